@@ -1,0 +1,271 @@
+//! glTF 2.0 import (`.gltf` with external or embedded buffers, and `.glb`), with
+//! `KHR_lights_punctual` lights.
+//!
+//! What is read, and nothing else: triangle geometry (`TRIANGLES`, `TRIANGLE_STRIP` and
+//! `TRIANGLE_FAN`, converted to lists; points and lines are skipped and counted), positions,
+//! normals (computed from faces where absent), node transforms baked into world space, the base
+//! colour factor of each material (its texture is not read) with `specular = 0.5 * (1 -
+//! roughness)`, the first camera of the scene if any, and point and spot lights (directional
+//! lights have no position or radius and are skipped and counted). A light without a `range`
+//! gets the radius at which its inverse-square irradiance falls to
+//! [`GltfOptions::light_threshold`].
+//!
+//! Malformed files give a [`SceneError::Gltf`] naming the file and the problem: schema errors,
+//! missing buffers, indices out of range, attribute arrays of unequal length, non-finite
+//! values, and node cycles. Nothing in a file can make the importer panic.
+
+use std::path::Path;
+
+use glam::{Mat3, Mat4, Vec3};
+
+use crate::{Aabb, Camera, Light, LightKind, Material, Primitive, Projection, Scene, SceneError};
+
+/// Options of the importer.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GltfOptions {
+    /// Irradiance threshold that sets the radius of lights without a `range`.
+    pub light_threshold: f32,
+}
+
+impl Default for GltfOptions {
+    fn default() -> Self {
+        Self { light_threshold: 0.01 }
+    }
+}
+
+/// What the importer skipped (it never skips silently).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ImportReport {
+    /// Point and line primitives skipped.
+    pub skipped_primitives: usize,
+    /// Directional lights skipped.
+    pub skipped_directional_lights: usize,
+}
+
+/// Deepest node hierarchy accepted; deeper files are reported as malformed.
+const MAX_NODE_DEPTH: usize = 256;
+
+/// Imports a glTF file into a [`Scene`].
+pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport), SceneError> {
+    let err = |problem: String| SceneError::Gltf { path: path.to_path_buf(), problem };
+    if !path.is_file() {
+        return Err(err("no such file".into()));
+    }
+    let gltf = gltf::Gltf::open(path).map_err(|e| err(format!("cannot parse: {e}")))?;
+    let base = path.parent();
+    let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
+        .map_err(|e| err(format!("cannot load buffers: {e}")))?;
+    let doc = &gltf.document;
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| err("the file has no scene".into()))?;
+
+    let mut out = Importer { buffers: &buffers, prims: Vec::new(), lights: Vec::new(), camera: None, report: ImportReport::default(), options };
+    let mut path_stack = Vec::new();
+    for node in scene.nodes() {
+        out.visit(&node, Mat4::IDENTITY, &mut path_stack).map_err(err)?;
+    }
+
+    let mut materials: Vec<Material> = doc
+        .materials()
+        .map(|m| {
+            let pbr = m.pbr_metallic_roughness();
+            let c = pbr.base_color_factor();
+            let base = Vec3::new(c[0], c[1], c[2]);
+            let base = if base.is_finite() { base.clamp(Vec3::ZERO, Vec3::ONE) } else { Vec3::splat(0.8) };
+            Material::new(base, (0.5 * (1.0 - pbr.roughness_factor())).clamp(0.0, 1.0))
+        })
+        .collect();
+    // Primitives without a material use the glTF default material, appended last.
+    let default_material = materials.len() as u32;
+    materials.push(Material::new(Vec3::splat(0.8), 0.0));
+    let primitives: Vec<Primitive> = out
+        .prims
+        .into_iter()
+        .map(|(mut p, m)| {
+            p.material = m.map_or(default_material, |m| m as u32);
+            p
+        })
+        .collect();
+    if primitives.is_empty() {
+        return Err(err("the scene holds no triangle geometry".into()));
+    }
+    let bounds = primitives.iter().flat_map(|p| p.positions.iter()).fold(Aabb::EMPTY, |b, &p| b.union_point(p));
+    let camera = out.camera.unwrap_or_else(|| framing_camera(bounds));
+    let name = path.file_stem().map_or_else(|| "gltf".into(), |s| s.to_string_lossy().into_owned());
+    let result = Scene { name, primitives, materials, lights: out.lights, camera, light_bounds: bounds };
+    result.validate().map_err(|e| err(e.to_string()))?;
+    Ok((result, out.report))
+}
+
+/// A camera outside the bounds looking at their centre.
+fn framing_camera(b: Aabb) -> Camera {
+    let c = b.center();
+    let r = (b.extent().length() * 0.5).max(1e-3);
+    let eye = c + Vec3::new(0.6, 0.45, 1.0).normalize() * r * 2.2;
+    Camera::perspective(eye, c, 50.0, r * 0.01, r * 6.0)
+}
+
+struct Importer<'a> {
+    buffers: &'a [gltf::buffer::Data],
+    prims: Vec<(Primitive, Option<usize>)>,
+    lights: Vec<Light>,
+    camera: Option<Camera>,
+    report: ImportReport,
+    options: &'a GltfOptions,
+}
+
+impl Importer<'_> {
+    fn visit(&mut self, node: &gltf::Node<'_>, parent: Mat4, stack: &mut Vec<usize>) -> Result<(), String> {
+        if stack.contains(&node.index()) {
+            return Err(format!("node {} is its own ancestor (the node hierarchy has a cycle)", node.index()));
+        }
+        if stack.len() >= MAX_NODE_DEPTH {
+            return Err(format!("node hierarchy deeper than {MAX_NODE_DEPTH}"));
+        }
+        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let world = parent * local;
+        if !world.is_finite() {
+            return Err(format!("node {} has a non-finite transform", node.index()));
+        }
+        stack.push(node.index());
+        if let Some(mesh) = node.mesh() {
+            for (k, prim) in mesh.primitives().enumerate() {
+                let what = format!("mesh {} primitive {k}", mesh.index());
+                if let Some(p) = self.primitive(&prim, world).map_err(|e| format!("{what}: {e}"))? {
+                    self.prims.push((p, prim.material().index()));
+                }
+            }
+        }
+        if let Some(light) = node.light() {
+            self.light(&light, world).map_err(|e| format!("node {} light {}: {e}", node.index(), light.index()))?;
+        }
+        if let (None, Some(cam)) = (self.camera, node.camera()) {
+            self.camera = camera(&cam, world);
+        }
+        for child in node.children() {
+            self.visit(&child, world, stack)?;
+        }
+        stack.pop();
+        Ok(())
+    }
+
+    fn primitive(&mut self, prim: &gltf::Primitive<'_>, world: Mat4) -> Result<Option<Primitive>, String> {
+        use gltf::mesh::Mode;
+        let mode = prim.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            self.report.skipped_primitives += 1;
+            return Ok(None);
+        }
+        let buffers = self.buffers;
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let positions: Vec<Vec3> = reader
+            .read_positions()
+            .ok_or("has no POSITION attribute (or its buffer data is missing)")?
+            .map(Vec3::from)
+            .collect();
+        let expected = prim.get(&gltf::Semantic::Positions).map_or(0, |a| a.count());
+        if positions.len() != expected {
+            return Err(format!("POSITION accessor declares {expected} elements but its buffer holds {}", positions.len()));
+        }
+        if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
+            return Err(format!("non-finite position {p:?}"));
+        }
+        let normals: Option<Vec<Vec3>> = reader.read_normals().map(|it| it.map(Vec3::from).collect());
+        if let Some(n) = &normals {
+            if n.len() != positions.len() {
+                return Err(format!("{} normals for {} positions (attribute arrays of unequal length)", n.len(), positions.len()));
+            }
+            if n.iter().any(|v| !v.is_finite()) {
+                return Err("non-finite normal".into());
+            }
+        }
+        let raw: Vec<u32> = match reader.read_indices() {
+            Some(ix) => {
+                let ix: Vec<u32> = ix.into_u32().collect();
+                let declared = prim.indices().map_or(0, |a| a.count());
+                if ix.len() != declared {
+                    return Err(format!("index accessor declares {declared} elements but its buffer holds {}", ix.len()));
+                }
+                if let Some(&bad) = ix.iter().find(|&&i| i as usize >= positions.len()) {
+                    return Err(format!("index {bad} out of range for {} vertices", positions.len()));
+                }
+                ix
+            }
+            None => (0..positions.len() as u32).collect(),
+        };
+        let indices = match mode {
+            Mode::Triangles => {
+                if raw.len() % 3 != 0 {
+                    return Err(format!("triangle list of {} vertices is not a multiple of 3 (truncated vertex array)", raw.len()));
+                }
+                raw
+            }
+            Mode::TriangleStrip => (2..raw.len())
+                .flat_map(|i| if i % 2 == 0 { [raw[i - 2], raw[i - 1], raw[i]] } else { [raw[i - 1], raw[i - 2], raw[i]] })
+                .collect(),
+            _ => (2..raw.len()).flat_map(|i| [raw[0], raw[i - 1], raw[i]]).collect(),
+        };
+        let normal_from_local = Mat3::from_mat4(world).inverse().transpose();
+        let world_pos: Vec<Vec3> = positions.iter().map(|&p| world.transform_point3(p)).collect();
+        let world_n: Vec<Vec3> = match normals {
+            Some(n) => n.iter().map(|&v| (normal_from_local * v).normalize_or(Vec3::Y)).collect(),
+            None => face_normals(&world_pos, &indices),
+        };
+        Ok(Some(Primitive { positions: world_pos, normals: world_n, indices, material: 0 }))
+    }
+
+    fn light(&mut self, light: &gltf::khr_lights_punctual::Light<'_>, world: Mat4) -> Result<(), String> {
+        use gltf::khr_lights_punctual::Kind;
+        let color = Vec3::from(light.color());
+        let intensity = light.intensity();
+        let position = world.transform_point3(Vec3::ZERO);
+        let direction = world.transform_vector3(-Vec3::Z).normalize_or(-Vec3::Z);
+        let kind = match light.kind() {
+            Kind::Directional => {
+                self.report.skipped_directional_lights += 1;
+                return Ok(());
+            }
+            Kind::Point => LightKind::Point,
+            Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                LightKind::Spot { direction, inner_angle: inner_cone_angle, outer_angle: outer_cone_angle }
+            }
+        };
+        let radius = light.range().unwrap_or_else(|| {
+            (intensity * color.max_element() / self.options.light_threshold).sqrt().max(1e-3)
+        });
+        let l = Light { kind, position, radius, color, intensity };
+        l.validate(self.lights.len()).map_err(|e| e.to_string())?;
+        self.lights.push(l);
+        Ok(())
+    }
+}
+
+fn camera(cam: &gltf::Camera<'_>, world: Mat4) -> Option<Camera> {
+    let position = world.transform_point3(Vec3::ZERO);
+    let target = position + world.transform_vector3(-Vec3::Z).normalize_or(-Vec3::Z);
+    let up = world.transform_vector3(Vec3::Y).normalize_or(Vec3::Y);
+    let projection = match cam.projection() {
+        gltf::camera::Projection::Perspective(p) => Projection::Perspective {
+            fov_y_deg: p.yfov().to_degrees(),
+            near: p.znear(),
+            far: p.zfar().unwrap_or(p.znear() * 1e4),
+        },
+        gltf::camera::Projection::Orthographic(o) => Projection::Orthographic { height: 2.0 * o.ymag(), near: o.znear(), far: o.zfar() },
+    };
+    let c = Camera { position, target, up, projection };
+    c.validate().is_ok().then_some(c)
+}
+
+fn face_normals(pos: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
+    let mut n = vec![Vec3::ZERO; pos.len()];
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
+        let f = (pos[b] - pos[a]).cross(pos[c] - pos[a]);
+        for i in [a, b, c] {
+            n[i] += f;
+        }
+    }
+    n.into_iter().map(|v| v.normalize_or(Vec3::Y)).collect()
+}

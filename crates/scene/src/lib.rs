@@ -1,0 +1,21 @@
+//! The scene model of manylights: everything culling and shading read, and nothing more.
+//!
+//! This crate owns the camera (with its matrix conventions), triangle meshes with one material
+//! index per primitive, minimal materials, point and spot lights with the one falloff function of
+//! the project, deterministic light generators, the procedural scenes (`atrium`, `pillars`,
+//! `topdown`, `city`) and glTF import. It must not depend on wgpu or any GPU crate: the CPU
+//! oracles of every GPU pass are written against these types alone.
+
+pub mod camera;
+pub mod error;
+pub mod generate;
+pub mod gltf_import;
+pub mod light;
+pub mod mesh;
+pub mod procedural;
+
+pub use camera::{Camera, Projection};
+pub use error::SceneError;
+pub use generate::{LightGenerator, LightSpec, RadiusRule};
+pub use light::{Light, LightKind};
+pub use mesh::{Aabb, Material, Primitive, Scene};
