@@ -51,7 +51,11 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
     if !path.is_file() {
         return Err(err("no such file".into()));
     }
-    let gltf = gltf::Gltf::open(path).map_err(|e| err(format!("cannot parse: {e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(format!("cannot parse: {e}")))?;
+    let root = raw.document.into_json();
+    validate_schema(&root).map_err(|problem| err(format!("cannot parse: invalid glTF: {problem}")))?;
+    let gltf = gltf::Gltf { document: gltf::Document::from_json_without_validation(root), blob: raw.blob };
     let base = path.parent();
     let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
         .map_err(|e| err(format!("cannot load buffers: {e}")))?;
@@ -97,6 +101,22 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
     let result = Scene { name, primitives, materials, lights: out.lights, camera, light_bounds: bounds };
     result.validate().map_err(|e| err(e.to_string()))?;
     Ok((result, out.report))
+}
+
+/// The glTF schema validation, less one rule: accessor `min`/`max` are required on POSITION by
+/// the specification but omitted by many real exporters, and nothing here reads them (bounds are
+/// recomputed, and non-finite positions are rejected when read), so their absence is tolerated.
+fn validate_schema(root: &gltf::json::Root) -> Result<(), String> {
+    use gltf::json::validation::{Error, Validate};
+    let mut problems = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path();
+        let bound = path.as_str().ends_with(".min") || path.as_str().ends_with(".max");
+        if !(bound && matches!(error, Error::Missing)) {
+            problems.push(format!("{path}: {error}"));
+        }
+    });
+    if problems.is_empty() { Ok(()) } else { Err(problems.join("; ")) }
 }
 
 /// A camera outside the bounds looking at their centre.
