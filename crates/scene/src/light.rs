@@ -168,10 +168,10 @@ pub enum Range {
     Infinite,
 }
 
-/// Outgoing radiance at surface point `p` with unit normal `n`, seen from `eye`, in f64: the
-/// CPU statement of the shading model that every GPU backend implements.
-pub fn shade(p: DVec3, n: DVec3, eye: DVec3, material: &Material, lights: &[Light], range: Range) -> DVec3 {
-    let v = (eye - p).normalize_or_zero();
+/// Outgoing radiance at surface point `p` with unit normal `n` towards the unit direction `v`
+/// (from `p` to the viewer; constant for an orthographic camera), in f64: the CPU statement of
+/// the shading model that every GPU backend implements.
+pub fn shade(p: DVec3, n: DVec3, v: DVec3, material: &Material, lights: &[Light], range: Range) -> DVec3 {
     let albedo = material.base_color.as_dvec3();
     let spec_norm = (SHININESS + 8.0) / (8.0 * std::f64::consts::PI);
     let mut out = DVec3::ZERO;

@@ -1,0 +1,221 @@
+//! The headless device: adapter choice, optional features and limits.
+
+use std::fmt;
+
+/// Environment variable naming the adapter when no CLI option does (a case-insensitive
+/// substring of the adapter name, or its index in the list printed by the error).
+pub const ADAPTER_ENV: &str = "MANYLIGHTS_ADAPTER";
+
+/// Errors of the GPU core.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter matched, or none exists.
+    #[error("{0}")]
+    NoAdapter(String),
+    /// The device could not be created.
+    #[error("cannot create a device on adapter `{adapter}`: {source}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// The wgpu error.
+        source: wgpu::RequestDeviceError,
+    },
+    /// A size over what the device allows.
+    #[error("{what} = {value} exceeds the device limit {limit} ({limit_name})")]
+    OverLimit {
+        /// What was asked for.
+        what: String,
+        /// The value.
+        value: u64,
+        /// The limit.
+        limit: u64,
+        /// The name of the wgpu limit.
+        limit_name: &'static str,
+    },
+    /// A wgpu validation or out-of-memory error caught on the device, or a lost device.
+    #[error("GPU error during {during}: {message}")]
+    Runtime {
+        /// What was being done.
+        during: String,
+        /// The wgpu message.
+        message: String,
+    },
+    /// Mapping a buffer for readback failed.
+    #[error("buffer readback failed: {0}")]
+    Readback(String),
+}
+
+/// How to choose the adapter.
+#[derive(Clone, Debug, Default)]
+pub struct GpuOptions {
+    /// A case-insensitive substring of the adapter name, or its index; `None` reads
+    /// [`ADAPTER_ENV`], and failing that prefers a discrete GPU, then integrated, then others.
+    pub adapter: Option<String>,
+}
+
+/// Optional features negotiated with the adapter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Negotiated {
+    /// Timestamp queries at pass boundaries (`TIMESTAMP_QUERY`).
+    pub timestamps: bool,
+    /// Subgroup operations in compute shaders (`SUBGROUP`).
+    pub subgroups: bool,
+    /// Smallest and largest subgroup size the adapter reports.
+    pub subgroup_size: (u32, u32),
+}
+
+/// A headless wgpu device and what was negotiated for it.
+pub struct GpuContext {
+    /// The adapter in use.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Adapter name, driver, backend.
+    pub info: wgpu::AdapterInfo,
+    /// Optional features that were enabled.
+    pub features: Negotiated,
+    /// The limits in force (the adapter's own, not WebGPU's defaults).
+    pub limits: wgpu::Limits,
+    errors: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+}
+
+impl fmt::Debug for GpuContext {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("GpuContext").field("info", &self.info).field("features", &self.features).finish_non_exhaustive()
+    }
+}
+
+fn describe(i: usize, info: &wgpu::AdapterInfo) -> String {
+    format!("  [{i}] {} ({:?}, {:?}, driver {} {})", info.name, info.device_type, info.backend, info.driver, info.driver_info)
+}
+
+impl GpuContext {
+    /// Opens a device on the chosen adapter with every optional feature it offers that the
+    /// project uses, and the adapter's full limits.
+    pub fn new(options: &GpuOptions) -> Result<Self, GpuError> {
+        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor {
+            backends: wgpu::Backends::VULKAN,
+            ..wgpu::InstanceDescriptor::new_without_display_handle_from_env()
+        });
+        let adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::VULKAN));
+        let infos: Vec<wgpu::AdapterInfo> = adapters.iter().map(wgpu::Adapter::get_info).collect();
+        let listing = || {
+            if infos.is_empty() {
+                "  (none: no Vulkan driver was found; on a machine without a GPU install Mesa's lavapipe with \
+                 `apt-get install mesa-vulkan-drivers libvulkan1`, or run `bash scripts/ensure-vulkan.sh`)"
+                    .to_owned()
+            } else {
+                infos.iter().enumerate().map(|(i, a)| describe(i, a)).collect::<Vec<_>>().join("\n")
+            }
+        };
+        let wanted = options.adapter.clone().or_else(|| std::env::var(ADAPTER_ENV).ok()).filter(|s| !s.is_empty());
+        let index = match &wanted {
+            Some(w) => {
+                let lw = w.to_lowercase();
+                let by_index = w.parse::<usize>().ok().filter(|&i| i < infos.len());
+                by_index.or_else(|| infos.iter().position(|a| a.name.to_lowercase().contains(&lw))).ok_or_else(|| {
+                    GpuError::NoAdapter(format!("no adapter matches `{w}` (from --adapter or {ADAPTER_ENV}); adapters found:\n{}", listing()))
+                })?
+            }
+            None => {
+                let rank = |t: wgpu::DeviceType| match t {
+                    wgpu::DeviceType::DiscreteGpu => 0,
+                    wgpu::DeviceType::IntegratedGpu => 1,
+                    wgpu::DeviceType::VirtualGpu => 2,
+                    wgpu::DeviceType::Cpu => 3,
+                    wgpu::DeviceType::Other => 4,
+                };
+                (0..infos.len())
+                    .min_by_key(|&i| rank(infos[i].device_type))
+                    .ok_or_else(|| GpuError::NoAdapter(format!("no GPU adapter found; adapters found:\n{}", listing())))?
+            }
+        };
+        let adapter = adapters.into_iter().nth(index).expect("index comes from the same list");
+        let info = infos[index].clone();
+        let offered = adapter.features();
+        let mut required = wgpu::Features::empty();
+        for f in [wgpu::Features::TIMESTAMP_QUERY, wgpu::Features::SUBGROUP] {
+            if offered.contains(f) {
+                required |= f;
+            }
+        }
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("manylights"),
+            required_features: required,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
+        // wgpu reports validation errors and device loss asynchronously; keep the first one and
+        // turn it into an error at the next wait, instead of a panic inside wgpu's callback.
+        let errors = std::sync::Arc::new(std::sync::Mutex::new(None::<String>));
+        let sink = errors.clone();
+        device.on_uncaptured_error(std::sync::Arc::new(move |e| {
+            let mut first = sink.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            first.get_or_insert_with(|| e.to_string());
+        }));
+        let features = Negotiated {
+            timestamps: required.contains(wgpu::Features::TIMESTAMP_QUERY),
+            subgroups: required.contains(wgpu::Features::SUBGROUP),
+            subgroup_size: (info.subgroup_min_size, info.subgroup_max_size),
+        };
+        Ok(Self { adapter, device, queue, info, features, limits, errors })
+    }
+
+    /// One line naming the adapter, driver and negotiated features, for logs and results.
+    pub fn summary(&self) -> String {
+        format!(
+            "{} ({:?}; driver {} {}; timestamps: {}; subgroups: {} [{}..{}])",
+            self.info.name,
+            self.info.backend,
+            self.info.driver,
+            self.info.driver_info,
+            if self.features.timestamps { "yes" } else { "no" },
+            if self.features.subgroups { "yes" } else { "no" },
+            self.features.subgroup_size.0,
+            self.features.subgroup_size.1,
+        )
+    }
+
+    /// Checks a render-target size against the device's texture limit.
+    pub fn check_resolution(&self, width: u32, height: u32) -> Result<(), GpuError> {
+        let limit = self.limits.max_texture_dimension_2d;
+        for (what, v) in [("width", width), ("height", height)] {
+            if v > limit {
+                return Err(GpuError::OverLimit { what: what.into(), value: v.into(), limit: limit.into(), limit_name: "max_texture_dimension_2d" });
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks a storage buffer size against the device's binding limit.
+    pub fn check_storage(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
+        let limit = u64::from(self.limits.max_storage_buffer_binding_size).min(self.limits.max_buffer_size);
+        if bytes > limit {
+            return Err(GpuError::OverLimit { what: what.into(), value: bytes, limit, limit_name: "max_storage_buffer_binding_size" });
+        }
+        Ok(())
+    }
+
+    /// Submits, waits for the queue to drain, and turns a lost device into an error.
+    pub fn submit_and_wait(&self, encoder: wgpu::CommandEncoder, during: &str) -> Result<(), GpuError> {
+        let index = self.queue.submit([encoder.finish()]);
+        self.device
+            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
+            .map_err(|e| GpuError::Runtime { during: during.into(), message: e.to_string() })?;
+        self.check(during)
+    }
+
+    /// Returns the first asynchronous wgpu error (validation, out of memory, device lost) seen
+    /// since the device was created, if any.
+    pub fn check(&self, during: &str) -> Result<(), GpuError> {
+        let first = self.errors.lock().unwrap_or_else(std::sync::PoisonError::into_inner).take();
+        match first {
+            Some(message) => Err(GpuError::Runtime { during: during.into(), message }),
+            None => Ok(()),
+        }
+    }
+}

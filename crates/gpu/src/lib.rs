@@ -1,0 +1,20 @@
+//! The GPU core of manylights.
+//!
+//! Owns: the headless wgpu device ([`GpuContext`]: adapter choice, feature negotiation, limits),
+//! per-pass GPU timing with timestamp queries ([`timing`]), buffer and texture readback
+//! ([`readback`]), the composition of WGSL from the files under `shaders/` ([`shaders`]), the
+//! host-side mirrors of the shader structs ([`layout`]), the scene on the GPU ([`GpuScene`]) and
+//! the depth prepass ([`prepass`]) that culling strategies and shading backends share.
+//!
+//! Depends on the scene crate and wgpu; knows nothing of culling strategies or backends.
+
+pub mod context;
+pub mod layout;
+pub mod prepass;
+pub mod readback;
+pub mod scene;
+pub mod shaders;
+pub mod timing;
+
+pub use context::{GpuContext, GpuError, GpuOptions};
+pub use scene::GpuScene;

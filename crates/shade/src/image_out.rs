@@ -1,0 +1,106 @@
+//! HDR images, tonemapping and atomic file output.
+//!
+//! Tonemapping (for PNGs and, later, FLIP): `c' = e*c / (1 + e*c)` per channel (Reinhard) with
+//! exposure `e`, then the sRGB transfer function, rounded to 8 bits.
+
+use std::io::Write;
+use std::path::Path;
+
+/// An RGBA f32 image, rows from the top.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HdrImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height` RGBA texels.
+    pub data: Vec<[f32; 4]>,
+}
+
+/// Errors of image output.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// A file could not be written.
+    #[error("cannot write {path}: {message}")]
+    Write {
+        /// The destination.
+        path: String,
+        /// Why.
+        message: String,
+    },
+}
+
+impl HdrImage {
+    /// From tightly packed `Rgba32Float` bytes.
+    pub fn from_bytes(width: u32, height: u32, bytes: &[u8]) -> Self {
+        Self { width, height, data: bytemuck::pod_collect_to_vec(bytes) }
+    }
+
+    /// The texel at `(x, y)`.
+    pub fn at(&self, x: u32, y: u32) -> [f32; 4] {
+        self.data[(y * self.width + x) as usize]
+    }
+
+    /// Number of texels with a NaN or infinite channel.
+    pub fn non_finite_count(&self) -> usize {
+        self.data.iter().filter(|t| t.iter().any(|c| !c.is_finite())).count()
+    }
+
+    /// Largest RGB channel value.
+    pub fn peak(&self) -> f32 {
+        self.data.iter().flat_map(|t| t[..3].iter().copied()).fold(0.0, f32::max)
+    }
+
+    /// 8-bit sRGB of the tonemapped image.
+    pub fn tonemap(&self, exposure: f32) -> image::RgbImage {
+        let map = |c: f32| {
+            let x = (c * exposure).max(0.0);
+            let x = x / (1.0 + x);
+            let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+            (s * 255.0).round().clamp(0.0, 255.0) as u8
+        };
+        image::RgbImage::from_fn(self.width, self.height, |x, y| {
+            let t = self.at(x, y);
+            image::Rgb([map(t[0]), map(t[1]), map(t[2])])
+        })
+    }
+
+    /// Writes a tonemapped PNG, atomically.
+    pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), OutputError> {
+        let img = self.tonemap(exposure);
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png).map_err(|e| e.to_string())
+        })
+    }
+
+    /// Writes the RGB channels as a 32-bit float OpenEXR file, atomically.
+    pub fn write_exr(&self, path: &Path) -> Result<(), OutputError> {
+        let rgb: Vec<f32> = self.data.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
+        let img = image::Rgb32FImage::from_raw(self.width, self.height, rgb).expect("size matches");
+        write_atomic(path, |f| {
+            image::DynamicImage::ImageRgb32F(img).write_to(f, image::ImageFormat::OpenExr).map_err(|e| e.to_string())
+        })
+    }
+}
+
+/// Writes `path` through a temporary file in the same directory and renames it into place, so
+/// a failure never leaves a half-written file. Creates the parent directory if needed.
+pub fn write_atomic(
+    path: &Path,
+    write: impl FnOnce(&mut std::io::BufWriter<&mut std::fs::File>) -> Result<(), String>,
+) -> Result<(), OutputError> {
+    let err = |message: String| OutputError::Write { path: path.display().to_string(), message };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
+    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| err(e.to_string()))?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file_mut());
+        write(&mut w).map_err(err)?;
+        w.flush().map_err(|e| err(e.to_string()))?;
+    }
+    tmp.persist(path).map_err(|e| err(e.error.to_string()))?;
+    Ok(())
+}

@@ -1,0 +1,141 @@
+//! The brute-force reference renderer (`shade.reference`): `prepass.depth`, then forward
+//! shading of every light at every covered pixel, into an `Rgba32Float` HDR target, with the
+//! surface position and shading normal of every pixel for the CPU oracles.
+
+use manylights_gpu::layout::VERTEX_LAYOUT;
+use manylights_gpu::prepass::{DEPTH_FORMAT, DepthPrepass, PRIMITIVE, depth_target};
+use manylights_gpu::shaders::{FRAME, LIGHT, SHADING, ShaderDef, VERTEX};
+use manylights_gpu::timing::{GpuTimer, PassTiming};
+use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
+
+use crate::HdrImage;
+
+/// The reference shader.
+pub const SHADER: ShaderDef = ShaderDef {
+    name: "shade.reference",
+    files: &[FRAME, LIGHT, SHADING, VERTEX, shader_file!("render/reference.wgsl")],
+};
+
+const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+/// What one reference render returns.
+#[derive(Clone, Debug)]
+pub struct ReferenceFrame {
+    /// Linear HDR radiance (alpha 1 where covered, 0 elsewhere).
+    pub color: HdrImage,
+    /// World position (w = 1 where covered).
+    pub position: HdrImage,
+    /// Shading normal (xyz), turned towards the viewer.
+    pub normal: HdrImage,
+    /// Depth buffer of the prepass, one f32 per pixel (1.0 = far plane / background).
+    pub depth: Vec<f32>,
+    /// GPU time per pass; `None` when the adapter has no timestamp queries.
+    pub timings: Option<Vec<PassTiming>>,
+}
+
+/// Reference renderer pipelines for one uploaded scene layout.
+pub struct ReferenceRenderer {
+    prepass: DepthPrepass,
+    pipeline: wgpu::RenderPipeline,
+}
+
+impl ReferenceRenderer {
+    /// Builds the pipelines.
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        let module = SHADER.create(&ctx.device);
+        let layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("shade.reference"),
+            bind_group_layouts: &[Some(&scene.layout)],
+            immediate_size: 0,
+        });
+        let target = Some(wgpu::ColorTargetState { format: HDR, blend: None, write_mask: wgpu::ColorWrites::ALL });
+        let pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("shade.reference"),
+            layout: Some(&layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(VERTEX_LAYOUT)],
+            },
+            primitive: PRIMITIVE,
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Equal),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_reference"),
+                compilation_options: Default::default(),
+                targets: &[target.clone(), target.clone(), target],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        Self { prepass: DepthPrepass::new(ctx, scene), pipeline }
+    }
+
+    /// Renders `scene` (whose frame uniform is set for `width` x `height`) and reads back
+    /// everything.
+    pub fn render(&self, ctx: &GpuContext, scene: &GpuScene, width: u32, height: u32) -> Result<ReferenceFrame, GpuError> {
+        ctx.check_resolution(width, height)?;
+        let target = |label| {
+            ctx.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: HDR,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let (color, position, normal) = (target("reference.color"), target("reference.position"), target("reference.normal"));
+        let depth = depth_target(ctx, width, height);
+        let views = [&color, &position, &normal].map(|t| t.create_view(&Default::default()));
+        let depth_view = depth.create_view(&Default::default());
+        let mut timer = GpuTimer::new(ctx, 2);
+        let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("reference") });
+        self.prepass.encode(&mut encoder, scene, &depth_view, &mut timer);
+        {
+            let attachment = |view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                })
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shade.reference"),
+                color_attachments: &[attachment(&views[0]), attachment(&views[1]), attachment(&views[2])],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &depth_view,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: timer.render_pass("shade.reference"),
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            scene.draw(&mut pass);
+        }
+        timer.resolve(&mut encoder);
+        ctx.submit_and_wait(encoder, "reference render")?;
+        let read = |t: &wgpu::Texture| readback::read_texture(ctx, t, wgpu::TextureAspect::All).map(|b| HdrImage::from_bytes(width, height, &b));
+        let depth_bytes = readback::read_texture(ctx, &depth, wgpu::TextureAspect::DepthOnly)?;
+        Ok(ReferenceFrame {
+            color: read(&color)?,
+            position: read(&position)?,
+            normal: read(&normal)?,
+            depth: bytemuck::pod_collect_to_vec(&depth_bytes),
+            timings: timer.read(ctx)?,
+        })
+    }
+}

@@ -1,0 +1,36 @@
+// Lights and the falloff: the WGSL twin of manylights_scene::light (see its module docs for the
+// formulas). Constants D_MIN, SPOT_EPS and LIGHT_KIND_* come from the generated prelude.
+// Host mirror: manylights_gpu::layout::GpuLight.
+struct Light {
+    position: vec3<f32>,
+    radius: f32,
+    color: vec3<f32>,
+    intensity: f32,
+    // Spot axis (unit); unused for point lights.
+    direction: vec3<f32>,
+    // LIGHT_KIND_POINT or LIGHT_KIND_SPOT.
+    kind: u32,
+    cos_inner: f32,
+    cos_outer: f32,
+    _pad0: u32,
+    _pad1: u32,
+}
+
+// clamp(1 - (d / r)^4, 0, 1)^2: exactly zero for d >= r.
+fn light_window(d: f32, r: f32) -> f32 {
+    let x = d / r;
+    let x2 = x * x;
+    let w = clamp(1.0 - x2 * x2, 0.0, 1.0);
+    return w * w;
+}
+
+// Windowed inverse-square falloff.
+fn light_falloff(d: f32, r: f32) -> f32 {
+    return light_window(d, r) / max(d * d, D_MIN * D_MIN);
+}
+
+// Spot cone factor; exactly zero at and outside the outer cone.
+fn light_spot(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    let t = clamp((cos_theta - cos_outer) / max(cos_inner - cos_outer, SPOT_EPS), 0.0, 1.0);
+    return t * t;
+}

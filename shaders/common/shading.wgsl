@@ -1,0 +1,32 @@
+// The shading model shared by every backend: the WGSL twin of manylights_scene::light::shade.
+// Lambert plus a normalised Blinn-Phong lobe of fixed exponent SHININESS (generated prelude).
+// Host mirror of the material: manylights_gpu::layout::GpuMaterial.
+struct Material {
+    base_color: vec3<f32>,
+    specular: f32,
+}
+
+// Radiance towards `v` from surface point `p` (unit normal `n`) lit by one light.
+fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
+    let to_light = light.position - p;
+    let d = length(to_light);
+    let atten = light_falloff(d, light.radius);
+    if atten == 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let l = select(n, to_light / d, d > 0.0);
+    var cone = 1.0;
+    if light.kind == LIGHT_KIND_SPOT {
+        cone = light_spot(dot(-l, light.direction), light.cos_inner, light.cos_outer);
+    }
+    let ndotl = max(dot(n, l), 0.0);
+    if cone == 0.0 || ndotl == 0.0 {
+        return vec3<f32>(0.0);
+    }
+    // normalize(0) is NaN in WGSL; l = -v (light exactly behind the viewer's line) gives h = 0.
+    let lv = l + v;
+    let h = select(vec3<f32>(0.0), normalize(lv), dot(lv, lv) > 0.0);
+    let spec_norm = (SHININESS + 8.0) / (8.0 * PI);
+    let brdf = m.base_color / PI + vec3<f32>(m.specular * spec_norm * pow(max(dot(n, h), 0.0), SHININESS));
+    return light.color * (light.intensity * atten * cone * ndotl) * brdf;
+}

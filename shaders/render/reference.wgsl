@@ -1,0 +1,29 @@
+// shade.reference: brute-force forward shading of every light, no culling. The accuracy
+// reference of every strategy and backend. Runs after prepass.depth with depth test `Equal`,
+// so each pixel is shaded once. Besides the HDR colour it writes the shaded surface point and
+// the shading normal (turned towards the viewer: surfaces are two-sided) for the CPU oracles.
+@group(0) @binding(1) var<storage, read> lights: array<Light>;
+@group(0) @binding(2) var<storage, read> materials: array<Material>;
+
+struct ReferenceOut {
+    @location(0) color: vec4<f32>,
+    // xyz = world position, w = 1 where covered (the clear value is w = 0).
+    @location(1) position: vec4<f32>,
+    // xyz = unit shading normal.
+    @location(2) normal: vec4<f32>,
+}
+
+@fragment
+fn fs_reference(in: VertexOut) -> ReferenceOut {
+    let v = view_dir(in.world);
+    var n = normalize(in.normal);
+    if dot(n, v) < 0.0 {
+        n = -n;
+    }
+    let m = materials[in.material];
+    var c = vec3<f32>(0.0);
+    for (var i = 0u; i < frame.light_count; i++) {
+        c += shade_light(lights[i], in.world, n, v, m);
+    }
+    return ReferenceOut(vec4<f32>(c, 1.0), vec4<f32>(in.world, 1.0), vec4<f32>(n, 0.0));
+}

@@ -1,0 +1,91 @@
+//! Every WGSL shader, composed as the crates compose it, parses and validates with naga (no GPU
+//! needed); every `.wgsl` file under `shaders/` belongs to some shader; and the host mirrors of
+//! the WGSL structs have the same size and member offsets as naga's layout.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use manylights_gpu::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex};
+use manylights_gpu::shaders::ShaderDef;
+
+fn all_shaders() -> Vec<ShaderDef> {
+    manylights_gpu::shaders::SHADERS.iter().chain(manylights_shade::SHADERS).copied().collect()
+}
+
+fn validate(def: &ShaderDef) -> naga::Module {
+    let src = def.compose();
+    let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
+    module
+}
+
+#[test]
+fn every_shader_validates_with_naga() {
+    for def in all_shaders() {
+        let m = validate(&def);
+        assert!(!m.entry_points.is_empty(), "{} has no entry point", def.name);
+    }
+}
+
+#[test]
+fn every_wgsl_file_is_used_by_a_shader() {
+    let used: BTreeSet<String> = all_shaders().iter().flat_map(|d| d.files.iter().map(|f| f.path.to_owned())).collect();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let mut stack = vec![root.clone()];
+    let mut found = Vec::new();
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "wgsl") {
+                found.push(p.strip_prefix(&root).unwrap().to_string_lossy().replace('\\', "/"));
+            }
+        }
+    }
+    assert!(!found.is_empty());
+    for f in found {
+        assert!(used.contains(&f), "shaders/{f} is not part of any ShaderDef, so nothing validates it");
+    }
+}
+
+/// naga's (size, [(member, offset)]) of the struct `name` in `module`.
+fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
+    let ty = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("no struct {name}")).1;
+    match &ty.inner {
+        naga::TypeInner::Struct { members, span } => {
+            (*span, members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect())
+        }
+        other => panic!("{name} is not a struct: {other:?}"),
+    }
+}
+
+#[test]
+fn host_structs_match_wgsl_layout() {
+    let reference = validate(&manylights_shade::reference::SHADER);
+    macro_rules! check {
+        ($ty:ty, $wgsl:literal, [$($field:ident => $member:literal),* $(,)?]) => {{
+            let (size, members) = wgsl_layout(&reference, $wgsl);
+            assert_eq!(size as usize, size_of::<$ty>(), "size of {} vs {}", $wgsl, stringify!($ty));
+            $(
+                let off = members.iter().find(|(n, _)| n == $member).unwrap_or_else(|| panic!("{}.{} missing", $wgsl, $member)).1;
+                assert_eq!(off as usize, std::mem::offset_of!($ty, $field), "{}.{} offset", $wgsl, $member);
+            )*
+        }};
+    }
+    check!(GpuFrame, "Frame", [clip_from_world => "clip_from_world", view_from_world => "view_from_world",
+        clip_from_view => "clip_from_view", eye => "eye", viewport => "viewport", light_count => "light_count"]);
+    check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
+        direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer"]);
+    check!(GpuMaterial, "Material", [base_color => "base_color", specular => "specular"]);
+    // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
+    // locations and formats against VERTEX_LAYOUT instead.
+    let (_, members) = wgsl_layout(&reference, "VertexIn");
+    let attrs = manylights_gpu::layout::VERTEX_LAYOUT.attributes;
+    assert_eq!(members.len(), attrs.len());
+    assert_eq!(attrs[0].offset as usize, std::mem::offset_of!(GpuVertex, position));
+    assert_eq!(attrs[1].offset as usize, std::mem::offset_of!(GpuVertex, normal));
+    assert_eq!(attrs[2].offset as usize, std::mem::offset_of!(GpuVertex, material));
+}
