@@ -35,6 +35,7 @@ enum Command {
 }
 
 #[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
 struct RenderArgs {
     /// A procedural scene (atrium, pillars, topdown, city) or a path to a .gltf/.glb file.
     #[arg(long, default_value = "atrium")]

@@ -193,7 +193,7 @@ impl GpuContext {
 
     /// Checks a storage buffer size against the device's binding limit.
     pub fn check_storage(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
-        let limit = u64::from(self.limits.max_storage_buffer_binding_size).min(self.limits.max_buffer_size);
+        let limit = self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size);
         if bytes > limit {
             return Err(GpuError::OverLimit { what: what.into(), value: bytes, limit, limit_name: "max_storage_buffer_binding_size" });
         }

@@ -217,7 +217,7 @@ impl Importer<'_> {
         };
         let indices = match mode {
             Mode::Triangles => {
-                if raw.len() % 3 != 0 {
+                if !raw.len().is_multiple_of(3) {
                     return Err(format!("triangle list of {} vertices is not a multiple of 3 (truncated vertex array)", raw.len()));
                 }
                 raw
