@@ -53,10 +53,12 @@ fn plane_hit(camera: &Camera, w: u32, h: u32, x: u32, y: u32) -> Option<DVec3> {
 /// hit of each pixel centre.
 ///
 /// Tolerance: |gpu - f64| <= 1e-3 x the image's peak value. The GPU interpolates the surface
-/// point in f32 (about 1e-6 relative), which the f32 falloff and the exponent-32 specular lobe
-/// amplify to a few 1e-5 of the peak; 1e-3 leaves a margin of over 10x (the measured maximum is
-/// printed). Outside the radius (by 1e-4 relative, to absorb that same interpolation error) the
-/// pixel must be exactly zero.
+/// point in f32, which the f32 falloff and the exponent-32 specular lobe amplify. Measured
+/// (2026-11-21, the maxima this test prints): lavapipe (Mesa 22.3.6) 1.7e-5 of the peak with a
+/// relative position error of 3.3e-6; NVIDIA H200 (driver 580.159.04) 2.9e-4 of the peak with
+/// 7.7e-5, so the bound holds with a margin of 3.5x on the less precise device. Outside the
+/// radius (by 1e-4 relative, to absorb that same interpolation error) a pixel must be exactly
+/// zero.
 #[test]
 fn point_light_above_plane_matches_closed_form() {
     let light = Light::point(Vec3::new(0.3, 1.5, -0.2), 4.0, Vec3::new(1.0, 0.9, 0.8), 5.0);
@@ -76,7 +78,7 @@ fn point_light_above_plane_matches_closed_form() {
         }
     }
     assert!(cases.len() > (w * h / 2) as usize, "the plane should cover most of the image");
-    let (mut max_err, mut inside, mut outside) = (0.0f64, 0, 0);
+    let (mut max_err, mut max_pos_err, mut inside, mut outside) = (0.0f64, 0.0f64, 0, 0);
     for (x, y, p, expected) in cases {
         let got = frame.color.at(x, y);
         let got = DVec3::new(got[0].into(), got[1].into(), got[2].into());
@@ -90,12 +92,17 @@ fn point_light_above_plane_matches_closed_form() {
             max_err = max_err.max(err);
             assert!(err <= 1e-3 * peak, "pixel ({x}, {y}): gpu {got:?} vs f64 {expected:?} (error {err:.3e}, peak {peak:.3e})");
         }
+        // The position output feeds the CPU oracles: it must be the surface point, up to the
+        // f32 interpolation error, which grows with distance and at grazing angles (seen on an
+        // H200: larger than lavapipe's); bound it relative to the distance from the eye.
         let pos = frame.position.at(x, y);
-        assert!((DVec3::new(pos[0].into(), pos[1].into(), pos[2].into()) - p).length() < 1e-3, "position output at ({x}, {y})");
+        let pos_err = (DVec3::new(pos[0].into(), pos[1].into(), pos[2].into()) - p).length() / (p - eye).length();
+        max_pos_err = max_pos_err.max(pos_err);
+        assert!(pos_err < 1e-3, "position output at ({x}, {y}): {pos:?} vs {p:?} (relative error {pos_err:.2e})");
         assert_eq!(pos[3], 1.0);
     }
     assert!(inside > 100 && outside > 100, "both sides of the radius must be sampled: {inside} inside, {outside} outside");
-    println!("closed form: max abs error {max_err:.3e} = {:.3e} of peak {peak:.3e}", max_err / peak);
+    println!("closed form: max abs error {max_err:.3e} = {:.3e} of peak {peak:.3e}; max relative position error {max_pos_err:.2e}", max_err / peak);
 }
 
 /// A spot light and an orthographic camera over the plane: the same closed form.
