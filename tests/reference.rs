@@ -192,3 +192,25 @@ fn no_lights_renders_black() {
     let frame = render(&plane_scene(Vec::new(), camera), 17, 9);
     assert!(frame.color.data.iter().all(|c| c[..3] == [0.0; 3]));
 }
+
+/// Per-pass GPU timings: where the adapter has timestamp queries (lavapipe and NVIDIA do), every
+/// pass of the reference renderer is timed, labelled raster, and positive.
+#[test]
+fn reference_passes_are_timed() {
+    let ctx = common::gpu();
+    let camera = Camera::perspective(Vec3::new(0.0, 6.0, 6.0), Vec3::ZERO, 60.0, 0.1, 50.0);
+    let scene = plane_scene(vec![Light::point(Vec3::Y, 3.0, Vec3::ONE, 1.0)], camera);
+    let gpu_scene = GpuScene::upload(&ctx, &scene, &camera, 32, 32).unwrap();
+    let frame = ReferenceRenderer::new(&ctx, &gpu_scene).render(&ctx, &gpu_scene, 32, 32).unwrap();
+    if !ctx.features.timestamps {
+        assert!(frame.timings.is_none(), "no timestamps, yet timings were reported");
+        return;
+    }
+    let t = frame.timings.expect("timestamps negotiated, so timings are reported");
+    let labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
+    assert_eq!(labels, ["prepass.depth", "shade.reference"]);
+    for p in &t {
+        assert_eq!(p.kind, manylights_gpu::timing::PassKind::Raster);
+        assert!(p.ms > 0.0 && p.ms.is_finite(), "{}: {} ms", p.label, p.ms);
+    }
+}
