@@ -95,7 +95,8 @@ enum Generator {
 fn load_scene(name: &str) -> Result<Scene> {
     let looks_like_file = name.ends_with(".gltf") || name.ends_with(".glb") || name.contains('/');
     if looks_like_file {
-        let (scene, report) = gltf_import::load(std::path::Path::new(name), &GltfOptions::default())?;
+        let (scene, report) =
+            gltf_import::load(std::path::Path::new(name), &GltfOptions::default())?;
         if report.skipped_primitives + report.skipped_directional_lights > 0 {
             eprintln!(
                 "note: {name}: skipped {} point/line primitives and {} directional lights (not supported)",
@@ -105,7 +106,12 @@ fn load_scene(name: &str) -> Result<Scene> {
         Ok(scene)
     } else {
         ProceduralScene::from_name(name)
-            .with_context(|| format!("--scene {name}: not a file path (.gltf/.glb) and not one of {}", procedural::NAMES.join(", ")))?
+            .with_context(|| {
+                format!(
+                    "--scene {name}: not a file path (.gltf/.glb) and not one of {}",
+                    procedural::NAMES.join(", ")
+                )
+            })?
             .build()
             .map_err(Into::into)
     }
@@ -120,23 +126,35 @@ fn render(args: &RenderArgs) -> Result<()> {
         generator: match args.generator {
             Generator::Uniform => LightGenerator::Uniform,
             Generator::Surface => LightGenerator::SurfaceHugging { offset: 0.1 },
-            Generator::Clustered => LightGenerator::Clustered { clusters: 8, spread: 1.5 },
+            Generator::Clustered => LightGenerator::Clustered {
+                clusters: 8,
+                spread: 1.5,
+            },
             Generator::Field => LightGenerator::LightField,
         },
         count: args.lights,
         seed: args.seed,
-        radius: args.threshold.map_or(RadiusRule::Fixed(args.radius), RadiusRule::Threshold),
+        radius: args
+            .threshold
+            .map_or(RadiusRule::Fixed(args.radius), RadiusRule::Threshold),
         intensity: args.intensity,
         spot_fraction: args.spot_fraction,
         ..LightSpec::default()
     };
-    let generated = spec.generate(&scene).context("invalid light options (--radius, --threshold, --intensity, --spot-fraction)")?;
+    let generated = spec
+        .generate(&scene)
+        .context("invalid light options (--radius, --threshold, --intensity, --spot-fraction)")?;
     scene.lights.extend(generated);
-    scene.validate().with_context(|| format!("scene {}", scene.name))?;
+    scene
+        .validate()
+        .with_context(|| format!("scene {}", scene.name))?;
 
-    let ctx = GpuContext::new(&GpuOptions { adapter: args.adapter.clone() })?;
+    let ctx = GpuContext::new(&GpuOptions {
+        adapter: args.adapter.clone(),
+    })?;
     eprintln!("adapter: {}", ctx.summary());
-    ctx.check_resolution(args.width, args.height).context("invalid --width/--height")?;
+    ctx.check_resolution(args.width, args.height)
+        .context("invalid --width/--height")?;
     let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, args.width, args.height)?;
     let renderer = ReferenceRenderer::new(&ctx, &gpu_scene);
     let frame = renderer.render(&ctx, &gpu_scene, args.width, args.height)?;

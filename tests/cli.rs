@@ -26,16 +26,27 @@ fn rejects(extra: &[&str], code: i32, expect: &[&str]) {
     args.extend_from_slice(extra);
     let o = manylights(&args);
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(code), "{extra:?}: exit code; stderr: {stderr}");
+    assert_eq!(
+        o.status.code(),
+        Some(code),
+        "{extra:?}: exit code; stderr: {stderr}"
+    );
     for e in expect {
-        assert!(stderr.contains(e), "{extra:?}: `{e}` missing from stderr: {stderr}");
+        assert!(
+            stderr.contains(e),
+            "{extra:?}: `{e}` missing from stderr: {stderr}"
+        );
     }
     assert!(!out.exists(), "{extra:?}: output written despite the error");
 }
 
 #[test]
 fn unknown_scene_lists_the_accepted_names() {
-    rejects(&["--scene", "sponza"], 1, &["unknown scene `sponza`", "atrium, pillars, topdown, city"]);
+    rejects(
+        &["--scene", "sponza"],
+        1,
+        &["unknown scene `sponza`", "atrium, pillars, topdown, city"],
+    );
 }
 
 #[test]
@@ -45,7 +56,11 @@ fn bad_light_values_name_the_value() {
     rejects(&["--intensity", "-2"], 1, &["intensity = -2", ">= 0"]);
     rejects(&["--intensity", "NaN"], 1, &["intensity = NaN"]);
     rejects(&["--threshold", "0"], 1, &["threshold = 0"]);
-    rejects(&["--spot-fraction", "1.5"], 1, &["spot_fraction = 1.5", "[0, 1]"]);
+    rejects(
+        &["--spot-fraction", "1.5"],
+        1,
+        &["spot_fraction = 1.5", "[0, 1]"],
+    );
 }
 
 #[test]
@@ -53,12 +68,20 @@ fn bad_resolutions_name_the_value_and_the_limit() {
     rejects(&["--width", "0"], 2, &["'0'", "1..=65536"]);
     rejects(&["--height", "0"], 2, &["'0'", "1..=65536"]);
     // Over the device's limit (lavapipe allows 16,384, an H100 32,768).
-    rejects(&["--width", "65536"], 1, &["width = 65536", "max_texture_dimension_2d"]);
+    rejects(
+        &["--width", "65536"],
+        1,
+        &["width = 65536", "max_texture_dimension_2d"],
+    );
 }
 
 #[test]
 fn missing_and_malformed_gltf_are_errors() {
-    rejects(&["--scene", "/nonexistent/model.glb"], 1, &["/nonexistent/model.glb", "no such file"]);
+    rejects(
+        &["--scene", "/nonexistent/model.glb"],
+        1,
+        &["/nonexistent/model.glb", "no such file"],
+    );
     let bad = "/usr/share/assimp/models/glTF2/RecursiveNodes/RecursiveNodes.gltf";
     assert!(Path::new(bad).exists(), "install assimp-testmodels");
     rejects(&["--scene", bad], 1, &[bad, "cycle"]);
@@ -68,28 +91,65 @@ fn missing_and_malformed_gltf_are_errors() {
 fn render_writes_png_and_exr() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("render");
-    let o = manylights(&["render", "--scene", "pillars", "--lights", "32", "--width", "48", "--height", "27", "--out", out.to_str().unwrap()]);
-    assert!(o.status.success(), "stderr: {}", String::from_utf8_lossy(&o.stderr));
-    let png = image::open(out.join("reference.png")).expect("a readable PNG").to_rgb8();
+    let o = manylights(&[
+        "render",
+        "--scene",
+        "pillars",
+        "--lights",
+        "32",
+        "--width",
+        "48",
+        "--height",
+        "27",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(
+        o.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let png = image::open(out.join("reference.png"))
+        .expect("a readable PNG")
+        .to_rgb8();
     assert_eq!(png.dimensions(), (48, 27));
     assert!(png.pixels().any(|p| p.0 != [0, 0, 0]), "the PNG is black");
-    let exr = image::open(out.join("reference.exr")).expect("a readable EXR").to_rgb32f();
+    let exr = image::open(out.join("reference.exr"))
+        .expect("a readable EXR")
+        .to_rgb32f();
     assert_eq!(exr.dimensions(), (48, 27));
-    let names: Vec<String> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    assert_eq!(names.len(), 2, "only the two images, no temporary files: {names:?}");
+    let names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names.len(),
+        2,
+        "only the two images, no temporary files: {names:?}"
+    );
 }
 
 #[test]
 fn help_explains_each_subcommand() {
     let o = manylights(&["--help"]);
     let s = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success() && s.contains("render") && s.contains("reference renderer"), "{s}");
+    assert!(
+        o.status.success() && s.contains("render") && s.contains("reference renderer"),
+        "{s}"
+    );
     let o = manylights(&["render", "--help"]);
     let s = String::from_utf8_lossy(&o.stdout);
-    assert!(s.contains("--scene") && s.contains("--adapter") && s.contains("MANYLIGHTS_ADAPTER"), "{s}");
+    assert!(
+        s.contains("--scene") && s.contains("--adapter") && s.contains("MANYLIGHTS_ADAPTER"),
+        "{s}"
+    );
 }
 
 #[test]
 fn unknown_adapter_lists_the_adapters_found() {
-    rejects(&["--adapter", "no-such-gpu"], 1, &["no adapter matches `no-such-gpu`", "adapters found", "[0]"]);
+    rejects(
+        &["--adapter", "no-such-gpu"],
+        1,
+        &["no adapter matches `no-such-gpu`", "adapters found", "[0]"],
+    );
 }

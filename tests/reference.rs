@@ -6,7 +6,10 @@ use glam::{DVec3, DVec4, Vec3};
 use manylights_gpu::GpuScene;
 use manylights_scene::light::{Range, shade};
 use manylights_scene::procedural::{NAMES, ProceduralScene};
-use manylights_scene::{Aabb, Camera, Light, LightGenerator, LightKind, LightSpec, Material, Primitive, RadiusRule, Scene};
+use manylights_scene::{
+    Aabb, Camera, Light, LightGenerator, LightKind, LightSpec, Material, Primitive, RadiusRule,
+    Scene,
+};
 use manylights_shade::{ReferenceFrame, ReferenceRenderer};
 
 fn render(scene: &Scene, width: u32, height: u32) -> ReferenceFrame {
@@ -22,7 +25,12 @@ fn plane_scene(lights: Vec<Light>, camera: Camera) -> Scene {
     Scene {
         name: "plane".into(),
         primitives: vec![Primitive {
-            positions: vec![Vec3::new(-h, 0.0, -h), Vec3::new(h, 0.0, -h), Vec3::new(h, 0.0, h), Vec3::new(-h, 0.0, h)],
+            positions: vec![
+                Vec3::new(-h, 0.0, -h),
+                Vec3::new(h, 0.0, -h),
+                Vec3::new(h, 0.0, h),
+                Vec3::new(-h, 0.0, h),
+            ],
             normals: vec![Vec3::Y; 4],
             indices: vec![0, 2, 1, 0, 3, 2],
             material: 0,
@@ -37,7 +45,10 @@ fn plane_scene(lights: Vec<Light>, camera: Camera) -> Scene {
 /// The world-space point where the ray through the centre of pixel (x, y) meets the plane y = 0,
 /// computed in f64 from the inverse of the camera's matrix.
 fn plane_hit(camera: &Camera, w: u32, h: u32, x: u32, y: u32) -> Option<DVec3> {
-    let world_from_clip = camera.clip_from_world(w as f32 / h as f32).as_dmat4().inverse();
+    let world_from_clip = camera
+        .clip_from_world(w as f32 / h as f32)
+        .as_dmat4()
+        .inverse();
     let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
     let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0;
     let unproject = |z: f64| {
@@ -46,7 +57,9 @@ fn plane_hit(camera: &Camera, w: u32, h: u32, x: u32, y: u32) -> Option<DVec3> {
     };
     let (a, b) = (unproject(0.0), unproject(1.0));
     let t = a.y / (a.y - b.y);
-    (t > 0.0 && t < 1.0).then(|| a + (b - a) * t).filter(|p| p.x.abs() < 9.9 && p.z.abs() < 9.9)
+    (t > 0.0 && t < 1.0)
+        .then(|| a + (b - a) * t)
+        .filter(|p| p.x.abs() < 9.9 && p.z.abs() < 9.9)
 }
 
 /// One point light above a plane against the shading model evaluated in f64 at the exact ray
@@ -61,7 +74,12 @@ fn plane_hit(camera: &Camera, w: u32, h: u32, x: u32, y: u32) -> Option<DVec3> {
 /// zero.
 #[test]
 fn point_light_above_plane_matches_closed_form() {
-    let light = Light::point(Vec3::new(0.3, 1.5, -0.2), 4.0, Vec3::new(1.0, 0.9, 0.8), 5.0);
+    let light = Light::point(
+        Vec3::new(0.3, 1.5, -0.2),
+        4.0,
+        Vec3::new(1.0, 0.9, 0.8),
+        5.0,
+    );
     let camera = Camera::perspective(Vec3::new(0.0, 6.0, 6.0), Vec3::ZERO, 60.0, 0.1, 50.0);
     let scene = plane_scene(vec![light], camera);
     let (w, h) = (96, 64);
@@ -71,52 +89,89 @@ fn point_light_above_plane_matches_closed_form() {
     let mut cases = Vec::new();
     for y in 0..h {
         for x in 0..w {
-            let Some(p) = plane_hit(&camera, w, h, x, y) else { continue };
-            let expected = shade(p, DVec3::Y, (eye - p).normalize(), &scene.materials[0], &scene.lights, Range::Windowed);
+            let Some(p) = plane_hit(&camera, w, h, x, y) else {
+                continue;
+            };
+            let expected = shade(
+                p,
+                DVec3::Y,
+                (eye - p).normalize(),
+                &scene.materials[0],
+                &scene.lights,
+                Range::Windowed,
+            );
             peak = peak.max(expected.max_element());
             cases.push((x, y, p, expected));
         }
     }
-    assert!(cases.len() > (w * h / 2) as usize, "the plane should cover most of the image");
+    assert!(
+        cases.len() > (w * h / 2) as usize,
+        "the plane should cover most of the image"
+    );
     let (mut max_err, mut max_pos_err, mut inside, mut outside) = (0.0f64, 0.0f64, 0, 0);
     for (x, y, p, expected) in cases {
         let got = frame.color.at(x, y);
         let got = DVec3::new(got[0].into(), got[1].into(), got[2].into());
         let d = (p - light.position.as_dvec3()).length();
         if d > f64::from(light.radius) * (1.0 + 1e-4) {
-            assert_eq!(got, DVec3::ZERO, "pixel ({x}, {y}) at distance {d} outside radius is not exactly zero");
+            assert_eq!(
+                got,
+                DVec3::ZERO,
+                "pixel ({x}, {y}) at distance {d} outside radius is not exactly zero"
+            );
             outside += 1;
         } else {
             inside += 1;
             let err = (got - expected).abs().max_element();
             max_err = max_err.max(err);
-            assert!(err <= 1e-3 * peak, "pixel ({x}, {y}): gpu {got:?} vs f64 {expected:?} (error {err:.3e}, peak {peak:.3e})");
+            assert!(
+                err <= 1e-3 * peak,
+                "pixel ({x}, {y}): gpu {got:?} vs f64 {expected:?} (error {err:.3e}, peak {peak:.3e})"
+            );
         }
         // The position output feeds the CPU oracles: it must be the surface point, up to the
         // f32 interpolation error, which grows with distance and at grazing angles (seen on an
         // H200: larger than lavapipe's); bound it relative to the distance from the eye.
         let pos = frame.position.at(x, y);
-        let pos_err = (DVec3::new(pos[0].into(), pos[1].into(), pos[2].into()) - p).length() / (p - eye).length();
+        let pos_err = (DVec3::new(pos[0].into(), pos[1].into(), pos[2].into()) - p).length()
+            / (p - eye).length();
         max_pos_err = max_pos_err.max(pos_err);
-        assert!(pos_err < 1e-3, "position output at ({x}, {y}): {pos:?} vs {p:?} (relative error {pos_err:.2e})");
+        assert!(
+            pos_err < 1e-3,
+            "position output at ({x}, {y}): {pos:?} vs {p:?} (relative error {pos_err:.2e})"
+        );
         assert_eq!(pos[3], 1.0);
     }
-    assert!(inside > 100 && outside > 100, "both sides of the radius must be sampled: {inside} inside, {outside} outside");
-    println!("closed form: max abs error {max_err:.3e} = {:.3e} of peak {peak:.3e}; max relative position error {max_pos_err:.2e}", max_err / peak);
+    assert!(
+        inside > 100 && outside > 100,
+        "both sides of the radius must be sampled: {inside} inside, {outside} outside"
+    );
+    println!(
+        "closed form: max abs error {max_err:.3e} = {:.3e} of peak {peak:.3e}; max relative position error {max_pos_err:.2e}",
+        max_err / peak
+    );
 }
 
 /// A spot light and an orthographic camera over the plane: the same closed form.
 #[test]
 fn spot_light_orthographic_matches_closed_form() {
     let spot = Light {
-        kind: LightKind::Spot { direction: Vec3::new(0.2, -1.0, 0.1), inner_angle: 0.3, outer_angle: 0.5 },
+        kind: LightKind::Spot {
+            direction: Vec3::new(0.2, -1.0, 0.1),
+            inner_angle: 0.3,
+            outer_angle: 0.5,
+        },
         ..Light::point(Vec3::new(-0.5, 2.0, 0.5), 5.0, Vec3::ONE, 8.0)
     };
     let camera = Camera {
         position: Vec3::new(1.0, 8.0, 4.0),
         target: Vec3::ZERO,
         up: Vec3::Y,
-        projection: manylights_scene::Projection::Orthographic { height: 8.0, near: 0.1, far: 30.0 },
+        projection: manylights_scene::Projection::Orthographic {
+            height: 8.0,
+            near: 0.1,
+            far: 30.0,
+        },
     };
     let scene = plane_scene(vec![spot], camera);
     let (w, h) = (80, 60);
@@ -126,19 +181,39 @@ fn spot_light_orthographic_matches_closed_form() {
     let mut cases = Vec::new();
     for y in 0..h {
         for x in 0..w {
-            let Some(p) = plane_hit(&camera, w, h, x, y) else { continue };
-            let e = shade(p, DVec3::Y, v, &scene.materials[0], &scene.lights, Range::Windowed);
+            let Some(p) = plane_hit(&camera, w, h, x, y) else {
+                continue;
+            };
+            let e = shade(
+                p,
+                DVec3::Y,
+                v,
+                &scene.materials[0],
+                &scene.lights,
+                Range::Windowed,
+            );
             peak = peak.max(e.max_element());
             cases.push((x, y, e));
         }
     }
     let lit = cases.iter().filter(|c| c.2.max_element() > 0.0).count();
-    assert!(lit > 50 && lit < cases.len(), "the cone must light part of the plane ({lit} of {})", cases.len());
+    assert!(
+        lit > 50 && lit < cases.len(),
+        "the cone must light part of the plane ({lit} of {})",
+        cases.len()
+    );
     for (x, y, e) in cases {
         let g = frame.color.at(x, y);
-        let err = (DVec3::new(g[0].into(), g[1].into(), g[2].into()) - e).abs().max_element();
+        let err = (DVec3::new(g[0].into(), g[1].into(), g[2].into()) - e)
+            .abs()
+            .max_element();
         let p = plane_hit(&camera, w, h, x, y).unwrap();
-        assert!(err <= 1e-3 * peak, "pixel ({x}, {y}): gpu {g:?} vs f64 {e:?} at {p:?}; gpu pos {:?} normal {:?}", frame.position.at(x, y), frame.normal.at(x, y));
+        assert!(
+            err <= 1e-3 * peak,
+            "pixel ({x}, {y}): gpu {g:?} vs f64 {e:?} at {p:?}; gpu pos {:?} normal {:?}",
+            frame.position.at(x, y),
+            frame.normal.at(x, y)
+        );
     }
 }
 
@@ -169,18 +244,45 @@ fn procedural_scenes_are_deterministic_finite_and_lit() {
         let scene = lit_scene(name);
         let a = render(&scene, w, h);
         let b = render(&scene, w, h);
-        assert!(a.color.data == b.color.data && a.depth == b.depth, "{name}: two runs differ");
-        assert_eq!(a.color.non_finite_count(), 0, "{name}: NaN or Inf in colour");
-        assert_eq!(a.position.non_finite_count() + a.normal.non_finite_count(), 0, "{name}: NaN or Inf in position/normal");
+        assert!(
+            a.color.data == b.color.data && a.depth == b.depth,
+            "{name}: two runs differ"
+        );
+        assert_eq!(
+            a.color.non_finite_count(),
+            0,
+            "{name}: NaN or Inf in colour"
+        );
+        assert_eq!(
+            a.position.non_finite_count() + a.normal.non_finite_count(),
+            0,
+            "{name}: NaN or Inf in position/normal"
+        );
         let covered = a.position.data.iter().filter(|p| p[3] == 1.0).count();
-        let lit = a.color.data.iter().zip(&a.position.data).filter(|(c, p)| p[3] == 1.0 && c[..3].iter().any(|&v| v > 0.0)).count();
+        let lit = a
+            .color
+            .data
+            .iter()
+            .zip(&a.position.data)
+            .filter(|(c, p)| p[3] == 1.0 && c[..3].iter().any(|&v| v > 0.0))
+            .count();
         let total = (w * h) as usize;
         println!("{name}: covered {covered}/{total}, lit {lit}/{covered}");
-        assert!(covered * 4 >= total, "{name}: only {covered} of {total} pixels covered");
-        assert!(lit * 5 >= covered, "{name}: only {lit} of {covered} covered pixels lit");
+        assert!(
+            covered * 4 >= total,
+            "{name}: only {covered} of {total} pixels covered"
+        );
+        assert!(
+            lit * 5 >= covered,
+            "{name}: only {lit} of {covered} covered pixels lit"
+        );
         // Depth is 1.0 exactly where nothing was drawn.
         for (d, p) in a.depth.iter().zip(&a.position.data) {
-            assert_eq!(*d == 1.0, p[3] == 0.0, "{name}: depth and coverage disagree");
+            assert_eq!(
+                *d == 1.0,
+                p[3] == 0.0,
+                "{name}: depth and coverage disagree"
+            );
         }
     }
 }
@@ -201,12 +303,19 @@ fn reference_passes_are_timed() {
     let camera = Camera::perspective(Vec3::new(0.0, 6.0, 6.0), Vec3::ZERO, 60.0, 0.1, 50.0);
     let scene = plane_scene(vec![Light::point(Vec3::Y, 3.0, Vec3::ONE, 1.0)], camera);
     let gpu_scene = GpuScene::upload(&ctx, &scene, &camera, 32, 32).unwrap();
-    let frame = ReferenceRenderer::new(&ctx, &gpu_scene).render(&ctx, &gpu_scene, 32, 32).unwrap();
+    let frame = ReferenceRenderer::new(&ctx, &gpu_scene)
+        .render(&ctx, &gpu_scene, 32, 32)
+        .unwrap();
     if !ctx.features.timestamps {
-        assert!(frame.timings.is_none(), "no timestamps, yet timings were reported");
+        assert!(
+            frame.timings.is_none(),
+            "no timestamps, yet timings were reported"
+        );
         return;
     }
-    let t = frame.timings.expect("timestamps negotiated, so timings are reported");
+    let t = frame
+        .timings
+        .expect("timestamps negotiated, so timings are reported");
     let labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
     assert_eq!(labels, ["prepass.depth", "shade.reference"]);
     for p in &t {

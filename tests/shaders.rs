@@ -5,19 +5,31 @@
 use std::collections::BTreeSet;
 use std::path::Path;
 
+use std::mem::offset_of;
+
+use manylights_cull::layout::{GpuCullParams, GpuTileDepth};
 use manylights_gpu::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex};
 use manylights_gpu::shaders::ShaderDef;
 
 fn all_shaders() -> Vec<ShaderDef> {
-    manylights_gpu::shaders::SHADERS.iter().chain(manylights_shade::SHADERS).copied().collect()
+    manylights_gpu::shaders::SHADERS
+        .iter()
+        .chain(manylights_shade::SHADERS)
+        .chain(manylights_cull::gpu::SHADERS)
+        .copied()
+        .collect()
 }
 
 fn validate(def: &ShaderDef) -> naga::Module {
     let src = def.compose();
-    let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-        .validate(&module)
+    let module = naga::front::wgsl::parse_str(&src)
         .unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
     module
 }
 
@@ -25,13 +37,20 @@ fn validate(def: &ShaderDef) -> naga::Module {
 fn every_shader_validates_with_naga() {
     for def in all_shaders() {
         let m = validate(&def);
-        assert!(!m.entry_points.is_empty(), "{} has no entry point", def.name);
+        assert!(
+            !m.entry_points.is_empty(),
+            "{} has no entry point",
+            def.name
+        );
     }
 }
 
 #[test]
 fn every_wgsl_file_is_used_by_a_shader() {
-    let used: BTreeSet<String> = all_shaders().iter().flat_map(|d| d.files.iter().map(|f| f.path.to_owned())).collect();
+    let used: BTreeSet<String> = all_shaders()
+        .iter()
+        .flat_map(|d| d.files.iter().map(|f| f.path.to_owned()))
+        .collect();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let mut stack = vec![root.clone()];
     let mut found = Vec::new();
@@ -41,23 +60,40 @@ fn every_wgsl_file_is_used_by_a_shader() {
             if p.is_dir() {
                 stack.push(p);
             } else if p.extension().is_some_and(|x| x == "wgsl") {
-                found.push(p.strip_prefix(&root).unwrap().to_string_lossy().replace('\\', "/"));
+                found.push(
+                    p.strip_prefix(&root)
+                        .unwrap()
+                        .to_string_lossy()
+                        .replace('\\', "/"),
+                );
             }
         }
     }
     assert!(!found.is_empty());
     for f in found {
-        assert!(used.contains(&f), "shaders/{f} is not part of any ShaderDef, so nothing validates it");
+        assert!(
+            used.contains(&f),
+            "shaders/{f} is not part of any ShaderDef, so nothing validates it"
+        );
     }
 }
 
 /// naga's (size, [(member, offset)]) of the struct `name` in `module`.
 fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
-    let ty = module.types.iter().find(|(_, t)| t.name.as_deref() == Some(name)).unwrap_or_else(|| panic!("no struct {name}")).1;
+    let ty = module
+        .types
+        .iter()
+        .find(|(_, t)| t.name.as_deref() == Some(name))
+        .unwrap_or_else(|| panic!("no struct {name}"))
+        .1;
     match &ty.inner {
-        naga::TypeInner::Struct { members, span } => {
-            (*span, members.iter().map(|m| (m.name.clone().unwrap_or_default(), m.offset)).collect())
-        }
+        naga::TypeInner::Struct { members, span } => (
+            *span,
+            members
+                .iter()
+                .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                .collect(),
+        ),
         other => panic!("{name} is not a struct: {other:?}"),
     }
 }
@@ -80,12 +116,56 @@ fn host_structs_match_wgsl_layout() {
     check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
         direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer"]);
     check!(GpuMaterial, "Material", [base_color => "base_color", specular => "specular"]);
+    let cull = validate(&manylights_cull::gpu::DEPTH_BOUNDS);
+    let (size, members) = wgsl_layout(&cull, "CullParams");
+    assert_eq!(size as usize, size_of::<GpuCullParams>());
+    let expect = [
+        ("tiles_x", offset_of!(GpuCullParams, tiles_x)),
+        ("light_count", offset_of!(GpuCullParams, light_count)),
+        ("slices", offset_of!(GpuCullParams, slices)),
+        ("flags", offset_of!(GpuCullParams, flags)),
+        ("bins", offset_of!(GpuCullParams, bins)),
+        ("near", offset_of!(GpuCullParams, near)),
+        ("slack", offset_of!(GpuCullParams, slack)),
+        ("slice_scale", offset_of!(GpuCullParams, slice_scale)),
+    ];
+    for (name, off) in expect {
+        assert_eq!(
+            members.iter().find(|m| m.0 == name).map(|m| m.1 as usize),
+            Some(off),
+            "CullParams.{name}"
+        );
+    }
+    let (size, members) = wgsl_layout(&cull, "TileDepth");
+    assert_eq!(size as usize, size_of::<GpuTileDepth>());
+    let expect = [
+        ("dmin", offset_of!(GpuTileDepth, dmin)),
+        ("dmax", offset_of!(GpuTileDepth, dmax)),
+        ("mask", offset_of!(GpuTileDepth, mask)),
+        ("covered", offset_of!(GpuTileDepth, covered)),
+    ];
+    for (name, off) in expect {
+        assert_eq!(
+            members.iter().find(|m| m.0 == name).map(|m| m.1 as usize),
+            Some(off),
+            "TileDepth.{name}"
+        );
+    }
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.
     let (_, members) = wgsl_layout(&reference, "VertexIn");
     let attrs = manylights_gpu::layout::VERTEX_LAYOUT.attributes;
     assert_eq!(members.len(), attrs.len());
-    assert_eq!(attrs[0].offset as usize, std::mem::offset_of!(GpuVertex, position));
-    assert_eq!(attrs[1].offset as usize, std::mem::offset_of!(GpuVertex, normal));
-    assert_eq!(attrs[2].offset as usize, std::mem::offset_of!(GpuVertex, material));
+    assert_eq!(
+        attrs[0].offset as usize,
+        std::mem::offset_of!(GpuVertex, position)
+    );
+    assert_eq!(
+        attrs[1].offset as usize,
+        std::mem::offset_of!(GpuVertex, normal)
+    );
+    assert_eq!(
+        attrs[2].offset as usize,
+        std::mem::offset_of!(GpuVertex, material)
+    );
 }

@@ -83,12 +83,18 @@ pub struct GpuContext {
 
 impl fmt::Debug for GpuContext {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("GpuContext").field("info", &self.info).field("features", &self.features).finish_non_exhaustive()
+        f.debug_struct("GpuContext")
+            .field("info", &self.info)
+            .field("features", &self.features)
+            .finish_non_exhaustive()
     }
 }
 
 fn describe(i: usize, info: &wgpu::AdapterInfo) -> String {
-    format!("  [{i}] {} ({:?}, {:?}, driver {} {})", info.name, info.device_type, info.backend, info.driver, info.driver_info)
+    format!(
+        "  [{i}] {} ({:?}, {:?}, driver {} {})",
+        info.name, info.device_type, info.backend, info.driver, info.driver_info
+    )
 }
 
 impl GpuContext {
@@ -107,10 +113,19 @@ impl GpuContext {
                  `apt-get install mesa-vulkan-drivers libvulkan1`, or run `bash scripts/ensure-vulkan.sh`)"
                     .to_owned()
             } else {
-                infos.iter().enumerate().map(|(i, a)| describe(i, a)).collect::<Vec<_>>().join("\n")
+                infos
+                    .iter()
+                    .enumerate()
+                    .map(|(i, a)| describe(i, a))
+                    .collect::<Vec<_>>()
+                    .join("\n")
             }
         };
-        let wanted = options.adapter.clone().or_else(|| std::env::var(ADAPTER_ENV).ok()).filter(|s| !s.is_empty());
+        let wanted = options
+            .adapter
+            .clone()
+            .or_else(|| std::env::var(ADAPTER_ENV).ok())
+            .filter(|s| !s.is_empty());
         let index = match &wanted {
             Some(w) => {
                 let lw = w.to_lowercase();
@@ -129,10 +144,18 @@ impl GpuContext {
                 };
                 (0..infos.len())
                     .min_by_key(|&i| rank(infos[i].device_type))
-                    .ok_or_else(|| GpuError::NoAdapter(format!("no GPU adapter found; adapters found:\n{}", listing())))?
+                    .ok_or_else(|| {
+                        GpuError::NoAdapter(format!(
+                            "no GPU adapter found; adapters found:\n{}",
+                            listing()
+                        ))
+                    })?
             }
         };
-        let adapter = adapters.into_iter().nth(index).expect("index comes from the same list");
+        let adapter = adapters
+            .into_iter()
+            .nth(index)
+            .expect("index comes from the same list");
         let info = infos[index].clone();
         let offered = adapter.features();
         let mut required = wgpu::Features::empty();
@@ -148,13 +171,18 @@ impl GpuContext {
             required_limits: limits.clone(),
             ..Default::default()
         }))
-        .map_err(|source| GpuError::Device { adapter: info.name.clone(), source })?;
+        .map_err(|source| GpuError::Device {
+            adapter: info.name.clone(),
+            source,
+        })?;
         // wgpu reports validation errors and device loss asynchronously; keep the first one and
         // turn it into an error at the next wait, instead of a panic inside wgpu's callback.
         let errors = std::sync::Arc::new(std::sync::Mutex::new(None::<String>));
         let sink = errors.clone();
         device.on_uncaptured_error(std::sync::Arc::new(move |e| {
-            let mut first = sink.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+            let mut first = sink
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
             first.get_or_insert_with(|| e.to_string());
         }));
         let features = Negotiated {
@@ -162,7 +190,15 @@ impl GpuContext {
             subgroups: required.contains(wgpu::Features::SUBGROUP),
             subgroup_size: (info.subgroup_min_size, info.subgroup_max_size),
         };
-        Ok(Self { adapter, device, queue, info, features, limits, errors })
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            info,
+            features,
+            limits,
+            errors,
+        })
     }
 
     /// One line naming the adapter, driver and negotiated features, for logs and results.
@@ -173,7 +209,11 @@ impl GpuContext {
             self.info.backend,
             self.info.driver,
             self.info.driver_info,
-            if self.features.timestamps { "yes" } else { "no" },
+            if self.features.timestamps {
+                "yes"
+            } else {
+                "no"
+            },
             if self.features.subgroups { "yes" } else { "no" },
             self.features.subgroup_size.0,
             self.features.subgroup_size.1,
@@ -185,7 +225,12 @@ impl GpuContext {
         let limit = self.limits.max_texture_dimension_2d;
         for (what, v) in [("width", width), ("height", height)] {
             if v > limit {
-                return Err(GpuError::OverLimit { what: what.into(), value: v.into(), limit: limit.into(), limit_name: "max_texture_dimension_2d" });
+                return Err(GpuError::OverLimit {
+                    what: what.into(),
+                    value: v.into(),
+                    limit: limit.into(),
+                    limit_name: "max_texture_dimension_2d",
+                });
             }
         }
         Ok(())
@@ -193,28 +238,53 @@ impl GpuContext {
 
     /// Checks a storage buffer size against the device's binding limit.
     pub fn check_storage(&self, what: &str, bytes: u64) -> Result<(), GpuError> {
-        let limit = self.limits.max_storage_buffer_binding_size.min(self.limits.max_buffer_size);
+        let limit = self
+            .limits
+            .max_storage_buffer_binding_size
+            .min(self.limits.max_buffer_size);
         if bytes > limit {
-            return Err(GpuError::OverLimit { what: what.into(), value: bytes, limit, limit_name: "max_storage_buffer_binding_size" });
+            return Err(GpuError::OverLimit {
+                what: what.into(),
+                value: bytes,
+                limit,
+                limit_name: "max_storage_buffer_binding_size",
+            });
         }
         Ok(())
     }
 
     /// Submits, waits for the queue to drain, and turns a lost device into an error.
-    pub fn submit_and_wait(&self, encoder: wgpu::CommandEncoder, during: &str) -> Result<(), GpuError> {
+    pub fn submit_and_wait(
+        &self,
+        encoder: wgpu::CommandEncoder,
+        during: &str,
+    ) -> Result<(), GpuError> {
         let index = self.queue.submit([encoder.finish()]);
         self.device
-            .poll(wgpu::PollType::Wait { submission_index: Some(index), timeout: None })
-            .map_err(|e| GpuError::Runtime { during: during.into(), message: e.to_string() })?;
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Runtime {
+                during: during.into(),
+                message: e.to_string(),
+            })?;
         self.check(during)
     }
 
     /// Returns the first asynchronous wgpu error (validation, out of memory, device lost) seen
     /// since the device was created, if any.
     pub fn check(&self, during: &str) -> Result<(), GpuError> {
-        let first = self.errors.lock().unwrap_or_else(std::sync::PoisonError::into_inner).take();
+        let first = self
+            .errors
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .take();
         match first {
-            Some(message) => Err(GpuError::Runtime { during: during.into(), message }),
+            Some(message) => Err(GpuError::Runtime {
+                during: during.into(),
+                message,
+            }),
             None => Ok(()),
         }
     }

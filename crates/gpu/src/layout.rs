@@ -108,7 +108,17 @@ impl From<&Light> for GpuLight {
                 (axis, LIGHT_KIND_SPOT, ci, co)
             }
         };
-        Self { position: l.position, radius: l.radius, color: l.color, intensity: l.intensity, direction, kind, cos_inner, cos_outer, _pad: [0; 2] }
+        Self {
+            position: l.position,
+            radius: l.radius,
+            color: l.color,
+            intensity: l.intensity,
+            direction,
+            kind,
+            cos_inner,
+            cos_outer,
+            _pad: [0; 2],
+        }
     }
 }
 
@@ -125,7 +135,10 @@ const _: () = assert!(size_of::<GpuMaterial>() == 16);
 
 impl From<&Material> for GpuMaterial {
     fn from(m: &Material) -> Self {
-        Self { base_color: m.base_color, specular: m.specular }
+        Self {
+            base_color: m.base_color,
+            specular: m.specular,
+        }
     }
 }
 

@@ -33,12 +33,27 @@ pub struct GpuScene {
 
 impl GpuScene {
     /// Uploads `scene` (which must validate) and sets the frame for `camera` at `width` x `height`.
-    pub fn upload(ctx: &GpuContext, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<Self, GpuError> {
+    pub fn upload(
+        ctx: &GpuContext,
+        scene: &Scene,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, GpuError> {
         let mut vertices = Vec::with_capacity(scene.vertex_count());
         let mut indices = Vec::with_capacity(scene.triangle_count() * 3);
         for p in &scene.primitives {
             let base = vertices.len() as u32;
-            vertices.extend(p.positions.iter().zip(&p.normals).map(|(&position, &normal)| GpuVertex { position, normal, material: p.material }));
+            vertices.extend(
+                p.positions
+                    .iter()
+                    .zip(&p.normals)
+                    .map(|(&position, &normal)| GpuVertex {
+                        position,
+                        normal,
+                        material: p.material,
+                    }),
+            );
             indices.extend(p.indices.iter().map(|i| base + i));
         }
         let light_count = u32::try_from(scene.lights.len()).map_err(|_| GpuError::OverLimit {
@@ -51,23 +66,60 @@ impl GpuScene {
         if lights.is_empty() {
             lights.push(bytemuck::Zeroable::zeroed());
         }
-        ctx.check_storage("light buffer bytes", (lights.len() * size_of::<GpuLight>()) as u64)?;
-        ctx.check_storage("vertex buffer bytes", (vertices.len().max(1) * size_of::<GpuVertex>()) as u64)?;
+        ctx.check_storage(
+            "light buffer bytes",
+            (lights.len() * size_of::<GpuLight>()) as u64,
+        )?;
+        ctx.check_storage(
+            "vertex buffer bytes",
+            (vertices.len().max(1) * size_of::<GpuVertex>()) as u64,
+        )?;
         let materials: Vec<GpuMaterial> = scene.materials.iter().map(GpuMaterial::from).collect();
         let d = &ctx.device;
-        let init = |label, contents: &[u8], usage| d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage });
+        let init = |label, contents: &[u8], usage| {
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
         let copy = wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC;
-        let vertices_buf = init("scene.vertices", cast_slice(&vertices), wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | copy);
-        let indices_buf = init("scene.indices", cast_slice(&indices), wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | copy);
-        let lights_buf = init("scene.lights", cast_slice(&lights), wgpu::BufferUsages::STORAGE | copy);
-        let materials_buf = init("scene.materials", cast_slice(&materials), wgpu::BufferUsages::STORAGE | copy);
+        let vertices_buf = init(
+            "scene.vertices",
+            cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::STORAGE | copy,
+        );
+        let indices_buf = init(
+            "scene.indices",
+            cast_slice(&indices),
+            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::STORAGE | copy,
+        );
+        let lights_buf = init(
+            "scene.lights",
+            cast_slice(&lights),
+            wgpu::BufferUsages::STORAGE | copy,
+        );
+        let materials_buf = init(
+            "scene.materials",
+            cast_slice(&materials),
+            wgpu::BufferUsages::STORAGE | copy,
+        );
         let frame = GpuFrame::new(camera, width, height, light_count);
-        let frame_buf = init("scene.frame", bytemuck::bytes_of(&frame), wgpu::BufferUsages::UNIFORM | copy);
-        let vis = wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+        let frame_buf = init(
+            "scene.frame",
+            bytemuck::bytes_of(&frame),
+            wgpu::BufferUsages::UNIFORM | copy,
+        );
+        let vis =
+            wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
         let storage = |binding| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: vis,
-            ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
             count: None,
         };
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -76,7 +128,11 @@ impl GpuScene {
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
                     visibility: vis,
-                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
                     count: None,
                 },
                 storage(1),
@@ -87,9 +143,18 @@ impl GpuScene {
             label: Some("scene.group0"),
             layout: &layout,
             entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: frame_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: lights_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 2, resource: materials_buf.as_entire_binding() },
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: frame_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: lights_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: materials_buf.as_entire_binding(),
+                },
             ],
         });
         Ok(Self {
@@ -108,7 +173,8 @@ impl GpuScene {
     /// Rewrites the frame uniform for another camera or resolution.
     pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32) {
         let frame = GpuFrame::new(camera, width, height, self.light_count);
-        ctx.queue.write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        ctx.queue
+            .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
     }
 
     /// Binds group 0 and the geometry, and draws every triangle.

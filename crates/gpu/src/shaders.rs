@@ -24,7 +24,11 @@ macro_rules! shader_file {
     ($path:literal) => {
         $crate::shaders::ShaderFile {
             path: $path,
-            source: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/../../shaders/", $path)),
+            source: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/../../shaders/",
+                $path
+            )),
         }
     };
 }
@@ -38,11 +42,22 @@ pub const LIGHT: ShaderFile = shader_file!("common/light.wgsl");
 /// Material and shading model.
 pub const SHADING: ShaderFile = shader_file!("common/shading.wgsl");
 
-/// A shader: a name (its profiler scope) and its files in order.
+/// A constant generated into a shader's prelude from its Rust definition.
+#[derive(Clone, Copy, Debug)]
+pub enum WgslConst {
+    /// `const NAME: u32 = value;`
+    U32(&'static str, u32),
+    /// `const NAME: f32 = value;`
+    F32(&'static str, f32),
+}
+
+/// A shader: a name (its profiler scope), extra constants, and its files in order.
 #[derive(Clone, Copy, Debug)]
 pub struct ShaderDef {
     /// Pass name, such as `prepass.depth`.
     pub name: &'static str,
+    /// Constants added to the common prelude (from the Rust constants of the defining crate).
+    pub consts: &'static [WgslConst],
     /// Files, concatenated in this order after the prelude.
     pub files: &'static [ShaderFile],
 }
@@ -51,6 +66,12 @@ impl ShaderDef {
     /// The full WGSL text.
     pub fn compose(&self) -> String {
         let mut s = wgsl_prelude();
+        for c in self.consts {
+            match c {
+                WgslConst::U32(name, v) => s.push_str(&format!("const {name}: u32 = {v}u;\n")),
+                WgslConst::F32(name, v) => s.push_str(&format!("const {name}: f32 = {v:?};\n")),
+            }
+        }
         for f in self.files {
             s.push_str("\n// ---- shaders/");
             s.push_str(f.path);
@@ -70,7 +91,11 @@ impl ShaderDef {
 }
 
 /// The depth prepass: the shared vertex stage alone.
-pub const PREPASS: ShaderDef = ShaderDef { name: "prepass.depth", files: &[FRAME, VERTEX] };
+pub const PREPASS: ShaderDef = ShaderDef {
+    name: "prepass.depth",
+    consts: &[],
+    files: &[FRAME, VERTEX],
+};
 
 /// Every shader this crate defines.
 pub const SHADERS: &[ShaderDef] = &[PREPASS];

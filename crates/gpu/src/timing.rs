@@ -55,7 +55,12 @@ impl GpuTimer {
     pub fn new(ctx: &GpuContext, capacity: u32) -> Self {
         let capacity = capacity.clamp(1, MAX_QUERIES / 2);
         if !ctx.features.timestamps {
-            return Self { set: None, resolve: None, passes: Vec::new(), capacity };
+            return Self {
+                set: None,
+                resolve: None,
+                passes: Vec::new(),
+                capacity,
+            };
         }
         let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
             label: Some("timer"),
@@ -68,7 +73,12 @@ impl GpuTimer {
             usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        Self { set: Some(set), resolve: Some(resolve), passes: Vec::new(), capacity }
+        Self {
+            set: Some(set),
+            resolve: Some(resolve),
+            passes: Vec::new(),
+            capacity,
+        }
     }
 
     /// Whether this timer records anything.
@@ -79,27 +89,33 @@ impl GpuTimer {
     fn next(&mut self, label: &str, kind: PassKind) -> Option<(&wgpu::QuerySet, u32)> {
         let set = self.set.as_ref()?;
         let i = self.passes.len() as u32;
-        assert!(i < self.capacity, "GpuTimer: more than {} passes in one timer", self.capacity);
+        assert!(
+            i < self.capacity,
+            "GpuTimer: more than {} passes in one timer",
+            self.capacity
+        );
         self.passes.push((label.to_owned(), kind));
         Some((set, i * 2))
     }
 
     /// Timestamp writes for a render pass named `label`.
     pub fn render_pass(&mut self, label: &str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        self.next(label, PassKind::Raster).map(|(query_set, q)| wgpu::RenderPassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(q),
-            end_of_pass_write_index: Some(q + 1),
-        })
+        self.next(label, PassKind::Raster)
+            .map(|(query_set, q)| wgpu::RenderPassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(q),
+                end_of_pass_write_index: Some(q + 1),
+            })
     }
 
     /// Timestamp writes for a compute pass named `label`.
     pub fn compute_pass(&mut self, label: &str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.next(label, PassKind::Compute).map(|(query_set, q)| wgpu::ComputePassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(q),
-            end_of_pass_write_index: Some(q + 1),
-        })
+        self.next(label, PassKind::Compute)
+            .map(|(query_set, q)| wgpu::ComputePassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(q),
+                end_of_pass_write_index: Some(q + 1),
+            })
     }
 
     /// Resolves the queries written so far; call once, at the end of the encoder.
@@ -115,7 +131,9 @@ impl GpuTimer {
     /// Reads the timings back after the submission finished. `Ok(None)` when the adapter has no
     /// timestamp queries.
     pub fn read(&self, ctx: &GpuContext) -> Result<Option<Vec<PassTiming>>, GpuError> {
-        let Some(buf) = &self.resolve else { return Ok(None) };
+        let Some(buf) = &self.resolve else {
+            return Ok(None);
+        };
         if self.passes.is_empty() {
             return Ok(Some(Vec::new()));
         }
@@ -128,7 +146,11 @@ impl GpuTimer {
                 .enumerate()
                 .map(|(i, (label, kind))| {
                     let dt = ticks[2 * i + 1].wrapping_sub(ticks[2 * i]);
-                    PassTiming { label: label.clone(), kind: *kind, ms: dt as f64 * period * 1e-6 }
+                    PassTiming {
+                        label: label.clone(),
+                        kind: *kind,
+                        ms: dt as f64 * period * 1e-6,
+                    }
                 })
                 .collect(),
         ))

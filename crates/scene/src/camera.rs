@@ -56,41 +56,95 @@ pub struct Camera {
 impl Camera {
     /// A perspective camera looking from `position` at `target` with +Y up.
     pub fn perspective(position: Vec3, target: Vec3, fov_y_deg: f32, near: f32, far: f32) -> Self {
-        Self { position, target, up: Vec3::Y, projection: Projection::Perspective { fov_y_deg, near, far } }
+        Self {
+            position,
+            target,
+            up: Vec3::Y,
+            projection: Projection::Perspective {
+                fov_y_deg,
+                near,
+                far,
+            },
+        }
     }
 
     /// Checks that the pose and projection are usable; errors name the field and value.
     pub fn validate(&self) -> Result<(), SceneError> {
-        for (name, v) in [("position", self.position), ("target", self.target), ("up", self.up)] {
+        for (name, v) in [
+            ("position", self.position),
+            ("target", self.target),
+            ("up", self.up),
+        ] {
             if !v.is_finite() {
-                return Err(SceneError::invalid(format!("camera.{name}"), format!("{v:?}"), "finite coordinates"));
+                return Err(SceneError::invalid(
+                    format!("camera.{name}"),
+                    format!("{v:?}"),
+                    "finite coordinates",
+                ));
             }
         }
         let forward = self.target - self.position;
         if forward.length_squared() < 1e-12 {
-            return Err(SceneError::invalid("camera.target", format!("{:?}", self.target), "a point different from camera.position"));
+            return Err(SceneError::invalid(
+                "camera.target",
+                format!("{:?}", self.target),
+                "a point different from camera.position",
+            ));
         }
-        if forward.normalize().cross(self.up.normalize_or_zero()).length_squared() < 1e-10 {
-            return Err(SceneError::invalid("camera.up", format!("{:?}", self.up), "a direction not parallel to the view direction"));
+        if forward
+            .normalize()
+            .cross(self.up.normalize_or_zero())
+            .length_squared()
+            < 1e-10
+        {
+            return Err(SceneError::invalid(
+                "camera.up",
+                format!("{:?}", self.up),
+                "a direction not parallel to the view direction",
+            ));
         }
         match self.projection {
-            Projection::Perspective { fov_y_deg, near, far } => {
+            Projection::Perspective {
+                fov_y_deg,
+                near,
+                far,
+            } => {
                 if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
-                    return Err(SceneError::invalid("camera.fov_y_deg", fov_y_deg, "a value in (0, 180) degrees"));
+                    return Err(SceneError::invalid(
+                        "camera.fov_y_deg",
+                        fov_y_deg,
+                        "a value in (0, 180) degrees",
+                    ));
                 }
                 if !(near > 0.0 && near.is_finite()) {
-                    return Err(SceneError::invalid("camera.near", near, "a finite value > 0"));
+                    return Err(SceneError::invalid(
+                        "camera.near",
+                        near,
+                        "a finite value > 0",
+                    ));
                 }
                 if !(far > near && far.is_finite()) {
-                    return Err(SceneError::invalid("camera.far", far, format!("a finite value > near ({near})")));
+                    return Err(SceneError::invalid(
+                        "camera.far",
+                        far,
+                        format!("a finite value > near ({near})"),
+                    ));
                 }
             }
             Projection::Orthographic { height, near, far } => {
                 if !(height > 0.0 && height.is_finite()) {
-                    return Err(SceneError::invalid("camera.height", height, "a finite value > 0"));
+                    return Err(SceneError::invalid(
+                        "camera.height",
+                        height,
+                        "a finite value > 0",
+                    ));
                 }
                 if !(near.is_finite() && far.is_finite() && far > near) {
-                    return Err(SceneError::invalid("camera.far", far, format!("a finite value > near ({near})")));
+                    return Err(SceneError::invalid(
+                        "camera.far",
+                        far,
+                        format!("a finite value > near ({near})"),
+                    ));
                 }
             }
         }
@@ -105,7 +159,11 @@ impl Camera {
     /// View to clip space for a target of the given aspect ratio (width / height), depth in [0, 1].
     pub fn clip_from_view(&self, aspect: f32) -> Mat4 {
         match self.projection {
-            Projection::Perspective { fov_y_deg, near, far } => {
+            Projection::Perspective {
+                fov_y_deg,
+                near,
+                far,
+            } => {
                 // glam's `directx` constructors give WebGPU's clip space: NDC z in [0, 1], +Y up.
                 directx::perspective(fov_y_deg.to_radians(), aspect, near, far)
             }
@@ -125,7 +183,8 @@ impl Camera {
     /// `(near, far)` distances of the projection.
     pub fn near_far(&self) -> (f32, f32) {
         match self.projection {
-            Projection::Perspective { near, far, .. } | Projection::Orthographic { near, far, .. } => (near, far),
+            Projection::Perspective { near, far, .. }
+            | Projection::Orthographic { near, far, .. } => (near, far),
         }
     }
 
@@ -152,9 +211,26 @@ mod tests {
     #[test]
     fn bad_cameras_are_rejected() {
         let mut cam = Camera::perspective(Vec3::ZERO, -Vec3::Z, 60.0, 0.5, 100.0);
-        cam.projection = Projection::Perspective { fov_y_deg: 200.0, near: 0.5, far: 100.0 };
-        assert!(cam.validate().unwrap_err().to_string().contains("fov_y_deg"));
-        let cam = Camera { up: Vec3::Z, ..Camera::perspective(Vec3::ZERO, -Vec3::Z, 60.0, 0.5, 1.0) };
-        assert!(cam.validate().unwrap_err().to_string().contains("camera.up"));
+        cam.projection = Projection::Perspective {
+            fov_y_deg: 200.0,
+            near: 0.5,
+            far: 100.0,
+        };
+        assert!(
+            cam.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("fov_y_deg")
+        );
+        let cam = Camera {
+            up: Vec3::Z,
+            ..Camera::perspective(Vec3::ZERO, -Vec3::Z, 60.0, 0.5, 1.0)
+        };
+        assert!(
+            cam.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("camera.up")
+        );
     }
 }

@@ -35,7 +35,15 @@ pub enum SceneError {
 
 impl SceneError {
     /// Shorthand for [`SceneError::InvalidValue`].
-    pub fn invalid(field: impl Into<String>, value: impl ToString, accepted: impl Into<String>) -> Self {
-        Self::InvalidValue { field: field.into(), value: value.to_string(), accepted: accepted.into() }
+    pub fn invalid(
+        field: impl Into<String>,
+        value: impl ToString,
+        accepted: impl Into<String>,
+    ) -> Self {
+        Self::InvalidValue {
+            field: field.into(),
+            value: value.to_string(),
+            accepted: accepted.into(),
+        }
     }
 }

@@ -77,32 +77,60 @@ impl LightSpec {
     /// Checks every field; the error names the field, the value and what is accepted.
     pub fn validate(&self) -> Result<(), SceneError> {
         if !(self.intensity.is_finite() && self.intensity >= 0.0) {
-            return Err(SceneError::invalid("lights.intensity", self.intensity, "a finite value >= 0"));
+            return Err(SceneError::invalid(
+                "lights.intensity",
+                self.intensity,
+                "a finite value >= 0",
+            ));
         }
         match self.radius {
             RadiusRule::Fixed(r) if !(r.is_finite() && r > 0.0) => {
-                return Err(SceneError::invalid("lights.radius", r, "a finite radius > 0"));
+                return Err(SceneError::invalid(
+                    "lights.radius",
+                    r,
+                    "a finite radius > 0",
+                ));
             }
             RadiusRule::Threshold(t) if !(t.is_finite() && t > 0.0) => {
-                return Err(SceneError::invalid("lights.threshold", t, "a finite cut-off threshold > 0"));
+                return Err(SceneError::invalid(
+                    "lights.threshold",
+                    t,
+                    "a finite cut-off threshold > 0",
+                ));
             }
             _ => {}
         }
         if !(0.0..=1.0).contains(&self.spot_fraction) {
-            return Err(SceneError::invalid("lights.spot_fraction", self.spot_fraction, "a fraction in [0, 1]"));
+            return Err(SceneError::invalid(
+                "lights.spot_fraction",
+                self.spot_fraction,
+                "a fraction in [0, 1]",
+            ));
         }
         if !(self.spot_outer_deg > 0.0 && self.spot_outer_deg <= 180.0) {
-            return Err(SceneError::invalid("lights.spot_outer_deg", self.spot_outer_deg, "a half-angle in (0, 180] degrees"));
+            return Err(SceneError::invalid(
+                "lights.spot_outer_deg",
+                self.spot_outer_deg,
+                "a half-angle in (0, 180] degrees",
+            ));
         }
         match self.generator {
             LightGenerator::SurfaceHugging { offset } if !(offset.is_finite() && offset >= 0.0) => {
-                Err(SceneError::invalid("lights.offset", offset, "a finite value >= 0"))
+                Err(SceneError::invalid(
+                    "lights.offset",
+                    offset,
+                    "a finite value >= 0",
+                ))
             }
-            LightGenerator::Clustered { clusters, .. } if clusters == 0 => {
-                Err(SceneError::invalid("lights.clusters", clusters, "an integer >= 1"))
-            }
+            LightGenerator::Clustered { clusters, .. } if clusters == 0 => Err(
+                SceneError::invalid("lights.clusters", clusters, "an integer >= 1"),
+            ),
             LightGenerator::Clustered { spread, .. } if !(spread.is_finite() && spread > 0.0) => {
-                Err(SceneError::invalid("lights.spread", spread, "a finite value > 0"))
+                Err(SceneError::invalid(
+                    "lights.spread",
+                    spread,
+                    "a finite value > 0",
+                ))
             }
             _ => Ok(()),
         }
@@ -113,20 +141,35 @@ impl LightSpec {
         self.validate()?;
         let b = scene.light_bounds;
         if !b.is_valid() {
-            return Err(SceneError::invalid("scene.light_bounds", format!("{b:?}"), "a non-empty box"));
+            return Err(SceneError::invalid(
+                "scene.light_bounds",
+                format!("{b:?}"),
+                "a non-empty box",
+            ));
         }
         let mut rng = Pcg64::seed_from_u64(self.seed);
         let n = self.count as usize;
-        let uniform = |rng: &mut Pcg64| b.min + b.extent() * Vec3::new(rng.random::<f32>(), rng.random::<f32>(), rng.random::<f32>());
+        let uniform = |rng: &mut Pcg64| {
+            b.min
+                + b.extent()
+                    * Vec3::new(
+                        rng.random::<f32>(),
+                        rng.random::<f32>(),
+                        rng.random::<f32>(),
+                    )
+        };
         let positions: Vec<Vec3> = match self.generator {
             LightGenerator::Uniform => (0..n).map(|_| uniform(&mut rng)).collect(),
-            LightGenerator::SurfaceHugging { offset } => surface_points(scene, n, offset, &mut rng)?,
+            LightGenerator::SurfaceHugging { offset } => {
+                surface_points(scene, n, offset, &mut rng)?
+            }
             LightGenerator::Clustered { clusters, spread } => {
                 let centres: Vec<Vec3> = (0..clusters).map(|_| uniform(&mut rng)).collect();
                 (0..n)
                     .map(|i| {
                         let c = centres[i % centres.len()];
-                        let g = Vec3::new(gaussian(&mut rng), gaussian(&mut rng), gaussian(&mut rng));
+                        let g =
+                            Vec3::new(gaussian(&mut rng), gaussian(&mut rng), gaussian(&mut rng));
                         (c + g * spread).clamp(b.min, b.max)
                     })
                     .collect()
@@ -139,19 +182,32 @@ impl LightSpec {
                 let color = hue_to_rgb(rng.random::<f32>());
                 let radius = match self.radius {
                     RadiusRule::Fixed(r) => r,
-                    RadiusRule::Threshold(t) => (self.intensity * color.max_element() / t).sqrt().max(1e-3),
+                    RadiusRule::Threshold(t) => {
+                        (self.intensity * color.max_element() / t).sqrt().max(1e-3)
+                    }
                 };
                 let kind = if rng.random::<f32>() < self.spot_fraction {
                     // Mostly downward axes, tilted up to 60 degrees.
                     let tilt = rng.random::<f32>() * 60f32.to_radians();
                     let az = rng.random::<f32>() * std::f32::consts::TAU;
-                    let direction = Vec3::new(tilt.sin() * az.cos(), -tilt.cos(), tilt.sin() * az.sin());
+                    let direction =
+                        Vec3::new(tilt.sin() * az.cos(), -tilt.cos(), tilt.sin() * az.sin());
                     let outer = self.spot_outer_deg.to_radians();
-                    LightKind::Spot { direction, inner_angle: 0.8 * outer, outer_angle: outer }
+                    LightKind::Spot {
+                        direction,
+                        inner_angle: 0.8 * outer,
+                        outer_angle: outer,
+                    }
                 } else {
                     LightKind::Point
                 };
-                Light { kind, position, radius, color, intensity: self.intensity }
+                Light {
+                    kind,
+                    position,
+                    radius,
+                    color,
+                    intensity: self.intensity,
+                }
             })
             .collect();
         Ok(lights)
@@ -172,7 +228,12 @@ fn hue_to_rgb(h: f32) -> Vec3 {
     Vec3::new(c(0.0), c(4.0), c(2.0))
 }
 
-fn surface_points(scene: &Scene, n: usize, offset: f32, rng: &mut Pcg64) -> Result<Vec<Vec3>, SceneError> {
+fn surface_points(
+    scene: &Scene,
+    n: usize,
+    offset: f32,
+    rng: &mut Pcg64,
+) -> Result<Vec<Vec3>, SceneError> {
     // Cumulative triangle areas over the whole scene, then inverse-CDF sampling.
     let mut tris = Vec::new();
     let mut cdf = Vec::new();
@@ -189,7 +250,11 @@ fn surface_points(scene: &Scene, n: usize, offset: f32, rng: &mut Pcg64) -> Resu
         }
     }
     if tris.is_empty() {
-        return Err(SceneError::invalid("lights.generator", "SurfaceHugging", "a scene with at least one non-degenerate triangle"));
+        return Err(SceneError::invalid(
+            "lights.generator",
+            "SurfaceHugging",
+            "a scene with at least one non-degenerate triangle",
+        ));
     }
     Ok((0..n)
         .map(|_| {
@@ -227,8 +292,16 @@ fn light_field(min: Vec3, extent: Vec3, n: usize, rng: &mut Pcg64) -> Vec<Vec3> 
     order[..n]
         .iter()
         .map(|&c| {
-            let idx = Vec3::new((c % dims.x) as f32, ((c / dims.x) % dims.y) as f32, (c / (dims.x * dims.y)) as f32);
-            let jitter = Vec3::new(rng.random::<f32>(), rng.random::<f32>(), rng.random::<f32>());
+            let idx = Vec3::new(
+                (c % dims.x) as f32,
+                ((c / dims.x) % dims.y) as f32,
+                (c / (dims.x * dims.y)) as f32,
+            );
+            let jitter = Vec3::new(
+                rng.random::<f32>(),
+                rng.random::<f32>(),
+                rng.random::<f32>(),
+            );
             min + (idx + jitter) / dims.as_vec3() * extent
         })
         .collect()
@@ -240,7 +313,10 @@ mod tests {
     use crate::procedural::ProceduralScene;
 
     fn scene() -> Scene {
-        ProceduralScene::from_name("atrium").unwrap().build().unwrap()
+        ProceduralScene::from_name("atrium")
+            .unwrap()
+            .build()
+            .unwrap()
     }
 
     #[test]
@@ -249,11 +325,19 @@ mod tests {
         let gens = [
             LightGenerator::Uniform,
             LightGenerator::SurfaceHugging { offset: 0.1 },
-            LightGenerator::Clustered { clusters: 4, spread: 1.0 },
+            LightGenerator::Clustered {
+                clusters: 4,
+                spread: 1.0,
+            },
             LightGenerator::LightField,
         ];
         for g in gens {
-            let spec = LightSpec { generator: g, count: 3072, spot_fraction: 0.25, ..LightSpec::default() };
+            let spec = LightSpec {
+                generator: g,
+                count: 3072,
+                spot_fraction: 0.25,
+                ..LightSpec::default()
+            };
             let a = spec.generate(&s).unwrap();
             assert_eq!(a, spec.generate(&s).unwrap(), "{g:?} not deterministic");
             assert_eq!(a.len(), 3072);
@@ -263,7 +347,11 @@ mod tests {
             assert!(a.iter().any(|l| l.cone().is_some()), "{g:?}: no spots");
             if !matches!(g, LightGenerator::SurfaceHugging { .. }) {
                 let b = s.light_bounds;
-                assert!(a.iter().all(|l| l.position.cmpge(b.min).all() && l.position.cmple(b.max).all()), "{g:?} out of bounds");
+                assert!(
+                    a.iter()
+                        .all(|l| l.position.cmpge(b.min).all() && l.position.cmple(b.max).all()),
+                    "{g:?} out of bounds"
+                );
             }
             let other = LightSpec { seed: 2, ..spec }.generate(&s).unwrap();
             assert_ne!(a, other, "{g:?}: the seed changes nothing");
@@ -272,7 +360,12 @@ mod tests {
 
     #[test]
     fn threshold_radius_solves_the_inverse_square() {
-        let spec = LightSpec { radius: RadiusRule::Threshold(0.01), intensity: 4.0, count: 16, ..LightSpec::default() };
+        let spec = LightSpec {
+            radius: RadiusRule::Threshold(0.01),
+            intensity: 4.0,
+            count: 16,
+            ..LightSpec::default()
+        };
         for l in spec.generate(&scene()).unwrap() {
             let at_r = l.intensity * l.color.max_element() / (l.radius * l.radius);
             assert!((at_r - 0.01).abs() < 1e-5, "{at_r}");
@@ -281,9 +374,19 @@ mod tests {
 
     #[test]
     fn bad_specs_name_the_field() {
-        let e = LightSpec { radius: RadiusRule::Fixed(-1.0), ..LightSpec::default() }.validate().unwrap_err();
+        let e = LightSpec {
+            radius: RadiusRule::Fixed(-1.0),
+            ..LightSpec::default()
+        }
+        .validate()
+        .unwrap_err();
         assert!(e.to_string().contains("lights.radius = -1"), "{e}");
-        let e = LightSpec { intensity: f32::NAN, ..LightSpec::default() }.validate().unwrap_err();
+        let e = LightSpec {
+            intensity: f32::NAN,
+            ..LightSpec::default()
+        }
+        .validate()
+        .unwrap_err();
         assert!(e.to_string().contains("lights.intensity = NaN"), "{e}");
     }
 }

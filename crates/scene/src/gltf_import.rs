@@ -29,7 +29,9 @@ pub struct GltfOptions {
 
 impl Default for GltfOptions {
     fn default() -> Self {
-        Self { light_threshold: 0.01 }
+        Self {
+            light_threshold: 0.01,
+        }
     }
 }
 
@@ -47,15 +49,23 @@ const MAX_NODE_DEPTH: usize = 256;
 
 /// Imports a glTF file into a [`Scene`].
 pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport), SceneError> {
-    let err = |problem: String| SceneError::Gltf { path: path.to_path_buf(), problem };
+    let err = |problem: String| SceneError::Gltf {
+        path: path.to_path_buf(),
+        problem,
+    };
     if !path.is_file() {
         return Err(err("no such file".into()));
     }
     let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read: {e}")))?;
-    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| err(format!("cannot parse: {e}")))?;
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| err(format!("cannot parse: {e}")))?;
     let root = raw.document.into_json();
-    validate_schema(&root).map_err(|problem| err(format!("cannot parse: invalid glTF: {problem}")))?;
-    let gltf = gltf::Gltf { document: gltf::Document::from_json_without_validation(root), blob: raw.blob };
+    validate_schema(&root)
+        .map_err(|problem| err(format!("cannot parse: invalid glTF: {problem}")))?;
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json_without_validation(root),
+        blob: raw.blob,
+    };
     let base = path.parent();
     let buffers = gltf::import_buffers(&gltf.document, base, gltf.blob.clone())
         .map_err(|e| err(format!("cannot load buffers: {e}")))?;
@@ -65,10 +75,18 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
         .or_else(|| doc.scenes().next())
         .ok_or_else(|| err("the file has no scene".into()))?;
 
-    let mut out = Importer { buffers: &buffers, prims: Vec::new(), lights: Vec::new(), camera: None, report: ImportReport::default(), options };
+    let mut out = Importer {
+        buffers: &buffers,
+        prims: Vec::new(),
+        lights: Vec::new(),
+        camera: None,
+        report: ImportReport::default(),
+        options,
+    };
     let mut path_stack = Vec::new();
     for node in scene.nodes() {
-        out.visit(&node, Mat4::IDENTITY, &mut path_stack).map_err(err)?;
+        out.visit(&node, Mat4::IDENTITY, &mut path_stack)
+            .map_err(err)?;
     }
 
     let mut materials: Vec<Material> = doc
@@ -77,7 +95,11 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
             let pbr = m.pbr_metallic_roughness();
             let c = pbr.base_color_factor();
             let base = Vec3::new(c[0], c[1], c[2]);
-            let base = if base.is_finite() { base.clamp(Vec3::ZERO, Vec3::ONE) } else { Vec3::splat(0.8) };
+            let base = if base.is_finite() {
+                base.clamp(Vec3::ZERO, Vec3::ONE)
+            } else {
+                Vec3::splat(0.8)
+            };
             Material::new(base, (0.5 * (1.0 - pbr.roughness_factor())).clamp(0.0, 1.0))
         })
         .collect();
@@ -95,10 +117,22 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
     if primitives.is_empty() {
         return Err(err("the scene holds no triangle geometry".into()));
     }
-    let bounds = primitives.iter().flat_map(|p| p.positions.iter()).fold(Aabb::EMPTY, |b, &p| b.union_point(p));
+    let bounds = primitives
+        .iter()
+        .flat_map(|p| p.positions.iter())
+        .fold(Aabb::EMPTY, |b, &p| b.union_point(p));
     let camera = out.camera.unwrap_or_else(|| framing_camera(bounds));
-    let name = path.file_stem().map_or_else(|| "gltf".into(), |s| s.to_string_lossy().into_owned());
-    let result = Scene { name, primitives, materials, lights: out.lights, camera, light_bounds: bounds };
+    let name = path
+        .file_stem()
+        .map_or_else(|| "gltf".into(), |s| s.to_string_lossy().into_owned());
+    let result = Scene {
+        name,
+        primitives,
+        materials,
+        lights: out.lights,
+        camera,
+        light_bounds: bounds,
+    };
     result.validate().map_err(|e| err(e.to_string()))?;
     Ok((result, out.report))
 }
@@ -116,7 +150,11 @@ fn validate_schema(root: &gltf::json::Root) -> Result<(), String> {
             problems.push(format!("{path}: {error}"));
         }
     });
-    if problems.is_empty() { Ok(()) } else { Err(problems.join("; ")) }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(problems.join("; "))
+    }
 }
 
 /// A camera outside the bounds looking at their centre.
@@ -137,9 +175,17 @@ struct Importer<'a> {
 }
 
 impl Importer<'_> {
-    fn visit(&mut self, node: &gltf::Node<'_>, parent: Mat4, stack: &mut Vec<usize>) -> Result<(), String> {
+    fn visit(
+        &mut self,
+        node: &gltf::Node<'_>,
+        parent: Mat4,
+        stack: &mut Vec<usize>,
+    ) -> Result<(), String> {
         if stack.contains(&node.index()) {
-            return Err(format!("node {} is its own ancestor (the node hierarchy has a cycle)", node.index()));
+            return Err(format!(
+                "node {} is its own ancestor (the node hierarchy has a cycle)",
+                node.index()
+            ));
         }
         if stack.len() >= MAX_NODE_DEPTH {
             return Err(format!("node hierarchy deeper than {MAX_NODE_DEPTH}"));
@@ -153,13 +199,17 @@ impl Importer<'_> {
         if let Some(mesh) = node.mesh() {
             for (k, prim) in mesh.primitives().enumerate() {
                 let what = format!("mesh {} primitive {k}", mesh.index());
-                if let Some(p) = self.primitive(&prim, world).map_err(|e| format!("{what}: {e}"))? {
+                if let Some(p) = self
+                    .primitive(&prim, world)
+                    .map_err(|e| format!("{what}: {e}"))?
+                {
                     self.prims.push((p, prim.material().index()));
                 }
             }
         }
         if let Some(light) = node.light() {
-            self.light(&light, world).map_err(|e| format!("node {} light {}: {e}", node.index(), light.index()))?;
+            self.light(&light, world)
+                .map_err(|e| format!("node {} light {}: {e}", node.index(), light.index()))?;
         }
         if let (None, Some(cam)) = (self.camera, node.camera()) {
             self.camera = camera(&cam, world);
@@ -171,10 +221,17 @@ impl Importer<'_> {
         Ok(())
     }
 
-    fn primitive(&mut self, prim: &gltf::Primitive<'_>, world: Mat4) -> Result<Option<Primitive>, String> {
+    fn primitive(
+        &mut self,
+        prim: &gltf::Primitive<'_>,
+        world: Mat4,
+    ) -> Result<Option<Primitive>, String> {
         use gltf::mesh::Mode;
         let mode = prim.mode();
-        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
             self.report.skipped_primitives += 1;
             return Ok(None);
         }
@@ -185,17 +242,27 @@ impl Importer<'_> {
             .ok_or("has no POSITION attribute (or its buffer data is missing)")?
             .map(Vec3::from)
             .collect();
-        let expected = prim.get(&gltf::Semantic::Positions).map_or(0, |a| a.count());
+        let expected = prim
+            .get(&gltf::Semantic::Positions)
+            .map_or(0, |a| a.count());
         if positions.len() != expected {
-            return Err(format!("POSITION accessor declares {expected} elements but its buffer holds {}", positions.len()));
+            return Err(format!(
+                "POSITION accessor declares {expected} elements but its buffer holds {}",
+                positions.len()
+            ));
         }
         if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
             return Err(format!("non-finite position {p:?}"));
         }
-        let normals: Option<Vec<Vec3>> = reader.read_normals().map(|it| it.map(Vec3::from).collect());
+        let normals: Option<Vec<Vec3>> =
+            reader.read_normals().map(|it| it.map(Vec3::from).collect());
         if let Some(n) = &normals {
             if n.len() != positions.len() {
-                return Err(format!("{} normals for {} positions (attribute arrays of unequal length)", n.len(), positions.len()));
+                return Err(format!(
+                    "{} normals for {} positions (attribute arrays of unequal length)",
+                    n.len(),
+                    positions.len()
+                ));
             }
             if n.iter().any(|v| !v.is_finite()) {
                 return Err("non-finite normal".into());
@@ -206,10 +273,16 @@ impl Importer<'_> {
                 let ix: Vec<u32> = ix.into_u32().collect();
                 let declared = prim.indices().map_or(0, |a| a.count());
                 if ix.len() != declared {
-                    return Err(format!("index accessor declares {declared} elements but its buffer holds {}", ix.len()));
+                    return Err(format!(
+                        "index accessor declares {declared} elements but its buffer holds {}",
+                        ix.len()
+                    ));
                 }
                 if let Some(&bad) = ix.iter().find(|&&i| i as usize >= positions.len()) {
-                    return Err(format!("index {bad} out of range for {} vertices", positions.len()));
+                    return Err(format!(
+                        "index {bad} out of range for {} vertices",
+                        positions.len()
+                    ));
                 }
                 ix
             }
@@ -218,25 +291,51 @@ impl Importer<'_> {
         let indices = match mode {
             Mode::Triangles => {
                 if !raw.len().is_multiple_of(3) {
-                    return Err(format!("triangle list of {} vertices is not a multiple of 3 (truncated vertex array)", raw.len()));
+                    return Err(format!(
+                        "triangle list of {} vertices is not a multiple of 3 (truncated vertex array)",
+                        raw.len()
+                    ));
                 }
                 raw
             }
             Mode::TriangleStrip => (2..raw.len())
-                .flat_map(|i| if i % 2 == 0 { [raw[i - 2], raw[i - 1], raw[i]] } else { [raw[i - 1], raw[i - 2], raw[i]] })
+                .flat_map(|i| {
+                    if i % 2 == 0 {
+                        [raw[i - 2], raw[i - 1], raw[i]]
+                    } else {
+                        [raw[i - 1], raw[i - 2], raw[i]]
+                    }
+                })
                 .collect(),
-            _ => (2..raw.len()).flat_map(|i| [raw[0], raw[i - 1], raw[i]]).collect(),
+            _ => (2..raw.len())
+                .flat_map(|i| [raw[0], raw[i - 1], raw[i]])
+                .collect(),
         };
         let normal_from_local = Mat3::from_mat4(world).inverse().transpose();
-        let world_pos: Vec<Vec3> = positions.iter().map(|&p| world.transform_point3(p)).collect();
+        let world_pos: Vec<Vec3> = positions
+            .iter()
+            .map(|&p| world.transform_point3(p))
+            .collect();
         let world_n: Vec<Vec3> = match normals {
-            Some(n) => n.iter().map(|&v| (normal_from_local * v).normalize_or(Vec3::Y)).collect(),
+            Some(n) => n
+                .iter()
+                .map(|&v| (normal_from_local * v).normalize_or(Vec3::Y))
+                .collect(),
             None => face_normals(&world_pos, &indices),
         };
-        Ok(Some(Primitive { positions: world_pos, normals: world_n, indices, material: 0 }))
+        Ok(Some(Primitive {
+            positions: world_pos,
+            normals: world_n,
+            indices,
+            material: 0,
+        }))
     }
 
-    fn light(&mut self, light: &gltf::khr_lights_punctual::Light<'_>, world: Mat4) -> Result<(), String> {
+    fn light(
+        &mut self,
+        light: &gltf::khr_lights_punctual::Light<'_>,
+        world: Mat4,
+    ) -> Result<(), String> {
         use gltf::khr_lights_punctual::Kind;
         let color = Vec3::from(light.color());
         let intensity = light.intensity();
@@ -248,14 +347,27 @@ impl Importer<'_> {
                 return Ok(());
             }
             Kind::Point => LightKind::Point,
-            Kind::Spot { inner_cone_angle, outer_cone_angle } => {
-                LightKind::Spot { direction, inner_angle: inner_cone_angle, outer_angle: outer_cone_angle }
-            }
+            Kind::Spot {
+                inner_cone_angle,
+                outer_cone_angle,
+            } => LightKind::Spot {
+                direction,
+                inner_angle: inner_cone_angle,
+                outer_angle: outer_cone_angle,
+            },
         };
         let radius = light.range().unwrap_or_else(|| {
-            (intensity * color.max_element() / self.options.light_threshold).sqrt().max(1e-3)
+            (intensity * color.max_element() / self.options.light_threshold)
+                .sqrt()
+                .max(1e-3)
         });
-        let l = Light { kind, position, radius, color, intensity };
+        let l = Light {
+            kind,
+            position,
+            radius,
+            color,
+            intensity,
+        };
         l.validate(self.lights.len()).map_err(|e| e.to_string())?;
         self.lights.push(l);
         Ok(())
@@ -272,9 +384,18 @@ fn camera(cam: &gltf::Camera<'_>, world: Mat4) -> Option<Camera> {
             near: p.znear(),
             far: p.zfar().unwrap_or(p.znear() * 1e4),
         },
-        gltf::camera::Projection::Orthographic(o) => Projection::Orthographic { height: 2.0 * o.ymag(), near: o.znear(), far: o.zfar() },
+        gltf::camera::Projection::Orthographic(o) => Projection::Orthographic {
+            height: 2.0 * o.ymag(),
+            near: o.znear(),
+            far: o.zfar(),
+        },
     };
-    let c = Camera { position, target, up, projection };
+    let c = Camera {
+        position,
+        target,
+        up,
+        projection,
+    };
     c.validate().is_ok().then_some(c)
 }
 

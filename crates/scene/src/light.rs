@@ -76,33 +76,72 @@ pub struct Light {
 impl Light {
     /// A point light.
     pub fn point(position: Vec3, radius: f32, color: Vec3, intensity: f32) -> Self {
-        Self { kind: LightKind::Point, position, radius, color, intensity }
+        Self {
+            kind: LightKind::Point,
+            position,
+            radius,
+            color,
+            intensity,
+        }
     }
 
     /// Checks the light's data; `index` names it in the error.
     pub fn validate(&self, index: usize) -> Result<(), SceneError> {
         let f = |field: &str| format!("lights[{index}].{field}");
         if !self.position.is_finite() {
-            return Err(SceneError::invalid(f("position"), format!("{:?}", self.position), "finite coordinates"));
+            return Err(SceneError::invalid(
+                f("position"),
+                format!("{:?}", self.position),
+                "finite coordinates",
+            ));
         }
         if !(self.radius.is_finite() && self.radius > 0.0) {
-            return Err(SceneError::invalid(f("radius"), self.radius, "a finite value > 0"));
+            return Err(SceneError::invalid(
+                f("radius"),
+                self.radius,
+                "a finite value > 0",
+            ));
         }
         if !(self.intensity.is_finite() && self.intensity >= 0.0) {
-            return Err(SceneError::invalid(f("intensity"), self.intensity, "a finite value >= 0"));
+            return Err(SceneError::invalid(
+                f("intensity"),
+                self.intensity,
+                "a finite value >= 0",
+            ));
         }
         if !(self.color.is_finite() && self.color.min_element() >= 0.0) {
-            return Err(SceneError::invalid(f("color"), format!("{:?}", self.color), "finite channels >= 0"));
+            return Err(SceneError::invalid(
+                f("color"),
+                format!("{:?}", self.color),
+                "finite channels >= 0",
+            ));
         }
-        if let LightKind::Spot { direction, inner_angle, outer_angle } = self.kind {
+        if let LightKind::Spot {
+            direction,
+            inner_angle,
+            outer_angle,
+        } = self.kind
+        {
             if !(direction.is_finite() && direction.length_squared() > 1e-12) {
-                return Err(SceneError::invalid(f("direction"), format!("{direction:?}"), "a finite non-zero vector"));
+                return Err(SceneError::invalid(
+                    f("direction"),
+                    format!("{direction:?}"),
+                    "a finite non-zero vector",
+                ));
             }
             if !(outer_angle > 0.0 && outer_angle <= std::f32::consts::PI) {
-                return Err(SceneError::invalid(f("outer_angle"), outer_angle, "a half-angle in (0, pi] radians"));
+                return Err(SceneError::invalid(
+                    f("outer_angle"),
+                    outer_angle,
+                    "a half-angle in (0, pi] radians",
+                ));
             }
             if !(inner_angle >= 0.0 && inner_angle <= outer_angle) {
-                return Err(SceneError::invalid(f("inner_angle"), inner_angle, format!("a half-angle in [0, outer_angle = {outer_angle}] radians")));
+                return Err(SceneError::invalid(
+                    f("inner_angle"),
+                    inner_angle,
+                    format!("a half-angle in [0, outer_angle = {outer_angle}] radians"),
+                ));
             }
         }
         Ok(())
@@ -113,9 +152,11 @@ impl Light {
     pub fn cone(&self) -> Option<(Vec3, f32, f32)> {
         match self.kind {
             LightKind::Point => None,
-            LightKind::Spot { direction, inner_angle, outer_angle } => {
-                Some((direction.normalize(), inner_angle.cos(), outer_angle.cos()))
-            }
+            LightKind::Spot {
+                direction,
+                inner_angle,
+                outer_angle,
+            } => Some((direction.normalize(), inner_angle.cos(), outer_angle.cos())),
         }
     }
 
@@ -129,7 +170,9 @@ impl Light {
         }
         match self.cone() {
             None => true,
-            Some((axis, _, cos_outer)) => d > 0.0 && to_p.dot(axis.as_dvec3()) / d > f64::from(cos_outer),
+            Some((axis, _, cos_outer)) => {
+                d > 0.0 && to_p.dot(axis.as_dvec3()) / d > f64::from(cos_outer)
+            }
         }
     }
 }
@@ -171,7 +214,14 @@ pub enum Range {
 /// Outgoing radiance at surface point `p` with unit normal `n` towards the unit direction `v`
 /// (from `p` to the viewer; constant for an orthographic camera), in f64: the CPU statement of
 /// the shading model that every GPU backend implements.
-pub fn shade(p: DVec3, n: DVec3, v: DVec3, material: &Material, lights: &[Light], range: Range) -> DVec3 {
+pub fn shade(
+    p: DVec3,
+    n: DVec3,
+    v: DVec3,
+    material: &Material,
+    lights: &[Light],
+    range: Range,
+) -> DVec3 {
     let albedo = material.base_color.as_dvec3();
     let spec_norm = (SHININESS + 8.0) / (8.0 * std::f64::consts::PI);
     let mut out = DVec3::ZERO;
@@ -188,9 +238,11 @@ pub fn shade(p: DVec3, n: DVec3, v: DVec3, material: &Material, lights: &[Light]
         let l = if d > 0.0 { to_light / d } else { n };
         let cone = match light.cone() {
             None => 1.0,
-            Some((axis, cos_inner, cos_outer)) => {
-                spot(-l.dot(axis.as_dvec3()), f64::from(cos_inner), f64::from(cos_outer))
-            }
+            Some((axis, cos_inner, cos_outer)) => spot(
+                -l.dot(axis.as_dvec3()),
+                f64::from(cos_inner),
+                f64::from(cos_outer),
+            ),
         };
         let ndotl = n.dot(l).max(0.0);
         if cone == 0.0 || ndotl == 0.0 {
@@ -198,7 +250,9 @@ pub fn shade(p: DVec3, n: DVec3, v: DVec3, material: &Material, lights: &[Light]
         }
         let h = (l + v).normalize_or_zero();
         let brdf = albedo / std::f64::consts::PI
-            + DVec3::splat(f64::from(material.specular) * spec_norm * n.dot(h).max(0.0).powf(SHININESS));
+            + DVec3::splat(
+                f64::from(material.specular) * spec_norm * n.dot(h).max(0.0).powf(SHININESS),
+            );
         out += light.color.as_dvec3() * f64::from(light.intensity) * atten * cone * ndotl * brdf;
     }
     out
@@ -231,9 +285,19 @@ mod tests {
     #[test]
     fn invalid_lights_name_the_field() {
         let mut l = Light::point(Vec3::ZERO, -1.0, Vec3::ONE, 1.0);
-        assert!(l.validate(7).unwrap_err().to_string().contains("lights[7].radius = -1"));
+        assert!(
+            l.validate(7)
+                .unwrap_err()
+                .to_string()
+                .contains("lights[7].radius = -1")
+        );
         l.radius = 1.0;
         l.intensity = f32::NAN;
-        assert!(l.validate(0).unwrap_err().to_string().contains("intensity = NaN"));
+        assert!(
+            l.validate(0)
+                .unwrap_err()
+                .to_string()
+                .contains("intensity = NaN")
+        );
     }
 }

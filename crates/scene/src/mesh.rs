@@ -17,7 +17,10 @@ pub struct Material {
 impl Material {
     /// A material with the given albedo and specular weight.
     pub const fn new(base_color: Vec3, specular: f32) -> Self {
-        Self { base_color, specular }
+        Self {
+            base_color,
+            specular,
+        }
     }
 }
 
@@ -45,7 +48,10 @@ pub struct Aabb {
 
 impl Aabb {
     /// The empty box (min = +inf, max = -inf), the identity of [`Aabb::union_point`].
-    pub const EMPTY: Self = Self { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY };
+    pub const EMPTY: Self = Self {
+        min: Vec3::INFINITY,
+        max: Vec3::NEG_INFINITY,
+    };
 
     /// A box from its corners.
     pub const fn new(min: Vec3, max: Vec3) -> Self {
@@ -54,7 +60,10 @@ impl Aabb {
 
     /// The box grown to hold `p`.
     pub fn union_point(self, p: Vec3) -> Self {
-        Self { min: self.min.min(p), max: self.max.max(p) }
+        Self {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
     }
 
     /// Size along each axis.
@@ -103,13 +112,20 @@ impl Scene {
 
     /// Bounds of all geometry.
     pub fn bounds(&self) -> Aabb {
-        self.primitives.iter().flat_map(|p| p.positions.iter()).fold(Aabb::EMPTY, |b, &p| b.union_point(p))
+        self.primitives
+            .iter()
+            .flat_map(|p| p.positions.iter())
+            .fold(Aabb::EMPTY, |b, &p| b.union_point(p))
     }
 
     /// Checks geometry, materials, lights and camera; the error names the first bad value.
     pub fn validate(&self) -> Result<(), SceneError> {
         if self.materials.is_empty() {
-            return Err(SceneError::invalid("materials", "[]", "at least one material"));
+            return Err(SceneError::invalid(
+                "materials",
+                "[]",
+                "at least one material",
+            ));
         }
         for (i, m) in self.materials.iter().enumerate() {
             let ok = m.base_color.is_finite()
@@ -117,31 +133,63 @@ impl Scene {
                 && m.base_color.max_element() <= 1.0
                 && (0.0..=1.0).contains(&m.specular);
             if !ok {
-                return Err(SceneError::invalid(format!("materials[{i}]"), format!("{m:?}"), "base_color channels and specular in [0, 1]"));
+                return Err(SceneError::invalid(
+                    format!("materials[{i}]"),
+                    format!("{m:?}"),
+                    "base_color channels and specular in [0, 1]",
+                ));
             }
         }
         for (i, p) in self.primitives.iter().enumerate() {
             if p.normals.len() != p.positions.len() {
                 return Err(SceneError::invalid(
                     format!("primitives[{i}].normals"),
-                    format!("{} normals for {} positions", p.normals.len(), p.positions.len()),
+                    format!(
+                        "{} normals for {} positions",
+                        p.normals.len(),
+                        p.positions.len()
+                    ),
                     "one normal per position",
                 ));
             }
             if p.indices.len() % 3 != 0 {
-                return Err(SceneError::invalid(format!("primitives[{i}].indices"), p.indices.len(), "a multiple of 3 (triangle list)"));
+                return Err(SceneError::invalid(
+                    format!("primitives[{i}].indices"),
+                    p.indices.len(),
+                    "a multiple of 3 (triangle list)",
+                ));
             }
-            if let Some(&bad) = p.indices.iter().find(|&&ix| ix as usize >= p.positions.len()) {
-                return Err(SceneError::invalid(format!("primitives[{i}].indices"), bad, format!("indices < vertex count {}", p.positions.len())));
+            if let Some(&bad) = p
+                .indices
+                .iter()
+                .find(|&&ix| ix as usize >= p.positions.len())
+            {
+                return Err(SceneError::invalid(
+                    format!("primitives[{i}].indices"),
+                    bad,
+                    format!("indices < vertex count {}", p.positions.len()),
+                ));
             }
             if let Some(v) = p.positions.iter().find(|v| !v.is_finite()) {
-                return Err(SceneError::invalid(format!("primitives[{i}].positions"), format!("{v:?}"), "finite coordinates"));
+                return Err(SceneError::invalid(
+                    format!("primitives[{i}].positions"),
+                    format!("{v:?}"),
+                    "finite coordinates",
+                ));
             }
             if let Some(v) = p.normals.iter().find(|v| !v.is_finite()) {
-                return Err(SceneError::invalid(format!("primitives[{i}].normals"), format!("{v:?}"), "finite coordinates"));
+                return Err(SceneError::invalid(
+                    format!("primitives[{i}].normals"),
+                    format!("{v:?}"),
+                    "finite coordinates",
+                ));
             }
             if p.material as usize >= self.materials.len() {
-                return Err(SceneError::invalid(format!("primitives[{i}].material"), p.material, format!("an index < {}", self.materials.len())));
+                return Err(SceneError::invalid(
+                    format!("primitives[{i}].material"),
+                    p.material,
+                    format!("an index < {}", self.materials.len()),
+                ));
             }
         }
         for (i, l) in self.lights.iter().enumerate() {

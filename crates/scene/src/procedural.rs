@@ -37,7 +37,11 @@ pub struct AtriumParams {
 
 impl Default for AtriumParams {
     fn default() -> Self {
-        Self { bays: 7, storeys: 2, cloth: true }
+        Self {
+            bays: 7,
+            storeys: 2,
+            cloth: true,
+        }
     }
 }
 
@@ -55,7 +59,11 @@ pub struct PillarsParams {
 
 impl Default for PillarsParams {
     fn default() -> Self {
-        Self { count: 64, width: 0.12, gap: 20.0 }
+        Self {
+            count: 64,
+            width: 0.12,
+            gap: 20.0,
+        }
     }
 }
 
@@ -71,7 +79,10 @@ pub struct TopdownParams {
 
 impl Default for TopdownParams {
     fn default() -> Self {
-        Self { size: 40.0, subdivisions: 32 }
+        Self {
+            size: 40.0,
+            subdivisions: 32,
+        }
     }
 }
 
@@ -89,7 +100,11 @@ pub struct CityParams {
 
 impl Default for CityParams {
     fn default() -> Self {
-        Self { blocks: 8, seed: 1, max_height: 24.0 }
+        Self {
+            blocks: 8,
+            seed: 1,
+            max_height: 24.0,
+        }
     }
 }
 
@@ -114,7 +129,12 @@ impl ProceduralScene {
             "pillars" => Self::Pillars(PillarsParams::default()),
             "topdown" => Self::Topdown(TopdownParams::default()),
             "city" => Self::City(CityParams::default()),
-            _ => return Err(SceneError::UnknownScene { name: name.to_owned(), accepted: NAMES.join(", ") }),
+            _ => {
+                return Err(SceneError::UnknownScene {
+                    name: name.to_owned(),
+                    accepted: NAMES.join(", "),
+                });
+            }
         })
     }
 
@@ -140,11 +160,23 @@ impl ProceduralScene {
 }
 
 fn check_u32(field: &str, v: u32, lo: u32, hi: u32) -> Result<(), SceneError> {
-    if (lo..=hi).contains(&v) { Ok(()) } else { Err(SceneError::invalid(field, v, format!("an integer in {lo}..={hi}"))) }
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(
+            field,
+            v,
+            format!("an integer in {lo}..={hi}"),
+        ))
+    }
 }
 
 fn check_pos(field: &str, v: f32) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 { Ok(()) } else { Err(SceneError::invalid(field, v, "a finite value > 0")) }
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(SceneError::invalid(field, v, "a finite value > 0"))
+    }
 }
 
 /// Accumulates triangles per material.
@@ -155,7 +187,12 @@ struct MeshBuilder {
 
 impl MeshBuilder {
     fn prim(&mut self, material: u32) -> &mut Primitive {
-        self.by_material.entry(material).or_insert_with(|| Primitive { material, ..Primitive::default() })
+        self.by_material
+            .entry(material)
+            .or_insert_with(|| Primitive {
+                material,
+                ..Primitive::default()
+            })
     }
 
     /// A parallelogram `corner, corner + u, corner + u + v, corner + v`, normal `u x v`.
@@ -163,9 +200,11 @@ impl MeshBuilder {
         let n = u.cross(v).normalize();
         let p = self.prim(material);
         let base = p.positions.len() as u32;
-        p.positions.extend([corner, corner + u, corner + u + v, corner + v]);
+        p.positions
+            .extend([corner, corner + u, corner + u + v, corner + v]);
         p.normals.extend([n; 4]);
-        p.indices.extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+        p.indices
+            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
     }
 
     /// An axis-aligned box with outward faces.
@@ -194,16 +233,24 @@ impl MeshBuilder {
         }
         for j in 0..nv {
             for i in 0..nu {
-                let (a, b, c, d) = (j * stride + i, j * stride + i + 1, (j + 1) * stride + i + 1, (j + 1) * stride + i);
-                let fnorm = (positions[c as usize] - positions[a as usize]).cross(positions[d as usize] - positions[b as usize]);
+                let (a, b, c, d) = (
+                    j * stride + i,
+                    j * stride + i + 1,
+                    (j + 1) * stride + i + 1,
+                    (j + 1) * stride + i,
+                );
+                let fnorm = (positions[c as usize] - positions[a as usize])
+                    .cross(positions[d as usize] - positions[b as usize]);
                 for k in [a, b, c, d] {
                     normals[k as usize] += fnorm;
                 }
-                p.indices.extend([base + a, base + b, base + c, base + a, base + c, base + d]);
+                p.indices
+                    .extend([base + a, base + b, base + c, base + a, base + c, base + d]);
             }
         }
         p.positions.extend(positions);
-        p.normals.extend(normals.into_iter().map(|n| n.normalize_or(Vec3::Y)));
+        p.normals
+            .extend(normals.into_iter().map(|n| n.normalize_or(Vec3::Y)));
     }
 
     /// A vertical cylinder side (no caps).
@@ -216,13 +263,26 @@ impl MeshBuilder {
 
     /// A semicircular arch in the XY plane (spanning along X), centred at `center`, extruded
     /// along Z by `depth`: intrados, extrados and both faces.
-    fn arch(&mut self, material: u32, center: Vec3, r_in: f32, r_out: f32, depth: f32, segments: u32) {
-        let ring = |r: f32, u: f32, z: f32| center + Vec3::new(r * (PI * u).cos(), r * (PI * u).sin(), z);
+    fn arch(
+        &mut self,
+        material: u32,
+        center: Vec3,
+        r_in: f32,
+        r_out: f32,
+        depth: f32,
+        segments: u32,
+    ) {
+        let ring =
+            |r: f32, u: f32, z: f32| center + Vec3::new(r * (PI * u).cos(), r * (PI * u).sin(), z);
         let h = depth * 0.5;
         self.surface(material, segments, 1, |u, v| ring(r_in, u, -h + depth * v));
         self.surface(material, segments, 1, |u, v| ring(r_out, u, -h + depth * v));
-        self.surface(material, segments, 1, |u, v| ring(r_in + (r_out - r_in) * v, u, -h));
-        self.surface(material, segments, 1, |u, v| ring(r_in + (r_out - r_in) * v, u, h));
+        self.surface(material, segments, 1, |u, v| {
+            ring(r_in + (r_out - r_in) * v, u, -h)
+        });
+        self.surface(material, segments, 1, |u, v| {
+            ring(r_in + (r_out - r_in) * v, u, h)
+        });
     }
 
     fn finish(self) -> Vec<Primitive> {
@@ -255,13 +315,26 @@ pub fn atrium(params: &AtriumParams) -> Result<Scene, SceneError> {
     let half_len = params.bays as f32 * BAY * 0.5;
     let height = params.storeys as f32 * STOREY + 1.0;
     let mut mb = MeshBuilder::default();
-    mb.quad(FLOOR, Vec3::new(-half_len, 0.0, -OUTER), Vec3::Z * 2.0 * OUTER, Vec3::X * 2.0 * half_len);
+    mb.quad(
+        FLOOR,
+        Vec3::new(-half_len, 0.0, -OUTER),
+        Vec3::Z * 2.0 * OUTER,
+        Vec3::X * 2.0 * half_len,
+    );
     for side in [-1.0f32, 1.0] {
         // Outer wall and end walls.
         let wall_z = side * OUTER;
-        mb.cuboid(STONE, Vec3::new(-half_len, 0.0, wall_z.min(wall_z + side * 0.3)), Vec3::new(half_len, height, wall_z.max(wall_z + side * 0.3)));
+        mb.cuboid(
+            STONE,
+            Vec3::new(-half_len, 0.0, wall_z.min(wall_z + side * 0.3)),
+            Vec3::new(half_len, height, wall_z.max(wall_z + side * 0.3)),
+        );
         let end_x = side * half_len;
-        mb.cuboid(STONE, Vec3::new(end_x.min(end_x + side * 0.3), 0.0, -OUTER), Vec3::new(end_x.max(end_x + side * 0.3), height, OUTER));
+        mb.cuboid(
+            STONE,
+            Vec3::new(end_x.min(end_x + side * 0.3), 0.0, -OUTER),
+            Vec3::new(end_x.max(end_x + side * 0.3), height, OUTER),
+        );
         for storey in 0..params.storeys {
             let y0 = storey as f32 * STOREY;
             let z = side * COURT;
@@ -271,14 +344,29 @@ pub fn atrium(params: &AtriumParams) -> Result<Scene, SceneError> {
             }
             for i in 0..params.bays {
                 let x = -half_len + (i as f32 + 0.5) * BAY;
-                mb.arch(STONE, Vec3::new(x, y0 + COL_H, z), BAY * 0.5 - 0.35, BAY * 0.5, 0.6, 16);
+                mb.arch(
+                    STONE,
+                    Vec3::new(x, y0 + COL_H, z),
+                    BAY * 0.5 - 0.35,
+                    BAY * 0.5,
+                    0.6,
+                    16,
+                );
             }
             // Lintel band above the arches and the gallery floor/roof slab behind it.
             let top = y0 + COL_H + BAY * 0.5;
             let (z0, z1) = (z - side * 0.3, z + side * 0.3);
-            mb.cuboid(STONE, Vec3::new(-half_len, top, z0.min(z1)), Vec3::new(half_len, y0 + STOREY, z0.max(z1)));
+            mb.cuboid(
+                STONE,
+                Vec3::new(-half_len, top, z0.min(z1)),
+                Vec3::new(half_len, y0 + STOREY, z0.max(z1)),
+            );
             let (s0, s1) = (z, wall_z);
-            mb.cuboid(STONE, Vec3::new(-half_len, y0 + STOREY - 0.3, s0.min(s1)), Vec3::new(half_len, y0 + STOREY, s0.max(s1)));
+            mb.cuboid(
+                STONE,
+                Vec3::new(-half_len, y0 + STOREY - 0.3, s0.min(s1)),
+                Vec3::new(half_len, y0 + STOREY, s0.max(s1)),
+            );
         }
         if params.cloth && params.storeys >= 2 {
             // Drapes hang in front of the first-floor gallery, every other bay.
@@ -308,7 +396,10 @@ pub fn atrium(params: &AtriumParams) -> Result<Scene, SceneError> {
         materials: base_materials(),
         lights: Vec::new(),
         camera,
-        light_bounds: Aabb::new(Vec3::new(-half_len, 0.2, -OUTER), Vec3::new(half_len, height - 1.0, OUTER)),
+        light_bounds: Aabb::new(
+            Vec3::new(-half_len, 0.2, -OUTER),
+            Vec3::new(half_len, height - 1.0, OUTER),
+        ),
     })
 }
 
@@ -323,15 +414,43 @@ pub fn pillars(params: &PillarsParams) -> Result<Scene, SceneError> {
     let wall_z = ROW_Z - params.gap;
     let mut mb = MeshBuilder::default();
     let extent = 2.0 * (10.0 - wall_z);
-    mb.quad(FLOOR, Vec3::new(-extent, 0.0, wall_z), Vec3::Z * (10.0 - wall_z), Vec3::X * 2.0 * extent);
-    mb.quad(STONE, Vec3::new(-extent, 0.0, wall_z), Vec3::X * 2.0 * extent, Vec3::Y * extent);
-    let spacing = if params.count > 1 { 2.0 * ROW_HALF / (params.count - 1) as f32 } else { 0.0 };
+    mb.quad(
+        FLOOR,
+        Vec3::new(-extent, 0.0, wall_z),
+        Vec3::Z * (10.0 - wall_z),
+        Vec3::X * 2.0 * extent,
+    );
+    mb.quad(
+        STONE,
+        Vec3::new(-extent, 0.0, wall_z),
+        Vec3::X * 2.0 * extent,
+        Vec3::Y * extent,
+    );
+    let spacing = if params.count > 1 {
+        2.0 * ROW_HALF / (params.count - 1) as f32
+    } else {
+        0.0
+    };
     let hw = params.width * 0.5;
     for i in 0..params.count {
-        let x = if params.count > 1 { -ROW_HALF + i as f32 * spacing } else { 0.0 };
-        mb.cuboid(STONE, Vec3::new(x - hw, 0.0, ROW_Z - hw), Vec3::new(x + hw, HEIGHT, ROW_Z + hw));
+        let x = if params.count > 1 {
+            -ROW_HALF + i as f32 * spacing
+        } else {
+            0.0
+        };
+        mb.cuboid(
+            STONE,
+            Vec3::new(x - hw, 0.0, ROW_Z - hw),
+            Vec3::new(x + hw, HEIGHT, ROW_Z + hw),
+        );
     }
-    let camera = Camera::perspective(Vec3::new(0.0, 3.0, 5.0), Vec3::new(0.0, 3.0, -10.0), 60.0, 0.1, 20.0 - 2.0 * wall_z);
+    let camera = Camera::perspective(
+        Vec3::new(0.0, 3.0, 5.0),
+        Vec3::new(0.0, 3.0, -10.0),
+        60.0,
+        0.1,
+        20.0 - 2.0 * wall_z,
+    );
     Ok(Scene {
         name: "pillars".into(),
         primitives: mb.finish(),
@@ -348,8 +467,16 @@ pub fn topdown(params: &TopdownParams) -> Result<Scene, SceneError> {
     check_u32("scene.subdivisions", params.subdivisions, 1, 1024)?;
     let h = params.size * 0.5;
     let mut mb = MeshBuilder::default();
-    mb.surface(FLOOR, params.subdivisions, params.subdivisions, |u, v| Vec3::new(-h + params.size * u, 0.0, h - params.size * v));
-    let mut camera = Camera::perspective(Vec3::new(0.0, params.size * 0.75, 0.0), Vec3::ZERO, 60.0, 0.1, params.size * 2.0);
+    mb.surface(FLOOR, params.subdivisions, params.subdivisions, |u, v| {
+        Vec3::new(-h + params.size * u, 0.0, h - params.size * v)
+    });
+    let mut camera = Camera::perspective(
+        Vec3::new(0.0, params.size * 0.75, 0.0),
+        Vec3::ZERO,
+        60.0,
+        0.1,
+        params.size * 2.0,
+    );
     camera.up = -Vec3::Z;
     Ok(Scene {
         name: "topdown".into(),
@@ -371,13 +498,22 @@ pub fn city(params: &CityParams) -> Result<Scene, SceneError> {
     let half = params.blocks as f32 * pitch * 0.5;
     let mut rng = rand_pcg::Pcg64::seed_from_u64(params.seed);
     let mut mb = MeshBuilder::default();
-    mb.quad(FLOOR, Vec3::new(-half, 0.0, -half), Vec3::Z * 2.0 * half, Vec3::X * 2.0 * half);
+    mb.quad(
+        FLOOR,
+        Vec3::new(-half, 0.0, -half),
+        Vec3::Z * 2.0 * half,
+        Vec3::X * 2.0 * half,
+    );
     for j in 0..params.blocks {
         for i in 0..params.blocks {
             let x0 = -half + i as f32 * pitch + STREET * 0.5;
             let z0 = -half + j as f32 * pitch + STREET * 0.5;
             let hgt = params.max_height * rng.random_range(0.15f32..=1.0);
-            mb.cuboid(STONE, Vec3::new(x0, 0.0, z0), Vec3::new(x0 + BLOCK, hgt, z0 + BLOCK));
+            mb.cuboid(
+                STONE,
+                Vec3::new(x0, 0.0, z0),
+                Vec3::new(x0 + BLOCK, hgt, z0 + BLOCK),
+            );
         }
     }
     let camera = Camera::perspective(
@@ -393,7 +529,10 @@ pub fn city(params: &CityParams) -> Result<Scene, SceneError> {
         materials: base_materials(),
         lights: Vec::new(),
         camera,
-        light_bounds: Aabb::new(Vec3::new(-half, 0.2, -half), Vec3::new(half, params.max_height, half)),
+        light_bounds: Aabb::new(
+            Vec3::new(-half, 0.2, -half),
+            Vec3::new(half, params.max_height, half),
+        ),
     })
 }
 
@@ -408,22 +547,41 @@ mod tests {
             let a = s.build().unwrap();
             let b = s.build().unwrap();
             a.validate().unwrap();
-            assert!(a.triangle_count() > 10, "{name}: {} triangles", a.triangle_count());
+            assert!(
+                a.triangle_count() > 10,
+                "{name}: {} triangles",
+                a.triangle_count()
+            );
             assert_eq!(a.primitives, b.primitives, "{name} is not deterministic");
         }
     }
 
     #[test]
     fn unknown_scene_lists_accepted_names() {
-        let e = ProceduralScene::from_name("sponza").unwrap_err().to_string();
-        assert!(e.contains("sponza") && e.contains("atrium, pillars, topdown, city"), "{e}");
+        let e = ProceduralScene::from_name("sponza")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("sponza") && e.contains("atrium, pillars, topdown, city"),
+            "{e}"
+        );
     }
 
     #[test]
     fn bad_parameters_are_rejected() {
-        let e = atrium(&AtriumParams { bays: 0, ..AtriumParams::default() }).unwrap_err().to_string();
+        let e = atrium(&AtriumParams {
+            bays: 0,
+            ..AtriumParams::default()
+        })
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("scene.bays = 0"), "{e}");
-        let e = pillars(&PillarsParams { width: f32::NAN, ..PillarsParams::default() }).unwrap_err().to_string();
+        let e = pillars(&PillarsParams {
+            width: f32::NAN,
+            ..PillarsParams::default()
+        })
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("scene.width = NaN"), "{e}");
     }
 }

@@ -38,23 +38,40 @@ fn malformed_files_give_an_error_naming_file_and_problem() {
         ("IndexOutOfRange/AllIndicesOutOfRange.gltf", "out of range"),
         ("MissingBin/BoxTextured.gltf", "buffer"),
         ("SchemaFailures/sceneWrongType.gltf", "cannot parse"),
-        ("BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb", "non-finite position"),
+        (
+            "BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb",
+            "non-finite position",
+        ),
         ("RecursiveNodes/RecursiveNodes.gltf", "cycle"),
         ("IncorrectVertexArrays/Cube.gltf", "not a multiple of 3"),
     ];
     for (rel, problem) in cases {
         let path = model(rel);
         let err = match load(&path, &GltfOptions::default()) {
-            Ok((s, _)) => panic!("{rel} imported ({} triangles) but is malformed", s.triangle_count()),
+            Ok((s, _)) => panic!(
+                "{rel} imported ({} triangles) but is malformed",
+                s.triangle_count()
+            ),
             Err(e) => e.to_string(),
         };
-        assert!(err.contains(&path.display().to_string()), "{rel}: error does not name the file: {err}");
-        assert!(err.contains(problem), "{rel}: expected `{problem}` in: {err}");
+        assert!(
+            err.contains(&path.display().to_string()),
+            "{rel}: error does not name the file: {err}"
+        );
+        assert!(
+            err.contains(problem),
+            "{rel}: expected `{problem}` in: {err}"
+        );
     }
 }
 
 #[test]
 fn missing_file_is_an_error() {
-    let err = load(Path::new("/nonexistent/scene.glb"), &GltfOptions::default()).unwrap_err().to_string();
-    assert!(err.contains("/nonexistent/scene.glb") && err.contains("no such file"), "{err}");
+    let err = load(Path::new("/nonexistent/scene.glb"), &GltfOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("/nonexistent/scene.glb") && err.contains("no such file"),
+        "{err}"
+    );
 }

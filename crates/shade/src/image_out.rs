@@ -33,7 +33,11 @@ pub enum OutputError {
 impl HdrImage {
     /// From tightly packed `Rgba32Float` bytes.
     pub fn from_bytes(width: u32, height: u32, bytes: &[u8]) -> Self {
-        Self { width, height, data: bytemuck::pod_collect_to_vec(bytes) }
+        Self {
+            width,
+            height,
+            data: bytemuck::pod_collect_to_vec(bytes),
+        }
     }
 
     /// The texel at `(x, y)`.
@@ -43,12 +47,18 @@ impl HdrImage {
 
     /// Number of texels with a NaN or infinite channel.
     pub fn non_finite_count(&self) -> usize {
-        self.data.iter().filter(|t| t.iter().any(|c| !c.is_finite())).count()
+        self.data
+            .iter()
+            .filter(|t| t.iter().any(|c| !c.is_finite()))
+            .count()
     }
 
     /// Largest RGB channel value.
     pub fn peak(&self) -> f32 {
-        self.data.iter().flat_map(|t| t[..3].iter().copied()).fold(0.0, f32::max)
+        self.data
+            .iter()
+            .flat_map(|t| t[..3].iter().copied())
+            .fold(0.0, f32::max)
     }
 
     /// 8-bit sRGB of the tonemapped image.
@@ -56,7 +66,11 @@ impl HdrImage {
         let map = |c: f32| {
             let x = (c * exposure).max(0.0);
             let x = x / (1.0 + x);
-            let s = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+            let s = if x <= 0.003_130_8 {
+                12.92 * x
+            } else {
+                1.055 * x.powf(1.0 / 2.4) - 0.055
+            };
             (s * 255.0).round().clamp(0.0, 255.0) as u8
         };
         image::RgbImage::from_fn(self.width, self.height, |x, y| {
@@ -69,7 +83,8 @@ impl HdrImage {
     pub fn write_png(&self, path: &Path, exposure: f32) -> Result<(), OutputError> {
         let img = self.tonemap(exposure);
         write_atomic(path, |f| {
-            img.write_to(f, image::ImageFormat::Png).map_err(|e| e.to_string())
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
         })
     }
 
@@ -78,7 +93,9 @@ impl HdrImage {
         let rgb: Vec<f32> = self.data.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
         let img = image::Rgb32FImage::from_raw(self.width, self.height, rgb).expect("size matches");
         write_atomic(path, |f| {
-            image::DynamicImage::ImageRgb32F(img).write_to(f, image::ImageFormat::OpenExr).map_err(|e| e.to_string())
+            image::DynamicImage::ImageRgb32F(img)
+                .write_to(f, image::ImageFormat::OpenExr)
+                .map_err(|e| e.to_string())
         })
     }
 }
@@ -89,7 +106,10 @@ pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut std::io::BufWriter<&mut std::fs::File>) -> Result<(), String>,
 ) -> Result<(), OutputError> {
-    let err = |message: String| OutputError::Write { path: path.display().to_string(), message };
+    let err = |message: String| OutputError::Write {
+        path: path.display().to_string(),
+        message,
+    };
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),

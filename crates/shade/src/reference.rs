@@ -13,7 +13,14 @@ use crate::HdrImage;
 /// The reference shader.
 pub const SHADER: ShaderDef = ShaderDef {
     name: "shade.reference",
-    files: &[FRAME, LIGHT, SHADING, VERTEX, shader_file!("render/reference.wgsl")],
+    consts: &[],
+    files: &[
+        FRAME,
+        LIGHT,
+        SHADING,
+        VERTEX,
+        shader_file!("render/reference.wgsl"),
+    ],
 };
 
 const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -43,50 +50,71 @@ impl ReferenceRenderer {
     /// Builds the pipelines.
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let module = SHADER.create(&ctx.device);
-        let layout = ctx.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("shade.reference"),
-            bind_group_layouts: &[Some(&scene.layout)],
-            immediate_size: 0,
+        let layout = ctx
+            .device
+            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("shade.reference"),
+                bind_group_layouts: &[Some(&scene.layout)],
+                immediate_size: 0,
+            });
+        let target = Some(wgpu::ColorTargetState {
+            format: HDR,
+            blend: None,
+            write_mask: wgpu::ColorWrites::ALL,
         });
-        let target = Some(wgpu::ColorTargetState { format: HDR, blend: None, write_mask: wgpu::ColorWrites::ALL });
-        let pipeline = ctx.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("shade.reference"),
-            layout: Some(&layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
-            },
-            primitive: PRIMITIVE,
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(wgpu::CompareFunction::Equal),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_reference"),
-                compilation_options: Default::default(),
-                targets: &[target.clone(), target.clone(), target],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        Self { prepass: DepthPrepass::new(ctx, scene), pipeline }
+        let pipeline = ctx
+            .device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("shade.reference"),
+                layout: Some(&layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(VERTEX_LAYOUT)],
+                },
+                primitive: PRIMITIVE,
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(false),
+                    depth_compare: Some(wgpu::CompareFunction::Equal),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_reference"),
+                    compilation_options: Default::default(),
+                    targets: &[target.clone(), target.clone(), target],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+        Self {
+            prepass: DepthPrepass::new(ctx, scene),
+            pipeline,
+        }
     }
 
     /// Renders `scene` (whose frame uniform is set for `width` x `height`) and reads back
     /// everything.
-    pub fn render(&self, ctx: &GpuContext, scene: &GpuScene, width: u32, height: u32) -> Result<ReferenceFrame, GpuError> {
+    pub fn render(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        width: u32,
+        height: u32,
+    ) -> Result<ReferenceFrame, GpuError> {
         ctx.check_resolution(width, height)?;
         let target = |label| {
             ctx.device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(label),
-                size: wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
                 mip_level_count: 1,
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
@@ -95,28 +123,47 @@ impl ReferenceRenderer {
                 view_formats: &[],
             })
         };
-        let (color, position, normal) = (target("reference.color"), target("reference.position"), target("reference.normal"));
+        let (color, position, normal) = (
+            target("reference.color"),
+            target("reference.position"),
+            target("reference.normal"),
+        );
         let depth = depth_target(ctx, width, height);
         let views = [&color, &position, &normal].map(|t| t.create_view(&Default::default()));
         let depth_view = depth.create_view(&Default::default());
         let mut timer = GpuTimer::new(ctx, 2);
-        let mut encoder = ctx.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("reference") });
-        self.prepass.encode(&mut encoder, scene, &depth_view, &mut timer);
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("reference"),
+            });
+        self.prepass
+            .encode(&mut encoder, scene, &depth_view, &mut timer);
         {
             let attachment = |view| {
                 Some(wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shade.reference"),
-                color_attachments: &[attachment(&views[0]), attachment(&views[1]), attachment(&views[2])],
+                color_attachments: &[
+                    attachment(&views[0]),
+                    attachment(&views[1]),
+                    attachment(&views[2]),
+                ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &depth_view,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    }),
                     stencil_ops: None,
                 }),
                 timestamp_writes: timer.render_pass("shade.reference"),
@@ -128,7 +175,10 @@ impl ReferenceRenderer {
         }
         timer.resolve(&mut encoder);
         ctx.submit_and_wait(encoder, "reference render")?;
-        let read = |t: &wgpu::Texture| readback::read_texture(ctx, t, wgpu::TextureAspect::All).map(|b| HdrImage::from_bytes(width, height, &b));
+        let read = |t: &wgpu::Texture| {
+            readback::read_texture(ctx, t, wgpu::TextureAspect::All)
+                .map(|b| HdrImage::from_bytes(width, height, &b))
+        };
         let depth_bytes = readback::read_texture(ctx, &depth, wgpu::TextureAspect::DepthOnly)?;
         Ok(ReferenceFrame {
             color: read(&color)?,

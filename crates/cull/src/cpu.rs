@@ -1,0 +1,264 @@
+//! CPU oracles of every culling pass, producing the same lists as the GPU.
+//!
+//! The oracles run the f32 mirror in [`crate::geometry`]. Besides the lists they return, per
+//! bin, the *borderline* lights: those whose decision changes when the slack moves by
+//! +-[`BORDER`] of itself. A GPU that fuses multiply-adds may decide those either way; every
+//! other decision must match exactly. The band (1e-5 of a light's distance) is far above f32
+//! rounding and far below any geometric feature.
+
+use manylights_gpu::layout::{GpuFrame, GpuLight};
+
+use crate::geometry::{
+    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, linear_depth, tile_keeps,
+    tile_side_planes,
+};
+use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth};
+
+/// Relative band around the slack inside which a decision is borderline.
+pub const BORDER: f32 = 0.1;
+
+/// An oracle's lists: per bin, the lights it keeps (sorted) and the borderline ones.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct OracleLists {
+    /// Lights kept, per bin, sorted.
+    pub kept: Vec<Vec<u32>>,
+    /// Lights whose decision is borderline, per bin, sorted.
+    pub borderline: Vec<Vec<u32>>,
+}
+
+impl OracleLists {
+    fn new(bins: usize) -> Self {
+        Self {
+            kept: vec![Vec::new(); bins],
+            borderline: vec![Vec::new(); bins],
+        }
+    }
+
+    fn push(&mut self, bin: usize, light: u32, lo: bool, hi: bool) {
+        // `lo`/`hi`: the decision at slack * (1 -+ BORDER). Kept means kept at the real slack,
+        // which lies between them; where they differ, the real decision is borderline too, and
+        // we record it as kept (the conservative side) and borderline.
+        if lo || hi {
+            self.kept[bin].push(light);
+        }
+        if lo != hi {
+            self.borderline[bin].push(light);
+        }
+    }
+
+    /// Compares GPU lists (as sets per bin) with the oracle's; returns a description of the
+    /// first difference that is not borderline, and the number of borderline differences.
+    pub fn compare(&self, gpu: &crate::BinLists) -> Result<usize, String> {
+        let mut tolerated = 0;
+        for b in 0..self.kept.len() {
+            let g = gpu.sorted(b);
+            if g.windows(2).any(|w| w[0] == w[1]) {
+                return Err(format!("bin {b}: duplicate light in GPU list {g:?}"));
+            }
+            for &l in &g {
+                if self.kept[b].binary_search(&l).is_err() {
+                    if self.borderline[b].binary_search(&l).is_ok() {
+                        tolerated += 1;
+                    } else {
+                        return Err(format!("bin {b}: GPU keeps light {l}, oracle culls it"));
+                    }
+                }
+            }
+            for &l in &self.kept[b] {
+                if g.binary_search(&l).is_err() {
+                    if self.borderline[b].binary_search(&l).is_ok() {
+                        tolerated += 1;
+                    } else {
+                        return Err(format!("bin {b}: oracle keeps light {l}, GPU culls it"));
+                    }
+                }
+            }
+        }
+        Ok(tolerated)
+    }
+
+    /// As [`crate::BinLists`] (kept lights), for metrics.
+    pub fn to_bin_lists(&self) -> crate::BinLists {
+        let mut ranges = Vec::with_capacity(self.kept.len());
+        let mut indices = Vec::new();
+        for l in &self.kept {
+            ranges.push([indices.len() as u32, l.len() as u32]);
+            indices.extend_from_slice(l);
+        }
+        crate::BinLists { ranges, indices }
+    }
+}
+
+/// Oracle of `cull.depth_bounds`: per tile depth data from the depth buffer (`w` x `h`, rows
+/// from the top), and per tile the mask bits whose pixel sits within a hair of a cell boundary
+/// (a GPU's rounding of the linear depth may set the neighbouring bit instead).
+pub fn depth_bounds(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    depth: &[f32],
+    w: u32,
+    h: u32,
+) -> (Vec<GpuTileDepth>, Vec<u32>) {
+    let tiles = (p.tiles_x * p.tiles_y) as usize;
+    let mut out = vec![GpuTileDepth::default(); tiles];
+    let mut zmin = vec![f32::INFINITY; tiles];
+    let mut zmax = vec![0.0f32; tiles];
+    let tile_of = |x: u32, y: u32| ((y / p.tile_size) * p.tiles_x + x / p.tile_size) as usize;
+    for y in 0..h {
+        for x in 0..w {
+            let z = depth[(y * w + x) as usize];
+            if z < 1.0 {
+                let t = tile_of(x, y);
+                zmin[t] = zmin[t].min(z);
+                zmax[t] = zmax[t].max(z);
+                out[t].covered += 1;
+            }
+        }
+    }
+    for t in 0..tiles {
+        if out[t].covered > 0 {
+            out[t].dmin = linear_depth(frame, zmin[t]);
+            out[t].dmax = linear_depth(frame, zmax[t]);
+        }
+    }
+    let mut uncertain = vec![0u32; tiles];
+    for y in 0..h {
+        for x in 0..w {
+            let z = depth[(y * w + x) as usize];
+            if z < 1.0 {
+                let t = tile_of(x, y);
+                let td = out[t];
+                let scale = depth_cell_scale(&td);
+                let d = linear_depth(frame, z);
+                let cell = depth_cell(d, td.dmin, scale);
+                out[t].mask |= 1 << cell;
+                let f = (d - td.dmin) * scale;
+                if (f - f.round()).abs() < 1e-4 * f.abs().max(1.0) {
+                    uncertain[t] |=
+                        (1 << cell) | (1 << cell.saturating_sub(1)) | (1 << (cell + 1).min(31));
+                }
+            }
+        }
+    }
+    (out, uncertain)
+}
+
+/// Oracle of `cull.tiled_gather` and `cull.depth_mask` (the flag in `p` decides), given the
+/// per-tile depth data (from the GPU pass, so that this oracle checks the light tests alone).
+pub fn gather(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    lights: &[GpuLight],
+    tile_depth: &[GpuTileDepth],
+) -> OracleLists {
+    let mut out = OracleLists::new(p.bins as usize);
+    for ty in 0..p.tiles_y {
+        for tx in 0..p.tiles_x {
+            let bin = (ty * p.tiles_x + tx) as usize;
+            let t = &tile_depth[bin];
+            let planes = tile_side_planes(frame, p, [tx, ty]);
+            for (i, l) in lights.iter().enumerate() {
+                let lo = tile_keeps(
+                    p,
+                    &CullLight::new(frame, l, p.slack * (1.0 - BORDER)),
+                    &planes,
+                    t,
+                );
+                let hi = tile_keeps(
+                    p,
+                    &CullLight::new(frame, l, p.slack * (1.0 + BORDER)),
+                    &planes,
+                    t,
+                );
+                out.push(bin, i as u32, lo, hi);
+            }
+        }
+    }
+    out
+}
+
+/// Oracle of `cull.occupancy`: 1 for each cluster holding a covered pixel.
+pub fn occupancy(frame: &GpuFrame, p: &GpuCullParams, depth: &[f32], w: u32, h: u32) -> Vec<u32> {
+    let mut occ = vec![0u32; p.bins as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let z = depth[(y * w + x) as usize];
+            if z < 1.0 {
+                occ[bin_of(frame, p, [x, y], z) as usize] = 1;
+            }
+        }
+    }
+    occ
+}
+
+/// The clusters light `l` is emitted to, at one slack: (tile, first slice, last slice) triples.
+fn clustered_light(frame: &GpuFrame, p: &GpuCullParams, l: &CullLight, mut emit: impl FnMut(u32)) {
+    let dlo = -l.center.z - l.radius - l.slack;
+    let dhi = -l.center.z + l.radius + l.slack;
+    if dlo > p.far {
+        return;
+    }
+    let (s0, s1) = (geometry::depth_slice(p, dlo), geometry::depth_slice(p, dhi));
+    let [x0, y0, x1, y1] = light_tiles(frame, p, l);
+    for ty in y0..=y1 {
+        for tx in x0..=x1 {
+            let planes = tile_side_planes(frame, p, [tx as u32, ty as u32]);
+            if planes.iter().any(|&pl| geometry::outside_plane(pl, l)) {
+                continue;
+            }
+            for s in s0..=s1 {
+                emit(s * p.tiles_x * p.tiles_y + ty as u32 * p.tiles_x + tx as u32);
+            }
+        }
+    }
+}
+
+/// Oracle of `cull.clustered`, given the cluster occupancy (from the GPU pass) when
+/// `skip_empty` is set.
+pub fn clustered(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    lights: &[GpuLight],
+    occupancy: &[u32],
+) -> OracleLists {
+    let bins = p.bins as usize;
+    let mut out = OracleLists::new(bins);
+    let skip = p.flags & CULL_FLAG_SKIP_EMPTY != 0;
+    let mut lo_set = vec![false; bins];
+    let mut touched = Vec::new();
+    for (i, l) in lights.iter().enumerate() {
+        clustered_light(
+            frame,
+            p,
+            &CullLight::new(frame, l, p.slack * (1.0 - BORDER)),
+            |b| {
+                lo_set[b as usize] = true;
+                touched.push(b);
+            },
+        );
+        let mut hi_bins = Vec::new();
+        clustered_light(
+            frame,
+            p,
+            &CullLight::new(frame, l, p.slack * (1.0 + BORDER)),
+            |b| hi_bins.push(b),
+        );
+        hi_bins.extend(touched.iter().copied());
+        hi_bins.sort_unstable();
+        hi_bins.dedup();
+        for &b in &hi_bins {
+            if skip && occupancy[b as usize] == 0 {
+                continue;
+            }
+            let lo = lo_set[b as usize];
+            // The hi-slack set contains the lo-slack set (more slack, more bins), except
+            // through rounding; a bin in only one of them is borderline.
+            let hi = true;
+            out.push(b as usize, i as u32, lo, hi);
+        }
+        for b in touched.drain(..) {
+            lo_set[b as usize] = false;
+        }
+    }
+    out
+}

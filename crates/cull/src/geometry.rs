@@ -1,0 +1,200 @@
+//! The culling geometry on the CPU: an f32 mirror of `shaders/cull/common.wgsl`, function for
+//! function and in the same order of operations, used by the CPU oracles. GPUs may fuse
+//! multiply-adds or round divisions differently, so a decision within a hair of its boundary can
+//! differ; the oracles detect such borderline decisions (see [`crate::cpu`]) instead of hiding
+//! them.
+
+use glam::{Mat4, Vec2, Vec3, Vec4, Vec4Swizzles};
+use manylights_gpu::layout::{GpuFrame, GpuLight, LIGHT_KIND_SPOT};
+
+use crate::layout::{
+    CONE_MIN_COS, CULL_FLAG_DEPTH_MASK, GpuCullParams, GpuTileDepth, SLICING_EXPONENTIAL,
+};
+
+fn row(m: &Mat4, i: usize) -> Vec4 {
+    m.row(i)
+}
+
+/// WGSL `linear_depth`.
+pub fn linear_depth(frame: &GpuFrame, z: f32) -> f32 {
+    let m = &frame.clip_from_view;
+    let (a, b, c, d) = (m.z_axis.z, m.w_axis.z, m.z_axis.w, m.w_axis.w);
+    -(b - d * z) / (c * z - a)
+}
+
+/// WGSL `tile_ndc`.
+pub fn tile_ndc(frame: &GpuFrame, p: &GpuCullParams, tile: [u32; 2]) -> Vec4 {
+    let (w, h) = (frame.viewport.x as u32, frame.viewport.y as u32);
+    let px0 = (tile[0] * p.tile_size) as f32;
+    let px1 = ((tile[0] + 1) * p.tile_size).min(w) as f32;
+    let py0 = (tile[1] * p.tile_size) as f32;
+    let py1 = ((tile[1] + 1) * p.tile_size).min(h) as f32;
+    Vec4::new(
+        px0 * frame.viewport.z * 2.0 - 1.0,
+        1.0 - py1 * frame.viewport.w * 2.0,
+        px1 * frame.viewport.z * 2.0 - 1.0,
+        1.0 - py0 * frame.viewport.w * 2.0,
+    )
+}
+
+fn normalize_plane(p: Vec4) -> Vec4 {
+    p / p.xyz().length()
+}
+
+/// WGSL `tile_side_planes`.
+pub fn tile_side_planes(frame: &GpuFrame, p: &GpuCullParams, tile: [u32; 2]) -> [Vec4; 4] {
+    let r = tile_ndc(frame, p, tile);
+    let m = &frame.clip_from_view;
+    let (r0, r1, r3) = (row(m, 0), row(m, 1), row(m, 3));
+    [
+        normalize_plane(r0 - r.x * r3),
+        normalize_plane(r.z * r3 - r0),
+        normalize_plane(r1 - r.y * r3),
+        normalize_plane(r.w * r3 - r1),
+    ]
+}
+
+/// WGSL `CullLight`.
+#[derive(Clone, Copy, Debug)]
+pub struct CullLight {
+    /// View-space centre.
+    pub center: Vec3,
+    /// Radius.
+    pub radius: f32,
+    /// Slack in view-space units.
+    pub slack: f32,
+    /// Whether the cone test applies.
+    pub is_cone: bool,
+    /// View-space spot axis.
+    pub axis: Vec3,
+    /// tan of the outer half-angle.
+    pub tan_outer: f32,
+}
+
+impl CullLight {
+    /// WGSL `cull_light`, with the relative slack given explicitly.
+    pub fn new(frame: &GpuFrame, l: &GpuLight, slack: f32) -> Self {
+        let center = (frame.view_from_world * l.position.extend(1.0)).xyz();
+        Self {
+            center,
+            radius: l.radius,
+            slack: slack * (center.length() + l.radius),
+            is_cone: l.kind == LIGHT_KIND_SPOT && l.cos_outer > CONE_MIN_COS,
+            axis: (frame.view_from_world * l.direction.extend(0.0)).xyz(),
+            tan_outer: (1.0 - l.cos_outer * l.cos_outer).max(0.0).sqrt()
+                / l.cos_outer.max(CONE_MIN_COS),
+        }
+    }
+}
+
+/// WGSL `outside_plane`.
+pub fn outside_plane(p: Vec4, l: &CullLight) -> bool {
+    let dc = p.xyz().dot(l.center) + p.w;
+    if dc < -(l.radius + l.slack) {
+        return true;
+    }
+    if l.is_cone {
+        let base = p.xyz().dot(l.center + l.axis * l.radius) + p.w;
+        let n_perp = p.xyz() - p.xyz().dot(l.axis) * l.axis;
+        let reach = dc.max(base + l.radius * l.tan_outer * n_perp.length());
+        return reach < -l.slack;
+    }
+    false
+}
+
+/// WGSL `depth_cell`.
+pub fn depth_cell(d: f32, dmin: f32, scale: f32) -> u32 {
+    ((d - dmin) * scale).floor().clamp(0.0, 31.0) as u32
+}
+
+/// WGSL `depth_cell_scale`.
+pub fn depth_cell_scale(t: &GpuTileDepth) -> f32 {
+    if t.dmax > t.dmin {
+        32.0 / (t.dmax - t.dmin)
+    } else {
+        0.0
+    }
+}
+
+/// WGSL `bit_range`.
+pub fn bit_range(lo: u32, hi: u32) -> u32 {
+    (u32::MAX >> (31 - hi)) & (u32::MAX << lo)
+}
+
+/// WGSL `light_depth_mask`.
+pub fn light_depth_mask(l: &CullLight, t: &GpuTileDepth) -> u32 {
+    let scale = depth_cell_scale(t);
+    let lo = depth_cell(-l.center.z - l.radius - l.slack, t.dmin, scale);
+    let hi = depth_cell(-l.center.z + l.radius + l.slack, t.dmin, scale);
+    bit_range(lo, hi)
+}
+
+/// WGSL `tile_keeps`.
+pub fn tile_keeps(p: &GpuCullParams, l: &CullLight, planes: &[Vec4; 4], t: &GpuTileDepth) -> bool {
+    if t.covered == 0 || planes.iter().any(|&pl| outside_plane(pl, l)) {
+        return false;
+    }
+    if outside_plane(Vec4::new(0.0, 0.0, -1.0, -t.dmin), l)
+        || outside_plane(Vec4::new(0.0, 0.0, 1.0, t.dmax), l)
+    {
+        return false;
+    }
+    if p.flags & CULL_FLAG_DEPTH_MASK != 0 {
+        return light_depth_mask(l, t) & t.mask != 0;
+    }
+    true
+}
+
+/// WGSL `depth_slice`, and the unclamped, unfloored slice coordinate (for borderline checks).
+pub fn depth_slice(p: &GpuCullParams, d: f32) -> u32 {
+    slice_coord(p, d).floor().clamp(0.0, (p.slices - 1) as f32) as u32
+}
+
+/// The slice coordinate before `floor`.
+pub fn slice_coord(p: &GpuCullParams, d: f32) -> f32 {
+    if p.slicing == SLICING_EXPONENTIAL {
+        (d.max(p.near) / p.near).ln() * p.slice_scale
+    } else {
+        (d - p.near) * p.slice_scale
+    }
+}
+
+/// WGSL `bin_of`.
+pub fn bin_of(frame: &GpuFrame, p: &GpuCullParams, pixel: [u32; 2], z: f32) -> u32 {
+    let t = (pixel[1] / p.tile_size) * p.tiles_x + pixel[0] / p.tile_size;
+    if p.slices <= 1 {
+        return t;
+    }
+    depth_slice(p, linear_depth(frame, z)) * p.tiles_x * p.tiles_y + t
+}
+
+/// WGSL `light_tiles`: inclusive tile rectangle (x0, y0, x1, y1); empty when x0 > x1.
+pub fn light_tiles(frame: &GpuFrame, p: &GpuCullParams, l: &CullLight) -> [i32; 4] {
+    let full = [0, 0, p.tiles_x as i32 - 1, p.tiles_y as i32 - 1];
+    let r = l.radius + l.slack;
+    let mut lo = Vec2::splat(1e30);
+    let mut hi = Vec2::splat(-1e30);
+    for k in 0..8u32 {
+        let s = |bit: u32| if k & bit != 0 { 1.0 } else { -1.0 };
+        let corner = l.center + r * Vec3::new(s(1), s(2), s(4));
+        let c = frame.clip_from_view * corner.extend(1.0);
+        if c.w <= 1e-6 {
+            return full;
+        }
+        let ndc = c.xy() / c.w;
+        lo = lo.min(ndc);
+        hi = hi.max(ndc);
+    }
+    let px0 = (lo.x + 1.0) * 0.5 * frame.viewport.x - 1.0;
+    let px1 = (hi.x + 1.0) * 0.5 * frame.viewport.x + 1.0;
+    let py0 = (1.0 - hi.y) * 0.5 * frame.viewport.y - 1.0;
+    let py1 = (1.0 - lo.y) * 0.5 * frame.viewport.y + 1.0;
+    let ts = p.tile_size as f32;
+    let t = |v: f32| (v / ts).floor().clamp(-1.0, 1e6) as i32;
+    [
+        t(px0).max(full[0]),
+        t(py0).max(full[1]),
+        t(px1).min(full[2]),
+        t(py1).min(full[3]),
+    ]
+}

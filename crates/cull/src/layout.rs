@@ -1,0 +1,100 @@
+//! Host mirrors of the culling WGSL structs and the constants both sides share.
+
+use bytemuck::{Pod, Zeroable};
+use manylights_gpu::shaders::WgslConst;
+
+/// `CullParams.flags`: apply the 2.5D depth masks (`cull.depth_mask`).
+pub const CULL_FLAG_DEPTH_MASK: u32 = 1;
+/// `CullParams.flags`: emit lights only into clusters that hold geometry.
+pub const CULL_FLAG_SKIP_EMPTY: u32 = 2;
+/// `CullParams.slicing`: slices of equal depth.
+pub const SLICING_LINEAR: u32 = 0;
+/// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
+pub const SLICING_EXPONENTIAL: u32 = 1;
+/// Spots whose outer cosine is at most this (half-angle of about 89.9 degrees or more) are
+/// culled as spheres; narrower ones also by their cone.
+pub const CONE_MIN_COS: f32 = 1e-3;
+/// Default conservative slack, relative to each light's `|centre| + radius` in view space.
+///
+/// Budget: the f32 planes and the linearised depth bounds carry relative errors of a few 1e-7
+/// (the depth linearisation's subtraction is exact by Sterbenz' lemma, leaving one rounding per
+/// operation); the pixel positions the exact oracle reconstructs from the same depth values
+/// agree with them to that order. 1e-4 covers this by a factor of about 100 and costs a
+/// negligible widening (1 mm for a light 10 m away).
+pub const DEFAULT_SLACK: f32 = 1e-4;
+
+/// Threads of the portable scan's workgroups.
+pub const SCAN_THREADS: u32 = 256;
+/// Elements each scan thread handles.
+pub const SCAN_PER_THREAD: u32 = 4;
+/// Elements one scan workgroup handles.
+pub const SCAN_BLOCK: u32 = SCAN_THREADS * SCAN_PER_THREAD;
+/// Workgroups along x in a 2D scan dispatch (rows of this many blocks).
+pub const SCAN_MAX_GROUPS_X: u32 = 32768;
+
+/// Workgroups along x in the 2D dispatches of one-thread-per-item passes (per light, per bin).
+pub const GROUPS_X: u32 = 32768;
+
+/// Constants of the culling shaders, generated into their prelude.
+pub const CULL_CONSTS: &[WgslConst] = &[
+    WgslConst::U32("GROUPS_X", GROUPS_X),
+    WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),
+    WgslConst::U32("CULL_FLAG_SKIP_EMPTY", CULL_FLAG_SKIP_EMPTY),
+    WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
+    WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),
+    WgslConst::F32("CONE_MIN_COS", CONE_MIN_COS),
+];
+
+/// Constants of the scan shader.
+pub const SCAN_CONSTS: &[WgslConst] = &[
+    WgslConst::U32("SCAN_THREADS", SCAN_THREADS),
+    WgslConst::U32("SCAN_PER_THREAD", SCAN_PER_THREAD),
+    WgslConst::U32("SCAN_BLOCK", SCAN_BLOCK),
+    WgslConst::U32("SCAN_MAX_GROUPS_X", SCAN_MAX_GROUPS_X),
+];
+
+/// Mirror of WGSL `CullParams` (`shaders/cull/common.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuCullParams {
+    /// Tiles across.
+    pub tiles_x: u32,
+    /// Tiles down.
+    pub tiles_y: u32,
+    /// Tile side in pixels.
+    pub tile_size: u32,
+    /// Lights.
+    pub light_count: u32,
+    /// Depth slices (1 for tiled strategies).
+    pub slices: u32,
+    /// `SLICING_*`.
+    pub slicing: u32,
+    /// `CULL_FLAG_*`.
+    pub flags: u32,
+    /// Bins: tiles x slices.
+    pub bins: u32,
+    /// Near plane distance.
+    pub near: f32,
+    /// Far plane distance.
+    pub far: f32,
+    /// Relative conservative slack.
+    pub slack: f32,
+    /// Slice scale: slices / (far - near) or slices / ln(far / near).
+    pub slice_scale: f32,
+}
+const _: () = assert!(size_of::<GpuCullParams>() == 48);
+
+/// Mirror of WGSL `TileDepth` (`shaders/cull/common.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTileDepth {
+    /// Nearest covered linear depth.
+    pub dmin: f32,
+    /// Farthest covered linear depth.
+    pub dmax: f32,
+    /// 2.5D geometry mask.
+    pub mask: u32,
+    /// Covered pixels.
+    pub covered: u32,
+}
+const _: () = assert!(size_of::<GpuTileDepth>() == 16);

@@ -1,0 +1,167 @@
+//! The portable GPU exclusive scan (`shaders/scan/scan.wgsl`), in place over a u32 buffer:
+//! block scans of 1,024 elements, the block totals scanned recursively, then added back.
+//! It assumes no subgroup size, so it runs on any adapter.
+
+use manylights_gpu::GpuContext;
+use manylights_gpu::shader_file;
+use manylights_gpu::shaders::ShaderDef;
+use manylights_gpu::timing::GpuTimer;
+use wgpu::util::DeviceExt;
+
+use crate::layout::{SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X};
+
+/// The scan shader.
+pub const SHADER: ShaderDef = ShaderDef {
+    name: "scan",
+    consts: SCAN_CONSTS,
+    files: &[shader_file!("scan/scan.wgsl")],
+};
+
+/// Scan pipelines.
+pub struct Scan {
+    layout: wgpu::BindGroupLayout,
+    blocks: wgpu::ComputePipeline,
+    add: wgpu::ComputePipeline,
+}
+
+/// Workgroup counts (x, y) for `groups` workgroups laid out in rows of `SCAN_MAX_GROUPS_X`.
+pub fn groups_2d(groups: u32, row: u32) -> (u32, u32) {
+    if groups <= row {
+        (groups, 1)
+    } else {
+        (row, groups.div_ceil(row))
+    }
+}
+
+impl Scan {
+    /// Builds the pipelines.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let d = &ctx.device;
+        let storage = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scan"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: None,
+                    },
+                    count: None,
+                },
+                storage(1),
+                storage(2),
+            ],
+        });
+        let module = SHADER.create(d);
+        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scan"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipe = |entry| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pl),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        Self {
+            blocks: pipe("scan_blocks"),
+            add: pipe("scan_add"),
+            layout,
+        }
+    }
+
+    /// Encodes an in-place exclusive scan of the first `n` u32 of `data`.
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        data: &wgpu::Buffer,
+        n: u32,
+        timer: &mut GpuTimer,
+    ) {
+        if n == 0 {
+            return;
+        }
+        let blocks = n.div_ceil(SCAN_BLOCK);
+        let sums = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scan.block_sums"),
+            size: u64::from(blocks) * 4,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let params = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("scan.params"),
+                contents: bytemuck::cast_slice(&[n, 0, 0, 0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scan"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: params.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: data.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: sums.as_entire_binding(),
+                },
+            ],
+        });
+        let (gx, gy) = groups_2d(blocks, SCAN_MAX_GROUPS_X);
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("scan.blocks"),
+                timestamp_writes: timer.compute_pass("scan.blocks"),
+            });
+            pass.set_pipeline(&self.blocks);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+        if blocks > 1 {
+            self.encode(ctx, encoder, &sums, blocks, timer);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("scan.add"),
+                timestamp_writes: timer.compute_pass("scan.add"),
+            });
+            pass.set_pipeline(&self.add);
+            pass.set_bind_group(0, &group, &[]);
+            pass.dispatch_workgroups(gx, gy, 1);
+        }
+    }
+}
+
+/// The CPU oracle: exclusive prefix sum (wrapping, as u32 on the GPU).
+pub fn cpu(data: &[u32]) -> Vec<u32> {
+    let mut acc = 0u32;
+    data.iter()
+        .map(|&x| {
+            let out = acc;
+            acc = acc.wrapping_add(x);
+            out
+        })
+        .collect()
+}

@@ -1,0 +1,203 @@
+// Shared culling geometry: the WGSL twin of manylights_cull::geometry (CPU oracles mirror every
+// function here in f32, in the same order of operations).
+//
+// Bins: a tile (tiled strategies) or a cluster (tile x depth slice). Lists: bin_ranges[bin] =
+// (offset, count) into light_indices, written by every strategy and read by every backend
+// through lookup.wgsl.
+//
+// Planes are vec4 (n, d) with inside = dot(n, p) + d >= 0, in view space, built from rows of
+// clip_from_view (Gribb-Hartmann), so perspective and orthographic cameras share one code path.
+
+// Host mirror: manylights_cull::layout::GpuCullParams.
+struct CullParams {
+    tiles_x: u32,
+    tiles_y: u32,
+    tile_size: u32,
+    light_count: u32,
+    // Depth slices of the cluster grid (1 for tiled strategies).
+    slices: u32,
+    // SLICING_LINEAR or SLICING_EXPONENTIAL.
+    slicing: u32,
+    // CULL_FLAG_* bits.
+    flags: u32,
+    bins: u32,
+    near: f32,
+    far: f32,
+    // Conservative slack, relative to (|centre| + radius) of each light: absorbs f32 rounding
+    // in planes and depth linearisation (see docs/STRATEGIES.md).
+    slack: f32,
+    // S / (far - near) (linear) or S / ln(far / near) (exponential).
+    slice_scale: f32,
+}
+
+@group(1) @binding(0) var<uniform> cull: CullParams;
+
+// Per-tile depth data written by cull.depth_bounds. Host mirror: layout::GpuTileDepth.
+struct TileDepth {
+    // Linear view depth (distance along -Z) of the nearest and farthest covered pixel.
+    dmin: f32,
+    dmax: f32,
+    // 2.5D geometry mask: bit k set when a covered pixel falls in depth cell k of [dmin, dmax].
+    mask: u32,
+    // Number of covered pixels (0: an empty tile needs no lights).
+    covered: u32,
+}
+
+// A light as culling sees it, in view space.
+struct CullLight {
+    center: vec3<f32>,
+    radius: f32,
+    // Conservative slack in view-space units.
+    slack: f32,
+    is_cone: bool,
+    axis: vec3<f32>,
+    tan_outer: f32,
+}
+
+fn clip_row(i: u32) -> vec4<f32> {
+    let m = frame.clip_from_view;
+    return vec4<f32>(m[0][i], m[1][i], m[2][i], m[3][i]);
+}
+
+// Linear view depth (distance along -Z, > 0 in front) of NDC depth z. With row 2 = (0, 0, A, B)
+// and row 3 = (0, 0, C, D) of clip_from_view, z = (A vz + B) / (C vz + D). For a perspective
+// camera the denominator (C z - A) subtracts nearly equal numbers, which is exact in floating
+// point (Sterbenz), so the result has one rounding.
+fn linear_depth(z: f32) -> f32 {
+    let m = frame.clip_from_view;
+    let a = m[2][2];
+    let b = m[3][2];
+    let c = m[2][3];
+    let d = m[3][3];
+    return -(b - d * z) / (c * z - a);
+}
+
+// NDC rectangle (x0, y0, x1, y1) of a tile, clamped to the image (the last row and column may
+// be partial when the resolution is not a multiple of the tile size).
+fn tile_ndc(tile: vec2<u32>) -> vec4<f32> {
+    let px0 = f32(tile.x * cull.tile_size);
+    let px1 = f32(min((tile.x + 1u) * cull.tile_size, u32(frame.viewport.x)));
+    let py0 = f32(tile.y * cull.tile_size);
+    let py1 = f32(min((tile.y + 1u) * cull.tile_size, u32(frame.viewport.y)));
+    // Pixel rows grow downwards, NDC y upwards.
+    return vec4<f32>(
+        px0 * frame.viewport.z * 2.0 - 1.0,
+        1.0 - py1 * frame.viewport.w * 2.0,
+        px1 * frame.viewport.z * 2.0 - 1.0,
+        1.0 - py0 * frame.viewport.w * 2.0,
+    );
+}
+
+fn normalize_plane(p: vec4<f32>) -> vec4<f32> {
+    return p / length(p.xyz);
+}
+
+// The four side planes of a tile's frustum: x >= x0 w, x <= x1 w, y >= y0 w, y <= y1 w.
+fn tile_side_planes(tile: vec2<u32>) -> array<vec4<f32>, 4> {
+    let r = tile_ndc(tile);
+    let r0 = clip_row(0u);
+    let r1 = clip_row(1u);
+    let r3 = clip_row(3u);
+    return array<vec4<f32>, 4>(
+        normalize_plane(r0 - r.x * r3),
+        normalize_plane(r.z * r3 - r0),
+        normalize_plane(r1 - r.y * r3),
+        normalize_plane(r.w * r3 - r1),
+    );
+}
+
+fn cull_light(l: Light) -> CullLight {
+    var out: CullLight;
+    out.center = (frame.view_from_world * vec4<f32>(l.position, 1.0)).xyz;
+    out.radius = l.radius;
+    out.slack = cull.slack * (length(out.center) + l.radius);
+    // The cone test applies to spots narrower than a hemisphere; wider ones use the sphere.
+    out.is_cone = l.kind == LIGHT_KIND_SPOT && l.cos_outer > CONE_MIN_COS;
+    out.axis = (frame.view_from_world * vec4<f32>(l.direction, 0.0)).xyz;
+    out.tan_outer = sqrt(max(1.0 - l.cos_outer * l.cos_outer, 0.0)) / max(l.cos_outer, CONE_MIN_COS);
+    return out;
+}
+
+// Whether the light's influence lies entirely outside the plane: its sphere, and for a spot
+// also the cone of height `radius` (which contains the spot's sector) are tested; either
+// being outside is enough.
+fn outside_plane(p: vec4<f32>, l: CullLight) -> bool {
+    let dc = dot(p.xyz, l.center) + p.w;
+    if dc < -(l.radius + l.slack) {
+        return true;
+    }
+    if l.is_cone {
+        // Support of the cone (apex, base disk of radius r tan) in direction n.
+        let base = dot(p.xyz, l.center + l.axis * l.radius) + p.w;
+        let n_perp = p.xyz - dot(p.xyz, l.axis) * l.axis;
+        let reach = max(dc, base + l.radius * l.tan_outer * length(n_perp));
+        return reach < -l.slack;
+    }
+    return false;
+}
+
+// Depth cell in [0, 31] of linear depth d in a tile spanning [dmin, dmin + 32 / scale].
+fn depth_cell(d: f32, dmin: f32, scale: f32) -> u32 {
+    return u32(clamp(floor((d - dmin) * scale), 0.0, 31.0));
+}
+
+// Scale of depth_cell for a tile: 32 / (dmax - dmin), or 0 for a flat tile (one cell).
+fn depth_cell_scale(t: TileDepth) -> f32 {
+    return select(0.0, 32.0 / (t.dmax - t.dmin), t.dmax > t.dmin);
+}
+
+// Bits lo..=hi of a 32-bit mask.
+fn bit_range(lo: u32, hi: u32) -> u32 {
+    return (0xffffffffu >> (31u - hi)) & (0xffffffffu << lo);
+}
+
+// The 2.5D mask of a light's depth extent in a tile.
+fn light_depth_mask(l: CullLight, t: TileDepth) -> u32 {
+    let scale = depth_cell_scale(t);
+    let lo = depth_cell(-l.center.z - l.radius - l.slack, t.dmin, scale);
+    let hi = depth_cell(-l.center.z + l.radius + l.slack, t.dmin, scale);
+    return bit_range(lo, hi);
+}
+
+// Whether a light may reach any covered pixel of a tile: the tile frustum between the tile's
+// depth bounds, and with CULL_FLAG_DEPTH_MASK the 2.5D masks.
+fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
+    if t.covered == 0u {
+        return false;
+    }
+    for (var i = 0u; i < 4u; i++) {
+        if outside_plane(planes[i], l) {
+            return false;
+        }
+    }
+    // Depth bounds as planes: -z >= dmin and -z <= dmax.
+    if outside_plane(vec4<f32>(0.0, 0.0, -1.0, -t.dmin), l) || outside_plane(vec4<f32>(0.0, 0.0, 1.0, t.dmax), l) {
+        return false;
+    }
+    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
+        return (light_depth_mask(l, t) & t.mask) != 0u;
+    }
+    return true;
+}
+
+// Depth slice in [0, slices - 1] of linear depth d.
+fn depth_slice(d: f32) -> u32 {
+    var s: f32;
+    if cull.slicing == SLICING_EXPONENTIAL {
+        s = floor(log(max(d, cull.near) / cull.near) * cull.slice_scale);
+    } else {
+        s = floor((d - cull.near) * cull.slice_scale);
+    }
+    return u32(clamp(s, 0.0, f32(cull.slices - 1u)));
+}
+
+// The bin of pixel `pixel` whose depth buffer value is `z` (NDC): its tile, and for clusters
+// the depth slice of its linear depth.
+fn bin_of(pixel: vec2<u32>, z: f32) -> u32 {
+    let tile = pixel / cull.tile_size;
+    let t = tile.y * cull.tiles_x + tile.x;
+    if cull.slices <= 1u {
+        return t;
+    }
+    return depth_slice(linear_depth(z)) * cull.tiles_x * cull.tiles_y + t;
+}

@@ -1,0 +1,557 @@
+//! Culling strategies on a real Vulkan device (lavapipe in CI) against their CPU oracles and the
+//! exact per-pixel oracle.
+
+mod common;
+
+use glam::Vec3;
+use manylights_cull::layout::{DEFAULT_SLACK, GpuCullParams};
+use manylights_cull::metrics::{ListMetrics, evaluate, exact_sets, surface_points};
+use manylights_cull::{BinLists, Culler, Slicing, Strategy, cpu, geometry, scan};
+use manylights_gpu::layout::{GpuFrame, GpuLight};
+use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::{GpuContext, readback};
+use manylights_scene::procedural::{
+    AtriumParams, CityParams, PillarsParams, ProceduralScene, TopdownParams,
+};
+use manylights_scene::{
+    Camera, Light, LightGenerator, LightKind, LightSpec, Projection, RadiusRule, Scene,
+};
+use rand::{RngExt, SeedableRng};
+
+/// Every strategy, with tile sizes and cluster options varied.
+fn strategies() -> Vec<Strategy> {
+    vec![
+        Strategy::TiledGather { tile_size: 8 },
+        Strategy::TiledGather { tile_size: 16 },
+        Strategy::TiledGather { tile_size: 32 },
+        Strategy::DepthMask { tile_size: 8 },
+        Strategy::DepthMask { tile_size: 16 },
+        Strategy::Clustered {
+            tile_size: 16,
+            slices: 16,
+            slicing: Slicing::Exponential,
+            skip_empty: false,
+        },
+        Strategy::Clustered {
+            tile_size: 8,
+            slices: 8,
+            slicing: Slicing::Linear,
+            skip_empty: true,
+        },
+    ]
+}
+
+/// One test configuration: a scene with lights and a camera.
+struct Case {
+    scene: Scene,
+    camera: Camera,
+    label: String,
+}
+
+/// A random scene, lights and camera. Besides the generated lights every case holds a light
+/// containing the camera, one whose centre is behind the camera, and one crossing the near
+/// plane; spots range from 1 degree to 120 degrees.
+fn random_case(seed: u64) -> Case {
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    let which = rng.random_range(0..4u32);
+    let proc_scene = match which {
+        0 => ProceduralScene::Atrium(AtriumParams {
+            bays: rng.random_range(2..6),
+            storeys: rng.random_range(1..3),
+            cloth: rng.random_bool(0.5),
+        }),
+        1 => ProceduralScene::Pillars(PillarsParams {
+            count: rng.random_range(4..40),
+            width: rng.random_range(0.05..0.5),
+            gap: rng.random_range(2.0..30.0),
+        }),
+        2 => ProceduralScene::Topdown(TopdownParams {
+            size: rng.random_range(5.0..60.0),
+            subdivisions: 4,
+        }),
+        _ => ProceduralScene::City(CityParams {
+            blocks: rng.random_range(2..6),
+            seed,
+            max_height: rng.random_range(5.0..40.0),
+        }),
+    };
+    let mut scene = proc_scene.build().unwrap();
+    let b = scene.light_bounds;
+    let ext = b.extent().max_element();
+    let spec = LightSpec {
+        generator: match rng.random_range(0..4u32) {
+            0 => LightGenerator::Uniform,
+            1 => LightGenerator::SurfaceHugging { offset: 0.05 },
+            2 => LightGenerator::Clustered {
+                clusters: 3,
+                spread: ext * 0.05,
+            },
+            _ => LightGenerator::LightField,
+        },
+        count: rng.random_range(20..160),
+        seed,
+        radius: RadiusRule::Fixed(ext * rng.random_range(0.02..0.4)),
+        intensity: 1.0,
+        spot_fraction: 0.3,
+        spot_outer_deg: [1.0, 10.0, 45.0, 89.95, 90.0, 120.0][rng.random_range(0..6)],
+    };
+    scene.lights = spec.generate(&scene).unwrap();
+    let pick = |rng: &mut rand_pcg::Pcg64| {
+        b.min
+            + b.extent()
+                * Vec3::new(
+                    rng.random::<f32>(),
+                    rng.random::<f32>(),
+                    rng.random::<f32>(),
+                )
+    };
+    let camera = if rng.random_bool(0.3) {
+        scene.camera
+    } else {
+        let position = pick(&mut rng);
+        let mut target = pick(&mut rng);
+        if (target - position).length() < 1e-2 {
+            target += Vec3::X;
+        }
+        let near = rng.random_range(0.05..0.5);
+        let projection = if rng.random_bool(0.2) {
+            Projection::Orthographic {
+                height: ext * rng.random_range(0.2..1.0),
+                near: -ext,
+                far: ext * 3.0,
+            }
+        } else {
+            Projection::Perspective {
+                fov_y_deg: rng.random_range(30.0..110.0),
+                near,
+                far: ext * 3.0,
+            }
+        };
+        let up = if (target - position).normalize().y.abs() > 0.99 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        Camera {
+            position,
+            target,
+            up,
+            projection,
+        }
+    };
+    camera.validate().unwrap();
+    let fwd = (camera.target - camera.position).normalize();
+    let (near, _) = camera.near_far();
+    let r = ext * 0.1;
+    scene.lights.push(Light::point(
+        camera.position + fwd * r * 0.3,
+        r,
+        Vec3::ONE,
+        1.0,
+    )); // contains the camera
+    scene.lights.push(Light::point(
+        camera.position - fwd * r * 0.6,
+        r,
+        Vec3::ONE,
+        1.0,
+    )); // centre behind
+    scene.lights.push(Light::point(
+        camera.position + fwd * near.max(0.01),
+        near.max(0.01) * 0.8,
+        Vec3::ONE,
+        1.0,
+    )); // crosses near
+    scene.lights.push(Light {
+        kind: LightKind::Spot {
+            direction: fwd,
+            inner_angle: 0.0,
+            outer_angle: 0.3,
+        },
+        ..Light::point(camera.position - fwd * r * 0.2, r * 3.0, Vec3::ONE, 1.0)
+    });
+    scene.validate().unwrap();
+    Case {
+        label: format!("seed {seed} ({})", proc_scene.name()),
+        scene,
+        camera,
+    }
+}
+
+struct Rendered {
+    gpu_scene: manylights_gpu::GpuScene,
+    depth_tex: wgpu::Texture,
+    depth: Vec<f32>,
+    frame: GpuFrame,
+    lights: Vec<GpuLight>,
+    exact: Vec<Option<Vec<u32>>>,
+    w: u32,
+    h: u32,
+}
+
+fn render(ctx: &GpuContext, case: &Case, w: u32, h: u32) -> Rendered {
+    let (gpu_scene, depth_tex, depth) = common::depth_prepass(ctx, &case.scene, &case.camera, w, h);
+    let frame = GpuFrame::new(&case.camera, w, h, case.scene.lights.len() as u32);
+    let points = surface_points(&frame, &depth, w, h);
+    let exact = exact_sets(&points, &case.scene.lights);
+    let lights = case.scene.lights.iter().map(GpuLight::from).collect();
+    Rendered {
+        gpu_scene,
+        depth_tex,
+        depth,
+        frame,
+        lights,
+        exact,
+        w,
+        h,
+    }
+}
+
+fn params(r: &Rendered, case: &Case, s: &Strategy) -> GpuCullParams {
+    let (near, far) = case.camera.near_far();
+    s.params(r.w, r.h, r.lights.len() as u32, near, far, DEFAULT_SLACK)
+}
+
+/// The CPU oracle's lists for a strategy, computed from the depth buffer alone.
+fn oracle_lists(r: &Rendered, case: &Case, s: &Strategy) -> (GpuCullParams, BinLists) {
+    let p = params(r, case, s);
+    let lists = match s {
+        Strategy::Clustered { .. } => cpu::clustered(
+            &r.frame,
+            &p,
+            &r.lights,
+            &cpu::occupancy(&r.frame, &p, &r.depth, r.w, r.h),
+        ),
+        _ => cpu::gather(
+            &r.frame,
+            &p,
+            &r.lights,
+            &cpu::depth_bounds(&r.frame, &p, &r.depth, r.w, r.h).0,
+        ),
+    };
+    (p, lists.to_bin_lists())
+}
+
+fn metrics(r: &Rendered, p: &GpuCullParams, lists: &BinLists) -> ListMetrics {
+    evaluate(&r.frame, p, &r.depth, r.w, r.h, &r.exact, lists)
+}
+
+fn run_gpu(
+    ctx: &GpuContext,
+    culler: &Culler,
+    r: &Rendered,
+    case: &Case,
+    s: &Strategy,
+) -> manylights_cull::CullOutput {
+    let (near, far) = case.camera.near_far();
+    let mut timer = GpuTimer::new(ctx, 16);
+    culler
+        .run(
+            ctx,
+            &r.gpu_scene,
+            &r.depth_tex,
+            s,
+            near,
+            far,
+            DEFAULT_SLACK,
+            &mut timer,
+        )
+        .unwrap()
+}
+
+#[test]
+fn scan_matches_cpu_on_edge_sizes() {
+    let ctx = common::gpu();
+    let s = scan::Scan::new(&ctx);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(3);
+    for n in [
+        0u32,
+        1,
+        2,
+        255,
+        1023,
+        1024,
+        1025,
+        4099,
+        1 << 20,
+        (1 << 20) + 3,
+        3_000_001,
+    ] {
+        for kind in ["random", "ones", "zeros"] {
+            let data: Vec<u32> = (0..n)
+                .map(|_| match kind {
+                    "random" => rng.random_range(0..1000u32),
+                    "ones" => 1,
+                    _ => 0,
+                })
+                .collect();
+            let buf = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: None,
+                size: (u64::from(n) * 4).max(4),
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            ctx.queue.write_buffer(&buf, 0, bytemuck::cast_slice(&data));
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            s.encode(&ctx, &mut enc, &buf, n, &mut GpuTimer::new(&ctx, 16));
+            ctx.submit_and_wait(enc, "scan").unwrap();
+            let got: Vec<u32> = bytemuck::pod_collect_to_vec(
+                &readback::read_buffer(&ctx, &buf, 0, (u64::from(n) * 4).max(4)).unwrap(),
+            );
+            assert_eq!(
+                &got[..n as usize],
+                &scan::cpu(&data)[..],
+                "scan of {n} {kind}"
+            );
+        }
+    }
+}
+
+/// Every strategy: GPU lists equal the CPU oracle's (as sets per bin; only decisions the oracle
+/// marks borderline may differ), on several scenes and cameras, at 70 x 45 (not a multiple of
+/// any tile size); every intermediate pass against its own oracle; zero false negatives; and
+/// the shared per-pixel lookup agrees with the CPU's.
+#[test]
+fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let mut total_border = 0;
+    let mut culler = None;
+    for seed in [11u64, 12, 13, 14, 15, 16] {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
+        for s in strategies() {
+            let what = format!("{} {}", case.label, s.name());
+            let out = run_gpu(&ctx, culler, &r, &case, &s);
+            let p = out.params;
+            let gpu = out.read(&ctx).unwrap();
+            let oracle = match s {
+                Strategy::Clustered { .. } => {
+                    let occ = out.read_occupancy(&ctx).unwrap();
+                    if p.flags & manylights_cull::layout::CULL_FLAG_SKIP_EMPTY != 0 {
+                        assert_eq!(
+                            occ,
+                            cpu::occupancy(&r.frame, &p, &r.depth, w, h),
+                            "{what}: occupancy"
+                        );
+                    }
+                    cpu::clustered(&r.frame, &p, &r.lights, &occ)
+                }
+                _ => {
+                    let td = out.read_tile_depth(&ctx).unwrap();
+                    let (cpu_td, uncertain) = cpu::depth_bounds(&r.frame, &p, &r.depth, w, h);
+                    for (t, (g, c)) in td.iter().zip(&cpu_td).enumerate() {
+                        assert_eq!(g.covered, c.covered, "{what}: tile {t} covered");
+                        let close = |a: f32, b: f32| {
+                            (a - b).abs() <= 4.0 * f32::EPSILON * a.abs().max(b.abs())
+                        };
+                        assert!(
+                            close(g.dmin, c.dmin) && close(g.dmax, c.dmax),
+                            "{what}: tile {t} bounds {g:?} vs {c:?}"
+                        );
+                        assert_eq!(
+                            g.mask & !uncertain[t],
+                            c.mask & !uncertain[t],
+                            "{what}: tile {t} mask"
+                        );
+                    }
+                    cpu::gather(&r.frame, &p, &r.lights, &td)
+                }
+            };
+            total_border += oracle
+                .compare(&gpu)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let m = metrics(&r, &p, &gpu);
+            assert_eq!(m.false_negatives, 0, "{what}: false negatives on the GPU");
+            // The shared WGSL lookup reads the same lists as the CPU lookup.
+            let per_pixel = culler
+                .lights_per_pixel(&ctx, &r.gpu_scene, &r.depth_tex, &out)
+                .unwrap();
+            for y in 0..h {
+                for x in 0..w {
+                    let i = (y * w + x) as usize;
+                    let z = r.depth[i];
+                    let expect = if z < 1.0 {
+                        gpu.list(geometry::bin_of(&r.frame, &p, [x, y], z) as usize)
+                            .len() as u32
+                    } else {
+                        0
+                    };
+                    if per_pixel[i] != expect {
+                        let c = geometry::slice_coord(&p, geometry::linear_depth(&r.frame, z));
+                        assert!(
+                            (c - c.round()).abs() < 1e-3,
+                            "{what}: pixel ({x}, {y}) reads {} lights, CPU lookup {expect}",
+                            per_pixel[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+    println!("borderline decisions tolerated: {total_border}");
+}
+
+/// Zero false negatives for every strategy's CPU oracle over 200 random scene/light/camera
+/// seeds (depth buffers from the GPU prepass; lists and exact sets on the CPU).
+#[test]
+fn cpu_oracles_have_no_false_negatives_over_200_seeds() {
+    let ctx = common::gpu();
+    let (w, h) = (37, 23);
+    let mut fp = vec![(0u64, 0u64); strategies().len()];
+    for seed in 1000..1200u64 {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        for (k, s) in strategies().iter().enumerate() {
+            let (p, lists) = oracle_lists(&r, &case, s);
+            let m = metrics(&r, &p, &lists);
+            assert_eq!(
+                m.false_negatives,
+                0,
+                "{} {}: {} false negatives",
+                case.label,
+                s.name(),
+                m.false_negatives
+            );
+            fp[k].0 += m.evaluated;
+            fp[k].1 += m.needed;
+        }
+    }
+    for (s, (e, n)) in strategies().iter().zip(fp) {
+        println!(
+            "{s:?}: false-positive ratio over 200 seeds {:.3}",
+            e as f64 / n as f64
+        );
+    }
+}
+
+/// Zero false negatives for every strategy on the GPU over 10 random seeds.
+#[test]
+fn gpu_strategies_have_no_false_negatives_over_10_seeds() {
+    let ctx = common::gpu();
+    let (w, h) = (61, 37);
+    let mut culler = None;
+    for seed in 2000..2010u64 {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
+        for s in strategies() {
+            let out = run_gpu(&ctx, culler, &r, &case, &s);
+            let m = metrics(&r, &out.params, &out.read(&ctx).unwrap());
+            assert_eq!(m.false_negatives, 0, "{} {}", case.label, s.name());
+        }
+    }
+}
+
+/// 2.5D culling keeps a subset of tiled gather's lists in every tile (over 20 seeds, on the
+/// GPU), and on `pillars` culls strictly more.
+#[test]
+fn depth_mask_never_keeps_what_gather_culls_and_wins_on_pillars() {
+    let ctx = common::gpu();
+    let mut culler = None;
+    let mut cases: Vec<Case> = (3000..3020u64).map(random_case).collect();
+    let mut pillars = ProceduralScene::Pillars(PillarsParams::default())
+        .build()
+        .unwrap();
+    pillars.lights = LightSpec {
+        generator: LightGenerator::LightField,
+        count: 512,
+        radius: RadiusRule::Fixed(1.0),
+        ..LightSpec::default()
+    }
+    .generate(&pillars)
+    .unwrap();
+    let camera = pillars.camera;
+    cases.push(Case {
+        scene: pillars,
+        camera,
+        label: "pillars".into(),
+    });
+    for case in &cases {
+        let r = render(&ctx, case, 96, 54);
+        let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
+        let gather = run_gpu(
+            &ctx,
+            culler,
+            &r,
+            case,
+            &Strategy::TiledGather { tile_size: 16 },
+        );
+        let masked = run_gpu(
+            &ctx,
+            culler,
+            &r,
+            case,
+            &Strategy::DepthMask { tile_size: 16 },
+        );
+        let (g, m) = (gather.read(&ctx).unwrap(), masked.read(&ctx).unwrap());
+        for b in 0..g.ranges.len() {
+            let gs = g.sorted(b);
+            for l in m.list(b) {
+                assert!(
+                    gs.binary_search(l).is_ok(),
+                    "{}: tile {b}: 2.5D keeps light {l} that gather culls",
+                    case.label
+                );
+            }
+        }
+        if case.label == "pillars" {
+            let (mg, mm) = (
+                metrics(&r, &gather.params, &g),
+                metrics(&r, &masked.params, &m),
+            );
+            println!(
+                "pillars, 512 lights of radius 1 m, 96x54, 16 px tiles: lights evaluated per pixel {:.2} (gather) vs {:.2} (2.5D), \
+                 false-positive ratio {:.2} vs {:.2}, list entries {} vs {}",
+                mg.lights_per_pixel_mean,
+                mm.lights_per_pixel_mean,
+                mg.false_positive_ratio.unwrap(),
+                mm.false_positive_ratio.unwrap(),
+                g.indices.len(),
+                m.indices.len()
+            );
+            assert!(
+                mm.evaluated < mg.evaluated,
+                "2.5D must cull strictly more on pillars"
+            );
+            assert_eq!(mm.false_negatives + mg.false_negatives, 0);
+        }
+    }
+}
+
+/// The false-negative check can fail: lists culled with lights shrunk by 5% (a negative slack)
+/// miss lights that reach some pixels, and `evaluate` counts them.
+#[test]
+fn shrunk_lights_produce_false_negatives() {
+    let ctx = common::gpu();
+    let mut missed = 0;
+    for seed in 4000..4010u64 {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, 48, 32);
+        let s = Strategy::TiledGather { tile_size: 8 };
+        let (near, far) = case.camera.near_far();
+        let mut p = s.params(r.w, r.h, r.lights.len() as u32, near, far, DEFAULT_SLACK);
+        let td = cpu::depth_bounds(&r.frame, &p, &r.depth, r.w, r.h).0;
+        let shrunk: Vec<GpuLight> = r
+            .lights
+            .iter()
+            .map(|l| GpuLight {
+                radius: l.radius * 0.95,
+                ..*l
+            })
+            .collect();
+        p.slack = 0.0;
+        missed += metrics(
+            &r,
+            &p,
+            &cpu::gather(&r.frame, &p, &shrunk, &td).to_bin_lists(),
+        )
+        .false_negatives;
+    }
+    assert!(
+        missed > 0,
+        "culling with shrunk lights must show false negatives"
+    );
+}
