@@ -24,6 +24,8 @@ fn strategies() -> Vec<Strategy> {
         Strategy::TiledGather { tile_size: 8 },
         Strategy::TiledGather { tile_size: 16 },
         Strategy::TiledGather { tile_size: 32 },
+        Strategy::TiledScatter { tile_size: 8 },
+        Strategy::TiledScatter { tile_size: 16 },
         Strategy::DepthMask { tile_size: 8 },
         Strategy::DepthMask { tile_size: 16 },
         Strategy::Clustered {
@@ -357,7 +359,18 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                             "{what}: tile {t} mask"
                         );
                     }
-                    cpu::gather(&r.frame, &p, &r.lights, &td)
+                    if matches!(s, Strategy::TiledScatter { .. }) {
+                        // Same per-tile test, reached from the light's side: the same lists.
+                        let gathered = cpu::gather(&r.frame, &p, &r.lights, &td);
+                        let scattered = cpu::scatter(&r.frame, &p, &r.lights, &td);
+                        assert_eq!(
+                            gathered.kept, scattered.kept,
+                            "{what}: scatter and gather oracles differ"
+                        );
+                        scattered
+                    } else {
+                        cpu::gather(&r.frame, &p, &r.lights, &td)
+                    }
                 }
             };
             total_border += oracle

@@ -4,36 +4,6 @@
 // tile is tested with the tile's side planes (sphere, and cone for spots), and every slice of
 // the light's range is emitted (with CULL_FLAG_SKIP_EMPTY, only clusters holding geometry).
 
-// Inclusive tile rectangle (x0, y0, x1, y1) that may hold the light, or x0 > x1 when none.
-// The view-space box around the sphere is projected corner by corner (its projection contains
-// the sphere's while the box lies in front of the eye); otherwise the whole screen is a
-// candidate and the plane tests decide.
-fn light_tiles(l: CullLight) -> vec4<i32> {
-    let full = vec4<i32>(0, 0, i32(cull.tiles_x) - 1, i32(cull.tiles_y) - 1);
-    let r = l.radius + l.slack;
-    var lo = vec2<f32>(1e30);
-    var hi = vec2<f32>(-1e30);
-    for (var k = 0u; k < 8u; k++) {
-        let corner = l.center + r * vec3<f32>(select(-1.0, 1.0, (k & 1u) != 0u), select(-1.0, 1.0, (k & 2u) != 0u), select(-1.0, 1.0, (k & 4u) != 0u));
-        let c = frame.clip_from_view * vec4<f32>(corner, 1.0);
-        if c.w <= 1e-6 {
-            return full;
-        }
-        let ndc = c.xy / c.w;
-        lo = min(lo, ndc);
-        hi = max(hi, ndc);
-    }
-    // NDC to pixels (y flips), one pixel of margin for rounding, then tiles.
-    let px0 = (lo.x + 1.0) * 0.5 * frame.viewport.x - 1.0;
-    let px1 = (hi.x + 1.0) * 0.5 * frame.viewport.x + 1.0;
-    let py0 = (1.0 - hi.y) * 0.5 * frame.viewport.y - 1.0;
-    let py1 = (1.0 - lo.y) * 0.5 * frame.viewport.y + 1.0;
-    let ts = f32(cull.tile_size);
-    let t0 = vec2<i32>(clamp(floor(vec2<f32>(px0, py0) / ts), vec2<f32>(-1.0), vec2<f32>(1e6)));
-    let t1 = vec2<i32>(clamp(floor(vec2<f32>(px1, py1) / ts), vec2<f32>(-1.0), vec2<f32>(1e6)));
-    return vec4<i32>(max(t0, full.xy), min(t1, full.zw));
-}
-
 fn assign(i: u32, fill: bool) {
     if i >= cull.light_count {
         return;

@@ -262,3 +262,33 @@ pub fn clustered(
     }
     out
 }
+
+/// Oracle of `cull.tiled_scatter`: per light, the tiles of its screen rectangle that keep it
+/// (the same per-tile test as gather), given the per-tile depth data.
+pub fn scatter(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    lights: &[GpuLight],
+    tile_depth: &[GpuTileDepth],
+) -> OracleLists {
+    let mut out = OracleLists::new(p.bins as usize);
+    for (i, l) in lights.iter().enumerate() {
+        let [lo, hi] = [1.0 - BORDER, 1.0 + BORDER].map(|k| CullLight::new(frame, l, p.slack * k));
+        let (rl, rh) = (light_tiles(frame, p, &lo), light_tiles(frame, p, &hi));
+        for ty in rl[1].min(rh[1])..=rl[3].max(rh[3]) {
+            for tx in rl[0].min(rh[0])..=rl[2].max(rh[2]) {
+                let inside = |r: &[i32; 4]| tx >= r[0] && tx <= r[2] && ty >= r[1] && ty <= r[3];
+                let tile = [tx as u32, ty as u32];
+                let bin = (tile[1] * p.tiles_x + tile[0]) as usize;
+                let planes = tile_side_planes(frame, p, tile);
+                let keep_lo = inside(&rl) && tile_keeps(p, &lo, &planes, &tile_depth[bin]);
+                let keep_hi = inside(&rh) && tile_keeps(p, &hi, &planes, &tile_depth[bin]);
+                out.push(bin, i as u32, keep_lo, keep_hi);
+            }
+        }
+    }
+    for v in out.kept.iter_mut().chain(out.borderline.iter_mut()) {
+        v.sort_unstable();
+    }
+    out
+}

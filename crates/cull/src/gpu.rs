@@ -6,6 +6,7 @@ use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
 use wgpu::util::DeviceExt;
 
 use crate::layout::{CULL_CONSTS, GROUPS_X, GpuCullParams, GpuTileDepth};
+use crate::radix_sort::{RadixSort, SortedIn, key_bits_for};
 use crate::scan::{Scan, groups_2d};
 use crate::{CullError, Strategy};
 
@@ -29,6 +30,18 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
         COMMON,
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
+    ],
+};
+/// `cull.tiled_scatter`.
+pub const TILED_SCATTER: ShaderDef = ShaderDef {
+    name: "cull.tiled_scatter",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        COMMON,
+        LISTS,
+        shader_file!("cull/tiled_scatter.wgsl"),
     ],
 };
 /// `cull.clustered` and `cull.occupancy`.
@@ -60,9 +73,11 @@ pub const LIGHTS_PER_PIXEL: ShaderDef = ShaderDef {
 pub const SHADERS: &[ShaderDef] = &[
     DEPTH_BOUNDS,
     TILED_GATHER,
+    TILED_SCATTER,
     CLUSTERED,
     LIGHTS_PER_PIXEL,
     crate::scan::SHADER,
+    crate::radix_sort::SHADER,
 ];
 
 /// Light lists read back to the host.
@@ -163,7 +178,9 @@ pub struct Culler {
     occupancy: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
     lights_per_pixel: wgpu::ComputePipeline,
+    scatter: [wgpu::ComputePipeline; 4],
     scan: Scan,
+    sort: RadixSort,
 }
 
 fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
@@ -225,7 +242,7 @@ impl Culler {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let d = &ctx.device;
         let mut entries = vec![entry(0, UNIFORM), entry(1, DEPTH)];
-        entries.extend((2..=8).map(|b| entry(b, storage(false))));
+        entries.extend((2..=9).map(|b| entry(b, storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.group1"),
             entries: &entries,
@@ -256,6 +273,18 @@ impl Culler {
             &layout,
             ["clustered_count", "clustered_fill", "cluster_occupancy"],
         );
+        let scatter = pipelines(
+            d,
+            &TILED_SCATTER,
+            scene_layout,
+            &layout,
+            [
+                "scatter_count",
+                "scatter_pairs",
+                "scatter_ranges",
+                "scatter_finalize",
+            ],
+        );
         let [lights_per_pixel] = pipelines(
             d,
             &LIGHTS_PER_PIXEL,
@@ -274,14 +303,16 @@ impl Culler {
             occupancy,
             finalize,
             lights_per_pixel,
+            scatter,
             scan: Scan::new(ctx),
+            sort: RadixSort::new(ctx),
         }
     }
 
     /// Runs `strategy` over the depth buffer `depth` of `scene` (whose frame uniform is set for
     /// the depth buffer's size), with the camera's near and far distances and the relative
-    /// `slack`. Two submissions: counts and scan, then (with the list sized exactly from the
-    /// total) fill and finalize.
+    /// `slack`. Two submissions: counts and scan, then (with the lists sized exactly from the
+    /// total the scan read back) fill and finalize.
     #[expect(
         clippy::too_many_arguments,
         reason = "one frame's inputs, each distinct"
@@ -300,195 +331,169 @@ impl Culler {
         strategy.validate()?;
         let (w, h) = (depth.width(), depth.height());
         let params = strategy.params(w, h, scene.light_count, near, far, slack);
-        let d = &ctx.device;
-        let tiles = u64::from(params.tiles_x * params.tiles_y);
-        let bins = u64::from(params.bins);
-        ctx.check_storage("cull bins", bins * 8)?;
-        let buf = |label, size: u64, extra| {
-            d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: size.max(4),
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST
-                    | extra,
-                mapped_at_creation: false,
-            })
-        };
-        let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("cull.params"),
-            contents: bytemuck::bytes_of(&params),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
-        let tile_depth = buf("cull.tile_depth", tiles * 16, wgpu::BufferUsages::empty());
-        let counts = buf(
-            "cull.bin_counts",
-            (bins + 1) * 4,
-            wgpu::BufferUsages::empty(),
-        );
-        let offsets = buf(
-            "cull.bin_offsets",
-            (bins + 1) * 4,
-            wgpu::BufferUsages::empty(),
-        );
-        let cursors = buf("cull.bin_cursors", bins * 4, wgpu::BufferUsages::empty());
-        let ranges = buf("cull.bin_ranges", bins * 8, wgpu::BufferUsages::empty());
-        let occupancy = buf("cull.occupancy", bins * 4, wgpu::BufferUsages::empty());
-        let depth_view = depth.create_view(&wgpu::TextureViewDescriptor {
-            aspect: wgpu::TextureAspect::DepthOnly,
-            ..Default::default()
-        });
-        fn b(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }
+        ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
+        let f = Frame::new(self, ctx, scene, depth, params);
+        match strategy {
+            Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer),
+            _ => self.run_binned(ctx, f, strategy, timer),
         }
-        let group = |indices: &wgpu::Buffer| {
-            d.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("cull.group1"),
-                layout: &self.layout,
-                entries: &[
-                    b(0, &params_buf),
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&depth_view),
-                    },
-                    b(2, &tile_depth),
-                    b(3, &counts),
-                    b(4, &offsets),
-                    b(5, &cursors),
-                    b(6, &ranges),
-                    b(7, indices),
-                    b(8, &occupancy),
-                ],
-            })
-        };
-        let placeholder = buf(
-            "cull.light_indices.placeholder",
-            4,
-            wgpu::BufferUsages::empty(),
-        );
-        let group_a = group(&placeholder);
-        let light_groups = groups_2d(scene.light_count.div_ceil(64), GROUPS_X);
+    }
+
+    /// Gather, 2.5D and clusters: a count pass and a fill pass over bins.
+    fn run_binned(
+        &self,
+        ctx: &GpuContext,
+        f: Frame<'_>,
+        strategy: &Strategy,
+        timer: &mut GpuTimer,
+    ) -> Result<CullOutput, CullError> {
+        let p = f.params;
         let name = strategy.name();
-        let is_clustered = matches!(strategy, Strategy::Clustered { .. });
-        let (count_pipe, fill_pipe) = if is_clustered {
+        let clustered = matches!(strategy, Strategy::Clustered { .. });
+        let (count, fill) = if clustered {
             (&self.clustered_count, &self.clustered_fill)
         } else {
             (&self.gather_count, &self.gather_fill)
         };
-        let dispatch_main = |pass: &mut wgpu::ComputePass<'_>| {
-            if is_clustered {
-                pass.dispatch_workgroups(light_groups.0, light_groups.1, 1);
-            } else {
-                pass.dispatch_workgroups(params.tiles_x, params.tiles_y, 1);
-            }
+        let light_groups = groups_2d(p.light_count.div_ceil(64), GROUPS_X);
+        let main = if clustered {
+            light_groups
+        } else {
+            (p.tiles_x, p.tiles_y)
         };
-
-        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("cull.count"),
-        });
-        enc.clear_buffer(&counts, 0, None);
-        enc.clear_buffer(&cursors, 0, None);
-        enc.clear_buffer(&occupancy, 0, None);
-        {
-            let mut compute =
-                |enc: &mut wgpu::CommandEncoder,
-                 label: &str,
-                 pipe: &wgpu::ComputePipeline,
-                 g: &wgpu::BindGroup,
-                 f: &dyn Fn(&mut wgpu::ComputePass<'_>)| {
-                    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some(label),
-                        timestamp_writes: timer.compute_pass(label),
-                    });
-                    pass.set_pipeline(pipe);
-                    pass.set_bind_group(0, &scene.bind_group, &[]);
-                    pass.set_bind_group(1, g, &[]);
-                    f(&mut pass);
-                };
-            if is_clustered {
-                if params.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
-                    compute(
-                        &mut enc,
-                        "cull.occupancy",
-                        &self.occupancy,
-                        &group_a,
-                        &|p| p.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1),
-                    );
-                }
-            } else {
-                compute(
+        let placeholder = f.buf("cull.light_indices.placeholder", 4);
+        let group_a = f.group(&placeholder, &placeholder);
+        let mut enc = f.encoder("cull.count");
+        if clustered {
+            if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
+                f.pass(
                     &mut enc,
-                    "cull.depth_bounds",
-                    &self.depth_bounds,
+                    timer,
+                    "cull.occupancy",
+                    &self.occupancy,
                     &group_a,
-                    &|p| p.dispatch_workgroups(params.tiles_x, params.tiles_y, 1),
+                    (f.w.div_ceil(8), f.h.div_ceil(8)),
                 );
             }
-            compute(
+        } else {
+            f.pass(
                 &mut enc,
-                &format!("cull.{name}.count"),
-                count_pipe,
+                timer,
+                "cull.depth_bounds",
+                &self.depth_bounds,
                 &group_a,
-                &dispatch_main,
+                (p.tiles_x, p.tiles_y),
             );
         }
-        enc.copy_buffer_to_buffer(&counts, 0, &offsets, 0, (bins + 1) * 4);
-        self.scan
-            .encode(ctx, &mut enc, &offsets, params.bins + 1, timer);
-        ctx.submit_and_wait(enc, "culling: count and scan")?;
-        let total_bytes = readback::read_buffer(ctx, &offsets, bins * 4, 4)?;
-        let total = u32::from_le_bytes(total_bytes[..4].try_into().expect("4 bytes"));
-        ctx.check_storage("light list entries", u64::from(total) * 4)?;
-
-        let indices = buf(
-            "cull.light_indices",
-            u64::from(total) * 4,
-            wgpu::BufferUsages::empty(),
+        f.pass(
+            &mut enc,
+            timer,
+            &format!("cull.{name}.count"),
+            count,
+            &group_a,
+            main,
         );
-        let group_b = group(&indices);
-        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("cull.fill"),
-        });
-        let bin_groups = groups_2d(params.bins.div_ceil(64), GROUPS_X);
-        {
-            let mut compute =
-                |enc: &mut wgpu::CommandEncoder,
-                 label: &str,
-                 pipe: &wgpu::ComputePipeline,
-                 f: &dyn Fn(&mut wgpu::ComputePass<'_>)| {
-                    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some(label),
-                        timestamp_writes: timer.compute_pass(label),
-                    });
-                    pass.set_pipeline(pipe);
-                    pass.set_bind_group(0, &scene.bind_group, &[]);
-                    pass.set_bind_group(1, &group_b, &[]);
-                    f(&mut pass);
-                };
-            compute(
-                &mut enc,
-                &format!("cull.{name}.fill"),
-                fill_pipe,
-                &dispatch_main,
-            );
-            compute(&mut enc, "cull.finalize", &self.finalize, &|p| {
-                p.dispatch_workgroups(bin_groups.0, bin_groups.1, 1)
-            });
-        }
+        let total = f.scan_total(ctx, &self.scan, enc, p.bins, timer)?;
+        let indices = f.buf("cull.light_indices", u64::from(total) * 4);
+        let group_b = f.group(&indices, &placeholder);
+        let mut enc = f.encoder("cull.fill");
+        f.pass(
+            &mut enc,
+            timer,
+            &format!("cull.{name}.fill"),
+            fill,
+            &group_b,
+            main,
+        );
+        f.pass(
+            &mut enc,
+            timer,
+            "cull.finalize",
+            &self.finalize,
+            &group_b,
+            groups_2d(p.bins.div_ceil(64), GROUPS_X),
+        );
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: fill")?;
-        Ok(CullOutput {
-            params,
-            params_buf,
+        Ok(f.finish(indices, total))
+    }
+
+    /// Tiled scatter: per-light pair counts, their scan, the pairs, the radix sort by tile, and
+    /// each tile's start and end.
+    fn run_scatter(
+        &self,
+        ctx: &GpuContext,
+        f: Frame<'_>,
+        timer: &mut GpuTimer,
+    ) -> Result<CullOutput, CullError> {
+        let p = f.params;
+        let [count, pairs_pipe, ranges, finalize] = &self.scatter;
+        let light_groups = groups_2d(p.light_count.div_ceil(64), GROUPS_X);
+        let placeholder = f.buf("cull.placeholder", 4);
+        let group_a = f.group(&placeholder, &placeholder);
+        let mut enc = f.encoder("cull.tiled_scatter.count");
+        f.pass(
+            &mut enc,
+            timer,
+            "cull.depth_bounds",
+            &self.depth_bounds,
+            &group_a,
+            (p.tiles_x, p.tiles_y),
+        );
+        f.pass(
+            &mut enc,
+            timer,
+            "cull.tiled_scatter.count",
+            count,
+            &group_a,
+            light_groups,
+        );
+        let pairs = f.scan_total(ctx, &self.scan, enc, p.light_count, timer)?;
+        ctx.check_storage("tiled scatter pairs", u64::from(pairs) * 4)?;
+        let (keys, vals) = (
+            f.buf("cull.pair_keys", u64::from(pairs) * 4),
+            f.buf("cull.light_indices", u64::from(pairs) * 4),
+        );
+        let (keys_tmp, vals_tmp) = (
+            f.buf("cull.pair_keys.tmp", u64::from(pairs) * 4),
+            f.buf("cull.light_indices.tmp", u64::from(pairs) * 4),
+        );
+        let mut enc = f.encoder("cull.tiled_scatter.sort");
+        f.pass(
+            &mut enc,
+            timer,
+            "cull.tiled_scatter.pairs",
+            pairs_pipe,
+            &f.group(&vals, &keys),
+            light_groups,
+        );
+        let bits = key_bits_for(p.bins.saturating_sub(1));
+        let (keys, vals) = match self.sort.encode(
+            ctx, &mut enc, &keys, &vals, &keys_tmp, &vals_tmp, pairs, bits, timer,
+        )? {
+            SortedIn::Input => (keys, vals),
+            SortedIn::Scratch => (keys_tmp, vals_tmp),
+        };
+        let group_c = f.group(&vals, &keys);
+        f.pass(
+            &mut enc,
+            timer,
+            "cull.tiled_scatter.ranges",
             ranges,
-            indices,
-            total,
-            tile_depth,
-            occupancy,
-        })
+            &group_c,
+            groups_2d(pairs.div_ceil(64), GROUPS_X),
+        );
+        f.pass(
+            &mut enc,
+            timer,
+            "cull.finalize",
+            finalize,
+            &group_c,
+            groups_2d(p.bins.div_ceil(64), GROUPS_X),
+        );
+        timer.resolve(&mut enc);
+        ctx.submit_and_wait(enc, "culling: tiled scatter")?;
+        Ok(f.finish(vals, pairs))
     }
 
     /// The length of the list each pixel reads through the shared lookup (0 for background).
@@ -558,4 +563,182 @@ impl Culler {
             u64::from(w * h) * 4,
         )?))
     }
+}
+
+/// The per-frame buffers and bind groups of one culling run.
+struct Frame<'a> {
+    ctx: &'a GpuContext,
+    scene: &'a GpuScene,
+    layout: &'a wgpu::BindGroupLayout,
+    params: GpuCullParams,
+    w: u32,
+    h: u32,
+    params_buf: wgpu::Buffer,
+    depth_view: wgpu::TextureView,
+    tile_depth: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+    cursors: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    occupancy: wgpu::Buffer,
+}
+
+impl<'a> Frame<'a> {
+    fn new(
+        culler: &'a Culler,
+        ctx: &'a GpuContext,
+        scene: &'a GpuScene,
+        depth: &wgpu::Texture,
+        params: GpuCullParams,
+    ) -> Self {
+        let bins = u64::from(params.bins);
+        let tiles = u64::from(params.tiles_x * params.tiles_y);
+        // Counts and offsets hold one entry per bin, or per light for tiled scatter.
+        let items = bins.max(u64::from(params.light_count));
+        let params_buf = ctx
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("cull.params"),
+                contents: bytemuck::bytes_of(&params),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+        let mut f = Self {
+            ctx,
+            scene,
+            layout: &culler.layout,
+            params,
+            w: depth.width(),
+            h: depth.height(),
+            params_buf,
+            depth_view: depth.create_view(&wgpu::TextureViewDescriptor {
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..Default::default()
+            }),
+            tile_depth: placeholder(ctx),
+            counts: placeholder(ctx),
+            offsets: placeholder(ctx),
+            cursors: placeholder(ctx),
+            ranges: placeholder(ctx),
+            occupancy: placeholder(ctx),
+        };
+        f.tile_depth = f.buf("cull.tile_depth", tiles * 16);
+        f.counts = f.buf("cull.bin_counts", (items + 1) * 4);
+        f.offsets = f.buf("cull.bin_offsets", (items + 1) * 4);
+        f.cursors = f.buf("cull.bin_cursors", bins * 4);
+        f.ranges = f.buf("cull.bin_ranges", bins * 8);
+        f.occupancy = f.buf("cull.occupancy", bins * 4);
+        f
+    }
+
+    fn buf(&self, label: &str, size: u64) -> wgpu::Buffer {
+        self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: size.max(4),
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    fn group(&self, indices: &wgpu::Buffer, pair_keys: &wgpu::Buffer) -> wgpu::BindGroup {
+        fn b(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }
+        }
+        self.ctx
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("cull.group1"),
+                layout: self.layout,
+                entries: &[
+                    b(0, &self.params_buf),
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&self.depth_view),
+                    },
+                    b(2, &self.tile_depth),
+                    b(3, &self.counts),
+                    b(4, &self.offsets),
+                    b(5, &self.cursors),
+                    b(6, &self.ranges),
+                    b(7, indices),
+                    b(8, &self.occupancy),
+                    b(9, pair_keys),
+                ],
+            })
+    }
+
+    /// A new encoder; the first one of a run also clears the counters.
+    fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
+        let mut enc = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+        if label.ends_with("count") {
+            for b in [&self.counts, &self.cursors, &self.occupancy, &self.ranges] {
+                enc.clear_buffer(b, 0, None);
+            }
+        }
+        enc
+    }
+
+    fn pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipe: &wgpu::ComputePipeline,
+        group: &wgpu::BindGroup,
+        groups: (u32, u32),
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: timer.compute_pass(label),
+        });
+        pass.set_pipeline(pipe);
+        pass.set_bind_group(0, &self.scene.bind_group, &[]);
+        pass.set_bind_group(1, group, &[]);
+        pass.dispatch_workgroups(groups.0, groups.1, 1);
+    }
+
+    /// Copies the first `n` counts (plus a zero) to the offsets, scans them, submits `enc`,
+    /// and reads back the total (`offsets[n]`).
+    fn scan_total(
+        &self,
+        ctx: &GpuContext,
+        scan: &Scan,
+        mut enc: wgpu::CommandEncoder,
+        n: u32,
+        timer: &mut GpuTimer,
+    ) -> Result<u32, GpuError> {
+        enc.copy_buffer_to_buffer(&self.counts, 0, &self.offsets, 0, (u64::from(n) + 1) * 4);
+        scan.encode(ctx, &mut enc, &self.offsets, n + 1, timer);
+        ctx.submit_and_wait(enc, "culling: count and scan")?;
+        let bytes = readback::read_buffer(ctx, &self.offsets, u64::from(n) * 4, 4)?;
+        Ok(u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")))
+    }
+
+    fn finish(self, indices: wgpu::Buffer, total: u32) -> CullOutput {
+        CullOutput {
+            params: self.params,
+            params_buf: self.params_buf,
+            ranges: self.ranges,
+            indices,
+            total,
+            tile_depth: self.tile_depth,
+            occupancy: self.occupancy,
+        }
+    }
+}
+
+fn placeholder(ctx: &GpuContext) -> wgpu::Buffer {
+    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("placeholder"),
+        size: 4,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    })
 }

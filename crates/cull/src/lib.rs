@@ -14,6 +14,7 @@
 //!    dropped). 5. `cull.<strategy>.fill`: the lists. 6. `cull.finalize`: the ranges.
 //!
 //! Strategies ([`Strategy`]): `tiled_gather` (Harada, McKee, Yang 2012, section 4.1),
+//! `tiled_scatter` (same paper, section 4.2; pairs sorted by [`radix_sort`]),
 //! `depth_mask` (2.5D culling, Harada 2012), `clustered` (Olsson, Billeter, Assarsson 2012).
 //! Each has a CPU oracle in [`cpu`]; [`metrics`] holds the exact per-pixel oracle. See
 //! docs/STRATEGIES.md for the methods, their tests, parameters, memory and false positives.
@@ -23,6 +24,7 @@ pub mod geometry;
 pub mod gpu;
 pub mod layout;
 pub mod metrics;
+pub mod radix_sort;
 pub mod scan;
 
 pub use gpu::{BinLists, CullOutput, Culler};
@@ -49,6 +51,12 @@ pub enum Strategy {
     /// between the tile's depth bounds.
     TiledGather {
         /// Tile side in pixels (the paper's 8; 16 and 32 are common).
+        tile_size: u32,
+    },
+    /// Forward+ tiled scatter: one thread per light writes (tile, light) pairs for the tiles it
+    /// overlaps; a GPU radix sort orders them by tile.
+    TiledScatter {
+        /// Tile side in pixels.
         tile_size: u32,
     },
     /// 2.5D culling: tiled gather plus 32-cell depth masks of geometry and lights.
@@ -92,15 +100,17 @@ impl Strategy {
     pub fn name(&self) -> &'static str {
         match self {
             Self::TiledGather { .. } => "tiled_gather",
+            Self::TiledScatter { .. } => "tiled_scatter",
             Self::DepthMask { .. } => "depth_mask",
             Self::Clustered { .. } => "clustered",
         }
     }
 
     /// The default parameters of each strategy, in a fixed order.
-    pub fn defaults() -> [Strategy; 3] {
+    pub fn defaults() -> [Strategy; 4] {
         [
             Self::TiledGather { tile_size: 16 },
+            Self::TiledScatter { tile_size: 16 },
             Self::DepthMask { tile_size: 16 },
             Self::Clustered {
                 tile_size: 64,
@@ -115,6 +125,7 @@ impl Strategy {
     pub fn tile_size(&self) -> u32 {
         match *self {
             Self::TiledGather { tile_size }
+            | Self::TiledScatter { tile_size }
             | Self::DepthMask { tile_size }
             | Self::Clustered { tile_size, .. } => tile_size,
         }
@@ -156,7 +167,7 @@ impl Strategy {
         let ts = self.tile_size();
         let (tiles_x, tiles_y) = (width.div_ceil(ts), height.div_ceil(ts));
         let (slices, slicing, flags) = match *self {
-            Self::TiledGather { .. } => (1, SLICING_LINEAR, 0),
+            Self::TiledGather { .. } | Self::TiledScatter { .. } => (1, SLICING_LINEAR, 0),
             Self::DepthMask { .. } => (1, SLICING_LINEAR, CULL_FLAG_DEPTH_MASK),
             Self::Clustered {
                 slices,

@@ -1,0 +1,232 @@
+//! `sort.radix`: a stable LSD radix sort of (u32 key, u32 value) pairs on the GPU, written here
+//! because it is a subject of study (`shaders/sort/radix_sort.wgsl`). Portable: it assumes no
+//! subgroup size. Tested against the standard library's stable sort and the `lampshade` crate.
+//!
+//! Per pass of [`RADIX_BITS`] bits: `sort.radix.count` (per-block digit histograms, digit-major),
+//! the portable scan over them, `sort.radix.scatter` (stable in-block ranks). Only the key bits
+//! asked for are sorted: sorting tile indices of 8,160 tiles takes 13 bits, four passes.
+
+use manylights_gpu::shader_file;
+use manylights_gpu::shaders::{ShaderDef, WgslConst};
+use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::{GpuContext, GpuError};
+use wgpu::util::DeviceExt;
+
+use crate::layout::GROUPS_X;
+use crate::scan::{Scan, groups_2d};
+
+/// Bits sorted per pass.
+pub const RADIX_BITS: u32 = 4;
+/// Threads per workgroup.
+pub const SORT_THREADS: u32 = 256;
+/// Keys per thread.
+pub const SORT_PER_THREAD: u32 = 4;
+/// Keys per block (workgroup); a 16-bit rank field holds up to 65,535.
+pub const SORT_BLOCK: u32 = SORT_THREADS * SORT_PER_THREAD;
+const _: () = assert!(SORT_BLOCK < 1 << 16);
+
+/// The sort shader.
+pub const SHADER: ShaderDef = ShaderDef {
+    name: "sort.radix",
+    consts: &[
+        WgslConst::U32("RADIX", 1 << RADIX_BITS),
+        WgslConst::U32("SORT_THREADS", SORT_THREADS),
+        WgslConst::U32("SORT_PER_THREAD", SORT_PER_THREAD),
+        WgslConst::U32("SORT_BLOCK", SORT_BLOCK),
+        WgslConst::U32("GROUPS_X", GROUPS_X),
+    ],
+    files: &[shader_file!("sort/radix_sort.wgsl")],
+};
+
+/// Radix sort pipelines.
+pub struct RadixSort {
+    layout: wgpu::BindGroupLayout,
+    count: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    scan: Scan,
+}
+
+/// Where the sorted pairs ended up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SortedIn {
+    /// In the input buffers.
+    Input,
+    /// In the scratch buffers.
+    Scratch,
+}
+
+/// Number of key bits needed to hold values up to `max_key`.
+pub fn key_bits_for(max_key: u32) -> u32 {
+    (32 - max_key.leading_zeros()).max(1)
+}
+
+impl RadixSort {
+    /// Builds the pipelines.
+    pub fn new(ctx: &GpuContext) -> Self {
+        let d = &ctx.device;
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        entries.extend((1..=5).map(|binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }));
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("sort.radix"),
+            entries: &entries,
+        });
+        let module = SHADER.create(d);
+        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("sort.radix"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipe = |entry| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pl),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        Self {
+            count: pipe("sort_count"),
+            scatter: pipe("sort_scatter"),
+            layout,
+            scan: Scan::new(ctx),
+        }
+    }
+
+    /// Encodes a stable sort of the first `n` pairs of (`keys`, `vals`) by the low `key_bits`
+    /// bits of the keys, ping-ponging with (`keys_tmp`, `vals_tmp`) (each at least `n`
+    /// elements). Returns which pair of buffers holds the result.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "four buffers of a ping-pong sort, plus its size"
+    )]
+    pub fn encode(
+        &self,
+        ctx: &GpuContext,
+        encoder: &mut wgpu::CommandEncoder,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        keys_tmp: &wgpu::Buffer,
+        vals_tmp: &wgpu::Buffer,
+        n: u32,
+        key_bits: u32,
+        timer: &mut GpuTimer,
+    ) -> Result<SortedIn, GpuError> {
+        let passes = key_bits.clamp(1, 32).div_ceil(RADIX_BITS);
+        if n <= 1 {
+            return Ok(SortedIn::Input);
+        }
+        let blocks = n.div_ceil(SORT_BLOCK);
+        let hist_len = blocks * (1 << RADIX_BITS);
+        ctx.check_storage("radix sort histogram", u64::from(hist_len) * 4)?;
+        let hist = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("sort.radix.hist"),
+            size: u64::from(hist_len) * 4,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        let (gx, gy) = groups_2d(blocks, GROUPS_X);
+        for pass in 0..passes {
+            let (src_k, src_v, dst_k, dst_v) = if pass % 2 == 0 {
+                (keys, vals, keys_tmp, vals_tmp)
+            } else {
+                (keys_tmp, vals_tmp, keys, vals)
+            };
+            let params = ctx
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("sort.radix.params"),
+                    contents: bytemuck::cast_slice(&[
+                        n,
+                        pass * RADIX_BITS,
+                        blocks,
+                        (1u32 << RADIX_BITS.min(key_bits.clamp(1, 32) - pass * RADIX_BITS)) - 1,
+                    ]),
+                    usage: wgpu::BufferUsages::UNIFORM,
+                });
+            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("sort.radix"),
+                layout: &self.layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: src_k.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: src_v.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: dst_k.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: dst_v.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: hist.as_entire_binding(),
+                    },
+                ],
+            });
+            {
+                let mut p = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("sort.radix.count"),
+                    timestamp_writes: timer.compute_pass("sort.radix.count"),
+                });
+                p.set_pipeline(&self.count);
+                p.set_bind_group(0, &group, &[]);
+                p.dispatch_workgroups(gx, gy, 1);
+            }
+            self.scan.encode(ctx, encoder, &hist, hist_len, timer);
+            let mut p = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("sort.radix.scatter"),
+                timestamp_writes: timer.compute_pass("sort.radix.scatter"),
+            });
+            p.set_pipeline(&self.scatter);
+            p.set_bind_group(0, &group, &[]);
+            p.dispatch_workgroups(gx, gy, 1);
+        }
+        Ok(if passes.is_multiple_of(2) {
+            SortedIn::Input
+        } else {
+            SortedIn::Scratch
+        })
+    }
+}
+
+/// The CPU oracle: a stable sort of pairs by the low `key_bits` bits of the key.
+pub fn cpu(keys: &[u32], vals: &[u32], key_bits: u32) -> (Vec<u32>, Vec<u32>) {
+    let mask = if key_bits >= 32 {
+        u32::MAX
+    } else {
+        (1u32 << key_bits) - 1
+    };
+    let mut pairs: Vec<(u32, u32)> = keys.iter().copied().zip(vals.iter().copied()).collect();
+    pairs.sort_by_key(|&(k, _)| k & mask);
+    pairs.into_iter().unzip()
+}

@@ -1,0 +1,75 @@
+// cull.tiled_scatter (Harada, McKee, Yang 2012, section 4.2): one thread per light finds the
+// tiles it overlaps (its conservative screen rectangle, then the same per-tile test as tiled
+// gather) and writes (tile, light) pairs; sort.radix orders them by tile (stably, so each
+// tile's lights stay in light order); scatter_ranges finds each tile's start and end.
+// Group 1 here: bin_counts/bin_offsets are per light (pair counts and their scan), bin_cursors
+// holds each tile's end, out_indices the pairs' lights, pair_keys their tiles.
+@group(1) @binding(9) var<storage, read_write> pair_keys: array<u32>;
+
+// Visits the tiles light i is kept by.
+fn scatter_light(i: u32, write: bool) {
+    if i >= cull.light_count {
+        return;
+    }
+    let l = cull_light(lights[i]);
+    let rect = light_tiles(l);
+    var n = 0u;
+    var base = 0u;
+    if write {
+        base = bin_offsets[i];
+    }
+    for (var ty = rect.y; ty <= rect.w; ty++) {
+        for (var tx = rect.x; tx <= rect.z; tx++) {
+            let tile = vec2<u32>(u32(tx), u32(ty));
+            let bin = tile.y * cull.tiles_x + tile.x;
+            if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {
+                if write {
+                    pair_keys[base + n] = bin;
+                    out_indices[base + n] = i;
+                }
+                n += 1u;
+            }
+        }
+    }
+    if !write {
+        atomicStore(&bin_counts[i], n);
+    }
+}
+
+@compute @workgroup_size(64)
+fn scatter_count(@builtin(global_invocation_id) id: vec3<u32>) {
+    scatter_light(id.y * GROUPS_X * 64u + id.x, false);
+}
+
+@compute @workgroup_size(64)
+fn scatter_pairs(@builtin(global_invocation_id) id: vec3<u32>) {
+    scatter_light(id.y * GROUPS_X * 64u + id.x, true);
+}
+
+// After the sort: each tile's first pair (into out_ranges.x) and end (into bin_cursors).
+@compute @workgroup_size(64)
+fn scatter_ranges(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.y * GROUPS_X * 64u + id.x;
+    let pairs = bin_offsets[cull.light_count];
+    if i >= pairs {
+        return;
+    }
+    let k = pair_keys[i];
+    if i == 0u || pair_keys[i - 1u] != k {
+        out_ranges[k].x = i;
+    }
+    if i + 1u == pairs || pair_keys[i + 1u] != k {
+        atomicStore(&bin_cursors[k], i + 1u);
+    }
+}
+
+// (start, end) to (offset, count); empty tiles stay (0, 0).
+@compute @workgroup_size(64)
+fn scatter_finalize(@builtin(global_invocation_id) id: vec3<u32>) {
+    let b = id.y * GROUPS_X * 64u + id.x;
+    if b < cull.bins {
+        let end = atomicLoad(&bin_cursors[b]);
+        let start = out_ranges[b].x;
+        out_ranges[b] = select(vec2<u32>(0u), vec2<u32>(start, end - start), end > 0u);
+    }
+}
