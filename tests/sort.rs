@@ -4,6 +4,7 @@
 mod common;
 
 use manylights_cull::radix_sort::{self, RadixSort, SortedIn};
+use manylights_cull::scan::ScanPath;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, readback};
 use rand::{RngExt, SeedableRng};
@@ -96,16 +97,31 @@ fn key_sets(n: usize, rng: &mut rand_pcg::Pcg64) -> Vec<(&'static str, Vec<u32>)
 /// index of 1080p at 16 px). Values are the input positions, so equality with the standard
 /// library's stable sort checks stability too.
 #[test]
-fn radix_sort_matches_std_stable_sort() {
+fn radix_sort_portable_matches_std_stable_sort() {
     let ctx = common::gpu();
-    let sort = RadixSort::new(&ctx);
+    check_against_std(
+        &ctx,
+        &RadixSort::with_scan_path(&ctx, ScanPath::Portable).unwrap(),
+    );
+}
+
+/// The same cases with the subgroup scan under the sort (lavapipe and NVIDIA have subgroups).
+#[test]
+fn radix_sort_subgroup_matches_std_stable_sort() {
+    let ctx = common::gpu();
+    let sort = RadixSort::with_scan_path(&ctx, ScanPath::Subgroup)
+        .unwrap_or_else(|| panic!("adapter {} has no subgroup operations", ctx.info.name));
+    check_against_std(&ctx, &sort);
+}
+
+fn check_against_std(ctx: &GpuContext, sort: &RadixSort) {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
     for n in [0usize, 1, 2, 3, 1000, 1023, 1024, 1025, 4097, 100_003] {
         for (kind, keys) in key_sets(n, &mut rng) {
             let vals: Vec<u32> = (0..n as u32).collect();
             for bits in [32, 13] {
                 let expect = radix_sort::cpu(&keys, &vals, bits);
-                let got = gpu_sort(&ctx, &sort, &keys, &vals, bits);
+                let got = gpu_sort(ctx, sort, &keys, &vals, bits);
                 assert!(
                     first_diff(&got, &expect).is_none(),
                     "{n} keys, {kind}, {bits} bits: {}",

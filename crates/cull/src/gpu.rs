@@ -77,6 +77,7 @@ pub const SHADERS: &[ShaderDef] = &[
     CLUSTERED,
     LIGHTS_PER_PIXEL,
     crate::scan::SHADER,
+    crate::scan::SUBGROUP_SHADER,
     crate::radix_sort::SHADER,
 ];
 

@@ -13,7 +13,7 @@ use manylights_gpu::{GpuContext, GpuError};
 use wgpu::util::DeviceExt;
 
 use crate::layout::GROUPS_X;
-use crate::scan::{Scan, groups_2d};
+use crate::scan::{Scan, ScanPath, groups_2d};
 
 /// Bits sorted per pass.
 pub const RADIX_BITS: u32 = 4;
@@ -61,8 +61,17 @@ pub fn key_bits_for(max_key: u32) -> u32 {
 }
 
 impl RadixSort {
-    /// Builds the pipelines.
+    /// Builds the pipelines, with the subgroup scan where the device has subgroups.
     pub fn new(ctx: &GpuContext) -> Self {
+        Self::with_scan(ctx, Scan::new(ctx))
+    }
+
+    /// Builds the pipelines over a given scan path; `None` where that path is unavailable.
+    pub fn with_scan_path(ctx: &GpuContext, path: ScanPath) -> Option<Self> {
+        Scan::with_path(ctx, path).map(|scan| Self::with_scan(ctx, scan))
+    }
+
+    fn with_scan(ctx: &GpuContext, scan: Scan) -> Self {
         let d = &ctx.device;
         let mut entries = vec![wgpu::BindGroupLayoutEntry {
             binding: 0,
@@ -108,7 +117,7 @@ impl RadixSort {
             count: pipe("sort_count"),
             scatter: pipe("sort_scatter"),
             layout,
-            scan: Scan::new(ctx),
+            scan,
         }
     }
 

@@ -17,11 +17,32 @@ pub const SHADER: ShaderDef = ShaderDef {
     files: &[shader_file!("scan/scan.wgsl")],
 };
 
+/// The block scan using subgroup operations (built only where the device has them).
+pub const SUBGROUP_SHADER: ShaderDef = ShaderDef {
+    name: "scan.subgroup",
+    consts: SCAN_CONSTS,
+    files: &[
+        shader_file!("scan/scan.wgsl"),
+        shader_file!("scan/scan_subgroup.wgsl"),
+    ],
+};
+
+/// Which block scan to use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScanPath {
+    /// Workgroup memory only; assumes no subgroup size.
+    Portable,
+    /// Subgroup inclusive adds within subgroups, workgroup memory across them.
+    Subgroup,
+}
+
 /// Scan pipelines.
 pub struct Scan {
     layout: wgpu::BindGroupLayout,
     blocks: wgpu::ComputePipeline,
     add: wgpu::ComputePipeline,
+    /// The path in use.
+    pub path: ScanPath,
 }
 
 /// Workgroup counts (x, y) for `groups` workgroups laid out in rows of `SCAN_MAX_GROUPS_X`.
@@ -34,8 +55,25 @@ pub fn groups_2d(groups: u32, row: u32) -> (u32, u32) {
 }
 
 impl Scan {
-    /// Builds the pipelines.
+    /// Builds the pipelines with the subgroup path where the device has subgroups.
     pub fn new(ctx: &GpuContext) -> Self {
+        Self::with_path(
+            ctx,
+            if ctx.features.subgroups {
+                ScanPath::Subgroup
+            } else {
+                ScanPath::Portable
+            },
+        )
+        .expect("the subgroup path is chosen only where subgroups exist")
+    }
+
+    /// Builds the pipelines of one path; `None` for the subgroup path on a device without
+    /// subgroups.
+    pub fn with_path(ctx: &GpuContext, path: ScanPath) -> Option<Self> {
+        if path == ScanPath::Subgroup && !ctx.features.subgroups {
+            return None;
+        }
         let d = &ctx.device;
         let storage = |binding| wgpu::BindGroupLayoutEntry {
             binding,
@@ -65,26 +103,32 @@ impl Scan {
             ],
         });
         let module = SHADER.create(d);
+        let sg_module = (path == ScanPath::Subgroup).then(|| SUBGROUP_SHADER.create(d));
         let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("scan"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let pipe = |entry| {
+        let pipe = |entry: &str, module: &wgpu::ShaderModule| {
             d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(entry),
                 layout: Some(&pl),
-                module: &module,
+                module,
                 entry_point: Some(entry),
                 compilation_options: Default::default(),
                 cache: None,
             })
         };
-        Self {
-            blocks: pipe("scan_blocks"),
-            add: pipe("scan_add"),
+        let blocks = match &sg_module {
+            Some(m) => pipe("scan_blocks_subgroup", m),
+            None => pipe("scan_blocks", &module),
+        };
+        Some(Self {
+            blocks,
+            add: pipe("scan_add", &module),
             layout,
-        }
+            path,
+        })
     }
 
     /// Encodes an in-place exclusive scan of the first `n` u32 of `data`.
