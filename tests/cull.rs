@@ -588,3 +588,67 @@ fn shrunk_lights_produce_false_negatives() {
         "culling with shrunk lights must show false negatives"
     );
 }
+
+/// The GPU exact oracle agrees with the CPU's: the same covered pixels and lists evaluated, no
+/// false negatives, and lights needed equal up to the decisions within 1e-4 of a light's radius
+/// or cone edge (f32 on the GPU, f64 on the CPU).
+#[test]
+fn gpu_exact_oracle_matches_cpu() {
+    let ctx = common::gpu();
+    let mut culler = None;
+    for seed in 5000..5006u64 {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, 53, 31);
+        let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
+        for s in [
+            Strategy::TiledGather { tile_size: 8 },
+            Strategy::Clustered {
+                tile_size: 8,
+                slices: 12,
+                slicing: Slicing::Exponential,
+                skip_empty: true,
+            },
+        ] {
+            let out = run_gpu(&ctx, culler, &r, &case, &s);
+            let lists = out.read(&ctx).unwrap();
+            let counts = culler
+                .exact_counts(
+                    &ctx,
+                    &r.gpu_scene,
+                    &r.depth_tex,
+                    &out,
+                    r.frame.clip_from_world.inverse(),
+                )
+                .unwrap();
+            let (g, c) = (
+                manylights_cull::metrics::from_gpu_counts(&counts, &lists),
+                metrics(&r, &out.params, &lists),
+            );
+            let what = format!("{} {}", case.label, s.name());
+            assert_eq!(g.covered_pixels, c.covered_pixels, "{what}");
+            assert_eq!(g.false_negatives, 0, "{what}: GPU oracle");
+            // Borderline (pixel, light) pairs by the f64 oracle.
+            let points = surface_points(&r.frame, &r.depth, r.w, r.h);
+            let mut border = 0u64;
+            for p in points.iter().flatten() {
+                for l in &case.scene.lights {
+                    let d = (*p - l.position.as_dvec3()).length() / f64::from(l.radius);
+                    let cone = l.cone().map_or(1.0, |(axis, _, cos_o)| {
+                        let dir = (*p - l.position.as_dvec3()).normalize_or_zero();
+                        (dir.dot(axis.as_dvec3()) - f64::from(cos_o)).abs()
+                    });
+                    if (d - 1.0).abs() < 1e-4 || (d < 1.0 && cone < 1e-4) {
+                        border += 1;
+                    }
+                }
+            }
+            assert!(
+                g.needed.abs_diff(c.needed) <= border,
+                "{what}: needed {} (GPU) vs {} (CPU), {border} borderline",
+                g.needed,
+                c.needed
+            );
+            assert_eq!(g.evaluated, c.evaluated, "{what}: evaluated");
+        }
+    }
+}

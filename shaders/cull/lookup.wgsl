@@ -1,6 +1,7 @@
 // The one pixel-to-list lookup every shading backend uses, whatever the strategy.
 // Bindings of group 1 for list consumers: 0 = CullParams, 1 = bin_ranges, 2 = light_indices,
-// 3 = the depth buffer (host: manylights_cull::Culler::lists_layout).
+// 3 = the depth buffer, 4 = a per-pixel output, 5 = a pass-specific uniform (host:
+// manylights_cull::Culler::lists_layout).
 @group(1) @binding(1) var<storage, read> bin_ranges: array<vec2<u32>>;
 @group(1) @binding(2) var<storage, read> light_indices: array<u32>;
 

@@ -69,6 +69,19 @@ pub const LIGHTS_PER_PIXEL: ShaderDef = ShaderDef {
     ],
 };
 
+/// `cull.exact`: the exact per-pixel oracle on the GPU.
+pub const EXACT: ShaderDef = ShaderDef {
+    name: "cull.exact",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        COMMON,
+        LOOKUP,
+        shader_file!("cull/exact.wgsl"),
+    ],
+};
+
 /// Every shader of this crate.
 pub const SHADERS: &[ShaderDef] = &[
     DEPTH_BOUNDS,
@@ -76,6 +89,7 @@ pub const SHADERS: &[ShaderDef] = &[
     TILED_SCATTER,
     CLUSTERED,
     LIGHTS_PER_PIXEL,
+    EXACT,
     crate::scan::SHADER,
     crate::scan::SUBGROUP_SHADER,
     crate::radix_sort::SHADER,
@@ -179,6 +193,7 @@ pub struct Culler {
     occupancy: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
     lights_per_pixel: wgpu::ComputePipeline,
+    exact: wgpu::ComputePipeline,
     scatter: [wgpu::ComputePipeline; 4],
     scan: Scan,
     sort: RadixSort,
@@ -256,6 +271,7 @@ impl Culler {
                 entry(2, storage(true)),
                 entry(3, DEPTH),
                 entry(4, storage(false)),
+                entry(5, UNIFORM),
             ],
         });
         let scene_layout = &scene.layout;
@@ -293,6 +309,7 @@ impl Culler {
             &lists_layout,
             ["lights_per_pixel"],
         );
+        let [exact] = pipelines(d, &EXACT, scene_layout, &lists_layout, ["exact_counts"]);
         Self {
             layout,
             lists_layout,
@@ -304,6 +321,7 @@ impl Culler {
             occupancy,
             finalize,
             lights_per_pixel,
+            exact,
             scatter,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
@@ -505,13 +523,65 @@ impl Culler {
         depth: &wgpu::Texture,
         lists: &CullOutput,
     ) -> Result<Vec<u32>, GpuError> {
+        self.per_pixel(
+            ctx,
+            scene,
+            depth,
+            lists,
+            &self.lights_per_pixel,
+            1,
+            glam::Mat4::IDENTITY,
+        )
+    }
+
+    /// The exact per-pixel oracle on the GPU: per pixel `[evaluated, needed, found, covered]`
+    /// (see `shaders/cull/exact.wgsl`); `world_from_clip` is the inverse of the frame's
+    /// `clip_from_world`.
+    pub fn exact_counts(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        lists: &CullOutput,
+        world_from_clip: glam::Mat4,
+    ) -> Result<Vec<[u32; 4]>, GpuError> {
+        let flat = self.per_pixel(ctx, scene, depth, lists, &self.exact, 4, world_from_clip)?;
+        Ok(flat
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect())
+    }
+
+    /// Runs a one-thread-per-pixel consumer of the lists and reads back its `stride` u32 per
+    /// pixel.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the lists, their consumer and its one parameter"
+    )]
+    fn per_pixel(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        lists: &CullOutput,
+        pipeline: &wgpu::ComputePipeline,
+        stride: u64,
+        world_from_clip: glam::Mat4,
+    ) -> Result<Vec<u32>, GpuError> {
         let (w, h) = (depth.width(), depth.height());
         let d = &ctx.device;
+        let bytes = u64::from(w) * u64::from(h) * 4 * stride;
+        ctx.check_storage("per-pixel output", bytes)?;
         let out = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("cull.lights_per_pixel"),
-            size: u64::from(w * h) * 4,
+            label: Some("cull.per_pixel"),
+            size: bytes,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
+        });
+        let exact = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("cull.exact.params"),
+            contents: bytemuck::bytes_of(&world_from_clip),
+            usage: wgpu::BufferUsages::UNIFORM,
         });
         let view = depth.create_view(&wgpu::TextureViewDescriptor {
             aspect: wgpu::TextureAspect::DepthOnly,
@@ -541,27 +611,28 @@ impl Culler {
                     binding: 4,
                     resource: out.as_entire_binding(),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: exact.as_entire_binding(),
+                },
             ],
         });
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("cull.lights_per_pixel"),
+            label: Some("cull.per_pixel"),
         });
         {
             let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("cull.lights_per_pixel"),
+                label: Some("cull.per_pixel"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.lights_per_pixel);
+            pass.set_pipeline(pipeline);
             pass.set_bind_group(0, &scene.bind_group, &[]);
             pass.set_bind_group(1, &group, &[]);
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
         }
-        ctx.submit_and_wait(enc, "lights per pixel")?;
+        ctx.submit_and_wait(enc, "per-pixel list consumer")?;
         Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
-            ctx,
-            &out,
-            0,
-            u64::from(w * h) * 4,
+            ctx, &out, 0, bytes,
         )?))
     }
 }

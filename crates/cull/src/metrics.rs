@@ -86,48 +86,73 @@ pub fn evaluate(
     exact: &[Option<Vec<u32>>],
     lists: &BinLists,
 ) -> ListMetrics {
-    let mut m = ListMetrics {
-        covered_pixels: 0,
-        false_negatives: 0,
-        evaluated: 0,
-        needed: 0,
-        false_positive_ratio: None,
-        lights_per_pixel_mean: 0.0,
-        max_lights_per_bin: 0,
-        histogram: Vec::new(),
-        dropped_lights: 0,
-    };
     let sorted: Vec<Vec<u32>> = (0..lists.ranges.len()).map(|b| lists.sorted(b)).collect();
-    for y in 0..h {
-        for x in 0..w {
+    let pixels = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .filter_map(|(x, y)| {
             let i = (y * w + x) as usize;
-            let Some(ex) = &exact[i] else { continue };
+            let ex = exact[i].as_ref()?;
             let list = &sorted[bin_of(frame, params, [x, y], depth[i]) as usize];
-            m.covered_pixels += 1;
-            m.evaluated += list.len() as u64;
-            m.needed += ex.len() as u64;
-            m.false_negatives +=
-                ex.iter().filter(|l| list.binary_search(l).is_err()).count() as u64;
-        }
-    }
-    if m.needed > 0 {
-        m.false_positive_ratio = Some(m.evaluated as f64 / m.needed as f64);
-    }
-    if m.covered_pixels > 0 {
-        m.lights_per_pixel_mean = m.evaluated as f64 / m.covered_pixels as f64;
-    }
-    for l in &sorted {
-        let n = l.len() as u32;
-        m.max_lights_per_bin = m.max_lights_per_bin.max(n);
-        let bucket = if n == 0 {
-            0
-        } else {
-            (32 - n.leading_zeros()) as usize
+            let missing = ex.iter().filter(|l| list.binary_search(l).is_err()).count() as u64;
+            Some((list.len() as u64, ex.len() as u64, missing))
+        });
+    ListMetrics::from_pixels(pixels, lists.ranges.iter().map(|r| r[1]))
+}
+
+/// The same metrics from the GPU exact oracle's per-pixel `[evaluated, needed, found, covered]`
+/// (`Culler::exact_counts`).
+pub fn from_gpu_counts(counts: &[[u32; 4]], lists: &BinLists) -> ListMetrics {
+    let pixels = counts.iter().filter(|c| c[3] != 0).map(|c| {
+        (
+            u64::from(c[0]),
+            u64::from(c[1]),
+            u64::from(c[1] - c[2].min(c[1])),
+        )
+    });
+    ListMetrics::from_pixels(pixels, lists.ranges.iter().map(|r| r[1]))
+}
+
+impl ListMetrics {
+    /// From per covered pixel (evaluated, needed, missing) and per bin list lengths.
+    pub fn from_pixels(
+        pixels: impl Iterator<Item = (u64, u64, u64)>,
+        bin_lengths: impl Iterator<Item = u32>,
+    ) -> Self {
+        let mut m = ListMetrics {
+            covered_pixels: 0,
+            false_negatives: 0,
+            evaluated: 0,
+            needed: 0,
+            false_positive_ratio: None,
+            lights_per_pixel_mean: 0.0,
+            max_lights_per_bin: 0,
+            histogram: Vec::new(),
+            dropped_lights: 0,
         };
-        if m.histogram.len() <= bucket {
-            m.histogram.resize(bucket + 1, 0);
+        for (evaluated, needed, missing) in pixels {
+            m.covered_pixels += 1;
+            m.evaluated += evaluated;
+            m.needed += needed;
+            m.false_negatives += missing;
         }
-        m.histogram[bucket] += 1;
+        if m.needed > 0 {
+            m.false_positive_ratio = Some(m.evaluated as f64 / m.needed as f64);
+        }
+        if m.covered_pixels > 0 {
+            m.lights_per_pixel_mean = m.evaluated as f64 / m.covered_pixels as f64;
+        }
+        for n in bin_lengths {
+            m.max_lights_per_bin = m.max_lights_per_bin.max(n);
+            let bucket = if n == 0 {
+                0
+            } else {
+                (32 - n.leading_zeros()) as usize
+            };
+            if m.histogram.len() <= bucket {
+                m.histogram.resize(bucket + 1, 0);
+            }
+            m.histogram[bucket] += 1;
+        }
+        m
     }
-    m
 }

@@ -1,0 +1,57 @@
+// cull.exact: the exact per-pixel oracle on the GPU, for images too large for the CPU's
+// O(pixels x lights). Per covered pixel: the surface point reconstructed from the depth buffer
+// (as the CPU oracle does, but in f32), the number of lights reaching it (needed), the length of
+// its list (evaluated) and how many list entries reach it (found). Lists hold no duplicates
+// (tested), so false negatives = needed - found. Decisions within f32 rounding of a light's
+// radius or cone may differ from the f64 CPU oracle; a test bounds that difference.
+struct ExactParams {
+    world_from_clip: mat4x4<f32>,
+}
+
+@group(0) @binding(1) var<storage, read> lights: array<Light>;
+@group(1) @binding(4) var<storage, read_write> counts: array<vec4<u32>>;
+@group(1) @binding(5) var<uniform> exact: ExactParams;
+
+// manylights_scene::Light::reaches, in f32.
+fn reaches(l: Light, p: vec3<f32>) -> bool {
+    let to_p = p - l.position;
+    let d = length(to_p);
+    if d >= l.radius {
+        return false;
+    }
+    if l.kind == LIGHT_KIND_SPOT {
+        return d > 0.0 && dot(to_p, l.direction) / d > l.cos_outer;
+    }
+    return true;
+}
+
+@compute @workgroup_size(8, 8)
+fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = vec2<u32>(frame.viewport.xy);
+    if any(id.xy >= size) {
+        return;
+    }
+    let i = id.y * size.x + id.x;
+    let z = textureLoad(depth_tex, id.xy, 0);
+    if z >= 1.0 {
+        counts[i] = vec4<u32>(0u);
+        return;
+    }
+    let ndc = vec4<f32>((f32(id.x) + 0.5) * frame.viewport.z * 2.0 - 1.0, 1.0 - (f32(id.y) + 0.5) * frame.viewport.w * 2.0, z, 1.0);
+    let q = exact.world_from_clip * ndc;
+    let p = q.xyz / q.w;
+    var needed = 0u;
+    for (var k = 0u; k < frame.light_count; k++) {
+        if reaches(lights[k], p) {
+            needed += 1u;
+        }
+    }
+    let list = light_list(id.xy, z);
+    var found = 0u;
+    for (var k = 0u; k < list.y; k++) {
+        if reaches(lights[light_indices[list.x + k]], p) {
+            found += 1u;
+        }
+    }
+    counts[i] = vec4<u32>(list.y, needed, found, 1u);
+}
