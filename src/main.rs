@@ -4,15 +4,20 @@
 //! GPU adapter, a device error, an unwritable output); 2 the command line itself is malformed
 //! (unknown option, unparsable number, value outside an option's range).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
+use manylights_cull::layout::DEFAULT_SLACK;
+use manylights_cull::{Culler, Slicing, Strategy, heatmap, metrics};
+use manylights_gpu::prepass::{DepthPrepass, depth_target};
+use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::procedural::{self, ProceduralScene};
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::ReferenceRenderer;
+use manylights_shade::image_out::write_atomic;
 
 /// Light-culling research workbench: culling strategies and shading backends on wgpu,
 /// measured for speed and for exactness against a brute-force reference.
@@ -32,11 +37,15 @@ enum Command {
     /// holds (glTF KHR_lights_punctual). The output files are written atomically: a failed run
     /// leaves no partial file.
     Render(RenderArgs),
+    /// Cull the lights of a scene with one strategy and measure the lists against the exact
+    /// per-pixel oracle: false negatives, false-positive ratio, lights per pixel, the longest
+    /// list, list memory, per-pass GPU times; and write heatmaps of lights per tile and per pixel.
+    Cull(CullArgs),
 }
 
+/// Scene, lights, resolution and adapter: shared by every subcommand.
 #[derive(clap::Args, Debug)]
-#[command(allow_negative_numbers = true)]
-struct RenderArgs {
+struct SceneArgs {
     /// A procedural scene (atrium, pillars, topdown, city) or a path to a .gltf/.glb file.
     #[arg(long, default_value = "atrium")]
     scene: String,
@@ -68,16 +77,57 @@ struct RenderArgs {
     /// Image height in pixels (at most the device's max_texture_dimension_2d).
     #[arg(long, default_value_t = 720, value_parser = clap::value_parser!(u32).range(1..=65536))]
     height: u32,
-    /// Exposure applied before tonemapping the PNG.
-    #[arg(long, default_value_t = 1.0)]
-    exposure: f32,
-    /// Output directory (created if needed).
-    #[arg(long, default_value = "out/render")]
-    out: PathBuf,
+    /// Output directory, created if needed (default: out/<subcommand>).
+    #[arg(long)]
+    out: Option<PathBuf>,
     /// GPU adapter: a substring of its name or its index (default: $MANYLIGHTS_ADAPTER, else the
     /// first discrete GPU, else any adapter, lavapipe included).
     #[arg(long)]
     adapter: Option<String>,
+}
+
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+struct RenderArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Exposure applied before tonemapping the PNG.
+    #[arg(long, default_value_t = 1.0)]
+    exposure: f32,
+}
+
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+struct CullArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    /// Culling strategy.
+    #[arg(long, value_enum, default_value_t = StrategyName::TiledGather)]
+    strategy: StrategyName,
+    /// Tile side in pixels (8, 16 and 32 are usual; 4..=256 accepted). Default: 16, or 64 for
+    /// clustered.
+    #[arg(long)]
+    tile_size: Option<u32>,
+    /// Depth slices of the cluster grid (clustered only).
+    #[arg(long, default_value_t = 24)]
+    slices: u32,
+    /// Slicing of the cluster grid (clustered only).
+    #[arg(long, value_enum, default_value_t = SlicingName::Exponential)]
+    slicing: SlicingName,
+    /// Emit lights only into clusters that hold geometry (clustered only).
+    #[arg(long)]
+    skip_empty: bool,
+    /// Conservative slack, relative to each light's distance from the eye.
+    #[arg(long, default_value_t = DEFAULT_SLACK)]
+    slack: f32,
+    /// Top of the heatmaps' colour scale (default: the longest list shown), so that heatmaps
+    /// of several runs can share one scale.
+    #[arg(long)]
+    heat_max: Option<u32>,
+    /// For clusters, the depth slice the tile heatmap shows (default: the longest list over
+    /// all slices of each tile).
+    #[arg(long)]
+    slice: Option<u32>,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -92,11 +142,30 @@ enum Generator {
     Field,
 }
 
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum StrategyName {
+    /// Forward+ tiled gather (Harada et al. 2012, 4.1).
+    TiledGather,
+    /// Forward+ tiled scatter with the GPU radix sort (Harada et al. 2012, 4.2).
+    TiledScatter,
+    /// 2.5D culling with depth masks (Harada 2012).
+    DepthMask,
+    /// 3D clusters (Olsson et al. 2012).
+    Clustered,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum SlicingName {
+    /// Equal depth per slice.
+    Linear,
+    /// Equal depth ratio per slice.
+    Exponential,
+}
+
 fn load_scene(name: &str) -> Result<Scene> {
     let looks_like_file = name.ends_with(".gltf") || name.ends_with(".glb") || name.contains('/');
     if looks_like_file {
-        let (scene, report) =
-            gltf_import::load(std::path::Path::new(name), &GltfOptions::default())?;
+        let (scene, report) = gltf_import::load(Path::new(name), &GltfOptions::default())?;
         if report.skipped_primitives + report.skipped_directional_lights > 0 {
             eprintln!(
                 "note: {name}: skipped {} point/line primitives and {} directional lights (not supported)",
@@ -117,53 +186,79 @@ fn load_scene(name: &str) -> Result<Scene> {
     }
 }
 
+impl SceneArgs {
+    /// The scene with its generated lights, validated.
+    fn build(&self) -> Result<Scene> {
+        let mut scene = load_scene(&self.scene)?;
+        let spec = LightSpec {
+            generator: match self.generator {
+                Generator::Uniform => LightGenerator::Uniform,
+                Generator::Surface => LightGenerator::SurfaceHugging { offset: 0.1 },
+                Generator::Clustered => LightGenerator::Clustered {
+                    clusters: 8,
+                    spread: 1.5,
+                },
+                Generator::Field => LightGenerator::LightField,
+            },
+            count: self.lights,
+            seed: self.seed,
+            radius: self
+                .threshold
+                .map_or(RadiusRule::Fixed(self.radius), RadiusRule::Threshold),
+            intensity: self.intensity,
+            spot_fraction: self.spot_fraction,
+            ..LightSpec::default()
+        };
+        let generated = spec.generate(&scene).context(
+            "invalid light options (--radius, --threshold, --intensity, --spot-fraction)",
+        )?;
+        scene.lights.extend(generated);
+        scene
+            .validate()
+            .with_context(|| format!("scene {}", scene.name))?;
+        Ok(scene)
+    }
+
+    /// The device, checked against the resolution.
+    fn gpu(&self) -> Result<GpuContext> {
+        let ctx = GpuContext::new(&GpuOptions {
+            adapter: self.adapter.clone(),
+        })?;
+        eprintln!("adapter: {}", ctx.summary());
+        ctx.check_resolution(self.width, self.height)
+            .context("invalid --width/--height")?;
+        Ok(ctx)
+    }
+}
+
+fn print_timings(timings: Option<&[manylights_gpu::timing::PassTiming]>) {
+    match timings {
+        Some(t) => {
+            for p in t {
+                println!("  {:<28} {:>8} {:>10.3} ms", p.label, p.kind.as_str(), p.ms);
+            }
+        }
+        None => println!("  (no GPU timings: the adapter has no timestamp queries)"),
+    }
+}
+
 fn render(args: &RenderArgs) -> Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("invalid --exposure {}: a finite value > 0", args.exposure);
     }
-    let mut scene = load_scene(&args.scene)?;
-    let spec = LightSpec {
-        generator: match args.generator {
-            Generator::Uniform => LightGenerator::Uniform,
-            Generator::Surface => LightGenerator::SurfaceHugging { offset: 0.1 },
-            Generator::Clustered => LightGenerator::Clustered {
-                clusters: 8,
-                spread: 1.5,
-            },
-            Generator::Field => LightGenerator::LightField,
-        },
-        count: args.lights,
-        seed: args.seed,
-        radius: args
-            .threshold
-            .map_or(RadiusRule::Fixed(args.radius), RadiusRule::Threshold),
-        intensity: args.intensity,
-        spot_fraction: args.spot_fraction,
-        ..LightSpec::default()
-    };
-    let generated = spec
-        .generate(&scene)
-        .context("invalid light options (--radius, --threshold, --intensity, --spot-fraction)")?;
-    scene.lights.extend(generated);
-    scene
-        .validate()
-        .with_context(|| format!("scene {}", scene.name))?;
-
-    let ctx = GpuContext::new(&GpuOptions {
-        adapter: args.adapter.clone(),
-    })?;
-    eprintln!("adapter: {}", ctx.summary());
-    ctx.check_resolution(args.width, args.height)
-        .context("invalid --width/--height")?;
-    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, args.width, args.height)?;
-    let renderer = ReferenceRenderer::new(&ctx, &gpu_scene);
-    let frame = renderer.render(&ctx, &gpu_scene, args.width, args.height)?;
+    let a = &args.scene;
+    let scene = a.build()?;
+    let ctx = a.gpu()?;
+    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, a.width, a.height)?;
+    let frame =
+        ReferenceRenderer::new(&ctx, &gpu_scene).render(&ctx, &gpu_scene, a.width, a.height)?;
     let bad = frame.color.non_finite_count();
     if bad > 0 {
         bail!("the render holds {bad} NaN/Inf pixels; nothing was written");
     }
-    let png = args.out.join("reference.png");
-    let exr = args.out.join("reference.exr");
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from("out/render"));
+    let png = out.join("reference.png");
+    let exr = out.join("reference.exr");
     frame.color.write_exr(&exr)?;
     frame.color.write_png(&png, args.exposure)?;
     println!(
@@ -171,18 +266,123 @@ fn render(args: &RenderArgs) -> Result<()> {
         scene.name,
         scene.triangle_count(),
         scene.lights.len(),
-        args.width,
-        args.height
+        a.width,
+        a.height
     );
-    match &frame.timings {
-        Some(t) => {
-            for p in t {
-                println!("  {:<18} {:>8} {:>10.3} ms", p.label, p.kind.as_str(), p.ms);
-            }
-        }
-        None => println!("  (no GPU timings: the adapter has no timestamp queries)"),
-    }
+    print_timings(frame.timings.as_deref());
     println!("wrote {} and {}", png.display(), exr.display());
+    Ok(())
+}
+
+fn cull(args: &CullArgs) -> Result<()> {
+    let a = &args.scene;
+    let default_tile = if matches!(args.strategy, StrategyName::Clustered) {
+        64
+    } else {
+        16
+    };
+    let tile_size = args.tile_size.unwrap_or(default_tile);
+    let strategy = match args.strategy {
+        StrategyName::TiledGather => Strategy::TiledGather { tile_size },
+        StrategyName::TiledScatter => Strategy::TiledScatter { tile_size },
+        StrategyName::DepthMask => Strategy::DepthMask { tile_size },
+        StrategyName::Clustered => Strategy::Clustered {
+            tile_size,
+            slices: args.slices,
+            slicing: match args.slicing {
+                SlicingName::Linear => Slicing::Linear,
+                SlicingName::Exponential => Slicing::Exponential,
+            },
+            skip_empty: args.skip_empty,
+        },
+    };
+    strategy.validate()?;
+    if !(args.slack.is_finite() && args.slack >= 0.0) {
+        bail!(
+            "invalid --slack {}: a finite value >= 0 (0 disables the guard against f32 rounding)",
+            args.slack
+        );
+    }
+    let scene = a.build()?;
+    let ctx = a.gpu()?;
+    let (w, h) = (a.width, a.height);
+    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
+    let depth = depth_target(&ctx, w, h);
+    let mut timer = GpuTimer::new(&ctx, 64);
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    DepthPrepass::new(&ctx, &gpu_scene).encode(
+        &mut enc,
+        &gpu_scene,
+        &depth.create_view(&Default::default()),
+        &mut timer,
+    );
+    ctx.submit_and_wait(enc, "depth prepass")?;
+    let culler = Culler::new(&ctx, &gpu_scene);
+    let (near, far) = scene.camera.near_far();
+    let out = culler.run(
+        &ctx, &gpu_scene, &depth, &strategy, near, far, args.slack, &mut timer,
+    )?;
+    let timings = timer.read(&ctx)?;
+    let lists = out.read(&ctx)?;
+    let frame =
+        manylights_gpu::layout::GpuFrame::new(&scene.camera, w, h, scene.lights.len() as u32);
+    let counts = culler.exact_counts(
+        &ctx,
+        &gpu_scene,
+        &depth,
+        &out,
+        frame.clip_from_world.inverse(),
+    )?;
+    let m = metrics::from_gpu_counts(&counts, &lists);
+    let per_pixel: Vec<u32> = counts.iter().map(|c| c[0]).collect();
+    let tiles = heatmap::tile_counts(&out.params, &lists, args.slice);
+    let max = args
+        .heat_max
+        .unwrap_or_else(|| tiles.iter().copied().max().unwrap_or(0).max(1));
+    let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/cull"));
+    let tile_png = dir.join(format!("heatmap_tiles_{}.png", strategy.name()));
+    let pixel_png = dir.join(format!("heatmap_pixels_{}.png", strategy.name()));
+    for (path, img) in [
+        (&tile_png, heatmap::tiles(&out.params, &tiles, w, h, max)),
+        (&pixel_png, heatmap::pixels(&per_pixel, w, h, max)),
+    ] {
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        })?;
+    }
+    println!(
+        "{}: {} triangles, {} lights, {w}x{h}, {strategy:?}",
+        scene.name,
+        scene.triangle_count(),
+        scene.lights.len()
+    );
+    println!("  covered pixels          {}", m.covered_pixels);
+    println!("  false negatives         {}", m.false_negatives);
+    match m.false_positive_ratio {
+        Some(r) => println!("  false-positive ratio    {r:.3} (lights evaluated / lights needed)"),
+        None => println!("  false-positive ratio    n/a (no pixel needs a light)"),
+    }
+    println!("  lights per pixel        {:.2}", m.lights_per_pixel_mean);
+    println!("  max lights per bin      {}", m.max_lights_per_bin);
+    println!(
+        "  list entries / bytes    {} / {}",
+        out.total,
+        out.list_bytes()
+    );
+    println!("  dropped lights          {}", m.dropped_lights);
+    print_timings(timings.as_deref());
+    println!(
+        "heat scale 0..{max} lights; wrote {} and {}",
+        tile_png.display(),
+        pixel_png.display()
+    );
+    if m.false_negatives > 0 {
+        bail!(
+            "{} false negatives: a conservative strategy must have none (a bug, or --slack too small)",
+            m.false_negatives
+        );
+    }
     Ok(())
 }
 
@@ -190,6 +390,7 @@ fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Render(args) => render(args),
+        Command::Cull(args) => cull(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -15,9 +15,13 @@ fn manylights(args: &[&str]) -> Output {
 /// Runs `render` with `extra` options into a fresh directory and expects failure with `code`
 /// and every string of `expect` in stderr, and no output directory.
 fn rejects(extra: &[&str], code: i32, expect: &[&str]) {
+    rejects_cmd("render", extra, code, expect);
+}
+
+fn rejects_cmd(cmd: &str, extra: &[&str], code: i32, expect: &[&str]) {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    let mut args = vec!["render", "--out", out.to_str().unwrap()];
+    let mut args = vec![cmd, "--out", out.to_str().unwrap()];
     for (flag, value) in [("--width", "32"), ("--height", "16"), ("--lights", "4")] {
         if !extra.contains(&flag) {
             args.extend([flag, value]);
@@ -152,4 +156,75 @@ fn unknown_adapter_lists_the_adapters_found() {
         1,
         &["no adapter matches `no-such-gpu`", "adapters found", "[0]"],
     );
+}
+
+#[test]
+fn cull_reports_metrics_and_writes_heatmaps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cull");
+    for strategy in ["tiled-gather", "tiled-scatter", "depth-mask", "clustered"] {
+        let o = manylights(&[
+            "cull",
+            "--scene",
+            "pillars",
+            "--lights",
+            "64",
+            "--radius",
+            "1.5",
+            "--strategy",
+            strategy,
+            "--width",
+            "40",
+            "--height",
+            "23",
+            "--tile-size",
+            "8",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{strategy}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            stdout.contains("false negatives         0"),
+            "{strategy}: {stdout}"
+        );
+        assert!(
+            stdout.contains("false-positive ratio") && stdout.contains("list entries / bytes"),
+            "{stdout}"
+        );
+        let name = strategy.replace('-', "_");
+        for kind in ["tiles", "pixels"] {
+            let img = image::open(out.join(format!("heatmap_{kind}_{name}.png")))
+                .expect("a heatmap PNG")
+                .to_rgb8();
+            assert_eq!(img.dimensions(), (40 + manylights_cull::heatmap::BAR, 23));
+        }
+    }
+}
+
+#[test]
+fn cull_rejects_bad_parameters() {
+    rejects_cmd(
+        "cull",
+        &["--tile-size", "2"],
+        1,
+        &["tile_size = 2", "4..=256"],
+    );
+    rejects_cmd(
+        "cull",
+        &["--strategy", "clustered", "--slices", "0"],
+        1,
+        &["slices = 0"],
+    );
+    rejects_cmd(
+        "cull",
+        &["--strategy", "forward-plus"],
+        2,
+        &["forward-plus", "tiled-gather"],
+    );
+    rejects_cmd("cull", &["--slack", "-1"], 1, &["--slack -1"]);
 }

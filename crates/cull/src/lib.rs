@@ -22,6 +22,7 @@
 pub mod cpu;
 pub mod geometry;
 pub mod gpu;
+pub mod heatmap;
 pub mod layout;
 pub mod metrics;
 pub mod radix_sort;
