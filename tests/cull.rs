@@ -316,10 +316,10 @@ fn check_scan(ctx: &GpuContext, s: &scan::Scan) {
             });
             ctx.queue.write_buffer(&buf, 0, bytemuck::cast_slice(&data));
             let mut enc = ctx.device.create_command_encoder(&Default::default());
-            s.encode(&ctx, &mut enc, &buf, n, &mut GpuTimer::new(&ctx, 16));
+            s.encode(ctx, &mut enc, &buf, n, &mut GpuTimer::new(ctx, 16));
             ctx.submit_and_wait(enc, "scan").unwrap();
             let got: Vec<u32> = bytemuck::pod_collect_to_vec(
-                &readback::read_buffer(&ctx, &buf, 0, (u64::from(n) * 4).max(4)).unwrap(),
+                &readback::read_buffer(ctx, &buf, 0, (u64::from(n) * 4).max(4)).unwrap(),
             );
             assert_eq!(
                 &got[..n as usize],
