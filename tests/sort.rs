@@ -77,6 +77,22 @@ fn first_diff(a: &(Vec<u32>, Vec<u32>), b: &(Vec<u32>, Vec<u32>)) -> Option<Stri
         })
 }
 
+/// lampshade's key-value radix sort on the same device.
+fn lampshade_sort(
+    lamp: &mut lampshade::KeyValueSorter,
+    keys: &[u32],
+    vals: &[u32],
+    bits: u32,
+) -> (Vec<u32>, Vec<u32>) {
+    let pairs: Vec<lampshade::KeyValue> = keys
+        .iter()
+        .zip(vals)
+        .map(|(&k, &v)| lampshade::KeyValue::new(k, v))
+        .collect();
+    let sorted = pollster::block_on(lamp.sort_with_key_bits(&pairs, bits)).expect("lampshade sort");
+    sorted.into_iter().map(|kv| (kv.key, kv.value)).unzip()
+}
+
 fn key_sets(n: usize, rng: &mut rand_pcg::Pcg64) -> Vec<(&'static str, Vec<u32>)> {
     let random: Vec<u32> = (0..n).map(|_| rng.random::<u32>()).collect();
     let mut sorted = random.clone();
@@ -115,6 +131,7 @@ fn radix_sort_subgroup_matches_std_stable_sort() {
 }
 
 fn check_against_std(ctx: &GpuContext, sort: &RadixSort) {
+    let mut lamp = lampshade::KeyValueSorter::new(&ctx.device, &ctx.queue);
     let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
     for n in [0usize, 1, 2, 3, 1000, 1023, 1024, 1025, 4097, 100_003] {
         for (kind, keys) in key_sets(n, &mut rng) {
@@ -159,16 +176,7 @@ fn radix_sort_matches_std_and_lampshade_on_millions() {
             "{n} keys vs std: {}",
             first_diff(&ours, &std).unwrap()
         );
-        let pairs: Vec<lampshade::KeyValue> = keys
-            .iter()
-            .zip(&vals)
-            .map(|(&k, &v)| lampshade::KeyValue::new(k, v))
-            .collect();
-        let theirs =
-            pollster::block_on(lamp.sort_with_key_bits(&pairs, bits)).expect("lampshade sort");
-        let (tk, tv): (Vec<u32>, Vec<u32>) =
-            theirs.into_iter().map(|kv| (kv.key, kv.value)).unzip();
-        let theirs = (tk, tv);
+        let theirs = lampshade_sort(&mut lamp, &keys, &vals, bits);
         assert!(
             first_diff(&ours, &theirs).is_none(),
             "{n} keys vs lampshade: {}",
