@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use manylights_cull::layout::DEFAULT_SLACK;
-use manylights_cull::{Culler, Slicing, Strategy, heatmap, metrics};
+use manylights_cull::{CullSettings, Culler, Slicing, Strategy, heatmap, metrics};
 use manylights_gpu::prepass::{DepthPrepass, depth_target};
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
@@ -318,10 +318,11 @@ fn cull(args: &CullArgs) -> Result<()> {
     );
     ctx.submit_and_wait(enc, "depth prepass")?;
     let culler = Culler::new(&ctx, &gpu_scene);
-    let (near, far) = scene.camera.near_far();
-    let out = culler.run(
-        &ctx, &gpu_scene, &depth, &strategy, near, far, args.slack, &mut timer,
-    )?;
+    let settings = CullSettings {
+        slack: args.slack,
+        ..CullSettings::for_camera(&scene.camera)
+    };
+    let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
     let timings = timer.read(&ctx)?;
     let lists = out.read(&ctx)?;
     let frame =

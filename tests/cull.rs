@@ -4,9 +4,9 @@
 mod common;
 
 use glam::Vec3;
-use manylights_cull::layout::{DEFAULT_SLACK, GpuCullParams};
+use manylights_cull::layout::GpuCullParams;
 use manylights_cull::metrics::{ListMetrics, evaluate, exact_sets, surface_points};
-use manylights_cull::{BinLists, Culler, Slicing, Strategy, cpu, geometry, scan};
+use manylights_cull::{BinLists, CullSettings, Culler, Slicing, Strategy, cpu, geometry, scan};
 use manylights_gpu::layout::{GpuFrame, GpuLight};
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, readback};
@@ -209,8 +209,12 @@ fn render(ctx: &GpuContext, case: &Case, w: u32, h: u32) -> Rendered {
 }
 
 fn params(r: &Rendered, case: &Case, s: &Strategy) -> GpuCullParams {
-    let (near, far) = case.camera.near_far();
-    s.params(r.w, r.h, r.lights.len() as u32, near, far, DEFAULT_SLACK)
+    s.params(
+        r.w,
+        r.h,
+        r.lights.len() as u32,
+        &CullSettings::for_camera(&case.camera),
+    )
 }
 
 /// The CPU oracle's lists for a strategy, computed from the depth buffer alone.
@@ -222,6 +226,12 @@ fn oracle_lists(r: &Rendered, case: &Case, s: &Strategy) -> (GpuCullParams, BinL
             &p,
             &r.lights,
             &cpu::occupancy(&r.frame, &p, &r.depth, r.w, r.h),
+        ),
+        Strategy::TiledScatter { .. } => cpu::scatter(
+            &r.frame,
+            &p,
+            &r.lights,
+            &cpu::depth_bounds(&r.frame, &p, &r.depth, r.w, r.h).0,
         ),
         _ => cpu::gather(
             &r.frame,
@@ -244,7 +254,6 @@ fn run_gpu(
     case: &Case,
     s: &Strategy,
 ) -> manylights_cull::CullOutput {
-    let (near, far) = case.camera.near_far();
     let mut timer = GpuTimer::new(ctx, 16);
     culler
         .run(
@@ -252,9 +261,7 @@ fn run_gpu(
             &r.gpu_scene,
             &r.depth_tex,
             s,
-            near,
-            far,
-            DEFAULT_SLACK,
+            &CullSettings::for_camera(&case.camera),
             &mut timer,
         )
         .unwrap()
@@ -564,8 +571,12 @@ fn shrunk_lights_produce_false_negatives() {
         let case = random_case(seed);
         let r = render(&ctx, &case, 48, 32);
         let s = Strategy::TiledGather { tile_size: 8 };
-        let (near, far) = case.camera.near_far();
-        let mut p = s.params(r.w, r.h, r.lights.len() as u32, near, far, DEFAULT_SLACK);
+        let mut p = s.params(
+            r.w,
+            r.h,
+            r.lights.len() as u32,
+            &CullSettings::for_camera(&case.camera),
+        );
         let td = cpu::depth_bounds(&r.frame, &p, &r.depth, r.w, r.h).0;
         let shrunk: Vec<GpuLight> = r
             .lights
@@ -650,5 +661,78 @@ fn gpu_exact_oracle_matches_cpu() {
             );
             assert_eq!(g.evaluated, c.evaluated, "{what}: evaluated");
         }
+    }
+}
+
+/// A deliberate capacity drops exactly the lights beyond it, counts every one of them, and the
+/// loss shows as false negatives: the capped lists are the uncapped ones truncated.
+#[test]
+fn capacity_drops_are_counted() {
+    let ctx = common::gpu();
+    let case = random_case(6001);
+    let r = render(&ctx, &case, 64, 40);
+    let culler = Culler::new(&ctx, &r.gpu_scene);
+    for s in [
+        Strategy::TiledGather { tile_size: 16 },
+        Strategy::TiledScatter { tile_size: 16 },
+        Strategy::Clustered {
+            tile_size: 16,
+            slices: 8,
+            slicing: Slicing::Linear,
+            skip_empty: false,
+        },
+    ] {
+        let full = run_gpu(&ctx, &culler, &r, &case, &s);
+        let full_lists = full.read(&ctx).unwrap();
+        let cap = 2;
+        let expected: u64 = full_lists
+            .ranges
+            .iter()
+            .map(|r| u64::from(r[1].saturating_sub(cap)))
+            .sum();
+        assert!(
+            expected > 0,
+            "{}: the case must overflow a capacity of {cap}",
+            s.name()
+        );
+        let settings = CullSettings {
+            capacity: Some(cap),
+            ..CullSettings::for_camera(&case.camera)
+        };
+        let capped = culler
+            .run(
+                &ctx,
+                &r.gpu_scene,
+                &r.depth_tex,
+                &s,
+                &settings,
+                &mut GpuTimer::new(&ctx, 16),
+            )
+            .unwrap();
+        assert_eq!(
+            u64::from(capped.dropped),
+            expected,
+            "{}: dropped lights",
+            s.name()
+        );
+        let lists = capped.read(&ctx).unwrap();
+        for b in 0..lists.ranges.len() {
+            let full_set = full_lists.sorted(b);
+            assert!(lists.list(b).len() as u32 <= cap);
+            assert!(
+                lists
+                    .list(b)
+                    .iter()
+                    .all(|l| full_set.binary_search(l).is_ok()),
+                "{}: bin {b} keeps a light it did not hold",
+                s.name()
+            );
+        }
+        assert!(
+            metrics(&r, &capped.params, &lists).false_negatives > 0,
+            "{}: the loss must show",
+            s.name()
+        );
+        assert_eq!(full.dropped, 0);
     }
 }

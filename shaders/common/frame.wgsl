@@ -6,12 +6,15 @@ struct Frame {
     clip_from_world: mat4x4<f32>,
     view_from_world: mat4x4<f32>,
     clip_from_view: mat4x4<f32>,
+    // Inverse of view_from_world (computed on the host).
+    world_from_view: mat4x4<f32>,
     // Perspective: (eye position, 1). Orthographic: (unit direction towards the viewer, 0).
     eye: vec4<f32>,
     // (width, height, 1 / width, 1 / height) in pixels.
     viewport: vec4<f32>,
     light_count: u32,
-    _pad0: u32,
+    // FRAME_FLAG_* bits.
+    flags: u32,
     _pad1: u32,
     _pad2: u32,
 }

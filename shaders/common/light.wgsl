@@ -29,6 +29,12 @@ fn light_falloff(d: f32, r: f32) -> f32 {
     return light_window(d, r) / max(d * d, D_MIN * D_MIN);
 }
 
+// Inverse-square falloff without the window: the infinite-range reference of the accuracy
+// metrics (what the radius cut-off itself costs).
+fn light_falloff_infinite(d: f32) -> f32 {
+    return 1.0 / max(d * d, D_MIN * D_MIN);
+}
+
 // Spot cone factor; exactly zero at and outside the outer cone.
 fn light_spot(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
     let t = clamp((cos_theta - cos_outer) / max(cos_inner - cos_outer, SPOT_EPS), 0.0, 1.0);

@@ -1,16 +1,30 @@
 // The shading model shared by every backend: the WGSL twin of manylights_scene::light::shade.
 // Lambert plus a normalised Blinn-Phong lobe of fixed exponent SHININESS (generated prelude).
-// Host mirror of the material: manylights_gpu::layout::GpuMaterial.
-struct Material {
-    base_color: vec3<f32>,
-    specular: f32,
+// Materials: struct Material in scene.wgsl.
+
+// The shading normal: the geometric normal turned towards the viewer (surfaces are two-sided).
+fn facing_normal(n: vec3<f32>, v: vec3<f32>) -> vec3<f32> {
+    return select(n, -n, dot(n, v) < 0.0);
+}
+
+// Radiance from every light in the scene (the brute-force sum of the reference and naive
+// forward).
+fn shade_all(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
+    var c = vec3<f32>(0.0);
+    for (var i = 0u; i < frame.light_count; i++) {
+        c += shade_light(lights[i], p, n, v, m);
+    }
+    return c;
 }
 
 // Radiance towards `v` from surface point `p` (unit normal `n`) lit by one light.
 fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let to_light = light.position - p;
     let d = length(to_light);
-    let atten = light_falloff(d, light.radius);
+    var atten = light_falloff(d, light.radius);
+    if (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u {
+        atten = light_falloff_infinite(d);
+    }
     if atten == 0.0 {
         return vec3<f32>(0.0);
     }

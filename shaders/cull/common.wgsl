@@ -28,6 +28,12 @@ struct CullParams {
     slack: f32,
     // S / (far - near) (linear) or S / ln(far / near) (exponential).
     slice_scale: f32,
+    // Deliberate cap on each list's length (0: none). Every light beyond it is counted in
+    // cull_stats[0]; see lists.wgsl.
+    capacity: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(1) @binding(0) var<uniform> cull: CullParams;

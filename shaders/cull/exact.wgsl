@@ -8,7 +8,6 @@ struct ExactParams {
     world_from_clip: mat4x4<f32>,
 }
 
-@group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(1) @binding(4) var<storage, read_write> counts: array<vec4<u32>>;
 @group(1) @binding(5) var<uniform> exact: ExactParams;
 

@@ -8,15 +8,34 @@
 @group(1) @binding(5) var<storage, read_write> bin_cursors: array<atomic<u32>>;
 @group(1) @binding(6) var<storage, read_write> out_ranges: array<vec2<u32>>;
 @group(1) @binding(7) var<storage, read_write> out_indices: array<u32>;
-@group(0) @binding(1) var<storage, read> lights: array<Light>;
 
-// Appends light `light` to bin `bin` (count pass: counts; fill pass: writes).
+// Statistics: [0] = lights dropped by a deliberate capacity.
+@group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
+
+// Appends light `light` to bin `bin` (count pass: counts; fill pass: writes, up to the
+// capacity when one is set).
 fn emit(bin: u32, light: u32, fill: bool) {
     if fill {
-        let slot = bin_offsets[bin] + atomicAdd(&bin_cursors[bin], 1u);
-        out_indices[slot] = light;
+        let k = atomicAdd(&bin_cursors[bin], 1u);
+        if cull.capacity == 0u || k < cull.capacity {
+            out_indices[bin_offsets[bin] + k] = light;
+        }
     } else {
         atomicAdd(&bin_counts[bin], 1u);
+    }
+}
+
+// cull.cap: with a capacity, clamps each bin's count to it and counts what is dropped (which
+// lights are dropped depends on the fill order). Runs between the count pass and the scan.
+@compute @workgroup_size(64)
+fn cap_counts(@builtin(global_invocation_id) id: vec3<u32>) {
+    let b = id.y * GROUPS_X * 64u + id.x;
+    if b < cull.bins && cull.capacity != 0u {
+        let c = atomicLoad(&bin_counts[b]);
+        if c > cull.capacity {
+            atomicAdd(&cull_stats[0], c - cull.capacity);
+            atomicStore(&bin_counts[b], cull.capacity);
+        }
     }
 }
 

@@ -70,6 +70,12 @@ fn scatter_finalize(@builtin(global_invocation_id) id: vec3<u32>) {
     if b < cull.bins {
         let end = atomicLoad(&bin_cursors[b]);
         let start = out_ranges[b].x;
-        out_ranges[b] = select(vec2<u32>(0u), vec2<u32>(start, end - start), end > 0u);
+        var count = select(0u, end - start, end > 0u);
+        // A deliberate capacity keeps each tile's lowest-indexed lights and counts the rest.
+        if cull.capacity != 0u && count > cull.capacity {
+            atomicAdd(&cull_stats[0], count - cull.capacity);
+            count = cull.capacity;
+        }
+        out_ranges[b] = vec2<u32>(select(0u, start, count > 0u), count);
     }
 }

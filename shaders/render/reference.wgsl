@@ -2,8 +2,6 @@
 // reference of every strategy and backend. Runs after prepass.depth with depth test `Equal`,
 // so each pixel is shaded once. Besides the HDR colour it writes the shaded surface point and
 // the shading normal (turned towards the viewer: surfaces are two-sided) for the CPU oracles.
-@group(0) @binding(1) var<storage, read> lights: array<Light>;
-@group(0) @binding(2) var<storage, read> materials: array<Material>;
 
 struct ReferenceOut {
     @location(0) color: vec4<f32>,
@@ -16,14 +14,7 @@ struct ReferenceOut {
 @fragment
 fn fs_reference(in: VertexOut) -> ReferenceOut {
     let v = view_dir(in.world);
-    var n = normalize(in.normal);
-    if dot(n, v) < 0.0 {
-        n = -n;
-    }
-    let m = materials[in.material];
-    var c = vec3<f32>(0.0);
-    for (var i = 0u; i < frame.light_count; i++) {
-        c += shade_light(lights[i], in.world, n, v, m);
-    }
+    let n = facing_normal(normalize(in.normal), v);
+    let c = shade_all(in.world, n, v, materials[in.material]);
     return ReferenceOut(vec4<f32>(c, 1.0), vec4<f32>(in.world, 1.0), vec4<f32>(n, 0.0));
 }

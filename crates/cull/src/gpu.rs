@@ -1,6 +1,6 @@
 //! The GPU side: pipelines of every culling pass, and their orchestration for one frame.
 
-use manylights_gpu::shaders::{FRAME, LIGHT, ShaderDef, ShaderFile};
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, ShaderDef, ShaderFile};
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
 use wgpu::util::DeviceExt;
@@ -8,7 +8,7 @@ use wgpu::util::DeviceExt;
 use crate::layout::{CULL_CONSTS, GROUPS_X, GpuCullParams, GpuTileDepth};
 use crate::radix_sort::{RadixSort, SortedIn, key_bits_for};
 use crate::scan::{Scan, groups_2d};
-use crate::{CullError, Strategy};
+use crate::{CullError, CullSettings, Strategy};
 
 const COMMON: ShaderFile = shader_file!("cull/common.wgsl");
 const LISTS: ShaderFile = shader_file!("cull/lists.wgsl");
@@ -18,7 +18,13 @@ const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
 pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
     name: "cull.depth_bounds",
     consts: CULL_CONSTS,
-    files: &[FRAME, LIGHT, COMMON, shader_file!("cull/depth_bounds.wgsl")],
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        COMMON,
+        shader_file!("cull/depth_bounds.wgsl"),
+    ],
 };
 /// `cull.tiled_gather` (also `cull.depth_mask`, with its flag) and `cull.finalize`.
 pub const TILED_GATHER: ShaderDef = ShaderDef {
@@ -27,6 +33,7 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
     files: &[
         FRAME,
         LIGHT,
+        SCENE,
         COMMON,
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
@@ -39,6 +46,7 @@ pub const TILED_SCATTER: ShaderDef = ShaderDef {
     files: &[
         FRAME,
         LIGHT,
+        SCENE,
         COMMON,
         LISTS,
         shader_file!("cull/tiled_scatter.wgsl"),
@@ -51,6 +59,7 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
     files: &[
         FRAME,
         LIGHT,
+        SCENE,
         COMMON,
         LISTS,
         shader_file!("cull/clustered.wgsl"),
@@ -63,6 +72,7 @@ pub const LIGHTS_PER_PIXEL: ShaderDef = ShaderDef {
     files: &[
         FRAME,
         LIGHT,
+        SCENE,
         COMMON,
         LOOKUP,
         shader_file!("cull/lights_per_pixel.wgsl"),
@@ -76,6 +86,7 @@ pub const EXACT: ShaderDef = ShaderDef {
     files: &[
         FRAME,
         LIGHT,
+        SCENE,
         COMMON,
         LOOKUP,
         shader_file!("cull/exact.wgsl"),
@@ -131,6 +142,8 @@ pub struct CullOutput {
     pub indices: wgpu::Buffer,
     /// Total list entries.
     pub total: u32,
+    /// Lights dropped by a deliberate capacity (0 without one).
+    pub dropped: u32,
     /// Per-tile depth data (tiled strategies).
     pub tile_depth: wgpu::Buffer,
     /// Cluster occupancy (clusters with `skip_empty`).
@@ -192,6 +205,7 @@ pub struct Culler {
     clustered_fill: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
+    cap: wgpu::ComputePipeline,
     lights_per_pixel: wgpu::ComputePipeline,
     exact: wgpu::ComputePipeline,
     scatter: [wgpu::ComputePipeline; 4],
@@ -258,7 +272,7 @@ impl Culler {
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let d = &ctx.device;
         let mut entries = vec![entry(0, UNIFORM), entry(1, DEPTH)];
-        entries.extend((2..=9).map(|b| entry(b, storage(false))));
+        entries.extend((2..=10).map(|b| entry(b, storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.group1"),
             entries: &entries,
@@ -276,12 +290,12 @@ impl Culler {
         });
         let scene_layout = &scene.layout;
         let [depth_bounds] = pipelines(d, &DEPTH_BOUNDS, scene_layout, &layout, ["depth_bounds"]);
-        let [gather_count, gather_fill, finalize] = pipelines(
+        let [gather_count, gather_fill, finalize, cap] = pipelines(
             d,
             &TILED_GATHER,
             scene_layout,
             &layout,
-            ["gather_count", "gather_fill", "finalize"],
+            ["gather_count", "gather_fill", "finalize", "cap_counts"],
         );
         let [clustered_count, clustered_fill, occupancy] = pipelines(
             d,
@@ -320,6 +334,7 @@ impl Culler {
             clustered_fill,
             occupancy,
             finalize,
+            cap,
             lights_per_pixel,
             exact,
             scatter,
@@ -329,8 +344,7 @@ impl Culler {
     }
 
     /// Runs `strategy` over the depth buffer `depth` of `scene` (whose frame uniform is set for
-    /// the depth buffer's size), with the camera's near and far distances and the relative
-    /// `slack`. Two submissions: counts and scan, then (with the lists sized exactly from the
+    /// the depth buffer's size) with `settings`. Two submissions: counts and scan, then (with the lists sized exactly from the
     /// total the scan read back) fill and finalize.
     #[expect(
         clippy::too_many_arguments,
@@ -342,14 +356,13 @@ impl Culler {
         scene: &GpuScene,
         depth: &wgpu::Texture,
         strategy: &Strategy,
-        near: f32,
-        far: f32,
-        slack: f32,
+        settings: &CullSettings,
         timer: &mut GpuTimer,
     ) -> Result<CullOutput, CullError> {
         strategy.validate()?;
+        settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
-        let params = strategy.params(w, h, scene.light_count, near, far, slack);
+        let params = strategy.params(w, h, scene.light_count, settings);
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
         let f = Frame::new(self, ctx, scene, depth, params);
         match strategy {
@@ -412,6 +425,16 @@ impl Culler {
             &group_a,
             main,
         );
+        if p.capacity != 0 {
+            f.pass(
+                &mut enc,
+                timer,
+                "cull.cap",
+                &self.cap,
+                &group_a,
+                groups_2d(p.bins.div_ceil(64), GROUPS_X),
+            );
+        }
         let total = f.scan_total(ctx, &self.scan, enc, p.bins, timer)?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
         let group_b = f.group(&indices, &placeholder);
@@ -434,7 +457,7 @@ impl Culler {
         );
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: fill")?;
-        Ok(f.finish(indices, total))
+        Ok(f.finish(indices, total)?)
     }
 
     /// Tiled scatter: per-light pair counts, their scan, the pairs, the radix sort by tile, and
@@ -512,7 +535,7 @@ impl Culler {
         );
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: tiled scatter")?;
-        Ok(f.finish(vals, pairs))
+        Ok(f.finish(vals, pairs)?)
     }
 
     /// The length of the list each pixel reads through the shared lookup (0 for background).
@@ -653,6 +676,7 @@ struct Frame<'a> {
     cursors: wgpu::Buffer,
     ranges: wgpu::Buffer,
     occupancy: wgpu::Buffer,
+    stats: wgpu::Buffer,
 }
 
 impl<'a> Frame<'a> {
@@ -692,6 +716,7 @@ impl<'a> Frame<'a> {
             cursors: placeholder(ctx),
             ranges: placeholder(ctx),
             occupancy: placeholder(ctx),
+            stats: placeholder(ctx),
         };
         f.tile_depth = f.buf("cull.tile_depth", tiles * 16);
         f.counts = f.buf("cull.bin_counts", (items + 1) * 4);
@@ -699,6 +724,7 @@ impl<'a> Frame<'a> {
         f.cursors = f.buf("cull.bin_cursors", bins * 4);
         f.ranges = f.buf("cull.bin_ranges", bins * 8);
         f.occupancy = f.buf("cull.occupancy", bins * 4);
+        f.stats = f.buf("cull.stats", 16);
         f
     }
 
@@ -739,6 +765,7 @@ impl<'a> Frame<'a> {
                     b(7, indices),
                     b(8, &self.occupancy),
                     b(9, pair_keys),
+                    b(10, &self.stats),
                 ],
             })
     }
@@ -750,7 +777,13 @@ impl<'a> Frame<'a> {
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
         if label.ends_with("count") {
-            for b in [&self.counts, &self.cursors, &self.occupancy, &self.ranges] {
+            for b in [
+                &self.counts,
+                &self.cursors,
+                &self.occupancy,
+                &self.ranges,
+                &self.stats,
+            ] {
                 enc.clear_buffer(b, 0, None);
             }
         }
@@ -793,8 +826,16 @@ impl<'a> Frame<'a> {
         Ok(u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")))
     }
 
-    fn finish(self, indices: wgpu::Buffer, total: u32) -> CullOutput {
-        CullOutput {
+    /// The output; reads back the dropped count where a capacity was set.
+    fn finish(self, indices: wgpu::Buffer, total: u32) -> Result<CullOutput, GpuError> {
+        let dropped = if self.params.capacity != 0 {
+            let bytes = readback::read_buffer(self.ctx, &self.stats, 0, 4)?;
+            u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes"))
+        } else {
+            0
+        };
+        Ok(CullOutput {
+            dropped,
             params: self.params,
             params_buf: self.params_buf,
             ranges: self.ranges,
@@ -802,7 +843,7 @@ impl<'a> Frame<'a> {
             total,
             tile_depth: self.tile_depth,
             occupancy: self.occupancy,
-        }
+        })
     }
 }
 

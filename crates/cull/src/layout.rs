@@ -81,8 +81,12 @@ pub struct GpuCullParams {
     pub slack: f32,
     /// Slice scale: slices / (far - near) or slices / ln(far / near).
     pub slice_scale: f32,
+    /// Deliberate cap on each list's length (0: none).
+    pub capacity: u32,
+    /// Padding to 16 bytes.
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(size_of::<GpuCullParams>() == 48);
+const _: () = assert!(size_of::<GpuCullParams>() == 64);
 
 /// Mirror of WGSL `TileDepth` (`shaders/cull/common.wgsl`).
 #[repr(C)]

@@ -154,17 +154,20 @@ impl Strategy {
         Ok(())
     }
 
-    /// The culling parameters for a `width` x `height` target, `lights` lights and a camera with
-    /// the given near and far distances.
+    /// The culling parameters for a `width` x `height` target and `lights` lights.
     pub fn params(
         &self,
         width: u32,
         height: u32,
         lights: u32,
-        near: f32,
-        far: f32,
-        slack: f32,
+        settings: &CullSettings,
     ) -> GpuCullParams {
+        let CullSettings {
+            near,
+            far,
+            slack,
+            capacity,
+        } = *settings;
         let ts = self.tile_size();
         let (tiles_x, tiles_y) = (width.div_ceil(ts), height.div_ceil(ts));
         let (slices, slicing, flags) = match *self {
@@ -209,6 +212,54 @@ impl Strategy {
             far,
             slack,
             slice_scale,
+            capacity: capacity.unwrap_or(0),
+            _pad: [0; 3],
         }
+    }
+}
+
+/// Settings of a culling run that are not the strategy's own.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CullSettings {
+    /// The camera's near plane distance.
+    pub near: f32,
+    /// The camera's far plane distance.
+    pub far: f32,
+    /// Conservative slack, relative to each light's distance (see `layout::DEFAULT_SLACK`).
+    pub slack: f32,
+    /// A deliberate cap on each list's length; lights beyond it are dropped and counted in
+    /// [`CullOutput::dropped`]. `None` (the default): lists are sized exactly, nothing dropped.
+    pub capacity: Option<u32>,
+}
+
+impl CullSettings {
+    /// The settings for `camera`, with the default slack and no capacity.
+    pub fn for_camera(camera: &manylights_scene::Camera) -> Self {
+        let (near, far) = camera.near_far();
+        Self {
+            near,
+            far,
+            slack: layout::DEFAULT_SLACK,
+            capacity: None,
+        }
+    }
+
+    /// Checks the values.
+    pub fn validate(&self) -> Result<(), CullError> {
+        if !(self.slack.is_finite() && self.slack >= 0.0) {
+            return Err(CullError::InvalidParameter {
+                field: "slack",
+                value: self.slack.to_string(),
+                accepted: "a finite value >= 0",
+            });
+        }
+        if self.capacity == Some(0) {
+            return Err(CullError::InvalidParameter {
+                field: "capacity",
+                value: "0".into(),
+                accepted: "an integer >= 1, or none",
+            });
+        }
+        Ok(())
     }
 }

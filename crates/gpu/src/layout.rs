@@ -13,6 +13,10 @@ pub const LIGHT_KIND_POINT: u32 = 0;
 /// `Light.kind` of a spot light.
 pub const LIGHT_KIND_SPOT: u32 = 1;
 
+/// `Frame.flags`: shade with the infinite-range falloff (no radius cut-off), for the reference
+/// that measures what the cut-off costs.
+pub const FRAME_FLAG_INFINITE_RANGE: u32 = 1;
+
 /// WGSL constants generated from their Rust definitions; prepended to every composed shader.
 pub fn wgsl_prelude() -> String {
     format!(
@@ -22,7 +26,8 @@ pub fn wgsl_prelude() -> String {
          const SPOT_EPS: f32 = {spot_eps:?};\n\
          const SHININESS: f32 = {shininess:?};\n\
          const LIGHT_KIND_POINT: u32 = {LIGHT_KIND_POINT}u;\n\
-         const LIGHT_KIND_SPOT: u32 = {LIGHT_KIND_SPOT}u;\n",
+         const LIGHT_KIND_SPOT: u32 = {LIGHT_KIND_SPOT}u;\n\
+         const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n",
         pi = std::f32::consts::PI,
         d_min = light::D_MIN as f32,
         spot_eps = light::SPOT_EPS as f32,
@@ -40,16 +45,20 @@ pub struct GpuFrame {
     pub view_from_world: Mat4,
     /// View to clip.
     pub clip_from_view: Mat4,
+    /// Inverse of `view_from_world`.
+    pub world_from_view: Mat4,
     /// Perspective: (eye, 1); orthographic: (unit direction towards the viewer, 0).
     pub eye: Vec4,
     /// (width, height, 1 / width, 1 / height).
     pub viewport: Vec4,
     /// Number of lights in the light buffer.
     pub light_count: u32,
+    /// `FRAME_FLAG_*` bits.
+    pub flags: u32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
-const _: () = assert!(size_of::<GpuFrame>() == 240);
+const _: () = assert!(size_of::<GpuFrame>() == 304);
 
 impl GpuFrame {
     /// The frame constants of `camera` rendering a `width` x `height` target.
@@ -66,10 +75,12 @@ impl GpuFrame {
             clip_from_world: clip_from_view * view_from_world,
             view_from_world,
             clip_from_view,
+            world_from_view: view_from_world.inverse(),
             eye,
             viewport: Vec4::new(w, h, 1.0 / w, 1.0 / h),
             light_count,
-            _pad: [0; 3],
+            flags: 0,
+            _pad: [0; 2],
         }
     }
 }

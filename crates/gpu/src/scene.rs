@@ -170,9 +170,12 @@ impl GpuScene {
         })
     }
 
-    /// Rewrites the frame uniform for another camera or resolution.
-    pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32) {
-        let frame = GpuFrame::new(camera, width, height, self.light_count);
+    /// Rewrites the frame uniform for another camera, resolution or flags.
+    pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
+        let frame = GpuFrame {
+            flags,
+            ..GpuFrame::new(camera, width, height, self.light_count)
+        };
         ctx.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
     }

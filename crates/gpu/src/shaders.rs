@@ -39,6 +39,8 @@ pub const FRAME: ShaderFile = shader_file!("common/frame.wgsl");
 pub const VERTEX: ShaderFile = shader_file!("common/vertex.wgsl");
 /// Light struct, falloff, spot cone.
 pub const LIGHT: ShaderFile = shader_file!("common/light.wgsl");
+/// Material struct and the scene's light and material buffers (after LIGHT).
+pub const SCENE: ShaderFile = shader_file!("common/scene.wgsl");
 /// Material and shading model.
 pub const SHADING: ShaderFile = shader_file!("common/shading.wgsl");
 

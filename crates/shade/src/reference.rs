@@ -4,7 +4,7 @@
 
 use manylights_gpu::layout::VERTEX_LAYOUT;
 use manylights_gpu::prepass::{DEPTH_FORMAT, DepthPrepass, PRIMITIVE, depth_target};
-use manylights_gpu::shaders::{FRAME, LIGHT, SHADING, ShaderDef, VERTEX};
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
 
@@ -17,6 +17,7 @@ pub const SHADER: ShaderDef = ShaderDef {
     files: &[
         FRAME,
         LIGHT,
+        SCENE,
         SHADING,
         VERTEX,
         shader_file!("render/reference.wgsl"),

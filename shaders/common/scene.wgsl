@@ -1,0 +1,11 @@
+// The scene's storage buffers, group 0 of every pass (binding 0 is the frame, frame.wgsl).
+// Host side: manylights_gpu::GpuScene.
+
+// What the shading model reads of a material. Host mirror: manylights_gpu::layout::GpuMaterial.
+struct Material {
+    base_color: vec3<f32>,
+    specular: f32,
+}
+
+@group(0) @binding(1) var<storage, read> lights: array<Light>;
+@group(0) @binding(2) var<storage, read> materials: array<Material>;
