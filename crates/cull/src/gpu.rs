@@ -344,12 +344,8 @@ impl Culler {
     }
 
     /// Runs `strategy` over the depth buffer `depth` of `scene` (whose frame uniform is set for
-    /// the depth buffer's size) with `settings`. Two submissions: counts and scan, then (with the lists sized exactly from the
-    /// total the scan read back) fill and finalize.
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "one frame's inputs, each distinct"
-    )]
+    /// the depth buffer's size) with `settings`. Two submissions: counts and scan, then (with
+    /// the lists sized exactly from the total the scan read back) fill and finalize.
     pub fn run(
         &self,
         ctx: &GpuContext,
