@@ -10,9 +10,12 @@ use crate::radix_sort::{RadixSort, SortedIn, key_bits_for};
 use crate::scan::{Scan, groups_2d};
 use crate::{CullError, CullSettings, Strategy};
 
-const COMMON: ShaderFile = shader_file!("cull/common.wgsl");
-const LISTS: ShaderFile = shader_file!("cull/lists.wgsl");
-const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
+/// Shared culling geometry and parameters.
+pub const COMMON: ShaderFile = shader_file!("cull/common.wgsl");
+/// List buffers of the culling passes.
+pub const LISTS: ShaderFile = shader_file!("cull/lists.wgsl");
+/// The pixel-to-list lookup of every list consumer.
+pub const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
 
 /// `cull.depth_bounds`.
 pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {

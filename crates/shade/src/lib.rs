@@ -1,15 +1,24 @@
 //! Shading for manylights.
 //!
 //! Owns: the brute-force reference renderer ([`reference`]), the accuracy reference of every
-//! later strategy and backend; and the images it produces with their output to EXR and
-//! tonemapped PNG ([`image_out`]). The forward and deferred backends join this crate later.
-//! Depends on the scene and GPU crates.
+//! strategy and backend; the shading backends ([`backends`]: forward, deferred, naive forward)
+//! over any culling strategy; image error metrics ([`accuracy`]: max abs error, RMSE, PSNR,
+//! FLIP); and HDR images with their output to EXR and tonemapped PNG ([`image_out`]).
+//! Depends on the scene, GPU and culling crates.
 
+pub mod accuracy;
+pub mod backends;
 pub mod image_out;
 pub mod reference;
 
+pub use backends::{Backend, Renderer, ShadeOutput};
 pub use image_out::HdrImage;
 pub use reference::{ReferenceFrame, ReferenceRenderer};
 
 /// Every shader this crate defines (validated by naga in `tests/shaders.rs`).
-pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[reference::SHADER];
+pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
+    reference::SHADER,
+    backends::FORWARD,
+    backends::GBUFFER,
+    backends::DEFERRED,
+];

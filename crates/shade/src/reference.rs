@@ -98,6 +98,29 @@ impl ReferenceRenderer {
         }
     }
 
+    /// Renders with the infinite-range falloff (no radius cut-off): the reference that measures
+    /// what the cut-off itself costs. Sets the frame for `camera` at `width` x `height`, and
+    /// restores the normal frame afterwards.
+    pub fn render_infinite(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        camera: &manylights_scene::Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<ReferenceFrame, GpuError> {
+        scene.set_view(
+            ctx,
+            camera,
+            width,
+            height,
+            manylights_gpu::layout::FRAME_FLAG_INFINITE_RANGE,
+        );
+        let frame = self.render(ctx, scene, width, height);
+        scene.set_view(ctx, camera, width, height, 0);
+        frame
+    }
+
     /// Renders `scene` (whose frame uniform is set for `width` x `height`) and reads back
     /// everything.
     pub fn render(

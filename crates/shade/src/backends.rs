@@ -1,0 +1,575 @@
+//! The shading backends: forward (Forward+), deferred, and naive forward, each over any culling
+//! strategy (naive forward culls nothing), with per-pass GPU timing.
+//!
+//! - `forward`: `prepass.depth`, culling, `shade.forward` (the geometry again with depth test
+//!   `Equal`, a loop over each pixel's list).
+//! - `deferred`: `shade.gbuffer` (depth, shading normal with linear view depth, material index),
+//!   culling on its depth, `shade.deferred` (a compute pass over pixels reading the lists).
+//! - `naive_forward`: `prepass.depth`, `shade.naive` (every light at every fragment).
+//!
+//! All three use the one shading model of `shaders/common/shading.wgsl`.
+
+use manylights_cull::gpu::{COMMON, LOOKUP};
+use manylights_cull::layout::CULL_CONSTS;
+use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
+use manylights_gpu::layout::VERTEX_LAYOUT;
+use manylights_gpu::prepass::{DEPTH_FORMAT, DepthPrepass, PRIMITIVE, depth_target};
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
+use manylights_gpu::timing::{GpuTimer, PassTiming};
+use manylights_gpu::{GpuContext, GpuScene, readback, shader_file};
+use serde::{Deserialize, Serialize};
+
+use crate::HdrImage;
+
+/// `shade.forward` and `shade.naive`.
+pub const FORWARD: ShaderDef = ShaderDef {
+    name: "shade.forward",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        VERTEX,
+        COMMON,
+        LOOKUP,
+        shader_file!("render/forward.wgsl"),
+    ],
+};
+/// `shade.gbuffer`.
+pub const GBUFFER: ShaderDef = ShaderDef {
+    name: "shade.gbuffer",
+    consts: &[],
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        VERTEX,
+        shader_file!("render/gbuffer.wgsl"),
+    ],
+};
+/// `shade.deferred`.
+pub const DEFERRED: ShaderDef = ShaderDef {
+    name: "shade.deferred",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        COMMON,
+        LOOKUP,
+        shader_file!("render/deferred.wgsl"),
+    ],
+};
+
+const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// G-buffer bytes per pixel: normal and view depth (16), material index (4), depth (4).
+pub const GBUFFER_BYTES_PER_PIXEL: u64 = 24;
+
+/// A shading backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Backend {
+    /// Forward+: depth prepass, culling, forward shading over the lists.
+    Forward,
+    /// Deferred: G-buffer, culling, a compute lighting pass over the lists.
+    Deferred,
+    /// Every light at every fragment, no culling (baseline).
+    NaiveForward,
+}
+
+impl Backend {
+    /// The backend's name (result column value).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Forward => "forward",
+            Self::Deferred => "deferred",
+            Self::NaiveForward => "naive_forward",
+        }
+    }
+
+    /// Every backend.
+    pub const ALL: [Backend; 3] = [Self::Forward, Self::Deferred, Self::NaiveForward];
+}
+
+/// What one frame of a backend produced.
+pub struct ShadeOutput {
+    /// HDR radiance (alpha 1 where covered).
+    pub color: HdrImage,
+    /// GPU time of every pass, in order; `None` without timestamp queries.
+    pub timings: Option<Vec<PassTiming>>,
+    /// The light lists (not for naive forward).
+    pub lists: Option<CullOutput>,
+    /// The depth buffer the lists were built from.
+    pub depth: wgpu::Texture,
+    /// G-buffer bytes (deferred only; 0 otherwise).
+    pub gbuffer_bytes: u64,
+}
+
+/// Pipelines of every backend for one scene layout, and the culler.
+pub struct Renderer {
+    /// The culling strategies.
+    pub culler: Culler,
+    prepass: DepthPrepass,
+    forward: wgpu::RenderPipeline,
+    naive: wgpu::RenderPipeline,
+    gbuffer: wgpu::RenderPipeline,
+    deferred: wgpu::ComputePipeline,
+    forward_lists: wgpu::BindGroupLayout,
+    deferred_lists: wgpu::BindGroupLayout,
+    deferred_gbuffer: wgpu::BindGroupLayout,
+}
+
+fn layout_entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
+    let buffer = |ty| wgpu::BindingType::Buffer {
+        ty,
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    };
+    vec![
+        layout_entry(0, visibility, buffer(wgpu::BufferBindingType::Uniform)),
+        layout_entry(
+            1,
+            visibility,
+            buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+        ),
+        layout_entry(
+            2,
+            visibility,
+            buffer(wgpu::BufferBindingType::Storage { read_only: true }),
+        ),
+    ]
+}
+
+fn texture(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type,
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: false,
+    }
+}
+
+impl Renderer {
+    /// Builds every pipeline for scenes laid out as [`GpuScene`].
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        let d = &ctx.device;
+        let forward_lists = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade.forward.lists"),
+            entries: &lists_entries(wgpu::ShaderStages::FRAGMENT),
+        });
+        let mut entries = lists_entries(wgpu::ShaderStages::COMPUTE);
+        entries.push(layout_entry(
+            3,
+            wgpu::ShaderStages::COMPUTE,
+            texture(wgpu::TextureSampleType::Depth),
+        ));
+        let deferred_lists = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade.deferred.lists"),
+            entries: &entries,
+        });
+        let deferred_gbuffer = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade.deferred.gbuffer"),
+            entries: &[
+                layout_entry(
+                    0,
+                    wgpu::ShaderStages::COMPUTE,
+                    texture(wgpu::TextureSampleType::Float { filterable: false }),
+                ),
+                layout_entry(
+                    1,
+                    wgpu::ShaderStages::COMPUTE,
+                    texture(wgpu::TextureSampleType::Uint),
+                ),
+                layout_entry(
+                    2,
+                    wgpu::ShaderStages::COMPUTE,
+                    wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: HDR,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                ),
+            ],
+        });
+        let pl = |label, groups: &[Option<&wgpu::BindGroupLayout>]| {
+            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some(label),
+                bind_group_layouts: groups,
+                immediate_size: 0,
+            })
+        };
+        let raster = |label: &str,
+                      module: &wgpu::ShaderModule,
+                      fs: &str,
+                      layout: &wgpu::PipelineLayout,
+                      targets: &[Option<wgpu::ColorTargetState>],
+                      equal: bool| {
+            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(layout),
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some("vs_main"),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(VERTEX_LAYOUT)],
+                },
+                primitive: PRIMITIVE,
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(!equal),
+                    depth_compare: Some(if equal {
+                        wgpu::CompareFunction::Equal
+                    } else {
+                        wgpu::CompareFunction::Less
+                    }),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: Default::default(),
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let target = |format| {
+            Some(wgpu::ColorTargetState {
+                format,
+                blend: None,
+                write_mask: wgpu::ColorWrites::ALL,
+            })
+        };
+        let fwd_module = FORWARD.create(d);
+        let forward = raster(
+            "shade.forward",
+            &fwd_module,
+            "fs_forward",
+            &pl(
+                "shade.forward",
+                &[Some(&scene.layout), Some(&forward_lists)],
+            ),
+            &[target(HDR)],
+            true,
+        );
+        let naive = raster(
+            "shade.naive",
+            &fwd_module,
+            "fs_naive",
+            &pl("shade.naive", &[Some(&scene.layout)]),
+            &[target(HDR)],
+            true,
+        );
+        let gb_module = GBUFFER.create(d);
+        let gbuffer = raster(
+            "shade.gbuffer",
+            &gb_module,
+            "fs_gbuffer",
+            &pl("shade.gbuffer", &[Some(&scene.layout)]),
+            &[target(GB_NORMAL_DEPTH), target(GB_MATERIAL)],
+            false,
+        );
+        let def_module = DEFERRED.create(d);
+        let deferred = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("shade.deferred"),
+            layout: Some(&pl(
+                "shade.deferred",
+                &[
+                    Some(&scene.layout),
+                    Some(&deferred_lists),
+                    Some(&deferred_gbuffer),
+                ],
+            )),
+            module: &def_module,
+            entry_point: Some("deferred_shade"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self {
+            culler: Culler::new(ctx, scene),
+            prepass: DepthPrepass::new(ctx, scene),
+            forward,
+            naive,
+            gbuffer,
+            deferred,
+            forward_lists,
+            deferred_lists,
+            deferred_gbuffer,
+        }
+    }
+
+    /// Renders one frame of `scene` (its frame uniform set for `width` x `height`) with
+    /// `backend`; `strategy` and `settings` are ignored by naive forward.
+    pub fn render(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        backend: Backend,
+        strategy: &Strategy,
+        settings: &CullSettings,
+        (width, height): (u32, u32),
+    ) -> Result<ShadeOutput, CullError> {
+        ctx.check_resolution(width, height)?;
+        let d = &ctx.device;
+        let tex = |label, format, usage| {
+            d.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let color = tex(
+            "shade.color",
+            HDR,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+        );
+        let color_view = color.create_view(&Default::default());
+        let depth = depth_target(ctx, width, height);
+        let depth_view = depth.create_view(&Default::default());
+        let mut timer = GpuTimer::new(ctx, 64);
+        let mut gbuffer_bytes = 0;
+        let lists = match backend {
+            Backend::NaiveForward => {
+                let mut enc = d.create_command_encoder(&Default::default());
+                self.prepass
+                    .encode(&mut enc, scene, &depth_view, &mut timer);
+                self.raster_pass(
+                    &mut enc,
+                    &mut timer,
+                    "shade.naive",
+                    &self.naive,
+                    scene,
+                    &[&color_view],
+                    &depth_view,
+                    true,
+                    None,
+                );
+                timer.resolve(&mut enc);
+                ctx.submit_and_wait(enc, "naive forward")?;
+                None
+            }
+            Backend::Forward => {
+                let mut enc = d.create_command_encoder(&Default::default());
+                self.prepass
+                    .encode(&mut enc, scene, &depth_view, &mut timer);
+                ctx.submit_and_wait(enc, "depth prepass")?;
+                let lists = self
+                    .culler
+                    .run(ctx, scene, &depth, strategy, settings, &mut timer)?;
+                let group = self.lists_group(ctx, &self.forward_lists, &lists, None);
+                let mut enc = d.create_command_encoder(&Default::default());
+                self.raster_pass(
+                    &mut enc,
+                    &mut timer,
+                    "shade.forward",
+                    &self.forward,
+                    scene,
+                    &[&color_view],
+                    &depth_view,
+                    true,
+                    Some(&group),
+                );
+                timer.resolve(&mut enc);
+                ctx.submit_and_wait(enc, "forward shading")?;
+                Some(lists)
+            }
+            Backend::Deferred => {
+                let usage =
+                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+                let (gb_nd, gb_mat) = (
+                    tex("gbuffer.normal_depth", GB_NORMAL_DEPTH, usage),
+                    tex("gbuffer.material", GB_MATERIAL, usage),
+                );
+                let views = [
+                    gb_nd.create_view(&Default::default()),
+                    gb_mat.create_view(&Default::default()),
+                ];
+                gbuffer_bytes = u64::from(width) * u64::from(height) * GBUFFER_BYTES_PER_PIXEL;
+                let mut enc = d.create_command_encoder(&Default::default());
+                self.raster_pass(
+                    &mut enc,
+                    &mut timer,
+                    "shade.gbuffer",
+                    &self.gbuffer,
+                    scene,
+                    &[&views[0], &views[1]],
+                    &depth_view,
+                    false,
+                    None,
+                );
+                ctx.submit_and_wait(enc, "G-buffer")?;
+                let lists = self
+                    .culler
+                    .run(ctx, scene, &depth, strategy, settings, &mut timer)?;
+                let depth_only = depth.create_view(&wgpu::TextureViewDescriptor {
+                    aspect: wgpu::TextureAspect::DepthOnly,
+                    ..Default::default()
+                });
+                let group1 = self.lists_group(ctx, &self.deferred_lists, &lists, Some(&depth_only));
+                let group2 = d.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shade.deferred.gbuffer"),
+                    layout: &self.deferred_gbuffer,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: wgpu::BindingResource::TextureView(&views[0]),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 1,
+                            resource: wgpu::BindingResource::TextureView(&views[1]),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 2,
+                            resource: wgpu::BindingResource::TextureView(&color_view),
+                        },
+                    ],
+                });
+                let mut enc = d.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("shade.deferred"),
+                        timestamp_writes: timer.compute_pass("shade.deferred"),
+                    });
+                    pass.set_pipeline(&self.deferred);
+                    pass.set_bind_group(0, &scene.bind_group, &[]);
+                    pass.set_bind_group(1, &group1, &[]);
+                    pass.set_bind_group(2, &group2, &[]);
+                    pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+                }
+                timer.resolve(&mut enc);
+                ctx.submit_and_wait(enc, "deferred lighting")?;
+                Some(lists)
+            }
+        };
+        let bytes = readback::read_texture(ctx, &color, wgpu::TextureAspect::All)?;
+        Ok(ShadeOutput {
+            color: HdrImage::from_bytes(width, height, &bytes),
+            timings: timer.read(ctx)?,
+            lists,
+            depth,
+            gbuffer_bytes,
+        })
+    }
+
+    fn lists_group(
+        &self,
+        ctx: &GpuContext,
+        layout: &wgpu::BindGroupLayout,
+        lists: &CullOutput,
+        depth: Option<&wgpu::TextureView>,
+    ) -> wgpu::BindGroup {
+        let mut entries = vec![
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: lists.params_buf.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: lists.ranges.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: lists.indices.as_entire_binding(),
+            },
+        ];
+        if let Some(view) = depth {
+            entries.push(wgpu::BindGroupEntry {
+                binding: 3,
+                resource: wgpu::BindingResource::TextureView(view),
+            });
+        }
+        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shade.lists"),
+            layout,
+            entries: &entries,
+        })
+    }
+
+    /// A raster pass drawing the scene into `targets` (cleared), testing depth with `Equal`
+    /// against the prepass (`equal`) or clearing and writing it.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "a pass: where, what, into which targets, with which lists"
+    )]
+    fn raster_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipeline: &wgpu::RenderPipeline,
+        scene: &GpuScene,
+        targets: &[&wgpu::TextureView],
+        depth: &wgpu::TextureView,
+        equal: bool,
+        lists: Option<&wgpu::BindGroup>,
+    ) {
+        let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = targets
+            .iter()
+            .map(|view| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(label),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: if equal {
+                        wgpu::LoadOp::Load
+                    } else {
+                        wgpu::LoadOp::Clear(1.0)
+                    },
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.render_pass(label),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(pipeline);
+        if let Some(group) = lists {
+            pass.set_bind_group(1, group, &[]);
+        }
+        scene.draw(&mut pass);
+    }
+}

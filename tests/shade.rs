@@ -1,0 +1,236 @@
+//! The shading backends over every culling strategy, against the brute-force reference, on a
+//! real Vulkan device (lavapipe in CI).
+//!
+//! Tolerance: maximum absolute error <= 1e-4 of the reference's peak and mean FLIP < 1e-3. Forward
+//! shading evaluates the same f32 expressions at the same interpolated points as the reference,
+//! summing fewer (exactly zero) terms in another order; deferred reconstructs the point from the
+//! G-buffer's f32 view depth. Both stay within rounding of the reference (the measured maxima are
+//! printed).
+
+mod common;
+
+use manylights_cull::{CullSettings, Slicing, Strategy};
+use manylights_gpu::GpuScene;
+use manylights_gpu::timing::PassKind;
+use manylights_scene::procedural::ProceduralScene;
+use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
+use manylights_shade::accuracy::{ImageError, compare};
+use manylights_shade::{Backend, ReferenceRenderer, Renderer, ShadeOutput};
+
+fn scene(name: &str) -> Scene {
+    let mut s = ProceduralScene::from_name(name).unwrap().build().unwrap();
+    let r = s.light_bounds.extent().max_element() / 8.0;
+    s.lights = LightSpec {
+        generator: LightGenerator::LightField,
+        count: 160,
+        seed: 3,
+        radius: RadiusRule::Fixed(r),
+        intensity: r * r * 0.5,
+        spot_fraction: 0.25,
+        spot_outer_deg: 40.0,
+    }
+    .generate(&s)
+    .unwrap();
+    s
+}
+
+fn strategies() -> [Strategy; 4] {
+    [
+        Strategy::TiledGather { tile_size: 16 },
+        Strategy::TiledScatter { tile_size: 8 },
+        Strategy::DepthMask { tile_size: 16 },
+        Strategy::Clustered {
+            tile_size: 16,
+            slices: 16,
+            slicing: Slicing::Exponential,
+            skip_empty: true,
+        },
+    ]
+}
+
+fn within_tolerance(e: &ImageError) -> bool {
+    e.max_abs_error <= 1e-4 * e.peak && e.flip_mean < 1e-3
+}
+
+fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
+    let t = out.timings.as_ref().unwrap_or_else(|| {
+        panic!("{what}: no timings (lavapipe and NVIDIA have timestamp queries)")
+    });
+    let expect_raster: &[&str] = match backend {
+        Backend::Forward => &["prepass.depth", "shade.forward"],
+        Backend::Deferred => &["shade.gbuffer"],
+        Backend::NaiveForward => &["prepass.depth", "shade.naive"],
+    };
+    for name in expect_raster {
+        assert!(
+            t.iter()
+                .any(|p| p.label == *name && p.kind == PassKind::Raster),
+            "{what}: no raster pass {name} in {t:?}"
+        );
+    }
+    if backend == Backend::Deferred {
+        assert!(
+            t.iter()
+                .any(|p| p.label == "shade.deferred" && p.kind == PassKind::Compute),
+            "{what}: no compute lighting pass"
+        );
+    }
+    if backend != Backend::NaiveForward {
+        assert!(
+            t.iter()
+                .any(|p| p.label.starts_with("cull.") && p.kind == PassKind::Compute),
+            "{what}: no culling pass"
+        );
+    }
+    for p in t {
+        assert!(
+            p.ms > 0.0 && p.ms.is_finite(),
+            "{what}: pass {} took {} ms",
+            p.label,
+            p.ms
+        );
+    }
+}
+
+/// Every strategy x backend (and naive forward) renders `atrium` and `pillars` within the
+/// tolerance of the reference, at 64 x 48 (a multiple of every tile size) and 70 x 45 (of none);
+/// forward and deferred agree within it; every pass is timed.
+#[test]
+fn every_strategy_and_backend_matches_the_reference() {
+    let ctx = common::gpu();
+    let mut worst = [0.0f64; 2];
+    for name in ["atrium", "pillars"] {
+        let s = scene(name);
+        for (w, h) in [(64, 48), (70, 45)] {
+            let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+            let reference = ReferenceRenderer::new(&ctx, &gpu_scene)
+                .render(&ctx, &gpu_scene, w, h)
+                .unwrap()
+                .color;
+            assert!(reference.peak() > 0.0, "{name}: the reference is black");
+            let renderer = Renderer::new(&ctx, &gpu_scene);
+            let settings = CullSettings::for_camera(&s.camera);
+            let naive = renderer
+                .render(
+                    &ctx,
+                    &gpu_scene,
+                    Backend::NaiveForward,
+                    &strategies()[0],
+                    &settings,
+                    (w, h),
+                )
+                .unwrap();
+            let e = compare(&naive.color, &reference, 1.0);
+            assert!(within_tolerance(&e), "{name} {w}x{h} naive: {e:?}");
+            check_timings(&naive, &format!("{name} naive"), Backend::NaiveForward);
+            for strategy in strategies() {
+                let mut images = Vec::new();
+                for backend in [Backend::Forward, Backend::Deferred] {
+                    let what = format!("{name} {w}x{h} {} {}", strategy.name(), backend.name());
+                    let out = renderer
+                        .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
+                        .unwrap();
+                    let e = compare(&out.color, &reference, 1.0);
+                    let k = usize::from(backend == Backend::Deferred);
+                    worst[k] = worst[k].max(e.max_abs_error / e.peak);
+                    assert!(within_tolerance(&e), "{what}: {e:?}");
+                    assert_eq!(out.color.non_finite_count(), 0, "{what}: NaN or Inf");
+                    assert_eq!(out.lists.as_ref().unwrap().dropped, 0, "{what}");
+                    check_timings(&out, &what, backend);
+                    if backend == Backend::Deferred {
+                        assert_eq!(
+                            out.gbuffer_bytes,
+                            u64::from(w * h) * 24,
+                            "{what}: G-buffer bytes"
+                        );
+                    }
+                    images.push(out.color);
+                }
+                let e = compare(&images[1], &images[0], 1.0);
+                assert!(
+                    within_tolerance(&e),
+                    "{name} {w}x{h} {}: deferred vs forward {e:?}",
+                    strategy.name()
+                );
+            }
+        }
+    }
+    println!(
+        "worst max abs error: forward {:.2e}, deferred {:.2e} of the peak",
+        worst[0], worst[1]
+    );
+}
+
+/// A deliberate capacity drops lights; the results say how many, and the loss is visible as
+/// image error.
+#[test]
+fn capacity_cap_reports_dropped_lights_and_error() {
+    let ctx = common::gpu();
+    let s = scene("atrium");
+    let (w, h) = (64, 48);
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    let reference = ReferenceRenderer::new(&ctx, &gpu_scene)
+        .render(&ctx, &gpu_scene, w, h)
+        .unwrap()
+        .color;
+    let renderer = Renderer::new(&ctx, &gpu_scene);
+    let settings = CullSettings {
+        capacity: Some(2),
+        ..CullSettings::for_camera(&s.camera)
+    };
+    for backend in [Backend::Forward, Backend::Deferred] {
+        let out = renderer
+            .render(
+                &ctx,
+                &gpu_scene,
+                backend,
+                &Strategy::TiledGather { tile_size: 16 },
+                &settings,
+                (w, h),
+            )
+            .unwrap();
+        let dropped = out.lists.as_ref().unwrap().dropped;
+        let e = compare(&out.color, &reference, 1.0);
+        assert!(
+            dropped > 0,
+            "{}: a capacity of 2 must drop lights here",
+            backend.name()
+        );
+        assert!(
+            e.max_abs_error > 1e-3 * e.peak,
+            "{}: {dropped} dropped lights but no visible error: {e:?}",
+            backend.name()
+        );
+    }
+}
+
+/// The infinite-range reference differs from the windowed one (the cut-off has a cost), and
+/// only by adding light.
+#[test]
+fn infinite_range_reference_measures_the_cutoff() {
+    let ctx = common::gpu();
+    let s = scene("pillars");
+    let (w, h) = (48, 32);
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    let r = ReferenceRenderer::new(&ctx, &gpu_scene);
+    let windowed = r.render(&ctx, &gpu_scene, w, h).unwrap().color;
+    let infinite = r
+        .render_infinite(&ctx, &gpu_scene, &s.camera, w, h)
+        .unwrap()
+        .color;
+    let again = r.render(&ctx, &gpu_scene, w, h).unwrap().color;
+    assert_eq!(
+        windowed.data, again.data,
+        "the frame flags must be restored"
+    );
+    let e = compare(&windowed, &infinite, 1.0);
+    assert!(e.max_abs_error > 0.0 && e.psnr_db.is_finite(), "{e:?}");
+    for (a, b) in windowed.data.iter().zip(&infinite.data) {
+        for c in 0..3 {
+            assert!(
+                b[c] >= a[c] * (1.0 - 1e-5),
+                "infinite range must not darken a pixel: {a:?} vs {b:?}"
+            );
+        }
+    }
+}
