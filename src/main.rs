@@ -16,8 +16,8 @@ use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::procedural::{self, ProceduralScene};
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
-use manylights_shade::ReferenceRenderer;
 use manylights_shade::image_out::write_atomic;
+use manylights_shade::{Backend, ReferenceRenderer, Renderer, accuracy};
 
 /// Light-culling research workbench: culling strategies and shading backends on wgpu,
 /// measured for speed and for exactness against a brute-force reference.
@@ -31,7 +31,9 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Render a scene with the brute-force reference renderer (every light at every pixel, no
-    /// culling) and write the HDR image (EXR) and a tonemapped PNG.
+    /// culling) or with a shading backend over a culling strategy, and write the HDR image
+    /// (EXR), a tonemapped PNG and, for a backend, a heatmap of lights evaluated per pixel.
+    /// --compare prints the image error against the reference and the infinite-range reference.
     ///
     /// Lights are generated deterministically from --seed and added to any lights the scene
     /// holds (glTF KHR_lights_punctual). The output files are written atomically: a failed run
@@ -91,7 +93,20 @@ struct SceneArgs {
 struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Exposure applied before tonemapping the PNG.
+    /// Shading backend: the brute-force reference, or a backend over a culling strategy
+    /// (--strategy and its options; naive-forward culls nothing).
+    #[arg(long, value_enum, default_value_t = BackendName::Reference)]
+    backend: BackendName,
+    #[command(flatten)]
+    cull: StrategyArgs,
+    /// Also render the reference and the infinite-range reference, and print the image error
+    /// against each (max abs error, RMSE, PSNR, mean FLIP).
+    #[arg(long)]
+    compare: bool,
+    /// With --compare, also write the FLIP error map against the reference as a PNG.
+    #[arg(long, requires = "compare")]
+    flip_map: bool,
+    /// Exposure applied before tonemapping the PNG (and for FLIP).
     #[arg(long, default_value_t = 1.0)]
     exposure: f32,
 }
@@ -101,6 +116,21 @@ struct RenderArgs {
 struct CullArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    cull: StrategyArgs,
+    /// Top of the heatmaps' colour scale (default: the longest list shown), so that heatmaps
+    /// of several runs can share one scale.
+    #[arg(long)]
+    heat_max: Option<u32>,
+    /// For clusters, the depth slice the tile heatmap shows (default: the longest list over
+    /// all slices of each tile).
+    #[arg(long)]
+    slice: Option<u32>,
+}
+
+/// A culling strategy and its parameters.
+#[derive(clap::Args, Debug)]
+struct StrategyArgs {
     /// Culling strategy.
     #[arg(long, value_enum, default_value_t = StrategyName::TiledGather)]
     strategy: StrategyName,
@@ -120,14 +150,59 @@ struct CullArgs {
     /// Conservative slack, relative to each light's distance from the eye.
     #[arg(long, default_value_t = DEFAULT_SLACK)]
     slack: f32,
-    /// Top of the heatmaps' colour scale (default: the longest list shown), so that heatmaps
-    /// of several runs can share one scale.
+    /// A deliberate cap on each list's length: lights beyond it are dropped and counted (the
+    /// default, none, sizes lists exactly and drops nothing).
     #[arg(long)]
-    heat_max: Option<u32>,
-    /// For clusters, the depth slice the tile heatmap shows (default: the longest list over
-    /// all slices of each tile).
-    #[arg(long)]
-    slice: Option<u32>,
+    capacity: Option<u32>,
+}
+
+impl StrategyArgs {
+    fn strategy(&self) -> Result<Strategy> {
+        let default_tile = if matches!(self.strategy, StrategyName::Clustered) {
+            64
+        } else {
+            16
+        };
+        let tile_size = self.tile_size.unwrap_or(default_tile);
+        let strategy = match self.strategy {
+            StrategyName::TiledGather => Strategy::TiledGather { tile_size },
+            StrategyName::TiledScatter => Strategy::TiledScatter { tile_size },
+            StrategyName::DepthMask => Strategy::DepthMask { tile_size },
+            StrategyName::Clustered => Strategy::Clustered {
+                tile_size,
+                slices: self.slices,
+                slicing: match self.slicing {
+                    SlicingName::Linear => Slicing::Linear,
+                    SlicingName::Exponential => Slicing::Exponential,
+                },
+                skip_empty: self.skip_empty,
+            },
+        };
+        strategy.validate()?;
+        Ok(strategy)
+    }
+
+    fn settings(&self, camera: &manylights_scene::Camera) -> Result<CullSettings> {
+        let s = CullSettings {
+            slack: self.slack,
+            capacity: self.capacity,
+            ..CullSettings::for_camera(camera)
+        };
+        s.validate().context("invalid --slack or --capacity")?;
+        Ok(s)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum BackendName {
+    /// The brute-force reference renderer.
+    Reference,
+    /// Forward+: depth prepass, culling, forward shading over the lists.
+    Forward,
+    /// Deferred: G-buffer, culling, compute lighting over the lists.
+    Deferred,
+    /// Every light at every fragment, no culling.
+    NaiveForward,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -248,61 +323,120 @@ fn render(args: &RenderArgs) -> Result<()> {
     }
     let a = &args.scene;
     let scene = a.build()?;
+    let strategy = args.cull.strategy()?;
+    let settings = args.cull.settings(&scene.camera)?;
     let ctx = a.gpu()?;
-    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, a.width, a.height)?;
-    let frame =
-        ReferenceRenderer::new(&ctx, &gpu_scene).render(&ctx, &gpu_scene, a.width, a.height)?;
-    let bad = frame.color.non_finite_count();
+    let (w, h) = (a.width, a.height);
+    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
+    let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/render"));
+    println!(
+        "{}: {} triangles, {} lights, {w}x{h}",
+        scene.name,
+        scene.triangle_count(),
+        scene.lights.len()
+    );
+    let reference = ReferenceRenderer::new(&ctx, &gpu_scene);
+    let mut outputs: Vec<(PathBuf, image::RgbImage)> = Vec::new();
+    let (name, image) = if args.backend == BackendName::Reference {
+        let frame = reference.render(&ctx, &gpu_scene, w, h)?;
+        print_timings(frame.timings.as_deref());
+        ("reference", frame.color)
+    } else {
+        let backend = match args.backend {
+            BackendName::Forward => Backend::Forward,
+            BackendName::Deferred => Backend::Deferred,
+            _ => Backend::NaiveForward,
+        };
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;
+        if backend != Backend::NaiveForward {
+            println!("  strategy {strategy:?}");
+        }
+        print_timings(out.timings.as_deref());
+        let per_pixel: Vec<u32> = match &out.lists {
+            Some(lists) => renderer
+                .culler
+                .lights_per_pixel(&ctx, &gpu_scene, &out.depth, lists)?,
+            None => out
+                .color
+                .data
+                .iter()
+                .map(|c| {
+                    if c[3] > 0.0 {
+                        scene.lights.len() as u32
+                    } else {
+                        0
+                    }
+                })
+                .collect(),
+        };
+        if let Some(lists) = &out.lists {
+            println!(
+                "  list entries / bytes    {} / {}",
+                lists.total,
+                lists.list_bytes()
+            );
+            println!("  dropped lights          {}", lists.dropped);
+        }
+        if out.gbuffer_bytes > 0 {
+            println!("  G-buffer bytes          {}", out.gbuffer_bytes);
+        }
+        let covered = out.color.data.iter().filter(|c| c[3] > 0.0).count().max(1);
+        let max = per_pixel.iter().copied().max().unwrap_or(0).max(1);
+        let mean = per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>() / covered as f64;
+        println!("  lights per pixel        {mean:.2} (mean over covered pixels), {max} at most");
+        let heat = dir.join(format!("heatmap_lights_per_pixel_{}.png", backend.name()));
+        outputs.push((heat, heatmap::pixels(&per_pixel, w, h, max)));
+        (backend.name(), out.color)
+    };
+    let bad = image.non_finite_count();
     if bad > 0 {
         bail!("the render holds {bad} NaN/Inf pixels; nothing was written");
     }
-    let out = a.out.clone().unwrap_or_else(|| PathBuf::from("out/render"));
-    let png = out.join("reference.png");
-    let exr = out.join("reference.exr");
-    frame.color.write_exr(&exr)?;
-    frame.color.write_png(&png, args.exposure)?;
-    println!(
-        "{}: {} triangles, {} lights, {}x{}",
-        scene.name,
-        scene.triangle_count(),
-        scene.lights.len(),
-        a.width,
-        a.height
-    );
-    print_timings(frame.timings.as_deref());
+    if args.compare {
+        let windowed = reference.render(&ctx, &gpu_scene, w, h)?.color;
+        let infinite = reference
+            .render_infinite(&ctx, &gpu_scene, &scene.camera, w, h)?
+            .color;
+        for (label, r) in [
+            ("reference", &windowed),
+            ("infinite-range reference", &infinite),
+        ] {
+            let e = accuracy::compare(&image, r, args.exposure);
+            println!(
+                "  vs {label:<25} max abs {:.3e} ({:.2e} of peak), RMSE {:.3e}, PSNR {:.2} dB, mean FLIP {:.5}",
+                e.max_abs_error,
+                e.max_abs_error / e.peak.max(f64::MIN_POSITIVE),
+                e.rmse,
+                e.psnr_db,
+                e.flip_mean
+            );
+        }
+        if args.flip_map {
+            outputs.push((
+                dir.join(format!("flip_{name}.png")),
+                accuracy::flip_map(&image, &windowed, args.exposure),
+            ));
+        }
+    }
+    let png = dir.join(format!("{name}.png"));
+    let exr = dir.join(format!("{name}.exr"));
+    image.write_exr(&exr)?;
+    image.write_png(&png, args.exposure)?;
+    for (path, img) in &outputs {
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        })?;
+        println!("wrote {}", path.display());
+    }
     println!("wrote {} and {}", png.display(), exr.display());
     Ok(())
 }
 
 fn cull(args: &CullArgs) -> Result<()> {
     let a = &args.scene;
-    let default_tile = if matches!(args.strategy, StrategyName::Clustered) {
-        64
-    } else {
-        16
-    };
-    let tile_size = args.tile_size.unwrap_or(default_tile);
-    let strategy = match args.strategy {
-        StrategyName::TiledGather => Strategy::TiledGather { tile_size },
-        StrategyName::TiledScatter => Strategy::TiledScatter { tile_size },
-        StrategyName::DepthMask => Strategy::DepthMask { tile_size },
-        StrategyName::Clustered => Strategy::Clustered {
-            tile_size,
-            slices: args.slices,
-            slicing: match args.slicing {
-                SlicingName::Linear => Slicing::Linear,
-                SlicingName::Exponential => Slicing::Exponential,
-            },
-            skip_empty: args.skip_empty,
-        },
-    };
-    strategy.validate()?;
-    if !(args.slack.is_finite() && args.slack >= 0.0) {
-        bail!(
-            "invalid --slack {}: a finite value >= 0 (0 disables the guard against f32 rounding)",
-            args.slack
-        );
-    }
+    let strategy = args.cull.strategy()?;
     let scene = a.build()?;
     let ctx = a.gpu()?;
     let (w, h) = (a.width, a.height);
@@ -318,10 +452,7 @@ fn cull(args: &CullArgs) -> Result<()> {
     );
     ctx.submit_and_wait(enc, "depth prepass")?;
     let culler = Culler::new(&ctx, &gpu_scene);
-    let settings = CullSettings {
-        slack: args.slack,
-        ..CullSettings::for_camera(&scene.camera)
-    };
+    let settings = args.cull.settings(&scene.camera)?;
     let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
     let timings = timer.read(&ctx)?;
     let lists = out.read(&ctx)?;
@@ -371,7 +502,7 @@ fn cull(args: &CullArgs) -> Result<()> {
         out.total,
         out.list_bytes()
     );
-    println!("  dropped lights          {}", m.dropped_lights);
+    println!("  dropped lights          {}", out.dropped);
     print_timings(timings.as_deref());
     println!(
         "heat scale 0..{max} lights; wrote {} and {}",

@@ -226,5 +226,59 @@ fn cull_rejects_bad_parameters() {
         2,
         &["forward-plus", "tiled-gather"],
     );
-    rejects_cmd("cull", &["--slack", "-1"], 1, &["--slack -1"]);
+    rejects_cmd("cull", &["--slack", "-1"], 1, &["slack = -1", ">= 0"]);
+    rejects_cmd(
+        "render",
+        &["--backend", "forward", "--capacity", "0"],
+        1,
+        &["capacity = 0"],
+    );
+}
+
+#[test]
+fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("r");
+    for backend in ["forward", "deferred", "naive-forward"] {
+        let o = manylights(&[
+            "render",
+            "--scene",
+            "atrium",
+            "--lights",
+            "64",
+            "--backend",
+            backend,
+            "--strategy",
+            "depth-mask",
+            "--width",
+            "40",
+            "--height",
+            "24",
+            "--compare",
+            "--flip-map",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{backend}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            stdout.contains("vs reference")
+                && stdout.contains("vs infinite-range reference")
+                && stdout.contains("mean FLIP"),
+            "{stdout}"
+        );
+        let name = backend.replace('-', "_");
+        for file in [
+            format!("{name}.png"),
+            format!("{name}.exr"),
+            format!("heatmap_lights_per_pixel_{name}.png"),
+            format!("flip_{name}.png"),
+        ] {
+            assert!(out.join(&file).is_file(), "{backend}: {file} missing");
+        }
+    }
 }

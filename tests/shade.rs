@@ -1,11 +1,15 @@
 //! The shading backends over every culling strategy, against the brute-force reference, on a
 //! real Vulkan device (lavapipe in CI).
 //!
-//! Tolerance: maximum absolute error <= 1e-4 of the reference's peak and mean FLIP < 1e-3. Forward
-//! shading evaluates the same f32 expressions at the same interpolated points as the reference,
-//! summing fewer (exactly zero) terms in another order; deferred reconstructs the point from the
-//! G-buffer's f32 view depth. Both stay within rounding of the reference (the measured maxima are
-//! printed).
+//! Tolerances, with mean FLIP < 1e-3 for every backend:
+//! - forward and naive forward: maximum absolute error <= 1e-4 of the reference's peak. They
+//!   evaluate the same f32 expressions at the same interpolated points as the reference, summing
+//!   fewer (exactly zero) terms in another order (measured on lavapipe: 2e-8 of the peak).
+//! - deferred: <= 3e-4 of the peak. It rebuilds the surface point from the G-buffer's f32 view
+//!   depth, which differs from the interpolated world position by a few ulps of the world
+//!   coordinates (about 4e-6 m in a 30 m scene); next to a light a few centimetres from a
+//!   surface the inverse-square falloff amplifies that to about 1e-4 of the peak (measured: up to
+//!   7.5e-5 on lavapipe). The measured maxima are printed.
 
 mod common;
 
@@ -48,8 +52,13 @@ fn strategies() -> [Strategy; 4] {
     ]
 }
 
-fn within_tolerance(e: &ImageError) -> bool {
-    e.max_abs_error <= 1e-4 * e.peak && e.flip_mean < 1e-3
+fn within_tolerance(e: &ImageError, backend: Backend) -> bool {
+    let max_rel = if backend == Backend::Deferred {
+        3e-4
+    } else {
+        1e-4
+    };
+    e.max_abs_error <= max_rel * e.peak && e.flip_mean < 1e-3
 }
 
 fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
@@ -121,7 +130,10 @@ fn every_strategy_and_backend_matches_the_reference() {
                 )
                 .unwrap();
             let e = compare(&naive.color, &reference, 1.0);
-            assert!(within_tolerance(&e), "{name} {w}x{h} naive: {e:?}");
+            assert!(
+                within_tolerance(&e, Backend::NaiveForward),
+                "{name} {w}x{h} naive: {e:?}"
+            );
             check_timings(&naive, &format!("{name} naive"), Backend::NaiveForward);
             for strategy in strategies() {
                 let mut images = Vec::new();
@@ -133,7 +145,7 @@ fn every_strategy_and_backend_matches_the_reference() {
                     let e = compare(&out.color, &reference, 1.0);
                     let k = usize::from(backend == Backend::Deferred);
                     worst[k] = worst[k].max(e.max_abs_error / e.peak);
-                    assert!(within_tolerance(&e), "{what}: {e:?}");
+                    assert!(within_tolerance(&e, backend), "{what}: {e:?}");
                     assert_eq!(out.color.non_finite_count(), 0, "{what}: NaN or Inf");
                     assert_eq!(out.lists.as_ref().unwrap().dropped, 0, "{what}");
                     check_timings(&out, &what, backend);
@@ -148,7 +160,7 @@ fn every_strategy_and_backend_matches_the_reference() {
                 }
                 let e = compare(&images[1], &images[0], 1.0);
                 assert!(
-                    within_tolerance(&e),
+                    within_tolerance(&e, Backend::Deferred),
                     "{name} {w}x{h} {}: deferred vs forward {e:?}",
                     strategy.name()
                 );
