@@ -199,8 +199,10 @@ enum BackendName {
     Reference,
     /// Forward+: depth prepass, culling, forward shading over the lists.
     Forward,
-    /// Deferred: G-buffer, culling, compute lighting over the lists.
+    /// Deferred: G-buffer, culling, compute lighting over the lists (position rebuilt from depth).
     Deferred,
+    /// Deferred with the interpolated world position stored in the G-buffer.
+    DeferredStoredPosition,
     /// Every light at every fragment, no culling.
     NaiveForward,
 }
@@ -345,7 +347,8 @@ fn render(args: &RenderArgs) -> Result<()> {
         let backend = match args.backend {
             BackendName::Forward => Backend::Forward,
             BackendName::Deferred => Backend::Deferred,
-            _ => Backend::NaiveForward,
+            BackendName::DeferredStoredPosition => Backend::DeferredStoredPosition,
+            BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
         let renderer = Renderer::new(&ctx, &gpu_scene);
         let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;

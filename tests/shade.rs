@@ -5,11 +5,15 @@
 //! - forward and naive forward: maximum absolute error <= 1e-4 of the reference's peak. They
 //!   evaluate the same f32 expressions at the same interpolated points as the reference, summing
 //!   fewer (exactly zero) terms in another order (measured on lavapipe: 2e-8 of the peak).
-//! - deferred: <= 3e-4 of the peak. It rebuilds the surface point from the G-buffer's f32 view
-//!   depth, which differs from the interpolated world position by a few ulps of the world
-//!   coordinates (about 4e-6 m in a 30 m scene); next to a light a few centimetres from a
-//!   surface the inverse-square falloff amplifies that to about 1e-4 of the peak (measured: up to
-//!   7.5e-5 on lavapipe). The measured maxima are printed.
+//! - deferred_stored_position: the same bound; its G-buffer stores the interpolated position.
+//! - deferred: <= 5e-3 of the peak. It rebuilds the surface point from the G-buffer's view depth
+//!   and the pixel centre, which differs from the interpolated world position the reference
+//!   shades: by a few ulps of the world coordinates on lavapipe (measured: up to 7.5e-5 of the
+//!   peak), and by the rasteriser's own interpolation error on NVIDIA (measured on an H200,
+//!   driver 580.159.04, 2026-11-21: 2.6e-3 of the peak at 64 x 48, where a light 0.1 m from a
+//!   wall makes the peak; mean FLIP 0.001). Next to a light the inverse-square falloff amplifies
+//!   position differences, so this is the real cost of rebuilding positions; the stored-position
+//!   variant shows it is nothing else. The measured maxima are printed.
 
 mod common;
 
@@ -20,6 +24,12 @@ use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::accuracy::{ImageError, compare};
 use manylights_shade::{Backend, ReferenceRenderer, Renderer, ShadeOutput};
+
+const CULLED: [Backend; 3] = [
+    Backend::Forward,
+    Backend::Deferred,
+    Backend::DeferredStoredPosition,
+];
 
 fn scene(name: &str) -> Scene {
     let mut s = ProceduralScene::from_name(name).unwrap().build().unwrap();
@@ -52,32 +62,35 @@ fn strategies() -> [Strategy; 4] {
     ]
 }
 
-fn within_tolerance(e: &ImageError, backend: Backend) -> bool {
-    let max_rel = if backend == Backend::Deferred {
-        3e-4
+fn tolerance(backend: Backend) -> f64 {
+    if backend == Backend::Deferred {
+        5e-3
     } else {
         1e-4
-    };
-    e.max_abs_error <= max_rel * e.peak && e.flip_mean < 1e-3
+    }
+}
+
+fn within_tolerance(e: &ImageError, backend: Backend) -> bool {
+    e.max_abs_error <= tolerance(backend) * e.peak && e.flip_mean < 1e-3
 }
 
 fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
     let t = out.timings.as_ref().unwrap_or_else(|| {
         panic!("{what}: no timings (lavapipe and NVIDIA have timestamp queries)")
     });
-    let expect_raster: &[&str] = match backend {
+    let raster: &[&str] = match backend {
         Backend::Forward => &["prepass.depth", "shade.forward"],
-        Backend::Deferred => &["shade.gbuffer"],
+        Backend::Deferred | Backend::DeferredStoredPosition => &["shade.gbuffer"],
         Backend::NaiveForward => &["prepass.depth", "shade.naive"],
     };
-    for name in expect_raster {
+    for name in raster {
         assert!(
             t.iter()
                 .any(|p| p.label == *name && p.kind == PassKind::Raster),
             "{what}: no raster pass {name} in {t:?}"
         );
     }
-    if backend == Backend::Deferred {
+    if matches!(backend, Backend::Deferred | Backend::DeferredStoredPosition) {
         assert!(
             t.iter()
                 .any(|p| p.label == "shade.deferred" && p.kind == PassKind::Compute),
@@ -107,7 +120,7 @@ fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
 #[test]
 fn every_strategy_and_backend_matches_the_reference() {
     let ctx = common::gpu();
-    let mut worst = [0.0f64; 2];
+    let mut worst = [0.0f64; 3];
     for name in ["atrium", "pillars"] {
         let s = scene(name);
         for (w, h) in [(64, 48), (70, 45)] {
@@ -137,39 +150,44 @@ fn every_strategy_and_backend_matches_the_reference() {
             check_timings(&naive, &format!("{name} naive"), Backend::NaiveForward);
             for strategy in strategies() {
                 let mut images = Vec::new();
-                for backend in [Backend::Forward, Backend::Deferred] {
+                for (k, backend) in CULLED.into_iter().enumerate() {
                     let what = format!("{name} {w}x{h} {} {}", strategy.name(), backend.name());
                     let out = renderer
                         .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
                         .unwrap();
                     let e = compare(&out.color, &reference, 1.0);
-                    let k = usize::from(backend == Backend::Deferred);
                     worst[k] = worst[k].max(e.max_abs_error / e.peak);
                     assert!(within_tolerance(&e, backend), "{what}: {e:?}");
                     assert_eq!(out.color.non_finite_count(), 0, "{what}: NaN or Inf");
                     assert_eq!(out.lists.as_ref().unwrap().dropped, 0, "{what}");
                     check_timings(&out, &what, backend);
-                    if backend == Backend::Deferred {
-                        assert_eq!(
-                            out.gbuffer_bytes,
-                            u64::from(w * h) * 24,
-                            "{what}: G-buffer bytes"
-                        );
-                    }
+                    let per_pixel = match backend {
+                        Backend::Deferred => 24,
+                        Backend::DeferredStoredPosition => 40,
+                        _ => 0,
+                    };
+                    assert_eq!(
+                        out.gbuffer_bytes,
+                        u64::from(w * h) * per_pixel,
+                        "{what}: G-buffer bytes"
+                    );
                     images.push(out.color);
                 }
-                let e = compare(&images[1], &images[0], 1.0);
-                assert!(
-                    within_tolerance(&e, Backend::Deferred),
-                    "{name} {w}x{h} {}: deferred vs forward {e:?}",
-                    strategy.name()
-                );
+                for (k, backend) in [(1, Backend::Deferred), (2, Backend::DeferredStoredPosition)] {
+                    let e = compare(&images[k], &images[0], 1.0);
+                    assert!(
+                        within_tolerance(&e, backend),
+                        "{name} {w}x{h} {}: {} vs forward {e:?}",
+                        strategy.name(),
+                        backend.name()
+                    );
+                }
             }
         }
     }
     println!(
-        "worst max abs error: forward {:.2e}, deferred {:.2e} of the peak",
-        worst[0], worst[1]
+        "worst max abs error of the peak: forward {:.2e}, deferred {:.2e}, deferred_stored_position {:.2e}",
+        worst[0], worst[1], worst[2]
     );
 }
 
@@ -190,7 +208,7 @@ fn capacity_cap_reports_dropped_lights_and_error() {
         capacity: Some(2),
         ..CullSettings::for_camera(&s.camera)
     };
-    for backend in [Backend::Forward, Backend::Deferred] {
+    for backend in CULLED {
         let out = renderer
             .render(
                 &ctx,
@@ -209,7 +227,7 @@ fn capacity_cap_reports_dropped_lights_and_error() {
             backend.name()
         );
         assert!(
-            e.max_abs_error > 1e-3 * e.peak,
+            e.max_abs_error > 1e-2 * e.peak,
             "{}: {dropped} dropped lights but no visible error: {e:?}",
             backend.name()
         );

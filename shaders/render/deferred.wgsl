@@ -4,6 +4,8 @@
 @group(2) @binding(0) var gb_normal_depth: texture_2d<f32>;
 @group(2) @binding(1) var gb_material: texture_2d<u32>;
 @group(2) @binding(2) var out_color: texture_storage_2d<rgba32float, write>;
+// The stored world position (deferred_stored_position; a 1 x 1 placeholder otherwise).
+@group(2) @binding(3) var gb_position: texture_2d<f32>;
 
 // The view-space point on the ray through NDC (x, y) at view-space z: with rows of
 // clip_from_view, x_c = P00 x + P02 z + P03 and w_c = P32 z + P33, so x = (ndc_x w_c - P02 z -
@@ -16,6 +18,16 @@ fn view_point(ndc: vec2<f32>, z: f32) -> vec3<f32> {
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade_pixel(id.xy, false);
+}
+
+@compute @workgroup_size(8, 8)
+fn deferred_shade_stored(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade_pixel(id.xy, true);
+}
+
+fn shade_pixel(pixel: vec2<u32>, stored: bool) {
+    let id = vec3<u32>(pixel, 0u);
     let size = vec2<u32>(frame.viewport.xy);
     if any(id.xy >= size) {
         return;
@@ -28,7 +40,10 @@ fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
     let g = textureLoad(gb_normal_depth, id.xy, 0);
     let m = materials[textureLoad(gb_material, id.xy, 0).x];
     let ndc = vec2<f32>((f32(id.x) + 0.5) * frame.viewport.z * 2.0 - 1.0, 1.0 - (f32(id.y) + 0.5) * frame.viewport.w * 2.0);
-    let p = (frame.world_from_view * vec4<f32>(view_point(ndc, g.w), 1.0)).xyz;
+    var p = (frame.world_from_view * vec4<f32>(view_point(ndc, g.w), 1.0)).xyz;
+    if stored {
+        p = textureLoad(gb_position, id.xy, 0).xyz;
+    }
     let v = view_dir(p);
     let list = light_list(id.xy, z);
     var c = vec3<f32>(0.0);

@@ -5,6 +5,8 @@
 //!   `Equal`, a loop over each pixel's list).
 //! - `deferred`: `shade.gbuffer` (depth, shading normal with linear view depth, material index),
 //!   culling on its depth, `shade.deferred` (a compute pass over pixels reading the lists).
+//! - `deferred_stored_position`: as `deferred`, with the interpolated world position stored in
+//!   the G-buffer instead of rebuilt (agrees with forward to rounding on any GPU).
 //! - `naive_forward`: `prepass.depth`, `shade.naive` (every light at every fragment).
 //!
 //! All three use the one shading model of `shaders/common/shading.wgsl`.
@@ -67,6 +69,7 @@ pub const DEFERRED: ShaderDef = ShaderDef {
 const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+const GB_POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// G-buffer bytes per pixel: normal and view depth (16), material index (4), depth (4).
 pub const GBUFFER_BYTES_PER_PIXEL: u64 = 24;
 
@@ -75,8 +78,13 @@ pub const GBUFFER_BYTES_PER_PIXEL: u64 = 24;
 pub enum Backend {
     /// Forward+: depth prepass, culling, forward shading over the lists.
     Forward,
-    /// Deferred: G-buffer, culling, a compute lighting pass over the lists.
+    /// Deferred: G-buffer, culling, a compute lighting pass over the lists; the position is
+    /// rebuilt from the G-buffer's view depth and the pixel centre.
     Deferred,
+    /// Deferred with the interpolated world position stored in the G-buffer (16 bytes more a
+    /// pixel): agrees with forward shading to rounding on any GPU. Comparing it with `deferred`
+    /// measures what rebuilding the position costs.
+    DeferredStoredPosition,
     /// Every light at every fragment, no culling (baseline).
     NaiveForward,
 }
@@ -87,12 +95,18 @@ impl Backend {
         match self {
             Self::Forward => "forward",
             Self::Deferred => "deferred",
+            Self::DeferredStoredPosition => "deferred_stored_position",
             Self::NaiveForward => "naive_forward",
         }
     }
 
     /// Every backend.
-    pub const ALL: [Backend; 3] = [Self::Forward, Self::Deferred, Self::NaiveForward];
+    pub const ALL: [Backend; 4] = [
+        Self::Forward,
+        Self::Deferred,
+        Self::DeferredStoredPosition,
+        Self::NaiveForward,
+    ];
 }
 
 /// What one frame of a backend produced.
@@ -117,7 +131,9 @@ pub struct Renderer {
     forward: wgpu::RenderPipeline,
     naive: wgpu::RenderPipeline,
     gbuffer: wgpu::RenderPipeline,
+    gbuffer_stored: wgpu::RenderPipeline,
     deferred: wgpu::ComputePipeline,
+    deferred_stored: wgpu::ComputePipeline,
     forward_lists: wgpu::BindGroupLayout,
     deferred_lists: wgpu::BindGroupLayout,
     deferred_gbuffer: wgpu::BindGroupLayout,
@@ -205,6 +221,11 @@ impl Renderer {
                         view_dimension: wgpu::TextureViewDimension::D2,
                     },
                 ),
+                layout_entry(
+                    3,
+                    wgpu::ShaderStages::COMPUTE,
+                    texture(wgpu::TextureSampleType::Float { filterable: false }),
+                ),
             ],
         });
         let pl = |label, groups: &[Option<&wgpu::BindGroupLayout>]| {
@@ -288,29 +309,50 @@ impl Renderer {
             &[target(GB_NORMAL_DEPTH), target(GB_MATERIAL)],
             false,
         );
+        let gbuffer_stored = raster(
+            "shade.gbuffer",
+            &gb_module,
+            "fs_gbuffer_stored",
+            &pl("shade.gbuffer", &[Some(&scene.layout)]),
+            &[
+                target(GB_NORMAL_DEPTH),
+                target(GB_MATERIAL),
+                target(GB_POSITION),
+            ],
+            false,
+        );
         let def_module = DEFERRED.create(d);
-        let deferred = d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("shade.deferred"),
-            layout: Some(&pl(
-                "shade.deferred",
-                &[
-                    Some(&scene.layout),
-                    Some(&deferred_lists),
-                    Some(&deferred_gbuffer),
-                ],
-            )),
-            module: &def_module,
-            entry_point: Some("deferred_shade"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let def_layout = pl(
+            "shade.deferred",
+            &[
+                Some(&scene.layout),
+                Some(&deferred_lists),
+                Some(&deferred_gbuffer),
+            ],
+        );
+        let lighting = |entry| {
+            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&def_layout),
+                module: &def_module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let (deferred, deferred_stored) = (
+            lighting("deferred_shade"),
+            lighting("deferred_shade_stored"),
+        );
         Self {
             culler: Culler::new(ctx, scene),
             prepass: DepthPrepass::new(ctx, scene),
             forward,
             naive,
             gbuffer,
+            gbuffer_stored,
             deferred,
+            deferred_stored,
             forward_lists,
             deferred_lists,
             deferred_gbuffer,
@@ -403,9 +445,25 @@ impl Renderer {
                 ctx.submit_and_wait(enc, "forward shading")?;
                 Some(lists)
             }
-            Backend::Deferred => {
+            Backend::Deferred | Backend::DeferredStoredPosition => {
+                let stored = backend == Backend::DeferredStoredPosition;
                 let usage =
                     wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+                let (pw, ph) = if stored { (width, height) } else { (1, 1) };
+                let gb_pos = d.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("gbuffer.position"),
+                    size: wgpu::Extent3d {
+                        width: pw,
+                        height: ph,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: GB_POSITION,
+                    usage,
+                    view_formats: &[],
+                });
                 let (gb_nd, gb_mat) = (
                     tex("gbuffer.normal_depth", GB_NORMAL_DEPTH, usage),
                     tex("gbuffer.material", GB_MATERIAL, usage),
@@ -413,16 +471,27 @@ impl Renderer {
                 let views = [
                     gb_nd.create_view(&Default::default()),
                     gb_mat.create_view(&Default::default()),
+                    gb_pos.create_view(&Default::default()),
                 ];
-                gbuffer_bytes = u64::from(width) * u64::from(height) * GBUFFER_BYTES_PER_PIXEL;
+                let per_pixel = GBUFFER_BYTES_PER_PIXEL + if stored { 16 } else { 0 };
+                gbuffer_bytes = u64::from(width) * u64::from(height) * per_pixel;
+                let targets: &[&wgpu::TextureView] = if stored {
+                    &[&views[0], &views[1], &views[2]]
+                } else {
+                    &[&views[0], &views[1]]
+                };
                 let mut enc = d.create_command_encoder(&Default::default());
                 self.raster_pass(
                     &mut enc,
                     &mut timer,
                     "shade.gbuffer",
-                    &self.gbuffer,
+                    if stored {
+                        &self.gbuffer_stored
+                    } else {
+                        &self.gbuffer
+                    },
                     scene,
-                    &[&views[0], &views[1]],
+                    targets,
                     &depth_view,
                     false,
                     None,
@@ -452,6 +521,10 @@ impl Renderer {
                             binding: 2,
                             resource: wgpu::BindingResource::TextureView(&color_view),
                         },
+                        wgpu::BindGroupEntry {
+                            binding: 3,
+                            resource: wgpu::BindingResource::TextureView(&views[2]),
+                        },
                     ],
                 });
                 let mut enc = d.create_command_encoder(&Default::default());
@@ -460,7 +533,11 @@ impl Renderer {
                         label: Some("shade.deferred"),
                         timestamp_writes: timer.compute_pass("shade.deferred"),
                     });
-                    pass.set_pipeline(&self.deferred);
+                    pass.set_pipeline(if stored {
+                        &self.deferred_stored
+                    } else {
+                        &self.deferred
+                    });
                     pass.set_bind_group(0, &scene.bind_group, &[]);
                     pass.set_bind_group(1, &group1, &[]);
                     pass.set_bind_group(2, &group2, &[]);
