@@ -467,6 +467,7 @@ fn cull(args: &CullArgs) -> Result<()> {
         &depth,
         &out,
         frame.clip_from_world.inverse(),
+        1,
     )?;
     let m = metrics::from_gpu_counts(&counts, &lists);
     let per_pixel: Vec<u32> = counts.iter().map(|c| c[0]).collect();

@@ -629,6 +629,7 @@ fn gpu_exact_oracle_matches_cpu() {
                     &r.depth_tex,
                     &out,
                     r.frame.clip_from_world.inverse(),
+                    1,
                 )
                 .unwrap();
             let (g, c) = (

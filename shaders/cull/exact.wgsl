@@ -4,8 +4,15 @@
 // its list (evaluated) and how many list entries reach it (found). Lists hold no duplicates
 // (tested), so false negatives = needed - found. Decisions within f32 rounding of a light's
 // radius or cone may differ from the f64 CPU oracle; a test bounds that difference.
+// Host mirror: manylights_cull::layout::GpuExactParams.
 struct ExactParams {
     world_from_clip: mat4x4<f32>,
+    // Only pixels whose x and y are multiples of stride are evaluated (1: every pixel); the
+    // others report as not covered. Lets large experiments sample the O(pixels x lights) oracle.
+    stride: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }
 
 @group(1) @binding(4) var<storage, read_write> counts: array<vec4<u32>>;
@@ -32,7 +39,7 @@ fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let i = id.y * size.x + id.x;
     let z = textureLoad(depth_tex, id.xy, 0);
-    if z >= 1.0 {
+    if z >= 1.0 || id.x % exact.stride != 0u || id.y % exact.stride != 0u {
         counts[i] = vec4<u32>(0u);
         return;
     }

@@ -552,13 +552,13 @@ impl Culler {
             lists,
             &self.lights_per_pixel,
             1,
-            glam::Mat4::IDENTITY,
+            bytemuck::bytes_of(&[0u32; 4]),
         )
     }
 
     /// The exact per-pixel oracle on the GPU: per pixel `[evaluated, needed, found, covered]`
     /// (see `shaders/cull/exact.wgsl`); `world_from_clip` is the inverse of the frame's
-    /// `clip_from_world`.
+    /// `clip_from_world`; only pixels on a grid of `stride` are evaluated (1: all).
     pub fn exact_counts(
         &self,
         ctx: &GpuContext,
@@ -566,16 +566,30 @@ impl Culler {
         depth: &wgpu::Texture,
         lists: &CullOutput,
         world_from_clip: glam::Mat4,
+        stride: u32,
     ) -> Result<Vec<[u32; 4]>, GpuError> {
-        let flat = self.per_pixel(ctx, scene, depth, lists, &self.exact, 4, world_from_clip)?;
+        let params = crate::layout::GpuExactParams {
+            world_from_clip,
+            stride: stride.max(1),
+            _pad: [0; 3],
+        };
+        let flat = self.per_pixel(
+            ctx,
+            scene,
+            depth,
+            lists,
+            &self.exact,
+            4,
+            bytemuck::bytes_of(&params),
+        )?;
         Ok(flat
             .chunks_exact(4)
             .map(|c| [c[0], c[1], c[2], c[3]])
             .collect())
     }
 
-    /// Runs a one-thread-per-pixel consumer of the lists and reads back its `stride` u32 per
-    /// pixel.
+    /// Runs a one-thread-per-pixel consumer of the lists with `uniform` at binding 5 and reads
+    /// back its `stride` u32 per pixel.
     #[expect(
         clippy::too_many_arguments,
         reason = "the lists, their consumer and its one parameter"
@@ -588,7 +602,7 @@ impl Culler {
         lists: &CullOutput,
         pipeline: &wgpu::ComputePipeline,
         stride: u64,
-        world_from_clip: glam::Mat4,
+        uniform: &[u8],
     ) -> Result<Vec<u32>, GpuError> {
         let (w, h) = (depth.width(), depth.height());
         let d = &ctx.device;
@@ -602,7 +616,7 @@ impl Culler {
         });
         let exact = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("cull.exact.params"),
-            contents: bytemuck::bytes_of(&world_from_clip),
+            contents: uniform,
             usage: wgpu::BufferUsages::UNIFORM,
         });
         let view = depth.create_view(&wgpu::TextureViewDescriptor {
@@ -771,10 +785,7 @@ impl<'a> Frame<'a> {
 
     /// A new encoder; the first one of a run also clears the counters.
     fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
-        let mut enc = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) });
+        let mut enc = self.ctx.encoder(label);
         if label.ends_with("count") {
             for b in [
                 &self.counts,

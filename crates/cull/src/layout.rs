@@ -88,6 +88,19 @@ pub struct GpuCullParams {
 }
 const _: () = assert!(size_of::<GpuCullParams>() == 64);
 
+/// Mirror of WGSL `ExactParams` (`shaders/cull/exact.wgsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct GpuExactParams {
+    /// Inverse of the frame's `clip_from_world`.
+    pub world_from_clip: glam::Mat4,
+    /// Pixel sampling stride (1: every pixel).
+    pub stride: u32,
+    /// Padding to 16 bytes.
+    pub _pad: [u32; 3],
+}
+const _: () = assert!(size_of::<GpuExactParams>() == 80);
+
 /// Mirror of WGSL `TileDepth` (`shaders/cull/common.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]

@@ -45,37 +45,58 @@ pub enum Slicing {
     Exponential,
 }
 
-/// A culling strategy and its parameters.
+/// A culling strategy and its parameters. In RON, omitted parameters take their defaults:
+/// tiles of 16 pixels (64 for clusters), 24 exponential slices, `skip_empty: false`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Strategy {
     /// Forward+ tiled gather: one workgroup per tile tests every light against the tile frustum
     /// between the tile's depth bounds.
     TiledGather {
         /// Tile side in pixels (the paper's 8; 16 and 32 are common).
+        #[serde(default = "default_tile")]
         tile_size: u32,
     },
     /// Forward+ tiled scatter: one thread per light writes (tile, light) pairs for the tiles it
     /// overlaps; a GPU radix sort orders them by tile.
     TiledScatter {
         /// Tile side in pixels.
+        #[serde(default = "default_tile")]
         tile_size: u32,
     },
     /// 2.5D culling: tiled gather plus 32-cell depth masks of geometry and lights.
     DepthMask {
         /// Tile side in pixels.
+        #[serde(default = "default_tile")]
         tile_size: u32,
     },
     /// 3D clusters: tiles x depth slices, lights assigned per light.
     Clustered {
         /// Tile side in pixels.
+        #[serde(default = "default_cluster_tile")]
         tile_size: u32,
         /// Depth slices.
+        #[serde(default = "default_slices")]
         slices: u32,
         /// Slicing of [near, far].
+        #[serde(default = "default_slicing")]
         slicing: Slicing,
         /// Emit lights only into clusters that hold geometry.
+        #[serde(default)]
         skip_empty: bool,
     },
+}
+
+fn default_tile() -> u32 {
+    16
+}
+fn default_cluster_tile() -> u32 {
+    64
+}
+fn default_slices() -> u32 {
+    24
+}
+fn default_slicing() -> Slicing {
+    Slicing::Exponential
 }
 
 /// Errors of culling.

@@ -79,6 +79,10 @@ pub struct GpuContext {
     /// The limits in force (the adapter's own, not WebGPU's defaults).
     pub limits: wgpu::Limits,
     errors: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    /// When the open frame encoder was created (see [`GpuContext::encoder`]).
+    encode_start: std::sync::Mutex<Option<std::time::Instant>>,
+    /// CPU time spent recording frame encoders since the last [`GpuContext::take_encode_ms`].
+    encode_total: std::sync::Mutex<std::time::Duration>,
 }
 
 impl fmt::Debug for GpuContext {
@@ -198,6 +202,8 @@ impl GpuContext {
             features,
             limits,
             errors,
+            encode_start: Default::default(),
+            encode_total: Default::default(),
         })
     }
 
@@ -253,12 +259,43 @@ impl GpuContext {
         Ok(())
     }
 
+    /// A command encoder for frame work; the CPU time from here to its submission counts as
+    /// encoding time ([`GpuContext::take_encode_ms`], the `cpu_ms_encode` of results).
+    pub fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
+        *self
+            .encode_start
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(std::time::Instant::now());
+        self.device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+    }
+
+    /// CPU milliseconds spent recording frame encoders since the last call.
+    pub fn take_encode_ms(&self) -> f64 {
+        let mut t = self
+            .encode_total
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        std::mem::take(&mut *t).as_secs_f64() * 1e3
+    }
+
     /// Submits, waits for the queue to drain, and turns a lost device into an error.
     pub fn submit_and_wait(
         &self,
         encoder: wgpu::CommandEncoder,
         during: &str,
     ) -> Result<(), GpuError> {
+        if let Some(start) = self
+            .encode_start
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .take()
+        {
+            *self
+                .encode_total
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner) += start.elapsed();
+        }
         let index = self.queue.submit([encoder.finish()]);
         self.device
             .poll(wgpu::PollType::Wait {

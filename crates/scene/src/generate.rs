@@ -40,8 +40,10 @@ pub enum RadiusRule {
     Threshold(f32),
 }
 
-/// A complete description of a generated light set.
+/// A complete description of a generated light set. Every field has a default (see
+/// `LightSpec::default`), so experiment files name only what they change.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct LightSpec {
     /// Placement.
     pub generator: LightGenerator,

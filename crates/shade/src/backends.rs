@@ -402,7 +402,7 @@ impl Renderer {
         let mut gbuffer_bytes = 0;
         let lists = match backend {
             Backend::NaiveForward => {
-                let mut enc = d.create_command_encoder(&Default::default());
+                let mut enc = ctx.encoder("shade");
                 self.prepass
                     .encode(&mut enc, scene, &depth_view, &mut timer);
                 self.raster_pass(
@@ -421,7 +421,7 @@ impl Renderer {
                 None
             }
             Backend::Forward => {
-                let mut enc = d.create_command_encoder(&Default::default());
+                let mut enc = ctx.encoder("shade");
                 self.prepass
                     .encode(&mut enc, scene, &depth_view, &mut timer);
                 ctx.submit_and_wait(enc, "depth prepass")?;
@@ -429,7 +429,7 @@ impl Renderer {
                     .culler
                     .run(ctx, scene, &depth, strategy, settings, &mut timer)?;
                 let group = self.lists_group(ctx, &self.forward_lists, &lists, None);
-                let mut enc = d.create_command_encoder(&Default::default());
+                let mut enc = ctx.encoder("shade");
                 self.raster_pass(
                     &mut enc,
                     &mut timer,
@@ -480,7 +480,7 @@ impl Renderer {
                 } else {
                     &[&views[0], &views[1]]
                 };
-                let mut enc = d.create_command_encoder(&Default::default());
+                let mut enc = ctx.encoder("shade");
                 self.raster_pass(
                     &mut enc,
                     &mut timer,
@@ -527,7 +527,7 @@ impl Renderer {
                         },
                     ],
                 });
-                let mut enc = d.create_command_encoder(&Default::default());
+                let mut enc = ctx.encoder("shade");
                 {
                     let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                         label: Some("shade.deferred"),
