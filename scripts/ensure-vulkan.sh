@@ -2,7 +2,8 @@
 # Checks what manylights needs on this machine and installs it where it can (Debian/Ubuntu, as
 # root): a Rust toolchain (checked only), the Vulkan loader (libvulkan1) and a Vulkan driver
 # (Mesa's lavapipe, mesa-vulkan-drivers, where there is no GPU driver). With --tests it also
-# needs Debian's assimp-testmodels (real glTF files, good and malformed, used by the tests).
+# needs Debian's assimp-testmodels (real glTF files, good and malformed, used by the tests) and
+# Chromium (the HTML report is checked in a headless browser).
 # Exits non-zero with the command to run when something is missing and cannot be installed.
 set -euo pipefail
 
@@ -18,6 +19,7 @@ ldconfig -p 2>/dev/null | grep -q 'libvulkan\.so\.1' || pkgs+=(libvulkan1)
 icds=$(ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/share/vulkan/icd.d/*.json 2>/dev/null || true)
 [ -n "$icds" ] || [ -n "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] || pkgs+=(mesa-vulkan-drivers)
 if [ "$want_tests" = 1 ] && [ ! -d /usr/share/assimp/models/glTF2 ]; then pkgs+=(assimp-testmodels); fi
+if [ "$want_tests" = 1 ] && ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1; then pkgs+=(chromium); fi
 
 if [ "${#pkgs[@]}" -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then

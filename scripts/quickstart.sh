@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# The quickstart: checks the machine, builds the release binary and renders the atrium with the
-# brute-force reference renderer (256 lights, 640x360), printing per-pass GPU times and writing
-# out/quickstart/reference.png and .exr. About a minute on lavapipe, most of it the build.
+# The quickstart: checks the machine, builds the release binary and runs
+# experiments/quickstart.ron (three culling strategies, forward and deferred, on the atrium), which
+# renders, measures, and writes out/quickstart/results.csv, results.json and report.html (with
+# report.md and figures). About a minute on lavapipe plus the first build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/ensure-vulkan.sh
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp}"
-cargo run --release --quiet -- render --scene atrium --lights 256 --width 640 --height 360 --out out/quickstart "$@"
+cargo run --release --quiet -- run experiments/quickstart.ron --out out/quickstart "$@"

@@ -43,6 +43,113 @@ enum Command {
     /// per-pixel oracle: false negatives, false-positive ratio, lights per pixel, the longest
     /// list, list memory, per-pass GPU times; and write heatmaps of lights per tile and per pixel.
     Cull(CullArgs),
+    /// Run an experiment (a RON file): every cell of its sweep, with a progress bar, each cell
+    /// persisted as soon as it finishes (a rerun skips finished cells), then DIR/results.csv,
+    /// DIR/results.json and the report (DIR/report.md, DIR/report.html).
+    Run(RunArgs),
+    /// Join the output directories of the shards of one experiment into one, and report.
+    Merge(MergeArgs),
+    /// Write the paper-style report of a run directory: report.md and report.html with figures.
+    Report(ReportArgs),
+}
+
+#[derive(clap::Args, Debug)]
+struct RunArgs {
+    /// The experiment file (see experiments/ and docs/EXPERIMENTS.md).
+    experiment: PathBuf,
+    /// Output directory (default: out/<experiment file stem>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Run only every N-th cell, starting at cell I (I/N, 0 <= I < N), to spread a sweep over
+    /// machines; join the outputs with `manylights merge`.
+    #[arg(long, value_parser = parse_shard)]
+    shard: Option<(usize, usize)>,
+    /// Do not write the report at the end.
+    #[arg(long)]
+    no_report: bool,
+    /// GPU adapter (see `render --help`).
+    #[arg(long)]
+    adapter: Option<String>,
+}
+
+#[derive(clap::Args, Debug)]
+struct MergeArgs {
+    /// Output directory.
+    #[arg(long)]
+    out: PathBuf,
+    /// Shard output directories.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
+struct ReportArgs {
+    /// A run directory.
+    dir: PathBuf,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("`{s}`: expected I/N, such as 0/4"))?;
+    let i: usize = i
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: I must be an integer"))?;
+    let n: usize = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}`: N must be an integer"))?;
+    if n == 0 || i >= n {
+        return Err(format!("`{s}`: need 0 <= I < N"));
+    }
+    Ok((i, n))
+}
+
+fn run_experiment(args: &RunArgs) -> Result<()> {
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out").join(
+            args.experiment
+                .file_stem()
+                .map_or_else(|| "experiment".into(), |s| s.to_string_lossy().into_owned()),
+        )
+    });
+    // Parse first: a malformed file fails before any device is opened or any file is written.
+    let (exp, _) = manylights_lab::Experiment::load(&args.experiment)?;
+    let cells = exp.cells().len();
+    let ctx = GpuContext::new(&GpuOptions {
+        adapter: args.adapter.clone(),
+    })?;
+    eprintln!("adapter: {}", ctx.summary());
+    eprintln!(
+        "experiment `{}`: {cells} cells{}",
+        exp.name,
+        args.shard
+            .map_or(String::new(), |(i, n)| format!(", shard {i}/{n}"))
+    );
+    let opts = manylights_lab::runner::RunOptions {
+        shard: args.shard,
+        max_cells: None,
+        progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        commit: env!("MANYLIGHTS_COMMIT").to_string(),
+    };
+    let s = manylights_lab::runner::run(&ctx, &args.experiment, &out, &opts)?;
+    eprintln!(
+        "ran {} cells, {} already done; {} rows in {}",
+        s.ran,
+        s.skipped,
+        s.rows.len(),
+        out.join("results.csv").display()
+    );
+    if !args.no_report {
+        let html = manylights_lab::report::write_report(&out)?;
+        eprintln!(
+            "report: {} and {}",
+            out.join("report.md").display(),
+            html.display()
+        );
+    }
+    Ok(())
 }
 
 /// Scene, lights, resolution and adapter: shared by every subcommand.
@@ -527,6 +634,21 @@ fn main() -> std::process::ExitCode {
     let result = match &cli.command {
         Command::Render(args) => render(args),
         Command::Cull(args) => cull(args),
+        Command::Run(args) => run_experiment(args),
+        Command::Merge(args) => {
+            let inputs: Vec<&Path> = args.inputs.iter().map(PathBuf::as_path).collect();
+            manylights_lab::results::merge(&inputs, &args.out)
+                .map_err(anyhow::Error::from)
+                .and_then(|rows| {
+                    eprintln!("merged {} cells into {}", rows.len(), args.out.display());
+                    let html = manylights_lab::report::write_report(&args.out)?;
+                    eprintln!("report: {}", html.display());
+                    Ok(())
+                })
+        }
+        Command::Report(args) => manylights_lab::report::write_report(&args.dir)
+            .map(|p| eprintln!("report: {}", p.display()))
+            .map_err(Into::into),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,0 +1,690 @@
+//! Paper-style reports of a run directory: `report.md` and `report.html` with SVG figures in
+//! `figures/`, drawn with plotters and the embedded DejaVu Sans (no system fonts needed).
+//!
+//! Contents: the setup (adapter, driver, date, commit, the exact experiment file); a summary of
+//! findings generated from the rows (the fastest conservative configuration at each light count
+//! and where the winner changes; any false negatives or dropped lights); a results table; GPU
+//! time against light count per configuration; per-pass stacked bars, raster and compute
+//! labelled; speed against accuracy with the Pareto front marked; renders and lights-per-pixel
+//! heatmaps.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use plotters::prelude::*;
+
+use crate::results::{Row, load_cells};
+use crate::{LabError, write_atomic};
+
+const FONT: &str = "sans-serif";
+
+fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("../assets/DejaVuSans.ttf");
+        // Registered under the family every figure asks for; failure only means plotters'
+        // own font path is used.
+        let _ = plotters::style::register_font(FONT, FontStyle::Normal, bytes);
+    });
+}
+
+fn err(e: impl std::fmt::Display) -> LabError {
+    LabError::Other(format!("report figure: {e}"))
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+/// The configuration of a row without its light count: one series of the scaling figure.
+fn series_key(r: &Row) -> String {
+    let parts: Vec<&str> = r
+        .cell
+        .split(',')
+        .filter(|p| !p.starts_with("lights=") && !p.starts_with("seed="))
+        .collect();
+    if parts.is_empty() || parts == ["base"] {
+        format!("{}+{}", r.backend, r.strategy)
+    } else {
+        parts.join(",")
+    }
+}
+
+fn time_vs_lights(rows: &[Row], path: &Path) -> Result<bool, LabError> {
+    let mut series: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+    for r in rows {
+        if let Some(t) = r.gpu_ms_total {
+            series
+                .entry(series_key(r))
+                .or_default()
+                .push((r.lights as f64, t));
+        }
+    }
+    let counts: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.lights).collect();
+    if counts.len() < 2 || series.is_empty() {
+        return Ok(false);
+    }
+    let (xmin, xmax) = (
+        *counts.first().unwrap() as f64,
+        *counts.last().unwrap() as f64,
+    );
+    let ymax = series.values().flatten().map(|p| p.1).fold(0.0, f64::max) * 1.1;
+    let ymin = series
+        .values()
+        .flatten()
+        .map(|p| p.1)
+        .fold(f64::INFINITY, f64::min)
+        .max(1e-4)
+        * 0.8;
+    let root = SVGBackend::new(path, (760, 460)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption("GPU time per frame against light count", (FONT, 18))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(
+            (xmin * 0.9..xmax * 1.1).log_scale(),
+            (ymin..ymax.max(ymin * 10.0)).log_scale(),
+        )
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("lights")
+        .y_desc("GPU ms (median)")
+        .label_style((FONT, 12))
+        .draw()
+        .map_err(err)?;
+    for (i, (name, mut pts)) in series.into_iter().enumerate() {
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let c = PALETTE[i % PALETTE.len()];
+        chart
+            .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+            .map_err(err)?
+            .label(name)
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
+        chart
+            .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+            .map_err(err)?;
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 11))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::UpperLeft)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(true)
+}
+
+fn passes(rows: &[Row], path: &Path) -> Result<bool, LabError> {
+    let shown: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.gpu_ms_total.is_some())
+        .take(40)
+        .collect();
+    if shown.is_empty() {
+        return Ok(false);
+    }
+    let parts = |r: &Row| {
+        [
+            r.gpu_ms_prepass.unwrap_or(0.0),
+            r.gpu_ms_cull.unwrap_or(0.0),
+            r.gpu_ms_shade.unwrap_or(0.0),
+        ]
+    };
+    let xmax = shown
+        .iter()
+        .map(|r| parts(r).iter().sum::<f64>())
+        .fold(0.0, f64::max)
+        .max(1e-6)
+        * 1.05;
+    let n = shown.len();
+    let root = SVGBackend::new(path, (860, 120 + 22 * n as u32)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let labels: Vec<String> = shown
+        .iter()
+        .map(|r| r.cell.chars().take(60).collect())
+        .collect();
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Per-pass GPU time (median): geometry pass (raster) | culling (compute) | shading",
+            (FONT, 16),
+        )
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(330)
+        .build_cartesian_2d(0.0..xmax, 0.0..n as f64)
+        .map_err(err)?;
+    let labels2 = labels.clone();
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .y_labels(n)
+        .y_label_formatter(&move |y| {
+            let i = y.floor() as usize;
+            if (y - i as f64 - 0.5).abs() < 0.26 || y.fract() == 0.0 {
+                labels2.get(i).cloned().unwrap_or_default()
+            } else {
+                String::new()
+            }
+        })
+        .x_desc("GPU ms")
+        .label_style((FONT, 11))
+        .draw()
+        .map_err(err)?;
+    let names = [
+        "geometry pass (prepass / G-buffer, raster)",
+        "culling (compute)",
+        "shading",
+    ];
+    for (k, name) in names.iter().enumerate() {
+        let c = PALETTE[k];
+        chart
+            .draw_series(shown.iter().enumerate().map(|(i, r)| {
+                let p = parts(r);
+                let x0: f64 = p[..k].iter().sum();
+                Rectangle::new(
+                    [(x0, i as f64 + 0.15), (x0 + p[k], i as f64 + 0.85)],
+                    c.filled(),
+                )
+            }))
+            .map_err(err)?
+            .label(*name)
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], c.filled()));
+    }
+    chart
+        .configure_series_labels()
+        .label_font((FONT, 11))
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .position(SeriesLabelPosition::LowerRight)
+        .draw()
+        .map_err(err)?;
+    root.present().map_err(err)?;
+    Ok(true)
+}
+
+/// Points on the Pareto front (smaller is better on both axes), sorted by x.
+fn pareto(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut front: Vec<(f64, f64)> = Vec::new();
+    for q in p {
+        if front.last().is_none_or(|l| q.1 < l.1) {
+            front.push(q);
+        }
+    }
+    front
+}
+
+fn speed_accuracy(
+    rows: &[Row],
+    path: &Path,
+    y_name: &str,
+    y: impl Fn(&Row) -> Option<f64>,
+) -> Result<bool, LabError> {
+    let pts: Vec<(f64, f64, String)> = rows
+        .iter()
+        .filter_map(|r| Some((r.gpu_ms_total?, y(r)?, series_key(r))))
+        .collect();
+    if pts.len() < 2 {
+        return Ok(false);
+    }
+    let xmax = pts.iter().map(|p| p.0).fold(0.0, f64::max) * 1.1;
+    let ymin = pts.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let ymax = pts.iter().map(|p| p.1).fold(0.0, f64::max);
+    let pad = ((ymax - ymin) * 0.1).max(ymax.abs() * 0.05).max(1e-9);
+    let root = SVGBackend::new(path, (760, 460)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("Speed against accuracy: GPU time and {y_name} (Pareto front in black)"),
+            (FONT, 16),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(70)
+        .build_cartesian_2d(0.0..xmax.max(1e-6), (ymin - pad)..(ymax + pad))
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("GPU ms (median)")
+        .y_desc(y_name)
+        .label_style((FONT, 12))
+        .draw()
+        .map_err(err)?;
+    let keys: Vec<String> = {
+        let mut k: Vec<String> = pts.iter().map(|p| p.2.clone()).collect();
+        k.sort();
+        k.dedup();
+        k
+    };
+    for (i, key) in keys.iter().enumerate() {
+        let c = PALETTE[i % PALETTE.len()];
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| &p.2 == key)
+                    .map(|p| Circle::new((p.0, p.1), 4, c.filled())),
+            )
+            .map_err(err)?
+            .label(key.clone())
+            .legend(move |(x, y)| Circle::new((x + 6, y), 4, c.filled()));
+    }
+    let front = pareto(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
+    chart
+        .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(2)))
+        .map_err(err)?;
+    chart
+        .draw_series(
+            front
+                .into_iter()
+                .map(|p| Circle::new(p, 6, BLACK.stroke_width(2))),
+        )
+        .map_err(err)?;
+    if keys.len() <= 12 {
+        chart
+            .configure_series_labels()
+            .label_font((FONT, 11))
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(err)?;
+    }
+    root.present().map_err(err)?;
+    Ok(true)
+}
+
+/// `YYYY-MM-DD HH:MM UTC` of a Unix time (civil-from-days, Howard Hinnant's algorithm).
+pub fn utc(secs: u64) -> String {
+    let days = (secs / 86_400) as i64;
+    let (h, m) = ((secs % 86_400) / 3600, (secs % 3600) / 60);
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}-{month:02}-{d:02} {h:02}:{m:02} UTC")
+}
+
+fn fmt_opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("-".into(), |x| {
+        if x.is_infinite() {
+            "inf".into()
+        } else {
+            format!("{x:.digits$}")
+        }
+    })
+}
+
+/// The generated summary of findings.
+fn summary(rows: &[Row]) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut by_lights: BTreeMap<u64, Vec<&Row>> = BTreeMap::new();
+    for r in rows {
+        by_lights.entry(r.lights).or_default().push(r);
+    }
+    let mut prev: Option<String> = None;
+    for (n, rs) in &by_lights {
+        let best = rs
+            .iter()
+            .filter(|r| r.false_negatives.unwrap_or(0) == 0 && r.dropped_lights == 0)
+            .filter_map(|r| Some((r.gpu_ms_total?, *r)))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        if let Some((t, r)) = best {
+            let key = series_key(r);
+            let mut line = format!(
+                "At {n} lights the fastest configuration with no false negatives and no dropped lights is `{key}` ({t:.3} ms)."
+            );
+            if let Some(p) = &prev {
+                if *p != key {
+                    line.push_str(&format!(" The winner changes here (crossover from `{p}`)."));
+                }
+            }
+            prev = Some(key);
+            out.push(line);
+        }
+    }
+    let fns: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.false_negatives.unwrap_or(0) > 0)
+        .collect();
+    if fns.is_empty() {
+        if rows.iter().any(|r| r.false_negatives.is_some()) {
+            out.push(
+                "No configuration had false negatives against the exact per-pixel oracle.".into(),
+            );
+        }
+    } else {
+        for r in fns {
+            out.push(format!(
+                "`{}` had {} false negatives{}.",
+                r.cell,
+                r.false_negatives.unwrap_or(0),
+                if r.dropped_lights > 0 {
+                    format!(" ({} lights dropped by its capacity)", r.dropped_lights)
+                } else {
+                    String::new()
+                }
+            ));
+        }
+    }
+    if let Some(r) = rows
+        .iter()
+        .filter_map(|r| Some((r.false_positive_ratio?, r)))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+    {
+        out.push(format!(
+            "The tightest lists (lights evaluated / needed {:.2}) came from `{}`.",
+            r.0, r.1.cell
+        ));
+    }
+    if rows
+        .iter()
+        .any(|r| r.adapter.contains("H100") || r.adapter.contains("H200"))
+    {
+        out.push(
+            "Measured on an NVIDIA H100/H200, a compute chip with little raster hardware: raster passes (depth prepass, G-buffer, forward shading) are far slower relative to compute passes than on a consumer GPU, so raster and compute times are reported apart."
+                .into(),
+        );
+    }
+    if rows
+        .iter()
+        .any(|r| r.adapter.to_lowercase().contains("llvmpipe"))
+    {
+        out.push("Measured on lavapipe (a CPU rasteriser): the times say nothing about GPUs; accuracy and list metrics hold.".into());
+    }
+    out
+}
+
+/// Writes `report.md`, `report.html` and `figures/` for the run in `dir`; returns the HTML path.
+pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
+    register_font();
+    let rows = load_cells(dir)?;
+    if rows.is_empty() {
+        return Err(LabError::Other(format!(
+            "{}: no finished cells to report on (run the experiment first)",
+            dir.display()
+        )));
+    }
+    let exp_src = std::fs::read_to_string(dir.join("experiment.ron")).unwrap_or_default();
+    let meta: serde_json::Value = std::fs::read_to_string(dir.join("meta.json"))
+        .ok()
+        .and_then(|s| serde_json::from_str(&s).ok())
+        .unwrap_or_default();
+    let description = crate::Experiment::parse(&exp_src, &dir.join("experiment.ron"))
+        .map(|e| e.description)
+        .unwrap_or_default();
+    let figures = dir.join("figures");
+    std::fs::create_dir_all(&figures).map_err(|e| LabError::Io {
+        path: figures.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let mut figs: Vec<(&str, &str)> = Vec::new();
+    // Each figure is drawn to a temporary name and renamed, so no half-written SVG remains.
+    let mut draw = |name: &'static str,
+                    caption: &'static str,
+                    f: &dyn Fn(&Path) -> Result<bool, LabError>|
+     -> Result<(), LabError> {
+        let tmp = figures.join(format!(".{name}.tmp.svg"));
+        if f(&tmp)? {
+            std::fs::rename(&tmp, figures.join(name)).map_err(|e| LabError::Io {
+                path: name.into(),
+                message: e.to_string(),
+            })?;
+            figs.push((name, caption));
+        }
+        Ok(())
+    };
+    draw(
+        "time_vs_lights.svg",
+        "GPU time per frame against light count, one line per configuration.",
+        &|p| time_vs_lights(&rows, p),
+    )?;
+    draw(
+        "passes.svg",
+        "Per-pass GPU time of each cell: the geometry pass (raster), culling (compute) and shading.",
+        &|p| passes(&rows, p),
+    )?;
+    draw(
+        "speed_fp.svg",
+        "Speed against list quality: lights evaluated per light needed (1.0 is exact). Black: the Pareto front.",
+        &|p| speed_accuracy(&rows, p, "false-positive ratio", |r| r.false_positive_ratio),
+    )?;
+    draw(
+        "speed_error.svg",
+        "Speed against image error: maximum absolute error against the reference. Black: the Pareto front.",
+        &|p| speed_accuracy(&rows, p, "max abs error vs reference", |r| r.max_abs_error),
+    )?;
+
+    let name = rows[0].experiment.clone();
+    let adapter = meta["adapter"]
+        .as_str()
+        .unwrap_or(&rows[0].adapter)
+        .to_string();
+    let driver = meta["driver"]
+        .as_str()
+        .unwrap_or(&rows[0].driver)
+        .to_string();
+    let commit = meta["commit"]
+        .as_str()
+        .unwrap_or(&rows[0].commit)
+        .to_string();
+    let date = rows.iter().map(|r| r.finished_unix).max().unwrap_or(0);
+    let findings = summary(&rows);
+    let head = [
+        "cell",
+        "lights",
+        "res",
+        "backend",
+        "strategy",
+        "GPU ms",
+        "p10",
+        "p90",
+        "cull ms",
+        "shade ms",
+        "geometry ms",
+        "FN",
+        "FP ratio",
+        "max/tile",
+        "dropped",
+        "list KiB",
+        "PSNR dB",
+        "FLIP",
+    ];
+    let table: Vec<Vec<String>> = rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.cell.clone(),
+                r.lights.to_string(),
+                format!("{}x{}", r.width, r.height),
+                r.backend.clone(),
+                format!("{} ({})", r.strategy, r.params),
+                fmt_opt(r.gpu_ms_total, 3),
+                fmt_opt(r.gpu_ms_total_p10, 3),
+                fmt_opt(r.gpu_ms_total_p90, 3),
+                fmt_opt(r.gpu_ms_cull, 3),
+                fmt_opt(r.gpu_ms_shade, 3),
+                fmt_opt(r.gpu_ms_prepass, 3),
+                r.false_negatives.map_or("-".into(), |v| v.to_string()),
+                fmt_opt(r.false_positive_ratio, 2),
+                r.max_lights_per_tile.map_or("-".into(), |v| v.to_string()),
+                r.dropped_lights.to_string(),
+                format!("{:.1}", r.list_bytes as f64 / 1024.0),
+                fmt_opt(r.psnr_db, 1),
+                fmt_opt(r.flip_mean, 5),
+            ]
+        })
+        .collect();
+    let images: Vec<&Row> = rows
+        .iter()
+        .filter(|r| {
+            dir.join("images")
+                .join(format!("{}_render.png", r.id))
+                .exists()
+        })
+        .take(12)
+        .collect();
+
+    // Markdown.
+    let mut md = String::new();
+    let _ = writeln!(md, "# {name}\n\n{description}\n");
+    let _ = writeln!(
+        md,
+        "## Setup\n\n- adapter: {adapter}\n- driver: {driver}\n- commit: {commit}\n- finished: {}\n- cells: {}\n",
+        utc(date),
+        rows.len()
+    );
+    let _ = writeln!(
+        md,
+        "GPU times are medians over each cell's measured frames (timestamp queries), with p10 and p90 in the results. Accuracy is against the brute-force reference with the same falloff; list metrics against the exact per-pixel oracle.\n"
+    );
+    let _ = writeln!(md, "```ron\n{}\n```\n", exp_src.trim_end());
+    let _ = writeln!(md, "## Findings\n");
+    for f in &findings {
+        let _ = writeln!(md, "- {f}");
+    }
+    let _ = writeln!(
+        md,
+        "\n## Results\n\n| {} |\n|{}|",
+        head.join(" | "),
+        head.iter().map(|_| "---").collect::<Vec<_>>().join("|")
+    );
+    for row in &table {
+        let _ = writeln!(
+            md,
+            "| {} |",
+            row.iter()
+                .map(|c| c.replace('|', "\\|"))
+                .collect::<Vec<_>>()
+                .join(" | ")
+        );
+    }
+    let _ = writeln!(md, "\n## Figures\n");
+    for (f, caption) in &figs {
+        let _ = writeln!(md, "![{caption}](figures/{f})\n\n{caption}\n");
+    }
+    if !images.is_empty() {
+        let _ = writeln!(md, "## Renders and lights-per-pixel heatmaps\n");
+        for r in &images {
+            let _ = writeln!(
+                md,
+                "`{}`\n\n![render](images/{}_render.png) ![lights per pixel](images/{}_heat.png)\n",
+                r.cell, r.id, r.id
+            );
+        }
+    }
+    write_atomic(&dir.join("report.md"), md.as_bytes())?;
+
+    // HTML.
+    let esc = |s: &str| {
+        s.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let mut html = String::new();
+    let _ = write!(
+        html,
+        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title>\n<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}pre{{background:#f6f6f6;padding:1em;overflow:auto}}img{{max-width:100%}}</style></head><body>\n<h1>{0}</h1>\n<p>{1}</p>\n",
+        esc(&name),
+        esc(&description)
+    );
+    let _ = writeln!(
+        html,
+        "<h2>Setup</h2><ul><li>adapter: {}</li><li>driver: {}</li><li>commit: {}</li><li>finished: {}</li><li>cells: {}</li></ul>",
+        esc(&adapter),
+        esc(&driver),
+        esc(&commit),
+        utc(date),
+        rows.len()
+    );
+    let _ = write!(
+        html,
+        "<pre>{}</pre>\n<h2>Findings</h2><ul>",
+        esc(exp_src.trim_end())
+    );
+    for f in &findings {
+        let _ = write!(html, "<li>{}</li>", esc(f).replace('`', ""));
+    }
+    let _ = write!(
+        html,
+        "</ul>\n<h2>Results</h2><table><tr>{}</tr>\n",
+        head.iter()
+            .map(|h| format!("<th>{h}</th>"))
+            .collect::<String>()
+    );
+    for row in &table {
+        let _ = writeln!(
+            html,
+            "<tr>{}</tr>",
+            row.iter()
+                .map(|c| format!("<td>{}</td>", esc(c)))
+                .collect::<String>()
+        );
+    }
+    let _ = write!(html, "</table>\n<h2>Figures</h2>\n");
+    for (f, caption) in &figs {
+        let _ = writeln!(
+            html,
+            "<figure><img src=\"figures/{f}\" alt=\"{caption}\"><figcaption>{caption}</figcaption></figure>"
+        );
+    }
+    if !images.is_empty() {
+        let _ = writeln!(html, "<h2>Renders and lights-per-pixel heatmaps</h2>");
+        for r in &images {
+            let _ = writeln!(
+                html,
+                "<p>{}</p><img src=\"images/{}_render.png\" alt=\"render\"> <img src=\"images/{}_heat.png\" alt=\"lights per pixel\">",
+                esc(&r.cell),
+                r.id,
+                r.id
+            );
+        }
+    }
+    // Marks the page once every figure has loaded (checked by the headless-browser test).
+    let _ = write!(
+        html,
+        "<script>window.addEventListener('load',function(){{var i=Array.from(document.images);document.body.setAttribute('data-figures',i.every(function(x){{return x.complete&&x.naturalWidth>0}})?'loaded':'missing');document.body.setAttribute('data-figure-count',String(i.length));}});</script>\n</body></html>\n"
+    );
+    let path = dir.join("report.html");
+    write_atomic(&path, html.as_bytes())?;
+    Ok(path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_dates() {
+        assert_eq!(utc(0), "1970-01-01 00:00 UTC");
+        assert_eq!(utc(951_782_400), "2000-02-29 00:00 UTC");
+        assert_eq!(utc(1_795_243_888), "2026-11-21 06:51 UTC");
+    }
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let pts = [(3.0, 1.0), (1.0, 5.0), (2.0, 2.0), (2.5, 3.0), (4.0, 0.5)];
+        assert_eq!(
+            pareto(&pts),
+            vec![(1.0, 5.0), (2.0, 2.0), (3.0, 1.0), (4.0, 0.5)]
+        );
+    }
+}

@@ -1,0 +1,323 @@
+//! Result rows: one per cell, persisted as `cells/<id>.json` when the cell finishes, and
+//! gathered into `results.csv` and `results.json`.
+//!
+//! The columns named by the experiments issue are a public contract: keep them, add new ones
+//! after them, never rename. GPU times are medians over the measured frames, with p10 and p90
+//! beside them; `gpu_ms_prepass` counts `prepass.depth` and `shade.gbuffer` (the geometry pass of
+//! either backend), `gpu_ms_cull` every `cull.*`, `scan.*` and `sort.*` pass, `gpu_ms_shade`
+//! every other `shade.*` pass. Values that were not measured are empty in the CSV and null in
+//! the JSON.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::{LabError, write_atomic};
+
+/// One cell's results.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    /// Experiment name.
+    pub experiment: String,
+    /// Cell name.
+    pub cell: String,
+    /// Scene name.
+    pub scene: String,
+    /// Number of lights.
+    pub lights: u64,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Strategy name (`none` for naive forward).
+    pub strategy: String,
+    /// Backend name.
+    pub backend: String,
+    /// Strategy parameters.
+    pub params: String,
+    /// Median GPU time of all passes, ms.
+    pub gpu_ms_total: Option<f64>,
+    /// Median culling time, ms.
+    pub gpu_ms_cull: Option<f64>,
+    /// Median shading time, ms.
+    pub gpu_ms_shade: Option<f64>,
+    /// Median geometry-pass time (depth prepass or G-buffer), ms.
+    pub gpu_ms_prepass: Option<f64>,
+    /// Median CPU time recording command buffers, ms.
+    pub cpu_ms_encode: f64,
+    /// False negatives (pixel, light pairs).
+    pub false_negatives: Option<u64>,
+    /// Lights evaluated / lights needed.
+    pub false_positive_ratio: Option<f64>,
+    /// Mean lights evaluated per covered pixel.
+    pub lights_per_pixel_mean: Option<f64>,
+    /// Longest list of any tile or cluster.
+    pub max_lights_per_tile: Option<u64>,
+    /// Lights dropped by a capacity.
+    pub dropped_lights: u64,
+    /// Bytes of the lists.
+    pub list_bytes: u64,
+    /// Bytes of the G-buffer.
+    pub gbuffer_bytes: u64,
+    /// PSNR against the reference, dB.
+    pub psnr_db: Option<f64>,
+    /// Mean FLIP against the reference.
+    pub flip_mean: Option<f64>,
+    /// Maximum absolute error against the reference.
+    pub max_abs_error: Option<f64>,
+    /// Adapter name.
+    pub adapter: String,
+    /// Driver.
+    pub driver: String,
+    /// Commit of the binary.
+    pub commit: String,
+    /// p10 of `gpu_ms_total`.
+    pub gpu_ms_total_p10: Option<f64>,
+    /// p90 of `gpu_ms_total`.
+    pub gpu_ms_total_p90: Option<f64>,
+    /// p10 of `gpu_ms_cull`.
+    pub gpu_ms_cull_p10: Option<f64>,
+    /// p90 of `gpu_ms_cull`.
+    pub gpu_ms_cull_p90: Option<f64>,
+    /// p10 of `gpu_ms_shade`.
+    pub gpu_ms_shade_p10: Option<f64>,
+    /// p90 of `gpu_ms_shade`.
+    pub gpu_ms_shade_p90: Option<f64>,
+    /// p10 of `gpu_ms_prepass`.
+    pub gpu_ms_prepass_p10: Option<f64>,
+    /// p90 of `gpu_ms_prepass`.
+    pub gpu_ms_prepass_p90: Option<f64>,
+    /// Median GPU time of raster passes, ms.
+    pub gpu_ms_raster: Option<f64>,
+    /// Median GPU time of compute passes, ms.
+    pub gpu_ms_compute: Option<f64>,
+    /// PSNR against the infinite-range reference (the cost of the cut-off), dB.
+    pub psnr_db_infinite: Option<f64>,
+    /// Mean FLIP against the infinite-range reference.
+    pub flip_mean_infinite: Option<f64>,
+    /// Maximum absolute error against the infinite-range reference.
+    pub max_abs_error_infinite: Option<f64>,
+    /// Pixel stride of the exact oracle (1: every pixel).
+    pub exact_stride: u32,
+    /// Measured frames.
+    pub frames: u32,
+    /// Per-pass median GPU times, ms, by pass name.
+    pub passes: BTreeMap<String, f64>,
+    /// Cell index in sweep order.
+    pub index: usize,
+    /// Cell id (hash of its configuration).
+    pub id: String,
+    /// UTC time the cell finished (seconds since 1970).
+    pub finished_unix: u64,
+}
+
+/// The CSV columns, in order: the issue's contract first.
+pub const COLUMNS: &[&str] = &[
+    "experiment",
+    "cell",
+    "scene",
+    "lights",
+    "width",
+    "height",
+    "strategy",
+    "backend",
+    "params",
+    "gpu_ms_total",
+    "gpu_ms_cull",
+    "gpu_ms_shade",
+    "gpu_ms_prepass",
+    "cpu_ms_encode",
+    "false_negatives",
+    "false_positive_ratio",
+    "lights_per_pixel_mean",
+    "max_lights_per_tile",
+    "dropped_lights",
+    "list_bytes",
+    "gbuffer_bytes",
+    "psnr_db",
+    "flip_mean",
+    "max_abs_error",
+    "adapter",
+    "driver",
+    "commit",
+    "gpu_ms_total_p10",
+    "gpu_ms_total_p90",
+    "gpu_ms_cull_p10",
+    "gpu_ms_cull_p90",
+    "gpu_ms_shade_p10",
+    "gpu_ms_shade_p90",
+    "gpu_ms_prepass_p10",
+    "gpu_ms_prepass_p90",
+    "gpu_ms_raster",
+    "gpu_ms_compute",
+    "psnr_db_infinite",
+    "flip_mean_infinite",
+    "max_abs_error_infinite",
+    "exact_stride",
+    "frames",
+    "index",
+    "id",
+];
+
+fn csv_field(v: &serde_json::Value) -> String {
+    let s = match v {
+        serde_json::Value::Null => String::new(),
+        serde_json::Value::String(s) => s.clone(),
+        serde_json::Value::Number(n) => n.to_string(),
+        other => other.to_string(),
+    };
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s
+    }
+}
+
+/// The rows as CSV text with a header.
+pub fn to_csv(rows: &[Row]) -> String {
+    let mut out = COLUMNS.join(",");
+    out.push('\n');
+    for r in rows {
+        let v = serde_json::to_value(r).expect("rows serialise");
+        let fields: Vec<String> = COLUMNS.iter().map(|c| csv_field(&v[*c])).collect();
+        out.push_str(&fields.join(","));
+        out.push('\n');
+    }
+    out
+}
+
+/// Reads every persisted cell of `dir` (`dir/cells/*.json`), sorted by index.
+pub fn load_cells(dir: &Path) -> Result<Vec<Row>, LabError> {
+    let cells = dir.join("cells");
+    let mut rows = Vec::new();
+    let entries = match std::fs::read_dir(&cells) {
+        Ok(e) => e,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(rows),
+        Err(e) => {
+            return Err(LabError::Io {
+                path: cells.display().to_string(),
+                message: e.to_string(),
+            });
+        }
+    };
+    for e in entries {
+        let path = e
+            .map_err(|e| LabError::Io {
+                path: cells.display().to_string(),
+                message: e.to_string(),
+            })?
+            .path();
+        // Only finished cells: temporary files of an interrupted write are ignored.
+        if path.extension().is_some_and(|x| x == "json") {
+            let text = std::fs::read_to_string(&path).map_err(|e| LabError::Io {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            })?;
+            let row: Row = serde_json::from_str(&text).map_err(|e| LabError::Io {
+                path: path.display().to_string(),
+                message: format!("not a result cell: {e}"),
+            })?;
+            rows.push(row);
+        }
+    }
+    rows.sort_by(|a, b| (a.index, &a.id).cmp(&(b.index, &b.id)));
+    Ok(rows)
+}
+
+/// Writes one finished cell.
+pub fn save_cell(dir: &Path, row: &Row) -> Result<(), LabError> {
+    let path = dir.join("cells").join(format!("{}.json", row.id));
+    write_atomic(
+        &path,
+        serde_json::to_string_pretty(row)
+            .expect("rows serialise")
+            .as_bytes(),
+    )
+}
+
+/// Writes `results.csv` and `results.json` for `rows`.
+pub fn write_results(dir: &Path, rows: &[Row]) -> Result<(), LabError> {
+    write_atomic(&dir.join("results.csv"), to_csv(rows).as_bytes())?;
+    write_atomic(
+        &dir.join("results.json"),
+        serde_json::to_string_pretty(rows)
+            .expect("rows serialise")
+            .as_bytes(),
+    )
+}
+
+/// Joins the cells of several run directories (shards of one experiment) into `out`: copies
+/// `experiment.ron` and `meta.json` from the first, every cell file, and writes the results.
+/// Two shards holding the same cell with different contents is an error.
+pub fn merge(inputs: &[&Path], out: &Path) -> Result<Vec<Row>, LabError> {
+    let first = inputs
+        .first()
+        .ok_or_else(|| LabError::Other("merge: no input directories".into()))?;
+    let mut by_id: BTreeMap<String, Row> = BTreeMap::new();
+    let mut experiment: Option<String> = None;
+    for dir in inputs {
+        let exp =
+            std::fs::read_to_string(dir.join("experiment.ron")).map_err(|e| LabError::Io {
+                path: dir.join("experiment.ron").display().to_string(),
+                message: format!("{e} (is this a run directory?)"),
+            })?;
+        match &experiment {
+            None => experiment = Some(exp),
+            Some(e) if *e != exp => {
+                return Err(LabError::Other(format!(
+                    "merge: {} ran a different experiment file than {}",
+                    dir.display(),
+                    first.display()
+                )));
+            }
+            Some(_) => {}
+        }
+        for row in load_cells(dir)? {
+            if let Some(prev) = by_id.get(&row.id) {
+                if prev.cell != row.cell {
+                    return Err(LabError::Other(format!(
+                        "merge: cell id {} names `{}` and `{}`",
+                        row.id, prev.cell, row.cell
+                    )));
+                }
+            }
+            by_id.insert(row.id.clone(), row);
+        }
+    }
+    let mut rows: Vec<Row> = by_id.into_values().collect();
+    rows.sort_by_key(|r| r.index);
+    write_atomic(
+        &out.join("experiment.ron"),
+        experiment.unwrap_or_default().as_bytes(),
+    )?;
+    if let Ok(meta) = std::fs::read(first.join("meta.json")) {
+        write_atomic(&out.join("meta.json"), &meta)?;
+    }
+    for r in &rows {
+        save_cell(out, r)?;
+    }
+    for dir in inputs {
+        let images = dir.join("images");
+        if let Ok(entries) = std::fs::read_dir(&images) {
+            for e in entries.flatten() {
+                if let Ok(bytes) = std::fs::read(e.path()) {
+                    write_atomic(&out.join("images").join(e.file_name()), &bytes)?;
+                }
+            }
+        }
+    }
+    write_results(out, &rows)?;
+    Ok(rows)
+}
+
+/// Median, p10 and p90 (nearest rank) of `v`.
+pub fn percentiles(v: &[f64]) -> Option<(f64, f64, f64)> {
+    if v.is_empty() {
+        return None;
+    }
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    let at = |q: f64| s[((q * (s.len() - 1) as f64).round() as usize).min(s.len() - 1)];
+    Some((at(0.5), at(0.1), at(0.9)))
+}

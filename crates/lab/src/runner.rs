@@ -1,0 +1,495 @@
+//! The runner: every cell of an experiment (or of one shard of it), each persisted the moment
+//! it finishes, so that a killed run loses nothing finished and a rerun skips what is done.
+//!
+//! Per cell: build the scene and lights; render `warmup` frames, then `frames` measured frames
+//! (GPU times from timestamp queries, medians with p10 and p90); at the first camera pose, the
+//! list metrics from the exact per-pixel oracle (on the GPU, on every `exact_stride`-th pixel)
+//! and, with `accuracy`, the image error against the reference and the infinite-range
+//! reference; a small render and lights-per-pixel heatmap for the report.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
+use manylights_cull::{CullSettings, Strategy, heatmap};
+use manylights_gpu::layout::GpuFrame;
+use manylights_gpu::timing::{PassKind, PassTiming};
+use manylights_gpu::{GpuContext, GpuScene};
+use manylights_scene::gltf_import::{self, GltfOptions};
+use manylights_scene::{Camera, Scene};
+use manylights_shade::accuracy::compare;
+use manylights_shade::{Backend, ReferenceRenderer, Renderer};
+
+use crate::experiment::{CameraSpec, Cell, Experiment, params_label};
+use crate::results::{Row, load_cells, percentiles, save_cell, write_results};
+use crate::{LabError, write_atomic};
+
+/// How to run.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Run only cells whose index is `i` modulo `n`.
+    pub shard: Option<(usize, usize)>,
+    /// Stop after this many cells were run (as if the run were killed then).
+    pub max_cells: Option<usize>,
+    /// Show a progress bar.
+    pub progress: bool,
+    /// The commit the binary was built from.
+    pub commit: String,
+}
+
+/// What a run did.
+#[derive(Clone, Debug)]
+pub struct RunSummary {
+    /// Cells run now.
+    pub ran: usize,
+    /// Cells skipped because a previous run finished them.
+    pub skipped: usize,
+    /// Cells of this shard.
+    pub in_shard: usize,
+    /// Every finished row of the experiment in the output directory.
+    pub rows: Vec<Row>,
+}
+
+fn io(path: &Path, e: impl ToString) -> LabError {
+    LabError::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    }
+}
+
+/// Runs the experiment at `path` into `out`.
+pub fn run(
+    ctx: &GpuContext,
+    path: &Path,
+    out: &Path,
+    opts: &RunOptions,
+) -> Result<RunSummary, LabError> {
+    let (exp, src) = Experiment::load(path)?;
+    run_parsed(
+        ctx,
+        &exp,
+        &src,
+        path.parent().unwrap_or(Path::new(".")),
+        out,
+        opts,
+    )
+}
+
+/// Runs a parsed experiment whose text is `src` (kept in `out/experiment.ron`); relative glTF
+/// paths are resolved against `base`.
+pub fn run_parsed(
+    ctx: &GpuContext,
+    exp: &Experiment,
+    src: &str,
+    base: &Path,
+    out: &Path,
+    opts: &RunOptions,
+) -> Result<RunSummary, LabError> {
+    std::fs::create_dir_all(out)
+        .map_err(|e| io(out, format!("cannot create the output directory: {e}")))?;
+    let exp_copy = out.join("experiment.ron");
+    match std::fs::read_to_string(&exp_copy) {
+        Ok(prev) if prev != src => {
+            return Err(LabError::Other(format!(
+                "{} holds results of a different experiment file; choose another --out or remove it",
+                out.display()
+            )));
+        }
+        Ok(_) => {}
+        Err(_) => write_atomic(&exp_copy, src.as_bytes())?,
+    }
+    let meta = serde_json::json!({
+        "experiment": exp.name,
+        "adapter": ctx.info.name,
+        "driver": format!("{} {}", ctx.info.driver, ctx.info.driver_info),
+        "backend": format!("{:?}", ctx.info.backend),
+        "device_type": format!("{:?}", ctx.info.device_type),
+        "summary": ctx.summary(),
+        "commit": opts.commit,
+        "started_unix": now(),
+        "shard": opts.shard.map(|(i, n)| format!("{i}/{n}")),
+    });
+    write_atomic(
+        &out.join("meta.json"),
+        serde_json::to_string_pretty(&meta)
+            .expect("json")
+            .as_bytes(),
+    )?;
+
+    let cells = exp.cells();
+    let ids: BTreeSet<String> = cells.iter().map(Cell::id).collect();
+    let mine: Vec<&Cell> = cells
+        .iter()
+        .filter(|c| opts.shard.is_none_or(|(i, n)| c.index % n == i))
+        .collect();
+    let done: BTreeSet<String> = load_cells(out)?.into_iter().map(|r| r.id).collect();
+    let todo: Vec<&&Cell> = mine.iter().filter(|c| !done.contains(&c.id())).collect();
+    let skipped = mine.len() - todo.len();
+    let bar = if opts.progress {
+        indicatif::ProgressBar::new(mine.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} cells, {elapsed} elapsed, ETA {eta}  {msg}",
+        )
+        .expect("template")
+        .progress_chars("=> "),
+    );
+    bar.set_position(skipped as u64);
+    let mut ran = 0;
+    for cell in todo {
+        if opts.max_cells.is_some_and(|m| ran >= m) {
+            break;
+        }
+        bar.set_message(cell.name.clone());
+        let row =
+            run_cell(ctx, exp, cell, base, out, &opts.commit).map_err(|e| LabError::Cell {
+                index: cell.index,
+                name: cell.name.clone(),
+                message: e.to_string(),
+            })?;
+        save_cell(out, &row)?;
+        ran += 1;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let rows: Vec<Row> = load_cells(out)?
+        .into_iter()
+        .filter(|r| ids.contains(&r.id))
+        .collect();
+    write_results(out, &rows)?;
+    Ok(RunSummary {
+        ran,
+        skipped,
+        in_shard: mine.len(),
+        rows,
+    })
+}
+
+fn now() -> u64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs())
+}
+
+fn build_scene(cell: &Cell, base: &Path) -> Result<Scene, LabError> {
+    let c = &cell.config;
+    let mut scene = match c.scene.procedural() {
+        Some(p) => p.build().map_err(|e| LabError::Other(e.to_string()))?,
+        None => {
+            let crate::experiment::SceneSpec::Gltf(p) = &c.scene else {
+                unreachable!("procedural handled")
+            };
+            let path: PathBuf = if Path::new(p).is_absolute() {
+                p.into()
+            } else {
+                base.join(p)
+            };
+            gltf_import::load(&path, &GltfOptions::default())
+                .map_err(|e| LabError::Other(e.to_string()))?
+                .0
+        }
+    };
+    let lights = c
+        .lights
+        .generate(&scene)
+        .map_err(|e| LabError::Other(e.to_string()))?;
+    scene.lights.extend(lights);
+    scene
+        .validate()
+        .map_err(|e| LabError::Other(e.to_string()))?;
+    Ok(scene)
+}
+
+/// Pass category for the result columns.
+fn category(label: &str) -> &'static str {
+    if label == "prepass.depth" || label == "shade.gbuffer" {
+        "prepass"
+    } else if label.starts_with("cull.") || label.starts_with("scan.") || label.starts_with("sort.")
+    {
+        "cull"
+    } else {
+        "shade"
+    }
+}
+
+fn run_cell(
+    ctx: &GpuContext,
+    exp: &Experiment,
+    cell: &Cell,
+    base: &Path,
+    out: &Path,
+    commit: &str,
+) -> Result<Row, LabError> {
+    let c = &cell.config;
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let scene = build_scene(cell, base)?;
+    let poses: Vec<Camera> = match &c.camera {
+        CameraSpec::Default => vec![scene.camera],
+        CameraSpec::Pose(p) => vec![p.camera()],
+        CameraSpec::Path(ps) => ps.iter().map(|p| p.camera()).collect(),
+    };
+    let (w, h) = c.resolution;
+    ctx.check_resolution(w, h).map_err(|e| other(&e))?;
+    let gpu_scene = GpuScene::upload(ctx, &scene, &poses[0], w, h).map_err(|e| other(&e))?;
+    let renderer = Renderer::new(ctx, &gpu_scene);
+    let settings = |cam: &Camera| CullSettings {
+        slack: c.slack,
+        capacity: c.capacity,
+        ..CullSettings::for_camera(cam)
+    };
+    let mut frames: Vec<Vec<PassTiming>> = Vec::new();
+    let mut encode = Vec::new();
+    let mut timed = true;
+    for f in 0..(c.warmup + c.frames) as usize {
+        let cam = &poses[f % poses.len()];
+        gpu_scene.set_view(ctx, cam, w, h, 0);
+        ctx.take_encode_ms();
+        let o = renderer
+            .render(
+                ctx,
+                &gpu_scene,
+                c.backend,
+                &c.strategy,
+                &settings(cam),
+                (w, h),
+            )
+            .map_err(|e| other(&e))?;
+        let enc = ctx.take_encode_ms();
+        if f >= c.warmup as usize {
+            match o.timings {
+                Some(t) => frames.push(t),
+                None => timed = false,
+            }
+            encode.push(enc);
+        }
+    }
+    // Metrics, accuracy and images at the first pose.
+    gpu_scene.set_view(ctx, &poses[0], w, h, 0);
+    let o = renderer
+        .render(
+            ctx,
+            &gpu_scene,
+            c.backend,
+            &c.strategy,
+            &settings(&poses[0]),
+            (w, h),
+        )
+        .map_err(|e| other(&e))?;
+    let frame = GpuFrame::new(&poses[0], w, h, gpu_scene.light_count);
+    let light_count = scene.lights.len() as u64;
+    let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
+    let mut metrics: Option<ListMetrics> = None;
+    let (mut list_bytes, mut dropped) = (0, 0);
+    let per_pixel: Vec<u32> = match &o.lists {
+        Some(lists) => {
+            list_bytes = lists.list_bytes();
+            dropped = u64::from(lists.dropped);
+            if c.exact_stride > 0 {
+                let bins = lists.read(ctx).map_err(|e| other(&e))?;
+                let counts = renderer
+                    .culler
+                    .exact_counts(
+                        ctx,
+                        &gpu_scene,
+                        &o.depth,
+                        lists,
+                        frame.clip_from_world.inverse(),
+                        c.exact_stride,
+                    )
+                    .map_err(|e| other(&e))?;
+                metrics = Some(from_gpu_counts(&counts, &bins));
+            }
+            renderer
+                .culler
+                .lights_per_pixel(ctx, &gpu_scene, &o.depth, lists)
+                .map_err(|e| other(&e))?
+        }
+        None => {
+            if c.exact_stride > 0 {
+                // Naive forward evaluates every light; the exact oracle (run over any
+                // conservative lists) gives the lights needed.
+                let mut timer = manylights_gpu::timing::GpuTimer::new(ctx, 32);
+                let probe = Strategy::TiledGather { tile_size: 16 };
+                let lists = renderer
+                    .culler
+                    .run(
+                        ctx,
+                        &gpu_scene,
+                        &o.depth,
+                        &probe,
+                        &settings(&poses[0]),
+                        &mut timer,
+                    )
+                    .map_err(|e| other(&e))?;
+                let bins = lists.read(ctx).map_err(|e| other(&e))?;
+                let counts = renderer
+                    .culler
+                    .exact_counts(
+                        ctx,
+                        &gpu_scene,
+                        &o.depth,
+                        &lists,
+                        frame.clip_from_world.inverse(),
+                        c.exact_stride,
+                    )
+                    .map_err(|e| other(&e))?;
+                let sampled = counts.iter().filter(|k| k[3] != 0).count() as u64;
+                let needed: u64 = counts.iter().map(|k| u64::from(k[1])).sum();
+                metrics = Some(ListMetrics {
+                    covered_pixels: sampled,
+                    false_negatives: 0,
+                    evaluated: sampled * light_count,
+                    needed,
+                    false_positive_ratio: (needed > 0)
+                        .then(|| (sampled * light_count) as f64 / needed as f64),
+                    lights_per_pixel_mean: light_count as f64,
+                    max_lights_per_bin: light_count as u32,
+                    histogram: Vec::new(),
+                    dropped_lights: 0,
+                });
+                drop(bins);
+            }
+            o.color
+                .data
+                .iter()
+                .map(|p| if p[3] > 0.0 { light_count as u32 } else { 0 })
+                .collect()
+        }
+    };
+    let (mut acc, mut acc_inf) = (None, None);
+    if c.accuracy {
+        let reference = ReferenceRenderer::new(ctx, &gpu_scene);
+        let r = reference
+            .render(ctx, &gpu_scene, w, h)
+            .map_err(|e| other(&e))?;
+        acc = Some(compare(&o.color, &r.color, 1.0));
+        let ri = reference
+            .render_infinite(ctx, &gpu_scene, &poses[0], w, h)
+            .map_err(|e| other(&e))?;
+        acc_inf = Some(compare(&o.color, &ri.color, 1.0));
+    }
+    let id = cell.id();
+    save_images(out, &id, &o.color, &per_pixel, w, h)?;
+
+    let series = |pick: &dyn Fn(&PassTiming) -> bool| -> Vec<f64> {
+        frames
+            .iter()
+            .map(|t| t.iter().filter(|p| pick(p)).map(|p| p.ms).sum())
+            .collect()
+    };
+    let stats = |v: Vec<f64>| if timed { percentiles(&v) } else { None };
+    let total = stats(series(&|_| true));
+    let cull = stats(series(&|p| category(&p.label) == "cull"));
+    let shade = stats(series(&|p| category(&p.label) == "shade"));
+    let prepass = stats(series(&|p| category(&p.label) == "prepass"));
+    let raster = stats(series(&|p| p.kind == PassKind::Raster));
+    let compute = stats(series(&|p| p.kind == PassKind::Compute));
+    let mut passes = std::collections::BTreeMap::new();
+    if timed {
+        let labels: BTreeSet<String> = frames
+            .iter()
+            .flat_map(|t| t.iter().map(|p| p.label.clone()))
+            .collect();
+        for l in labels {
+            if let Some((m, _, _)) = percentiles(&series(&|p| p.label == l)) {
+                passes.insert(l, m);
+            }
+        }
+    }
+    let med = |s: Option<(f64, f64, f64)>| s.map(|x| x.0);
+    let p10 = |s: Option<(f64, f64, f64)>| s.map(|x| x.1);
+    let p90 = |s: Option<(f64, f64, f64)>| s.map(|x| x.2);
+    Ok(Row {
+        experiment: exp.name.clone(),
+        cell: cell.name.clone(),
+        scene: c.scene.name(),
+        lights: light_count,
+        width: w,
+        height: h,
+        strategy: if c.backend == Backend::NaiveForward {
+            "none".into()
+        } else {
+            c.strategy.name().into()
+        },
+        backend: c.backend.name().into(),
+        params: params_label(c),
+        gpu_ms_total: med(total),
+        gpu_ms_cull: med(cull),
+        gpu_ms_shade: med(shade),
+        gpu_ms_prepass: med(prepass),
+        cpu_ms_encode: percentiles(&encode).map_or(0.0, |x| x.0),
+        false_negatives: metrics.as_ref().map(|m| m.false_negatives),
+        false_positive_ratio: metrics.as_ref().and_then(|m| m.false_positive_ratio),
+        lights_per_pixel_mean: Some(
+            per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>() / covered.max(1) as f64,
+        ),
+        max_lights_per_tile: metrics.as_ref().map(|m| u64::from(m.max_lights_per_bin)),
+        dropped_lights: dropped,
+        list_bytes,
+        gbuffer_bytes: o.gbuffer_bytes,
+        psnr_db: acc.map(|e| e.psnr_db),
+        flip_mean: acc.map(|e| e.flip_mean),
+        max_abs_error: acc.map(|e| e.max_abs_error),
+        adapter: ctx.info.name.clone(),
+        driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info)
+            .trim()
+            .to_string(),
+        commit: commit.to_string(),
+        gpu_ms_total_p10: p10(total),
+        gpu_ms_total_p90: p90(total),
+        gpu_ms_cull_p10: p10(cull),
+        gpu_ms_cull_p90: p90(cull),
+        gpu_ms_shade_p10: p10(shade),
+        gpu_ms_shade_p90: p90(shade),
+        gpu_ms_prepass_p10: p10(prepass),
+        gpu_ms_prepass_p90: p90(prepass),
+        gpu_ms_raster: med(raster),
+        gpu_ms_compute: med(compute),
+        psnr_db_infinite: acc_inf.map(|e| e.psnr_db),
+        flip_mean_infinite: acc_inf.map(|e| e.flip_mean),
+        max_abs_error_infinite: acc_inf.map(|e| e.max_abs_error),
+        exact_stride: c.exact_stride,
+        frames: c.frames,
+        passes,
+        index: cell.index,
+        id,
+        finished_unix: now(),
+    })
+}
+
+/// The render and the lights-per-pixel heatmap, at most 480 pixels wide, for the report.
+fn save_images(
+    out: &Path,
+    id: &str,
+    color: &manylights_shade::HdrImage,
+    per_pixel: &[u32],
+    w: u32,
+    h: u32,
+) -> Result<(), LabError> {
+    let small = |img: image::RgbImage| {
+        if w > 480 {
+            let nh = ((h as f32) * 480.0 / w as f32).round().max(1.0) as u32;
+            image::imageops::resize(&img, 480, nh, image::imageops::FilterType::Triangle)
+        } else {
+            img
+        }
+    };
+    let max = per_pixel.iter().copied().max().unwrap_or(0).max(1);
+    for (name, img) in [
+        ("render", small(color.tonemap(1.0))),
+        ("heat", small(heatmap::pixels(per_pixel, w, h, max))),
+    ] {
+        let mut bytes = Vec::new();
+        img.write_to(
+            &mut std::io::Cursor::new(&mut bytes),
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| LabError::Other(e.to_string()))?;
+        write_atomic(&out.join("images").join(format!("{id}_{name}.png")), &bytes)?;
+    }
+    Ok(())
+}

@@ -1,0 +1,338 @@
+//! Experiments: the shipped files, tiny runs of each, durable and sharded runs, bad input, and
+//! the HTML report in a headless browser.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use manylights_lab::runner::{RunOptions, run_parsed};
+use manylights_lab::{Experiment, Row};
+
+/// The experiment files the issue names.
+const SHIPPED: [&str; 8] = [
+    "quickstart",
+    "harada2012",
+    "cis5650-scaling",
+    "tile-size",
+    "cluster-grid",
+    "depth-mask",
+    "cutoff-accuracy",
+    "scaling-1m",
+];
+
+fn shipped(name: &str) -> (Experiment, String, PathBuf) {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("experiments")
+        .join(format!("{name}.ron"));
+    let (e, src) = Experiment::load(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+    (e, src, path)
+}
+
+fn opts() -> RunOptions {
+    RunOptions {
+        commit: "test".into(),
+        ..RunOptions::default()
+    }
+}
+
+#[test]
+fn every_shipped_experiment_parses() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+    let mut found: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| {
+            e.ok()?
+                .path()
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+        })
+        .collect();
+    found.sort();
+    for name in SHIPPED {
+        assert!(
+            found.contains(&name.to_string()),
+            "experiments/{name}.ron is missing"
+        );
+        let (e, _, _) = shipped(name);
+        assert_eq!(e.name, name);
+        let cells = e.cells();
+        assert!(!cells.is_empty(), "{name}: no cells");
+        let mut names: Vec<&str> = cells.iter().map(|c| c.name.as_str()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), cells.len(), "{name}: two cells share a name");
+    }
+    assert_eq!(shipped("harada2012").0.config.lights.count, 3072);
+    assert_eq!(shipped("harada2012").0.config.resolution, (1280, 720));
+    assert_eq!(
+        shipped("scaling-1m")
+            .0
+            .sweep
+            .light_count
+            .as_ref()
+            .unwrap()
+            .last(),
+        Some(&1_048_576)
+    );
+}
+
+/// A tiny variant of every shipped experiment (48 x 27 at most, one frame, at most 256 lights)
+/// runs end to end: every cell has a row, no false negatives anywhere, and a report.
+#[test]
+fn a_tiny_variant_of_each_shipped_experiment_runs() {
+    let ctx = common::gpu();
+    let tmp = tempfile::tempdir().unwrap();
+    for name in SHIPPED {
+        let (e, src, path) = shipped(name);
+        let tiny = e.tiny();
+        let out = tmp.path().join(name);
+        let s = run_parsed(&ctx, &tiny, &src, path.parent().unwrap(), &out, &opts())
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(s.rows.len(), tiny.cells().len(), "{name}: rows");
+        for r in &s.rows {
+            assert_eq!(
+                r.false_negatives.unwrap_or(0),
+                0,
+                "{name} {}: false negatives",
+                r.cell
+            );
+            assert_eq!(r.dropped_lights, 0);
+            assert!(
+                r.gpu_ms_total.is_some_and(|t| t > 0.0),
+                "{name} {}: no GPU time",
+                r.cell
+            );
+            assert_eq!(r.experiment, name);
+        }
+        let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+        assert!(csv.starts_with("experiment,cell,scene,lights,width,height,strategy,backend,params,gpu_ms_total,gpu_ms_cull,gpu_ms_shade,gpu_ms_prepass,cpu_ms_encode,false_negatives,false_positive_ratio,lights_per_pixel_mean,max_lights_per_tile,dropped_lights,list_bytes,gbuffer_bytes,psnr_db,flip_mean,max_abs_error,adapter,driver,commit"));
+        assert_eq!(csv.lines().count(), s.rows.len() + 1);
+        let json: Vec<Row> =
+            serde_json::from_str(&std::fs::read_to_string(out.join("results.json")).unwrap())
+                .unwrap();
+        assert_eq!(json.len(), s.rows.len());
+        manylights_lab::report::write_report(&out).unwrap();
+        assert!(out.join("report.md").is_file() && out.join("report.html").is_file());
+    }
+}
+
+/// The columns of a row that do not depend on timing.
+fn deterministic(
+    r: &Row,
+) -> (
+    String,
+    String,
+    Option<u64>,
+    Option<String>,
+    u64,
+    Option<u64>,
+    String,
+) {
+    (
+        r.id.clone(),
+        r.cell.clone(),
+        r.false_negatives,
+        r.false_positive_ratio.map(|v| format!("{v:.9}")),
+        r.list_bytes,
+        r.max_lights_per_tile,
+        r.psnr_db.map_or(String::new(), |v| format!("{v:.6}")),
+    )
+}
+
+/// A run stopped after some cells and run again yields the same rows as a clean run, none
+/// duplicated; a temporary file left by an interrupted write is ignored; shards merged give the
+/// same rows too.
+#[test]
+fn resumed_and_sharded_runs_equal_a_clean_run() {
+    let ctx = common::gpu();
+    let (e, src, path) = shipped("quickstart");
+    let tiny = e.tiny();
+    let base = path.parent().unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let clean = run_parsed(&ctx, &tiny, &src, base, &tmp.path().join("clean"), &opts())
+        .unwrap()
+        .rows;
+
+    let resumed_dir = tmp.path().join("resumed");
+    let first = run_parsed(
+        &ctx,
+        &tiny,
+        &src,
+        base,
+        &resumed_dir,
+        &RunOptions {
+            max_cells: Some(2),
+            ..opts()
+        },
+    )
+    .unwrap();
+    assert_eq!(
+        (first.ran, first.rows.len()),
+        (2, 2),
+        "the interrupted run persisted its finished cells"
+    );
+    std::fs::write(resumed_dir.join("cells").join(".tmpXYZ123"), b"{\"half\": ").unwrap();
+    let second = run_parsed(&ctx, &tiny, &src, base, &resumed_dir, &opts()).unwrap();
+    assert_eq!((second.ran, second.skipped), (clean.len() - 2, 2));
+    let a: Vec<_> = clean.iter().map(deterministic).collect();
+    let b: Vec<_> = second.rows.iter().map(deterministic).collect();
+    assert_eq!(a, b, "resumed rows differ from a clean run's");
+
+    let shards: Vec<PathBuf> = (0..2)
+        .map(|i| tmp.path().join(format!("shard{i}")))
+        .collect();
+    for (i, dir) in shards.iter().enumerate() {
+        let s = run_parsed(
+            &ctx,
+            &tiny,
+            &src,
+            base,
+            dir,
+            &RunOptions {
+                shard: Some((i, 2)),
+                ..opts()
+            },
+        )
+        .unwrap();
+        assert!(
+            s.rows.iter().all(|r| r.index % 2 == i),
+            "shard {i} ran a cell of another shard"
+        );
+    }
+    let inputs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
+    let merged = manylights_lab::results::merge(&inputs, &tmp.path().join("merged")).unwrap();
+    let m: Vec<_> = merged.iter().map(deterministic).collect();
+    assert_eq!(a, m, "merged shards differ from a clean run");
+}
+
+fn manylights(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_manylights"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .unwrap()
+}
+
+/// Bad experiment files: an error with the file, line and column, exit code 1, and no output.
+#[test]
+fn bad_ron_gives_its_location_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quickstart.ron"),
+    )
+    .unwrap();
+    let cases = [
+        (
+            "syntax",
+            good.replace("frames: 3,", "frames: 3,,"),
+            vec!["syntax.ron:11:19"],
+        ),
+        (
+            "unknown-strategy",
+            good.replace("DepthMask(tile_size: 16)", "ForwardPlus(tile_size: 16)"),
+            vec!["unknown-strategy.ron:", "ForwardPlus", "TiledGather"],
+        ),
+        (
+            "negative-count",
+            good.replace("count: 256", "count: -5"),
+            vec!["negative-count.ron:9:"],
+        ),
+        (
+            "empty-sweep",
+            good.replace("backend: [Forward, Deferred]", "backend: []"),
+            vec!["empty-sweep.ron:", "sweep.backend is empty"],
+        ),
+        (
+            "unknown-field",
+            good.replace("warmup: 1,", "warmup: 1, colour: 3,"),
+            vec!["unknown-field.ron:", "colour"],
+        ),
+        (
+            "bad-value",
+            good.replace("resolution: (320, 180)", "resolution: (0, 180)"),
+            vec!["bad-value.ron:", "resolution (0, 180)"],
+        ),
+    ];
+    for (name, text, expect) in cases {
+        let file = tmp.path().join(format!("{name}.ron"));
+        std::fs::write(&file, text).unwrap();
+        let out = tmp.path().join(format!("out-{name}"));
+        let o = manylights(&[
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{name}: {stderr}");
+        for e in expect {
+            assert!(stderr.contains(e), "{name}: `{e}` missing from: {stderr}");
+        }
+        assert!(!out.exists(), "{name}: output written for a bad file");
+        println!("{name}: {}", stderr.trim());
+    }
+}
+
+/// The HTML report opens in headless Chromium with no console errors and every figure loaded.
+#[test]
+fn html_report_loads_in_headless_chromium() {
+    let chromium = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .find(|p| Path::new(p).exists())
+        .unwrap_or_else(|| {
+            panic!("this test needs Chromium: `apt-get install chromium` (as .ci/run does)")
+        });
+    let ctx = common::gpu();
+    let (e, src, path) = shipped("quickstart");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    run_parsed(&ctx, &e.tiny(), &src, path.parent().unwrap(), &out, &opts()).unwrap();
+    let html = manylights_lab::report::write_report(&out).unwrap();
+    let profile = tmp.path().join("profile");
+    let o = Command::new(chromium)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--allow-file-access-from-files",
+            "--enable-logging=stderr",
+            "--v=0",
+            "--virtual-time-budget=5000",
+            &format!("--user-data-dir={}", profile.display()),
+            "--dump-dom",
+            &format!("file://{}", html.display()),
+        ])
+        .output()
+        .unwrap();
+    let dom = String::from_utf8_lossy(&o.stdout);
+    let log = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        dom.contains("data-figures=\"loaded\""),
+        "not every figure loaded; DOM: {}",
+        &dom[..dom.len().min(500)]
+    );
+    let count: usize = dom
+        .split("data-figure-count=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0);
+    assert!(count >= 3, "only {count} figures on the page");
+    for line in log.lines() {
+        let l = line.to_lowercase();
+        assert!(
+            !(l.contains("console") && (l.contains("error") || l.contains("uncaught"))),
+            "console error: {line}"
+        );
+        assert!(
+            !l.contains("failed to load resource"),
+            "a resource failed to load: {line}"
+        );
+    }
+}
