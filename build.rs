@@ -18,6 +18,8 @@ fn main() {
         "cargo:rustc-env=MANYLIGHTS_COMMIT={commit}{}",
         if dirty { "-dirty" } else { "" }
     );
-    println!("cargo:rerun-if-changed=.git/HEAD");
-    println!("cargo:rerun-if-changed=.git/index");
+    // HEAD moves on commit (the index and the reflog change); sources decide "-dirty".
+    for path in [".git/HEAD", ".git/index", ".git/logs/HEAD", "src", "crates", "shaders", "experiments"] {
+        println!("cargo:rerun-if-changed={path}");
+    }
 }

@@ -22,7 +22,7 @@ use manylights_shade::{Backend, ReferenceRenderer, Renderer, accuracy};
 /// Light-culling research workbench: culling strategies and shading backends on wgpu,
 /// measured for speed and for exactness against a brute-force reference.
 #[derive(Parser, Debug)]
-#[command(name = "manylights", version, about, long_about = None)]
+#[command(name = "manylights", version = concat!(env!("CARGO_PKG_VERSION"), " (commit ", env!("MANYLIGHTS_COMMIT"), ")"), about, long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
