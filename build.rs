@@ -19,7 +19,15 @@ fn main() {
         if dirty { "-dirty" } else { "" }
     );
     // HEAD moves on commit (the index and the reflog change); sources decide "-dirty".
-    for path in [".git/HEAD", ".git/index", ".git/logs/HEAD", "src", "crates", "shaders", "experiments"] {
+    for path in [
+        ".git/HEAD",
+        ".git/index",
+        ".git/logs/HEAD",
+        "src",
+        "crates",
+        "shaders",
+        "experiments",
+    ] {
         println!("cargo:rerun-if-changed={path}");
     }
 }

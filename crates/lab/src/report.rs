@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use crate::results::{Row, load_cells};
+use crate::results::{Row, load_rows};
 use crate::{LabError, write_atomic};
 
 const FONT: &str = "sans-serif";
@@ -416,7 +416,7 @@ fn summary(rows: &[Row]) -> Vec<String> {
 /// Writes `report.md`, `report.html` and `figures/` for the run in `dir`; returns the HTML path.
 pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     register_font();
-    let rows = load_cells(dir)?;
+    let rows = load_rows(dir)?;
     if rows.is_empty() {
         return Err(LabError::Other(format!(
             "{}: no finished cells to report on (run the experiment first)",
@@ -528,7 +528,12 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
                 r.max_lights_per_tile.map_or("-".into(), |v| v.to_string()),
                 r.dropped_lights.to_string(),
                 format!("{:.1}", r.list_bytes as f64 / 1024.0),
-                fmt_opt(r.psnr_db, 1),
+                // Identical images (no error at all) have an infinite PSNR.
+                if r.psnr_db.is_none() && r.max_abs_error == Some(0.0) {
+                    "inf".into()
+                } else {
+                    fmt_opt(r.psnr_db, 1)
+                },
                 fmt_opt(r.flip_mean, 5),
             ]
         })

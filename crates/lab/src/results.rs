@@ -60,7 +60,8 @@ pub struct Row {
     pub list_bytes: u64,
     /// Bytes of the G-buffer.
     pub gbuffer_bytes: u64,
-    /// PSNR against the reference, dB.
+    /// PSNR against the reference, dB (`"inf"` in JSON for identical images).
+    #[serde(with = "inf_f64")]
     pub psnr_db: Option<f64>,
     /// Mean FLIP against the reference.
     pub flip_mean: Option<f64>,
@@ -93,6 +94,7 @@ pub struct Row {
     /// Median GPU time of compute passes, ms.
     pub gpu_ms_compute: Option<f64>,
     /// PSNR against the infinite-range reference (the cost of the cut-off), dB.
+    #[serde(with = "inf_f64")]
     pub psnr_db_infinite: Option<f64>,
     /// Mean FLIP against the infinite-range reference.
     pub flip_mean_infinite: Option<f64>,
@@ -110,6 +112,38 @@ pub struct Row {
     pub id: String,
     /// UTC time the cell finished (seconds since 1970).
     pub finished_unix: u64,
+}
+
+/// JSON has no infinity: an infinite PSNR (identical images) is written as the string "inf",
+/// and read back from it; null stays "not measured".
+mod inf_f64 {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(x) if x.is_infinite() => s.serialize_str(if *x > 0.0 { "inf" } else { "-inf" }),
+            Some(x) => s.serialize_f64(*x),
+            None => s.serialize_none(),
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum V {
+            Num(f64),
+            Text(String),
+        }
+        Ok(match Option::<V>::deserialize(d)? {
+            None => None,
+            Some(V::Num(x)) => Some(x),
+            Some(V::Text(t)) => Some(match t.as_str() {
+                "inf" => f64::INFINITY,
+                "-inf" => f64::NEG_INFINITY,
+                other => return Err(serde::de::Error::custom(format!("not a number: {other}"))),
+            }),
+        })
+    }
 }
 
 /// The CSV columns, in order: the contract first.
@@ -185,6 +219,23 @@ pub fn to_csv(rows: &[Row]) -> String {
         out.push('\n');
     }
     out
+}
+
+/// The rows of a run directory: its cells, or where it has none (a copy kept for the record),
+/// its `results.json`.
+pub fn load_rows(dir: &Path) -> Result<Vec<Row>, LabError> {
+    let rows = load_cells(dir)?;
+    if !rows.is_empty() {
+        return Ok(rows);
+    }
+    let path = dir.join("results.json");
+    match std::fs::read_to_string(&path) {
+        Ok(text) => serde_json::from_str(&text).map_err(|e| LabError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        }),
+        Err(_) => Ok(Vec::new()),
+    }
 }
 
 /// Reads every persisted cell of `dir` (`dir/cells/*.json`), sorted by index.
@@ -318,6 +369,7 @@ pub fn percentiles(v: &[f64]) -> Option<(f64, f64, f64)> {
     }
     let mut s = v.to_vec();
     s.sort_by(f64::total_cmp);
-    let at = |q: f64| s[((q * (s.len() - 1) as f64).round() as usize).min(s.len() - 1)];
+    // `+ 0.0` turns the -0.0 of an empty sum into 0.0.
+    let at = |q: f64| s[((q * (s.len() - 1) as f64).round() as usize).min(s.len() - 1)] + 0.0;
     Some((at(0.5), at(0.1), at(0.9)))
 }
