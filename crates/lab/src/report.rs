@@ -328,7 +328,7 @@ fn fmt_opt(v: Option<f64>, digits: usize) -> String {
         if x.is_infinite() {
             "inf".into()
         } else {
-            format!("{x:.digits$}")
+            format!("{:.digits$}", x + 0.0) // `+ 0.0`: an empty sum's -0.0 shows as 0
         }
     })
 }
