@@ -1,0 +1,273 @@
+//! GPU-side benchmarks: the measured time is the GPU timestamp delta of the named passes,
+//! returned to criterion through `iter_custom`, so criterion's statistics apply to GPU time.
+//! Set-up (scenes, uploads, the depth prepass) stays outside the measurement.
+//!
+//! Benchmarks are named after the passes they time:
+//! - `cull.<strategy>/<width>x<height>/<lights>`: every culling pass of a strategy (its
+//!   `cull.*`, `scan.*` and `sort.*` passes) over the atrium's depth buffer;
+//! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
+//!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
+//! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
+//!   lights and 1920 x 1080, raster and compute passes apart.
+//!
+//! `MANYLIGHTS_BENCH_QUICK=1` shrinks everything (light counts, resolutions, key counts) so the
+//! benches can be smoke-run on lavapipe; figures come only from the GPU machine.
+
+use std::time::Duration;
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use manylights_cull::radix_sort::{RadixSort, SortedIn};
+use manylights_cull::{CullSettings, Culler, Strategy};
+use manylights_gpu::prepass::{DepthPrepass, depth_target};
+use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
+use manylights_scene::procedural::ProceduralScene;
+use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
+use manylights_shade::{Backend, Renderer};
+use rand::{RngExt, SeedableRng};
+
+fn quick() -> bool {
+    std::env::var("MANYLIGHTS_BENCH_QUICK").is_ok_and(|v| v != "0")
+}
+
+fn gpu() -> GpuContext {
+    let ctx = GpuContext::new(&GpuOptions::default())
+        .unwrap_or_else(|e| panic!("the GPU benchmarks need a Vulkan adapter: {e}"));
+    eprintln!("adapter: {}", ctx.summary());
+    ctx
+}
+
+/// The atrium with `n` uniformly placed lights of radius 0.5 m (as experiments/scaling-1m.ron).
+fn atrium(n: u32) -> Scene {
+    let mut s = ProceduralScene::from_name("atrium")
+        .unwrap()
+        .build()
+        .unwrap();
+    s.lights = LightSpec {
+        generator: LightGenerator::Uniform,
+        count: n,
+        seed: 1,
+        radius: RadiusRule::Fixed(0.5),
+        intensity: 0.5,
+        ..LightSpec::default()
+    }
+    .generate(&s)
+    .unwrap();
+    s
+}
+
+fn ms(t: &[manylights_gpu::timing::PassTiming], pick: impl Fn(&str) -> bool) -> f64 {
+    t.iter().filter(|p| pick(&p.label)).map(|p| p.ms).sum()
+}
+
+fn configure(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>) {
+    // Flat sampling: ten samples of equal iteration counts, so the slowest cases (a million
+    // lights at 4K) need ten iterations, not the fifty-five of linear sampling.
+    g.sample_size(10)
+        .sampling_mode(criterion::SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(300))
+        .measurement_time(Duration::from_secs(2));
+}
+
+fn cull(c: &mut Criterion) {
+    let ctx = gpu();
+    let (counts, sizes): (Vec<u32>, Vec<(u32, u32)>) = if quick() {
+        (vec![1024, 4096], vec![(160, 90)])
+    } else {
+        (
+            vec![1024, 4096, 16_384, 65_536, 262_144, 1_048_576],
+            vec![(1920, 1080), (3840, 2160)],
+        )
+    };
+    for &(w, h) in &sizes {
+        for &n in &counts {
+            let scene = atrium(n);
+            let gs = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
+            let depth = depth_target(&ctx, w, h);
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            DepthPrepass::new(&ctx, &gs).encode(
+                &mut enc,
+                &gs,
+                &depth.create_view(&Default::default()),
+                &mut GpuTimer::new(&ctx, 1),
+            );
+            ctx.submit_and_wait(enc, "bench prepass").unwrap();
+            let culler = Culler::new(&ctx, &gs);
+            let settings = CullSettings::for_camera(&scene.camera);
+            for strategy in Strategy::defaults() {
+                let mut g = c.benchmark_group(format!("cull.{}", strategy.name()));
+                configure(&mut g);
+                g.throughput(Throughput::Elements(u64::from(n)));
+                g.bench_with_input(BenchmarkId::new(format!("{w}x{h}"), n), &n, |b, _| {
+                    b.iter_custom(|iters| {
+                        let mut total = 0.0;
+                        for _ in 0..iters {
+                            let mut timer = GpuTimer::new(&ctx, 256);
+                            culler
+                                .run(&ctx, &gs, &depth, &strategy, &settings, &mut timer)
+                                .unwrap();
+                            let t = timer
+                                .read(&ctx)
+                                .unwrap()
+                                .expect("the benchmarks need timestamp queries");
+                            total += ms(&t, |l| {
+                                l.starts_with("cull.")
+                                    || l.starts_with("scan.")
+                                    || l.starts_with("sort.")
+                            });
+                        }
+                        Duration::from_secs_f64(total * 1e-3)
+                    })
+                });
+                g.finish();
+            }
+        }
+    }
+}
+
+fn buffer(ctx: &GpuContext, data: &[u32]) -> wgpu::Buffer {
+    let b = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: None,
+        size: (data.len() as u64 * 4).max(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    ctx.queue.write_buffer(&b, 0, bytemuck::cast_slice(data));
+    b
+}
+
+fn sort(c: &mut Criterion) {
+    let ctx = gpu();
+    let sizes: Vec<usize> = if quick() {
+        vec![1 << 16]
+    } else {
+        vec![1 << 20, 1 << 22, 1 << 24, 1 << 26]
+    };
+    let ours = RadixSort::new(&ctx);
+    let mut lamp = lampshade::KeyValueSorter::new(&ctx.device, &ctx.queue);
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+    for n in sizes {
+        let keys: Vec<u32> = (0..n).map(|_| rng.random::<u32>()).collect();
+        let vals: Vec<u32> = (0..n as u32).collect();
+        let (k, v, kt, vt) = (
+            buffer(&ctx, &keys),
+            buffer(&ctx, &vals),
+            buffer(&ctx, &vals),
+            buffer(&ctx, &vals),
+        );
+        let mut g = c.benchmark_group("sort.radix");
+        configure(&mut g);
+        g.throughput(Throughput::Elements(n as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter_custom(|iters| {
+                let mut total = 0.0;
+                for _ in 0..iters {
+                    ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
+                    let mut timer = GpuTimer::new(&ctx, 512);
+                    let mut enc = ctx.device.create_command_encoder(&Default::default());
+                    let at = ours
+                        .encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
+                        .unwrap();
+                    assert_eq!(at, SortedIn::Input, "32 bits: an even number of passes");
+                    timer.resolve(&mut enc);
+                    ctx.submit_and_wait(enc, "bench sort").unwrap();
+                    total += ms(&timer.read(&ctx).unwrap().expect("timestamps"), |_| true);
+                }
+                Duration::from_secs_f64(total * 1e-3)
+            })
+        });
+        g.finish();
+        let pairs: Vec<u32> = keys.iter().zip(&vals).flat_map(|(&a, &b)| [a, b]).collect();
+        let (inp, out) = (buffer(&ctx, &pairs), buffer(&ctx, &pairs));
+        let mut g = c.benchmark_group("sort.lampshade");
+        configure(&mut g);
+        g.throughput(Throughput::Elements(n as u64));
+        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    // The sum of its passes' GPU times, as ours is measured.
+                    total += pollster::block_on(lamp.profile_sort_gpu_to_gpu(&inp, &out, n as u32))
+                        .expect("lampshade profile")
+                        .dispatch_time;
+                }
+                total
+            })
+        });
+        g.finish();
+    }
+}
+
+fn shade(c: &mut Criterion) {
+    let ctx = gpu();
+    let ((w, h), n) = if quick() {
+        ((160, 90), 256)
+    } else {
+        ((1920, 1080), 4096)
+    };
+    let mut scene = ProceduralScene::from_name("atrium")
+        .unwrap()
+        .build()
+        .unwrap();
+    scene.lights = LightSpec {
+        generator: LightGenerator::LightField,
+        count: n,
+        seed: 4,
+        radius: RadiusRule::Fixed(2.0),
+        intensity: 4.0,
+        ..LightSpec::default()
+    }
+    .generate(&scene)
+    .unwrap();
+    let gs = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
+    let renderer = Renderer::new(&ctx, &gs);
+    let settings = CullSettings::for_camera(&scene.camera);
+    let strategy = Strategy::TiledGather { tile_size: 16 };
+    for backend in Backend::ALL {
+        let frame = |iters: u64, pick: &dyn Fn(&str) -> bool| {
+            let mut total = 0.0;
+            for _ in 0..iters {
+                let out = renderer
+                    .render(&ctx, &gs, backend, &strategy, &settings, (w, h))
+                    .unwrap();
+                total += ms(&out.timings.expect("timestamps"), pick);
+            }
+            Duration::from_secs_f64(total * 1e-3)
+        };
+        let mut g = c.benchmark_group(format!("frame.{}", backend.name()));
+        configure(&mut g);
+        g.bench_function(BenchmarkId::from_parameter(format!("{w}x{h}/{n}")), |b| {
+            b.iter_custom(|iters| frame(iters, &|_| true))
+        });
+        g.finish();
+        for pass in [
+            "prepass.depth",
+            "shade.gbuffer",
+            "shade.forward",
+            "shade.deferred",
+            "shade.naive",
+        ] {
+            let used = match backend {
+                Backend::Forward => ["prepass.depth", "shade.forward"].contains(&pass),
+                Backend::Deferred | Backend::DeferredStoredPosition => {
+                    ["shade.gbuffer", "shade.deferred"].contains(&pass)
+                }
+                Backend::NaiveForward => ["prepass.depth", "shade.naive"].contains(&pass),
+            };
+            if used {
+                let mut g = c.benchmark_group(pass);
+                configure(&mut g);
+                g.bench_function(
+                    BenchmarkId::new(backend.name(), format!("{w}x{h}/{n}")),
+                    |b| b.iter_custom(|iters| frame(iters, &|l| l == pass)),
+                );
+                g.finish();
+            }
+        }
+    }
+}
+
+criterion_group!(benches, cull, sort, shade);
+criterion_main!(benches);
