@@ -1,0 +1,84 @@
+#!/usr/bin/env python3
+"""Turns criterion's JSON (CRITERION_HOME of scripts/run-benches.sh) and the CUB JSON into the
+Markdown tables of docs/BENCHMARKS.md.
+
+usage: bench_tables.py CRITERION_GPU_DIR CRITERION_CPU_DIR CUB_JSON > tables.md
+Times are criterion's median estimates of the GPU timestamp deltas (GPU benches) or wall time
+(CPU benches)."""
+import json
+import os
+import sys
+from collections import defaultdict
+
+
+def load(root):
+    out = {}
+    for dirpath, _, files in os.walk(root):
+        if dirpath.endswith("/new") and "benchmark.json" in files and "estimates.json" in files:
+            b = json.load(open(os.path.join(dirpath, "benchmark.json")))
+            e = json.load(open(os.path.join(dirpath, "estimates.json")))
+            out[b["full_id"]] = (b, e["median"]["point_estimate"] / 1e6)  # ns -> ms
+    return out
+
+
+def ms(v):
+    return f"{v * 1000:.1f} µs" if v < 1 else f"{v:.2f} ms"
+
+
+def main():
+    gpu, cpu, cub = load(sys.argv[1]), load(sys.argv[2]), json.load(open(sys.argv[3]))
+    p = print
+    # Culling.
+    for res in ["1920x1080", "3840x2160"]:
+        counts = sorted({int(b["value_str"]) for b, _ in gpu.values() if b["group_id"].startswith("cull.") and b["function_id"] == res})
+        if not counts:
+            continue
+        p(f"\n**Culling, atrium, {res}** (all culling passes of the strategy: median GPU time)\n")
+        p("| strategy | " + " | ".join(f"{c:,}" for c in counts) + " |")
+        p("|---|" + "---|" * len(counts))
+        for s in ["tiled_gather", "tiled_scatter", "depth_mask", "clustered"]:
+            cells = [ms(gpu[f"cull.{s}/{res}/{c}"][1]) if f"cull.{s}/{res}/{c}" in gpu else "-" for c in counts]
+            p(f"| {s} | " + " | ".join(cells) + " |")
+    # Sort.
+    cubp = {r["n"]: r for r in cub["rows"] if r["kind"] == "pairs"}
+    cubk = {r["n"]: r for r in cub["rows"] if r["kind"] == "keys"}
+    p(f"\n**Radix sort of (u32 key, u32 value) pairs, random 32-bit keys** (CUB through CuPy {cub['cupy']}: argsort = SortPairs of (key, index); keys-only for reference)\n")
+    p("| keys | sort.radix | G pairs/s | lampshade | G pairs/s | CUB pairs | G pairs/s | ours / CUB | CUB keys only |")
+    p("|---|---|---|---|---|---|---|---|---|")
+    for n in sorted(cubp):
+        ours = gpu.get(f"sort.radix/{n}")
+        lamp = gpu.get(f"sort.lampshade/{n}")
+        if not ours:
+            continue
+        o, l, c = ours[1], lamp[1] if lamp else None, cubp[n]["ms"]
+        p(f"| {n:,} | {ms(o)} | {n / o / 1e6:.2f} | {ms(l) if l else '-'} | {n / l / 1e6:.2f} | {ms(c)} | {n / c / 1e6:.2f} | {c / o:.0%} | {ms(cubk[n]['ms'])} |" if l else "")
+    # Shading.
+    p("\n**Shading at 4,096 lights, atrium, 1920x1080** (tiled gather 16 px lists; raster and compute passes apart)\n")
+    p("| backend | frame | geometry pass (raster) | shading pass | shading kind |")
+    p("|---|---|---|---|---|")
+    rows = {}
+    for fid, (b, v) in gpu.items():
+        if b["group_id"].startswith("frame."):
+            rows[b["group_id"][6:]] = {"frame": v}
+    for fid, (b, v) in gpu.items():
+        g = b["group_id"]
+        if g in ("prepass.depth", "shade.gbuffer"):
+            rows[b["function_id"]]["geometry"] = v
+        elif g in ("shade.forward", "shade.deferred", "shade.naive"):
+            rows[b["function_id"]]["shade"] = v
+            rows[b["function_id"]]["kind"] = "compute" if g == "shade.deferred" else "raster"
+    for k in ["forward", "deferred", "deferred_stored_position", "naive_forward"]:
+        r = rows.get(k)
+        if r:
+            p(f"| {k} | {ms(r['frame'])} | {ms(r.get('geometry', 0))} | {ms(r.get('shade', 0))} | {r.get('kind', '')} |")
+    if "forward" in rows and "naive_forward" in rows:
+        p(f"\nForward+ against naive forward, whole frames: {rows['naive_forward']['frame'] / rows['forward']['frame']:.1f} times faster.")
+    # CPU.
+    p("\n**CPU side** (wall time, median)\n")
+    p("| benchmark | time |")
+    p("|---|---|")
+    for fid in sorted(cpu):
+        p(f"| {fid} | {ms(cpu[fid][1])} |")
+
+
+main()
