@@ -2,7 +2,7 @@
 
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, ShaderDef, ShaderFile};
 use manylights_gpu::timing::GpuTimer;
-use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
+use manylights_gpu::{GpuContext, GpuError, GpuScene, pipeline, readback, shader_file};
 use wgpu::util::DeviceExt;
 
 use crate::layout::{CULL_CONSTS, GROUPS_X, GpuCullParams, GpuTileDepth};
@@ -216,33 +216,16 @@ pub struct Culler {
     sort: RadixSort,
 }
 
+/// A binding of the culling groups (visible to compute and, for list consumers, fragments).
 fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
+    pipeline::entry(
         binding,
-        visibility: wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT,
+        wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT,
         ty,
-        count: None,
-    }
+    )
 }
 
-fn storage(read_only: bool) -> wgpu::BindingType {
-    wgpu::BindingType::Buffer {
-        ty: wgpu::BufferBindingType::Storage { read_only },
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    }
-}
-
-const UNIFORM: wgpu::BindingType = wgpu::BindingType::Buffer {
-    ty: wgpu::BufferBindingType::Uniform,
-    has_dynamic_offset: false,
-    min_binding_size: None,
-};
-const DEPTH: wgpu::BindingType = wgpu::BindingType::Texture {
-    sample_type: wgpu::TextureSampleType::Depth,
-    view_dimension: wgpu::TextureViewDimension::D2,
-    multisampled: false,
-};
+use pipeline::{DEPTH_TEXTURE as DEPTH, UNIFORM, storage};
 
 /// Compute pipelines for the entry points of one shader, over group 0 (the scene) and `group1`.
 fn pipelines<const N: usize>(
@@ -253,21 +236,8 @@ fn pipelines<const N: usize>(
     entries: [&str; N],
 ) -> [wgpu::ComputePipeline; N] {
     let module = def.create(d);
-    let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(def.name),
-        bind_group_layouts: &[Some(scene_layout), Some(group1)],
-        immediate_size: 0,
-    });
-    entries.map(|e| {
-        d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(e),
-            layout: Some(&pl),
-            module: &module,
-            entry_point: Some(e),
-            compilation_options: Default::default(),
-            cache: None,
-        })
-    })
+    let pl = pipeline::layout(d, def.name, &[scene_layout, group1]);
+    entries.map(|e| pipeline::compute(d, &module, &pl, e))
 }
 
 impl Culler {

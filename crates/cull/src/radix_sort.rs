@@ -9,7 +9,7 @@
 use manylights_gpu::shader_file;
 use manylights_gpu::shaders::{ShaderDef, WgslConst};
 use manylights_gpu::timing::GpuTimer;
-use manylights_gpu::{GpuContext, GpuError};
+use manylights_gpu::{GpuContext, GpuError, pipeline};
 use wgpu::util::DeviceExt;
 
 use crate::layout::GROUPS_X;
@@ -73,49 +73,18 @@ impl RadixSort {
 
     fn with_scan(ctx: &GpuContext, scan: Scan) -> Self {
         let d = &ctx.device;
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }];
-        entries.extend((1..=5).map(|binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }));
+        let c = wgpu::ShaderStages::COMPUTE;
+        let mut entries = vec![pipeline::entry(0, c, pipeline::UNIFORM)];
+        entries.extend((1..=5).map(|b| pipeline::entry(b, c, pipeline::storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("sort.radix"),
             entries: &entries,
         });
         let module = SHADER.create(d);
-        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("sort.radix"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipe = |entry| {
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pl),
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pl = pipeline::layout(d, "sort.radix", &[&layout]);
         Self {
-            count: pipe("sort_count"),
-            scatter: pipe("sort_scatter"),
+            count: pipeline::compute(d, &module, &pl, "sort_count"),
+            scatter: pipeline::compute(d, &module, &pl, "sort_scatter"),
             layout,
             scan,
         }

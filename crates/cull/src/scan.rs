@@ -2,10 +2,10 @@
 //! block scans of 1,024 elements, the block totals scanned recursively, then added back.
 //! It assumes no subgroup size, so it runs on any adapter.
 
-use manylights_gpu::GpuContext;
 use manylights_gpu::shader_file;
 use manylights_gpu::shaders::ShaderDef;
 use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::{GpuContext, pipeline};
 use wgpu::util::DeviceExt;
 
 use crate::layout::{SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X};
@@ -75,57 +75,26 @@ impl Scan {
             return None;
         }
         let d = &ctx.device;
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let c = wgpu::ShaderStages::COMPUTE;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scan"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage(1),
-                storage(2),
+                pipeline::entry(0, c, pipeline::UNIFORM),
+                pipeline::entry(1, c, pipeline::storage(false)),
+                pipeline::entry(2, c, pipeline::storage(false)),
             ],
         });
         let module = SHADER.create(d);
-        let sg_module = (path == ScanPath::Subgroup).then(|| SUBGROUP_SHADER.create(d));
-        let pl = d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("scan"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let pipe = |entry: &str, module: &wgpu::ShaderModule| {
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&pl),
-                module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let blocks = match &sg_module {
-            Some(m) => pipe("scan_blocks_subgroup", m),
-            None => pipe("scan_blocks", &module),
+        let pl = pipeline::layout(d, "scan", &[&layout]);
+        let blocks = match path {
+            ScanPath::Subgroup => {
+                pipeline::compute(d, &SUBGROUP_SHADER.create(d), &pl, "scan_blocks_subgroup")
+            }
+            ScanPath::Portable => pipeline::compute(d, &module, &pl, "scan_blocks"),
         };
         Some(Self {
             blocks,
-            add: pipe("scan_add", &module),
+            add: pipeline::compute(d, &module, &pl, "scan_add"),
             layout,
             path,
         })

@@ -10,6 +10,7 @@
 
 pub mod context;
 pub mod layout;
+pub mod pipeline;
 pub mod prepass;
 pub mod readback;
 pub mod scene;

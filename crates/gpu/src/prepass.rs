@@ -1,9 +1,8 @@
 //! The depth prepass (`prepass.depth`): the shared vertex stage into a `Depth32Float` target that
 //! culling strategies read and that later raster passes test against with `Equal`.
 
-use crate::layout::VERTEX_LAYOUT;
 use crate::timing::GpuTimer;
-use crate::{GpuContext, GpuScene, shaders};
+use crate::{GpuContext, GpuScene, pipeline, shaders};
 
 /// Depth format of every raster pass.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -48,37 +47,14 @@ impl DepthPrepass {
     /// Builds the pipeline for scenes laid out as [`GpuScene`].
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let module = shaders::PREPASS.create(&ctx.device);
-        let layout = ctx
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("prepass.depth"),
-                bind_group_layouts: &[Some(&scene.layout)],
-                immediate_size: 0,
-            });
-        let pipeline = ctx
-            .device
-            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("prepass.depth"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(VERTEX_LAYOUT)],
-                },
-                primitive: PRIMITIVE,
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Less),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: None,
-                multiview_mask: None,
-                cache: None,
-            });
+        let pipeline = pipeline::raster(
+            &ctx.device,
+            "prepass.depth",
+            &module,
+            &[&scene.layout],
+            None,
+            pipeline::DepthTest::WriteLess,
+        );
         Self { pipeline }
     }
 

@@ -14,8 +14,8 @@
 use manylights_cull::gpu::{COMMON, LOOKUP};
 use manylights_cull::layout::CULL_CONSTS;
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
-use manylights_gpu::layout::VERTEX_LAYOUT;
-use manylights_gpu::prepass::{DEPTH_FORMAT, DepthPrepass, PRIMITIVE, depth_target};
+use manylights_gpu::pipeline;
+use manylights_gpu::prepass::{DepthPrepass, depth_target};
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene, readback, shader_file};
@@ -139,37 +139,11 @@ pub struct Renderer {
     deferred_gbuffer: wgpu::BindGroupLayout,
 }
 
-fn layout_entry(
-    binding: u32,
-    visibility: wgpu::ShaderStages,
-    ty: wgpu::BindingType,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility,
-        ty,
-        count: None,
-    }
-}
-
 fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
-    let buffer = |ty| wgpu::BindingType::Buffer {
-        ty,
-        has_dynamic_offset: false,
-        min_binding_size: None,
-    };
     vec![
-        layout_entry(0, visibility, buffer(wgpu::BufferBindingType::Uniform)),
-        layout_entry(
-            1,
-            visibility,
-            buffer(wgpu::BufferBindingType::Storage { read_only: true }),
-        ),
-        layout_entry(
-            2,
-            visibility,
-            buffer(wgpu::BufferBindingType::Storage { read_only: true }),
-        ),
+        pipeline::entry(0, visibility, pipeline::UNIFORM),
+        pipeline::entry(1, visibility, pipeline::storage(true)),
+        pipeline::entry(2, visibility, pipeline::storage(true)),
     ]
 }
 
@@ -185,165 +159,92 @@ impl Renderer {
     /// Builds every pipeline for scenes laid out as [`GpuScene`].
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let d = &ctx.device;
-        let forward_lists = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shade.forward.lists"),
-            entries: &lists_entries(wgpu::ShaderStages::FRAGMENT),
-        });
-        let mut entries = lists_entries(wgpu::ShaderStages::COMPUTE);
-        entries.push(layout_entry(
-            3,
-            wgpu::ShaderStages::COMPUTE,
-            texture(wgpu::TextureSampleType::Depth),
-        ));
-        let deferred_lists = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shade.deferred.lists"),
-            entries: &entries,
-        });
-        let deferred_gbuffer = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("shade.deferred.gbuffer"),
-            entries: &[
-                layout_entry(
-                    0,
-                    wgpu::ShaderStages::COMPUTE,
-                    texture(wgpu::TextureSampleType::Float { filterable: false }),
-                ),
-                layout_entry(
-                    1,
-                    wgpu::ShaderStages::COMPUTE,
-                    texture(wgpu::TextureSampleType::Uint),
-                ),
-                layout_entry(
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let forward_lists = layout(
+            "shade.forward.lists",
+            &lists_entries(wgpu::ShaderStages::FRAGMENT),
+        );
+        let mut entries = lists_entries(compute);
+        entries.push(pipeline::entry(3, compute, pipeline::DEPTH_TEXTURE));
+        let deferred_lists = layout("shade.deferred.lists", &entries);
+        let unfiltered = texture(wgpu::TextureSampleType::Float { filterable: false });
+        let deferred_gbuffer = layout(
+            "shade.deferred.gbuffer",
+            &[
+                pipeline::entry(0, compute, unfiltered),
+                pipeline::entry(1, compute, texture(wgpu::TextureSampleType::Uint)),
+                pipeline::entry(
                     2,
-                    wgpu::ShaderStages::COMPUTE,
+                    compute,
                     wgpu::BindingType::StorageTexture {
                         access: wgpu::StorageTextureAccess::WriteOnly,
                         format: HDR,
                         view_dimension: wgpu::TextureViewDimension::D2,
                     },
                 ),
-                layout_entry(
-                    3,
-                    wgpu::ShaderStages::COMPUTE,
-                    texture(wgpu::TextureSampleType::Float { filterable: false }),
-                ),
+                pipeline::entry(3, compute, unfiltered),
             ],
-        });
-        let pl = |label, groups: &[Option<&wgpu::BindGroupLayout>]| {
-            d.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some(label),
-                bind_group_layouts: groups,
-                immediate_size: 0,
-            })
-        };
-        let raster = |label: &str,
-                      module: &wgpu::ShaderModule,
-                      fs: &str,
-                      layout: &wgpu::PipelineLayout,
-                      targets: &[Option<wgpu::ColorTargetState>],
-                      equal: bool| {
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some(label),
-                layout: Some(layout),
-                vertex: wgpu::VertexState {
-                    module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(VERTEX_LAYOUT)],
-                },
-                primitive: PRIMITIVE,
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(!equal),
-                    depth_compare: Some(if equal {
-                        wgpu::CompareFunction::Equal
-                    } else {
-                        wgpu::CompareFunction::Less
-                    }),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module,
-                    entry_point: Some(fs),
-                    compilation_options: Default::default(),
-                    targets,
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
-        };
-        let target = |format| {
-            Some(wgpu::ColorTargetState {
-                format,
-                blend: None,
-                write_mask: wgpu::ColorWrites::ALL,
-            })
-        };
-        let fwd_module = FORWARD.create(d);
+        );
+        use pipeline::{DepthTest, raster, target};
+        let fwd = FORWARD.create(d);
+        let gb = GBUFFER.create(d);
+        let g0 = &scene.layout;
         let forward = raster(
+            d,
             "shade.forward",
-            &fwd_module,
-            "fs_forward",
-            &pl(
-                "shade.forward",
-                &[Some(&scene.layout), Some(&forward_lists)],
-            ),
-            &[target(HDR)],
-            true,
+            &fwd,
+            &[g0, &forward_lists],
+            Some(("fs_forward", &[target(HDR)])),
+            DepthTest::Equal,
         );
         let naive = raster(
+            d,
             "shade.naive",
-            &fwd_module,
-            "fs_naive",
-            &pl("shade.naive", &[Some(&scene.layout)]),
-            &[target(HDR)],
-            true,
+            &fwd,
+            &[g0],
+            Some(("fs_naive", &[target(HDR)])),
+            DepthTest::Equal,
         );
-        let gb_module = GBUFFER.create(d);
         let gbuffer = raster(
+            d,
             "shade.gbuffer",
-            &gb_module,
-            "fs_gbuffer",
-            &pl("shade.gbuffer", &[Some(&scene.layout)]),
-            &[target(GB_NORMAL_DEPTH), target(GB_MATERIAL)],
-            false,
+            &gb,
+            &[g0],
+            Some((
+                "fs_gbuffer",
+                &[target(GB_NORMAL_DEPTH), target(GB_MATERIAL)],
+            )),
+            DepthTest::WriteLess,
         );
         let gbuffer_stored = raster(
+            d,
             "shade.gbuffer",
-            &gb_module,
-            "fs_gbuffer_stored",
-            &pl("shade.gbuffer", &[Some(&scene.layout)]),
-            &[
-                target(GB_NORMAL_DEPTH),
-                target(GB_MATERIAL),
-                target(GB_POSITION),
-            ],
-            false,
+            &gb,
+            &[g0],
+            Some((
+                "fs_gbuffer_stored",
+                &[
+                    target(GB_NORMAL_DEPTH),
+                    target(GB_MATERIAL),
+                    target(GB_POSITION),
+                ],
+            )),
+            DepthTest::WriteLess,
         );
-        let def_module = DEFERRED.create(d);
-        let def_layout = pl(
+        let def = DEFERRED.create(d);
+        let def_layout = pipeline::layout(
+            d,
             "shade.deferred",
-            &[
-                Some(&scene.layout),
-                Some(&deferred_lists),
-                Some(&deferred_gbuffer),
-            ],
+            &[g0, &deferred_lists, &deferred_gbuffer],
         );
-        let lighting = |entry| {
-            d.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&def_layout),
-                module: &def_module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
-        let (deferred, deferred_stored) = (
-            lighting("deferred_shade"),
-            lighting("deferred_shade_stored"),
-        );
+        let deferred = pipeline::compute(d, &def, &def_layout, "deferred_shade");
+        let deferred_stored = pipeline::compute(d, &def, &def_layout, "deferred_shade_stored");
         Self {
             culler: Culler::new(ctx, scene),
             prepass: DepthPrepass::new(ctx, scene),

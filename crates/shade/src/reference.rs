@@ -2,8 +2,8 @@
 //! shading of every light at every covered pixel, into an `Rgba32Float` HDR target, with the
 //! surface position and shading normal of every pixel for the CPU oracles.
 
-use manylights_gpu::layout::VERTEX_LAYOUT;
-use manylights_gpu::prepass::{DEPTH_FORMAT, DepthPrepass, PRIMITIVE, depth_target};
+use manylights_gpu::pipeline;
+use manylights_gpu::prepass::{DepthPrepass, depth_target};
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
@@ -51,47 +51,15 @@ impl ReferenceRenderer {
     /// Builds the pipelines.
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         let module = SHADER.create(&ctx.device);
-        let layout = ctx
-            .device
-            .create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                label: Some("shade.reference"),
-                bind_group_layouts: &[Some(&scene.layout)],
-                immediate_size: 0,
-            });
-        let target = Some(wgpu::ColorTargetState {
-            format: HDR,
-            blend: None,
-            write_mask: wgpu::ColorWrites::ALL,
-        });
-        let pipeline = ctx
-            .device
-            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("shade.reference"),
-                layout: Some(&layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_main"),
-                    compilation_options: Default::default(),
-                    buffers: &[Some(VERTEX_LAYOUT)],
-                },
-                primitive: PRIMITIVE,
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(false),
-                    depth_compare: Some(wgpu::CompareFunction::Equal),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: Default::default(),
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_reference"),
-                    compilation_options: Default::default(),
-                    targets: &[target.clone(), target.clone(), target],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+        let t = pipeline::target(HDR);
+        let pipeline = pipeline::raster(
+            &ctx.device,
+            "shade.reference",
+            &module,
+            &[&scene.layout],
+            Some(("fs_reference", &[t.clone(), t.clone(), t])),
+            pipeline::DepthTest::Equal,
+        );
         Self {
             prepass: DepthPrepass::new(ctx, scene),
             pipeline,

@@ -1,0 +1,135 @@
+//! Pipeline and bind-group-layout construction shared by every pass, so that each pass states
+//! only what is its own: its shader, entry point, groups, targets and depth test.
+
+use crate::layout::VERTEX_LAYOUT;
+use crate::prepass::{DEPTH_FORMAT, PRIMITIVE};
+
+/// How a raster pass uses the depth buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthTest {
+    /// Writes depth, keeping the nearest (`Less`): the depth prepass and the G-buffer pass.
+    WriteLess,
+    /// Reads the prepass depth and shades only where it is equal: each pixel shaded once.
+    Equal,
+}
+
+/// A pipeline layout over `groups` (group 0 first), with no immediates.
+pub fn layout(
+    device: &wgpu::Device,
+    label: &str,
+    groups: &[&wgpu::BindGroupLayout],
+) -> wgpu::PipelineLayout {
+    let groups: Vec<Option<&wgpu::BindGroupLayout>> = groups.iter().copied().map(Some).collect();
+    device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &groups,
+        immediate_size: 0,
+    })
+}
+
+/// A raster pipeline over the shared vertex stage (`vs_main`, the scene's vertex layout, the
+/// common primitive state); `fragment` is the entry point and its targets, or none for a
+/// depth-only pass.
+pub fn raster(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    groups: &[&wgpu::BindGroupLayout],
+    fragment: Option<(&str, &[Option<wgpu::ColorTargetState>])>,
+    depth: DepthTest,
+) -> wgpu::RenderPipeline {
+    let layout = layout(device, label, groups);
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(VERTEX_LAYOUT)],
+        },
+        primitive: PRIMITIVE,
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(depth == DepthTest::WriteLess),
+            depth_compare: Some(match depth {
+                DepthTest::WriteLess => wgpu::CompareFunction::Less,
+                DepthTest::Equal => wgpu::CompareFunction::Equal,
+            }),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: fragment.map(|(entry, targets)| wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// An opaque colour target of `format`.
+pub fn target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: None,
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+/// A compute pipeline for entry point `entry` of `module` over `layout`.
+pub fn compute(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+) -> wgpu::ComputePipeline {
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: Some(layout),
+        module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// A bind-group-layout entry.
+pub fn entry(
+    binding: u32,
+    visibility: wgpu::ShaderStages,
+    ty: wgpu::BindingType,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility,
+        ty,
+        count: None,
+    }
+}
+
+/// A uniform buffer binding.
+pub const UNIFORM: wgpu::BindingType = wgpu::BindingType::Buffer {
+    ty: wgpu::BufferBindingType::Uniform,
+    has_dynamic_offset: false,
+    min_binding_size: None,
+};
+
+/// A storage buffer binding.
+pub const fn storage(read_only: bool) -> wgpu::BindingType {
+    wgpu::BindingType::Buffer {
+        ty: wgpu::BufferBindingType::Storage { read_only },
+        has_dynamic_offset: false,
+        min_binding_size: None,
+    }
+}
+
+/// A 2D depth texture binding.
+pub const DEPTH_TEXTURE: wgpu::BindingType = wgpu::BindingType::Texture {
+    sample_type: wgpu::TextureSampleType::Depth,
+    view_dimension: wgpu::TextureViewDimension::D2,
+    multisampled: false,
+};
