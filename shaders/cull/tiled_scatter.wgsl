@@ -6,33 +6,42 @@
 // holds each tile's end, out_indices the pairs' lights, pair_keys their tiles.
 @group(1) @binding(9) var<storage, read_write> pair_keys: array<u32>;
 
-// Visits the tiles light i is kept by.
-fn scatter_light(i: u32, write: bool) {
+// Visits the tiles that keep light t / SCATTER_LANES, the lane t % SCATTER_LANES taking every
+// SCATTER_LANES-th tile of its rectangle, so that a light covering the screen is shared by many
+// threads. Each (light, lane) has its own count and its own segment of the pairs (bin_counts
+// and bin_offsets hold lights x SCATTER_LANES entries); the stable sort by tile then leaves each
+// tile's lights in light order, whatever the lanes.
+fn scatter_light(t: u32, write: bool) {
+    let i = t / SCATTER_LANES;
+    let lane = t % SCATTER_LANES;
     if i >= cull.light_count {
         return;
     }
     let l = cull_light(lights[i]);
     let rect = light_tiles(l);
+    if rect.x > rect.z || rect.y > rect.w {
+        return;
+    }
+    let width = u32(rect.z - rect.x + 1);
+    let count = width * u32(rect.w - rect.y + 1);
     var n = 0u;
     var base = 0u;
     if write {
-        base = bin_offsets[i];
+        base = bin_offsets[t];
     }
-    for (var ty = rect.y; ty <= rect.w; ty++) {
-        for (var tx = rect.x; tx <= rect.z; tx++) {
-            let tile = vec2<u32>(u32(tx), u32(ty));
-            let bin = tile.y * cull.tiles_x + tile.x;
-            if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {
-                if write {
-                    pair_keys[base + n] = bin;
-                    out_indices[base + n] = i;
-                }
-                n += 1u;
+    for (var k = lane; k < count; k += SCATTER_LANES) {
+        let tile = vec2<u32>(u32(rect.x) + k % width, u32(rect.y) + k / width);
+        let bin = tile.y * cull.tiles_x + tile.x;
+        if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {
+            if write {
+                pair_keys[base + n] = bin;
+                out_indices[base + n] = i;
             }
+            n += 1u;
         }
     }
     if !write {
-        atomicStore(&bin_counts[i], n);
+        atomicStore(&bin_counts[t], n);
     }
 }
 
@@ -50,7 +59,7 @@ fn scatter_pairs(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(64)
 fn scatter_ranges(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.y * GROUPS_X * 64u + id.x;
-    let pairs = bin_offsets[cull.light_count];
+    let pairs = bin_offsets[cull.light_count * SCATTER_LANES];
     if i >= pairs {
         return;
     }

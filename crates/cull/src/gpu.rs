@@ -356,7 +356,11 @@ impl Culler {
         } else {
             (&self.gather_count, &self.gather_fill)
         };
-        let light_groups = groups_2d(p.light_count.div_ceil(64), GROUPS_X);
+        // Clusters: CLUSTER_LANES threads a light (see clustered.wgsl).
+        let light_groups = groups_2d(
+            (p.light_count * crate::layout::CLUSTER_LANES).div_ceil(64),
+            GROUPS_X,
+        );
         let main = if clustered {
             light_groups
         } else {
@@ -439,7 +443,8 @@ impl Culler {
     ) -> Result<CullOutput, CullError> {
         let p = f.params;
         let [count, pairs_pipe, ranges, finalize] = &self.scatter;
-        let light_groups = groups_2d(p.light_count.div_ceil(64), GROUPS_X);
+        let work = p.light_count * crate::layout::SCATTER_LANES;
+        let light_groups = groups_2d(work.div_ceil(64), GROUPS_X);
         let placeholder = f.buf("cull.placeholder", 4);
         let group_a = f.group(&placeholder, &placeholder);
         let mut enc = f.encoder("cull.tiled_scatter.count");
@@ -459,7 +464,7 @@ impl Culler {
             &group_a,
             light_groups,
         );
-        let pairs = f.scan_total(ctx, &self.scan, enc, p.light_count, timer)?;
+        let pairs = f.scan_total(ctx, &self.scan, enc, work, timer)?;
         ctx.check_storage("tiled scatter pairs", u64::from(pairs) * 4)?;
         let (keys, vals) = (
             f.buf("cull.pair_keys", u64::from(pairs) * 4),
@@ -673,7 +678,8 @@ impl<'a> Frame<'a> {
         let bins = u64::from(params.bins);
         let tiles = u64::from(params.tiles_x * params.tiles_y);
         // Counts and offsets hold one entry per bin, or per light for tiled scatter.
-        let items = bins.max(u64::from(params.light_count));
+        let items =
+            bins.max(u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES));
         let params_buf = ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {

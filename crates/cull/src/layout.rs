@@ -34,10 +34,18 @@ pub const SCAN_MAX_GROUPS_X: u32 = 32768;
 
 /// Workgroups along x in the 2D dispatches of one-thread-per-item passes (per light, per bin).
 pub const GROUPS_X: u32 = 32768;
+/// Threads sharing one light's tiles in `cull.clustered` (one NVIDIA warp): balances lights that
+/// cover the whole screen against the many small ones.
+pub const CLUSTER_LANES: u32 = 32;
+/// Threads sharing one light's tiles in `cull.tiled_scatter`; each (light, lane) has a count, so
+/// the scan runs over lights x SCATTER_LANES entries.
+pub const SCATTER_LANES: u32 = 16;
 
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
+    WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
+    WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),
     WgslConst::U32("CULL_FLAG_SKIP_EMPTY", CULL_FLAG_SKIP_EMPTY),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
