@@ -785,14 +785,7 @@ impl<'a> Frame<'a> {
         group: &wgpu::BindGroup,
         groups: (u32, u32),
     ) {
-        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(label),
-            timestamp_writes: timer.compute_pass(label),
-        });
-        pass.set_pipeline(pipe);
-        pass.set_bind_group(0, &self.scene.bind_group, &[]);
-        pass.set_bind_group(1, group, &[]);
-        pass.dispatch_workgroups(groups.0, groups.1, 1);
+        pipeline::dispatch(enc, timer, label, pipe, &[&self.scene.bind_group, group], groups);
     }
 
     /// Copies the first `n` counts (plus a zero) to the offsets, scans them, submits `enc`,

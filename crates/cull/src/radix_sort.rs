@@ -141,53 +141,29 @@ impl RadixSort {
                     ]),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
-            let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("sort.radix"),
-                layout: &self.layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: params.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: src_k.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: src_v.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: dst_k.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: dst_v.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 5,
-                        resource: hist.as_entire_binding(),
-                    },
-                ],
-            });
-            {
-                let mut p = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("sort.radix.count"),
-                    timestamp_writes: timer.compute_pass("sort.radix.count"),
-                });
-                p.set_pipeline(&self.count);
-                p.set_bind_group(0, &group, &[]);
-                p.dispatch_workgroups(gx, gy, 1);
-            }
+            let group = pipeline::buffers_group(
+                &ctx.device,
+                "sort.radix",
+                &self.layout,
+                &[&params, src_k, src_v, dst_k, dst_v, &hist],
+            );
+            pipeline::dispatch(
+                encoder,
+                timer,
+                "sort.radix.count",
+                &self.count,
+                &[&group],
+                (gx, gy),
+            );
             self.scan.encode(ctx, encoder, &hist, hist_len, timer);
-            let mut p = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("sort.radix.scatter"),
-                timestamp_writes: timer.compute_pass("sort.radix.scatter"),
-            });
-            p.set_pipeline(&self.scatter);
-            p.set_bind_group(0, &group, &[]);
-            p.dispatch_workgroups(gx, gy, 1);
+            pipeline::dispatch(
+                encoder,
+                timer,
+                "sort.radix.scatter",
+                &self.scatter,
+                &[&group],
+                (gx, gy),
+            );
         }
         Ok(if passes.is_multiple_of(2) {
             SortedIn::Input

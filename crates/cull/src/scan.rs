@@ -126,43 +126,20 @@ impl Scan {
                 contents: bytemuck::cast_slice(&[n, 0, 0, 0]),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-        let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scan"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: params.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: data.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: sums.as_entire_binding(),
-                },
-            ],
-        });
+        let group =
+            pipeline::buffers_group(&ctx.device, "scan", &self.layout, &[&params, data, &sums]);
         let (gx, gy) = groups_2d(blocks, SCAN_MAX_GROUPS_X);
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("scan.blocks"),
-                timestamp_writes: timer.compute_pass("scan.blocks"),
-            });
-            pass.set_pipeline(&self.blocks);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(gx, gy, 1);
-        }
+        pipeline::dispatch(
+            encoder,
+            timer,
+            "scan.blocks",
+            &self.blocks,
+            &[&group],
+            (gx, gy),
+        );
         if blocks > 1 {
             self.encode(ctx, encoder, &sums, blocks, timer);
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("scan.add"),
-                timestamp_writes: timer.compute_pass("scan.add"),
-            });
-            pass.set_pipeline(&self.add);
-            pass.set_bind_group(0, &group, &[]);
-            pass.dispatch_workgroups(gx, gy, 1);
+            pipeline::dispatch(encoder, timer, "scan.add", &self.add, &[&group], (gx, gy));
         }
     }
 }

@@ -133,3 +133,70 @@ pub const DEPTH_TEXTURE: wgpu::BindingType = wgpu::BindingType::Texture {
     view_dimension: wgpu::TextureViewDimension::D2,
     multisampled: false,
 };
+
+/// A 2D texture of one mip level and one sample.
+pub fn texture_2d(
+    device: &wgpu::Device,
+    label: &str,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+/// A bind group of whole buffers at bindings 0, 1, 2, ... in order.
+pub fn buffers_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// A timed compute pass `label` dispatching `groups` workgroups of `pipeline` with bind groups
+/// 0, 1, ... set from `bind`.
+pub fn dispatch(
+    encoder: &mut wgpu::CommandEncoder,
+    timer: &mut crate::timing::GpuTimer,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind: &[&wgpu::BindGroup],
+    groups: (u32, u32),
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: timer.compute_pass(label),
+    });
+    pass.set_pipeline(pipeline);
+    for (i, g) in bind.iter().enumerate() {
+        pass.set_bind_group(i as u32, *g, &[]);
+    }
+    pass.dispatch_workgroups(groups.0, groups.1, 1);
+}

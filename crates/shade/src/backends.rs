@@ -273,22 +273,8 @@ impl Renderer {
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
         let d = &ctx.device;
-        let tex = |label, format, usage| {
-            d.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage,
-                view_formats: &[],
-            })
-        };
+        let tex =
+            |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
         let color = tex(
             "shade.color",
             HDR,
@@ -351,20 +337,8 @@ impl Renderer {
                 let usage =
                     wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
                 let (pw, ph) = if stored { (width, height) } else { (1, 1) };
-                let gb_pos = d.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("gbuffer.position"),
-                    size: wgpu::Extent3d {
-                        width: pw,
-                        height: ph,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: GB_POSITION,
-                    usage,
-                    view_formats: &[],
-                });
+                let gb_pos =
+                    pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage);
                 let (gb_nd, gb_mat) = (
                     tex("gbuffer.normal_depth", GB_NORMAL_DEPTH, usage),
                     tex("gbuffer.material", GB_MATERIAL, usage),

@@ -99,22 +99,8 @@ impl ReferenceRenderer {
         height: u32,
     ) -> Result<ReferenceFrame, GpuError> {
         ctx.check_resolution(width, height)?;
-        let target = |label| {
-            ctx.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: HDR,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
+        let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+        let target = |label| pipeline::texture_2d(&ctx.device, label, (width, height), HDR, usage);
         let (color, position, normal) = (
             target("reference.color"),
             target("reference.position"),
