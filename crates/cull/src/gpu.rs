@@ -785,7 +785,14 @@ impl<'a> Frame<'a> {
         group: &wgpu::BindGroup,
         groups: (u32, u32),
     ) {
-        pipeline::dispatch(enc, timer, label, pipe, &[&self.scene.bind_group, group], groups);
+        pipeline::dispatch(
+            enc,
+            timer,
+            label,
+            pipe,
+            &[&self.scene.bind_group, group],
+            groups,
+        );
     }
 
     /// Copies the first `n` counts (plus a zero) to the offsets, scans them, submits `enc`,
