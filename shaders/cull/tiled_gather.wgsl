@@ -4,8 +4,8 @@
 // a time. Entry points: gather_count (count pass) and gather_fill (fill pass).
 //
 // The fill keeps each list in light order: in every batch of 64 lights, a light's slot is the
-// number of kept lights before it in the batch (a prefix over the batch's flags) plus those of
-// earlier batches. Lists, and so the order in which shading sums a pixel's lights, are the same
+// number of kept lights before it in the batch (a workgroup scan of the batch's flags) plus
+// those of earlier batches. Lists, and so the order in which shading sums a pixel's lights, are the same
 // on every run: images are bit-identical across runs.
 var<workgroup> wg_planes: array<vec4<f32>, 4>;
 var<workgroup> wg_covered: u32;
@@ -36,16 +36,20 @@ fn gather(tile: vec2<u32>, li: u32, fill: bool) {
             }
             continue;
         }
+        // Inclusive Hillis-Steele scan of the batch's flags (6 steps for 64 threads).
         wg_keep[li] = u32(keep);
         workgroupBarrier();
-        var before = 0u;
-        var total = 0u;
-        for (var k = 0u; k < 64u; k++) {
-            let f = wg_keep[k];
-            before += select(0u, f, k < li);
-            total += f;
+        for (var off = 1u; off < 64u; off <<= 1u) {
+            var v = 0u;
+            if li >= off {
+                v = wg_keep[li - off];
+            }
+            workgroupBarrier();
+            wg_keep[li] += v;
+            workgroupBarrier();
         }
-        let slot = placed + before;
+        let total = wg_keep[63];
+        let slot = placed + wg_keep[li] - u32(keep);
         if keep && (cull.capacity == 0u || slot < cull.capacity) {
             out_indices[bin_offsets[bin] + slot] = i;
         }
