@@ -55,7 +55,9 @@ enum Command {
 
 #[derive(clap::Args, Debug)]
 struct RunArgs {
-    /// The experiment file (see experiments/ and docs/EXPERIMENTS.md).
+    /// The experiment file (see experiments/ and docs/EXPERIMENTS.md), or a directory of them
+    /// (such as experiments/stability), each run into OUT/<file stem> with a stability report in
+    /// OUT/stability.md.
     experiment: PathBuf,
     /// Output directory (default: out/<experiment file stem>).
     #[arg(long)]
@@ -106,7 +108,68 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     Ok((i, n))
 }
 
+/// `run DIR`: every experiment file of a directory (the stability suite), each into
+/// OUT/<file stem>, then OUT/stability.md. A case that fails to run is recorded, not fatal.
+fn run_suite(args: &RunArgs) -> Result<()> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&args.experiment)
+        .with_context(|| format!("cannot read {}", args.experiment.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        bail!("{}: no .ron experiment files", args.experiment.display());
+    }
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("out").join(
+            args.experiment
+                .file_name()
+                .map_or_else(|| "suite".into(), |s| s.to_string_lossy().into_owned()),
+        )
+    });
+    // Parse every file first: a malformed file fails before anything runs.
+    for f in &files {
+        manylights_lab::Experiment::load(f)?;
+    }
+    let ctx = GpuContext::new(&GpuOptions {
+        adapter: args.adapter.clone(),
+    })?;
+    eprintln!("adapter: {}", ctx.summary());
+    let opts = manylights_lab::runner::RunOptions {
+        shard: args.shard,
+        max_cells: None,
+        progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        commit: env!("MANYLIGHTS_COMMIT").to_string(),
+    };
+    let mut cases = Vec::new();
+    for f in &files {
+        let name = f
+            .file_stem()
+            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+        eprintln!("case {name}");
+        let dir = out.join(&name);
+        let rows = manylights_lab::runner::run(&ctx, f, &dir, &opts)
+            .map(|s| s.rows)
+            .map_err(|e| e.to_string());
+        if let Err(e) = &rows {
+            eprintln!("  failed: {e}");
+        } else if !args.no_report {
+            manylights_lab::report::write_report(&dir)?;
+        }
+        cases.push((name, rows));
+    }
+    let fails = manylights_lab::stability::write_report(&out, &cases)?;
+    eprintln!(
+        "stability report: {} ({fails} failing entries)",
+        out.join("stability.md").display()
+    );
+    Ok(())
+}
+
 fn run_experiment(args: &RunArgs) -> Result<()> {
+    if args.experiment.is_dir() {
+        return run_suite(args);
+    }
     let out = args.out.clone().unwrap_or_else(|| {
         PathBuf::from("out").join(
             args.experiment

@@ -341,3 +341,60 @@ fn html_report_loads_in_headless_chromium() {
         );
     }
 }
+
+/// The stability suite: every case parses, a tiny variant of each runs for every configuration,
+/// and no configuration fails in any case (false negatives without a capacity, NaN/Inf pixels).
+#[test]
+fn stability_suite_has_no_failures() {
+    use manylights_lab::stability::{Verdict, verdict, write_report};
+    let ctx = common::gpu();
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/stability");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 12, "only {} stability cases", files.len());
+    let tmp = tempfile::tempdir().unwrap();
+    let mut cases = Vec::new();
+    for f in &files {
+        let (e, src) = Experiment::load(f).unwrap_or_else(|e| panic!("{e}"));
+        let out = tmp.path().join(&e.name);
+        let rows = run_parsed(&ctx, &e.tiny(), &src, &dir, &out, &opts())
+            .unwrap_or_else(|err| panic!("{}: {err}", e.name))
+            .rows;
+        for r in &rows {
+            assert!(
+                !matches!(verdict(r), Verdict::Fail(_)),
+                "{} {}: {:?}",
+                e.name,
+                r.cell,
+                verdict(r)
+            );
+        }
+        if e.name == "05-overflow-pressure" {
+            assert!(
+                rows.iter().any(|r| r.dropped_lights > 0),
+                "the capacity cells must drop lights"
+            );
+            assert!(
+                rows.iter()
+                    .any(|r| matches!(verdict(r), Verdict::Degraded(_))),
+                "a counted loss is degraded"
+            );
+        }
+        cases.push((e.name.clone(), Ok(rows)));
+    }
+    cases.push(("broken".into(), Err("did not run".into())));
+    let fails = write_report(tmp.path(), &cases).unwrap();
+    let md = std::fs::read_to_string(tmp.path().join("stability.md")).unwrap();
+    assert!(
+        md.contains("| 01-depth-discontinuity |") && md.contains("pass"),
+        "{md}"
+    );
+    assert!(
+        fails > 0 && md.contains("fail: did not run"),
+        "a case that did not run must fail"
+    );
+}

@@ -8,6 +8,7 @@ pub mod experiment;
 pub mod report;
 pub mod results;
 pub mod runner;
+pub mod stability;
 
 pub use experiment::{Cell, Config, Experiment};
 pub use results::Row;

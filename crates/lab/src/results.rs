@@ -104,6 +104,9 @@ pub struct Row {
     pub exact_stride: u32,
     /// Measured frames.
     pub frames: u32,
+    /// Pixels of the backend's image with a NaN or infinite channel (at the first pose).
+    #[serde(default)]
+    pub nonfinite_pixels: u64,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -192,6 +195,7 @@ pub const COLUMNS: &[&str] = &[
     "frames",
     "index",
     "id",
+    "nonfinite_pixels",
 ];
 
 fn csv_field(v: &serde_json::Value) -> String {

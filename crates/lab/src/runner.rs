@@ -454,6 +454,7 @@ fn run_cell(
         max_abs_error_infinite: acc_inf.map(|e| e.max_abs_error),
         exact_stride: c.exact_stride,
         frames: c.frames,
+        nonfinite_pixels: o.color.non_finite_count() as u64,
         passes,
         index: cell.index,
         id,

@@ -1,0 +1,132 @@
+//! The stability suite's report: every case (an experiment of `experiments/stability/`) against
+//! every configuration (backend and strategy), marked
+//! - **fail**: false negatives not explained by a deliberate capacity, NaN or infinite pixels,
+//!   or a case that did not run;
+//! - **degraded**, with the measured cost: lights dropped by a capacity (counted), lists over
+//!   10 times longer than needed (false-positive ratio), or image error visible to FLIP (mean
+//!   above 0.01);
+//! - **pass** otherwise.
+//!
+//! A configuration's verdict in a case is the worst over that case's cells.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::results::Row;
+use crate::{LabError, write_atomic};
+
+/// Lists longer than this many times the lights needed count as degraded.
+pub const FP_DEGRADED: f64 = 10.0;
+/// Mean FLIP above this counts as degraded.
+pub const FLIP_DEGRADED: f64 = 0.01;
+
+/// A verdict, ordered from best to worst.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Verdict {
+    /// Nothing wrong.
+    Pass,
+    /// A measured cost, described.
+    Degraded(String),
+    /// A failure, described.
+    Fail(String),
+}
+
+/// The verdict of one cell.
+pub fn verdict(r: &Row) -> Verdict {
+    let fnegs = r.false_negatives.unwrap_or(0);
+    if r.nonfinite_pixels > 0 {
+        return Verdict::Fail(format!("{} NaN/Inf pixels", r.nonfinite_pixels));
+    }
+    if fnegs > 0 && r.dropped_lights == 0 {
+        return Verdict::Fail(format!("{fnegs} false negatives"));
+    }
+    let mut costs = Vec::new();
+    if r.dropped_lights > 0 {
+        costs.push(format!("{} dropped, {fnegs} FN", r.dropped_lights));
+    }
+    if let Some(fp) = r.false_positive_ratio.filter(|&fp| fp > FP_DEGRADED) {
+        costs.push(format!("FP ratio {fp:.1}"));
+    }
+    if let Some(f) = r.flip_mean.filter(|&f| f > FLIP_DEGRADED) {
+        costs.push(format!("FLIP {f:.3}"));
+    }
+    if costs.is_empty() {
+        Verdict::Pass
+    } else {
+        Verdict::Degraded(costs.join(", "))
+    }
+}
+
+/// One case: its name and its rows, or why it did not run.
+pub type Case = (String, Result<Vec<Row>, String>);
+
+/// Writes `stability.md` in `dir` for `cases`; returns the number of failing entries.
+pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
+    let config = |r: &Row| {
+        if r.backend == "naive_forward" {
+            "naive_forward".to_string()
+        } else {
+            format!("{}+{}", r.backend, r.strategy)
+        }
+    };
+    let mut configs: Vec<String> = cases
+        .iter()
+        .filter_map(|(_, r)| r.as_ref().ok())
+        .flatten()
+        .map(config)
+        .collect();
+    configs.sort();
+    configs.dedup();
+    let mut md = String::from("# Stability suite\n\n");
+    let _ = writeln!(
+        md,
+        "Each case of `experiments/stability/` against each configuration: **pass**; **degraded** (with the measured cost: dropped lights, false-positive ratio over {FP_DEGRADED}, mean FLIP over {FLIP_DEGRADED}); **fail** (false negatives without a capacity, NaN/Inf pixels, or a case that did not run). The worst verdict over a case's cells.\n"
+    );
+    let _ = writeln!(
+        md,
+        "| case | {} |\n|---|{}",
+        configs.join(" | "),
+        "---|".repeat(configs.len())
+    );
+    let mut fails = 0;
+    for (name, rows) in cases {
+        let cells: Vec<String> = match rows {
+            Err(e) => {
+                fails += configs.len().max(1);
+                vec![
+                    format!(
+                        "fail: {}",
+                        e.replace('|', "/").chars().take(120).collect::<String>()
+                    );
+                    configs.len().max(1)
+                ]
+            }
+            Ok(rows) => {
+                let mut worst: BTreeMap<String, Verdict> = BTreeMap::new();
+                for r in rows {
+                    let v = verdict(r);
+                    let e = worst.entry(config(r)).or_insert(Verdict::Pass);
+                    if v > *e {
+                        *e = v;
+                    }
+                }
+                configs
+                    .iter()
+                    .map(|c| match worst.get(c) {
+                        None => "-".into(),
+                        Some(Verdict::Pass) => "pass".into(),
+                        Some(Verdict::Degraded(d)) => format!("degraded ({d})"),
+                        Some(Verdict::Fail(f)) => {
+                            fails += 1;
+                            format!("**fail** ({f})")
+                        }
+                    })
+                    .collect()
+            }
+        };
+        let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
+    }
+    write_atomic(&dir.join("stability.md"), md.as_bytes())?;
+    Ok(fails)
+}
