@@ -166,6 +166,45 @@ fn run_suite(args: &RunArgs) -> Result<()> {
     Ok(())
 }
 
+/// `report DIR`: a run directory's report, or for a suite (case subdirectories, each with
+/// results) every case's report and the stability report.
+fn report(dir: &Path) -> Result<()> {
+    if dir.join("results.json").exists() || dir.join("cells").is_dir() {
+        let p = manylights_lab::report::write_report(dir)?;
+        eprintln!("report: {}", p.display());
+        return Ok(());
+    }
+    let mut cases: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("cannot read {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("results.json").exists())
+        .collect();
+    cases.sort();
+    if cases.is_empty() {
+        bail!(
+            "{}: neither a run directory (results.json, cells/) nor a suite of them",
+            dir.display()
+        );
+    }
+    let mut rows = Vec::new();
+    for c in &cases {
+        manylights_lab::report::write_report(c)?;
+        let name = c
+            .file_name()
+            .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+        rows.push((
+            name,
+            manylights_lab::results::load_rows(c).map_err(|e| e.to_string()),
+        ));
+    }
+    let fails = manylights_lab::stability::write_report(dir, &rows)?;
+    eprintln!(
+        "stability report: {} ({fails} failing entries)",
+        dir.join("stability.md").display()
+    );
+    Ok(())
+}
+
 fn run_experiment(args: &RunArgs) -> Result<()> {
     if args.experiment.is_dir() {
         return run_suite(args);
@@ -709,9 +748,7 @@ fn main() -> std::process::ExitCode {
                     Ok(())
                 })
         }
-        Command::Report(args) => manylights_lab::report::write_report(&args.dir)
-            .map(|p| eprintln!("report: {}", p.display()))
-            .map_err(Into::into),
+        Command::Report(args) => report(&args.dir),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -83,13 +83,29 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
         md,
         "Each case of `experiments/stability/` against each configuration: **pass**; **degraded** (with the measured cost: dropped lights, false-positive ratio over {FP_DEGRADED}, mean FLIP over {FLIP_DEGRADED}); **fail** (false negatives without a capacity, NaN/Inf pixels, or a case that did not run). The worst verdict over a case's cells.\n"
     );
+    let mut fails = 0;
+    let all: Vec<&Row> = cases
+        .iter()
+        .filter_map(|(_, r)| r.as_ref().ok())
+        .flatten()
+        .collect();
+    if let Some(r) = all.first() {
+        let date = all.iter().map(|r| r.finished_unix).max().unwrap_or(0);
+        let _ = writeln!(
+            md,
+            "Adapter: {}; driver: {}; commit: {}; finished: {}.\n",
+            r.adapter,
+            r.driver,
+            r.commit,
+            crate::report::utc(date)
+        );
+    }
     let _ = writeln!(
         md,
         "| case | {} |\n|---|{}",
         configs.join(" | "),
         "---|".repeat(configs.len())
     );
-    let mut fails = 0;
     for (name, rows) in cases {
         let cells: Vec<String> = match rows {
             Err(e) => {
@@ -107,9 +123,20 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
                 for r in rows {
                     let v = verdict(r);
                     let e = worst.entry(config(r)).or_insert(Verdict::Pass);
-                    if v > *e {
-                        *e = v;
-                    }
+                    *e = match (std::mem::replace(e, Verdict::Pass), v) {
+                        // Two measured costs: keep both (a capacity's drops and an FP ratio, say).
+                        (Verdict::Degraded(a), Verdict::Degraded(b)) if a != b => {
+                            let mut parts: Vec<String> = a
+                                .split(", ")
+                                .chain(b.split(", "))
+                                .map(String::from)
+                                .collect();
+                            parts.sort();
+                            parts.dedup();
+                            Verdict::Degraded(parts.join(", "))
+                        }
+                        (old, new) => old.max(new),
+                    };
                 }
                 configs
                     .iter()
