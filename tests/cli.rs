@@ -287,23 +287,52 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
 /// (lavapipe allows 128 MiB, 2,097,152 lights of 64 bytes).
 #[test]
 fn more_lights_than_the_device_holds_is_an_error_stating_the_limit() {
-    let ctx = manylights_gpu::GpuContext::new(&manylights_gpu::GpuOptions::default()).expect("a Vulkan adapter (lavapipe is enough)");
-    let limit = u64::from(ctx.limits.max_storage_buffer_binding_size).min(ctx.limits.max_buffer_size);
+    let ctx = manylights_gpu::GpuContext::new(&manylights_gpu::GpuOptions::default())
+        .expect("a Vulkan adapter (lavapipe is enough)");
+    let limit =
+        u64::from(ctx.limits.max_storage_buffer_binding_size).min(ctx.limits.max_buffer_size);
     drop(ctx);
     let too_many = (limit / 64 + 1).to_string();
-    rejects(&["--lights", &too_many], 1, &["light buffer bytes", "exceeds the device limit", &limit.to_string()]);
+    rejects(
+        &["--lights", &too_many],
+        1,
+        &[
+            "light buffer bytes",
+            "exceeds the device limit",
+            &limit.to_string(),
+        ],
+    );
 }
 
 /// An output directory that cannot be written: a clear error naming it, exit code 1.
 #[test]
 fn unwritable_output_is_an_error() {
-    let o = manylights(&["render", "--lights", "4", "--width", "8", "--height", "8", "--out", "/proc/manylights-test/out"]);
+    let o = manylights(&[
+        "render",
+        "--lights",
+        "4",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        "/proc/manylights-test/out",
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("/proc/manylights-test/out"), "{stderr}");
     let exp = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quickstart.ron");
-    let o = manylights(&["run", exp.to_str().unwrap(), "--out", "/proc/manylights-test/run"]);
+    let o = manylights(&[
+        "run",
+        exp.to_str().unwrap(),
+        "--out",
+        "/proc/manylights-test/run",
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{stderr}");
-    assert!(stderr.contains("/proc/manylights-test/run") && stderr.contains("cannot create the output directory"), "{stderr}");
+    assert!(
+        stderr.contains("/proc/manylights-test/run")
+            && stderr.contains("cannot create the output directory"),
+        "{stderr}"
+    );
 }

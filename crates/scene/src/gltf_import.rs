@@ -142,6 +142,26 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
 /// recomputed, and non-finite positions are rejected when read), so their absence is tolerated.
 fn validate_schema(root: &gltf::json::Root) -> Result<(), String> {
     use gltf::json::validation::{Error, Validate};
+    // gltf-json 1.4.1's validator indexes `accessors` with a primitive's POSITION accessor
+    // before checking that index's range, and panics on an out-of-range one (found by
+    // tests/fuzz.rs); check every primitive's accessor indices first.
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (k, prim) in mesh.primitives.iter().enumerate() {
+            let indices = prim
+                .attributes
+                .values()
+                .map(|a| a.value())
+                .chain(prim.indices.as_ref().map(|a| a.value()));
+            for (n, a) in indices.enumerate() {
+                if a >= accessors {
+                    return Err(format!(
+                        "meshes[{m}].primitives[{k}]: accessor index {a} out of range (the file has {accessors}) (reference {n})"
+                    ));
+                }
+            }
+        }
+    }
     let mut problems = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path();
@@ -236,6 +256,29 @@ impl Importer<'_> {
             return Ok(None);
         }
         let buffers = self.buffers;
+        use gltf::accessor::{DataType, Dimensions};
+        let pos = prim
+            .get(&gltf::Semantic::Positions)
+            .ok_or("has no POSITION attribute")?;
+        check_accessor(
+            &pos,
+            buffers,
+            "POSITION",
+            Dimensions::Vec3,
+            &[DataType::F32],
+        )?;
+        if let Some(n) = prim.get(&gltf::Semantic::Normals) {
+            check_accessor(&n, buffers, "NORMAL", Dimensions::Vec3, &[DataType::F32])?;
+        }
+        if let Some(ix) = prim.indices() {
+            check_accessor(
+                &ix,
+                buffers,
+                "index",
+                Dimensions::Scalar,
+                &[DataType::U8, DataType::U16, DataType::U32],
+            )?;
+        }
         let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<Vec3> = reader
             .read_positions()
@@ -397,6 +440,69 @@ fn camera(cam: &gltf::Camera<'_>, world: Mat4) -> Option<Camera> {
         projection,
     };
     c.validate().is_ok().then_some(c)
+}
+
+/// Checks an accessor before the `gltf` crate's reader touches it: its type, and that every
+/// element lies inside its buffer view and the view inside its buffer. The reader itself asserts
+/// and panics on such malformed data (found by tests/fuzz.rs).
+fn check_accessor(
+    acc: &gltf::Accessor<'_>,
+    buffers: &[gltf::buffer::Data],
+    what: &str,
+    dims: gltf::accessor::Dimensions,
+    types: &[gltf::accessor::DataType],
+) -> Result<(), String> {
+    let i = acc.index();
+    if acc.dimensions() != dims || !types.contains(&acc.data_type()) {
+        return Err(format!(
+            "{what} accessor {i} holds {:?} {:?}; expected {dims:?} of {types:?}",
+            acc.dimensions(),
+            acc.data_type()
+        ));
+    }
+    if acc.sparse().is_some() {
+        return Err(format!(
+            "{what} accessor {i} is sparse, which is not supported"
+        ));
+    }
+    let view = acc
+        .view()
+        .ok_or_else(|| format!("{what} accessor {i} has no buffer view"))?;
+    let elem = acc.size();
+    let stride = view.stride().unwrap_or(elem);
+    if stride < elem {
+        return Err(format!(
+            "{what} accessor {i}: byte stride {stride} is smaller than its element size {elem}"
+        ));
+    }
+    let count = acc.count();
+    let needed = if count == 0 {
+        0
+    } else {
+        acc.offset() + stride * (count - 1) + elem
+    };
+    if needed > view.length() {
+        return Err(format!(
+            "{what} accessor {i} needs {needed} bytes but its buffer view has {}",
+            view.length()
+        ));
+    }
+    let buffer = buffers.get(view.buffer().index()).ok_or_else(|| {
+        format!(
+            "{what} accessor {i}: buffer {} is missing",
+            view.buffer().index()
+        )
+    })?;
+    if view.offset() + view.length() > buffer.0.len() {
+        return Err(format!(
+            "buffer view {} ends at byte {} but buffer {} has {}",
+            view.index(),
+            view.offset() + view.length(),
+            view.buffer().index(),
+            buffer.0.len()
+        ));
+    }
+    Ok(())
 }
 
 fn face_normals(pos: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
