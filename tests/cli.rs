@@ -289,8 +289,10 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
 fn more_lights_than_the_device_holds_is_an_error_stating_the_limit() {
     let ctx = manylights_gpu::GpuContext::new(&manylights_gpu::GpuOptions::default())
         .expect("a Vulkan adapter (lavapipe is enough)");
-    let limit =
-        u64::from(ctx.limits.max_storage_buffer_binding_size).min(ctx.limits.max_buffer_size);
+    let limit = ctx
+        .limits
+        .max_storage_buffer_binding_size
+        .min(ctx.limits.max_buffer_size);
     drop(ctx);
     let too_many = (limit / 64 + 1).to_string();
     rejects(
