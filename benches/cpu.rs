@@ -3,6 +3,8 @@
 //! `lights.<generator>`, `cull.<strategy>.cpu`, `encode.<backend>`, `upload.lights`).
 //! `MANYLIGHTS_BENCH_QUICK=1` shrinks the sizes for a smoke run.
 
+mod common;
+
 use std::time::{Duration, Instant};
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -10,14 +12,12 @@ use manylights_cull::{CullSettings, Strategy, cpu};
 use manylights_gpu::layout::{GpuFrame, GpuLight};
 use manylights_gpu::prepass::{DepthPrepass, depth_target};
 use manylights_gpu::timing::GpuTimer;
-use manylights_gpu::{GpuContext, GpuOptions, GpuScene, readback};
+use manylights_gpu::{GpuScene, readback};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule};
 use manylights_shade::{Backend, Renderer};
 
-fn quick() -> bool {
-    std::env::var("MANYLIGHTS_BENCH_QUICK").is_ok_and(|v| v != "0")
-}
+use common::{configure, gpu, quick};
 
 fn counts() -> Vec<u32> {
     if quick() {
@@ -25,20 +25,6 @@ fn counts() -> Vec<u32> {
     } else {
         vec![1024, 16_384, 262_144, 1_048_576]
     }
-}
-
-fn gpu() -> GpuContext {
-    GpuContext::new(&GpuOptions::default())
-        .unwrap_or_else(|e| panic!("these benchmarks need a Vulkan adapter: {e}"))
-}
-
-fn configure(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>) {
-    // Flat sampling: ten samples of equal iteration counts, so the slowest cases (a million
-    // lights at 4K) need ten iterations, not the fifty-five of linear sampling.
-    g.sample_size(10)
-        .sampling_mode(criterion::SamplingMode::Flat)
-        .warm_up_time(Duration::from_millis(300))
-        .measurement_time(Duration::from_secs(2));
 }
 
 fn generation(c: &mut Criterion) {

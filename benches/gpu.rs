@@ -13,6 +13,8 @@
 //! `MANYLIGHTS_BENCH_QUICK=1` shrinks everything (light counts, resolutions, key counts) so the
 //! benches can be smoke-run on lavapipe; figures come only from the GPU machine.
 
+mod common;
+
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -20,22 +22,13 @@ use manylights_cull::radix_sort::{RadixSort, SortedIn};
 use manylights_cull::{CullSettings, Culler, Strategy};
 use manylights_gpu::prepass::{DepthPrepass, depth_target};
 use manylights_gpu::timing::GpuTimer;
-use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
+use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::{Backend, Renderer};
+
+use common::{configure, gpu, quick};
 use rand::{RngExt, SeedableRng};
-
-fn quick() -> bool {
-    std::env::var("MANYLIGHTS_BENCH_QUICK").is_ok_and(|v| v != "0")
-}
-
-fn gpu() -> GpuContext {
-    let ctx = GpuContext::new(&GpuOptions::default())
-        .unwrap_or_else(|e| panic!("the GPU benchmarks need a Vulkan adapter: {e}"));
-    eprintln!("adapter: {}", ctx.summary());
-    ctx
-}
 
 /// The atrium with `n` uniformly placed lights of radius 0.5 m (as experiments/scaling-1m.ron).
 fn atrium(n: u32) -> Scene {
@@ -58,15 +51,6 @@ fn atrium(n: u32) -> Scene {
 
 fn ms(t: &[manylights_gpu::timing::PassTiming], pick: impl Fn(&str) -> bool) -> f64 {
     t.iter().filter(|p| pick(&p.label)).map(|p| p.ms).sum()
-}
-
-fn configure(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>) {
-    // Flat sampling: ten samples of equal iteration counts, so the slowest cases (a million
-    // lights at 4K) need ten iterations, not the fifty-five of linear sampling.
-    g.sample_size(10)
-        .sampling_mode(criterion::SamplingMode::Flat)
-        .warm_up_time(Duration::from_millis(300))
-        .measurement_time(Duration::from_secs(2));
 }
 
 fn cull(c: &mut Criterion) {

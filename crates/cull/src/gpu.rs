@@ -154,6 +154,16 @@ pub struct CullOutput {
 }
 
 impl CullOutput {
+    /// The lists' bindings 0, 1, 2 (`CullParams`, `bin_ranges`, `light_indices`), as every
+    /// consumer's bind group starts.
+    pub fn list_bindings(&self) -> [wgpu::BindingResource<'_>; 3] {
+        [
+            self.params_buf.as_entire_binding(),
+            self.ranges.as_entire_binding(),
+            self.indices.as_entire_binding(),
+        ]
+    }
+
     /// Bytes of the lists: ranges plus indices.
     pub fn list_bytes(&self) -> u64 {
         u64::from(self.params.bins) * 8 + u64::from(self.total) * 4
@@ -598,36 +608,20 @@ impl Culler {
             aspect: wgpu::TextureAspect::DepthOnly,
             ..Default::default()
         });
-        let group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("lists.group1"),
-            layout: &self.lists_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: lists.params_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: lists.ranges.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: lists.indices.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::TextureView(&view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 4,
-                    resource: out.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: exact.as_entire_binding(),
-                },
+        let [params, ranges, indices] = lists.list_bindings();
+        let group = pipeline::group(
+            d,
+            "lists.group1",
+            &self.lists_layout,
+            &[
+                params,
+                ranges,
+                indices,
+                wgpu::BindingResource::TextureView(&view),
+                out.as_entire_binding(),
+                exact.as_entire_binding(),
             ],
-        });
+        );
         let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("cull.per_pixel"),
         });
@@ -729,34 +723,24 @@ impl<'a> Frame<'a> {
     }
 
     fn group(&self, indices: &wgpu::Buffer, pair_keys: &wgpu::Buffer) -> wgpu::BindGroup {
-        fn b(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }
-        }
-        self.ctx
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("cull.group1"),
-                layout: self.layout,
-                entries: &[
-                    b(0, &self.params_buf),
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: wgpu::BindingResource::TextureView(&self.depth_view),
-                    },
-                    b(2, &self.tile_depth),
-                    b(3, &self.counts),
-                    b(4, &self.offsets),
-                    b(5, &self.cursors),
-                    b(6, &self.ranges),
-                    b(7, indices),
-                    b(8, &self.occupancy),
-                    b(9, pair_keys),
-                    b(10, &self.stats),
-                ],
-            })
+        pipeline::group(
+            &self.ctx.device,
+            "cull.group1",
+            self.layout,
+            &[
+                self.params_buf.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&self.depth_view),
+                self.tile_depth.as_entire_binding(),
+                self.counts.as_entire_binding(),
+                self.offsets.as_entire_binding(),
+                self.cursors.as_entire_binding(),
+                self.ranges.as_entire_binding(),
+                indices.as_entire_binding(),
+                self.occupancy.as_entire_binding(),
+                pair_keys.as_entire_binding(),
+                self.stats.as_entire_binding(),
+            ],
+        )
     }
 
     /// A new encoder; the first one of a run also clears the counters.

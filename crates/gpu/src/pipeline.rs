@@ -158,19 +158,19 @@ pub fn texture_2d(
     })
 }
 
-/// A bind group of whole buffers at bindings 0, 1, 2, ... in order.
-pub fn buffers_group(
+/// A bind group of `resources` at bindings 0, 1, 2, ... in order.
+pub fn group(
     device: &wgpu::Device,
     label: &str,
     layout: &wgpu::BindGroupLayout,
-    buffers: &[&wgpu::Buffer],
+    resources: &[wgpu::BindingResource<'_>],
 ) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+    let entries: Vec<wgpu::BindGroupEntry<'_>> = resources
         .iter()
         .enumerate()
-        .map(|(i, b)| wgpu::BindGroupEntry {
+        .map(|(i, r)| wgpu::BindGroupEntry {
             binding: i as u32,
-            resource: b.as_entire_binding(),
+            resource: r.clone(),
         })
         .collect();
     device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -178,6 +178,18 @@ pub fn buffers_group(
         layout,
         entries: &entries,
     })
+}
+
+/// A bind group of whole buffers at bindings 0, 1, 2, ... in order.
+pub fn buffers_group(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[&wgpu::Buffer],
+) -> wgpu::BindGroup {
+    let resources: Vec<wgpu::BindingResource<'_>> =
+        buffers.iter().map(|b| b.as_entire_binding()).collect();
+    group(device, label, layout, &resources)
 }
 
 /// A timed compute pass `label` dispatching `groups` workgroups of `pipeline` with bind groups

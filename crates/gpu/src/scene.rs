@@ -139,24 +139,12 @@ impl GpuScene {
                 storage(2),
             ],
         });
-        let bind_group = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene.group0"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: frame_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: lights_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: materials_buf.as_entire_binding(),
-                },
-            ],
-        });
+        let bind_group = crate::pipeline::buffers_group(
+            d,
+            "scene.group0",
+            &layout,
+            &[&frame_buf, &lights_buf, &materials_buf],
+        );
         Ok(Self {
             vertices: vertices_buf,
             indices: indices_buf,

@@ -380,44 +380,30 @@ impl Renderer {
                     ..Default::default()
                 });
                 let group1 = self.lists_group(ctx, &self.deferred_lists, &lists, Some(&depth_only));
-                let group2 = d.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("shade.deferred.gbuffer"),
-                    layout: &self.deferred_gbuffer,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: wgpu::BindingResource::TextureView(&views[0]),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: wgpu::BindingResource::TextureView(&views[1]),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: wgpu::BindingResource::TextureView(&color_view),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 3,
-                            resource: wgpu::BindingResource::TextureView(&views[2]),
-                        },
+                let group2 = pipeline::group(
+                    d,
+                    "shade.deferred.gbuffer",
+                    &self.deferred_gbuffer,
+                    &[
+                        wgpu::BindingResource::TextureView(&views[0]),
+                        wgpu::BindingResource::TextureView(&views[1]),
+                        wgpu::BindingResource::TextureView(&color_view),
+                        wgpu::BindingResource::TextureView(&views[2]),
                     ],
-                });
+                );
                 let mut enc = ctx.encoder("shade");
-                {
-                    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("shade.deferred"),
-                        timestamp_writes: timer.compute_pass("shade.deferred"),
-                    });
-                    pass.set_pipeline(if stored {
+                pipeline::dispatch(
+                    &mut enc,
+                    &mut timer,
+                    "shade.deferred",
+                    if stored {
                         &self.deferred_stored
                     } else {
                         &self.deferred
-                    });
-                    pass.set_bind_group(0, &scene.bind_group, &[]);
-                    pass.set_bind_group(1, &group1, &[]);
-                    pass.set_bind_group(2, &group2, &[]);
-                    pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
-                }
+                    },
+                    &[&scene.bind_group, &group1, &group2],
+                    (width.div_ceil(8), height.div_ceil(8)),
+                );
                 timer.resolve(&mut enc);
                 ctx.submit_and_wait(enc, "deferred lighting")?;
                 Some(lists)
@@ -440,31 +426,11 @@ impl Renderer {
         lists: &CullOutput,
         depth: Option<&wgpu::TextureView>,
     ) -> wgpu::BindGroup {
-        let mut entries = vec![
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: lists.params_buf.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: lists.ranges.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: lists.indices.as_entire_binding(),
-            },
-        ];
+        let mut resources = lists.list_bindings().to_vec();
         if let Some(view) = depth {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 3,
-                resource: wgpu::BindingResource::TextureView(view),
-            });
+            resources.push(wgpu::BindingResource::TextureView(view));
         }
-        ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shade.lists"),
-            layout,
-            entries: &entries,
-        })
+        pipeline::group(&ctx.device, "shade.lists", layout, &resources)
     }
 
     /// A raster pass drawing the scene into `targets` (cleared), testing depth with `Equal`
