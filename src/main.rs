@@ -356,6 +356,10 @@ struct StrategyArgs {
     /// Emit lights only into clusters that hold geometry (clustered only).
     #[arg(long)]
     skip_empty: bool,
+    /// Keep the clusters' atomic fill order instead of sorting each list into light order
+    /// (clustered only; one pass less, images no longer bit-identical across runs).
+    #[arg(long)]
+    unordered: bool,
     /// Conservative slack, relative to each light's distance from the eye.
     #[arg(long, default_value_t = DEFAULT_SLACK)]
     slack: f32,
@@ -385,6 +389,7 @@ impl StrategyArgs {
                     SlicingName::Exponential => Slicing::Exponential,
                 },
                 skip_empty: self.skip_empty,
+                ordered: !self.unordered,
             },
         };
         strategy.validate()?;

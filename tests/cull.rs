@@ -33,12 +33,14 @@ fn strategies() -> Vec<Strategy> {
             slices: 16,
             slicing: Slicing::Exponential,
             skip_empty: false,
+            ordered: true,
         },
         Strategy::Clustered {
             tile_size: 8,
             slices: 8,
             slicing: Slicing::Linear,
             skip_empty: true,
+            ordered: false,
         },
     ]
 }
@@ -618,6 +620,7 @@ fn gpu_exact_oracle_matches_cpu() {
                 slices: 12,
                 slicing: Slicing::Exponential,
                 skip_empty: true,
+                ordered: true,
             },
         ] {
             let out = run_gpu(&ctx, culler, &r, &case, &s);
@@ -681,6 +684,7 @@ fn capacity_drops_are_counted() {
             slices: 8,
             slicing: Slicing::Linear,
             skip_empty: false,
+            ordered: true,
         },
     ] {
         let full = run_gpu(&ctx, &culler, &r, &case, &s);

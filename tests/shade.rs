@@ -58,6 +58,7 @@ fn strategies() -> [Strategy; 4] {
             slices: 16,
             slicing: Slicing::Exponential,
             skip_empty: true,
+            ordered: true,
         },
     ]
 }
@@ -265,23 +266,48 @@ fn infinite_range_reference_measures_the_cutoff() {
     }
 }
 
-/// Strategies whose lists come out in light order (gather and 2.5D fill in order, scatter sorts
-/// stably) give the same lists, order included, and bit-identical images on every run. Clusters
-/// append through atomics: their lists are equal as sets only, and the float sums of their
-/// pixels may differ in the last bits (the next step of determinism).
+/// Every strategy's lists come out in light order (gather and 2.5D fill in order, scatter sorts
+/// stably, clusters sort each list after their atomic fill): the same lists, order included,
+/// and bit-identical images on every run. The big case's clusters hold over 2,048 lights, so
+/// that both paths of `cull.clustered.order` (workgroup memory and in place) run.
 #[test]
 fn ordered_strategies_render_bit_identical_frames() {
     let ctx = common::gpu();
-    let s = scene("atrium");
     let (w, h) = (70, 45);
-    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    let renderer = Renderer::new(&ctx, &gpu_scene);
-    let settings = CullSettings::for_camera(&s.camera);
-    for strategy in [
-        Strategy::TiledGather { tile_size: 8 },
-        Strategy::DepthMask { tile_size: 16 },
-        Strategy::TiledScatter { tile_size: 8 },
-    ] {
+    let small = scene("atrium");
+    // 2,100 lights that each cover the whole view: every cluster's list is longer than the
+    // order pass's workgroup memory.
+    let mut big = scene("atrium");
+    big.lights = LightSpec {
+        generator: LightGenerator::LightField,
+        count: 2100,
+        seed: 4,
+        radius: RadiusRule::Fixed(big.light_bounds.extent().length() * 2.0),
+        intensity: 0.05,
+        spot_fraction: 0.0,
+        spot_outer_deg: 40.0,
+    }
+    .generate(&big)
+    .unwrap();
+    let clusters = Strategy::Clustered {
+        tile_size: 16,
+        slices: 8,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered: true,
+    };
+    let cases = [
+        (&small, Strategy::TiledGather { tile_size: 8 }),
+        (&small, Strategy::DepthMask { tile_size: 16 }),
+        (&small, Strategy::TiledScatter { tile_size: 8 }),
+        (&small, clusters),
+        (&big, clusters),
+    ];
+    for (s, strategy) in cases {
+        let gpu_scene = GpuScene::upload(&ctx, s, &s.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let settings = CullSettings::for_camera(&s.camera);
+        let mut longest = 0;
         for backend in [Backend::Forward, Backend::Deferred] {
             let runs: Vec<_> = (0..2)
                 .map(|_| {
@@ -306,12 +332,19 @@ fn ordered_strategies_render_bit_identical_frames() {
             );
             for b in 0..runs[0].1.ranges.len() {
                 let l = runs[0].1.list(b);
+                longest = longest.max(l.len());
                 assert!(
                     l.windows(2).all(|p| p[0] < p[1]),
-                    "{} bin {b}: not in light order: {l:?}",
+                    "{} bin {b}: not in light order",
                     strategy.name()
                 );
             }
+        }
+        if std::ptr::eq(s, &big) {
+            assert!(
+                longest > 2048,
+                "the big case must exceed workgroup memory: {longest}"
+            );
         }
     }
 }

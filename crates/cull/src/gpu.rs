@@ -55,7 +55,7 @@ pub const TILED_SCATTER: ShaderDef = ShaderDef {
         shader_file!("cull/tiled_scatter.wgsl"),
     ],
 };
-/// `cull.clustered` and `cull.occupancy`.
+/// `cull.clustered`, `cull.clustered.order` and `cull.occupancy`.
 pub const CLUSTERED: ShaderDef = ShaderDef {
     name: "cull.clustered",
     consts: CULL_CONSTS,
@@ -216,6 +216,7 @@ pub struct Culler {
     gather_fill: wgpu::ComputePipeline,
     clustered_count: wgpu::ComputePipeline,
     clustered_fill: wgpu::ComputePipeline,
+    cluster_order: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
     cap: wgpu::ComputePipeline,
@@ -280,12 +281,17 @@ impl Culler {
             &layout,
             ["gather_count", "gather_fill", "finalize", "cap_counts"],
         );
-        let [clustered_count, clustered_fill, occupancy] = pipelines(
+        let [clustered_count, clustered_fill, cluster_order, occupancy] = pipelines(
             d,
             &CLUSTERED,
             scene_layout,
             &layout,
-            ["clustered_count", "clustered_fill", "cluster_occupancy"],
+            [
+                "clustered_count",
+                "clustered_fill",
+                "cluster_order",
+                "cluster_occupancy",
+            ],
         );
         let scatter = pipelines(
             d,
@@ -315,6 +321,7 @@ impl Culler {
             gather_fill,
             clustered_count,
             clustered_fill,
+            cluster_order,
             occupancy,
             finalize,
             cap,
@@ -430,6 +437,16 @@ impl Culler {
             &group_b,
             main,
         );
+        if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
+            f.pass(
+                &mut enc,
+                timer,
+                "cull.clustered.order",
+                &self.cluster_order,
+                &group_b,
+                groups_2d(p.bins, GROUPS_X),
+            );
+        }
         f.pass(
             &mut enc,
             timer,

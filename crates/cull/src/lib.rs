@@ -46,7 +46,8 @@ pub enum Slicing {
 }
 
 /// A culling strategy and its parameters. In RON, omitted parameters take their defaults:
-/// tiles of 16 pixels (64 for clusters), 24 exponential slices, `skip_empty: false`.
+/// tiles of 16 pixels (64 for clusters), 24 exponential slices, `skip_empty: false`,
+/// `ordered: true`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Strategy {
     /// Forward+ tiled gather: one workgroup per tile tests every light against the tile frustum
@@ -83,7 +84,17 @@ pub enum Strategy {
         /// Emit lights only into clusters that hold geometry.
         #[serde(default)]
         skip_empty: bool,
+        /// Sort each cluster's list into light order after the fill (`cull.clustered.order`),
+        /// so that shading sums a pixel's lights in the same order on every run and images are
+        /// bit-identical. `false` keeps the atomic fill's arbitrary order (the same lights as
+        /// sets, one pass less).
+        #[serde(default = "default_ordered")]
+        ordered: bool,
     },
+}
+
+fn default_ordered() -> bool {
+    true
 }
 
 fn default_tile() -> u32 {
@@ -139,6 +150,7 @@ impl Strategy {
                 slices: 24,
                 slicing: Slicing::Exponential,
                 skip_empty: false,
+                ordered: true,
             },
         ]
     }

@@ -310,13 +310,15 @@ fn strategy_label(s: &Strategy) -> String {
             slices,
             slicing,
             skip_empty,
+            ordered,
         } => format!(
-            "clustered{tile_size}x{slices}{}{}",
+            "clustered{tile_size}x{slices}{}{}{}",
             match slicing {
                 manylights_cull::Slicing::Linear => "lin",
                 manylights_cull::Slicing::Exponential => "exp",
             },
-            if skip_empty { "skip" } else { "" }
+            if skip_empty { "skip" } else { "" },
+            if ordered { "" } else { "unordered" }
         ),
     }
 }
@@ -334,10 +336,15 @@ pub fn params_label(c: &Config) -> String {
             slices,
             slicing,
             skip_empty,
-        } => format!(
-            "tile_size={tile_size};slices={slices};slicing={slicing:?};skip_empty={skip_empty}"
-        )
-        .to_lowercase(),
+            ordered,
+        } => {
+            // `ordered` is the default: named only when off, so that labels stay as they were.
+            let unordered = if ordered { "" } else { ";ordered=false" };
+            format!(
+                "tile_size={tile_size};slices={slices};slicing={slicing:?};skip_empty={skip_empty}{unordered}"
+            )
+            .to_lowercase()
+        }
     };
     if c.backend == Backend::NaiveForward {
         p = "none".into();
