@@ -9,7 +9,8 @@
 @group(1) @binding(6) var<storage, read_write> out_ranges: array<vec2<u32>>;
 @group(1) @binding(7) var<storage, read_write> out_indices: array<u32>;
 
-// Statistics: [0] = lights dropped by a deliberate capacity.
+// Statistics: [0] = lights dropped by a deliberate capacity; [1], [2] = tiled scatter's pair
+// total, low word and carries.
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
 
 // Appends light `light` to bin `bin` (count pass: counts; fill pass: writes, up to the

@@ -42,6 +42,14 @@ fn scatter_light(t: u32, write: bool) {
     }
     if !write {
         atomicStore(&bin_counts[t], n);
+        // The pairs' 64-bit total: cull_stats[1] wraps, and the thread whose add wraps it
+        // carries into cull_stats[2].
+        if n > 0u {
+            let old = atomicAdd(&cull_stats[1], n);
+            if old + n < old {
+                atomicAdd(&cull_stats[2], 1u);
+            }
+        }
     }
 }
 

@@ -350,7 +350,14 @@ impl Culler {
         let (w, h) = (depth.width(), depth.height());
         let params = strategy.params(w, h, scene.light_count, settings);
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
-        let f = Frame::new(self, ctx, scene, depth, params);
+        let per_light = matches!(strategy, Strategy::TiledScatter { .. });
+        if per_light {
+            ctx.check_storage(
+                "tiled scatter per-lane counts",
+                (u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES) + 1) * 4,
+            )?;
+        }
+        let f = Frame::new(self, ctx, scene, depth, params, per_light);
         match strategy {
             Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer),
             _ => self.run_binned(ctx, f, strategy, timer),
@@ -426,6 +433,7 @@ impl Culler {
             );
         }
         let total = f.scan_total(ctx, &self.scan, enc, p.bins, timer)?;
+        let total = f.checked_total(ctx, p.bins, total)?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
         let group_b = f.group(&indices, &placeholder);
         let mut enc = f.encoder("cull.fill");
@@ -491,8 +499,20 @@ impl Culler {
             &group_a,
             light_groups,
         );
-        let pairs = f.scan_total(ctx, &self.scan, enc, work, timer)?;
-        ctx.check_storage("tiled scatter pairs", u64::from(pairs) * 4)?;
+        let scanned = f.scan_total(ctx, &self.scan, enc, work, timer)?;
+        // The count pass also sums the pairs in 64 bits (cull_stats[1], carries in [2]), so a
+        // total past u32 is an error here and never a wrapped, short buffer.
+        let sum = readback::read_buffer(ctx, &f.stats, 4, 8)?;
+        let word = |k: usize| u64::from(u32::from_le_bytes(sum[k..k + 4].try_into().expect("4")));
+        let exact = word(0) | (word(4) << 32);
+        debug_assert_eq!(u64::from(scanned), exact & u64::from(u32::MAX));
+        ctx.check_storage("tiled scatter pairs", exact * 4)?;
+        let pairs = u32::try_from(exact).map_err(|_| GpuError::OverLimit {
+            what: "tiled scatter pairs".into(),
+            value: exact,
+            limit: u32::MAX.into(),
+            limit_name: "u32 list offsets",
+        })?;
         let (keys, vals) = (
             f.buf("cull.pair_keys", u64::from(pairs) * 4),
             f.buf("cull.light_indices", u64::from(pairs) * 4),
@@ -685,12 +705,16 @@ impl<'a> Frame<'a> {
         scene: &'a GpuScene,
         depth: &wgpu::Texture,
         params: GpuCullParams,
+        per_light: bool,
     ) -> Self {
         let bins = u64::from(params.bins);
         let tiles = u64::from(params.tiles_x * params.tiles_y);
-        // Counts and offsets hold one entry per bin, or per light for tiled scatter.
-        let items =
-            bins.max(u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES));
+        // Counts and offsets hold one entry per bin, or per (light, lane) for tiled scatter.
+        let items = if per_light {
+            bins.max(u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES))
+        } else {
+            bins
+        };
         let params_buf = ctx
             .device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -811,6 +835,27 @@ impl<'a> Frame<'a> {
         ctx.submit_and_wait(enc, "culling: count and scan")?;
         let bytes = readback::read_buffer(ctx, &self.offsets, u64::from(n) * 4, 4)?;
         Ok(u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")))
+    }
+
+    /// `total` (the scan's u32 sum of the `n` bin counts), checked: where the counts could sum
+    /// past u32 (bins x lights > 2^32), they are read back and summed in u64, so that a wrapped
+    /// total never sizes the lists short; the lists must also fit one storage binding.
+    fn checked_total(&self, ctx: &GpuContext, n: u32, total: u32) -> Result<u32, GpuError> {
+        let mut exact = u64::from(total);
+        if u64::from(n) * u64::from(self.params.light_count) > u64::from(u32::MAX) {
+            let bytes = readback::read_buffer(ctx, &self.counts, 0, u64::from(n) * 4)?;
+            exact = bytes
+                .chunks_exact(4)
+                .map(|c| u64::from(u32::from_le_bytes(c.try_into().expect("4 bytes"))))
+                .sum();
+        }
+        ctx.check_storage("light list bytes", exact * 4)?;
+        u32::try_from(exact).map_err(|_| GpuError::OverLimit {
+            what: "light list entries".into(),
+            value: exact,
+            limit: u32::MAX.into(),
+            limit_name: "u32 list offsets",
+        })
     }
 
     /// The output; reads back the dropped count where a capacity was set.

@@ -251,6 +251,21 @@ impl Strategy {
     }
 }
 
+/// The largest light count the device `ctx` holds: every per-light buffer fits one storage
+/// binding (the lights, 64 bytes each, and tiled scatter's per-lane counts and offsets,
+/// `SCATTER_LANES` x 4 bytes a light plus one entry), and, on a driver that stops loops short
+/// (`GpuContext::loop_limit`), per-pixel loops over every light stay within its limit.
+pub fn max_lights(ctx: &manylights_gpu::GpuContext) -> u32 {
+    let limits = &ctx.limits;
+    let binding = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    let per_light = 64.max(4 * u64::from(layout::SCATTER_LANES));
+    let storage = binding.saturating_sub(4) / per_light;
+    let loops = ctx.loop_limit.map_or(u64::MAX, |l| l / 2);
+    u32::try_from(storage.min(loops)).unwrap_or(u32::MAX)
+}
+
 /// Settings of a culling run that are not the strategy's own.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CullSettings {

@@ -78,6 +78,9 @@ pub struct GpuContext {
     pub features: Negotiated,
     /// The limits in force (the adapter's own, not WebGPU's defaults).
     pub limits: wgpu::Limits,
+    /// Loop iterations a shader invocation may run in all, where the driver stops loops short
+    /// silently (see [`LLVMPIPE_LOOP_LIMIT`]); `None` where it does not.
+    pub loop_limit: Option<u64>,
     errors: std::sync::Arc<std::sync::Mutex<Option<String>>>,
     /// When the open frame encoder was created (see [`GpuContext::encoder`]).
     encode_start: std::sync::Mutex<Option<std::time::Instant>>,
@@ -94,12 +97,21 @@ impl fmt::Debug for GpuContext {
     }
 }
 
+fn is_llvmpipe(info: &wgpu::AdapterInfo) -> bool {
+    info.name.contains("llvmpipe") || info.driver.contains("llvmpipe")
+}
+
 fn describe(i: usize, info: &wgpu::AdapterInfo) -> String {
     format!(
         "  [{i}] {} ({:?}, {:?}, driver {} {})",
         info.name, info.device_type, info.backend, info.driver, info.driver_info
     )
 }
+
+/// Mesa's llvmpipe (lavapipe) ends every loop of a shader invocation, silently, once the
+/// invocation has run 65,535 loop iterations in all (`LP_MAX_TGSI_LOOP_ITERATIONS`, shared by
+/// every loop of the shader). A per-pixel loop over more lights than that stops short.
+pub const LLVMPIPE_LOOP_LIMIT: u64 = 65_535;
 
 impl GpuContext {
     /// Opens a device on the chosen adapter with every optional feature it offers that the
@@ -194,6 +206,7 @@ impl GpuContext {
             subgroups: required.contains(wgpu::Features::SUBGROUP),
             subgroup_size: (info.subgroup_min_size, info.subgroup_max_size),
         };
+        let loop_limit = is_llvmpipe(&info).then_some(LLVMPIPE_LOOP_LIMIT);
         Ok(Self {
             adapter,
             device,
@@ -201,6 +214,7 @@ impl GpuContext {
             info,
             features,
             limits,
+            loop_limit,
             errors,
             encode_start: Default::default(),
             encode_total: Default::default(),
@@ -240,6 +254,22 @@ impl GpuContext {
             }
         }
         Ok(())
+    }
+
+    /// Checks a light count against the driver's loop limit, where it has one: the exact
+    /// oracle loops over every light and then over a list of up to every light, so each
+    /// invocation may run twice the light count in iterations.
+    pub fn check_loop_count(&self, what: &str, lights: u64) -> Result<(), GpuError> {
+        match self.loop_limit {
+            Some(limit) if lights > limit / 2 => Err(GpuError::OverLimit {
+                what: what.into(),
+                value: lights,
+                limit: limit / 2,
+                limit_name: "llvmpipe's 65,535 loop iterations per shader invocation, which it \
+                             enforces by ending loops early without an error; use a hardware GPU",
+            }),
+            _ => Ok(()),
+        }
     }
 
     /// Checks a storage buffer size against the device's binding limit.

@@ -66,6 +66,7 @@ impl GpuScene {
         if lights.is_empty() {
             lights.push(bytemuck::Zeroable::zeroed());
         }
+        ctx.check_loop_count("light count", u64::from(light_count))?;
         ctx.check_storage(
             "light buffer bytes",
             (lights.len() * size_of::<GpuLight>()) as u64,

@@ -177,6 +177,8 @@ pub struct Sweep {
     pub backend: Option<Vec<Backend>>,
     /// Capacities (`None` entries mean none).
     pub capacity: Option<Vec<Option<u32>>>,
+    /// Device limits (`None` entries mean none).
+    pub device_limit: Option<Vec<Option<DeviceLimit>>>,
     /// Combined overrides.
     pub variants: Option<Vec<Variant>>,
 }
@@ -221,6 +223,37 @@ pub struct Config {
     /// light counts where O(pixels x lights) is too slow). 0 turns list metrics off.
     #[serde(default = "one")]
     pub exact_stride: u32,
+    /// Set one dimension to the device's limit when the cell runs (stability case 14).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device_limit: Option<DeviceLimit>,
+}
+
+/// A value the runner takes from the device's limits when the cell runs, so that one
+/// experiment file probes the limit of whatever device it runs on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum DeviceLimit {
+    /// The width: `max_texture_dimension_2d`.
+    Width,
+    /// The height: `max_texture_dimension_2d`.
+    Height,
+    /// The light count: the most lights the device holds (`manylights_cull::max_lights`:
+    /// per-light buffers within one storage binding, and llvmpipe's loop limit).
+    Lights,
+}
+
+impl Config {
+    /// This configuration with its `device_limit` resolved against the device `ctx`.
+    pub fn at_limits(&self, ctx: &manylights_gpu::GpuContext) -> Config {
+        let limits = &ctx.limits;
+        let mut c = self.clone();
+        match c.device_limit {
+            Some(DeviceLimit::Width) => c.resolution.0 = limits.max_texture_dimension_2d,
+            Some(DeviceLimit::Height) => c.resolution.1 = limits.max_texture_dimension_2d,
+            Some(DeviceLimit::Lights) => c.lights.count = manylights_cull::max_lights(ctx),
+            None => {}
+        }
+        c
+    }
 }
 
 fn resolution() -> (u32, u32) {
@@ -507,6 +540,13 @@ impl Experiment {
         axis!(s.capacity, |c: &mut Config, v: Option<u32>| {
             c.capacity = v;
             format!("capacity={}", v.map_or("none".into(), |x| x.to_string()))
+        });
+        axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
+            c.device_limit = v;
+            format!(
+                "limit={}",
+                v.map_or("none".into(), |x| format!("{x:?}").to_lowercase())
+            )
         });
         axis!(s.variants, |c: &mut Config, v: Variant| {
             if let Some(st) = v.strategy {

@@ -104,9 +104,23 @@ pub struct Row {
     pub exact_stride: u32,
     /// Measured frames.
     pub frames: u32,
-    /// Pixels of the backend's image with a NaN or infinite channel (at the first pose).
+    /// Pixels of the backend's image with a NaN or infinite channel (the worst pose).
     #[serde(default)]
     pub nonfinite_pixels: u64,
+    /// Camera poses measured (a path's length; 1 otherwise). Every list and accuracy column
+    /// is the worst over the poses (false negatives: their sum).
+    #[serde(default = "one")]
+    pub poses: u32,
+    /// Mean absolute frame-to-frame change of the image over the path (per RGB channel).
+    #[serde(default)]
+    pub temporal_change: Option<f64>,
+    /// The same for the reference: the change the camera motion itself causes.
+    #[serde(default)]
+    pub temporal_change_reference: Option<f64>,
+    /// Largest frame-to-frame change of the image's error against the reference, relative to
+    /// the reference's peak: flicker that the reference does not have.
+    #[serde(default)]
+    pub temporal_flicker: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -196,7 +210,15 @@ pub const COLUMNS: &[&str] = &[
     "index",
     "id",
     "nonfinite_pixels",
+    "poses",
+    "temporal_change",
+    "temporal_change_reference",
+    "temporal_flicker",
 ];
+
+fn one() -> u32 {
+    1
+}
 
 fn csv_field(v: &serde_json::Value) -> String {
     let s = match v {

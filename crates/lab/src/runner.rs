@@ -18,10 +18,10 @@ use manylights_gpu::timing::{PassKind, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::{Camera, Scene};
-use manylights_shade::accuracy::compare;
-use manylights_shade::{Backend, ReferenceRenderer, Renderer};
+use manylights_shade::accuracy::{ImageError, compare};
+use manylights_shade::{Backend, HdrImage, ReferenceRenderer, Renderer};
 
-use crate::experiment::{CameraSpec, Cell, Experiment, params_label};
+use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
 use crate::results::{Row, load_cells, percentiles, save_cell, write_results};
 use crate::{LabError, write_atomic};
 
@@ -175,8 +175,7 @@ fn now() -> u64 {
         .map_or(0, |d| d.as_secs())
 }
 
-fn build_scene(cell: &Cell, base: &Path) -> Result<Scene, LabError> {
-    let c = &cell.config;
+fn build_scene(c: &Config, base: &Path) -> Result<Scene, LabError> {
     let mut scene = match c.scene.procedural() {
         Some(p) => p.build().map_err(|e| LabError::Other(e.to_string()))?,
         None => {
@@ -224,9 +223,10 @@ fn run_cell(
     out: &Path,
     commit: &str,
 ) -> Result<Row, LabError> {
-    let c = &cell.config;
+    let resolved = cell.config.at_limits(ctx);
+    let c = &resolved;
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
-    let scene = build_scene(cell, base)?;
+    let scene = build_scene(c, base)?;
     let poses: Vec<Camera> = match &c.camera {
         CameraSpec::Default => vec![scene.camera],
         CameraSpec::Pose(p) => vec![p.camera()],
@@ -267,113 +267,50 @@ fn run_cell(
             encode.push(enc);
         }
     }
-    // Metrics, accuracy and images at the first pose.
-    gpu_scene.set_view(ctx, &poses[0], w, h, 0);
-    let o = renderer
-        .render(
-            ctx,
-            &gpu_scene,
-            c.backend,
-            &c.strategy,
-            &settings(&poses[0]),
-            (w, h),
-        )
-        .map_err(|e| other(&e))?;
-    let frame = GpuFrame::new(&poses[0], w, h, gpu_scene.light_count);
+    // Metrics and accuracy at every pose (a path's poses are all checked), images at the first.
     let light_count = scene.lights.len() as u64;
-    let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
-    let mut metrics: Option<ListMetrics> = None;
-    let (mut list_bytes, mut dropped) = (0, 0);
-    let per_pixel: Vec<u32> = match &o.lists {
-        Some(lists) => {
-            list_bytes = lists.list_bytes();
-            dropped = u64::from(lists.dropped);
-            if c.exact_stride > 0 {
-                let bins = lists.read(ctx).map_err(|e| other(&e))?;
-                let counts = renderer
-                    .culler
-                    .exact_counts(
-                        ctx,
-                        &gpu_scene,
-                        &o.depth,
-                        lists,
-                        frame.clip_from_world.inverse(),
-                        c.exact_stride,
-                    )
-                    .map_err(|e| other(&e))?;
-                metrics = Some(from_gpu_counts(&counts, &bins));
-            }
-            renderer
-                .culler
-                .lights_per_pixel(ctx, &gpu_scene, &o.depth, lists)
-                .map_err(|e| other(&e))?
-        }
-        None => {
-            if c.exact_stride > 0 {
-                // Naive forward evaluates every light; the exact oracle (run over any
-                // conservative lists) gives the lights needed.
-                let mut timer = manylights_gpu::timing::GpuTimer::new(ctx, 32);
-                let probe = Strategy::TiledGather { tile_size: 16 };
-                let lists = renderer
-                    .culler
-                    .run(
-                        ctx,
-                        &gpu_scene,
-                        &o.depth,
-                        &probe,
-                        &settings(&poses[0]),
-                        &mut timer,
-                    )
-                    .map_err(|e| other(&e))?;
-                let bins = lists.read(ctx).map_err(|e| other(&e))?;
-                let counts = renderer
-                    .culler
-                    .exact_counts(
-                        ctx,
-                        &gpu_scene,
-                        &o.depth,
-                        &lists,
-                        frame.clip_from_world.inverse(),
-                        c.exact_stride,
-                    )
-                    .map_err(|e| other(&e))?;
-                let sampled = counts.iter().filter(|k| k[3] != 0).count() as u64;
-                let needed: u64 = counts.iter().map(|k| u64::from(k[1])).sum();
-                metrics = Some(ListMetrics {
-                    covered_pixels: sampled,
-                    false_negatives: 0,
-                    evaluated: sampled * light_count,
-                    needed,
-                    false_positive_ratio: (needed > 0)
-                        .then(|| (sampled * light_count) as f64 / needed as f64),
-                    lights_per_pixel_mean: light_count as f64,
-                    max_lights_per_bin: light_count as u32,
-                    histogram: Vec::new(),
-                    dropped_lights: 0,
-                });
-                drop(bins);
-            }
-            o.color
-                .data
-                .iter()
-                .map(|p| if p[3] > 0.0 { light_count as u32 } else { 0 })
-                .collect()
-        }
-    };
-    let (mut acc, mut acc_inf) = (None, None);
-    if c.accuracy {
-        let reference = ReferenceRenderer::new(ctx, &gpu_scene);
-        let r = reference
-            .render(ctx, &gpu_scene, w, h)
-            .map_err(|e| other(&e))?;
-        acc = Some(compare(&o.color, &r.color, 1.0));
-        let ri = reference
-            .render_infinite(ctx, &gpu_scene, &poses[0], w, h)
-            .map_err(|e| other(&e))?;
-        acc_inf = Some(compare(&o.color, &ri.color, 1.0));
+    let mut evals = Vec::with_capacity(poses.len());
+    for cam in &poses {
+        evals.push(evaluate(
+            ctx,
+            &renderer,
+            &gpu_scene,
+            c,
+            cam,
+            light_count,
+            &settings(cam),
+        )?);
     }
+    let first = &evals[0];
     let id = cell.id();
-    save_images(out, &id, &o.color, &per_pixel, w, h)?;
+    save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
+    let temporal = temporal_stability(&evals);
+    // The worst pose of each measure.
+    let max_u64 = |f: &dyn Fn(&PoseEval) -> Option<u64>| evals.iter().filter_map(f).max();
+    let max_f64 =
+        |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::max);
+    let min_f64 =
+        |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::min);
+    let false_negatives = evals
+        .iter()
+        .map(|e| e.metrics.as_ref().map(|m| m.false_negatives))
+        .try_fold(0u64, |a, f| f.map(|f| a + f));
+    let fp_ratio = max_f64(&|e| e.metrics.as_ref().and_then(|m| m.false_positive_ratio));
+    let max_per_bin = max_u64(&|e| e.metrics.as_ref().map(|m| u64::from(m.max_lights_per_bin)));
+    let per_pixel_mean = max_f64(&|e| Some(e.lights_per_pixel_mean));
+    let dropped = max_u64(&|e| Some(e.dropped)).unwrap_or(0);
+    let nonfinite = max_u64(&|e| Some(e.nonfinite)).unwrap_or(0);
+    let (psnr, flip, max_abs) = (
+        min_f64(&|e| e.acc.map(|a| a.psnr_db)),
+        max_f64(&|e| e.acc.map(|a| a.flip_mean)),
+        max_f64(&|e| e.acc.map(|a| a.max_abs_error)),
+    );
+    let (psnr_inf, flip_inf, max_abs_inf) = (
+        min_f64(&|e| e.acc_inf.map(|a| a.psnr_db)),
+        max_f64(&|e| e.acc_inf.map(|a| a.flip_mean)),
+        max_f64(&|e| e.acc_inf.map(|a| a.max_abs_error)),
+    );
+    let (list_bytes, gbuffer_bytes) = (first.list_bytes, first.gbuffer_bytes);
 
     let series = |pick: &dyn Fn(&PassTiming) -> bool| -> Vec<f64> {
         frames
@@ -422,18 +359,16 @@ fn run_cell(
         gpu_ms_shade: med(shade),
         gpu_ms_prepass: med(prepass),
         cpu_ms_encode: percentiles(&encode).map_or(0.0, |x| x.0),
-        false_negatives: metrics.as_ref().map(|m| m.false_negatives),
-        false_positive_ratio: metrics.as_ref().and_then(|m| m.false_positive_ratio),
-        lights_per_pixel_mean: Some(
-            per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>() / covered.max(1) as f64,
-        ),
-        max_lights_per_tile: metrics.as_ref().map(|m| u64::from(m.max_lights_per_bin)),
+        false_negatives,
+        false_positive_ratio: fp_ratio,
+        lights_per_pixel_mean: per_pixel_mean,
+        max_lights_per_tile: max_per_bin,
         dropped_lights: dropped,
         list_bytes,
-        gbuffer_bytes: o.gbuffer_bytes,
-        psnr_db: acc.map(|e| e.psnr_db),
-        flip_mean: acc.map(|e| e.flip_mean),
-        max_abs_error: acc.map(|e| e.max_abs_error),
+        gbuffer_bytes,
+        psnr_db: psnr,
+        flip_mean: flip,
+        max_abs_error: max_abs,
         adapter: ctx.info.name.clone(),
         driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info)
             .trim()
@@ -449,17 +384,217 @@ fn run_cell(
         gpu_ms_prepass_p90: p90(prepass),
         gpu_ms_raster: med(raster),
         gpu_ms_compute: med(compute),
-        psnr_db_infinite: acc_inf.map(|e| e.psnr_db),
-        flip_mean_infinite: acc_inf.map(|e| e.flip_mean),
-        max_abs_error_infinite: acc_inf.map(|e| e.max_abs_error),
+        psnr_db_infinite: psnr_inf,
+        flip_mean_infinite: flip_inf,
+        max_abs_error_infinite: max_abs_inf,
         exact_stride: c.exact_stride,
         frames: c.frames,
-        nonfinite_pixels: o.color.non_finite_count() as u64,
+        nonfinite_pixels: nonfinite,
+        poses: poses.len() as u32,
+        temporal_change: temporal.map(|t| t.0),
+        temporal_change_reference: temporal.map(|t| t.1),
+        temporal_flicker: temporal.map(|t| t.2),
         passes,
         index: cell.index,
         id,
         finished_unix: now(),
     })
+}
+
+/// What one camera pose measured.
+struct PoseEval {
+    metrics: Option<ListMetrics>,
+    per_pixel: Vec<u32>,
+    lights_per_pixel_mean: f64,
+    color: HdrImage,
+    reference: Option<HdrImage>,
+    acc: Option<ImageError>,
+    acc_inf: Option<ImageError>,
+    list_bytes: u64,
+    gbuffer_bytes: u64,
+    dropped: u64,
+    nonfinite: u64,
+}
+
+/// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
+/// and (with `accuracy`) the error against the reference and the infinite-range reference.
+fn evaluate(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    c: &Config,
+    cam: &Camera,
+    light_count: u64,
+    settings: &CullSettings,
+) -> Result<PoseEval, LabError> {
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let (w, h) = c.resolution;
+    gpu_scene.set_view(ctx, cam, w, h, 0);
+    let o = renderer
+        .render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
+        .map_err(|e| other(&e))?;
+    let frame = GpuFrame::new(cam, w, h, gpu_scene.light_count);
+    let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
+    let mut metrics: Option<ListMetrics> = None;
+    let (mut list_bytes, mut dropped) = (0, 0);
+    let per_pixel: Vec<u32> = match &o.lists {
+        Some(lists) => {
+            list_bytes = lists.list_bytes();
+            dropped = u64::from(lists.dropped);
+            if c.exact_stride > 0 {
+                let bins = lists.read(ctx).map_err(|e| other(&e))?;
+                let counts = renderer
+                    .culler
+                    .exact_counts(
+                        ctx,
+                        gpu_scene,
+                        &o.depth,
+                        lists,
+                        frame.clip_from_world.inverse(),
+                        c.exact_stride,
+                    )
+                    .map_err(|e| other(&e))?;
+                metrics = Some(from_gpu_counts(&counts, &bins));
+            }
+            renderer
+                .culler
+                .lights_per_pixel(ctx, gpu_scene, &o.depth, lists)
+                .map_err(|e| other(&e))?
+        }
+        None => {
+            if c.exact_stride > 0 {
+                metrics = Some(naive_metrics(
+                    ctx,
+                    renderer,
+                    gpu_scene,
+                    &o.depth,
+                    &frame,
+                    c.exact_stride,
+                    light_count,
+                    settings,
+                )?);
+            }
+            o.color
+                .data
+                .iter()
+                .map(|p| if p[3] > 0.0 { light_count as u32 } else { 0 })
+                .collect()
+        }
+    };
+    let (mut acc, mut acc_inf, mut reference) = (None, None, None);
+    if c.accuracy {
+        let rr = ReferenceRenderer::new(ctx, gpu_scene);
+        let r = rr.render(ctx, gpu_scene, w, h).map_err(|e| other(&e))?;
+        acc = Some(compare(&o.color, &r.color, 1.0));
+        let ri = rr
+            .render_infinite(ctx, gpu_scene, cam, w, h)
+            .map_err(|e| other(&e))?;
+        acc_inf = Some(compare(&o.color, &ri.color, 1.0));
+        reference = Some(r.color);
+    }
+    Ok(PoseEval {
+        metrics,
+        lights_per_pixel_mean: per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>()
+            / covered.max(1) as f64,
+        per_pixel,
+        nonfinite: o.color.non_finite_count() as u64,
+        color: o.color,
+        reference,
+        acc,
+        acc_inf,
+        list_bytes,
+        gbuffer_bytes: o.gbuffer_bytes,
+        dropped,
+    })
+}
+
+/// Naive forward evaluates every light; the exact oracle (run over any conservative lists)
+/// gives the lights needed.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one call site; the arguments are what one pose needs"
+)]
+fn naive_metrics(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    depth: &wgpu::Texture,
+    frame: &GpuFrame,
+    exact_stride: u32,
+    light_count: u64,
+    settings: &CullSettings,
+) -> Result<ListMetrics, LabError> {
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let mut timer = manylights_gpu::timing::GpuTimer::new(ctx, 32);
+    let probe = Strategy::TiledGather { tile_size: 16 };
+    let lists = renderer
+        .culler
+        .run(ctx, gpu_scene, depth, &probe, settings, &mut timer)
+        .map_err(|e| other(&e))?;
+    let counts = renderer
+        .culler
+        .exact_counts(
+            ctx,
+            gpu_scene,
+            depth,
+            &lists,
+            frame.clip_from_world.inverse(),
+            exact_stride,
+        )
+        .map_err(|e| other(&e))?;
+    let sampled = counts.iter().filter(|k| k[3] != 0).count() as u64;
+    let needed: u64 = counts.iter().map(|k| u64::from(k[1])).sum();
+    Ok(ListMetrics {
+        covered_pixels: sampled,
+        false_negatives: 0,
+        evaluated: sampled * light_count,
+        needed,
+        false_positive_ratio: (needed > 0).then(|| (sampled * light_count) as f64 / needed as f64),
+        lights_per_pixel_mean: light_count as f64,
+        max_lights_per_bin: light_count as u32,
+        histogram: Vec::new(),
+        dropped_lights: 0,
+    })
+}
+
+/// Temporal stability over consecutive poses (with accuracy and at least two poses):
+/// the mean absolute frame-to-frame change of the image and of the reference (per RGB channel,
+/// averaged over the pose pairs), and the flicker: the largest change of the image's error
+/// against the reference from one pose to the next, `max |(I_t - I_t-1) - (R_t - R_t-1)|`,
+/// relative to the reference's peak. Flicker caused by culling is zero for a conservative
+/// method: its images differ from the reference by float rounding only.
+fn temporal_stability(evals: &[PoseEval]) -> Option<(f64, f64, f64)> {
+    if evals.len() < 2 || evals.iter().any(|e| e.reference.is_none()) {
+        return None;
+    }
+    let (mut change, mut change_ref, mut flicker, mut peak) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut n = 0.0f64;
+    for pair in evals.windows(2) {
+        let (i0, i1) = (&pair[0].color.data, &pair[1].color.data);
+        let r0 = &pair[0].reference.as_ref()?.data;
+        let r1 = &pair[1].reference.as_ref()?.data;
+        peak = peak.max(f64::from(pair[0].reference.as_ref()?.peak()));
+        peak = peak.max(f64::from(pair[1].reference.as_ref()?.peak()));
+        let (mut c, mut cr) = (0.0f64, 0.0f64);
+        for p in 0..i0.len() {
+            for k in 0..3 {
+                let di = f64::from(i1[p][k]) - f64::from(i0[p][k]);
+                let dr = f64::from(r1[p][k]) - f64::from(r0[p][k]);
+                c += di.abs();
+                cr += dr.abs();
+                flicker = flicker.max((di - dr).abs());
+            }
+        }
+        let m = (i0.len() * 3).max(1) as f64;
+        change += c / m;
+        change_ref += cr / m;
+        n += 1.0;
+    }
+    Some((
+        change / n,
+        change_ref / n,
+        if peak > 0.0 { flicker / peak } else { flicker },
+    ))
 }
 
 /// The render and the lights-per-pixel heatmap, at most 480 pixels wide, for the report.

@@ -3,8 +3,9 @@
 //! - **fail**: false negatives not explained by a deliberate capacity, NaN or infinite pixels,
 //!   or a case that did not run;
 //! - **degraded**, with the measured cost: lights dropped by a capacity (counted), lists over
-//!   10 times longer than needed (false-positive ratio), or image error visible to FLIP (mean
-//!   above 0.01);
+//!   10 times longer than needed (false-positive ratio), image error visible to FLIP (mean
+//!   above 0.01), or flicker over a camera path (the image's error against the reference
+//!   changing from one pose to the next by over 1% of the peak);
 //! - **pass** otherwise.
 //!
 //! A configuration's verdict in a case is the worst over that case's cells.
@@ -20,6 +21,8 @@ use crate::{LabError, write_atomic};
 pub const FP_DEGRADED: f64 = 10.0;
 /// Mean FLIP above this counts as degraded.
 pub const FLIP_DEGRADED: f64 = 0.01;
+/// Temporal flicker (relative to the reference's peak) above this counts as degraded.
+pub const FLICKER_DEGRADED: f64 = 0.01;
 
 /// A verdict, ordered from best to worst.
 #[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -51,6 +54,9 @@ pub fn verdict(r: &Row) -> Verdict {
     if let Some(f) = r.flip_mean.filter(|&f| f > FLIP_DEGRADED) {
         costs.push(format!("FLIP {f:.3}"));
     }
+    if let Some(f) = r.temporal_flicker.filter(|&f| f > FLICKER_DEGRADED) {
+        costs.push(format!("flicker {f:.3}"));
+    }
     if costs.is_empty() {
         Verdict::Pass
     } else {
@@ -81,7 +87,7 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
     let mut md = String::from("# Stability suite\n\n");
     let _ = writeln!(
         md,
-        "Each case of `experiments/stability/` against each configuration: **pass**; **degraded** (with the measured cost: dropped lights, false-positive ratio over {FP_DEGRADED}, mean FLIP over {FLIP_DEGRADED}); **fail** (false negatives without a capacity, NaN/Inf pixels, or a case that did not run). The worst verdict over a case's cells.\n"
+        "Each case of `experiments/stability/` against each configuration: **pass**; **degraded** (with the measured cost: dropped lights, false-positive ratio over {FP_DEGRADED}, mean FLIP over {FLIP_DEGRADED}, temporal flicker over {FLICKER_DEGRADED} of the peak); **fail** (false negatives without a capacity, NaN/Inf pixels, or a case that did not run). The worst verdict over a case's cells; over a camera path, the worst pose (false negatives: their sum).\n\nTwo columns describe the case rather than a method: **cut-off**, the mean FLIP against lights of infinite range, the smallest over the case's cells (the cost of the lights' radius cut-off, which every method shares, however exact its culling), and **flicker**, the largest temporal flicker of any configuration over a camera path (`-` without one).\n"
     );
     let mut fails = 0;
     let all: Vec<&Row> = cases
@@ -102,7 +108,7 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
     }
     let _ = writeln!(
         md,
-        "| case | {} |\n|---|{}",
+        "| case | cut-off | flicker | {} |\n|---|---|---|{}",
         configs.join(" | "),
         "---|".repeat(configs.len())
     );
@@ -152,7 +158,25 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
                     .collect()
             }
         };
-        let _ = writeln!(md, "| {name} | {} |", cells.join(" | "));
+        let (cutoff, flicker) = match rows {
+            Ok(rows) => (
+                rows.iter()
+                    .filter_map(|r| r.flip_mean_infinite)
+                    .reduce(f64::min),
+                rows.iter()
+                    .filter_map(|r| r.temporal_flicker)
+                    .reduce(f64::max),
+            ),
+            Err(_) => (None, None),
+        };
+        let show = |v: Option<f64>| v.map_or("-".to_string(), |x| format!("{x:.3}"));
+        let _ = writeln!(
+            md,
+            "| {name} | {} | {} | {} |",
+            show(cutoff),
+            show(flicker),
+            cells.join(" | ")
+        );
     }
     write_atomic(&dir.join("stability.md"), md.as_bytes())?;
     Ok(fails)
