@@ -348,3 +348,43 @@ fn ordered_strategies_render_bit_identical_frames() {
         }
     }
 }
+
+/// A lost device is a clear error, not a panic: after `Device::destroy`, rendering (culling,
+/// shading, readback) returns an error that says the device was lost.
+#[test]
+fn lost_device_is_an_error_not_a_panic() {
+    let ctx = common::gpu();
+    let s = scene("atrium");
+    let (w, h) = (32, 18);
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    let renderer = Renderer::new(&ctx, &gpu_scene);
+    let settings = CullSettings::for_camera(&s.camera);
+    let strategy = Strategy::TiledGather { tile_size: 16 };
+    renderer
+        .render(
+            &ctx,
+            &gpu_scene,
+            Backend::Forward,
+            &strategy,
+            &settings,
+            (w, h),
+        )
+        .expect("renders before the loss");
+    ctx.device.destroy();
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        renderer.render(
+            &ctx,
+            &gpu_scene,
+            Backend::Forward,
+            &strategy,
+            &settings,
+            (w, h),
+        )
+    }));
+    let err = match result {
+        Err(_) => panic!("rendering on a lost device panicked"),
+        Ok(Ok(_)) => panic!("rendering on a lost device succeeded"),
+        Ok(Err(e)) => e.to_string(),
+    };
+    assert!(err.to_lowercase().contains("lost"), "{err}");
+}

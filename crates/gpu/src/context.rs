@@ -201,6 +201,13 @@ impl GpuContext {
                 .unwrap_or_else(std::sync::PoisonError::into_inner);
             first.get_or_insert_with(|| e.to_string());
         }));
+        let lost = errors.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            let mut first = lost
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            first.get_or_insert_with(|| format!("device lost ({reason:?}): {message}"));
+        });
         let features = Negotiated {
             timestamps: required.contains(wgpu::Features::TIMESTAMP_QUERY),
             subgroups: required.contains(wgpu::Features::SUBGROUP),
@@ -332,9 +339,19 @@ impl GpuContext {
                 submission_index: Some(index),
                 timeout: None,
             })
-            .map_err(|e| GpuError::Runtime {
-                during: during.into(),
-                message: e.to_string(),
+            .map_err(|e| {
+                // A recorded error (a lost device, say) is the cause; the failed wait follows.
+                // wgpu reports the loss to its callback on a poll.
+                let _ = self.device.poll(wgpu::PollType::Poll);
+                let first = self
+                    .errors
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+                    .take();
+                GpuError::Runtime {
+                    during: during.into(),
+                    message: first.map_or_else(|| e.to_string(), |f| format!("{f} (then: {e})")),
+                }
             })?;
         self.check(during)
     }
