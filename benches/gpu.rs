@@ -78,8 +78,20 @@ fn cull(c: &mut Criterion) {
             ctx.submit_and_wait(enc, "bench prepass").unwrap();
             let culler = Culler::new(&ctx, &gs);
             let settings = CullSettings::for_camera(&scene.camera);
-            for strategy in Strategy::defaults() {
-                let mut g = c.benchmark_group(format!("cull.{}", strategy.name()));
+            // The defaults, and clusters without their order pass (what ordering costs).
+            let unordered = Strategy::Clustered {
+                tile_size: 64,
+                slices: 24,
+                slicing: manylights_cull::Slicing::Exponential,
+                skip_empty: false,
+                ordered: false,
+            };
+            for strategy in Strategy::defaults().into_iter().chain([unordered]) {
+                let name = match strategy {
+                    Strategy::Clustered { ordered: false, .. } => "clustered_unordered",
+                    _ => strategy.name(),
+                };
+                let mut g = c.benchmark_group(format!("cull.{name}"));
                 configure(&mut g);
                 g.throughput(Throughput::Elements(u64::from(n)));
                 g.bench_with_input(BenchmarkId::new(format!("{w}x{h}"), n), &n, |b, _| {
