@@ -177,7 +177,7 @@ fn report(dir: &Path) -> Result<()> {
     let mut cases: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("cannot read {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.join("results.json").exists())
+        .filter(|p| p.join("results.json").exists() || p.join("cells").is_dir())
         .collect();
     cases.sort();
     if cases.is_empty() {
@@ -192,10 +192,19 @@ fn report(dir: &Path) -> Result<()> {
         let name = c
             .file_name()
             .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-        rows.push((
-            name,
-            manylights_lab::results::load_rows(c).map_err(|e| e.to_string()),
-        ));
+        if c.join("results.json").exists() {
+            rows.push((
+                name,
+                manylights_lab::results::load_rows(c).map_err(|e| e.to_string()),
+            ));
+        } else {
+            // A case whose run did not finish: its finished cells, and the name says so.
+            let done = manylights_lab::results::load_cells(c).map_err(|e| e.to_string());
+            let total = manylights_lab::Experiment::load(&c.join("experiment.ron"))
+                .map_or(0, |(e, _)| e.cells().len());
+            let k = done.as_ref().map_or(0, Vec::len);
+            rows.push((format!("{name} (incomplete: {k} of {total} cells)"), done));
+        }
     }
     let fails = manylights_lab::stability::write_report(dir, &rows)?;
     eprintln!(
