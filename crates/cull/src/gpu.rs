@@ -432,8 +432,13 @@ impl Culler {
                 groups_2d(p.bins.div_ceil(64), GROUPS_X),
             );
         }
-        let total = f.scan_total(ctx, &self.scan, enc, p.bins, timer)?;
-        let total = f.checked_total(ctx, p.bins, total)?;
+        f.scan(ctx, &self.scan, enc, p.bins, timer)?;
+        let total = Frame::entries(
+            ctx,
+            "light list bytes",
+            "light list entries",
+            f.bins_total(ctx, p.bins)?,
+        )?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
         let group_b = f.group(&indices, &placeholder);
         let mut enc = f.encoder("cull.fill");
@@ -499,20 +504,13 @@ impl Culler {
             &group_a,
             light_groups,
         );
-        let scanned = f.scan_total(ctx, &self.scan, enc, work, timer)?;
-        // The count pass also sums the pairs in 64 bits (cull_stats[1], carries in [2]), so a
-        // total past u32 is an error here and never a wrapped, short buffer.
-        let sum = readback::read_buffer(ctx, &f.stats, 4, 8)?;
-        let word = |k: usize| u64::from(u32::from_le_bytes(sum[k..k + 4].try_into().expect("4")));
-        let exact = word(0) | (word(4) << 32);
-        debug_assert_eq!(u64::from(scanned), exact & u64::from(u32::MAX));
-        ctx.check_storage("tiled scatter pairs", exact * 4)?;
-        let pairs = u32::try_from(exact).map_err(|_| GpuError::OverLimit {
-            what: "tiled scatter pairs".into(),
-            value: exact,
-            limit: u32::MAX.into(),
-            limit_name: "u32 list offsets",
-        })?;
+        f.scan(ctx, &self.scan, enc, work, timer)?;
+        let pairs = Frame::entries(
+            ctx,
+            "tiled scatter pairs",
+            "tiled scatter pairs",
+            f.pairs_total(ctx)?,
+        )?;
         let (keys, vals) = (
             f.buf("cull.pair_keys", u64::from(pairs) * 4),
             f.buf("cull.light_indices", u64::from(pairs) * 4),
@@ -820,39 +818,59 @@ impl<'a> Frame<'a> {
         );
     }
 
-    /// Copies the first `n` counts (plus a zero) to the offsets, scans them, submits `enc`,
-    /// and reads back the total (`offsets[n]`).
-    fn scan_total(
+    /// Copies the first `n` counts (plus a zero) to the offsets, scans them and submits `enc`.
+    fn scan(
         &self,
         ctx: &GpuContext,
         scan: &Scan,
         mut enc: wgpu::CommandEncoder,
         n: u32,
         timer: &mut GpuTimer,
-    ) -> Result<u32, GpuError> {
+    ) -> Result<(), GpuError> {
         enc.copy_buffer_to_buffer(&self.counts, 0, &self.offsets, 0, (u64::from(n) + 1) * 4);
         scan.encode(ctx, &mut enc, &self.offsets, n + 1, timer);
-        ctx.submit_and_wait(enc, "culling: count and scan")?;
-        let bytes = readback::read_buffer(ctx, &self.offsets, u64::from(n) * 4, 4)?;
-        Ok(u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes")))
+        ctx.submit_and_wait(enc, "culling: count and scan")
     }
 
-    /// `total` (the scan's u32 sum of the `n` bin counts), checked: where the counts could sum
-    /// past u32 (bins x lights > 2^32), they are read back and summed in u64, so that a wrapped
-    /// total never sizes the lists short; the lists must also fit one storage binding.
-    fn checked_total(&self, ctx: &GpuContext, n: u32, total: u32) -> Result<u32, GpuError> {
-        let mut exact = u64::from(total);
+    /// The exact total of the `n` bin counts after [`Frame::scan`]: the scan's u32 total
+    /// (`offsets[n]`), or, where the counts could sum past u32 (bins x lights > 2^32), the
+    /// counts read back and summed in u64, so that a wrapped total never sizes the lists short.
+    fn bins_total(&self, ctx: &GpuContext, n: u32) -> Result<u64, GpuError> {
+        let read_u32s = |buf: &wgpu::Buffer, offset: u64, count: u64| {
+            readback::read_buffer(ctx, buf, offset, count * 4).map(|bytes| {
+                bytes
+                    .chunks_exact(4)
+                    .map(|c| u64::from(u32::from_le_bytes(c.try_into().expect("4 bytes"))))
+                    .collect::<Vec<u64>>()
+            })
+        };
         if u64::from(n) * u64::from(self.params.light_count) > u64::from(u32::MAX) {
-            let bytes = readback::read_buffer(ctx, &self.counts, 0, u64::from(n) * 4)?;
-            exact = bytes
-                .chunks_exact(4)
-                .map(|c| u64::from(u32::from_le_bytes(c.try_into().expect("4 bytes"))))
-                .sum();
+            Ok(read_u32s(&self.counts, 0, u64::from(n))?.iter().sum())
+        } else {
+            Ok(read_u32s(&self.offsets, u64::from(n) * 4, 1)?[0])
         }
-        ctx.check_storage("light list bytes", exact * 4)?;
-        u32::try_from(exact).map_err(|_| GpuError::OverLimit {
-            what: "light list entries".into(),
-            value: exact,
+    }
+
+    /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with
+    /// the carries in `cull_stats[2]`).
+    fn pairs_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
+        let sum = readback::read_buffer(ctx, &self.stats, 4, 8)?;
+        let word = |k: usize| u64::from(u32::from_le_bytes(sum[k..k + 4].try_into().expect("4")));
+        Ok(word(0) | (word(4) << 32))
+    }
+
+    /// `entries` list entries, checked: they must fit one storage binding (`what_bytes`) and
+    /// u32 offsets (`what`), or it is an error, never a wrapped, short buffer.
+    fn entries(
+        ctx: &GpuContext,
+        what_bytes: &str,
+        what: &str,
+        entries: u64,
+    ) -> Result<u32, GpuError> {
+        ctx.check_storage(what_bytes, entries * 4)?;
+        u32::try_from(entries).map_err(|_| GpuError::OverLimit {
+            what: what.into(),
+            value: entries,
             limit: u32::MAX.into(),
             limit_name: "u32 list offsets",
         })

@@ -262,7 +262,7 @@ pub fn max_lights(ctx: &manylights_gpu::GpuContext) -> u32 {
         .min(limits.max_buffer_size);
     let per_light = 64.max(4 * u64::from(layout::SCATTER_LANES));
     let storage = binding.saturating_sub(4) / per_light;
-    let loops = ctx.loop_limit.map_or(u64::MAX, |l| l / 2);
+    let loops = ctx.loop_light_limit().unwrap_or(u64::MAX);
     u32::try_from(storage.min(loops)).unwrap_or(u32::MAX)
 }
 

@@ -263,15 +263,21 @@ impl GpuContext {
         Ok(())
     }
 
+    /// The most lights per-pixel loops may visit under the driver's loop limit, where it has
+    /// one: half of it, since the exact oracle loops over every light and then over a list.
+    pub fn loop_light_limit(&self) -> Option<u64> {
+        self.loop_limit.map(|l| l / 2)
+    }
+
     /// Checks a light count against the driver's loop limit, where it has one: the exact
     /// oracle loops over every light and then over a list of up to every light, so each
     /// invocation may run twice the light count in iterations.
     pub fn check_loop_count(&self, what: &str, lights: u64) -> Result<(), GpuError> {
-        match self.loop_limit {
-            Some(limit) if lights > limit / 2 => Err(GpuError::OverLimit {
+        match self.loop_light_limit() {
+            Some(limit) if lights > limit => Err(GpuError::OverLimit {
                 what: what.into(),
                 value: lights,
-                limit: limit / 2,
+                limit,
                 limit_name: "llvmpipe's 65,535 loop iterations per shader invocation, which it \
                              enforces by ending loops early without an error; use a hardware GPU",
             }),

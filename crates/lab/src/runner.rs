@@ -269,15 +269,16 @@ fn run_cell(
     }
     // Metrics and accuracy at every pose (a path's poses are all checked), images at the first.
     let light_count = scene.lights.len() as u64;
+    let reference = c.accuracy.then(|| ReferenceRenderer::new(ctx, &gpu_scene));
     let mut evals = Vec::with_capacity(poses.len());
     for cam in &poses {
         evals.push(evaluate(
             ctx,
             &renderer,
+            reference.as_ref(),
             &gpu_scene,
             c,
             cam,
-            light_count,
             &settings(cam),
         )?);
     }
@@ -421,12 +422,13 @@ struct PoseEval {
 fn evaluate(
     ctx: &GpuContext,
     renderer: &Renderer,
+    reference: Option<&ReferenceRenderer>,
     gpu_scene: &GpuScene,
     c: &Config,
     cam: &Camera,
-    light_count: u64,
     settings: &CullSettings,
 ) -> Result<PoseEval, LabError> {
+    let light_count = u64::from(gpu_scene.light_count);
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let (w, h) = c.resolution;
     gpu_scene.set_view(ctx, cam, w, h, 0);
@@ -481,16 +483,15 @@ fn evaluate(
                 .collect()
         }
     };
-    let (mut acc, mut acc_inf, mut reference) = (None, None, None);
-    if c.accuracy {
-        let rr = ReferenceRenderer::new(ctx, gpu_scene);
+    let (mut acc, mut acc_inf, mut reference_color) = (None, None, None);
+    if let Some(rr) = reference {
         let r = rr.render(ctx, gpu_scene, w, h).map_err(|e| other(&e))?;
         acc = Some(compare(&o.color, &r.color, 1.0));
         let ri = rr
             .render_infinite(ctx, gpu_scene, cam, w, h)
             .map_err(|e| other(&e))?;
         acc_inf = Some(compare(&o.color, &ri.color, 1.0));
-        reference = Some(r.color);
+        reference_color = Some(r.color);
     }
     Ok(PoseEval {
         metrics,
@@ -499,7 +500,7 @@ fn evaluate(
         per_pixel,
         nonfinite: o.color.non_finite_count() as u64,
         color: o.color,
-        reference,
+        reference: reference_color,
         acc,
         acc_inf,
         list_bytes,
