@@ -26,6 +26,42 @@ use manylights_shade::{Backend, ReferenceRenderer, Renderer, accuracy};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Log to stderr what each stage of the work takes: -v the stages of every experiment cell
+    /// (scene upload, frames, oracle, reference), -vv also every GPU submission's wait.
+    /// RUST_LOG (such as `RUST_LOG=manylights_lab=debug`) overrides it. Logging hides the
+    /// progress bar.
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    verbose: u8,
+}
+
+/// Whether `-v` was given (the progress bar would garble the log lines).
+static VERBOSE: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+fn show_progress() -> bool {
+    !VERBOSE.load(std::sync::atomic::Ordering::Relaxed)
+        && std::io::IsTerminal::is_terminal(&std::io::stderr())
+}
+
+/// Logs to stderr at the level `-v` asks for (or RUST_LOG's).
+fn init_logging(verbose: u8) {
+    let level = match verbose {
+        0 => "warn",
+        1 => "warn,manylights_lab=info",
+        _ => {
+            "warn,manylights_lab=debug,manylights_gpu=debug,manylights_shade=debug,manylights_cull=debug"
+        }
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    VERBOSE.store(
+        verbose > 0 || std::env::var_os("RUST_LOG").is_some(),
+        std::sync::atomic::Ordering::Relaxed,
+    );
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
+        .init();
 }
 
 #[derive(Subcommand, Debug)]
@@ -138,7 +174,7 @@ fn run_suite(args: &RunArgs) -> Result<()> {
     let opts = manylights_lab::runner::RunOptions {
         shard: args.shard,
         max_cells: None,
-        progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        progress: show_progress(),
         commit: env!("MANYLIGHTS_COMMIT").to_string(),
     };
     let mut cases = Vec::new();
@@ -241,7 +277,7 @@ fn run_experiment(args: &RunArgs) -> Result<()> {
     let opts = manylights_lab::runner::RunOptions {
         shard: args.shard,
         max_cells: None,
-        progress: std::io::IsTerminal::is_terminal(&std::io::stderr()),
+        progress: show_progress(),
         commit: env!("MANYLIGHTS_COMMIT").to_string(),
     };
     let s = manylights_lab::runner::run(&ctx, &args.experiment, &out, &opts)?;
@@ -747,6 +783,7 @@ fn cull(args: &CullArgs) -> Result<()> {
 
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
+    init_logging(cli.verbose);
     let result = match &cli.command {
         Command::Render(args) => render(args),
         Command::Cull(args) => cull(args),

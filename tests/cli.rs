@@ -358,3 +358,49 @@ fn unwritable_output_is_an_error() {
         "{stderr}"
     );
 }
+
+/// `-vv run` logs each stage of each cell and each GPU submission to stderr, and the run still
+/// writes its results.
+#[test]
+fn verbose_run_logs_stages() {
+    let tmp = tempfile::tempdir().unwrap();
+    let exp = tmp.path().join("tiny.ron");
+    std::fs::write(
+        &exp,
+        r#"Experiment(
+    name: "tiny",
+    description: "one deferred cell, for the log",
+    config: Config(
+        scene: Atrium(),
+        lights: (generator: Uniform, count: 16, radius: Fixed(1.0), intensity: 1.0),
+        resolution: (16, 8),
+        frames: 1,
+        warmup: 0,
+        backend: Deferred,
+    ),
+)"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let o = manylights(&[
+        "-vv",
+        "run",
+        exp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-report",
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    for stage in [
+        "scene built",
+        "scene uploaded",
+        "frame 0 rendered",
+        "exact oracle",
+        "reference rendered",
+        "during=\"deferred lighting\"",
+    ] {
+        assert!(stderr.contains(stage), "no `{stage}` in the log:\n{stderr}");
+    }
+    assert!(out.join("results.csv").is_file());
+}

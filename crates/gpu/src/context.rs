@@ -340,7 +340,9 @@ impl GpuContext {
                 .unwrap_or_else(std::sync::PoisonError::into_inner) += start.elapsed();
         }
         let index = self.queue.submit([encoder.finish()]);
-        self.device
+        let waited = std::time::Instant::now();
+        let polled = self
+            .device
             .poll(wgpu::PollType::Wait {
                 submission_index: Some(index),
                 timeout: None,
@@ -358,7 +360,13 @@ impl GpuContext {
                     during: during.into(),
                     message: first.map_or_else(|| e.to_string(), |f| format!("{f} (then: {e})")),
                 }
-            })?;
+            });
+        tracing::debug!(
+            during,
+            wait_ms = waited.elapsed().as_secs_f64() * 1e3,
+            "GPU submission done"
+        );
+        polled?;
         self.check(during)
     }
 

@@ -307,6 +307,25 @@ fn speed_accuracy(
     Ok(true)
 }
 
+/// The distinct values of one field over the cells, in the order first seen: the value alone
+/// when all cells agree, otherwise each with its number of cells ("a (22 cells), b (5 cells)").
+pub(crate) fn distinct<'a>(values: impl IntoIterator<Item = &'a str>) -> String {
+    let mut seen: Vec<(&str, usize)> = Vec::new();
+    for v in values {
+        match seen.iter_mut().find(|(s, _)| *s == v) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((v, 1)),
+        }
+    }
+    if seen.len() == 1 {
+        return seen[0].0.to_string();
+    }
+    seen.iter()
+        .map(|(v, n)| format!("{v} ({n} cell{})", if *n == 1 { "" } else { "s" }))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// `YYYY-MM-DD HH:MM UTC` of a Unix time (civil-from-days, Howard Hinnant's algorithm).
 pub fn utc(secs: u64) -> String {
     let days = (secs / 86_400) as i64;
@@ -424,10 +443,6 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         )));
     }
     let exp_src = std::fs::read_to_string(dir.join("experiment.ron")).unwrap_or_default();
-    let meta: serde_json::Value = std::fs::read_to_string(dir.join("meta.json"))
-        .ok()
-        .and_then(|s| serde_json::from_str(&s).ok())
-        .unwrap_or_default();
     let description = crate::Experiment::parse(&exp_src, &dir.join("experiment.ron"))
         .map(|e| e.description)
         .unwrap_or_default();
@@ -474,18 +489,11 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     )?;
 
     let name = rows[0].experiment.clone();
-    let adapter = meta["adapter"]
-        .as_str()
-        .unwrap_or(&rows[0].adapter)
-        .to_string();
-    let driver = meta["driver"]
-        .as_str()
-        .unwrap_or(&rows[0].driver)
-        .to_string();
-    let commit = meta["commit"]
-        .as_str()
-        .unwrap_or(&rows[0].commit)
-        .to_string();
+    // The rows say what ran each cell: a resumed run may mix commits (or machines), and the
+    // setup lists each with its count (meta.json holds the last run's only).
+    let adapter = distinct(rows.iter().map(|r| r.adapter.as_str()));
+    let driver = distinct(rows.iter().map(|r| r.driver.as_str()));
+    let commit = distinct(rows.iter().map(|r| r.commit.as_str()));
     let date = rows.iter().map(|r| r.finished_unix).max().unwrap_or(0);
     let findings = summary(&rows);
     let head = [
@@ -682,6 +690,13 @@ mod tests {
         assert_eq!(utc(0), "1970-01-01 00:00 UTC");
         assert_eq!(utc(951_782_400), "2000-02-29 00:00 UTC");
         assert_eq!(utc(1_795_243_888), "2026-11-21 06:51 UTC");
+    }
+
+    #[test]
+    fn distinct_values_counted_only_when_they_differ() {
+        assert_eq!(distinct(["a", "a"]), "a");
+        assert_eq!(distinct(["b", "a", "b"]), "b (2 cells), a (1 cell)");
+        assert_eq!(distinct([]), "");
     }
 
     #[test]

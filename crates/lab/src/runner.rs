@@ -9,7 +9,7 @@
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
-use std::time::{SystemTime, UNIX_EPOCH};
+use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
 use manylights_cull::{CullSettings, Strategy, heatmap};
@@ -169,6 +169,19 @@ pub fn run_parsed(
     })
 }
 
+/// Runs `f` and logs (at level info) how long the stage `what` of cell `cell` took: with
+/// `manylights -v run`, a long cell shows where its time goes.
+fn stage<T>(cell: &str, what: &str, f: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let out = f();
+    tracing::info!(
+        cell,
+        ms = (start.elapsed().as_secs_f64() * 1e4).round() / 10.0,
+        "{what}"
+    );
+    out
+}
+
 fn now() -> u64 {
     SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -225,8 +238,10 @@ fn run_cell(
 ) -> Result<Row, LabError> {
     let resolved = cell.config.at_limits(ctx);
     let c = &resolved;
+    let id = cell.id();
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
-    let scene = build_scene(c, base)?;
+    let name = cell.name.as_str();
+    let scene = stage(name, "scene built", || build_scene(c, base))?;
     let poses: Vec<Camera> = match &c.camera {
         CameraSpec::Default => vec![scene.camera],
         CameraSpec::Pose(p) => vec![p.camera()],
@@ -234,8 +249,11 @@ fn run_cell(
     };
     let (w, h) = c.resolution;
     ctx.check_resolution(w, h).map_err(|e| other(&e))?;
-    let gpu_scene = GpuScene::upload(ctx, &scene, &poses[0], w, h).map_err(|e| other(&e))?;
-    let renderer = Renderer::new(ctx, &gpu_scene);
+    let gpu_scene = stage(name, "scene uploaded", || {
+        GpuScene::upload(ctx, &scene, &poses[0], w, h)
+    })
+    .map_err(|e| other(&e))?;
+    let renderer = stage(name, "pipelines built", || Renderer::new(ctx, &gpu_scene));
     let settings = |cam: &Camera| CullSettings {
         slack: c.slack,
         capacity: c.capacity,
@@ -248,8 +266,8 @@ fn run_cell(
         let cam = &poses[f % poses.len()];
         gpu_scene.set_view(ctx, cam, w, h, 0);
         ctx.take_encode_ms();
-        let o = renderer
-            .render(
+        let o = stage(name, &format!("frame {f} rendered"), || {
+            renderer.render(
                 ctx,
                 &gpu_scene,
                 c.backend,
@@ -257,7 +275,8 @@ fn run_cell(
                 &settings(cam),
                 (w, h),
             )
-            .map_err(|e| other(&e))?;
+        })
+        .map_err(|e| other(&e))?;
         let enc = ctx.take_encode_ms();
         if f >= c.warmup as usize {
             match o.timings {
@@ -271,7 +290,8 @@ fn run_cell(
     let light_count = scene.lights.len() as u64;
     let reference = c.accuracy.then(|| ReferenceRenderer::new(ctx, &gpu_scene));
     let mut evals = Vec::with_capacity(poses.len());
-    for cam in &poses {
+    for (k, cam) in poses.iter().enumerate() {
+        let pose = format!("{name} pose {k}");
         evals.push(evaluate(
             ctx,
             &renderer,
@@ -280,10 +300,10 @@ fn run_cell(
             c,
             cam,
             &settings(cam),
+            &pose,
         )?);
     }
     let first = &evals[0];
-    let id = cell.id();
     save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
     let temporal = temporal_stability(&evals);
     // The worst pose of each measure.
@@ -419,6 +439,11 @@ struct PoseEval {
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
 /// and (with `accuracy`) the error against the reference and the infinite-range reference.
+/// `pose` names the pose in the log.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one call site; the arguments are what one pose needs"
+)]
 fn evaluate(
     ctx: &GpuContext,
     renderer: &Renderer,
@@ -427,14 +452,16 @@ fn evaluate(
     c: &Config,
     cam: &Camera,
     settings: &CullSettings,
+    pose: &str,
 ) -> Result<PoseEval, LabError> {
     let light_count = u64::from(gpu_scene.light_count);
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let (w, h) = c.resolution;
     gpu_scene.set_view(ctx, cam, w, h, 0);
-    let o = renderer
-        .render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
-        .map_err(|e| other(&e))?;
+    let o = stage(pose, "rendered", || {
+        renderer.render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
+    })
+    .map_err(|e| other(&e))?;
     let frame = GpuFrame::new(cam, w, h, gpu_scene.light_count);
     let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
     let mut metrics: Option<ListMetrics> = None;
@@ -444,10 +471,10 @@ fn evaluate(
             list_bytes = lists.list_bytes();
             dropped = u64::from(lists.dropped);
             if c.exact_stride > 0 {
-                let bins = lists.read(ctx).map_err(|e| other(&e))?;
-                let counts = renderer
-                    .culler
-                    .exact_counts(
+                let bins =
+                    stage(pose, "lists read back", || lists.read(ctx)).map_err(|e| other(&e))?;
+                let counts = stage(pose, "exact oracle", || {
+                    renderer.culler.exact_counts(
                         ctx,
                         gpu_scene,
                         &o.depth,
@@ -455,26 +482,31 @@ fn evaluate(
                         frame.clip_from_world.inverse(),
                         c.exact_stride,
                     )
-                    .map_err(|e| other(&e))?;
+                })
+                .map_err(|e| other(&e))?;
                 metrics = Some(from_gpu_counts(&counts, &bins));
             }
-            renderer
-                .culler
-                .lights_per_pixel(ctx, gpu_scene, &o.depth, lists)
-                .map_err(|e| other(&e))?
+            stage(pose, "lights per pixel", || {
+                renderer
+                    .culler
+                    .lights_per_pixel(ctx, gpu_scene, &o.depth, lists)
+            })
+            .map_err(|e| other(&e))?
         }
         None => {
             if c.exact_stride > 0 {
-                metrics = Some(naive_metrics(
-                    ctx,
-                    renderer,
-                    gpu_scene,
-                    &o.depth,
-                    &frame,
-                    c.exact_stride,
-                    light_count,
-                    settings,
-                )?);
+                metrics = Some(stage(pose, "exact oracle", || {
+                    naive_metrics(
+                        ctx,
+                        renderer,
+                        gpu_scene,
+                        &o.depth,
+                        &frame,
+                        c.exact_stride,
+                        light_count,
+                        settings,
+                    )
+                })?);
             }
             o.color
                 .data
@@ -485,11 +517,15 @@ fn evaluate(
     };
     let (mut acc, mut acc_inf, mut reference_color) = (None, None, None);
     if let Some(rr) = reference {
-        let r = rr.render(ctx, gpu_scene, w, h).map_err(|e| other(&e))?;
+        let r = stage(pose, "reference rendered", || {
+            rr.render(ctx, gpu_scene, w, h)
+        })
+        .map_err(|e| other(&e))?;
         acc = Some(compare(&o.color, &r.color, 1.0));
-        let ri = rr
-            .render_infinite(ctx, gpu_scene, cam, w, h)
-            .map_err(|e| other(&e))?;
+        let ri = stage(pose, "infinite-range reference rendered", || {
+            rr.render_infinite(ctx, gpu_scene, cam, w, h)
+        })
+        .map_err(|e| other(&e))?;
         acc_inf = Some(compare(&o.color, &ri.color, 1.0));
         reference_color = Some(r.color);
     }

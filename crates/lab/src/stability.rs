@@ -95,14 +95,15 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
         .filter_map(|(_, r)| r.as_ref().ok())
         .flatten()
         .collect();
-    if let Some(r) = all.first() {
+    if !all.is_empty() {
         let date = all.iter().map(|r| r.finished_unix).max().unwrap_or(0);
+        let d = |f: fn(&Row) -> &str| crate::report::distinct(all.iter().map(|&r| f(r)));
         let _ = writeln!(
             md,
             "Adapter: {}; driver: {}; commit: {}; finished: {}.\n",
-            r.adapter,
-            r.driver,
-            r.commit,
+            d(|r| &r.adapter),
+            d(|r| &r.driver),
+            d(|r| &r.commit),
             crate::report::utc(date)
         );
     }
