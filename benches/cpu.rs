@@ -159,7 +159,7 @@ fn encoding_and_upload(c: &mut Criterion) {
                             &ctx,
                             &gs,
                             backend,
-                            &Strategy::TiledGather { tile_size: 16 },
+                            &Strategy::tiled_gather(16),
                             &settings,
                             (w, h),
                         )

@@ -5,6 +5,10 @@
 //! Benchmarks are named after the passes they time:
 //! - `cull.<strategy>/<width>x<height>/<lights>`: every culling pass of a strategy (its
 //!   `cull.*`, `scan.*` and `sort.*` passes) over the atrium's depth buffer;
+//! - `cull.tiled_gather_single/...`: gather without its coarse level, `cull.clustered_unordered/...`
+//!   clusters without their order pass;
+//! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
+//!   lights, 8-pixel tiles), every strategy;
 //! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
 //!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
@@ -78,7 +82,8 @@ fn cull(c: &mut Criterion) {
             ctx.submit_and_wait(enc, "bench prepass").unwrap();
             let culler = Culler::new(&ctx, &gs);
             let settings = CullSettings::for_camera(&scene.camera);
-            // The defaults, and clusters without their order pass (what ordering costs).
+            // The defaults; clusters without their order pass (what ordering costs); gather
+            // without its coarse level (what coarse-to-fine saves).
             let unordered = Strategy::Clustered {
                 tile_size: 64,
                 slices: 24,
@@ -86,9 +91,14 @@ fn cull(c: &mut Criterion) {
                 skip_empty: false,
                 ordered: false,
             };
-            for strategy in Strategy::defaults().into_iter().chain([unordered]) {
+            let single = Strategy::TiledGather {
+                tile_size: 16,
+                coarse: 0,
+            };
+            for strategy in Strategy::defaults().into_iter().chain([unordered, single]) {
                 let name = match strategy {
                     Strategy::Clustered { ordered: false, .. } => "clustered_unordered",
+                    Strategy::TiledGather { coarse: 0, .. } => "tiled_gather_single",
                     _ => strategy.name(),
                 };
                 let mut g = c.benchmark_group(format!("cull.{name}"));
@@ -96,29 +106,117 @@ fn cull(c: &mut Criterion) {
                 g.throughput(Throughput::Elements(u64::from(n)));
                 g.bench_with_input(BenchmarkId::new(format!("{w}x{h}"), n), &n, |b, _| {
                     b.iter_custom(|iters| {
-                        let mut total = 0.0;
-                        for _ in 0..iters {
-                            let mut timer = GpuTimer::new(&ctx, 256);
-                            culler
-                                .run(&ctx, &gs, &depth, &strategy, &settings, &mut timer)
-                                .unwrap();
-                            let t = timer
-                                .read(&ctx)
-                                .unwrap()
-                                .expect("the benchmarks need timestamp queries");
-                            total += ms(&t, |l| {
-                                l.starts_with("cull.")
-                                    || l.starts_with("scan.")
-                                    || l.starts_with("sort.")
-                            });
-                        }
-                        Duration::from_secs_f64(total * 1e-3)
+                        cull_time(&ctx, &culler, &gs, &depth, &strategy, &settings, iters)
                     })
                 });
                 g.finish();
             }
         }
     }
+}
+
+/// The GPU time of `iters` runs of `strategy`: every `cull.*`, `scan.*` and `sort.*` pass.
+fn cull_time(
+    ctx: &GpuContext,
+    culler: &Culler,
+    gs: &GpuScene,
+    depth: &wgpu::Texture,
+    strategy: &Strategy,
+    settings: &CullSettings,
+    iters: u64,
+) -> Duration {
+    let mut total = 0.0;
+    for _ in 0..iters {
+        let mut timer = GpuTimer::new(ctx, 256);
+        culler
+            .run(ctx, gs, depth, strategy, settings, &mut timer)
+            .unwrap();
+        let t = timer
+            .read(ctx)
+            .unwrap()
+            .expect("the benchmarks need timestamp queries");
+        total += ms(&t, |l| {
+            l.starts_with("cull.") || l.starts_with("scan.") || l.starts_with("sort.")
+        });
+    }
+    Duration::from_secs_f64(total * 1e-3)
+}
+
+/// The Forward+ paper's configuration, as experiments/harada2012.ron: the atrium with 3,072
+/// light-field lights of radius 2.5 m at 1280 x 720. `cull.harada2012/<variant>/3072` times
+/// every culling pass of: gather and 2.5D with 8-pixel tiles, with and without the coarse level;
+/// scatter with 8-pixel tiles; clusters (16-pixel tiles, 16 exponential slices), ordered and not.
+fn cull_paper(c: &mut Criterion) {
+    let ctx = gpu();
+    let (w, h, n) = if quick() {
+        (160, 90, 256)
+    } else {
+        (1280, 720, 3072)
+    };
+    let mut scene = ProceduralScene::from_name("atrium")
+        .unwrap()
+        .build()
+        .unwrap();
+    scene.lights = LightSpec {
+        generator: LightGenerator::LightField,
+        count: n,
+        seed: 2012,
+        radius: RadiusRule::Fixed(2.5),
+        intensity: 4.0,
+        ..LightSpec::default()
+    }
+    .generate(&scene)
+    .unwrap();
+    let gs = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
+    let depth = depth_target(&ctx, w, h);
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    DepthPrepass::new(&ctx, &gs).encode(
+        &mut enc,
+        &gs,
+        &depth.create_view(&Default::default()),
+        &mut GpuTimer::new(&ctx, 1),
+    );
+    ctx.submit_and_wait(enc, "bench prepass").unwrap();
+    let culler = Culler::new(&ctx, &gs);
+    let settings = CullSettings::for_camera(&scene.camera);
+    let clusters = |ordered| Strategy::Clustered {
+        tile_size: 16,
+        slices: 16,
+        slicing: manylights_cull::Slicing::Exponential,
+        skip_empty: false,
+        ordered,
+    };
+    let variants = [
+        ("tiled_gather8", Strategy::tiled_gather(8)),
+        (
+            "tiled_gather8_single",
+            Strategy::TiledGather {
+                tile_size: 8,
+                coarse: 0,
+            },
+        ),
+        ("depth_mask8", Strategy::depth_mask(8)),
+        (
+            "depth_mask8_single",
+            Strategy::DepthMask {
+                tile_size: 8,
+                coarse: 0,
+            },
+        ),
+        ("tiled_scatter8", Strategy::TiledScatter { tile_size: 8 }),
+        ("clustered16x16", clusters(true)),
+        ("clustered16x16_unordered", clusters(false)),
+    ];
+    let mut g = c.benchmark_group("cull.harada2012");
+    configure(&mut g);
+    for (label, strategy) in variants {
+        g.bench_with_input(BenchmarkId::new(label, n), &n, |b, _| {
+            b.iter_custom(|iters| {
+                cull_time(&ctx, &culler, &gs, &depth, &strategy, &settings, iters)
+            })
+        });
+    }
+    g.finish();
 }
 
 fn buffer(ctx: &GpuContext, data: &[u32]) -> wgpu::Buffer {
@@ -220,7 +318,7 @@ fn shade(c: &mut Criterion) {
     let gs = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
     let renderer = Renderer::new(&ctx, &gs);
     let settings = CullSettings::for_camera(&scene.camera);
-    let strategy = Strategy::TiledGather { tile_size: 16 };
+    let strategy = Strategy::tiled_gather(16);
     for backend in Backend::ALL {
         let frame = |iters: u64, pick: &dyn Fn(&str) -> bool| {
             let mut total = 0.0;
@@ -265,5 +363,5 @@ fn shade(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, cull, sort, shade);
+criterion_group!(benches, cull_paper, cull, sort, shade);
 criterion_main!(benches);

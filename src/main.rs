@@ -405,6 +405,11 @@ struct StrategyArgs {
     /// (clustered only; one pass less, images no longer bit-identical across runs).
     #[arg(long)]
     unordered: bool,
+    /// Gather and 2.5D: the side of a coarse tile in tiles; lights are culled against coarse
+    /// tiles first and each tile tests only its coarse tile's lights (same lists). 0: every
+    /// light at every tile.
+    #[arg(long, default_value_t = manylights_cull::DEFAULT_COARSE)]
+    coarse: u32,
     /// Conservative slack, relative to each light's distance from the eye.
     #[arg(long, default_value_t = DEFAULT_SLACK)]
     slack: f32,
@@ -423,9 +428,15 @@ impl StrategyArgs {
         };
         let tile_size = self.tile_size.unwrap_or(default_tile);
         let strategy = match self.strategy {
-            StrategyName::TiledGather => Strategy::TiledGather { tile_size },
+            StrategyName::TiledGather => Strategy::TiledGather {
+                tile_size,
+                coarse: self.coarse,
+            },
             StrategyName::TiledScatter => Strategy::TiledScatter { tile_size },
-            StrategyName::DepthMask => Strategy::DepthMask { tile_size },
+            StrategyName::DepthMask => Strategy::DepthMask {
+                tile_size,
+                coarse: self.coarse,
+            },
             StrategyName::Clustered => Strategy::Clustered {
                 tile_size,
                 slices: self.slices,

@@ -21,13 +21,24 @@ use rand::{RngExt, SeedableRng};
 /// Every strategy, with tile sizes and cluster options varied.
 fn strategies() -> Vec<Strategy> {
     vec![
-        Strategy::TiledGather { tile_size: 8 },
-        Strategy::TiledGather { tile_size: 16 },
-        Strategy::TiledGather { tile_size: 32 },
+        Strategy::tiled_gather(8),
+        // Coarse-to-fine with several coarse tiles, partial ones at the edges; and without.
+        Strategy::TiledGather {
+            tile_size: 8,
+            coarse: 2,
+        },
+        Strategy::TiledGather {
+            tile_size: 16,
+            coarse: 0,
+        },
+        Strategy::tiled_gather(32),
         Strategy::TiledScatter { tile_size: 8 },
         Strategy::TiledScatter { tile_size: 16 },
-        Strategy::DepthMask { tile_size: 8 },
-        Strategy::DepthMask { tile_size: 16 },
+        Strategy::DepthMask {
+            tile_size: 8,
+            coarse: 3,
+        },
+        Strategy::depth_mask(16),
         Strategy::Clustered {
             tile_size: 16,
             slices: 16,
@@ -514,20 +525,8 @@ fn depth_mask_never_keeps_what_gather_culls_and_wins_on_pillars() {
     for case in &cases {
         let r = render(&ctx, case, 96, 54);
         let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
-        let gather = run_gpu(
-            &ctx,
-            culler,
-            &r,
-            case,
-            &Strategy::TiledGather { tile_size: 16 },
-        );
-        let masked = run_gpu(
-            &ctx,
-            culler,
-            &r,
-            case,
-            &Strategy::DepthMask { tile_size: 16 },
-        );
+        let gather = run_gpu(&ctx, culler, &r, case, &Strategy::tiled_gather(16));
+        let masked = run_gpu(&ctx, culler, &r, case, &Strategy::depth_mask(16));
         let (g, m) = (gather.read(&ctx).unwrap(), masked.read(&ctx).unwrap());
         for b in 0..g.ranges.len() {
             let gs = g.sorted(b);
@@ -572,7 +571,7 @@ fn shrunk_lights_produce_false_negatives() {
     for seed in 4000..4010u64 {
         let case = random_case(seed);
         let r = render(&ctx, &case, 48, 32);
-        let s = Strategy::TiledGather { tile_size: 8 };
+        let s = Strategy::tiled_gather(8);
         let mut p = s.params(
             r.w,
             r.h,
@@ -614,7 +613,7 @@ fn gpu_exact_oracle_matches_cpu() {
         let r = render(&ctx, &case, 53, 31);
         let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
         for s in [
-            Strategy::TiledGather { tile_size: 8 },
+            Strategy::tiled_gather(8),
             Strategy::Clustered {
                 tile_size: 8,
                 slices: 12,
@@ -677,7 +676,7 @@ fn capacity_drops_are_counted() {
     let r = render(&ctx, &case, 64, 40);
     let culler = Culler::new(&ctx, &r.gpu_scene);
     for s in [
-        Strategy::TiledGather { tile_size: 16 },
+        Strategy::tiled_gather(16),
         Strategy::TiledScatter { tile_size: 16 },
         Strategy::Clustered {
             tile_size: 16,

@@ -50,9 +50,9 @@ fn scene(name: &str) -> Scene {
 
 fn strategies() -> [Strategy; 4] {
     [
-        Strategy::TiledGather { tile_size: 16 },
+        Strategy::tiled_gather(16),
         Strategy::TiledScatter { tile_size: 8 },
-        Strategy::DepthMask { tile_size: 16 },
+        Strategy::depth_mask(16),
         Strategy::Clustered {
             tile_size: 16,
             slices: 16,
@@ -215,7 +215,7 @@ fn capacity_cap_reports_dropped_lights_and_error() {
                 &ctx,
                 &gpu_scene,
                 backend,
-                &Strategy::TiledGather { tile_size: 16 },
+                &Strategy::tiled_gather(16),
                 &settings,
                 (w, h),
             )
@@ -269,7 +269,8 @@ fn infinite_range_reference_measures_the_cutoff() {
 /// Every strategy's lists come out in light order (gather and 2.5D fill in order, scatter sorts
 /// stably, clusters sort each list after their atomic fill): the same lists, order included,
 /// and bit-identical images on every run. The big case's clusters hold over 2,048 lights, so
-/// that both paths of `cull.clustered.order` (workgroup memory and in place) run.
+/// that both paths of `cull.clustered.order` (workgroup memory and in place) run, and gather's
+/// tiles take their coarse tile's candidates in more than one chunk of 2,048.
 #[test]
 fn ordered_strategies_render_bit_identical_frames() {
     let ctx = common::gpu();
@@ -297,11 +298,19 @@ fn ordered_strategies_render_bit_identical_frames() {
         ordered: true,
     };
     let cases = [
-        (&small, Strategy::TiledGather { tile_size: 8 }),
-        (&small, Strategy::DepthMask { tile_size: 16 }),
+        (&small, Strategy::tiled_gather(8)),
+        (&small, Strategy::depth_mask(16)),
         (&small, Strategy::TiledScatter { tile_size: 8 }),
         (&small, clusters),
         (&big, clusters),
+        // Gather's coarse level hands each tile its candidates 2,048 at a time.
+        (
+            &big,
+            Strategy::TiledGather {
+                tile_size: 8,
+                coarse: 2,
+            },
+        ),
     ];
     for (s, strategy) in cases {
         let gpu_scene = GpuScene::upload(&ctx, s, &s.camera, w, h).unwrap();
@@ -333,6 +342,16 @@ fn ordered_strategies_render_bit_identical_frames() {
             for b in 0..runs[0].1.ranges.len() {
                 let l = runs[0].1.list(b);
                 longest = longest.max(l.len());
+                if std::ptr::eq(s, &big) && !matches!(strategy, Strategy::Clustered { .. }) {
+                    // Every light covers the whole view: a tile with geometry keeps them all.
+                    assert!(
+                        l.is_empty() || l.len() == big.lights.len(),
+                        "{} bin {b}: {} of {} lights",
+                        strategy.name(),
+                        l.len(),
+                        big.lights.len()
+                    );
+                }
                 assert!(
                     l.windows(2).all(|p| p[0] < p[1]),
                     "{} bin {b}: not in light order",
@@ -359,7 +378,7 @@ fn lost_device_is_an_error_not_a_panic() {
     let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
     let renderer = Renderer::new(&ctx, &gpu_scene);
     let settings = CullSettings::for_camera(&s.camera);
-    let strategy = Strategy::TiledGather { tile_size: 16 };
+    let strategy = Strategy::tiled_gather(16);
     renderer
         .render(
             &ctx,

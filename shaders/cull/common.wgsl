@@ -31,9 +31,11 @@ struct CullParams {
     // Deliberate cap on each list's length (0: none). Every light beyond it is counted in
     // cull_stats[0]; see lists.wgsl.
     capacity: u32,
+    // Gather's coarse level (tiled_gather.wgsl): a coarse tile's side in tiles (0: none), and
+    // coarse tiles across.
+    coarse: u32,
+    coarse_x: u32,
     _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
 }
 
 @group(1) @binding(0) var<uniform> cull: CullParams;
@@ -78,13 +80,14 @@ fn linear_depth(z: f32) -> f32 {
     return -(b - d * z) / (c * z - a);
 }
 
-// NDC rectangle (x0, y0, x1, y1) of a tile, clamped to the image (the last row and column may
-// be partial when the resolution is not a multiple of the tile size).
-fn tile_ndc(tile: vec2<u32>) -> vec4<f32> {
-    let px0 = f32(tile.x * cull.tile_size);
-    let px1 = f32(min((tile.x + 1u) * cull.tile_size, u32(frame.viewport.x)));
-    let py0 = f32(tile.y * cull.tile_size);
-    let py1 = f32(min((tile.y + 1u) * cull.tile_size, u32(frame.viewport.y)));
+// NDC rectangle (x0, y0, x1, y1) of a square of `size` pixels at `tile` (in units of `size`),
+// clamped to the image (the last row and column may be partial when the resolution is not a
+// multiple of the size). A coarse tile's edges on its outer tiles' edges are the same floats.
+fn tile_ndc(tile: vec2<u32>, size: u32) -> vec4<f32> {
+    let px0 = f32(tile.x * size);
+    let px1 = f32(min((tile.x + 1u) * size, u32(frame.viewport.x)));
+    let py0 = f32(tile.y * size);
+    let py1 = f32(min((tile.y + 1u) * size, u32(frame.viewport.y)));
     // Pixel rows grow downwards, NDC y upwards.
     return vec4<f32>(
         px0 * frame.viewport.z * 2.0 - 1.0,
@@ -100,7 +103,12 @@ fn normalize_plane(p: vec4<f32>) -> vec4<f32> {
 
 // The four side planes of a tile's frustum: x >= x0 w, x <= x1 w, y >= y0 w, y <= y1 w.
 fn tile_side_planes(tile: vec2<u32>) -> array<vec4<f32>, 4> {
-    let r = tile_ndc(tile);
+    return square_side_planes(tile, cull.tile_size);
+}
+
+// The side planes of the frustum of a square of `size` pixels (see tile_ndc).
+fn square_side_planes(tile: vec2<u32>, size: u32) -> array<vec4<f32>, 4> {
+    let r = tile_ndc(tile, size);
     let r0 = clip_row(0u);
     let r1 = clip_row(1u);
     let r3 = clip_row(3u);

@@ -9,8 +9,8 @@
 use manylights_gpu::layout::{GpuFrame, GpuLight};
 
 use crate::geometry::{
-    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, linear_depth, tile_keeps,
-    tile_side_planes,
+    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, linear_depth,
+    square_side_planes, tile_keeps, tile_side_planes,
 };
 use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth};
 
@@ -145,33 +145,90 @@ pub fn depth_bounds(
 
 /// Oracle of `cull.tiled_gather` and `cull.depth_mask` (the flag in `p` decides), given the
 /// per-tile depth data (from the GPU pass, so that this oracle checks the light tests alone).
+/// With a coarse level (`p.coarse > 0`), a tile keeps a light only where its coarse tile does
+/// too ([`coarse_masks`]).
 pub fn gather(
     frame: &GpuFrame,
     p: &GpuCullParams,
     lights: &[GpuLight],
     tile_depth: &[GpuTileDepth],
 ) -> OracleLists {
+    let coarse = coarse_masks(frame, p, lights, tile_depth);
     let mut out = OracleLists::new(p.bins as usize);
     for ty in 0..p.tiles_y {
         for tx in 0..p.tiles_x {
             let bin = (ty * p.tiles_x + tx) as usize;
             let t = &tile_depth[bin];
             let planes = tile_side_planes(frame, p, [tx, ty]);
+            let parent = (p.coarse > 0)
+                .then(|| &coarse[((ty / p.coarse) * p.coarse_x + tx / p.coarse) as usize]);
             for (i, l) in lights.iter().enumerate() {
-                let lo = tile_keeps(
-                    p,
-                    &CullLight::new(frame, l, p.slack * (1.0 - BORDER)),
-                    &planes,
-                    t,
-                );
-                let hi = tile_keeps(
-                    p,
-                    &CullLight::new(frame, l, p.slack * (1.0 + BORDER)),
-                    &planes,
-                    t,
-                );
+                let (clo, chi) = parent.map_or((true, true), |c| c[i]);
+                let lo = clo
+                    && tile_keeps(
+                        p,
+                        &CullLight::new(frame, l, p.slack * (1.0 - BORDER)),
+                        &planes,
+                        t,
+                    );
+                let hi = chi
+                    && tile_keeps(
+                        p,
+                        &CullLight::new(frame, l, p.slack * (1.0 + BORDER)),
+                        &planes,
+                        t,
+                    );
                 out.push(bin, i as u32, lo, hi);
             }
+        }
+    }
+    out
+}
+
+/// Oracle of `cull.tiled_gather.coarse`: per coarse tile (row by row), per light, whether the
+/// coarse tile keeps it with the slack moved down and up by [`BORDER`]. A coarse tile spans
+/// `p.coarse` x `p.coarse` tiles, between the smallest `dmin` and the largest `dmax` of its
+/// covered tiles, without a 2.5D mask. Empty without a coarse level.
+pub fn coarse_masks(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    lights: &[GpuLight],
+    tile_depth: &[GpuTileDepth],
+) -> Vec<Vec<(bool, bool)>> {
+    let f = p.coarse;
+    if f == 0 {
+        return Vec::new();
+    }
+    let coarse_y = p.tiles_y.div_ceil(f);
+    let mut out = Vec::with_capacity((p.coarse_x * coarse_y) as usize);
+    for cy in 0..coarse_y {
+        for cx in 0..p.coarse_x {
+            let mut t = GpuTileDepth {
+                dmin: f32::INFINITY,
+                dmax: f32::NEG_INFINITY,
+                mask: u32::MAX,
+                covered: 0,
+            };
+            for ty in cy * f..((cy + 1) * f).min(p.tiles_y) {
+                for tx in cx * f..((cx + 1) * f).min(p.tiles_x) {
+                    let d = &tile_depth[(ty * p.tiles_x + tx) as usize];
+                    if d.covered != 0 {
+                        t.dmin = t.dmin.min(d.dmin);
+                        t.dmax = t.dmax.max(d.dmax);
+                        t.covered += d.covered;
+                    }
+                }
+            }
+            let planes = square_side_planes(frame, [cx, cy], f * p.tile_size);
+            let keeps = |l: &GpuLight, slack: f32| {
+                tile_keeps(p, &CullLight::new(frame, l, p.slack * slack), &planes, &t)
+            };
+            out.push(
+                lights
+                    .iter()
+                    .map(|l| (keeps(l, 1.0 - BORDER), keeps(l, 1.0 + BORDER)))
+                    .collect(),
+            );
         }
     }
     out

@@ -212,6 +212,7 @@ pub struct Culler {
     /// 1 ranges, 2 indices, 3 depth, 4 a per-pixel output.
     pub lists_layout: wgpu::BindGroupLayout,
     depth_bounds: wgpu::ComputePipeline,
+    gather_coarse: wgpu::ComputePipeline,
     gather_count: wgpu::ComputePipeline,
     gather_fill: wgpu::ComputePipeline,
     clustered_count: wgpu::ComputePipeline,
@@ -274,12 +275,18 @@ impl Culler {
         });
         let scene_layout = &scene.layout;
         let [depth_bounds] = pipelines(d, &DEPTH_BOUNDS, scene_layout, &layout, ["depth_bounds"]);
-        let [gather_count, gather_fill, finalize, cap] = pipelines(
+        let [gather_coarse, gather_count, gather_fill, finalize, cap] = pipelines(
             d,
             &TILED_GATHER,
             scene_layout,
             &layout,
-            ["gather_count", "gather_fill", "finalize", "cap_counts"],
+            [
+                "gather_coarse",
+                "gather_count",
+                "gather_fill",
+                "finalize",
+                "cap_counts",
+            ],
         );
         let [clustered_count, clustered_fill, cluster_order, occupancy] = pipelines(
             d,
@@ -317,6 +324,7 @@ impl Culler {
             layout,
             lists_layout,
             depth_bounds,
+            gather_coarse,
             gather_count,
             gather_fill,
             clustered_count,
@@ -348,7 +356,14 @@ impl Culler {
         strategy.validate()?;
         settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
-        let params = strategy.params(w, h, scene.light_count, settings);
+        let mut params = strategy.params(w, h, scene.light_count, settings);
+        crate::fit_coarse(
+            &mut params,
+            crate::COARSE_MASK_BUDGET
+                .min(u64::from(ctx.limits.max_storage_buffer_binding_size))
+                .min(ctx.limits.max_buffer_size),
+            ctx.limits.max_compute_workgroups_per_dimension,
+        );
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
         let per_light = matches!(strategy, Strategy::TiledScatter { .. });
         if per_light {
@@ -391,7 +406,18 @@ impl Culler {
             (p.tiles_x, p.tiles_y)
         };
         let placeholder = f.buf("cull.light_indices.placeholder", 4);
-        let group_a = f.group(&placeholder, &placeholder);
+        // Gather's coarse masks (bound where tiled scatter binds its pair keys).
+        let words = u64::from(p.light_count.div_ceil(32));
+        let coarse_y = p.tiles_y.div_ceil(p.coarse.max(1));
+        let coarse_mask = if p.coarse > 0 {
+            f.buf(
+                "cull.coarse_mask",
+                u64::from(p.coarse_x) * u64::from(coarse_y) * words * 4,
+            )
+        } else {
+            f.buf("cull.coarse_mask.placeholder", 4)
+        };
+        let group_a = f.group(&placeholder, &coarse_mask);
         let mut enc = f.encoder("cull.count");
         if clustered {
             if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
@@ -413,6 +439,16 @@ impl Culler {
                 &group_a,
                 (p.tiles_x, p.tiles_y),
             );
+            if p.coarse > 0 {
+                pipeline::dispatch_3d(
+                    &mut enc,
+                    timer,
+                    &format!("cull.{name}.coarse"),
+                    &self.gather_coarse,
+                    &[&f.scene.bind_group, &group_a],
+                    [p.coarse_x, coarse_y, (words.div_ceil(64)) as u32],
+                );
+            }
         }
         f.pass(
             &mut enc,
@@ -440,7 +476,7 @@ impl Culler {
             f.bins_total(ctx, p.bins)?,
         )?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-        let group_b = f.group(&indices, &placeholder);
+        let group_b = f.group(&indices, &coarse_mask);
         let mut enc = f.encoder("cull.fill");
         f.pass(
             &mut enc,

@@ -8,7 +8,9 @@
 //! Passes, in order (profiler scopes in brackets):
 //! 1. `cull.depth_bounds` (tiled strategies): per tile, the nearest and farthest covered depth
 //!    and the 2.5D geometry mask.
-//! 2. `cull.occupancy` (clusters with `skip_empty`): clusters that hold covered pixels.
+//! 2. `cull.occupancy` (clusters with `skip_empty`): clusters that hold covered pixels;
+//!    `cull.<strategy>.coarse` (gather and 2.5D with a coarse level): a bit mask of the lights
+//!    each coarse tile keeps.
 //! 3. `cull.<strategy>.count`: each bin's light count. 4. `scan.*`: exclusive scan of the
 //!    counts into offsets; the total sizes `light_indices` exactly (no capacity, nothing
 //!    dropped). 5. `cull.<strategy>.fill`: the lists. 6. `cull.finalize`: the ranges.
@@ -56,6 +58,12 @@ pub enum Strategy {
         /// Tile side in pixels (the paper's 8; 16 and 32 are common).
         #[serde(default = "default_tile")]
         tile_size: u32,
+        /// Coarse-to-fine: lights are first culled against coarse tiles of `coarse` x `coarse`
+        /// tiles (`cull.tiled_gather.coarse`, a bit mask of lights per coarse tile), and each
+        /// tile tests only its coarse tile's lights. The lists are the same; 0 tests every
+        /// light at every tile (the paper's single level).
+        #[serde(default = "default_coarse")]
+        coarse: u32,
     },
     /// Forward+ tiled scatter: one thread per light writes (tile, light) pairs for the tiles it
     /// overlaps; a GPU radix sort orders them by tile.
@@ -69,6 +77,9 @@ pub enum Strategy {
         /// Tile side in pixels.
         #[serde(default = "default_tile")]
         tile_size: u32,
+        /// Coarse-to-fine, as for `TiledGather`.
+        #[serde(default = "default_coarse")]
+        coarse: u32,
     },
     /// 3D clusters: tiles x depth slices, lights assigned per light.
     Clustered {
@@ -95,6 +106,44 @@ pub enum Strategy {
 
 fn default_ordered() -> bool {
     true
+}
+
+/// The default side of gather's coarse tiles, in tiles.
+pub const DEFAULT_COARSE: u32 = 8;
+
+fn default_coarse() -> u32 {
+    DEFAULT_COARSE
+}
+
+/// The most bytes gather's coarse masks may take; past it, coarse tiles grow.
+pub const COARSE_MASK_BUDGET: u64 = 256 << 20;
+
+/// Fits gather's coarse level in `p` (coarse tiles of `p.coarse` x `p.coarse` tiles; 0: none)
+/// to a device: the side doubles until the masks (a bit per light per coarse tile) fit `budget`
+/// bytes, up to one coarse tile for the whole image. Where even that has no room, or the mask
+/// words need more than `max_groups` workgroups of 64 in one dispatch dimension, no coarse level:
+/// the lists are then the single level's (a superset, equally conservative).
+pub fn fit_coarse(p: &mut GpuCullParams, budget: u64, max_groups: u32) {
+    let want = p.coarse;
+    p.coarse = 0;
+    p.coarse_x = 0;
+    let words = u64::from(p.light_count.div_ceil(32));
+    if want == 0 || words == 0 || words.div_ceil(64) > u64::from(max_groups) {
+        return;
+    }
+    let mut side = want;
+    loop {
+        let (cx, cy) = (p.tiles_x.div_ceil(side), p.tiles_y.div_ceil(side));
+        if u64::from(cx) * u64::from(cy) * words * 4 <= budget {
+            p.coarse = side;
+            p.coarse_x = cx;
+            return;
+        }
+        if cx == 1 && cy == 1 {
+            return;
+        }
+        side *= 2;
+    }
 }
 
 fn default_tile() -> u32 {
@@ -142,9 +191,9 @@ impl Strategy {
     /// The default parameters of each strategy, in a fixed order.
     pub fn defaults() -> [Strategy; 4] {
         [
-            Self::TiledGather { tile_size: 16 },
+            Self::tiled_gather(16),
             Self::TiledScatter { tile_size: 16 },
-            Self::DepthMask { tile_size: 16 },
+            Self::depth_mask(16),
             Self::Clustered {
                 tile_size: 64,
                 slices: 24,
@@ -155,13 +204,37 @@ impl Strategy {
         ]
     }
 
+    /// Tiled gather with `tile_size`-pixel tiles and the default coarse level.
+    pub fn tiled_gather(tile_size: u32) -> Self {
+        Self::TiledGather {
+            tile_size,
+            coarse: DEFAULT_COARSE,
+        }
+    }
+
+    /// 2.5D culling with `tile_size`-pixel tiles and the default coarse level.
+    pub fn depth_mask(tile_size: u32) -> Self {
+        Self::DepthMask {
+            tile_size,
+            coarse: DEFAULT_COARSE,
+        }
+    }
+
     /// Tile side in pixels.
     pub fn tile_size(&self) -> u32 {
         match *self {
-            Self::TiledGather { tile_size }
+            Self::TiledGather { tile_size, .. }
             | Self::TiledScatter { tile_size }
-            | Self::DepthMask { tile_size }
+            | Self::DepthMask { tile_size, .. }
             | Self::Clustered { tile_size, .. } => tile_size,
+        }
+    }
+
+    /// Gather's coarse level: a coarse tile's side in tiles, 0 (none) for other strategies.
+    pub fn coarse(&self) -> u32 {
+        match *self {
+            Self::TiledGather { coarse, .. } | Self::DepthMask { coarse, .. } => coarse,
+            _ => 0,
         }
     }
 
@@ -173,6 +246,13 @@ impl Strategy {
                 field: "tile_size",
                 value: ts.to_string(),
                 accepted: "an integer in 4..=256 pixels",
+            });
+        }
+        if self.coarse() > 64 {
+            return Err(CullError::InvalidParameter {
+                field: "coarse",
+                value: self.coarse().to_string(),
+                accepted: "an integer in 0..=64 tiles (0: no coarse level)",
             });
         }
         if let Self::Clustered { slices, .. } = *self {
@@ -246,7 +326,14 @@ impl Strategy {
             slack,
             slice_scale,
             capacity: capacity.unwrap_or(0),
-            _pad: [0; 3],
+            // The device may need larger coarse tiles for the masks to fit (Culler::run).
+            coarse: self.coarse(),
+            coarse_x: if self.coarse() > 0 {
+                tiles_x.div_ceil(self.coarse())
+            } else {
+                0
+            },
+            _pad: 0,
         }
     }
 }
@@ -309,5 +396,55 @@ impl CullSettings {
             });
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn gather_params(w: u32, h: u32, lights: u32, coarse: u32) -> GpuCullParams {
+        Strategy::TiledGather {
+            tile_size: 16,
+            coarse,
+        }
+        .params(
+            w,
+            h,
+            lights,
+            &CullSettings {
+                near: 0.1,
+                far: 100.0,
+                slack: layout::DEFAULT_SLACK,
+                capacity: None,
+            },
+        )
+    }
+
+    #[test]
+    fn coarse_level_grows_until_the_masks_fit() {
+        // 1080p: 120 x 68 tiles; 8-tile coarse tiles: 15 x 9; 1M lights: 32,768 words.
+        let mut p = gather_params(1920, 1080, 1 << 20, 8);
+        fit_coarse(&mut p, u64::MAX, 65_535);
+        assert_eq!((p.coarse, p.coarse_x), (8, 15));
+        // 135 coarse tiles x 128 KiB do not fit 4 MiB; 16-tile ones (8 x 5 = 40, 5 MiB) do not
+        // either; 32-tile ones (4 x 3 = 12, 1.5 MiB) do.
+        let mut p = gather_params(1920, 1080, 1 << 20, 8);
+        fit_coarse(&mut p, 4 << 20, 65_535);
+        assert_eq!((p.coarse, p.coarse_x), (32, 4));
+        // Not even one coarse tile's mask fits: no coarse level.
+        let mut p = gather_params(1920, 1080, 1 << 20, 8);
+        fit_coarse(&mut p, 1 << 10, 65_535);
+        assert_eq!((p.coarse, p.coarse_x), (0, 0));
+        // More mask words than one dispatch dimension reaches: no coarse level.
+        let mut p = gather_params(64, 64, 1 << 20, 8);
+        fit_coarse(&mut p, u64::MAX, 8);
+        assert_eq!(p.coarse, 0);
+        // Asked for none, and no lights: none.
+        for (lights, coarse) in [(1024, 0), (0, 8)] {
+            let mut p = gather_params(64, 64, lights, coarse);
+            fit_coarse(&mut p, u64::MAX, 65_535);
+            assert_eq!(p.coarse, 0);
+        }
     }
 }

@@ -202,6 +202,25 @@ pub fn dispatch(
     bind: &[&wgpu::BindGroup],
     groups: (u32, u32),
 ) {
+    dispatch_3d(
+        encoder,
+        timer,
+        label,
+        pipeline,
+        bind,
+        [groups.0, groups.1, 1],
+    );
+}
+
+/// [`dispatch`] over a three-dimensional grid of workgroups.
+pub fn dispatch_3d(
+    encoder: &mut wgpu::CommandEncoder,
+    timer: &mut crate::timing::GpuTimer,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind: &[&wgpu::BindGroup],
+    groups: [u32; 3],
+) {
     let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
         label: Some(label),
         timestamp_writes: timer.compute_pass(label),
@@ -210,5 +229,5 @@ pub fn dispatch(
     for (i, g) in bind.iter().enumerate() {
         pass.set_bind_group(i as u32, *g, &[]);
     }
-    pass.dispatch_workgroups(groups.0, groups.1, 1);
+    pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
 }

@@ -260,7 +260,7 @@ fn resolution() -> (u32, u32) {
     (1280, 720)
 }
 fn strategy() -> Strategy {
-    Strategy::TiledGather { tile_size: 16 }
+    Strategy::tiled_gather(16)
 }
 fn backend() -> Backend {
     Backend::Forward
@@ -333,10 +333,14 @@ fn locate(src: &str, needle: &str, from: usize) -> (usize, usize) {
 
 fn strategy_label(s: &Strategy) -> String {
     match *s {
-        Strategy::TiledGather { tile_size }
-        | Strategy::TiledScatter { tile_size }
-        | Strategy::DepthMask { tile_size } => {
-            format!("{}{tile_size}", s.name())
+        Strategy::TiledScatter { tile_size } => format!("{}{tile_size}", s.name()),
+        // The default coarse level is not named, so that labels stay as they were.
+        Strategy::TiledGather { tile_size, coarse } | Strategy::DepthMask { tile_size, coarse } => {
+            if coarse == manylights_cull::DEFAULT_COARSE {
+                format!("{}{tile_size}", s.name())
+            } else {
+                format!("{}{tile_size}coarse{coarse}", s.name())
+            }
         }
         Strategy::Clustered {
             tile_size,
@@ -359,10 +363,13 @@ fn strategy_label(s: &Strategy) -> String {
 /// The strategy's parameters as `key=value` pairs (the `params` column).
 pub fn params_label(c: &Config) -> String {
     let mut p = match c.strategy {
-        Strategy::TiledGather { tile_size }
-        | Strategy::TiledScatter { tile_size }
-        | Strategy::DepthMask { tile_size } => {
-            format!("tile_size={tile_size}")
+        Strategy::TiledScatter { tile_size } => format!("tile_size={tile_size}"),
+        Strategy::TiledGather { tile_size, coarse } | Strategy::DepthMask { tile_size, coarse } => {
+            if coarse == manylights_cull::DEFAULT_COARSE {
+                format!("tile_size={tile_size}")
+            } else {
+                format!("tile_size={tile_size};coarse={coarse}")
+            }
         }
         Strategy::Clustered {
             tile_size,

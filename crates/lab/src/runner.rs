@@ -563,7 +563,7 @@ fn naive_metrics(
 ) -> Result<ListMetrics, LabError> {
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let mut timer = manylights_gpu::timing::GpuTimer::new(ctx, 32);
-    let probe = Strategy::TiledGather { tile_size: 16 };
+    let probe = Strategy::tiled_gather(16);
     let lists = renderer
         .culler
         .run(ctx, gpu_scene, depth, &probe, settings, &mut timer)
