@@ -360,7 +360,7 @@ impl Culler {
         crate::fit_coarse(
             &mut params,
             crate::COARSE_MASK_BUDGET
-                .min(u64::from(ctx.limits.max_storage_buffer_binding_size))
+                .min(ctx.limits.max_storage_buffer_binding_size)
                 .min(ctx.limits.max_buffer_size),
             ctx.limits.max_compute_workgroups_per_dimension,
         );
