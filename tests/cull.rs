@@ -359,13 +359,29 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
     let ctx = common::gpu();
     let (w, h) = (70, 45);
     let mut total_border = 0;
-    let mut culler = None;
+    let mut cullers = None;
     for seed in [11u64, 12, 13, 14, 15, 16] {
         let case = random_case(seed);
         let r = render(&ctx, &case, w, h);
-        let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
-        for s in strategies() {
-            let what = format!("{} {}", case.label, s.name());
+        // Gather's scans with subgroup operations (where the device has them) and without.
+        let cullers = cullers.get_or_insert_with(|| {
+            let sub = Culler::new(&ctx, &r.gpu_scene);
+            assert_eq!(
+                sub.gather_subgroups, ctx.features.subgroups,
+                "gather must take its subgroup path where the device has subgroups"
+            );
+            [sub, Culler::with_subgroups(&ctx, &r.gpu_scene, false)]
+        });
+        for (culler, s) in cullers
+            .iter()
+            .flat_map(|c| strategies().into_iter().map(move |s| (c, s)))
+        {
+            let what = format!(
+                "{} {} (subgroups: {})",
+                case.label,
+                s.name(),
+                culler.gather_subgroups
+            );
             let out = run_gpu(&ctx, culler, &r, &case, &s);
             let p = out.params;
             let gpu = out.read(&ctx).unwrap();

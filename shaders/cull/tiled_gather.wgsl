@@ -1,8 +1,11 @@
 // cull.tiled_gather (Harada, McKee, Yang 2012, section 4.1) and, with CULL_FLAG_DEPTH_MASK,
 // cull.depth_mask (2.5D culling, Harada 2012): one workgroup per tile tests lights against the
 // tile frustum between the tile's depth bounds (and the 2.5D masks), 64 lights at a time.
-// Entry points: gather_coarse (the coarse level), gather_count (count pass) and gather_fill
-// (fill pass).
+// Entry points: gather_coarse (the coarse level), gather_count / gather_fill (count and fill
+// passes over the coarse tile's lights) and gather_count_flat / gather_fill_flat (the single
+// level, every light), in gather_scan.wgsl or, with subgroup operations, gather_scan_subgroup.wgsl,
+// which also define the workgroup scan `scan_keep`. A thread's `slot` (0..63) orders its light
+// within a batch.
 //
 // Coarse-to-fine (cull.coarse > 0): gather_coarse tests every light against each coarse tile
 // (cull.coarse x cull.coarse tiles, between the depth bounds of its covered tiles) and writes a
@@ -20,7 +23,6 @@
 
 var<workgroup> wg_planes: array<vec4<f32>, 4>;
 var<workgroup> wg_covered: u32;
-var<workgroup> wg_keep: array<u32, 64>;
 var<workgroup> wg_total: u32;
 // A chunk of candidates from the coarse mask: 64 words, up to 2,048 light indices.
 var<workgroup> wg_cand: array<u32, 2048>;
@@ -28,110 +30,102 @@ var<workgroup> wg_cmin: atomic<u32>;
 var<workgroup> wg_cmax: atomic<u32>;
 var<workgroup> wg_ccov: atomic<u32>;
 
-// Inclusive Hillis-Steele scan of wg_keep over the workgroup (6 steps for 64 threads); returns
-// this thread's inclusive prefix and leaves the total in wg_keep[63]. Called in uniform control
-// flow.
-fn scan_keep(li: u32, value: u32) -> u32 {
-    wg_keep[li] = value;
-    workgroupBarrier();
-    for (var off = 1u; off < 64u; off <<= 1u) {
-        var v = 0u;
-        if li >= off {
-            v = wg_keep[li - off];
-        }
-        workgroupBarrier();
-        wg_keep[li] += v;
-        workgroupBarrier();
-    }
-    return wg_keep[li];
-}
-
 // One batch of up to 64 candidate lights, light `i` at this thread (`valid` false past the
-// end): counts or places the survivors; returns how many lights the tile's list holds after
-// the batch. Called in uniform control flow.
-fn gather_batch(bin: u32, li: u32, i: u32, valid: bool, planes: array<vec4<f32>, 4>, t: TileDepth, fill: bool, placed: u32) -> u32 {
+// end). The count pass adds the survivors to `counted`, this thread's own count (one atomic
+// add per thread at the end, not one per light); the fill pass places them in light order.
+// Returns (lights placed in the tile's list after the batch, counted). Called in uniform
+// control flow.
+fn gather_batch(bin: u32, slot: u32, i: u32, valid: bool, planes: array<vec4<f32>, 4>, t: TileDepth, fill: bool, acc: vec2<u32>) -> vec2<u32> {
     var keep = false;
     if valid {
         keep = tile_keeps(cull_light(lights[i]), planes, t);
     }
     if !fill {
-        if keep {
-            atomicAdd(&bin_counts[bin], 1u);
-        }
-        return placed;
+        return vec2<u32>(acc.x, acc.y + u32(keep));
     }
-    let before = scan_keep(li, u32(keep));
-    let total = wg_keep[63];
-    let slot = placed + before - u32(keep);
-    if keep && (cull.capacity == 0u || slot < cull.capacity) {
-        out_indices[bin_offsets[bin] + slot] = i;
+    let scan = scan_keep(slot, u32(keep));
+    let at = acc.x + scan.x - u32(keep);
+    if keep && (cull.capacity == 0u || at < cull.capacity) {
+        out_indices[bin_offsets[bin] + at] = i;
     }
-    workgroupBarrier();
-    return placed + total;
+    return vec2<u32>(acc.x + scan.y, acc.y);
 }
 
-fn gather(tile: vec2<u32>, li: u32, fill: bool) {
-    let bin = tile.y * cull.tiles_x + tile.x;
-    let t = tile_depth[bin];
-    if li == 0u {
+// The tile's planes (in workgroup memory) and depth data; false for an empty tile. Uniform, so
+// the barriers after it are reached by all threads or none.
+fn tile_setup(tile: vec2<u32>, slot: u32) -> bool {
+    let t = tile_depth[tile.y * cull.tiles_x + tile.x];
+    if slot == 0u {
         wg_planes = tile_side_planes(tile);
         wg_covered = t.covered;
     }
-    // Uniform across the workgroup, so the barriers below are reached by all or none.
-    if workgroupUniformLoad(&wg_covered) == 0u {
+    return workgroupUniformLoad(&wg_covered) != 0u;
+}
+
+fn count_done(bin: u32, fill: bool, acc: vec2<u32>) {
+    if !fill && acc.y != 0u {
+        atomicAdd(&bin_counts[bin], acc.y);
+    }
+}
+
+// The single level: every light, 64 at a time.
+fn gather_flat(tile: vec2<u32>, slot: u32, fill: bool) {
+    if !tile_setup(tile, slot) {
         return;
     }
+    let bin = tile.y * cull.tiles_x + tile.x;
+    let t = tile_depth[bin];
     let planes = wg_planes;
-    var placed = 0u;
-    if cull.coarse == 0u {
-        for (var first = 0u; first < cull.light_count; first += 64u) {
-            let i = first + li;
-            placed = gather_batch(bin, li, i, i < cull.light_count, planes, t, fill, placed);
-        }
+    var acc = vec2<u32>(0u);
+    for (var first = 0u; first < cull.light_count; first += 64u) {
+        let i = first + slot;
+        acc = gather_batch(bin, slot, i, i < cull.light_count, planes, t, fill, acc);
+    }
+    count_done(bin, fill, acc);
+}
+
+// Over the coarse tile's lights, 64 mask words (2,048 lights) at a time: each thread writes its
+// word's lights at its place in the chunk (a scan of the words' bit counts), in light order;
+// then the chunk's candidates are tested 64 at a time.
+fn gather(tile: vec2<u32>, slot: u32, fill: bool) {
+    if !tile_setup(tile, slot) {
         return;
     }
-    // The coarse tile's lights, 64 mask words (2,048 lights) at a time: each thread writes
-    // its word's lights at its place in the chunk (a scan of the words' bit counts), in light
-    // order; then the chunk's candidates are tested 64 at a time.
+    let bin = tile.y * cull.tiles_x + tile.x;
+    let t = tile_depth[bin];
+    let planes = wg_planes;
+    var acc = vec2<u32>(0u);
     let words = (cull.light_count + 31u) / 32u;
     let row = ((tile.y / cull.coarse) * cull.coarse_x + tile.x / cull.coarse) * words;
     for (var w0 = 0u; w0 < words; w0 += 64u) {
         var word = 0u;
-        if w0 + li < words {
-            word = coarse_mask[row + w0 + li];
+        if w0 + slot < words {
+            word = coarse_mask[row + w0 + slot];
         }
         let n_bits = countOneBits(word);
-        var at = scan_keep(li, n_bits) - n_bits;
-        if li == 63u {
-            wg_total = wg_keep[63];
-        }
-        let base = (w0 + li) * 32u;
+        let scan = scan_keep(slot, n_bits);
+        var at = scan.x - n_bits;
+        let base = (w0 + slot) * 32u;
         while word != 0u {
             wg_cand[at] = base + firstTrailingBit(word);
             at += 1u;
             word &= word - 1u;
         }
+        if slot == 0u {
+            wg_total = scan.y;
+        }
         let n = workgroupUniformLoad(&wg_total);
         for (var k = 0u; k < n; k += 64u) {
-            let valid = k + li < n;
+            let valid = k + slot < n;
             var i = 0u;
             if valid {
-                i = wg_cand[k + li];
+                i = wg_cand[k + slot];
             }
-            placed = gather_batch(bin, li, i, valid, planes, t, fill, placed);
+            acc = gather_batch(bin, slot, i, valid, planes, t, fill, acc);
         }
         workgroupBarrier();
     }
-}
-
-@compute @workgroup_size(64)
-fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather(wg.xy, li, false);
-}
-
-@compute @workgroup_size(64)
-fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather(wg.xy, li, true);
+    count_done(bin, fill, acc);
 }
 
 // A float's bits mapped so that unsigned order is the float order (negative depths of an

@@ -29,7 +29,8 @@ pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
         shader_file!("cull/depth_bounds.wgsl"),
     ],
 };
-/// `cull.tiled_gather` (also `cull.depth_mask`, with its flag) and `cull.finalize`.
+/// `cull.tiled_gather` (also `cull.depth_mask`, with its flag) and `cull.finalize`, with the
+/// portable workgroup scan.
 pub const TILED_GATHER: ShaderDef = ShaderDef {
     name: "cull.tiled_gather",
     consts: CULL_CONSTS,
@@ -40,6 +41,22 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
         COMMON,
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
+        shader_file!("cull/gather_scan.wgsl"),
+    ],
+};
+/// [`TILED_GATHER`] with its scans in subgroup operations (built only where the device has
+/// them).
+pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
+    name: "cull.tiled_gather.subgroup",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        COMMON,
+        LISTS,
+        shader_file!("cull/tiled_gather.wgsl"),
+        shader_file!("cull/gather_scan_subgroup.wgsl"),
     ],
 };
 /// `cull.tiled_scatter`.
@@ -100,6 +117,7 @@ pub const EXACT: ShaderDef = ShaderDef {
 pub const SHADERS: &[ShaderDef] = &[
     DEPTH_BOUNDS,
     TILED_GATHER,
+    TILED_GATHER_SUBGROUP,
     TILED_SCATTER,
     CLUSTERED,
     LIGHTS_PER_PIXEL,
@@ -212,8 +230,12 @@ pub struct Culler {
     /// 1 ranges, 2 indices, 3 depth, 4 a per-pixel output.
     pub lists_layout: wgpu::BindGroupLayout,
     depth_bounds: wgpu::ComputePipeline,
+    /// Whether gather's scans use subgroup operations.
+    pub gather_subgroups: bool,
     gather_coarse: wgpu::ComputePipeline,
     gather_count: wgpu::ComputePipeline,
+    gather_count_flat: wgpu::ComputePipeline,
+    gather_fill_flat: wgpu::ComputePipeline,
     gather_fill: wgpu::ComputePipeline,
     clustered_count: wgpu::ComputePipeline,
     clustered_fill: wgpu::ComputePipeline,
@@ -255,6 +277,12 @@ fn pipelines<const N: usize>(
 impl Culler {
     /// Builds every pipeline for scenes laid out as [`GpuScene`].
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        Self::with_subgroups(ctx, scene, true)
+    }
+
+    /// As [`Culler::new`]; with `subgroups` false, gather keeps its portable scans even where
+    /// the device has subgroup operations (both paths give the same lists; the tests run both).
+    pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
         let d = &ctx.device;
         let mut entries = vec![entry(0, UNIFORM), entry(1, DEPTH)];
         entries.extend((2..=10).map(|b| entry(b, storage(false))));
@@ -275,15 +303,30 @@ impl Culler {
         });
         let scene_layout = &scene.layout;
         let [depth_bounds] = pipelines(d, &DEPTH_BOUNDS, scene_layout, &layout, ["depth_bounds"]);
-        let [gather_coarse, gather_count, gather_fill, finalize, cap] = pipelines(
+        let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
+        let [
+            gather_coarse,
+            gather_count,
+            gather_fill,
+            gather_count_flat,
+            gather_fill_flat,
+            finalize,
+            cap,
+        ] = pipelines(
             d,
-            &TILED_GATHER,
+            if gather_subgroups {
+                &TILED_GATHER_SUBGROUP
+            } else {
+                &TILED_GATHER
+            },
             scene_layout,
             &layout,
             [
                 "gather_coarse",
                 "gather_count",
                 "gather_fill",
+                "gather_count_flat",
+                "gather_fill_flat",
                 "finalize",
                 "cap_counts",
             ],
@@ -324,9 +367,12 @@ impl Culler {
             layout,
             lists_layout,
             depth_bounds,
+            gather_subgroups,
             gather_coarse,
             gather_count,
             gather_fill,
+            gather_count_flat,
+            gather_fill_flat,
             clustered_count,
             clustered_fill,
             cluster_order,
@@ -392,8 +438,10 @@ impl Culler {
         let clustered = matches!(strategy, Strategy::Clustered { .. });
         let (count, fill) = if clustered {
             (&self.clustered_count, &self.clustered_fill)
-        } else {
+        } else if p.coarse > 0 {
             (&self.gather_count, &self.gather_fill)
+        } else {
+            (&self.gather_count_flat, &self.gather_fill_flat)
         };
         // Clusters: CLUSTER_LANES threads a light (see clustered.wgsl).
         let light_groups = groups_2d(
@@ -931,6 +979,12 @@ impl<'a> Frame<'a> {
             occupancy: self.occupancy,
         })
     }
+}
+
+/// Whether gather's subgroup scans apply: subgroup operations, with subgroups that tile a
+/// workgroup of 64 (sizes are powers of two, so at most 64).
+fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
+    ctx.features.subgroups && ctx.features.subgroup_size.1 <= 64
 }
 
 fn placeholder(ctx: &GpuContext) -> wgpu::Buffer {

@@ -1,0 +1,44 @@
+// The portable workgroup scan of cull.tiled_gather and its count and fill entry points (see
+// tiled_gather.wgsl); gather_scan_subgroup.wgsl is the same with subgroup operations. Here a
+// thread's slot is its local_invocation_index.
+var<workgroup> wg_keep: array<u32, 64>;
+
+// (inclusive prefix of `value` over slots 0..=slot, total over the workgroup): a Hillis-Steele
+// scan, 6 steps for 64 threads. Called in uniform control flow; workgroup memory is free again
+// when it returns.
+fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
+    wg_keep[slot] = value;
+    workgroupBarrier();
+    for (var off = 1u; off < 64u; off <<= 1u) {
+        var v = 0u;
+        if slot >= off {
+            v = wg_keep[slot - off];
+        }
+        workgroupBarrier();
+        wg_keep[slot] += v;
+        workgroupBarrier();
+    }
+    let r = vec2<u32>(wg_keep[slot], wg_keep[63]);
+    workgroupBarrier();
+    return r;
+}
+
+@compute @workgroup_size(64)
+fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    gather(wg.xy, li, false);
+}
+
+@compute @workgroup_size(64)
+fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    gather(wg.xy, li, true);
+}
+
+@compute @workgroup_size(64)
+fn gather_count_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    gather_flat(wg.xy, li, false);
+}
+
+@compute @workgroup_size(64)
+fn gather_fill_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    gather_flat(wg.xy, li, true);
+}

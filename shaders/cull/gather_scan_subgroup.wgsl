@@ -1,0 +1,59 @@
+// The workgroup scan of cull.tiled_gather with subgroup operations, and its count and fill
+// entry points (see tiled_gather.wgsl and the portable gather_scan.wgsl). A thread's slot is
+// subgroup_id * subgroup_size + lane, so that lane order is slot order whatever the layout of
+// subgroups in the workgroup (any subgroup size that divides 64).
+var<workgroup> sg_sums: array<u32, 64>;
+var<private> g_lane: u32;
+var<private> g_sg_size: u32;
+var<private> g_sg_id: u32;
+var<private> g_sg_count: u32;
+
+fn subgroup_slot(lane: u32, size: u32, id: u32, count: u32) -> u32 {
+    g_lane = lane;
+    g_sg_size = size;
+    g_sg_id = id;
+    g_sg_count = count;
+    return id * size + lane;
+}
+
+// (inclusive prefix of `value` over slots 0..=slot, total over the workgroup): an inclusive add
+// within each subgroup, the subgroups' totals across them; two barriers. Called in uniform
+// control flow; workgroup memory is free again when it returns.
+fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
+    let inclusive = subgroupInclusiveAdd(value);
+    if g_lane == g_sg_size - 1u {
+        sg_sums[g_sg_id] = inclusive;
+    }
+    workgroupBarrier();
+    var before = 0u;
+    var total = 0u;
+    for (var s = 0u; s < g_sg_count; s++) {
+        let v = sg_sums[s];
+        if s < g_sg_id {
+            before += v;
+        }
+        total += v;
+    }
+    workgroupBarrier();
+    return vec2<u32>(before + inclusive, total);
+}
+
+@compute @workgroup_size(64)
+fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    gather(wg.xy, subgroup_slot(lane, size, id, count), false);
+}
+
+@compute @workgroup_size(64)
+fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    gather(wg.xy, subgroup_slot(lane, size, id, count), true);
+}
+
+@compute @workgroup_size(64)
+fn gather_count_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    gather_flat(wg.xy, subgroup_slot(lane, size, id, count), false);
+}
+
+@compute @workgroup_size(64)
+fn gather_fill_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    gather_flat(wg.xy, subgroup_slot(lane, size, id, count), true);
+}
