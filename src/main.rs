@@ -405,9 +405,9 @@ struct StrategyArgs {
     /// (clustered only; one pass less, images no longer bit-identical across runs).
     #[arg(long)]
     unordered: bool,
-    /// Gather and 2.5D: the side of a coarse tile in tiles; lights are culled against coarse
-    /// tiles first and each tile tests only its coarse tile's lights (same lists). 0: every
-    /// light at every tile.
+    /// Gather and 2.5D: 8 culls lights against coarse tiles of 8 x 8 tiles first, and each tile
+    /// tests only its coarse tile's survivors; 0 tests every light at every tile (the paper's
+    /// single level).
     #[arg(long, default_value_t = manylights_cull::DEFAULT_COARSE)]
     coarse: u32,
     /// Conservative slack, relative to each light's distance from the eye.

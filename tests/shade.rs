@@ -308,7 +308,7 @@ fn ordered_strategies_render_bit_identical_frames() {
             &big,
             Strategy::TiledGather {
                 tile_size: 8,
-                coarse: 2,
+                coarse: 8,
             },
         ),
     ];

@@ -31,11 +31,11 @@ struct CullParams {
     // Deliberate cap on each list's length (0: none). Every light beyond it is counted in
     // cull_stats[0]; see lists.wgsl.
     capacity: u32,
-    // Gather's coarse level (tiled_gather.wgsl): a coarse tile's side in tiles (0: none), and
-    // coarse tiles across.
+    // Gather's coarse level (tiled_gather.wgsl): a coarse tile's side in tiles (8; 0: none),
+    // coarse tiles across, and the lights of a chunk (a multiple of 64).
     coarse: u32,
     coarse_x: u32,
-    _pad0: u32,
+    chunk: u32,
 }
 
 @group(1) @binding(0) var<uniform> cull: CullParams;

@@ -25,12 +25,12 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
 
 @compute @workgroup_size(64)
 fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather(wg.xy, li, false);
+    gather_chunk(wg, li, false);
 }
 
 @compute @workgroup_size(64)
 fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather(wg.xy, li, true);
+    gather_chunk(wg, li, true);
 }
 
 @compute @workgroup_size(64)

@@ -185,7 +185,7 @@ pub fn gather(
     out
 }
 
-/// Oracle of `cull.tiled_gather.coarse`: per coarse tile (row by row), per light, whether the
+/// Oracle of gather's coarse test (coarse-to-fine passes): per coarse tile (row by row), per light, whether the
 /// coarse tile keeps it with the slack moved down and up by [`BORDER`]. A coarse tile spans
 /// `p.coarse` x `p.coarse` tiles, between the smallest `dmin` and the largest `dmax` of its
 /// covered tiles, without a 2.5D mask. Empty without a coarse level.

@@ -232,8 +232,8 @@ pub struct Culler {
     depth_bounds: wgpu::ComputePipeline,
     /// Whether gather's scans use subgroup operations.
     pub gather_subgroups: bool,
-    gather_coarse: wgpu::ComputePipeline,
     gather_count: wgpu::ComputePipeline,
+    gather_finalize: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
     gather_fill_flat: wgpu::ComputePipeline,
     gather_fill: wgpu::ComputePipeline,
@@ -305,11 +305,11 @@ impl Culler {
         let [depth_bounds] = pipelines(d, &DEPTH_BOUNDS, scene_layout, &layout, ["depth_bounds"]);
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         let [
-            gather_coarse,
             gather_count,
             gather_fill,
             gather_count_flat,
             gather_fill_flat,
+            gather_finalize,
             finalize,
             cap,
         ] = pipelines(
@@ -322,11 +322,11 @@ impl Culler {
             scene_layout,
             &layout,
             [
-                "gather_coarse",
                 "gather_count",
                 "gather_fill",
                 "gather_count_flat",
                 "gather_fill_flat",
+                "gather_finalize",
                 "finalize",
                 "cap_counts",
             ],
@@ -368,11 +368,11 @@ impl Culler {
             lists_layout,
             depth_bounds,
             gather_subgroups,
-            gather_coarse,
             gather_count,
             gather_fill,
             gather_count_flat,
             gather_fill_flat,
+            gather_finalize,
             clustered_count,
             clustered_fill,
             cluster_order,
@@ -403,11 +403,13 @@ impl Culler {
         settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
         let mut params = strategy.params(w, h, scene.light_count, settings);
-        crate::fit_coarse(
+        crate::fit_chunks(
             &mut params,
-            crate::COARSE_MASK_BUDGET
-                .min(ctx.limits.max_storage_buffer_binding_size)
-                .min(ctx.limits.max_buffer_size),
+            (ctx.limits
+                .max_storage_buffer_binding_size
+                .min(ctx.limits.max_buffer_size)
+                / 4)
+            .min(crate::MAX_CHUNK_ENTRIES),
             ctx.limits.max_compute_workgroups_per_dimension,
         );
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
@@ -454,18 +456,16 @@ impl Culler {
             (p.tiles_x, p.tiles_y)
         };
         let placeholder = f.buf("cull.light_indices.placeholder", 4);
-        // Gather's coarse masks (bound where tiled scatter binds its pair keys).
-        let words = u64::from(p.light_count.div_ceil(32));
-        let coarse_y = p.tiles_y.div_ceil(p.coarse.max(1));
-        let coarse_mask = if p.coarse > 0 {
-            f.buf(
-                "cull.coarse_mask",
-                u64::from(p.coarse_x) * u64::from(coarse_y) * words * 4,
-            )
-        } else {
-            f.buf("cull.coarse_mask.placeholder", 4)
-        };
-        let group_a = f.group(&placeholder, &coarse_mask);
+        let group_a = f.group(&placeholder, &placeholder);
+        // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
+        // count per (tile, chunk).
+        let chunked = !clustered && p.coarse > 0;
+        let chunk_groups = [
+            p.coarse_x,
+            p.tiles_y.div_ceil(p.coarse.max(1)),
+            p.light_count.div_ceil(p.chunk.max(1)),
+        ];
+        let entries = f.entries_counted();
         let mut enc = f.encoder("cull.count");
         if clustered {
             if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
@@ -487,24 +487,18 @@ impl Culler {
                 &group_a,
                 (p.tiles_x, p.tiles_y),
             );
-            if p.coarse > 0 {
-                pipeline::dispatch_3d(
-                    &mut enc,
-                    timer,
-                    &format!("cull.{name}.coarse"),
-                    &self.gather_coarse,
-                    &[&f.scene.bind_group, &group_a],
-                    [p.coarse_x, coarse_y, (words.div_ceil(64)) as u32],
-                );
-            }
         }
-        f.pass(
+        f.pass_3d(
             &mut enc,
             timer,
             &format!("cull.{name}.count"),
             count,
             &group_a,
-            main,
+            if chunked {
+                chunk_groups
+            } else {
+                [main.0, main.1, 1]
+            },
         );
         if p.capacity != 0 {
             f.pass(
@@ -516,23 +510,27 @@ impl Culler {
                 groups_2d(p.bins.div_ceil(64), GROUPS_X),
             );
         }
-        f.scan(ctx, &self.scan, enc, p.bins, timer)?;
+        f.scan(ctx, &self.scan, enc, entries, timer)?;
         let total = Frame::entries(
             ctx,
             "light list bytes",
             "light list entries",
-            f.bins_total(ctx, p.bins)?,
+            f.bins_total(ctx, entries)?,
         )?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-        let group_b = f.group(&indices, &coarse_mask);
+        let group_b = f.group(&indices, &placeholder);
         let mut enc = f.encoder("cull.fill");
-        f.pass(
+        f.pass_3d(
             &mut enc,
             timer,
             &format!("cull.{name}.fill"),
             fill,
             &group_b,
-            main,
+            if chunked {
+                chunk_groups
+            } else {
+                [main.0, main.1, 1]
+            },
         );
         if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
             f.pass(
@@ -548,7 +546,11 @@ impl Culler {
             &mut enc,
             timer,
             "cull.finalize",
-            &self.finalize,
+            if chunked {
+                &self.gather_finalize
+            } else {
+                &self.finalize
+            },
             &group_b,
             groups_2d(p.bins.div_ceil(64), GROUPS_X),
         );
@@ -795,7 +797,7 @@ impl<'a> Frame<'a> {
         let items = if per_light {
             bins.max(u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES))
         } else {
-            bins
+            bins * chunks(&params)
         };
         let params_buf = ctx
             .device
@@ -883,6 +885,32 @@ impl<'a> Frame<'a> {
         enc
     }
 
+    /// The count entries of a binned strategy: a count per bin, or for gather's coarse-to-fine
+    /// passes per (bin, chunk of lights).
+    fn entries_counted(&self) -> u32 {
+        u32::try_from(u64::from(self.params.bins) * chunks(&self.params))
+            .expect("fit_chunks bounds the entries")
+    }
+
+    fn pass_3d(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipe: &wgpu::ComputePipeline,
+        group: &wgpu::BindGroup,
+        groups: [u32; 3],
+    ) {
+        pipeline::dispatch_3d(
+            enc,
+            timer,
+            label,
+            pipe,
+            &[&self.scene.bind_group, group],
+            groups,
+        );
+    }
+
     fn pass(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -916,7 +944,7 @@ impl<'a> Frame<'a> {
         ctx.submit_and_wait(enc, "culling: count and scan")
     }
 
-    /// The exact total of the `n` bin counts after [`Frame::scan`]: the scan's u32 total
+    /// The exact total of the `n` counts after [`Frame::scan`]: the scan's u32 total
     /// (`offsets[n]`), or, where the counts could sum past u32 (bins x lights > 2^32), the
     /// counts read back and summed in u64, so that a wrapped total never sizes the lists short.
     fn bins_total(&self, ctx: &GpuContext, n: u32) -> Result<u64, GpuError> {
@@ -928,7 +956,7 @@ impl<'a> Frame<'a> {
                     .collect::<Vec<u64>>()
             })
         };
-        if u64::from(n) * u64::from(self.params.light_count) > u64::from(u32::MAX) {
+        if u64::from(self.params.bins) * u64::from(self.params.light_count) > u64::from(u32::MAX) {
             Ok(read_u32s(&self.counts, 0, u64::from(n))?.iter().sum())
         } else {
             Ok(read_u32s(&self.offsets, u64::from(n) * 4, 1)?[0])
@@ -978,6 +1006,16 @@ impl<'a> Frame<'a> {
             tile_depth: self.tile_depth,
             occupancy: self.occupancy,
         })
+    }
+}
+
+/// Chunks of lights per bin in the count entries: `ceil(lights / chunk)` for gather's
+/// coarse-to-fine passes, 1 otherwise.
+fn chunks(p: &GpuCullParams) -> u64 {
+    if p.coarse > 0 && p.chunk > 0 {
+        u64::from(p.light_count.div_ceil(p.chunk)).max(1)
+    } else {
+        1
     }
 }
 

@@ -91,12 +91,12 @@ pub struct GpuCullParams {
     pub slice_scale: f32,
     /// Deliberate cap on each list's length (0: none).
     pub capacity: u32,
-    /// Gather's coarse level: the side of a coarse tile in tiles (0: no coarse level).
+    /// Gather's coarse level: the side of a coarse tile in tiles (8; 0: no coarse level).
     pub coarse: u32,
     /// Coarse tiles across (0 without a coarse level).
     pub coarse_x: u32,
-    /// Padding to 16 bytes.
-    pub _pad: u32,
+    /// Lights of a chunk in gather's coarse-to-fine passes (a multiple of 64).
+    pub chunk: u32,
 }
 const _: () = assert!(size_of::<GpuCullParams>() == 64);
 

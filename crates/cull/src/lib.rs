@@ -8,9 +8,7 @@
 //! Passes, in order (profiler scopes in brackets):
 //! 1. `cull.depth_bounds` (tiled strategies): per tile, the nearest and farthest covered depth
 //!    and the 2.5D geometry mask.
-//! 2. `cull.occupancy` (clusters with `skip_empty`): clusters that hold covered pixels;
-//!    `cull.<strategy>.coarse` (gather and 2.5D with a coarse level): a bit mask of the lights
-//!    each coarse tile keeps.
+//! 2. `cull.occupancy` (clusters with `skip_empty`): clusters that hold covered pixels.
 //! 3. `cull.<strategy>.count`: each bin's light count. 4. `scan.*`: exclusive scan of the
 //!    counts into offsets; the total sizes `light_indices` exactly (no capacity, nothing
 //!    dropped). 5. `cull.<strategy>.fill`: the lists. 6. `cull.finalize`: the ranges.
@@ -58,10 +56,9 @@ pub enum Strategy {
         /// Tile side in pixels (the paper's 8; 16 and 32 are common).
         #[serde(default = "default_tile")]
         tile_size: u32,
-        /// Coarse-to-fine: lights are first culled against coarse tiles of `coarse` x `coarse`
-        /// tiles (`cull.tiled_gather.coarse`, a bit mask of lights per coarse tile), and each
-        /// tile tests only its coarse tile's lights. The lists are the same; 0 tests every
-        /// light at every tile (the paper's single level).
+        /// Coarse-to-fine: 8 (the default) tests each light against coarse tiles of 8 x 8 tiles
+        /// first, once per coarse tile, and each tile only the survivors; 0 tests every light
+        /// at every tile (the paper's single level). See docs/STRATEGIES.md.
         #[serde(default = "default_coarse")]
         coarse: u32,
     },
@@ -115,34 +112,39 @@ fn default_coarse() -> u32 {
     DEFAULT_COARSE
 }
 
-/// The most bytes gather's coarse masks may take; past it, coarse tiles grow.
-pub const COARSE_MASK_BUDGET: u64 = 256 << 20;
+/// The most (bin, chunk) count entries of gather's coarse-to-fine passes; past it, chunks of
+/// lights grow.
+pub const MAX_CHUNK_ENTRIES: u64 = 1 << 23;
 
-/// Fits gather's coarse level in `p` (coarse tiles of `p.coarse` x `p.coarse` tiles; 0: none)
-/// to a device: the side doubles until the masks (a bit per light per coarse tile) fit `budget`
-/// bytes, up to one coarse tile for the whole image. Where even that has no room, or the mask
-/// words need more than `max_groups` workgroups of 64 in one dispatch dimension, no coarse level:
-/// the lists are then the single level's (a superset, equally conservative).
-pub fn fit_coarse(p: &mut GpuCullParams, budget: u64, max_groups: u32) {
-    let want = p.coarse;
-    p.coarse = 0;
-    p.coarse_x = 0;
-    let words = u64::from(p.light_count.div_ceil(32));
-    if want == 0 || words == 0 || words.div_ceil(64) > u64::from(max_groups) {
+/// The smallest chunk of lights of gather's coarse-to-fine passes (a workgroup's share).
+pub const MIN_CHUNK: u32 = 256;
+
+/// Fits gather's coarse-to-fine passes in `p` to a device: the chunk of lights a workgroup
+/// takes (a multiple of 64, at least [`MIN_CHUNK`]) grows until the (tile, chunk) count entries
+/// fit `max_entries` and the chunks fit `max_groups` workgroups in one dispatch dimension.
+/// Without a coarse level, without lights, or with a capacity (which caps whole lists, not
+/// chunks), the single level runs (`p.coarse = 0`).
+pub fn fit_chunks(p: &mut GpuCullParams, max_entries: u64, max_groups: u32) {
+    p.chunk = 0;
+    if p.coarse == 0 || p.light_count == 0 || p.capacity != 0 {
+        p.coarse = 0;
+        p.coarse_x = 0;
         return;
     }
-    let mut side = want;
-    loop {
-        let (cx, cy) = (p.tiles_x.div_ceil(side), p.tiles_y.div_ceil(side));
-        if u64::from(cx) * u64::from(cy) * words * 4 <= budget {
-            p.coarse = side;
-            p.coarse_x = cx;
-            return;
+    let lights = u64::from(p.light_count);
+    let tiles = u64::from(p.bins);
+    let by_entries = (lights * tiles).div_ceil(max_entries.max(1));
+    let by_groups = lights.div_ceil(u64::from(max_groups.max(1)));
+    let chunk = by_entries
+        .max(by_groups)
+        .max(u64::from(MIN_CHUNK))
+        .next_multiple_of(64);
+    match u32::try_from(chunk) {
+        Ok(c) if lights.div_ceil(chunk) * tiles <= max_entries.max(tiles) => p.chunk = c,
+        _ => {
+            p.coarse = 0;
+            p.coarse_x = 0;
         }
-        if cx == 1 && cy == 1 {
-            return;
-        }
-        side *= 2;
     }
 }
 
@@ -248,11 +250,11 @@ impl Strategy {
                 accepted: "an integer in 4..=256 pixels",
             });
         }
-        if self.coarse() > 64 {
+        if !matches!(self.coarse(), 0 | DEFAULT_COARSE) {
             return Err(CullError::InvalidParameter {
                 field: "coarse",
                 value: self.coarse().to_string(),
-                accepted: "an integer in 0..=64 tiles (0: no coarse level)",
+                accepted: "8 (coarse tiles of 8 x 8 tiles, a thread a tile) or 0 (no coarse level)",
             });
         }
         if let Self::Clustered { slices, .. } = *self {
@@ -326,14 +328,14 @@ impl Strategy {
             slack,
             slice_scale,
             capacity: capacity.unwrap_or(0),
-            // The device may need larger coarse tiles for the masks to fit (Culler::run).
             coarse: self.coarse(),
             coarse_x: if self.coarse() > 0 {
                 tiles_x.div_ceil(self.coarse())
             } else {
                 0
             },
-            _pad: 0,
+            // Set for the device by `fit_chunks` (Culler::run).
+            chunk: 0,
         }
     }
 }
@@ -403,12 +405,8 @@ impl CullSettings {
 mod tests {
     use super::*;
 
-    fn gather_params(w: u32, h: u32, lights: u32, coarse: u32) -> GpuCullParams {
-        Strategy::TiledGather {
-            tile_size: 16,
-            coarse,
-        }
-        .params(
+    fn gather_params(w: u32, h: u32, lights: u32) -> GpuCullParams {
+        Strategy::tiled_gather(16).params(
             w,
             h,
             lights,
@@ -422,29 +420,31 @@ mod tests {
     }
 
     #[test]
-    fn coarse_level_grows_until_the_masks_fit() {
-        // 1080p: 120 x 68 tiles; 8-tile coarse tiles: 15 x 9; 1M lights: 32,768 words.
-        let mut p = gather_params(1920, 1080, 1 << 20, 8);
-        fit_coarse(&mut p, u64::MAX, 65_535);
-        assert_eq!((p.coarse, p.coarse_x), (8, 15));
-        // 135 coarse tiles x 128 KiB do not fit 4 MiB; 16-tile ones (8 x 5 = 40, 5 MiB) do not
-        // either; 32-tile ones (4 x 3 = 12, 1.5 MiB) do.
-        let mut p = gather_params(1920, 1080, 1 << 20, 8);
-        fit_coarse(&mut p, 4 << 20, 65_535);
-        assert_eq!((p.coarse, p.coarse_x), (32, 4));
-        // Not even one coarse tile's mask fits: no coarse level.
-        let mut p = gather_params(1920, 1080, 1 << 20, 8);
-        fit_coarse(&mut p, 1 << 10, 65_535);
-        assert_eq!((p.coarse, p.coarse_x), (0, 0));
-        // More mask words than one dispatch dimension reaches: no coarse level.
-        let mut p = gather_params(64, 64, 1 << 20, 8);
-        fit_coarse(&mut p, u64::MAX, 8);
+    fn chunks_grow_until_the_entries_fit() {
+        // 1080p: 120 x 68 = 8,160 tiles; 15 coarse tiles across.
+        let mut p = gather_params(1920, 1080, 3072);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        assert_eq!((p.coarse, p.coarse_x, p.chunk), (8, 15, MIN_CHUNK));
+        // 1M lights: 8,160 tiles x chunks <= 2^23 entries needs chunks of 1,024 lights.
+        let mut p = gather_params(1920, 1080, 1 << 20);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        assert_eq!(p.chunk, 1024);
+        assert!(u64::from(p.bins) * u64::from((1u32 << 20).div_ceil(p.chunk)) <= MAX_CHUNK_ENTRIES);
+        // One tile and 33.5M lights: the chunks must fit one dispatch dimension.
+        let mut p = gather_params(8, 4, 33_554_431);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        assert!(p.chunk % 64 == 0 && 33_554_431u32.div_ceil(p.chunk) <= 65_535);
+        // No lights, a capacity, or asked for none: the single level.
+        let mut p = gather_params(64, 64, 0);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        assert_eq!((p.coarse, p.chunk), (0, 0));
+        let mut p = gather_params(64, 64, 100);
+        p.capacity = 8;
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
         assert_eq!(p.coarse, 0);
-        // Asked for none, and no lights: none.
-        for (lights, coarse) in [(1024, 0), (0, 8)] {
-            let mut p = gather_params(64, 64, lights, coarse);
-            fit_coarse(&mut p, u64::MAX, 65_535);
-            assert_eq!(p.coarse, 0);
-        }
+        let mut p = gather_params(64, 64, 100);
+        p.coarse = 0;
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        assert_eq!(p.coarse, 0);
     }
 }
