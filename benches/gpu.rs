@@ -8,7 +8,8 @@
 //! - `cull.tiled_gather_single/...`: gather without its coarse level, `cull.clustered_unordered/...`
 //!   clusters without their order pass;
 //! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
-//!   lights, 8-pixel tiles), every strategy;
+//!   lights, 8-pixel tiles), every strategy, and gather with larger chunks of lights
+//!   (`tiled_gather8_chunk<N>`);
 //! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
 //!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
@@ -209,12 +210,27 @@ fn cull_paper(c: &mut Criterion) {
     ];
     let mut g = c.benchmark_group("cull.harada2012");
     configure(&mut g);
+    let mut culler = culler;
     for (label, strategy) in variants {
+        let culler = &culler;
         g.bench_with_input(BenchmarkId::new(label, n), &n, |b, _| {
-            b.iter_custom(|iters| {
-                cull_time(&ctx, &culler, &gs, &depth, &strategy, &settings, iters)
-            })
+            b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
         });
+    }
+    // Gather with larger chunks of lights a workgroup (less repeated set-up, fewer workgroups).
+    for chunk in [1024, 3072] {
+        culler.gather_min_chunk = chunk;
+        let strategy = Strategy::tiled_gather(8);
+        let culler = &culler;
+        g.bench_with_input(
+            BenchmarkId::new(format!("tiled_gather8_chunk{chunk}"), n),
+            &n,
+            |b, _| {
+                b.iter_custom(|iters| {
+                    cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters)
+                })
+            },
+        );
     }
     g.finish();
 }

@@ -232,6 +232,9 @@ pub struct Culler {
     depth_bounds: wgpu::ComputePipeline,
     /// Whether gather's scans use subgroup operations.
     pub gather_subgroups: bool,
+    /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
+    /// ([`crate::MIN_CHUNK`] by default; larger trades parallelism for less repeated set-up).
+    pub gather_min_chunk: u32,
     gather_count: wgpu::ComputePipeline,
     gather_finalize: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
@@ -368,6 +371,7 @@ impl Culler {
             lists_layout,
             depth_bounds,
             gather_subgroups,
+            gather_min_chunk: crate::MIN_CHUNK,
             gather_count,
             gather_fill,
             gather_count_flat,
@@ -411,6 +415,7 @@ impl Culler {
                 / 4)
             .min(crate::MAX_CHUNK_ENTRIES),
             ctx.limits.max_compute_workgroups_per_dimension,
+            self.gather_min_chunk,
         );
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
         let per_light = matches!(strategy, Strategy::TiledScatter { .. });

@@ -116,15 +116,16 @@ fn default_coarse() -> u32 {
 /// lights grow.
 pub const MAX_CHUNK_ENTRIES: u64 = 1 << 23;
 
-/// The smallest chunk of lights of gather's coarse-to-fine passes (a workgroup's share).
+/// The smallest chunk of lights of gather's coarse-to-fine passes (a workgroup's share), and
+/// the step of chunk sizes: a batch of the shader (`GATHER_BATCH`, 4 lights a thread).
 pub const MIN_CHUNK: u32 = 256;
 
 /// Fits gather's coarse-to-fine passes in `p` to a device: the chunk of lights a workgroup
-/// takes (a multiple of 64, at least [`MIN_CHUNK`]) grows until the (tile, chunk) count entries
+/// takes (a multiple of [`MIN_CHUNK`], at least `min_chunk`) grows until the (tile, chunk) count entries
 /// fit `max_entries` and the chunks fit `max_groups` workgroups in one dispatch dimension.
 /// Without a coarse level, without lights, or with a capacity (which caps whole lists, not
 /// chunks), the single level runs (`p.coarse = 0`).
-pub fn fit_chunks(p: &mut GpuCullParams, max_entries: u64, max_groups: u32) {
+pub fn fit_chunks(p: &mut GpuCullParams, max_entries: u64, max_groups: u32, min_chunk: u32) {
     p.chunk = 0;
     if p.coarse == 0 || p.light_count == 0 || p.capacity != 0 {
         p.coarse = 0;
@@ -137,8 +138,8 @@ pub fn fit_chunks(p: &mut GpuCullParams, max_entries: u64, max_groups: u32) {
     let by_groups = lights.div_ceil(u64::from(max_groups.max(1)));
     let chunk = by_entries
         .max(by_groups)
-        .max(u64::from(MIN_CHUNK))
-        .next_multiple_of(64);
+        .max(u64::from(min_chunk.max(MIN_CHUNK)))
+        .next_multiple_of(u64::from(MIN_CHUNK));
     match u32::try_from(chunk) {
         Ok(c) if lights.div_ceil(chunk) * tiles <= max_entries.max(tiles) => p.chunk = c,
         _ => {
@@ -423,28 +424,32 @@ mod tests {
     fn chunks_grow_until_the_entries_fit() {
         // 1080p: 120 x 68 = 8,160 tiles; 15 coarse tiles across.
         let mut p = gather_params(1920, 1080, 3072);
-        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
         assert_eq!((p.coarse, p.coarse_x, p.chunk), (8, 15, MIN_CHUNK));
         // 1M lights: 8,160 tiles x chunks <= 2^23 entries needs chunks of 1,024 lights.
         let mut p = gather_params(1920, 1080, 1 << 20);
-        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
         assert_eq!(p.chunk, 1024);
+        // A larger minimum (the ablation knob), rounded to whole batches.
+        let mut q = gather_params(1920, 1080, 3072);
+        fit_chunks(&mut q, MAX_CHUNK_ENTRIES, 65_535, 1000);
+        assert_eq!(q.chunk, 1024);
         assert!(u64::from(p.bins) * u64::from((1u32 << 20).div_ceil(p.chunk)) <= MAX_CHUNK_ENTRIES);
         // One tile and 33.5M lights: the chunks must fit one dispatch dimension.
         let mut p = gather_params(8, 4, 33_554_431);
-        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
-        assert!(p.chunk % 64 == 0 && 33_554_431u32.div_ceil(p.chunk) <= 65_535);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
+        assert!(p.chunk % MIN_CHUNK == 0 && 33_554_431u32.div_ceil(p.chunk) <= 65_535);
         // No lights, a capacity, or asked for none: the single level.
         let mut p = gather_params(64, 64, 0);
-        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
         assert_eq!((p.coarse, p.chunk), (0, 0));
         let mut p = gather_params(64, 64, 100);
         p.capacity = 8;
-        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
         assert_eq!(p.coarse, 0);
         let mut p = gather_params(64, 64, 100);
         p.coarse = 0;
-        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535);
+        fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
         assert_eq!(p.coarse, 0);
     }
 }
