@@ -8,8 +8,8 @@
 //! - `cull.tiled_gather_single/...`: gather without its coarse level, `cull.clustered_unordered/...`
 //!   clusters without their order pass;
 //! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
-//!   lights, 8-pixel tiles), every strategy, and gather with larger chunks of lights
-//!   (`tiled_gather8_chunk<N>`);
+//!   lights, 8-pixel tiles), every strategy, and gather with other chunks of lights a
+//!   workgroup (`tiled_gather8_chunk<N>`);
 //! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
 //!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
@@ -217,8 +217,9 @@ fn cull_paper(c: &mut Criterion) {
             b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
         });
     }
-    // Gather with larger chunks of lights a workgroup (less repeated set-up, fewer workgroups).
-    for chunk in [1024, 3072] {
+    // Gather with other chunks of lights a workgroup: smaller ones give more workgroups, larger
+    // ones less repeated set-up.
+    for chunk in [64, 128, 512, 1024] {
         culler.gather_min_chunk = chunk;
         let strategy = Strategy::tiled_gather(8);
         let culler = &culler;

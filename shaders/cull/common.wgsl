@@ -32,7 +32,7 @@ struct CullParams {
     // cull_stats[0]; see lists.wgsl.
     capacity: u32,
     // Gather's coarse level (tiled_gather.wgsl): a coarse tile's side in tiles (8; 0: none),
-    // coarse tiles across, and the lights of a chunk (a multiple of 256, the batch).
+    // coarse tiles across, and the lights of a chunk (a multiple of 64).
     coarse: u32,
     coarse_x: u32,
     chunk: u32,

@@ -30,12 +30,9 @@ var<workgroup> wg_covered: u32;
 var<workgroup> wg_cmin: atomic<u32>;
 var<workgroup> wg_cmax: atomic<u32>;
 var<workgroup> wg_ccov: atomic<u32>;
-// A batch's survivors of the coarse test and their light indices: a batch is GATHER_BATCH
-// lights, GATHER_PER_THREAD a thread.
-const GATHER_PER_THREAD: u32 = 4u;
-const GATHER_BATCH: u32 = 256u;
-var<workgroup> wg_surv: array<CullLight, GATHER_BATCH>;
-var<workgroup> wg_surv_index: array<u32, GATHER_BATCH>;
+// A batch's survivors of the coarse test and their light indices.
+var<workgroup> wg_surv: array<CullLight, 64>;
+var<workgroup> wg_surv_index: array<u32, 64>;
 
 // One batch of up to 64 candidate lights, light `i` at this thread (`valid` false past the
 // end). The count pass adds the survivors to `counted`, this thread's own count (one atomic
@@ -149,36 +146,22 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
     var kept = 0u;
     let first = wg.z * cull.chunk;
     let end = min(first + cull.chunk, cull.light_count);
-    // A batch: light b + 64 j + slot at this thread for j < GATHER_PER_THREAD (coalesced
-    // loads). Light order is (j, slot) order, so one scan of the keep flags packed a byte per
-    // j (each field at most 64, so fields do not carry into each other) places the survivors.
-    for (var b = first; b < end; b += GATHER_BATCH) {
-        var ls: array<CullLight, GATHER_PER_THREAD>;
-        var packed = 0u;
-        for (var j = 0u; j < GATHER_PER_THREAD; j++) {
-            let i = b + 64u * j + slot;
-            if i < end {
-                ls[j] = cull_light(lights[i]);
-                if tile_keeps(ls[j], coarse_planes, c) {
-                    packed |= 1u << (8u * j);
-                }
-            }
+    for (var b = first; b < end; b += 64u) {
+        let i = b + slot;
+        var keep = false;
+        var l: CullLight;
+        if i < end {
+            l = cull_light(lights[i]);
+            keep = tile_keeps(l, coarse_planes, c);
         }
-        let scan = scan_keep(slot, packed);
-        let before = scan.x - packed;
-        var base = 0u;
-        for (var j = 0u; j < GATHER_PER_THREAD; j++) {
-            if ((packed >> (8u * j)) & 1u) != 0u {
-                let pos = base + ((before >> (8u * j)) & 0xffu);
-                wg_surv[pos] = ls[j];
-                wg_surv_index[pos] = b + 64u * j + slot;
-            }
-            base += (scan.y >> (8u * j)) & 0xffu;
+        let scan = scan_keep(slot, u32(keep));
+        if keep {
+            wg_surv[scan.x - 1u] = l;
+            wg_surv_index[scan.x - 1u] = i;
         }
-        let n = base;
         workgroupBarrier();
         if has_pixels {
-            for (var k = 0u; k < n; k++) {
+            for (var k = 0u; k < scan.y; k++) {
                 if tile_keeps(wg_surv[k], planes, t) {
                     if fill {
                         out_indices[at + kept] = wg_surv_index[k];

@@ -95,7 +95,7 @@ pub struct GpuCullParams {
     pub coarse: u32,
     /// Coarse tiles across (0 without a coarse level).
     pub coarse_x: u32,
-    /// Lights of a chunk in gather's coarse-to-fine passes (a multiple of 256, the batch).
+    /// Lights of a chunk in gather's coarse-to-fine passes (a multiple of 64).
     pub chunk: u32,
 }
 const _: () = assert!(size_of::<GpuCullParams>() == 64);

@@ -116,12 +116,15 @@ fn default_coarse() -> u32 {
 /// lights grow.
 pub const MAX_CHUNK_ENTRIES: u64 = 1 << 23;
 
-/// The smallest chunk of lights of gather's coarse-to-fine passes (a workgroup's share), and
-/// the step of chunk sizes: a batch of the shader (`GATHER_BATCH`, 4 lights a thread).
+/// The default smallest chunk of lights of gather's coarse-to-fine passes (a workgroup's
+/// share; [`crate::Culler::gather_min_chunk`]).
 pub const MIN_CHUNK: u32 = 256;
 
+/// The step of chunk sizes: a batch of the shader, 64 lights, one a thread.
+pub const CHUNK_STEP: u32 = 64;
+
 /// Fits gather's coarse-to-fine passes in `p` to a device: the chunk of lights a workgroup
-/// takes (a multiple of [`MIN_CHUNK`], at least `min_chunk`) grows until the (tile, chunk) count entries
+/// takes (a multiple of [`CHUNK_STEP`], at least `min_chunk`) grows until the (tile, chunk) count entries
 /// fit `max_entries` and the chunks fit `max_groups` workgroups in one dispatch dimension.
 /// Without a coarse level, without lights, or with a capacity (which caps whole lists, not
 /// chunks), the single level runs (`p.coarse = 0`).
@@ -138,8 +141,8 @@ pub fn fit_chunks(p: &mut GpuCullParams, max_entries: u64, max_groups: u32, min_
     let by_groups = lights.div_ceil(u64::from(max_groups.max(1)));
     let chunk = by_entries
         .max(by_groups)
-        .max(u64::from(min_chunk.max(MIN_CHUNK)))
-        .next_multiple_of(u64::from(MIN_CHUNK));
+        .max(u64::from(min_chunk.max(CHUNK_STEP)))
+        .next_multiple_of(u64::from(CHUNK_STEP));
     match u32::try_from(chunk) {
         Ok(c) if lights.div_ceil(chunk) * tiles <= max_entries.max(tiles) => p.chunk = c,
         _ => {
@@ -430,15 +433,17 @@ mod tests {
         let mut p = gather_params(1920, 1080, 1 << 20);
         fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
         assert_eq!(p.chunk, 1024);
-        // A larger minimum (the ablation knob), rounded to whole batches.
+        // Another minimum (the ablation knob), rounded to whole batches.
         let mut q = gather_params(1920, 1080, 3072);
         fit_chunks(&mut q, MAX_CHUNK_ENTRIES, 65_535, 1000);
         assert_eq!(q.chunk, 1024);
+        fit_chunks(&mut q, MAX_CHUNK_ENTRIES, 65_535, 1);
+        assert_eq!(q.chunk, 64);
         assert!(u64::from(p.bins) * u64::from((1u32 << 20).div_ceil(p.chunk)) <= MAX_CHUNK_ENTRIES);
         // One tile and 33.5M lights: the chunks must fit one dispatch dimension.
         let mut p = gather_params(8, 4, 33_554_431);
         fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
-        assert!(p.chunk % MIN_CHUNK == 0 && 33_554_431u32.div_ceil(p.chunk) <= 65_535);
+        assert!(p.chunk % CHUNK_STEP == 0 && 33_554_431u32.div_ceil(p.chunk) <= 65_535);
         // No lights, a capacity, or asked for none: the single level.
         let mut p = gather_params(64, 64, 0);
         fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
