@@ -424,13 +424,18 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                         );
                     }
                     if matches!(s, Strategy::TiledScatter { .. }) {
-                        // Same per-tile test, reached from the light's side: the same lists.
+                        // Same per-tile test, reached from the light's side, within the light's
+                        // screen rectangle (cut at the near plane): a subset of gather's lists.
                         let gathered = cpu::gather(&r.frame, &p, &r.lights, &td);
                         let scattered = cpu::scatter(&r.frame, &p, &r.lights, &td);
-                        assert_eq!(
-                            gathered.kept, scattered.kept,
-                            "{what}: scatter and gather oracles differ"
-                        );
+                        for (b, (sl, gl)) in scattered.kept.iter().zip(&gathered.kept).enumerate() {
+                            for l in sl {
+                                assert!(
+                                    gl.contains(l) || gathered.borderline[b].contains(l),
+                                    "{what}: scatter keeps light {l} in tile {b}, gather does not"
+                                );
+                            }
+                        }
                         scattered
                     } else {
                         cpu::gather(&r.frame, &p, &r.lights, &td)

@@ -217,16 +217,24 @@ fn bin_of(pixel: vec2<u32>, z: f32) -> u32 {
 }
 
 // Inclusive tile rectangle (x0, y0, x1, y1) that may hold the light, or x0 > x1 when none.
-// The view-space box around the sphere is projected corner by corner (its projection contains
-// the sphere's while the box lies in front of the eye); otherwise the whole screen is a
-// candidate and the plane tests decide.
+// Every covered pixel lies at least the near plane's depth away, so only the part of a light's
+// view-space box beyond the near plane matters: a light wholly nearer reaches no visible pixel
+// (none), and a box crossing the near plane is cut there (still a box). Its corners, all in
+// front of the eye, are projected one by one; their rectangle contains the projection of the
+// sphere's visible part. (Only a degenerate camera leaves a corner at w <= 0: then the whole
+// screen is a candidate, and the plane tests decide.)
 fn light_tiles(l: CullLight) -> vec4<i32> {
     let full = vec4<i32>(0, 0, i32(cull.tiles_x) - 1, i32(cull.tiles_y) - 1);
     let r = l.radius + l.slack;
+    let near = linear_depth(0.0);
+    if -l.center.z + r < near {
+        return vec4<i32>(0, 0, -1, -1);
+    }
     var lo = vec2<f32>(1e30);
     var hi = vec2<f32>(-1e30);
     for (var k = 0u; k < 8u; k++) {
-        let corner = l.center + r * vec3<f32>(select(-1.0, 1.0, (k & 1u) != 0u), select(-1.0, 1.0, (k & 2u) != 0u), select(-1.0, 1.0, (k & 4u) != 0u));
+        var corner = l.center + r * vec3<f32>(select(-1.0, 1.0, (k & 1u) != 0u), select(-1.0, 1.0, (k & 2u) != 0u), select(-1.0, 1.0, (k & 4u) != 0u));
+        corner.z = min(corner.z, -near);
         let c = frame.clip_from_view * vec4<f32>(corner, 1.0);
         if c.w <= 1e-6 {
             return full;

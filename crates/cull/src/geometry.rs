@@ -177,11 +177,16 @@ pub fn bin_of(frame: &GpuFrame, p: &GpuCullParams, pixel: [u32; 2], z: f32) -> u
 pub fn light_tiles(frame: &GpuFrame, p: &GpuCullParams, l: &CullLight) -> [i32; 4] {
     let full = [0, 0, p.tiles_x as i32 - 1, p.tiles_y as i32 - 1];
     let r = l.radius + l.slack;
+    let near = linear_depth(frame, 0.0);
+    if -l.center.z + r < near {
+        return [0, 0, -1, -1];
+    }
     let mut lo = Vec2::splat(1e30);
     let mut hi = Vec2::splat(-1e30);
     for k in 0..8u32 {
         let s = |bit: u32| if k & bit != 0 { 1.0 } else { -1.0 };
-        let corner = l.center + r * Vec3::new(s(1), s(2), s(4));
+        let mut corner = l.center + r * Vec3::new(s(1), s(2), s(4));
+        corner.z = corner.z.min(-near);
         let c = frame.clip_from_view * corner.extend(1.0);
         if c.w <= 1e-6 {
             return full;
