@@ -4,46 +4,69 @@
 // tile is tested with the tile's side planes (sphere, and cone for spots), and every slice of
 // the light's range is emitted (with CULL_FLAG_SKIP_EMPTY, only clusters holding geometry).
 
-// Light `i`'s tiles are shared by the CLUSTER_LANES threads of its lane group: lane k takes
-// the tiles k, k + CLUSTER_LANES, ... of its rectangle. A light near the camera covers the whole
-// screen (at 1080p, 510 tiles x 24 slices); one thread alone would emit its 12,000 entries in
-// series while the rest of the GPU idles. Each lane recomputes the rectangle (a few hundred
-// flops), so the lanes need no barrier.
-fn assign(i: u32, lane: u32, fill: bool) {
-    if i >= cull.light_count {
-        return;
-    }
-    let l = cull_light(lights[i]);
-    let dlo = -l.center.z - l.radius - l.slack;
-    let dhi = -l.center.z + l.radius + l.slack;
+// Light `i`'s tiles are shared by `lanes` threads of a lane group: lane k takes the tiles
+// k, k + lanes, ... of its rectangle. Each lane recomputes the rectangle (a few hundred flops),
+// so the lanes need no barrier.
+//
+// Lights come in two sizes. Most cover a few tiles: one thread a light does them
+// (cull.clustered.count / fill), and a light covering more than CLUSTER_NARROW tiles is queued
+// instead (count pass) or skipped (fill pass). A light near the camera covers the whole screen
+// (at 1080p, 510 tiles x 24 slices); alone, one thread would emit its 12,000 entries in series
+// while the rest of the GPU idles, so the queued wide lights get CLUSTER_LANES threads each
+// (cull.clustered.count_wide / fill_wide, dispatched indirectly from the queue's length). So
+// neither the many small lights pay for lanes they do not use nor a wide light serialises.
+@group(1) @binding(9) var<storage, read_write> wide_lights: array<atomic<u32>>;
+@group(1) @binding(11) var<storage, read_write> wide_args: array<u32>;
+
+const CLUSTER_NARROW: u32 = 4u;
+
+struct LightRect {
+    l: CullLight,
+    s0: u32,
+    s1: u32,
+    rect: vec4<i32>,
+    // Tiles of the rectangle (0: the light reaches none).
+    count: u32,
+}
+
+fn light_rect(i: u32) -> LightRect {
+    var r: LightRect;
+    r.l = cull_light(lights[i]);
+    r.count = 0u;
+    let dlo = -r.l.center.z - r.l.radius - r.l.slack;
+    let dhi = -r.l.center.z + r.l.radius + r.l.slack;
     // Only the far side can reject: cull.near is where slicing starts, which for exponential
     // slicing of an orthographic camera lies beyond the camera's own near plane (nearer depths
-    // fall in slice 0).
+    // fall in slice 0). (light_tiles rejects lights wholly nearer than the near plane.)
     if dlo > cull.far {
-        return;
+        return r;
     }
-    let s0 = depth_slice(dlo);
-    let s1 = depth_slice(dhi);
-    let rect = light_tiles(l);
-    if rect.x > rect.z || rect.y > rect.w {
-        return;
+    r.s0 = depth_slice(dlo);
+    r.s1 = depth_slice(dhi);
+    r.rect = light_tiles(r.l);
+    if r.rect.x > r.rect.z || r.rect.y > r.rect.w {
+        return r;
     }
-    let width = u32(rect.z - rect.x + 1);
-    let count = width * u32(rect.w - rect.y + 1);
+    r.count = u32(r.rect.z - r.rect.x + 1) * u32(r.rect.w - r.rect.y + 1);
+    return r;
+}
+
+fn assign(i: u32, r: LightRect, lane: u32, lanes: u32, fill: bool) {
+    let width = u32(r.rect.z - r.rect.x + 1);
     let tiles = cull.tiles_x * cull.tiles_y;
-    for (var k = lane; k < count; k += CLUSTER_LANES) {
-        let tile = vec2<u32>(u32(rect.x) + k % width, u32(rect.y) + k / width);
+    for (var k = lane; k < r.count; k += lanes) {
+        let tile = vec2<u32>(u32(r.rect.x) + k % width, u32(r.rect.y) + k / width);
         let planes = tile_side_planes(tile);
         var inside = true;
         for (var p = 0u; p < 4u; p++) {
-            if outside_plane(planes[p], l) {
+            if outside_plane(planes[p], r.l) {
                 inside = false;
             }
         }
         if !inside {
             continue;
         }
-        for (var s = s0; s <= s1; s++) {
+        for (var s = r.s0; s <= r.s1; s++) {
             let bin = s * tiles + tile.y * cull.tiles_x + tile.x;
             if (cull.flags & CULL_FLAG_SKIP_EMPTY) == 0u || occupancy[bin] != 0u {
                 emit(bin, i, fill);
@@ -52,21 +75,60 @@ fn assign(i: u32, lane: u32, fill: bool) {
     }
 }
 
-fn lane_work(id: vec3<u32>) -> vec2<u32> {
+// One thread a light: narrow lights done here; wide ones queued by the count pass.
+fn assign_narrow(id: vec3<u32>, fill: bool) {
+    let i = id.y * GROUPS_X * 64u + id.x;
+    if i >= cull.light_count {
+        return;
+    }
+    let r = light_rect(i);
+    if r.count <= CLUSTER_NARROW {
+        assign(i, r, 0u, 1u, fill);
+    } else if !fill {
+        let q = atomicAdd(&wide_lights[0], 1u);
+        atomicStore(&wide_lights[1u + q], i);
+    }
+}
+
+// CLUSTER_LANES threads a queued wide light.
+fn assign_wide(id: vec3<u32>, fill: bool) {
     let t = id.y * GROUPS_X * 64u + id.x;
-    return vec2<u32>(t / CLUSTER_LANES, t % CLUSTER_LANES);
+    let q = t / CLUSTER_LANES;
+    if q >= atomicLoad(&wide_lights[0]) {
+        return;
+    }
+    let i = atomicLoad(&wide_lights[1u + q]);
+    assign(i, light_rect(i), t % CLUSTER_LANES, CLUSTER_LANES, fill);
 }
 
 @compute @workgroup_size(64)
 fn clustered_count(@builtin(global_invocation_id) id: vec3<u32>) {
-    let w = lane_work(id);
-    assign(w.x, w.y, false);
+    assign_narrow(id, false);
 }
 
 @compute @workgroup_size(64)
 fn clustered_fill(@builtin(global_invocation_id) id: vec3<u32>) {
-    let w = lane_work(id);
-    assign(w.x, w.y, true);
+    assign_narrow(id, true);
+}
+
+@compute @workgroup_size(64)
+fn clustered_count_wide(@builtin(global_invocation_id) id: vec3<u32>) {
+    assign_wide(id, false);
+}
+
+@compute @workgroup_size(64)
+fn clustered_fill_wide(@builtin(global_invocation_id) id: vec3<u32>) {
+    assign_wide(id, true);
+}
+
+// The indirect dispatch of the wide passes: CLUSTER_LANES threads for each queued light, in
+// workgroups of 64 laid out as groups_2d does (GROUPS_X across).
+@compute @workgroup_size(1)
+fn clustered_wide_args() {
+    let groups = (atomicLoad(&wide_lights[0]) * CLUSTER_LANES + 63u) / 64u;
+    wide_args[0] = min(groups, GROUPS_X);
+    wide_args[1] = (groups + GROUPS_X - 1u) / GROUPS_X;
+    wide_args[2] = 1u;
 }
 
 // Marks the clusters that hold covered pixels, one thread per pixel.

@@ -242,6 +242,9 @@ pub struct Culler {
     gather_fill: wgpu::ComputePipeline,
     clustered_count: wgpu::ComputePipeline,
     clustered_fill: wgpu::ComputePipeline,
+    clustered_count_wide: wgpu::ComputePipeline,
+    clustered_fill_wide: wgpu::ComputePipeline,
+    clustered_wide_args: wgpu::ComputePipeline,
     cluster_order: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
@@ -288,7 +291,7 @@ impl Culler {
     pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
         let d = &ctx.device;
         let mut entries = vec![entry(0, UNIFORM), entry(1, DEPTH)];
-        entries.extend((2..=10).map(|b| entry(b, storage(false))));
+        entries.extend((2..=11).map(|b| entry(b, storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.group1"),
             entries: &entries,
@@ -334,7 +337,15 @@ impl Culler {
                 "cap_counts",
             ],
         );
-        let [clustered_count, clustered_fill, cluster_order, occupancy] = pipelines(
+        let [
+            clustered_count,
+            clustered_fill,
+            clustered_count_wide,
+            clustered_fill_wide,
+            clustered_wide_args,
+            cluster_order,
+            occupancy,
+        ] = pipelines(
             d,
             &CLUSTERED,
             scene_layout,
@@ -342,6 +353,9 @@ impl Culler {
             [
                 "clustered_count",
                 "clustered_fill",
+                "clustered_count_wide",
+                "clustered_fill_wide",
+                "clustered_wide_args",
                 "cluster_order",
                 "cluster_occupancy",
             ],
@@ -379,6 +393,9 @@ impl Culler {
             gather_finalize,
             clustered_count,
             clustered_fill,
+            clustered_count_wide,
+            clustered_fill_wide,
+            clustered_wide_args,
             cluster_order,
             occupancy,
             finalize,
@@ -450,18 +467,35 @@ impl Culler {
         } else {
             (&self.gather_count_flat, &self.gather_fill_flat)
         };
-        // Clusters: CLUSTER_LANES threads a light (see clustered.wgsl).
-        let light_groups = groups_2d(
-            (p.light_count * crate::layout::CLUSTER_LANES).div_ceil(64),
-            GROUPS_X,
-        );
+        // Clusters: a thread a light, then CLUSTER_LANES threads for each wide light (the queue
+        // and the indirect dispatch of clustered.wgsl).
         let main = if clustered {
-            light_groups
+            groups_2d(p.light_count.div_ceil(64), GROUPS_X)
         } else {
             (p.tiles_x, p.tiles_y)
         };
         let placeholder = f.buf("cull.light_indices.placeholder", 4);
-        let group_a = f.group(&placeholder, &placeholder);
+        let (wide, wide_args) = if clustered {
+            (
+                f.buf(
+                    "cull.clustered.wide_lights",
+                    (u64::from(p.light_count) + 1) * 4,
+                ),
+                f.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("cull.clustered.wide_args"),
+                    size: 16,
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+                    mapped_at_creation: false,
+                }),
+            )
+        } else {
+            (f.buf("cull.wide.placeholder", 4), f.buf("cull.wide_args.placeholder", 16))
+        };
+        // The indirect arguments are written in one pass and read by the next: a buffer bound
+        // for storage in a dispatch cannot also be its indirect buffer.
+        let args_placeholder = f.buf("cull.wide_args.placeholder", 16);
+        let group_a = f.group(&placeholder, &wide, &args_placeholder);
+        let group_args = f.group(&placeholder, &wide, &wide_args);
         // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
         // count per (tile, chunk).
         let chunked = !clustered && p.coarse > 0;
@@ -473,6 +507,7 @@ impl Culler {
         let entries = f.entries_counted();
         let mut enc = f.encoder("cull.count");
         if clustered {
+            enc.clear_buffer(&wide, 0, Some(4));
             if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
                 f.pass(
                     &mut enc,
@@ -505,6 +540,24 @@ impl Culler {
                 [main.0, main.1, 1]
             },
         );
+        if clustered {
+            f.pass(
+                &mut enc,
+                timer,
+                "cull.clustered.wide_args",
+                &self.clustered_wide_args,
+                &group_args,
+                (1, 1),
+            );
+            f.pass_indirect(
+                &mut enc,
+                timer,
+                "cull.clustered.count_wide",
+                &self.clustered_count_wide,
+                &group_a,
+                &wide_args,
+            );
+        }
         if p.capacity != 0 {
             f.pass(
                 &mut enc,
@@ -523,7 +576,7 @@ impl Culler {
             f.bins_total(ctx, entries)?,
         )?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-        let group_b = f.group(&indices, &placeholder);
+        let group_b = f.group(&indices, &wide, &args_placeholder);
         let mut enc = f.encoder("cull.fill");
         f.pass_3d(
             &mut enc,
@@ -537,6 +590,16 @@ impl Culler {
                 [main.0, main.1, 1]
             },
         );
+        if clustered {
+            f.pass_indirect(
+                &mut enc,
+                timer,
+                "cull.clustered.fill_wide",
+                &self.clustered_fill_wide,
+                &group_b,
+                &wide_args,
+            );
+        }
         if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
             f.pass(
                 &mut enc,
@@ -577,7 +640,7 @@ impl Culler {
         let work = p.light_count * crate::layout::SCATTER_LANES;
         let light_groups = groups_2d(work.div_ceil(64), GROUPS_X);
         let placeholder = f.buf("cull.placeholder", 4);
-        let group_a = f.group(&placeholder, &placeholder);
+        let group_a = f.group(&placeholder, &placeholder, &placeholder);
         let mut enc = f.encoder("cull.tiled_scatter.count");
         f.pass(
             &mut enc,
@@ -616,7 +679,7 @@ impl Culler {
             timer,
             "cull.tiled_scatter.pairs",
             pairs_pipe,
-            &f.group(&vals, &keys),
+            &f.group(&vals, &keys, &placeholder),
             light_groups,
         );
         let bits = key_bits_for(p.bins.saturating_sub(1));
@@ -626,7 +689,7 @@ impl Culler {
             SortedIn::Input => (keys, vals),
             SortedIn::Scratch => (keys_tmp, vals_tmp),
         };
-        let group_c = f.group(&vals, &keys);
+        let group_c = f.group(&vals, &keys, &placeholder);
         f.pass(
             &mut enc,
             timer,
@@ -852,7 +915,14 @@ impl<'a> Frame<'a> {
         })
     }
 
-    fn group(&self, indices: &wgpu::Buffer, pair_keys: &wgpu::Buffer) -> wgpu::BindGroup {
+    /// The culling group: `pair_keys` at binding 9 (tiled scatter's pair keys, the clusters'
+    /// wide-light queue), `args` at 11 (the clusters' indirect dispatch).
+    fn group(
+        &self,
+        indices: &wgpu::Buffer,
+        pair_keys: &wgpu::Buffer,
+        args: &wgpu::Buffer,
+    ) -> wgpu::BindGroup {
         pipeline::group(
             &self.ctx.device,
             "cull.group1",
@@ -869,6 +939,7 @@ impl<'a> Frame<'a> {
                 self.occupancy.as_entire_binding(),
                 pair_keys.as_entire_binding(),
                 self.stats.as_entire_binding(),
+                args.as_entire_binding(),
             ],
         )
     }
@@ -895,6 +966,25 @@ impl<'a> Frame<'a> {
     fn entries_counted(&self) -> u32 {
         u32::try_from(u64::from(self.params.bins) * chunks(&self.params))
             .expect("fit_chunks bounds the entries")
+    }
+
+    fn pass_indirect(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        label: &str,
+        pipe: &wgpu::ComputePipeline,
+        group: &wgpu::BindGroup,
+        args: &wgpu::Buffer,
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: timer.compute_pass(label),
+        });
+        pass.set_pipeline(pipe);
+        pass.set_bind_group(0, &self.scene.bind_group, &[]);
+        pass.set_bind_group(1, group, &[]);
+        pass.dispatch_workgroups_indirect(args, 0);
     }
 
     fn pass_3d(
