@@ -54,6 +54,21 @@ fn atrium(n: u32) -> Scene {
     s
 }
 
+/// `scene` uploaded for a `w` x `h` target, and its depth buffer from the prepass.
+fn prepared(ctx: &GpuContext, scene: &Scene, w: u32, h: u32) -> (GpuScene, wgpu::Texture) {
+    let gs = GpuScene::upload(ctx, scene, &scene.camera, w, h).unwrap();
+    let depth = depth_target(ctx, w, h);
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    DepthPrepass::new(ctx, &gs).encode(
+        &mut enc,
+        &gs,
+        &depth.create_view(&Default::default()),
+        &mut GpuTimer::new(ctx, 1),
+    );
+    ctx.submit_and_wait(enc, "bench prepass").unwrap();
+    (gs, depth)
+}
+
 fn ms(t: &[manylights_gpu::timing::PassTiming], pick: impl Fn(&str) -> bool) -> f64 {
     t.iter().filter(|p| pick(&p.label)).map(|p| p.ms).sum()
 }
@@ -71,16 +86,7 @@ fn cull(c: &mut Criterion) {
     for &(w, h) in &sizes {
         for &n in &counts {
             let scene = atrium(n);
-            let gs = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
-            let depth = depth_target(&ctx, w, h);
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            DepthPrepass::new(&ctx, &gs).encode(
-                &mut enc,
-                &gs,
-                &depth.create_view(&Default::default()),
-                &mut GpuTimer::new(&ctx, 1),
-            );
-            ctx.submit_and_wait(enc, "bench prepass").unwrap();
+            let (gs, depth) = prepared(&ctx, &scene, w, h);
             let culler = Culler::new(&ctx, &gs);
             let settings = CullSettings::for_camera(&scene.camera);
             // The defaults; clusters without their order pass (what ordering costs); gather
@@ -168,16 +174,7 @@ fn cull_paper(c: &mut Criterion) {
     }
     .generate(&scene)
     .unwrap();
-    let gs = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
-    let depth = depth_target(&ctx, w, h);
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    DepthPrepass::new(&ctx, &gs).encode(
-        &mut enc,
-        &gs,
-        &depth.create_view(&Default::default()),
-        &mut GpuTimer::new(&ctx, 1),
-    );
-    ctx.submit_and_wait(enc, "bench prepass").unwrap();
+    let (gs, depth) = prepared(&ctx, &scene, w, h);
     let culler = Culler::new(&ctx, &gs);
     let settings = CullSettings::for_camera(&scene.camera);
     let clusters = |ordered| Strategy::Clustered {

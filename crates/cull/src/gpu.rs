@@ -460,7 +460,7 @@ impl Culler {
         let p = f.params;
         let name = strategy.name();
         let clustered = matches!(strategy, Strategy::Clustered { .. });
-        let (count, fill) = if clustered {
+        let (count, fill_pipe) = if clustered {
             (&self.clustered_count, &self.clustered_fill)
         } else if p.coarse > 0 {
             (&self.gather_count, &self.gather_fill)
@@ -489,7 +489,10 @@ impl Culler {
                 }),
             )
         } else {
-            (f.buf("cull.wide.placeholder", 4), f.buf("cull.wide_args.placeholder", 16))
+            (
+                f.buf("cull.wide.placeholder", 4),
+                f.buf("cull.wide_args.placeholder", 16),
+            )
         };
         // The indirect arguments are written in one pass and read by the next: a buffer bound
         // for storage in a dispatch cannot also be its indirect buffer.
@@ -528,36 +531,49 @@ impl Culler {
                 (p.tiles_x, p.tiles_y),
             );
         }
-        f.pass_3d(
-            &mut enc,
-            timer,
-            &format!("cull.{name}.count"),
-            count,
-            &group_a,
-            if chunked {
-                chunk_groups
+        let groups = if chunked {
+            chunk_groups
+        } else {
+            [main.0, main.1, 1]
+        };
+        // The count or fill pass, and for clusters its wide lights' pass (after the count
+        // pass, the queue's dispatch arguments).
+        let phase = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, fill: bool, group| {
+            let (what, pipe, wide_pipe) = if fill {
+                ("fill", fill_pipe, &self.clustered_fill_wide)
             } else {
-                [main.0, main.1, 1]
-            },
-        );
-        if clustered {
-            f.pass(
-                &mut enc,
+                ("count", count, &self.clustered_count_wide)
+            };
+            f.pass_3d(
+                enc,
                 timer,
-                "cull.clustered.wide_args",
-                &self.clustered_wide_args,
-                &group_args,
-                (1, 1),
+                &format!("cull.{name}.{what}"),
+                pipe,
+                group,
+                groups,
             );
-            f.pass_indirect(
-                &mut enc,
-                timer,
-                "cull.clustered.count_wide",
-                &self.clustered_count_wide,
-                &group_a,
-                &wide_args,
-            );
-        }
+            if clustered {
+                if !fill {
+                    f.pass(
+                        enc,
+                        timer,
+                        "cull.clustered.wide_args",
+                        &self.clustered_wide_args,
+                        &group_args,
+                        (1, 1),
+                    );
+                }
+                f.pass_indirect(
+                    enc,
+                    timer,
+                    &format!("cull.clustered.{what}_wide"),
+                    wide_pipe,
+                    group,
+                    &wide_args,
+                );
+            }
+        };
+        phase(&mut enc, timer, false, &group_a);
         if p.capacity != 0 {
             f.pass(
                 &mut enc,
@@ -578,28 +594,7 @@ impl Culler {
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
         let group_b = f.group(&indices, &wide, &args_placeholder);
         let mut enc = f.encoder("cull.fill");
-        f.pass_3d(
-            &mut enc,
-            timer,
-            &format!("cull.{name}.fill"),
-            fill,
-            &group_b,
-            if chunked {
-                chunk_groups
-            } else {
-                [main.0, main.1, 1]
-            },
-        );
-        if clustered {
-            f.pass_indirect(
-                &mut enc,
-                timer,
-                "cull.clustered.fill_wide",
-                &self.clustered_fill_wide,
-                &group_b,
-                &wide_args,
-            );
-        }
+        phase(&mut enc, timer, true, &group_b);
         if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
             f.pass(
                 &mut enc,
