@@ -36,9 +36,18 @@ def main():
         p(f"\n**Culling, atrium, {res}** (all culling passes of the strategy: median GPU time)\n")
         p("| strategy | " + " | ".join(f"{c:,}" for c in counts) + " |")
         p("|---|" + "---|" * len(counts))
-        for s in ["tiled_gather", "tiled_scatter", "depth_mask", "clustered"]:
+        for s in ["tiled_gather", "tiled_scatter", "depth_mask", "clustered", "clustered_unordered", "tiled_gather_single"]:
             cells = [ms(gpu[f"cull.{s}/{res}/{c}"][1]) if f"cull.{s}/{res}/{c}" in gpu else "-" for c in counts]
-            p(f"| {s} | " + " | ".join(cells) + " |")
+            if any(c != "-" for c in cells):
+                p(f"| {s} | " + " | ".join(cells) + " |")
+    # The Forward+ paper's configuration.
+    paper = sorted((b["function_id"], v) for b, v in gpu.values() if b["group_id"] == "cull.harada2012")
+    if paper:
+        p("\n**The Forward+ paper's configuration** (`cull.harada2012`: 3,072 lights, 1280x720; every culling pass)\n")
+        p("| variant | GPU time |")
+        p("|---|---|")
+        for f, v in paper:
+            p(f"| {f} | {ms(v)} |")
     # Sort.
     cubp = {r["n"]: r for r in cub["rows"] if r["kind"] == "pairs"}
     cubk = {r["n"]: r for r in cub["rows"] if r["kind"] == "keys"}
