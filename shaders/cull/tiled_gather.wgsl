@@ -111,21 +111,8 @@ fn from_ordered_bits(u: u32) -> f32 {
 
 // Coarse-to-fine over coarse tile wg.xy and light chunk wg.z (see the top of this file); this
 // thread's tile is the slot-th of the coarse tile, row by row.
-// A coarse-to-fine workgroup's set-up: this thread's tile (the slot-th of coarse tile wg.xy, row
-// by row) with its depth data and planes, and the coarse tile's depth bounds and planes.
-// `covered` is uniform: false when no tile of the coarse tile holds a pixel.
-struct ChunkSetup {
-    covered: bool,
-    has_pixels: bool,
-    bin: u32,
-    t: TileDepth,
-    planes: array<vec4<f32>, 4>,
-    c: TileDepth,
-    coarse_planes: array<vec4<f32>, 4>,
-}
-
-fn chunk_setup(wg: vec3<u32>, slot: u32) -> ChunkSetup {
-    var s: ChunkSetup;
+// `keep_bits` is a literal at each call (its own entry point).
+fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool, keep_bits: bool) {
     if slot == 0u {
         atomicStore(&wg_cmin, 0xffffffffu);
         atomicStore(&wg_cmax, 0u);
@@ -134,73 +121,70 @@ fn chunk_setup(wg: vec3<u32>, slot: u32) -> ChunkSetup {
     workgroupBarrier();
     let tile = wg.xy * 8u + vec2<u32>(slot % 8u, slot / 8u);
     let inside = tile.x < cull.tiles_x && tile.y < cull.tiles_y;
-    s.bin = tile.y * cull.tiles_x + tile.x;
+    let bin = tile.y * cull.tiles_x + tile.x;
+    var t: TileDepth;
+    var planes: array<vec4<f32>, 4>;
     if inside {
-        s.t = tile_depth[s.bin];
-        if s.t.covered != 0u {
-            atomicMin(&wg_cmin, ordered_bits(s.t.dmin));
-            atomicMax(&wg_cmax, ordered_bits(s.t.dmax));
-            atomicAdd(&wg_ccov, s.t.covered);
-            s.planes = tile_side_planes(tile);
+        t = tile_depth[bin];
+        if t.covered != 0u {
+            atomicMin(&wg_cmin, ordered_bits(t.dmin));
+            atomicMax(&wg_cmax, ordered_bits(t.dmax));
+            atomicAdd(&wg_ccov, t.covered);
+            planes = tile_side_planes(tile);
         }
     }
     workgroupBarrier();
     if slot == 0u {
         wg_covered = atomicLoad(&wg_ccov);
     }
-    s.covered = workgroupUniformLoad(&wg_covered) != 0u;
-    s.c.covered = atomicLoad(&wg_ccov);
-    s.c.dmin = from_ordered_bits(atomicLoad(&wg_cmin));
-    s.c.dmax = from_ordered_bits(atomicLoad(&wg_cmax));
-    s.c.mask = 0xffffffffu;
-    s.coarse_planes = square_side_planes(wg.xy, 8u * cull.tile_size);
-    s.has_pixels = inside && s.t.covered != 0u;
-    return s;
-}
-
-// One batch of the chunk (lights b .. b + 63, before `end`): each thread coarse-tests one and
-// the survivors go to workgroup memory in light order; returns how many survived. Ends with a
-// barrier: the survivors are then readable by every thread.
-fn coarse_batch(b: u32, end: u32, slot: u32, s: ChunkSetup) -> u32 {
-    let i = b + slot;
-    var keep = false;
-    var l: CullLight;
-    if i < end {
-        l = cull_light(lights[i]);
-        keep = tile_keeps(l, s.coarse_planes, s.c);
-    }
-    let scan = scan_keep(slot, u32(keep));
-    if keep {
-        wg_surv[scan.x - 1u] = l;
-        wg_surv_index[scan.x - 1u] = i;
-    }
-    workgroupBarrier();
-    return scan.y;
-}
-
-// Coarse-to-fine count or fill over coarse tile wg.xy and light chunk wg.z (see the top of this
-// file).
-fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
-    let s = chunk_setup(wg, slot);
-    if !s.covered {
+    // Uniform, so the barriers below are reached by all threads or none.
+    if workgroupUniformLoad(&wg_covered) == 0u {
         return;
     }
+    var c: TileDepth;
+    c.covered = atomicLoad(&wg_ccov);
+    c.dmin = from_ordered_bits(atomicLoad(&wg_cmin));
+    c.dmax = from_ordered_bits(atomicLoad(&wg_cmax));
+    c.mask = 0xffffffffu;
+    let coarse_planes = square_side_planes(wg.xy, 8u * cull.tile_size);
+    let has_pixels = inside && t.covered != 0u;
     let chunks = (cull.light_count + cull.chunk - 1u) / cull.chunk;
-    let entry = s.bin * chunks + wg.z;
+    let entry = bin * chunks + wg.z;
     var at = 0u;
-    if fill && s.has_pixels {
+    if fill && has_pixels {
         at = bin_offsets[entry];
     }
     var kept = 0u;
+    if keep_bits {
+        for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
+            wg_bits[slot * GATHER_BITS_WORDS + w] = 0u;
+        }
+    }
     let first = wg.z * cull.chunk;
     let end = min(first + cull.chunk, cull.light_count);
     for (var b = first; b < end; b += 64u) {
-        let n = coarse_batch(b, end, slot, s);
-        if s.has_pixels {
-            for (var k = 0u; k < n; k++) {
-                if tile_keeps(wg_surv[k], s.planes, s.t) {
+        let i = b + slot;
+        var keep = false;
+        var l: CullLight;
+        if i < end {
+            l = cull_light(lights[i]);
+            keep = tile_keeps(l, coarse_planes, c);
+        }
+        let scan = scan_keep(slot, u32(keep));
+        if keep {
+            wg_surv[scan.x - 1u] = l;
+            wg_surv_index[scan.x - 1u] = i;
+        }
+        workgroupBarrier();
+        if has_pixels {
+            for (var k = 0u; k < scan.y; k++) {
+                if tile_keeps(wg_surv[k], planes, t) {
                     if fill {
                         out_indices[at + kept] = wg_surv_index[k];
+                    }
+                    if keep_bits {
+                        let o = wg_surv_index[k] - first;
+                        wg_bits[slot * GATHER_BITS_WORDS + o / 32u] |= 1u << (o % 32u);
                     }
                     kept += 1u;
                 }
@@ -208,44 +192,12 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
         }
         workgroupBarrier();
     }
-    if !fill && s.has_pixels {
+    if !fill && has_pixels {
         atomicStore(&bin_counts[entry], kept);
-    }
-}
-
-// The count pass that also keeps its decisions as bits (CULL_FLAG_GATHER_BITS). A function of
-// its own: the bit words, in the pass without bits, slowed it (its 1M-light run rose from 7.5 to
-// 12-20 ms on the H200).
-fn gather_chunk_bits(wg: vec3<u32>, slot: u32) {
-    let s = chunk_setup(wg, slot);
-    if !s.covered {
-        return;
-    }
-    let chunks = (cull.light_count + cull.chunk - 1u) / cull.chunk;
-    let entry = s.bin * chunks + wg.z;
-    for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
-        wg_bits[slot * GATHER_BITS_WORDS + w] = 0u;
-    }
-    var kept = 0u;
-    let first = wg.z * cull.chunk;
-    let end = min(first + cull.chunk, cull.light_count);
-    for (var b = first; b < end; b += 64u) {
-        let n = coarse_batch(b, end, slot, s);
-        if s.has_pixels {
-            for (var k = 0u; k < n; k++) {
-                if tile_keeps(wg_surv[k], s.planes, s.t) {
-                    let o = wg_surv_index[k] - first;
-                    wg_bits[slot * GATHER_BITS_WORDS + o / 32u] |= 1u << (o % 32u);
-                    kept += 1u;
-                }
+        if keep_bits {
+            for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
+                gather_bits[entry * GATHER_BITS_WORDS + w] = wg_bits[slot * GATHER_BITS_WORDS + w];
             }
-        }
-        workgroupBarrier();
-    }
-    if s.has_pixels {
-        atomicStore(&bin_counts[entry], kept);
-        for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
-            gather_bits[entry * GATHER_BITS_WORDS + w] = wg_bits[slot * GATHER_BITS_WORDS + w];
         }
     }
 }
