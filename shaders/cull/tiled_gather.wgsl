@@ -31,9 +31,6 @@
 // again.
 @group(1) @binding(9) var<storage, read_write> gather_bits: array<u32>;
 const GATHER_BITS_WORDS: u32 = 8u;
-// Each thread's bit words, in workgroup memory: a private array indexed at run time would live
-// in slow local memory (and slowed the passes without bits too).
-var<workgroup> wg_bits: array<u32, 512>;
 
 var<workgroup> wg_planes: array<vec4<f32>, 4>;
 var<workgroup> wg_covered: u32;
@@ -111,7 +108,8 @@ fn from_ordered_bits(u: u32) -> f32 {
 
 // Coarse-to-fine over coarse tile wg.xy and light chunk wg.z (see the top of this file); this
 // thread's tile is the slot-th of the coarse tile, row by row.
-// `keep_bits` is a literal at each call (its own entry point).
+// `keep_bits` is a literal at each call (its own entry point), so that the pass without bits
+// does not hold the bit words in registers.
 fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool, keep_bits: bool) {
     if slot == 0u {
         atomicStore(&wg_cmin, 0xffffffffu);
@@ -155,11 +153,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool, keep_bits: bool) {
         at = bin_offsets[entry];
     }
     var kept = 0u;
-    if keep_bits {
-        for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
-            wg_bits[slot * GATHER_BITS_WORDS + w] = 0u;
-        }
-    }
+    var bits: array<u32, GATHER_BITS_WORDS>;
     let first = wg.z * cull.chunk;
     let end = min(first + cull.chunk, cull.light_count);
     for (var b = first; b < end; b += 64u) {
@@ -184,7 +178,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool, keep_bits: bool) {
                     }
                     if keep_bits {
                         let o = wg_surv_index[k] - first;
-                        wg_bits[slot * GATHER_BITS_WORDS + o / 32u] |= 1u << (o % 32u);
+                        bits[o / 32u] |= 1u << (o % 32u);
                     }
                     kept += 1u;
                 }
@@ -196,7 +190,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool, keep_bits: bool) {
         atomicStore(&bin_counts[entry], kept);
         if keep_bits {
             for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
-                gather_bits[entry * GATHER_BITS_WORDS + w] = wg_bits[slot * GATHER_BITS_WORDS + w];
+                gather_bits[entry * GATHER_BITS_WORDS + w] = bits[w];
             }
         }
     }
