@@ -25,17 +25,12 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
 
 @compute @workgroup_size(64)
 fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_chunk(wg, li, false, false);
-}
-
-@compute @workgroup_size(64)
-fn gather_count_bits(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_chunk(wg, li, false, true);
+    gather_chunk(wg, li, false);
 }
 
 @compute @workgroup_size(64)
 fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_chunk(wg, li, true, false);
+    gather_chunk(wg, li, true);
 }
 
 @compute @workgroup_size(64)

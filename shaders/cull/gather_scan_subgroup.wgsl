@@ -40,17 +40,12 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
 
 @compute @workgroup_size(64)
 fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
-    gather_chunk(wg, subgroup_slot(lane, size, id, count), false, false);
-}
-
-@compute @workgroup_size(64)
-fn gather_count_bits(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
-    gather_chunk(wg, subgroup_slot(lane, size, id, count), false, true);
+    gather_chunk(wg, subgroup_slot(lane, size, id, count), false);
 }
 
 @compute @workgroup_size(64)
 fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
-    gather_chunk(wg, subgroup_slot(lane, size, id, count), true, false);
+    gather_chunk(wg, subgroup_slot(lane, size, id, count), true);
 }
 
 @compute @workgroup_size(64)

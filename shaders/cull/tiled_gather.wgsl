@@ -25,8 +25,8 @@
 // those of earlier batches. Lists, and so the order in which shading sums a pixel's lights, are
 // the same on every run: images are bit-identical across runs.
 
-// With CULL_FLAG_GATHER_BITS (chunks of at most 256 lights), the count pass (gather_count_bits)
-// also keeps each (tile, chunk)'s decisions, a bit per light of the chunk, and the fill pass
+// With CULL_FLAG_GATHER_BITS (chunks of at most 256 lights), the count pass also
+// keeps each (tile, chunk)'s decisions, a bit per light of the chunk, and the fill pass
 // (gather_fill_bits, a thread per (tile, chunk)) writes the lists from them instead of testing
 // again.
 @group(1) @binding(9) var<storage, read_write> gather_bits: array<u32>;
@@ -108,9 +108,7 @@ fn from_ordered_bits(u: u32) -> f32 {
 
 // Coarse-to-fine over coarse tile wg.xy and light chunk wg.z (see the top of this file); this
 // thread's tile is the slot-th of the coarse tile, row by row.
-// `keep_bits` is a literal at each call (its own entry point), so that the pass without bits
-// does not hold the bit words in registers.
-fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool, keep_bits: bool) {
+fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
     if slot == 0u {
         atomicStore(&wg_cmin, 0xffffffffu);
         atomicStore(&wg_cmax, 0u);
@@ -154,6 +152,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool, keep_bits: bool) {
     }
     var kept = 0u;
     var bits: array<u32, GATHER_BITS_WORDS>;
+    let keep_bits = !fill && (cull.flags & CULL_FLAG_GATHER_BITS) != 0u;
     let first = wg.z * cull.chunk;
     let end = min(first + cull.chunk, cull.light_count);
     for (var b = first; b < end; b += 64u) {

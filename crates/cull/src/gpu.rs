@@ -238,7 +238,6 @@ pub struct Culler {
     /// Whether gather's count pass keeps its decisions as bits for the fill pass where they fit
     /// (chunks of at most 256 lights; `true` by default; `false` tests again in the fill).
     pub gather_keep_bits: bool,
-    gather_count_bits: wgpu::ComputePipeline,
     gather_fill_bits: wgpu::ComputePipeline,
     gather_count: wgpu::ComputePipeline,
     gather_finalize: wgpu::ComputePipeline,
@@ -320,7 +319,6 @@ impl Culler {
             gather_fill,
             gather_count_flat,
             gather_fill_flat,
-            gather_count_bits,
             gather_fill_bits,
             gather_finalize,
             finalize,
@@ -339,7 +337,6 @@ impl Culler {
                 "gather_fill",
                 "gather_count_flat",
                 "gather_fill_flat",
-                "gather_count_bits",
                 "gather_fill_bits",
                 "gather_finalize",
                 "finalize",
@@ -396,7 +393,6 @@ impl Culler {
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_keep_bits: true,
-            gather_count_bits,
             gather_fill_bits,
             gather_count,
             gather_fill,
@@ -571,8 +567,6 @@ impl Culler {
         let phase = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, fill: bool, group| {
             let (what, pipe, wide_pipe) = if fill {
                 ("fill", fill_pipe, &self.clustered_fill_wide)
-            } else if bits {
-                ("count", &self.gather_count_bits, &self.clustered_count_wide)
             } else {
                 ("count", count, &self.clustered_count_wide)
             };
