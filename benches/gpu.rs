@@ -8,9 +8,8 @@
 //! - `cull.tiled_gather_single/...`: gather without its coarse level, `cull.clustered_unordered/...`
 //!   clusters without their order pass;
 //! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
-//!   lights, 8-pixel tiles), every strategy, gather whose fill tests again
-//!   (`tiled_gather8_retest`) and gather with other chunks of lights a workgroup
-//!   (`tiled_gather8_chunk<N>`);
+//!   lights, 8-pixel tiles), every strategy, and gather with other chunks of lights a
+//!   workgroup (`tiled_gather8_chunk<N>`);
 //! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
 //!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
@@ -215,16 +214,6 @@ fn cull_paper(c: &mut Criterion) {
             b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
         });
     }
-    // Gather whose fill tests again instead of reading the count pass's kept bits.
-    culler.gather_keep_bits = false;
-    {
-        let strategy = Strategy::tiled_gather(8);
-        let culler = &culler;
-        g.bench_with_input(BenchmarkId::new("tiled_gather8_retest", n), &n, |b, _| {
-            b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
-        });
-    }
-    culler.gather_keep_bits = true;
     // Gather with other chunks of lights a workgroup: smaller ones give more workgroups, larger
     // ones less repeated set-up.
     for chunk in [64, 128, 512, 1024] {

@@ -378,25 +378,17 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 sub.gather_subgroups, ctx.features.subgroups,
                 "gather must take its subgroup path where the device has subgroups"
             );
-            // And gather's fill testing again instead of reading the count pass's bits.
-            let mut retest = Culler::new(&ctx, &r.gpu_scene);
-            retest.gather_keep_bits = false;
-            [
-                sub,
-                Culler::with_subgroups(&ctx, &r.gpu_scene, false),
-                retest,
-            ]
+            [sub, Culler::with_subgroups(&ctx, &r.gpu_scene, false)]
         });
         for (culler, s) in cullers
             .iter()
             .flat_map(|c| strategies().into_iter().map(move |s| (c, s)))
         {
             let what = format!(
-                "{} {} (subgroups: {}, kept bits: {})",
+                "{} {} (subgroups: {})",
                 case.label,
                 s.name(),
-                culler.gather_subgroups,
-                culler.gather_keep_bits
+                culler.gather_subgroups
             );
             let out = run_gpu(&ctx, culler, &r, &case, &s);
             let p = out.params;

@@ -25,13 +25,6 @@
 // those of earlier batches. Lists, and so the order in which shading sums a pixel's lights, are
 // the same on every run: images are bit-identical across runs.
 
-// With CULL_FLAG_GATHER_BITS (chunks of at most 256 lights), the count pass also
-// keeps each (tile, chunk)'s decisions, a bit per light of the chunk, and the fill pass
-// (gather_fill_bits, a thread per (tile, chunk)) writes the lists from them instead of testing
-// again.
-@group(1) @binding(9) var<storage, read_write> gather_bits: array<u32>;
-const GATHER_BITS_WORDS: u32 = 8u;
-
 var<workgroup> wg_planes: array<vec4<f32>, 4>;
 var<workgroup> wg_covered: u32;
 var<workgroup> wg_cmin: atomic<u32>;
@@ -151,8 +144,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
         at = bin_offsets[entry];
     }
     var kept = 0u;
-    var bits: array<u32, GATHER_BITS_WORDS>;
-    let keep_bits = !fill && (cull.flags & CULL_FLAG_GATHER_BITS) != 0u;
     let first = wg.z * cull.chunk;
     let end = min(first + cull.chunk, cull.light_count);
     for (var b = first; b < end; b += 64u) {
@@ -175,10 +166,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
                     if fill {
                         out_indices[at + kept] = wg_surv_index[k];
                     }
-                    if keep_bits {
-                        let o = wg_surv_index[k] - first;
-                        bits[o / 32u] |= 1u << (o % 32u);
-                    }
                     kept += 1u;
                 }
             }
@@ -187,38 +174,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
     }
     if !fill && has_pixels {
         atomicStore(&bin_counts[entry], kept);
-        if keep_bits {
-            for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
-                gather_bits[entry * GATHER_BITS_WORDS + w] = bits[w];
-            }
-        }
-    }
-}
-
-// cull.<strategy>.fill from the count pass's decisions (CULL_FLAG_GATHER_BITS): a thread per
-// (tile, chunk) writes the lights of its bits, in light order, at the chunk's offset. An entry
-// the count pass did not write has a count of 0 and is not read.
-@compute @workgroup_size(64)
-fn gather_fill_bits(@builtin(global_invocation_id) id: vec3<u32>) {
-    let entry = id.y * GROUPS_X * 64u + id.x;
-    let chunks = (cull.light_count + cull.chunk - 1u) / cull.chunk;
-    if entry >= cull.bins * chunks {
-        return;
-    }
-    let at = bin_offsets[entry];
-    let n = bin_offsets[entry + 1u] - at;
-    if n == 0u {
-        return;
-    }
-    let first = (entry % chunks) * cull.chunk;
-    var k = 0u;
-    for (var w = 0u; w < GATHER_BITS_WORDS; w++) {
-        var word = gather_bits[entry * GATHER_BITS_WORDS + w];
-        while word != 0u {
-            out_indices[at + k] = first + w * 32u + firstTrailingBit(word);
-            k += 1u;
-            word &= word - 1u;
-        }
     }
 }
 

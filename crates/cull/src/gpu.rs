@@ -235,10 +235,6 @@ pub struct Culler {
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
     /// ([`crate::MIN_CHUNK`] by default; larger trades parallelism for less repeated set-up).
     pub gather_min_chunk: u32,
-    /// Whether gather's count pass keeps its decisions as bits for the fill pass where they fit
-    /// (chunks of at most 256 lights; `true` by default; `false` tests again in the fill).
-    pub gather_keep_bits: bool,
-    gather_fill_bits: wgpu::ComputePipeline,
     gather_count: wgpu::ComputePipeline,
     gather_finalize: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
@@ -319,7 +315,6 @@ impl Culler {
             gather_fill,
             gather_count_flat,
             gather_fill_flat,
-            gather_fill_bits,
             gather_finalize,
             finalize,
             cap,
@@ -337,7 +332,6 @@ impl Culler {
                 "gather_fill",
                 "gather_count_flat",
                 "gather_fill_flat",
-                "gather_fill_bits",
                 "gather_finalize",
                 "finalize",
                 "cap_counts",
@@ -392,8 +386,6 @@ impl Culler {
             depth_bounds,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
-            gather_keep_bits: true,
-            gather_fill_bits,
             gather_count,
             gather_fill,
             gather_count_flat,
@@ -442,16 +434,6 @@ impl Culler {
             ctx.limits.max_compute_workgroups_per_dimension,
             self.gather_min_chunk,
         );
-        if params.coarse > 0
-            && self.gather_keep_bits
-            && params.chunk <= crate::layout::GATHER_BITS_CHUNK
-        {
-            let bytes =
-                u64::from(params.bins) * u64::from(params.light_count.div_ceil(params.chunk)) * 32;
-            if bytes <= crate::GATHER_BITS_BUDGET.min(ctx.limits.max_storage_buffer_binding_size) {
-                params.flags |= crate::layout::CULL_FLAG_GATHER_BITS;
-            }
-        }
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
         let per_light = matches!(strategy, Strategy::TiledScatter { .. });
         if per_light {
@@ -515,16 +497,8 @@ impl Culler {
         // The indirect arguments are written in one pass and read by the next: a buffer bound
         // for storage in a dispatch cannot also be its indirect buffer.
         let args_placeholder = f.buf("cull.wide_args.placeholder", 16);
-        let bits = p.flags & crate::layout::CULL_FLAG_GATHER_BITS != 0;
-        let gather_bits = if bits {
-            f.buf("cull.gather_bits", u64::from(f.entries_counted()) * 32)
-        } else {
-            f.buf("cull.gather_bits.placeholder", 4)
-        };
-        // Binding 9: the clusters' wide-light queue, or gather's decision bits.
-        let slot9 = if clustered { &wide } else { &gather_bits };
-        let group_a = f.group(&placeholder, slot9, &args_placeholder);
-        let group_args = f.group(&placeholder, slot9, &wide_args);
+        let group_a = f.group(&placeholder, &wide, &args_placeholder);
+        let group_args = f.group(&placeholder, &wide, &wide_args);
         // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
         // count per (tile, chunk).
         let chunked = !clustered && p.coarse > 0;
@@ -570,25 +544,14 @@ impl Culler {
             } else {
                 ("count", count, &self.clustered_count_wide)
             };
-            if fill && bits {
-                f.pass(
-                    enc,
-                    timer,
-                    &format!("cull.{name}.{what}"),
-                    &self.gather_fill_bits,
-                    group,
-                    groups_2d(entries.div_ceil(64), GROUPS_X),
-                );
-            } else {
-                f.pass_3d(
-                    enc,
-                    timer,
-                    &format!("cull.{name}.{what}"),
-                    pipe,
-                    group,
-                    groups,
-                );
-            }
+            f.pass_3d(
+                enc,
+                timer,
+                &format!("cull.{name}.{what}"),
+                pipe,
+                group,
+                groups,
+            );
             if clustered {
                 if !fill {
                     f.pass(
@@ -629,7 +592,7 @@ impl Culler {
             f.bins_total(ctx, entries)?,
         )?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-        let group_b = f.group(&indices, slot9, &args_placeholder);
+        let group_b = f.group(&indices, &wide, &args_placeholder);
         let mut enc = f.encoder("cull.fill");
         phase(&mut enc, timer, true, &group_b);
         if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {

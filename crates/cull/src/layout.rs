@@ -7,11 +7,6 @@ use manylights_gpu::shaders::WgslConst;
 pub const CULL_FLAG_DEPTH_MASK: u32 = 1;
 /// `CullParams.flags`: emit lights only into clusters that hold geometry.
 pub const CULL_FLAG_SKIP_EMPTY: u32 = 2;
-/// Gather's count pass keeps its decisions, a bit per (tile, light), and the fill pass writes
-/// the lists from them (set by the culler where the bits fit; see tiled_gather.wgsl).
-pub const CULL_FLAG_GATHER_BITS: u32 = 4;
-/// The largest chunk of lights whose decisions gather keeps as bits (8 words).
-pub const GATHER_BITS_CHUNK: u32 = 256;
 /// `CullParams.slicing`: slices of equal depth.
 pub const SLICING_LINEAR: u32 = 0;
 /// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
@@ -53,7 +48,6 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),
     WgslConst::U32("CULL_FLAG_SKIP_EMPTY", CULL_FLAG_SKIP_EMPTY),
-    WgslConst::U32("CULL_FLAG_GATHER_BITS", CULL_FLAG_GATHER_BITS),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
     WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),
     WgslConst::F32("CONE_MIN_COS", CONE_MIN_COS),

@@ -116,10 +116,6 @@ fn default_coarse() -> u32 {
 /// lights grow.
 pub const MAX_CHUNK_ENTRIES: u64 = 1 << 23;
 
-/// The most bytes gather's kept decisions may take (a bit per tile and light); past it, the
-/// fill pass tests again.
-pub const GATHER_BITS_BUDGET: u64 = 256 << 20;
-
 /// The default smallest chunk of lights of gather's coarse-to-fine passes (a workgroup's
 /// share; [`crate::Culler::gather_min_chunk`]).
 pub const MIN_CHUNK: u32 = 256;
