@@ -37,20 +37,23 @@ use rand::{RngExt, SeedableRng};
 
 /// The atrium with `n` uniformly placed lights of radius 0.5 m (as experiments/scaling-1m.ron).
 fn atrium(n: u32) -> Scene {
-    let mut s = ProceduralScene::from_name("atrium")
-        .unwrap()
-        .build()
-        .unwrap();
-    s.lights = LightSpec {
+    atrium_with(LightSpec {
         generator: LightGenerator::Uniform,
         count: n,
         seed: 1,
         radius: RadiusRule::Fixed(0.5),
         intensity: 0.5,
         ..LightSpec::default()
-    }
-    .generate(&s)
-    .unwrap();
+    })
+}
+
+/// The atrium with the lights of `spec`.
+fn atrium_with(spec: LightSpec) -> Scene {
+    let mut s = ProceduralScene::from_name("atrium")
+        .unwrap()
+        .build()
+        .unwrap();
+    s.lights = spec.generate(&s).unwrap();
     s
 }
 
@@ -160,20 +163,14 @@ fn cull_paper(c: &mut Criterion) {
     } else {
         (1280, 720, 3072)
     };
-    let mut scene = ProceduralScene::from_name("atrium")
-        .unwrap()
-        .build()
-        .unwrap();
-    scene.lights = LightSpec {
+    let scene = atrium_with(LightSpec {
         generator: LightGenerator::LightField,
         count: n,
         seed: 2012,
         radius: RadiusRule::Fixed(2.5),
         intensity: 4.0,
         ..LightSpec::default()
-    }
-    .generate(&scene)
-    .unwrap();
+    });
     let (gs, depth) = prepared(&ctx, &scene, w, h);
     let culler = Culler::new(&ctx, &gs);
     let settings = CullSettings::for_camera(&scene.camera);
@@ -315,20 +312,14 @@ fn shade(c: &mut Criterion) {
     } else {
         ((1920, 1080), 4096)
     };
-    let mut scene = ProceduralScene::from_name("atrium")
-        .unwrap()
-        .build()
-        .unwrap();
-    scene.lights = LightSpec {
+    let scene = atrium_with(LightSpec {
         generator: LightGenerator::LightField,
         count: n,
         seed: 4,
         radius: RadiusRule::Fixed(2.0),
         intensity: 4.0,
         ..LightSpec::default()
-    }
-    .generate(&scene)
-    .unwrap();
+    });
     let gs = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
     let renderer = Renderer::new(&ctx, &gs);
     let settings = CullSettings::for_camera(&scene.camera);

@@ -254,6 +254,8 @@ pub struct Culler {
     scatter: [wgpu::ComputePipeline; 4],
     scan: Scan,
     sort: RadixSort,
+    /// Bound where a strategy has no buffer for a binding (made once, not per run).
+    placeholder: wgpu::Buffer,
 }
 
 /// A binding of the culling groups (visible to compute and, for list consumers, fragments).
@@ -405,6 +407,7 @@ impl Culler {
             scatter,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
+            placeholder: storage_buf(ctx, "cull.placeholder", 16),
         }
     }
 
@@ -474,8 +477,8 @@ impl Culler {
         } else {
             (p.tiles_x, p.tiles_y)
         };
-        let placeholder = f.buf("cull.light_indices.placeholder", 4);
-        let (wide, wide_args) = if clustered {
+        let placeholder = &self.placeholder;
+        let wide_bufs = clustered.then(|| {
             (
                 f.buf(
                     "cull.clustered.wide_lights",
@@ -488,17 +491,14 @@ impl Culler {
                     mapped_at_creation: false,
                 }),
             )
-        } else {
-            (
-                f.buf("cull.wide.placeholder", 4),
-                f.buf("cull.wide_args.placeholder", 16),
-            )
-        };
+        });
+        let (wide, wide_args) = wide_bufs
+            .as_ref()
+            .map_or((placeholder, placeholder), |(w, a)| (w, a));
         // The indirect arguments are written in one pass and read by the next: a buffer bound
         // for storage in a dispatch cannot also be its indirect buffer.
-        let args_placeholder = f.buf("cull.wide_args.placeholder", 16);
-        let group_a = f.group(&placeholder, &wide, &args_placeholder);
-        let group_args = f.group(&placeholder, &wide, &wide_args);
+        let group_a = f.group(placeholder, wide, placeholder);
+        let group_args = f.group(placeholder, wide, wide_args);
         // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
         // count per (tile, chunk).
         let chunked = !clustered && p.coarse > 0;
@@ -510,7 +510,7 @@ impl Culler {
         let entries = f.entries_counted();
         let mut enc = f.encoder("cull.count");
         if clustered {
-            enc.clear_buffer(&wide, 0, Some(4));
+            enc.clear_buffer(wide, 0, Some(4));
             if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
                 f.pass(
                     &mut enc,
@@ -569,7 +569,7 @@ impl Culler {
                     &format!("cull.clustered.{what}_wide"),
                     wide_pipe,
                     group,
-                    &wide_args,
+                    wide_args,
                 );
             }
         };
@@ -592,7 +592,7 @@ impl Culler {
             f.bins_total(ctx, entries)?,
         )?;
         let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-        let group_b = f.group(&indices, &wide, &args_placeholder);
+        let group_b = f.group(&indices, wide, placeholder);
         let mut enc = f.encoder("cull.fill");
         phase(&mut enc, timer, true, &group_b);
         if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
@@ -634,8 +634,8 @@ impl Culler {
         let [count, pairs_pipe, ranges, finalize] = &self.scatter;
         let work = p.light_count * crate::layout::SCATTER_LANES;
         let light_groups = groups_2d(work.div_ceil(64), GROUPS_X);
-        let placeholder = f.buf("cull.placeholder", 4);
-        let group_a = f.group(&placeholder, &placeholder, &placeholder);
+        let placeholder = &self.placeholder;
+        let group_a = f.group(placeholder, placeholder, placeholder);
         let mut enc = f.encoder("cull.tiled_scatter.count");
         f.pass(
             &mut enc,
@@ -674,7 +674,7 @@ impl Culler {
             timer,
             "cull.tiled_scatter.pairs",
             pairs_pipe,
-            &f.group(&vals, &keys, &placeholder),
+            &f.group(&vals, &keys, placeholder),
             light_groups,
         );
         let bits = key_bits_for(p.bins.saturating_sub(1));
@@ -684,7 +684,7 @@ impl Culler {
             SortedIn::Input => (keys, vals),
             SortedIn::Scratch => (keys_tmp, vals_tmp),
         };
-        let group_c = f.group(&vals, &keys, &placeholder);
+        let group_c = f.group(&vals, &keys, placeholder);
         f.pass(
             &mut enc,
             timer,
@@ -869,7 +869,7 @@ impl<'a> Frame<'a> {
                 contents: bytemuck::bytes_of(&params),
                 usage: wgpu::BufferUsages::UNIFORM,
             });
-        let mut f = Self {
+        Self {
             ctx,
             scene,
             layout: &culler.layout,
@@ -881,33 +881,18 @@ impl<'a> Frame<'a> {
                 aspect: wgpu::TextureAspect::DepthOnly,
                 ..Default::default()
             }),
-            tile_depth: placeholder(ctx),
-            counts: placeholder(ctx),
-            offsets: placeholder(ctx),
-            cursors: placeholder(ctx),
-            ranges: placeholder(ctx),
-            occupancy: placeholder(ctx),
-            stats: placeholder(ctx),
-        };
-        f.tile_depth = f.buf("cull.tile_depth", tiles * 16);
-        f.counts = f.buf("cull.bin_counts", (items + 1) * 4);
-        f.offsets = f.buf("cull.bin_offsets", (items + 1) * 4);
-        f.cursors = f.buf("cull.bin_cursors", bins * 4);
-        f.ranges = f.buf("cull.bin_ranges", bins * 8);
-        f.occupancy = f.buf("cull.occupancy", bins * 4);
-        f.stats = f.buf("cull.stats", 16);
-        f
+            tile_depth: storage_buf(ctx, "cull.tile_depth", tiles * 16),
+            counts: storage_buf(ctx, "cull.bin_counts", (items + 1) * 4),
+            offsets: storage_buf(ctx, "cull.bin_offsets", (items + 1) * 4),
+            cursors: storage_buf(ctx, "cull.bin_cursors", bins * 4),
+            ranges: storage_buf(ctx, "cull.bin_ranges", bins * 8),
+            occupancy: storage_buf(ctx, "cull.occupancy", bins * 4),
+            stats: storage_buf(ctx, "cull.stats", 16),
+        }
     }
 
     fn buf(&self, label: &str, size: u64) -> wgpu::Buffer {
-        self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: size.max(4),
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
+        storage_buf(self.ctx, label, size)
     }
 
     /// The culling group: `pair_keys` at binding 9 (tiled scatter's pair keys, the clusters'
@@ -1115,11 +1100,14 @@ fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
     ctx.features.subgroups && ctx.features.subgroup_size.1 <= 64
 }
 
-fn placeholder(ctx: &GpuContext) -> wgpu::Buffer {
+/// A storage buffer (at least 4 bytes) that can be cleared and read back.
+fn storage_buf(ctx: &GpuContext, label: &str, size: u64) -> wgpu::Buffer {
     ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("placeholder"),
-        size: 4,
-        usage: wgpu::BufferUsages::STORAGE,
+        label: Some(label),
+        size: size.max(4),
+        usage: wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     })
 }

@@ -20,22 +20,15 @@ pub const PRIMITIVE: wgpu::PrimitiveState = wgpu::PrimitiveState {
 
 /// A depth texture that can be rendered, sampled by compute passes, and read back.
 pub fn depth_target(ctx: &GpuContext, width: u32, height: u32) -> wgpu::Texture {
-    ctx.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("depth"),
-        size: wgpu::Extent3d {
-            width,
-            height,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: DEPTH_FORMAT,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+    pipeline::texture_2d(
+        &ctx.device,
+        "depth",
+        (width, height),
+        DEPTH_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT
             | wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+    )
 }
 
 /// The depth prepass pipeline.
