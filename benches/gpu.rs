@@ -15,6 +15,9 @@
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
 //!   lights and 1920 x 1080, raster and compute passes apart.
 //!
+//! Culling runs go back to back in one submission after a run that sizes the lists (see
+//! `cull_time`); `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run on its own instead.
+//!
 //! `MANYLIGHTS_BENCH_QUICK=1` shrinks everything (light counts, resolutions, key counts) so the
 //! benches can be smoke-run on lavapipe; figures come only from the GPU machine.
 
@@ -26,7 +29,7 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use manylights_cull::radix_sort::{RadixSort, SortedIn};
 use manylights_cull::{CullSettings, Culler, Strategy};
 use manylights_gpu::prepass::{DepthPrepass, depth_target};
-use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
@@ -34,6 +37,12 @@ use manylights_shade::{Backend, Renderer};
 
 use common::{configure, gpu, quick};
 use rand::{RngExt, SeedableRng};
+
+/// `MANYLIGHTS_BENCH_ROUNDTRIP=1` (anything but `0`): culling runs timed one at a time, with
+/// the host waiting for each, instead of back to back.
+pub fn round_trip() -> bool {
+    std::env::var("MANYLIGHTS_BENCH_ROUNDTRIP").is_ok_and(|v| v != "0")
+}
 
 /// The atrium with `n` uniformly placed lights of radius 0.5 m (as experiments/scaling-1m.ron).
 fn atrium(n: u32) -> Scene {
@@ -126,6 +135,12 @@ fn cull(c: &mut Criterion) {
 }
 
 /// The GPU time of `iters` runs of `strategy`: every `cull.*`, `scan.*` and `sort.*` pass.
+///
+/// The runs go back to back, as frames do: a first, untimed run sizes the lists, then batches
+/// of runs are each one submission with no host round trip inside ([`Culler::run_repeated`]),
+/// so the GPU stays busy and its clocks settle. `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run
+/// on its own instead (two submissions and a readback of the list size each, the GPU idle in
+/// between), the method of the figures before 2026-11-21T12:00Z.
 fn cull_time(
     ctx: &GpuContext,
     culler: &Culler,
@@ -135,19 +150,42 @@ fn cull_time(
     settings: &CullSettings,
     iters: u64,
 ) -> Duration {
-    let mut total = 0.0;
-    for _ in 0..iters {
-        let mut timer = GpuTimer::new(ctx, 256);
-        culler
-            .run(ctx, gs, depth, strategy, settings, &mut timer)
-            .unwrap();
+    let culling =
+        |l: &str| l.starts_with("cull.") || l.starts_with("scan.") || l.starts_with("sort.");
+    let timed = |timer: &GpuTimer| {
         let t = timer
             .read(ctx)
             .unwrap()
             .expect("the benchmarks need timestamp queries");
-        total += ms(&t, |l| {
-            l.starts_with("cull.") || l.starts_with("scan.") || l.starts_with("sort.")
-        });
+        (ms(&t, culling), t.len() as u64)
+    };
+    let run = |timer: &mut GpuTimer| {
+        culler
+            .run(ctx, gs, depth, strategy, settings, timer)
+            .unwrap()
+    };
+    let mut total = 0.0;
+    if round_trip() {
+        for _ in 0..iters {
+            let mut timer = GpuTimer::new(ctx, 256);
+            run(&mut timer);
+            total += timed(&timer).0;
+        }
+        return Duration::from_secs_f64(total * 1e-3);
+    }
+    let mut timer = GpuTimer::new(ctx, 256);
+    let first = run(&mut timer);
+    let passes = timed(&timer).1.max(1);
+    let batch = (u64::from(MAX_QUERIES / 2) / passes).clamp(1, 64);
+    let mut left = iters;
+    while left > 0 {
+        let runs = left.min(batch);
+        let mut timer = GpuTimer::new(ctx, (runs * passes) as u32);
+        culler
+            .run_repeated(ctx, gs, depth, strategy, settings, &first, runs as u32, &mut timer)
+            .unwrap();
+        total += timed(&timer).0;
+        left -= runs;
     }
     Duration::from_secs_f64(total * 1e-3)
 }

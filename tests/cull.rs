@@ -447,6 +447,31 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 .unwrap_or_else(|e| panic!("{what}: {e}"));
             let m = metrics(&r, &p, &gpu);
             assert_eq!(m.false_negatives, 0, "{what}: false negatives on the GPU");
+            if seed == 16 {
+                // Back-to-back runs in one submission, sized from this run: the same lists.
+                let mut timer = GpuTimer::new(&ctx, 256);
+                let again = culler
+                    .run_repeated(
+                        &ctx,
+                        &r.gpu_scene,
+                        &r.depth_tex,
+                        &s,
+                        &CullSettings::for_camera(&case.camera),
+                        &out,
+                        3,
+                        &mut timer,
+                    )
+                    .unwrap();
+                let again = again.read(&ctx).unwrap();
+                assert_eq!(again.ranges.len(), gpu.ranges.len(), "{what}: repeated bins");
+                for b in 0..gpu.ranges.len() {
+                    assert_eq!(again.sorted(b), gpu.sorted(b), "{what}: repeated, bin {b}");
+                }
+                if let Some(t) = timer.read(&ctx).unwrap() {
+                    let passes = |l: &str| t.iter().filter(|p| p.label == l).count();
+                    assert_eq!(passes("cull.finalize"), 3, "{what}: three runs timed");
+                }
+            }
             // The shared WGSL lookup reads the same lists as the CPU lookup.
             let per_pixel = culler
                 .lights_per_pixel(&ctx, &r.gpu_scene, &r.depth_tex, &out)

@@ -423,6 +423,45 @@ impl Culler {
         settings: &CullSettings,
         timer: &mut GpuTimer,
     ) -> Result<CullOutput, CullError> {
+        self.run_with(ctx, scene, depth, strategy, settings, timer, None)
+    }
+
+    /// Runs `strategy` `runs` times back to back in one submission, with no host round trip
+    /// between or inside the runs, as a renderer does frame after frame: what steady-state
+    /// timing measures. The lists are sized from `earlier`, a [`Culler::run`] of the same
+    /// scene, depth, strategy and settings; the last run's total is read back and checked
+    /// against it ([`CullError::SizeChanged`] where it differs). `timer` needs room for
+    /// `runs` times the passes of one run.
+    #[allow(clippy::too_many_arguments)]
+    pub fn run_repeated(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        strategy: &Strategy,
+        settings: &CullSettings,
+        earlier: &CullOutput,
+        runs: u32,
+        timer: &mut GpuTimer,
+    ) -> Result<CullOutput, CullError> {
+        let repeat = Repeat {
+            total: earlier.total,
+            runs: runs.max(1),
+        };
+        self.run_with(ctx, scene, depth, strategy, settings, timer, Some(repeat))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn run_with(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        strategy: &Strategy,
+        settings: &CullSettings,
+        timer: &mut GpuTimer,
+        repeat: Option<Repeat>,
+    ) -> Result<CullOutput, CullError> {
         strategy.validate()?;
         settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
@@ -447,8 +486,8 @@ impl Culler {
         }
         let f = Frame::new(self, ctx, scene, depth, params, per_light);
         match strategy {
-            Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer),
-            _ => self.run_binned(ctx, f, strategy, timer),
+            Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer, repeat),
+            _ => self.run_binned(ctx, f, strategy, timer, repeat),
         }
     }
 
@@ -459,6 +498,7 @@ impl Culler {
         f: Frame<'_>,
         strategy: &Strategy,
         timer: &mut GpuTimer,
+        repeat: Option<Repeat>,
     ) -> Result<CullOutput, CullError> {
         let p = f.params;
         let name = strategy.name();
@@ -508,29 +548,6 @@ impl Culler {
             p.light_count.div_ceil(p.chunk.max(1)),
         ];
         let entries = f.entries_counted();
-        let mut enc = f.encoder("cull.count");
-        if clustered {
-            enc.clear_buffer(wide, 0, Some(4));
-            if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
-                f.pass(
-                    &mut enc,
-                    timer,
-                    "cull.occupancy",
-                    &self.occupancy,
-                    &group_a,
-                    (f.w.div_ceil(8), f.h.div_ceil(8)),
-                );
-            }
-        } else {
-            f.pass(
-                &mut enc,
-                timer,
-                "cull.depth_bounds",
-                &self.depth_bounds,
-                &group_a,
-                (p.tiles_x, p.tiles_y),
-            );
-        }
         let groups = if chunked {
             chunk_groups
         } else {
@@ -573,53 +590,99 @@ impl Culler {
                 );
             }
         };
-        phase(&mut enc, timer, false, &group_a);
-        if p.capacity != 0 {
+        // Everything up to the scanned counts.
+        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
+            f.clear(enc);
+            if clustered {
+                enc.clear_buffer(wide, 0, Some(4));
+                if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
+                    f.pass(
+                        enc,
+                        timer,
+                        "cull.occupancy",
+                        &self.occupancy,
+                        &group_a,
+                        (f.w.div_ceil(8), f.h.div_ceil(8)),
+                    );
+                }
+            } else {
+                f.pass(
+                    enc,
+                    timer,
+                    "cull.depth_bounds",
+                    &self.depth_bounds,
+                    &group_a,
+                    (p.tiles_x, p.tiles_y),
+                );
+            }
+            phase(enc, timer, false, &group_a);
+            if p.capacity != 0 {
+                f.pass(
+                    enc,
+                    timer,
+                    "cull.cap",
+                    &self.cap,
+                    &group_a,
+                    groups_2d(p.bins.div_ceil(64), GROUPS_X),
+                );
+            }
+            f.encode_scan(ctx, &self.scan, enc, entries, timer);
+        };
+        // The lists, once the index buffer is sized.
+        let filling = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b| {
+            phase(enc, timer, true, group_b);
+            if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
+                f.pass(
+                    enc,
+                    timer,
+                    "cull.clustered.order",
+                    &self.cluster_order,
+                    group_b,
+                    groups_2d(p.bins, GROUPS_X),
+                );
+            }
             f.pass(
-                &mut enc,
+                enc,
                 timer,
-                "cull.cap",
-                &self.cap,
-                &group_a,
+                "cull.finalize",
+                if chunked {
+                    &self.gather_finalize
+                } else {
+                    &self.finalize
+                },
+                group_b,
                 groups_2d(p.bins.div_ceil(64), GROUPS_X),
             );
-        }
-        f.scan(ctx, &self.scan, enc, entries, timer)?;
-        let total = Frame::entries(
-            ctx,
-            "light list bytes",
-            "light list entries",
-            f.bins_total(ctx, entries)?,
-        )?;
-        let indices = f.buf("cull.light_indices", u64::from(total) * 4);
+        };
+        let Some(repeat) = repeat else {
+            let mut enc = ctx.encoder("cull.count");
+            counting(&mut enc, timer);
+            ctx.submit_and_wait(enc, "culling: count and scan")?;
+            let total = Frame::entries(
+                ctx,
+                "light list bytes",
+                "light list entries",
+                f.bins_total(ctx, entries)?,
+            )?;
+            let indices = f.buf("cull.light_indices", u64::from(total) * 4);
+            let group_b = f.group(&indices, wide, placeholder);
+            let mut enc = ctx.encoder("cull.fill");
+            filling(&mut enc, timer, &group_b);
+            timer.resolve(&mut enc);
+            ctx.submit_and_wait(enc, "culling: fill")?;
+            return Ok(f.finish(indices, total)?);
+        };
+        let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
         let group_b = f.group(&indices, wide, placeholder);
-        let mut enc = f.encoder("cull.fill");
-        phase(&mut enc, timer, true, &group_b);
-        if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
-            f.pass(
-                &mut enc,
-                timer,
-                "cull.clustered.order",
-                &self.cluster_order,
-                &group_b,
-                groups_2d(p.bins, GROUPS_X),
-            );
+        let mut enc = ctx.encoder("cull.repeated");
+        for _ in 0..repeat.runs {
+            counting(&mut enc, timer);
+            filling(&mut enc, timer, &group_b);
         }
-        f.pass(
-            &mut enc,
-            timer,
-            "cull.finalize",
-            if chunked {
-                &self.gather_finalize
-            } else {
-                &self.finalize
-            },
-            &group_b,
-            groups_2d(p.bins.div_ceil(64), GROUPS_X),
-        );
         timer.resolve(&mut enc);
-        ctx.submit_and_wait(enc, "culling: fill")?;
-        Ok(f.finish(indices, total)?)
+        ctx.submit_and_wait(enc, "culling: repeated runs")?;
+        repeat.check(f.bins_total(ctx, entries)?)?;
+        Ok(f.finish(indices, repeat.total)?)
     }
 
     /// Tiled scatter: per-light pair counts, their scan, the pairs, the radix sort by tile, and
@@ -629,6 +692,7 @@ impl Culler {
         ctx: &GpuContext,
         f: Frame<'_>,
         timer: &mut GpuTimer,
+        repeat: Option<Repeat>,
     ) -> Result<CullOutput, CullError> {
         let p = f.params;
         let [count, pairs_pipe, ranges, finalize] = &self.scatter;
@@ -636,30 +700,40 @@ impl Culler {
         let light_groups = groups_2d(work.div_ceil(64), GROUPS_X);
         let placeholder = &self.placeholder;
         let group_a = f.group(placeholder, placeholder, placeholder);
-        let mut enc = f.encoder("cull.tiled_scatter.count");
-        f.pass(
-            &mut enc,
-            timer,
-            "cull.depth_bounds",
-            &self.depth_bounds,
-            &group_a,
-            (p.tiles_x, p.tiles_y),
-        );
-        f.pass(
-            &mut enc,
-            timer,
-            "cull.tiled_scatter.count",
-            count,
-            &group_a,
-            light_groups,
-        );
-        f.scan(ctx, &self.scan, enc, work, timer)?;
-        let pairs = Frame::entries(
-            ctx,
-            "tiled scatter pairs",
-            "tiled scatter pairs",
-            f.pairs_total(ctx)?,
-        )?;
+        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
+            f.clear(enc);
+            f.pass(
+                enc,
+                timer,
+                "cull.depth_bounds",
+                &self.depth_bounds,
+                &group_a,
+                (p.tiles_x, p.tiles_y),
+            );
+            f.pass(
+                enc,
+                timer,
+                "cull.tiled_scatter.count",
+                count,
+                &group_a,
+                light_groups,
+            );
+            f.encode_scan(ctx, &self.scan, enc, work, timer);
+        };
+        let pairs = match repeat {
+            Some(r) => r.total,
+            None => {
+                let mut enc = ctx.encoder("cull.tiled_scatter.count");
+                counting(&mut enc, timer);
+                ctx.submit_and_wait(enc, "culling: count and scan")?;
+                Frame::entries(
+                    ctx,
+                    "tiled scatter pairs",
+                    "tiled scatter pairs",
+                    f.pairs_total(ctx)?,
+                )?
+            }
+        };
         let (keys, vals) = (
             f.buf("cull.pair_keys", u64::from(pairs) * 4),
             f.buf("cull.light_indices", u64::from(pairs) * 4),
@@ -668,41 +742,60 @@ impl Culler {
             f.buf("cull.pair_keys.tmp", u64::from(pairs) * 4),
             f.buf("cull.light_indices.tmp", u64::from(pairs) * 4),
         );
-        let mut enc = f.encoder("cull.tiled_scatter.sort");
-        f.pass(
-            &mut enc,
-            timer,
-            "cull.tiled_scatter.pairs",
-            pairs_pipe,
-            &f.group(&vals, &keys, placeholder),
-            light_groups,
-        );
+        let group_pairs = f.group(&vals, &keys, placeholder);
         let bits = key_bits_for(p.bins.saturating_sub(1));
-        let (keys, vals) = match self.sort.encode(
-            ctx, &mut enc, &keys, &vals, &keys_tmp, &vals_tmp, pairs, bits, timer,
-        )? {
-            SortedIn::Input => (keys, vals),
-            SortedIn::Scratch => (keys_tmp, vals_tmp),
+        // The pairs, their sort by tile, and each tile's range; the sorted pairs' buffers.
+        let sorting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
+            f.pass(
+                enc,
+                timer,
+                "cull.tiled_scatter.pairs",
+                pairs_pipe,
+                &group_pairs,
+                light_groups,
+            );
+            let sorted = self.sort.encode(
+                ctx, enc, &keys, &vals, &keys_tmp, &vals_tmp, pairs, bits, timer,
+            )?;
+            let group_c = match sorted {
+                SortedIn::Input => f.group(&vals, &keys, placeholder),
+                SortedIn::Scratch => f.group(&vals_tmp, &keys_tmp, placeholder),
+            };
+            f.pass(
+                enc,
+                timer,
+                "cull.tiled_scatter.ranges",
+                ranges,
+                &group_c,
+                groups_2d(pairs.div_ceil(64), GROUPS_X),
+            );
+            f.pass(
+                enc,
+                timer,
+                "cull.finalize",
+                finalize,
+                &group_c,
+                groups_2d(p.bins.div_ceil(64), GROUPS_X),
+            );
+            Ok::<_, GpuError>(sorted)
         };
-        let group_c = f.group(&vals, &keys, placeholder);
-        f.pass(
-            &mut enc,
-            timer,
-            "cull.tiled_scatter.ranges",
-            ranges,
-            &group_c,
-            groups_2d(pairs.div_ceil(64), GROUPS_X),
-        );
-        f.pass(
-            &mut enc,
-            timer,
-            "cull.finalize",
-            finalize,
-            &group_c,
-            groups_2d(p.bins.div_ceil(64), GROUPS_X),
-        );
+        let mut enc = ctx.encoder("cull.tiled_scatter.sort");
+        let mut sorted = SortedIn::Input;
+        for _ in 0..repeat.map_or(1, |r| r.runs) {
+            if repeat.is_some() {
+                counting(&mut enc, timer);
+            }
+            sorted = sorting(&mut enc, timer)?;
+        }
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: tiled scatter")?;
+        if let Some(r) = repeat {
+            r.check(f.pairs_total(ctx)?)?;
+        }
+        let vals = match sorted {
+            SortedIn::Input => vals,
+            SortedIn::Scratch => vals_tmp,
+        };
         Ok(f.finish(vals, pairs)?)
     }
 
@@ -924,21 +1017,17 @@ impl<'a> Frame<'a> {
         )
     }
 
-    /// A new encoder; the first one of a run also clears the counters.
-    fn encoder(&self, label: &str) -> wgpu::CommandEncoder {
-        let mut enc = self.ctx.encoder(label);
-        if label.ends_with("count") {
-            for b in [
-                &self.counts,
-                &self.cursors,
-                &self.occupancy,
-                &self.ranges,
-                &self.stats,
-            ] {
-                enc.clear_buffer(b, 0, None);
-            }
+    /// Clears the counters at the start of a run.
+    fn clear(&self, enc: &mut wgpu::CommandEncoder) {
+        for b in [
+            &self.counts,
+            &self.cursors,
+            &self.occupancy,
+            &self.ranges,
+            &self.stats,
+        ] {
+            enc.clear_buffer(b, 0, None);
         }
-        enc
     }
 
     /// The count entries of a binned strategy: a count per bin, or for gather's coarse-to-fine
@@ -1005,18 +1094,17 @@ impl<'a> Frame<'a> {
         );
     }
 
-    /// Copies the first `n` counts (plus a zero) to the offsets, scans them and submits `enc`.
-    fn scan(
+    /// Copies the first `n` counts (plus a zero) to the offsets and scans them.
+    fn encode_scan(
         &self,
         ctx: &GpuContext,
         scan: &Scan,
-        mut enc: wgpu::CommandEncoder,
+        enc: &mut wgpu::CommandEncoder,
         n: u32,
         timer: &mut GpuTimer,
-    ) -> Result<(), GpuError> {
+    ) {
         enc.copy_buffer_to_buffer(&self.counts, 0, &self.offsets, 0, (u64::from(n) + 1) * 4);
-        scan.encode(ctx, &mut enc, &self.offsets, n + 1, timer);
-        ctx.submit_and_wait(enc, "culling: count and scan")
+        scan.encode(ctx, enc, &self.offsets, n + 1, timer);
     }
 
     /// The exact total of the `n` counts after [`Frame::scan`]: the scan's u32 total
@@ -1081,6 +1169,28 @@ impl<'a> Frame<'a> {
             tile_depth: self.tile_depth,
             occupancy: self.occupancy,
         })
+    }
+}
+
+/// Back-to-back runs of [`Culler::run_repeated`]: how many, and the list entries (or scatter's
+/// pairs) an earlier run of the same input needed.
+#[derive(Clone, Copy)]
+struct Repeat {
+    total: u32,
+    runs: u32,
+}
+
+impl Repeat {
+    /// The total the repeated runs needed, which must be the earlier run's.
+    fn check(self, total: u64) -> Result<(), CullError> {
+        if total == u64::from(self.total) {
+            Ok(())
+        } else {
+            Err(CullError::SizeChanged {
+                earlier: self.total,
+                now: total,
+            })
+        }
     }
 }
 

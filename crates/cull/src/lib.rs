@@ -181,6 +181,17 @@ pub enum CullError {
     /// A GPU failure.
     #[error(transparent)]
     Gpu(#[from] manylights_gpu::GpuError),
+    /// Repeated runs of one input needed other list sizes than the run that sized them.
+    #[error(
+        "repeated culling runs needed {now} list entries where the run that sized them needed \
+         {earlier}: the input changed between them"
+    )]
+    SizeChanged {
+        /// Entries of the sizing run.
+        earlier: u32,
+        /// Entries of the repeated runs.
+        now: u64,
+    },
 }
 
 impl Strategy {
