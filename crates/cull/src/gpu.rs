@@ -432,7 +432,10 @@ impl Culler {
     /// scene, depth, strategy and settings; the last run's total is read back and checked
     /// against it ([`CullError::SizeChanged`] where it differs). `timer` needs room for
     /// `runs` times the passes of one run.
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the inputs of a run, as `run` takes them, and the repeat"
+    )]
     pub fn run_repeated(
         &self,
         ctx: &GpuContext,
@@ -451,7 +454,10 @@ impl Culler {
         self.run_with(ctx, scene, depth, strategy, settings, timer, Some(repeat))
     }
 
-    #[allow(clippy::too_many_arguments)]
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the inputs of a run, as `run` takes them, and the repeat"
+    )]
     fn run_with(
         &self,
         ctx: &GpuContext,
