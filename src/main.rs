@@ -9,9 +9,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use manylights_cull::layout::DEFAULT_SLACK;
-use manylights_cull::{CullSettings, Culler, Slicing, Strategy, heatmap, metrics};
+use manylights_cull::{CullOutput, CullSettings, Culler, Slicing, Strategy, heatmap, metrics};
 use manylights_gpu::prepass::{DepthPrepass, depth_target};
-use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
 use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::procedural::{self, ProceduralScene};
@@ -380,6 +380,11 @@ struct CullArgs {
     /// all slices of each tile).
     #[arg(long)]
     slice: Option<u32>,
+    /// Also time this many runs back to back in one submission (no host round trip between
+    /// or inside them, the lists sized from the first run) and print each pass's median over
+    /// them: steady-state times, as the benchmarks measure. 0: only the single run.
+    #[arg(long, default_value_t = 0)]
+    repeat: u32,
 }
 
 /// A culling strategy and its parameters.
@@ -728,6 +733,11 @@ fn cull(args: &CullArgs) -> Result<()> {
     let settings = args.cull.settings(&scene.camera)?;
     let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
     let timings = timer.read(&ctx)?;
+    let repeated = if args.repeat > 0 {
+        repeated_timings(&ctx, &culler, &gpu_scene, &depth, &strategy, &settings, &out, args)?
+    } else {
+        String::new()
+    };
     let lists = out.read(&ctx)?;
     let frame =
         manylights_gpu::layout::GpuFrame::new(&scene.camera, w, h, scene.lights.len() as u32);
@@ -778,6 +788,7 @@ fn cull(args: &CullArgs) -> Result<()> {
     );
     println!("  dropped lights          {}", out.dropped);
     print_timings(timings.as_deref());
+    print!("{repeated}");
     println!(
         "heat scale 0..{max} lights; wrote {} and {}",
         tile_png.display(),
@@ -790,6 +801,65 @@ fn cull(args: &CullArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `cull --repeat N`: N runs back to back in one submission; each pass's median over them, as
+/// lines to print.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the inputs of the run being repeated"
+)]
+fn repeated_timings(
+    ctx: &GpuContext,
+    culler: &Culler,
+    scene: &GpuScene,
+    depth: &wgpu::Texture,
+    strategy: &Strategy,
+    settings: &CullSettings,
+    first: &CullOutput,
+    args: &CullArgs,
+) -> Result<String> {
+    use std::fmt::Write as _;
+    let n = args.repeat;
+    // The passes of one run, counted on a run of its own.
+    let mut probe = GpuTimer::new(ctx, MAX_QUERIES / 2);
+    culler.run(ctx, scene, depth, strategy, settings, &mut probe)?;
+    let Some(passes) = probe.read(ctx)?.map(|t| t.len() as u32) else {
+        return Ok("  (no GPU timings: the adapter has no timestamp queries)\n".into());
+    };
+    let most = MAX_QUERIES / 2 / passes.max(1);
+    if n > most {
+        bail!(
+            "invalid --repeat {n}: this strategy runs {passes} passes, and one timer holds {} \
+             passes, so at most {most} runs",
+            MAX_QUERIES / 2
+        );
+    }
+    let mut timer = GpuTimer::new(ctx, n * passes);
+    culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut timer)?;
+    let t = timer.read(ctx)?.expect("timestamps were there for the probe");
+    let k = passes as usize;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        let m = v.len() / 2;
+        if v.len() % 2 == 1 {
+            v[m]
+        } else {
+            0.5 * (v[m - 1] + v[m])
+        }
+    };
+    let mut lines = format!("  {n} runs back to back (median per pass):\n");
+    for j in 0..k {
+        let ms = median((0..n as usize).map(|r| t[r * k + j].ms).collect());
+        let (label, kind) = (&t[j].label, t[j].kind.as_str());
+        writeln!(lines, "  {label:<28} {kind:>8} {ms:>10.3} ms")?;
+    }
+    let totals = (0..n as usize)
+        .map(|r| t[r * k..(r + 1) * k].iter().map(|p| p.ms).sum())
+        .collect();
+    let total = median(totals);
+    writeln!(lines, "  {:<28} {:>8} {total:>10.3} ms", "total (median run)", "")?;
+    Ok(lines)
 }
 
 fn main() -> std::process::ExitCode {

@@ -206,6 +206,39 @@ fn cull_reports_metrics_and_writes_heatmaps() {
     }
 }
 
+/// `cull --repeat N`: N runs back to back, a median per pass and per run.
+#[test]
+fn cull_repeat_times_runs_back_to_back() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cull");
+    let o = manylights(&[
+        "cull",
+        "--scene",
+        "pillars",
+        "--lights",
+        "64",
+        "--strategy",
+        "tiled-scatter",
+        "--width",
+        "40",
+        "--height",
+        "23",
+        "--repeat",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let after = stdout
+        .split("3 runs back to back (median per pass):")
+        .nth(1)
+        .unwrap_or_else(|| panic!("no back-to-back timings: {stdout}"));
+    for pass in ["cull.tiled_scatter.count", "sort.radix.scatter", "total (median run)"] {
+        assert!(after.contains(pass), "{pass} missing: {stdout}");
+    }
+}
+
 #[test]
 fn cull_rejects_bad_parameters() {
     rejects_cmd(
@@ -227,6 +260,12 @@ fn cull_rejects_bad_parameters() {
         &["forward-plus", "tiled-gather"],
     );
     rejects_cmd("cull", &["--slack", "-1"], 1, &["slack = -1", ">= 0"]);
+    rejects_cmd(
+        "cull",
+        &["--repeat", "5000"],
+        1,
+        &["--repeat 5000", "at most"],
+    );
     rejects_cmd(
         "render",
         &["--backend", "forward", "--capacity", "0"],
