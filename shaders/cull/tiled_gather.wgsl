@@ -6,18 +6,23 @@
 // gather_count_flat / gather_fill_flat (the single level); here gather_finalize. A thread's
 // `slot` (0..63) orders its light within a batch.
 //
-// Coarse-to-fine (cull.coarse = 8): workgroup (x, y, z) takes coarse tile (x, y), 8 x 8 tiles,
-// one tile a thread, and chunk z of the lights (cull.chunk lights in light order). For each 64
-// lights of the chunk, each thread transforms one and tests it against the coarse tile (its
-// frustum between the depth bounds of its covered tiles); the survivors go to workgroup memory,
-// in light order (a workgroup scan of the flags); then each thread tests them against its own
-// tile. So a light is transformed once per coarse tile, not once per tile, and a thread writes
-// its tile's survivors in light order without scans: the count pass stores each (tile, chunk)'s
-// count, their exclusive scan gives each chunk's place in its tile's list, and
-// gather_finalize makes a tile's range from its first chunk's offset to the next tile's. A
-// coarse frustum contains each of its tiles' frusta (its outer planes are theirs, the same
-// floats), so coarse culling drops only plane-test false positives of the tile (cpu.rs mirrors
-// it).
+// Coarse-to-fine (cull.coarse = 8): cull.light_rects first stores each light's tile rectangle
+// (light_tiles, as scatter and clusters use: its view-space box cut at the near plane,
+// projected). Then workgroup (x, y, z) takes coarse tile (x, y), 8 x 8 tiles, one tile a
+// thread, and chunk z of the lights (cull.chunk lights in light order). For each 64 lights of
+// the chunk, each thread takes one: if its rectangle meets the coarse tile and it reaches the
+// coarse tile's depth slab (between the smallest and largest depth bound of its tiles), it
+// goes to workgroup memory at its slot, and its bit into the lines (the coarse tile's columns
+// and rows) its rectangle spans. Each thread then tests, in slot order, only the lights whose
+// bit is in both its column and its row, against its tile (frustum planes between its depth
+// bounds, and the 2.5D masks). So a light is transformed once per coarse tile, not once per
+// tile, a tile tests only the lights whose rectangle holds it, and a thread writes its tile's
+// lights in light order without scans: the count pass stores each (tile, chunk)'s count, their
+// exclusive scan gives each chunk's place in its tile's list, and gather_finalize makes a
+// tile's range from its first chunk's offset to the next tile's. A tile's list is exactly the
+// lights whose rectangle holds the tile and that pass its tile test: the coarse tests only
+// skip lights that would fail those (a tile's slab lies within its coarse tile's, and the same
+// floats are compared), and cpu::gather states the same.
 //
 // The single level (cull.coarse = 0): the paper's one workgroup per tile over every light; the
 // fill keeps each list in light order: in every batch of 64 lights, a light's slot is the
@@ -30,9 +35,15 @@ var<workgroup> wg_covered: u32;
 var<workgroup> wg_cmin: atomic<u32>;
 var<workgroup> wg_cmax: atomic<u32>;
 var<workgroup> wg_ccov: atomic<u32>;
-// A batch's survivors of the coarse test and their light indices.
-var<workgroup> wg_surv: array<CullLight, 64>;
-var<workgroup> wg_surv_index: array<u32, 64>;
+// A batch's lights (those that reach the coarse tile), at their slots.
+var<workgroup> wg_light: array<CullLight, 64>;
+// Two sets of a batch's lines, 32 words each: words 2c and 2c + 1 of a set have bit k set
+// for the batch's light at slot 32 * (word % 2) + k when its rectangle spans column c of the
+// coarse tile (c < 8), or row c - 8 (c >= 8). A tile's candidates are its column's bits and
+// its row's.
+var<workgroup> wg_lines: array<atomic<u32>, 64>;
+// Each light's tile rectangle (cull.light_rects, coarse-to-fine gather and 2.5D).
+@group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 
 // One batch of up to 64 candidate lights, light `i` at this thread (`valid` false past the
 // end). The count pass adds the survivors to `counted`, this thread's own count (one atomic
@@ -107,8 +118,10 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
         atomicStore(&wg_cmax, 0u);
         atomicStore(&wg_ccov, 0u);
     }
+    atomicStore(&wg_lines[slot], 0u);
     workgroupBarrier();
-    let tile = wg.xy * 8u + vec2<u32>(slot % 8u, slot / 8u);
+    let local = vec2<u32>(slot % 8u, slot / 8u);
+    let tile = wg.xy * 8u + local;
     let inside = tile.x < cull.tiles_x && tile.y < cull.tiles_y;
     let bin = tile.y * cull.tiles_x + tile.x;
     var t: TileDepth;
@@ -130,12 +143,9 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
     if workgroupUniformLoad(&wg_covered) == 0u {
         return;
     }
-    var c: TileDepth;
-    c.covered = atomicLoad(&wg_ccov);
-    c.dmin = from_ordered_bits(atomicLoad(&wg_cmin));
-    c.dmax = from_ordered_bits(atomicLoad(&wg_cmax));
-    c.mask = 0xffffffffu;
-    let coarse_planes = square_side_planes(wg.xy, 8u * cull.tile_size);
+    let cmin = from_ordered_bits(atomicLoad(&wg_cmin));
+    let cmax = from_ordered_bits(atomicLoad(&wg_cmax));
+    let origin = vec2<i32>(wg.xy * 8u);
     let has_pixels = inside && t.covered != 0u;
     let chunks = (cull.light_count + cull.chunk - 1u) / cull.chunk;
     let entry = bin * chunks + wg.z;
@@ -144,36 +154,73 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
         at = bin_offsets[entry];
     }
     var kept = 0u;
+    var lines = 0u;
     let first = wg.z * cull.chunk;
     let end = min(first + cull.chunk, cull.light_count);
     for (var b = first; b < end; b += 64u) {
+        // This thread's light: its rectangle within the coarse tile, and the coarse tile's
+        // depth slab. Its bit goes into the lines (columns, rows) the rectangle spans.
         let i = b + slot;
-        var keep = false;
-        var l: CullLight;
         if i < end {
-            l = cull_light(lights[i]);
-            keep = tile_keeps(l, coarse_planes, c);
-        }
-        let scan = scan_keep(slot, u32(keep));
-        if keep {
-            wg_surv[scan.x - 1u] = l;
-            wg_surv_index[scan.x - 1u] = i;
-        }
-        workgroupBarrier();
-        if has_pixels {
-            for (var k = 0u; k < scan.y; k++) {
-                if tile_keeps(wg_surv[k], planes, t) {
-                    if fill {
-                        out_indices[at + kept] = wg_surv_index[k];
+            let packed = light_rects[i];
+            let rect = vec4<i32>(vec4<u32>(packed.x & 0xffffu, packed.x >> 16u, packed.y & 0xffffu, packed.y >> 16u)) - origin.xyxy;
+            let lo = max(rect.xy, vec2<i32>(0));
+            let hi = min(rect.zw, vec2<i32>(7));
+            if all(lo <= hi) {
+                let l = cull_light(lights[i]);
+                if !outside_plane(vec4<f32>(0.0, 0.0, -1.0, -cmin), l) && !outside_plane(vec4<f32>(0.0, 0.0, 1.0, cmax), l) {
+                    wg_light[slot] = l;
+                    let bit = 1u << (slot % 32u);
+                    let word = lines + slot / 32u;
+                    for (var x = lo.x; x <= hi.x; x++) {
+                        atomicOr(&wg_lines[word + 2u * u32(x)], bit);
                     }
-                    kept += 1u;
+                    for (var y = lo.y; y <= hi.y; y++) {
+                        atomicOr(&wg_lines[word + 16u + 2u * u32(y)], bit);
+                    }
                 }
             }
         }
         workgroupBarrier();
+        // The other set of lines, read by the batch before, is cleared for the batch after.
+        if slot < 32u {
+            atomicStore(&wg_lines[(lines ^ 32u) + slot], 0u);
+        }
+        if has_pixels {
+            for (var w = 0u; w < 2u; w++) {
+                var m = atomicLoad(&wg_lines[lines + 2u * local.x + w]) & atomicLoad(&wg_lines[lines + 16u + 2u * local.y + w]);
+                while m != 0u {
+                    let k = w * 32u + firstTrailingBit(m);
+                    m &= m - 1u;
+                    if tile_keeps(wg_light[k], planes, t) {
+                        if fill {
+                            out_indices[at + kept] = b + k;
+                        }
+                        kept += 1u;
+                    }
+                }
+            }
+        }
+        workgroupBarrier();
+        lines ^= 32u;
     }
     if !fill && has_pixels {
         atomicStore(&bin_counts[entry], kept);
+    }
+}
+
+// cull.light_rects: each light's tile rectangle (light_tiles), packed as
+// (x0 | y0 << 16, x1 | y1 << 16); an empty one as (1, 0) (x0 > x1).
+@compute @workgroup_size(64)
+fn gather_rects(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.y * GROUPS_X * 64u + id.x;
+    if i < cull.light_count {
+        let r = light_tiles(cull_light(lights[i]));
+        if r.x > r.z || r.y > r.w {
+            light_rects[i] = vec2<u32>(1u, 0u);
+        } else {
+            light_rects[i] = vec2<u32>(u32(r.x) | (u32(r.y) << 16u), u32(r.z) | (u32(r.w) << 16u));
+        }
     }
 }
 

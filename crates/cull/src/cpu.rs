@@ -10,7 +10,7 @@ use manylights_gpu::layout::{GpuFrame, GpuLight};
 
 use crate::geometry::{
     self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, linear_depth,
-    square_side_planes, tile_keeps, tile_side_planes,
+    tile_keeps, tile_side_planes,
 };
 use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth};
 
@@ -145,90 +145,45 @@ pub fn depth_bounds(
 
 /// Oracle of `cull.tiled_gather` and `cull.depth_mask` (the flag in `p` decides), given the
 /// per-tile depth data (from the GPU pass, so that this oracle checks the light tests alone).
-/// With a coarse level (`p.coarse > 0`), a tile keeps a light only where its coarse tile does
-/// too ([`coarse_masks`]).
+/// With a coarse level (`p.coarse > 0`) a tile keeps a light only where the light's tile
+/// rectangle ([`light_tiles`], as scatter has it) holds the tile too; the coarse tests
+/// themselves only skip lights that fail these tests, so they need no oracle of their own.
+/// The single level is the paper's test alone.
 pub fn gather(
     frame: &GpuFrame,
     p: &GpuCullParams,
     lights: &[GpuLight],
     tile_depth: &[GpuTileDepth],
 ) -> OracleLists {
-    let coarse = coarse_masks(frame, p, lights, tile_depth);
+    let everywhere = [0, 0, p.tiles_x as i32 - 1, p.tiles_y as i32 - 1];
+    // Per light, at the slack moved down and up by BORDER: the light and its rectangle.
+    let tested: Vec<[(CullLight, [i32; 4]); 2]> = lights
+        .iter()
+        .map(|l| {
+            [1.0 - BORDER, 1.0 + BORDER].map(|k| {
+                let c = CullLight::new(frame, l, p.slack * k);
+                let rect = if p.coarse > 0 {
+                    light_tiles(frame, p, &c)
+                } else {
+                    everywhere
+                };
+                (c, rect)
+            })
+        })
+        .collect();
     let mut out = OracleLists::new(p.bins as usize);
     for ty in 0..p.tiles_y {
         for tx in 0..p.tiles_x {
             let bin = (ty * p.tiles_x + tx) as usize;
             let t = &tile_depth[bin];
             let planes = tile_side_planes(frame, p, [tx, ty]);
-            let parent = (p.coarse > 0)
-                .then(|| &coarse[((ty / p.coarse) * p.coarse_x + tx / p.coarse) as usize]);
-            for (i, l) in lights.iter().enumerate() {
-                let (clo, chi) = parent.map_or((true, true), |c| c[i]);
-                let lo = clo
-                    && tile_keeps(
-                        p,
-                        &CullLight::new(frame, l, p.slack * (1.0 - BORDER)),
-                        &planes,
-                        t,
-                    );
-                let hi = chi
-                    && tile_keeps(
-                        p,
-                        &CullLight::new(frame, l, p.slack * (1.0 + BORDER)),
-                        &planes,
-                        t,
-                    );
-                out.push(bin, i as u32, lo, hi);
-            }
-        }
-    }
-    out
-}
-
-/// Oracle of gather's coarse test (coarse-to-fine passes): per coarse tile (row by row), per light, whether the
-/// coarse tile keeps it with the slack moved down and up by [`BORDER`]. A coarse tile spans
-/// `p.coarse` x `p.coarse` tiles, between the smallest `dmin` and the largest `dmax` of its
-/// covered tiles, without a 2.5D mask. Empty without a coarse level.
-pub fn coarse_masks(
-    frame: &GpuFrame,
-    p: &GpuCullParams,
-    lights: &[GpuLight],
-    tile_depth: &[GpuTileDepth],
-) -> Vec<Vec<(bool, bool)>> {
-    let f = p.coarse;
-    if f == 0 {
-        return Vec::new();
-    }
-    let coarse_y = p.tiles_y.div_ceil(f);
-    let mut out = Vec::with_capacity((p.coarse_x * coarse_y) as usize);
-    for cy in 0..coarse_y {
-        for cx in 0..p.coarse_x {
-            let mut t = GpuTileDepth {
-                dmin: f32::INFINITY,
-                dmax: f32::NEG_INFINITY,
-                mask: u32::MAX,
-                covered: 0,
+            let (x, y) = (tx as i32, ty as i32);
+            let keeps = |(l, r): &(CullLight, [i32; 4])| {
+                x >= r[0] && x <= r[2] && y >= r[1] && y <= r[3] && tile_keeps(p, l, &planes, t)
             };
-            for ty in cy * f..((cy + 1) * f).min(p.tiles_y) {
-                for tx in cx * f..((cx + 1) * f).min(p.tiles_x) {
-                    let d = &tile_depth[(ty * p.tiles_x + tx) as usize];
-                    if d.covered != 0 {
-                        t.dmin = t.dmin.min(d.dmin);
-                        t.dmax = t.dmax.max(d.dmax);
-                        t.covered += d.covered;
-                    }
-                }
+            for (i, [lo, hi]) in tested.iter().enumerate() {
+                out.push(bin, i as u32, keeps(lo), keeps(hi));
             }
-            let planes = square_side_planes(frame, [cx, cy], f * p.tile_size);
-            let keeps = |l: &GpuLight, slack: f32| {
-                tile_keeps(p, &CullLight::new(frame, l, p.slack * slack), &planes, &t)
-            };
-            out.push(
-                lights
-                    .iter()
-                    .map(|l| (keeps(l, 1.0 - BORDER), keeps(l, 1.0 + BORDER)))
-                    .collect(),
-            );
         }
     }
     out

@@ -237,6 +237,7 @@ pub struct Culler {
     pub gather_min_chunk: u32,
     gather_count: wgpu::ComputePipeline,
     gather_finalize: wgpu::ComputePipeline,
+    gather_rects: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
     gather_fill_flat: wgpu::ComputePipeline,
     gather_fill: wgpu::ComputePipeline,
@@ -318,6 +319,7 @@ impl Culler {
             gather_count_flat,
             gather_fill_flat,
             gather_finalize,
+            gather_rects,
             finalize,
             cap,
         ] = pipelines(
@@ -335,6 +337,7 @@ impl Culler {
                 "gather_count_flat",
                 "gather_fill_flat",
                 "gather_finalize",
+                "gather_rects",
                 "finalize",
                 "cap_counts",
             ],
@@ -393,6 +396,7 @@ impl Culler {
             gather_count_flat,
             gather_fill_flat,
             gather_finalize,
+            gather_rects,
             clustered_count,
             clustered_fill,
             clustered_count_wide,
@@ -538,16 +542,20 @@ impl Culler {
                 }),
             )
         });
-        let (wide, wide_args) = wide_bufs
-            .as_ref()
-            .map_or((placeholder, placeholder), |(w, a)| (w, a));
+        // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
+        // count per (tile, chunk); each light's tile rectangle first.
+        let chunked = !clustered && p.coarse > 0;
+        let rects = chunked.then(|| f.buf("cull.light_rects", u64::from(p.light_count) * 8));
+        // Binding 9: the clusters' wide-light queue, or gather's light rectangles.
+        let (wide, wide_args) = match (&wide_bufs, &rects) {
+            (Some((w, a)), _) => (w, a),
+            (None, Some(r)) => (r, placeholder),
+            (None, None) => (placeholder, placeholder),
+        };
         // The indirect arguments are written in one pass and read by the next: a buffer bound
         // for storage in a dispatch cannot also be its indirect buffer.
         let group_a = f.group(placeholder, wide, placeholder);
         let group_args = f.group(placeholder, wide, wide_args);
-        // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
-        // count per (tile, chunk).
-        let chunked = !clustered && p.coarse > 0;
         let chunk_groups = [
             p.coarse_x,
             p.tiles_y.div_ceil(p.coarse.max(1)),
@@ -619,6 +627,16 @@ impl Culler {
                     &self.depth_bounds,
                     &group_a,
                     (p.tiles_x, p.tiles_y),
+                );
+            }
+            if chunked {
+                f.pass(
+                    enc,
+                    timer,
+                    "cull.light_rects",
+                    &self.gather_rects,
+                    &group_a,
+                    groups_2d(p.light_count.div_ceil(64), GROUPS_X),
                 );
             }
             phase(enc, timer, false, &group_a);
