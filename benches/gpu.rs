@@ -182,7 +182,16 @@ fn cull_time(
         let runs = left.min(batch);
         let mut timer = GpuTimer::new(ctx, (runs * passes) as u32);
         culler
-            .run_repeated(ctx, gs, depth, strategy, settings, &first, runs as u32, &mut timer)
+            .run_repeated(
+                ctx,
+                gs,
+                depth,
+                strategy,
+                settings,
+                &first,
+                runs as u32,
+                &mut timer,
+            )
             .unwrap();
         total += timed(&timer).0;
         left -= runs;

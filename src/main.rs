@@ -734,7 +734,9 @@ fn cull(args: &CullArgs) -> Result<()> {
     let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
     let timings = timer.read(&ctx)?;
     let repeated = if args.repeat > 0 {
-        repeated_timings(&ctx, &culler, &gpu_scene, &depth, &strategy, &settings, &out, args)?
+        repeated_timings(
+            &ctx, &culler, &gpu_scene, &depth, &strategy, &settings, &out, args,
+        )?
     } else {
         String::new()
     };
@@ -837,7 +839,9 @@ fn repeated_timings(
     }
     let mut timer = GpuTimer::new(ctx, n * passes);
     culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut timer)?;
-    let t = timer.read(ctx)?.expect("timestamps were there for the probe");
+    let t = timer
+        .read(ctx)?
+        .expect("timestamps were there for the probe");
     let k = passes as usize;
     let median = |mut v: Vec<f64>| {
         v.sort_by(f64::total_cmp);
@@ -858,7 +862,11 @@ fn repeated_timings(
         .map(|r| t[r * k..(r + 1) * k].iter().map(|p| p.ms).sum())
         .collect();
     let total = median(totals);
-    writeln!(lines, "  {:<28} {:>8} {total:>10.3} ms", "total (median run)", "")?;
+    writeln!(
+        lines,
+        "  {:<28} {:>8} {total:>10.3} ms",
+        "total (median run)", ""
+    )?;
     Ok(lines)
 }
 

@@ -234,7 +234,11 @@ fn cull_repeat_times_runs_back_to_back() {
         .split("3 runs back to back (median per pass):")
         .nth(1)
         .unwrap_or_else(|| panic!("no back-to-back timings: {stdout}"));
-    for pass in ["cull.tiled_scatter.count", "sort.radix.scatter", "total (median run)"] {
+    for pass in [
+        "cull.tiled_scatter.count",
+        "sort.radix.scatter",
+        "total (median run)",
+    ] {
         assert!(after.contains(pass), "{pass} missing: {stdout}");
     }
 }

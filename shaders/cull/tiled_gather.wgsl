@@ -3,7 +3,7 @@
 // between the tile's depth bounds (and the 2.5D masks). Entry points, in gather_scan.wgsl or,
 // with subgroup operations, gather_scan_subgroup.wgsl (which also define the workgroup scan
 // `scan_keep`): gather_count / gather_fill (count and fill passes, coarse-to-fine) and
-// gather_count_flat / gather_fill_flat (the single level); here gather_finalize. A thread's
+// gather_count_flat / gather_fill_flat (the single level); here gather_rects. A thread's
 // `slot` (0..63) orders its light within a batch.
 //
 // Coarse-to-fine (cull.coarse = 8): cull.light_rects first stores each light's tile rectangle
@@ -18,8 +18,8 @@
 // bounds, and the 2.5D masks). So a light is transformed once per coarse tile, not once per
 // tile, a tile tests only the lights whose rectangle holds it, and a thread writes its tile's
 // lights in light order without scans: the count pass stores each (tile, chunk)'s count, their
-// exclusive scan gives each chunk's place in its tile's list, and gather_finalize makes a
-// tile's range from its first chunk's offset to the next tile's. A tile's list is exactly the
+// exclusive scan gives each chunk's place in its tile's list, and the fill pass's first chunk
+// writes a tile's range from its first chunk's offset to the next tile's. A tile's list is exactly the
 // lights whose rectangle holds the tile and that pass its tile test: the coarse tests only
 // skip lights that would fail those (a tile's slab lies within its coarse tile's, and the same
 // floats are compared), and cpu::gather states the same.
@@ -152,6 +152,12 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
     var at = 0u;
     if fill && has_pixels {
         at = bin_offsets[entry];
+        // The first chunk's workgroup also writes the tile's range: from its first chunk's
+        // offset to the next tile's. (Ranges start cleared: a tile without pixels keeps an
+        // empty one.)
+        if wg.z == 0u {
+            out_ranges[bin] = vec2<u32>(at, bin_offsets[entry + chunks] - at);
+        }
     }
     var kept = 0u;
     var lines = 0u;
@@ -221,17 +227,5 @@ fn gather_rects(@builtin(global_invocation_id) id: vec3<u32>) {
         } else {
             light_rects[i] = vec2<u32>(u32(r.x) | (u32(r.y) << 16u), u32(r.z) | (u32(r.w) << 16u));
         }
-    }
-}
-
-// cull.finalize for the coarse-to-fine lists: a tile's range runs from its first chunk's
-// offset to the next tile's.
-@compute @workgroup_size(64)
-fn gather_finalize(@builtin(global_invocation_id) id: vec3<u32>) {
-    let b = id.y * GROUPS_X * 64u + id.x;
-    if b < cull.bins {
-        let chunks = (cull.light_count + cull.chunk - 1u) / cull.chunk;
-        let o = bin_offsets[b * chunks];
-        out_ranges[b] = vec2<u32>(o, bin_offsets[(b + 1u) * chunks] - o);
     }
 }

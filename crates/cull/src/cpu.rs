@@ -9,8 +9,8 @@
 use manylights_gpu::layout::{GpuFrame, GpuLight};
 
 use crate::geometry::{
-    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, linear_depth,
-    tile_keeps, tile_side_planes,
+    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, linear_depth, tile_keeps,
+    tile_side_planes,
 };
 use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth};
 

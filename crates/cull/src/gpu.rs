@@ -236,7 +236,6 @@ pub struct Culler {
     /// ([`crate::MIN_CHUNK`] by default; larger trades parallelism for less repeated set-up).
     pub gather_min_chunk: u32,
     gather_count: wgpu::ComputePipeline,
-    gather_finalize: wgpu::ComputePipeline,
     gather_rects: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
     gather_fill_flat: wgpu::ComputePipeline,
@@ -318,7 +317,6 @@ impl Culler {
             gather_fill,
             gather_count_flat,
             gather_fill_flat,
-            gather_finalize,
             gather_rects,
             finalize,
             cap,
@@ -336,7 +334,6 @@ impl Culler {
                 "gather_fill",
                 "gather_count_flat",
                 "gather_fill_flat",
-                "gather_finalize",
                 "gather_rects",
                 "finalize",
                 "cap_counts",
@@ -395,7 +392,6 @@ impl Culler {
             gather_fill,
             gather_count_flat,
             gather_fill_flat,
-            gather_finalize,
             gather_rects,
             clustered_count,
             clustered_fill,
@@ -665,18 +661,17 @@ impl Culler {
                     groups_2d(p.bins, GROUPS_X),
                 );
             }
-            f.pass(
-                enc,
-                timer,
-                "cull.finalize",
-                if chunked {
-                    &self.gather_finalize
-                } else {
-                    &self.finalize
-                },
-                group_b,
-                groups_2d(p.bins.div_ceil(64), GROUPS_X),
-            );
+            // (Coarse-to-fine gather's fill writes the ranges itself.)
+            if !chunked {
+                f.pass(
+                    enc,
+                    timer,
+                    "cull.finalize",
+                    &self.finalize,
+                    group_b,
+                    groups_2d(p.bins.div_ceil(64), GROUPS_X),
+                );
+            }
         };
         let Some(repeat) = repeat else {
             let mut enc = ctx.encoder("cull.count");
