@@ -179,10 +179,9 @@ fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
     if t.covered == 0u {
         return false;
     }
-    for (var i = 0u; i < 4u; i++) {
-        if outside_plane(planes[i], l) {
-            return false;
-        }
+    // Written out, not a loop: a dynamically indexed array may go to local memory.
+    if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
+        return false;
     }
     // Depth bounds as planes: -z >= dmin and -z <= dmax.
     if outside_plane(vec4<f32>(0.0, 0.0, -1.0, -t.dmin), l) || outside_plane(vec4<f32>(0.0, 0.0, 1.0, t.dmax), l) {

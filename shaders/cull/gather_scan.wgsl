@@ -42,3 +42,16 @@ fn gather_count_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoca
 fn gather_fill_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     gather_flat(wg.xy, li, true);
 }
+
+// Coarse-to-fine gather's lines (tiled_gather.wgsl): the bit of `slot` into line c of the set
+// at `base` for each bit c of `spans`, through workgroup atomics. Called in uniform control flow.
+fn mark_lines(slot: u32, spans: u32, base: u32) {
+    let bit = 1u << (slot % 32u);
+    let word = base + slot / 32u;
+    var s = spans;
+    while s != 0u {
+        let c = firstTrailingBit(s);
+        s &= s - 1u;
+        atomicOr(&wg_lines[word + 2u * c], bit);
+    }
+}

@@ -38,6 +38,29 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
     return vec2<u32>(before + inclusive, total);
 }
 
+// Coarse-to-fine gather's lines (tiled_gather.wgsl): the bit of `slot` into line c of the set
+// at `base` for each bit c of `spans`. A ballot per line that some lane of the subgroup spans,
+// written by the subgroup's first lane: no workgroup atomics contend when large lights span
+// many lines. Called in uniform control flow.
+fn mark_lines(slot: u32, spans: u32, base: u32) {
+    var used = subgroupOr(spans);
+    while used != 0u {
+        let c = firstTrailingBit(used);
+        used &= used - 1u;
+        let b = subgroupBallot(((spans >> c) & 1u) != 0u);
+        if g_lane == 0u {
+            let word = base + 2u * c;
+            if g_sg_size == 64u {
+                atomicStore(&wg_lines[word], b.x);
+                atomicStore(&wg_lines[word + 1u], b.y);
+            } else {
+                let first = g_sg_id * g_sg_size;
+                atomicOr(&wg_lines[word + first / 32u], b.x << (first % 32u));
+            }
+        }
+    }
+}
+
 @compute @workgroup_size(64)
 fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     gather_chunk(wg, subgroup_slot(lane, size, id, count), false);

@@ -165,8 +165,10 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
     let end = min(first + cull.chunk, cull.light_count);
     for (var b = first; b < end; b += 64u) {
         // This thread's light: its rectangle within the coarse tile, and the coarse tile's
-        // depth slab. Its bit goes into the lines (columns, rows) the rectangle spans.
+        // depth slab. Its bit goes into the lines (columns, rows) the rectangle spans
+        // (mark_lines, in gather_scan.wgsl or gather_scan_subgroup.wgsl).
         let i = b + slot;
+        var spans = 0u;
         if i < end {
             let packed = light_rects[i];
             let rect = vec4<i32>(vec4<u32>(packed.x & 0xffffu, packed.x >> 16u, packed.y & 0xffffu, packed.y >> 16u)) - origin.xyxy;
@@ -176,17 +178,13 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
                 let l = cull_light(lights[i]);
                 if !outside_plane(vec4<f32>(0.0, 0.0, -1.0, -cmin), l) && !outside_plane(vec4<f32>(0.0, 0.0, 1.0, cmax), l) {
                     wg_light[slot] = l;
-                    let bit = 1u << (slot % 32u);
-                    let word = lines + slot / 32u;
-                    for (var x = lo.x; x <= hi.x; x++) {
-                        atomicOr(&wg_lines[word + 2u * u32(x)], bit);
-                    }
-                    for (var y = lo.y; y <= hi.y; y++) {
-                        atomicOr(&wg_lines[word + 16u + 2u * u32(y)], bit);
-                    }
+                    // Bits lo..=hi of the columns (0..7) and of the rows (8..15).
+                    let span = (vec2<u32>(0xffu) << vec2<u32>(lo)) & (vec2<u32>(0xffu) >> vec2<u32>(7 - hi));
+                    spans = span.x | (span.y << 8u);
                 }
             }
         }
+        mark_lines(slot, spans, lines);
         workgroupBarrier();
         // The other set of lines, read by the batch before, is cleared for the batch after.
         if slot < 32u {
