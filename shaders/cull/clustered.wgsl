@@ -4,17 +4,19 @@
 // tile is tested with the tile's side planes (sphere, and cone for spots), and every slice of
 // the light's range is emitted (with CULL_FLAG_SKIP_EMPTY, only clusters holding geometry).
 
-// Light `i`'s tiles are shared by `lanes` threads of a lane group: lane k takes the tiles
-// k, k + lanes, ... of its rectangle. Each lane recomputes the rectangle (a few hundred flops),
-// so the lanes need no barrier.
-//
 // Lights come in two sizes. Most cover a few tiles: one thread a light does them
 // (cull.clustered.count / fill), and a light covering more than CLUSTER_NARROW tiles is queued
 // instead (count pass) or skipped (fill pass). A light near the camera covers the whole screen
 // (at 1080p, 510 tiles x 24 slices); alone, one thread would emit its 12,000 entries in series
 // while the rest of the GPU idles, so the queued wide lights get CLUSTER_LANES threads each
-// (cull.clustered.count_wide / fill_wide, dispatched indirectly from the queue's length). So
-// neither the many small lights pay for lanes they do not use nor a wide light serialises.
+// (cull.clustered.count_wide / fill_wide, dispatched indirectly from the queue's length), lane
+// k taking the light's (tile, slice) pairs k, k + lanes, ... So neither the many small lights
+// pay for lanes they do not use nor a wide light serialises.
+//
+// The queue (wide_lights): word 0 its length; entry q at words 4 + 4q: the light, its
+// rectangle (x0 | y0 << 16, x1 | y1 << 16) and its slices (s0 | s1 << 16), so that the lanes
+// need not recompute them. A workgroup of the count pass reserves its entries with one atomic,
+// not one per light: a quarter of a million lights may be wide.
 @group(1) @binding(9) var<storage, read_write> wide_lights: array<atomic<u32>>;
 @group(1) @binding(11) var<storage, read_write> wide_args: array<u32>;
 
@@ -51,64 +53,115 @@ fn light_rect(i: u32) -> LightRect {
     return r;
 }
 
-fn assign(i: u32, r: LightRect, lane: u32, lanes: u32, fill: bool) {
-    let width = u32(r.rect.z - r.rect.x + 1);
+// Whether the light may reach the tile: its four side planes.
+fn tile_holds(tile: vec2<u32>, l: CullLight) -> bool {
+    let planes = tile_side_planes(tile);
+    return !(outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l));
+}
+
+fn emit_slices(i: u32, tile: vec2<u32>, s0: u32, s1: u32, fill: bool) {
     let tiles = cull.tiles_x * cull.tiles_y;
-    for (var k = lane; k < r.count; k += lanes) {
+    for (var s = s0; s <= s1; s++) {
+        let bin = s * tiles + tile.y * cull.tiles_x + tile.x;
+        if (cull.flags & CULL_FLAG_SKIP_EMPTY) == 0u || occupancy[bin] != 0u {
+            emit(bin, i, fill);
+        }
+    }
+}
+
+var<workgroup> wg_wide: atomic<u32>;
+var<workgroup> wg_base: u32;
+
+// One thread a narrow light: its tiles, each with every slice of the light's range.
+fn assign_narrow(i: u32, r: LightRect, fill: bool) {
+    let width = u32(r.rect.z - r.rect.x + 1);
+    for (var k = 0u; k < r.count; k++) {
         let tile = vec2<u32>(u32(r.rect.x) + k % width, u32(r.rect.y) + k / width);
-        let planes = tile_side_planes(tile);
-        var inside = true;
-        for (var p = 0u; p < 4u; p++) {
-            if outside_plane(planes[p], r.l) {
-                inside = false;
-            }
-        }
-        if !inside {
-            continue;
-        }
-        for (var s = r.s0; s <= r.s1; s++) {
-            let bin = s * tiles + tile.y * cull.tiles_x + tile.x;
-            if (cull.flags & CULL_FLAG_SKIP_EMPTY) == 0u || occupancy[bin] != 0u {
-                emit(bin, i, fill);
-            }
+        if tile_holds(tile, r.l) {
+            emit_slices(i, tile, r.s0, r.s1, fill);
         }
     }
 }
 
-// One thread a light: narrow lights done here; wide ones queued by the count pass.
-fn assign_narrow(id: vec3<u32>, fill: bool) {
-    let i = id.y * GROUPS_X * 64u + id.x;
-    if i >= cull.light_count {
-        return;
-    }
-    let r = light_rect(i);
-    if r.count <= CLUSTER_NARROW {
-        assign(i, r, 0u, 1u, fill);
-    } else if !fill {
-        let q = atomicAdd(&wide_lights[0], 1u);
-        atomicStore(&wide_lights[1u + q], i);
-    }
-}
-
-// CLUSTER_LANES threads a queued wide light.
+// CLUSTER_LANES threads a queued wide light, over its (tile, slice) pairs.
 fn assign_wide(id: vec3<u32>, fill: bool) {
     let t = id.y * GROUPS_X * 64u + id.x;
     let q = t / CLUSTER_LANES;
     if q >= atomicLoad(&wide_lights[0]) {
         return;
     }
-    let i = atomicLoad(&wide_lights[1u + q]);
-    assign(i, light_rect(i), t % CLUSTER_LANES, CLUSTER_LANES, fill);
+    let e = 4u + 4u * q;
+    let i = atomicLoad(&wide_lights[e]);
+    let lo = atomicLoad(&wide_lights[e + 1u]);
+    let hi = atomicLoad(&wide_lights[e + 2u]);
+    let sl = atomicLoad(&wide_lights[e + 3u]);
+    let l = cull_light(lights[i]);
+    let x0 = lo & 0xffffu;
+    let y0 = lo >> 16u;
+    let width = (hi & 0xffffu) - x0 + 1u;
+    let s0 = sl & 0xffffu;
+    let slices = (sl >> 16u) - s0 + 1u;
+    let pairs = width * ((hi >> 16u) - y0 + 1u) * slices;
+    for (var k = t % CLUSTER_LANES; k < pairs; k += CLUSTER_LANES) {
+        let tk = k / slices;
+        let tile = vec2<u32>(x0 + tk % width, y0 + tk / width);
+        if tile_holds(tile, l) {
+            let s = s0 + k % slices;
+            emit_slices(i, tile, s, s, fill);
+        }
+    }
 }
 
+// One thread a light: narrow lights done here, wide ones queued.
 @compute @workgroup_size(64)
-fn clustered_count(@builtin(global_invocation_id) id: vec3<u32>) {
-    assign_narrow(id, false);
+fn clustered_count(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if li == 0u {
+        atomicStore(&wg_wide, 0u);
+    }
+    workgroupBarrier();
+    let i = id.y * GROUPS_X * 64u + id.x;
+    var r: LightRect;
+    var wide = false;
+    if i < cull.light_count {
+        r = light_rect(i);
+        wide = r.count > CLUSTER_NARROW;
+        if !wide {
+            assign_narrow(i, r, false);
+        }
+    }
+    var at = 0u;
+    if wide {
+        at = atomicAdd(&wg_wide, 1u);
+    }
+    workgroupBarrier();
+    if li == 0u {
+        let n = atomicLoad(&wg_wide);
+        var base = 0u;
+        if n != 0u {
+            base = atomicAdd(&wide_lights[0], n);
+        }
+        wg_base = base;
+    }
+    let base = workgroupUniformLoad(&wg_base);
+    if wide {
+        let e = 4u + 4u * (base + at);
+        atomicStore(&wide_lights[e], i);
+        atomicStore(&wide_lights[e + 1u], u32(r.rect.x) | (u32(r.rect.y) << 16u));
+        atomicStore(&wide_lights[e + 2u], u32(r.rect.z) | (u32(r.rect.w) << 16u));
+        atomicStore(&wide_lights[e + 3u], r.s0 | (r.s1 << 16u));
+    }
 }
 
+// The narrow lights again; the wide ones are the queue's.
 @compute @workgroup_size(64)
 fn clustered_fill(@builtin(global_invocation_id) id: vec3<u32>) {
-    assign_narrow(id, true);
+    let i = id.y * GROUPS_X * 64u + id.x;
+    if i < cull.light_count {
+        let r = light_rect(i);
+        if r.count <= CLUSTER_NARROW {
+            assign_narrow(i, r, true);
+        }
+    }
 }
 
 @compute @workgroup_size(64)

@@ -483,6 +483,12 @@ impl Culler {
             self.gather_min_chunk,
         );
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
+        if matches!(strategy, Strategy::Clustered { .. }) {
+            ctx.check_storage(
+                "clusters' wide-light queue",
+                (u64::from(params.light_count) + 1) * 16,
+            )?;
+        }
         let per_light = matches!(strategy, Strategy::TiledScatter { .. });
         if per_light {
             ctx.check_storage(
@@ -528,7 +534,7 @@ impl Culler {
             (
                 f.buf(
                     "cull.clustered.wide_lights",
-                    (u64::from(p.light_count) + 1) * 4,
+                    (u64::from(p.light_count) + 1) * 16,
                 ),
                 f.ctx.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("cull.clustered.wide_args"),
