@@ -4,9 +4,7 @@
 // Each pass: sort_count counts every block's digits into hist, laid out digit-major
 // (hist[digit * blocks + block]), so that one exclusive scan of hist (the portable scan) gives
 // each (digit, block) its first output slot; sort_scatter then ranks each key among the equal
-// digits of its block, in order, puts the block's pairs in digit order in workgroup memory, and
-// writes them out from there, so that consecutive threads write consecutive slots of each
-// digit's run (coalesced) rather than each thread its own scattered slots. Ranking packs a thread's 16 digit counters
+// digits of its block, in order, and writes it there. Ranking packs a thread's 16 digit counters
 // into 16-bit fields of two vec4<u32> (a block holds at most SORT_BLOCK = 1024 keys, so no field
 // overflows) and scans them across the workgroup with a Hillis-Steele scan.
 struct SortParams {
@@ -28,10 +26,6 @@ struct SortParams {
 var<workgroup> wg_hist: array<atomic<u32>, RADIX>;
 var<workgroup> sh_lo: array<vec4<u32>, SORT_THREADS>;
 var<workgroup> sh_hi: array<vec4<u32>, SORT_THREADS>;
-// The block's pairs in digit order, and each digit's first slot among them.
-var<workgroup> sh_keys: array<u32, SORT_BLOCK>;
-var<workgroup> sh_vals: array<u32, SORT_BLOCK>;
-var<workgroup> wg_start: array<u32, RADIX>;
 
 fn digit_of(key: u32) -> u32 {
     return (key >> sp.shift) & sp.digit_mask;
@@ -103,37 +97,13 @@ fn sort_scatter(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     // Exclusive: counts of the threads before this one.
     let ex_lo = sh_lo[li] - lo;
     let ex_hi = sh_hi[li] - hi;
-    // The block's first slot of each digit (its pairs in digit order), from the block's totals
-    // (the last thread's inclusive counts).
-    if li < RADIX {
-        let last_lo = sh_lo[SORT_THREADS - 1u];
-        let last_hi = sh_hi[SORT_THREADS - 1u];
-        var start = 0u;
-        for (var d = 0u; d < li; d++) {
-            start += field(last_lo, last_hi, d);
-        }
-        wg_start[li] = start;
-    }
-    workgroupBarrier();
-    // The block's pairs in digit order (stable), in workgroup memory...
     for (var k = 0u; k < SORT_PER_THREAD; k++) {
         let idx = block * SORT_BLOCK + li * SORT_PER_THREAD + k;
         if idx < sp.n {
             let d = digit_of(keys[k]);
-            let at = wg_start[d] + field(ex_lo, ex_hi, d) + rank[k];
-            sh_keys[at] = keys[k];
-            sh_vals[at] = vals[k];
+            let dest = hist[d * sp.blocks + block] + field(ex_lo, ex_hi, d) + rank[k];
+            keys_out[dest] = keys[k];
+            vals_out[dest] = vals[k];
         }
-    }
-    workgroupBarrier();
-    // ...then written out by consecutive threads to consecutive slots: each digit's run of the
-    // block is one contiguous stretch of the output.
-    let count = min(SORT_BLOCK, sp.n - min(sp.n, block * SORT_BLOCK));
-    for (var j = li; j < count; j += SORT_THREADS) {
-        let key = sh_keys[j];
-        let d = digit_of(key);
-        let dest = hist[d * sp.blocks + block] + j - wg_start[d];
-        keys_out[dest] = key;
-        vals_out[dest] = sh_vals[j];
     }
 }
