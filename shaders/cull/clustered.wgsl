@@ -9,9 +9,10 @@
 // instead (count pass) or skipped (fill pass). A light near the camera covers the whole screen
 // (at 1080p, 510 tiles x 24 slices); alone, one thread would emit its 12,000 entries in series
 // while the rest of the GPU idles, so the queued wide lights get CLUSTER_LANES threads each
-// (cull.clustered.count_wide / fill_wide, dispatched indirectly from the queue's length), lane
-// k taking the light's (tile, slice) pairs k, k + lanes, ... So neither the many small lights
-// pay for lanes they do not use nor a wide light serialises.
+// (cull.clustered.count_wide / fill_wide, dispatched indirectly from the queue's length): lane
+// k takes the light's tiles k, k + lanes, ... when it has at least as many tiles as lanes, and
+// otherwise its (tile, slice) pairs k, k + lanes, ... So neither the many small lights pay for
+// lanes they do not use nor a wide light serialises.
 //
 // The queue (wide_lights): word 0 its length; entry q at words 4 + 4q: the light, its
 // rectangle (x0 | y0 << 16, x1 | y1 << 16) and its slices (s0 | s1 << 16), so that the lanes
@@ -101,8 +102,22 @@ fn assign_wide(id: vec3<u32>, fill: bool) {
     let width = (hi & 0xffffu) - x0 + 1u;
     let s0 = sl & 0xffffu;
     let slices = (sl >> 16u) - s0 + 1u;
-    let pairs = width * ((hi >> 16u) - y0 + 1u) * slices;
-    for (var k = t % CLUSTER_LANES; k < pairs; k += CLUSTER_LANES) {
+    let tiles = width * ((hi >> 16u) - y0 + 1u);
+    let lane = t % CLUSTER_LANES;
+    if tiles >= CLUSTER_LANES {
+        // Enough tiles for every lane: a lane tests each of its tiles once, for all slices.
+        for (var k = lane; k < tiles; k += CLUSTER_LANES) {
+            let tile = vec2<u32>(x0 + k % width, y0 + k / width);
+            if tile_holds(tile, l) {
+                emit_slices(i, tile, s0, s0 + slices - 1u, fill);
+            }
+        }
+        return;
+    }
+    // Fewer tiles than lanes: the lanes share the (tile, slice) pairs (a tile is tested once
+    // per slice, by the lane that has the pair).
+    let pairs = tiles * slices;
+    for (var k = lane; k < pairs; k += CLUSTER_LANES) {
         let tk = k / slices;
         let tile = vec2<u32>(x0 + tk % width, y0 + tk / width);
         if tile_holds(tile, l) {
