@@ -331,6 +331,31 @@ fn sort(c: &mut Criterion) {
             })
         });
         g.finish();
+        // One more sort, its passes summed by label: where the time goes at this size.
+        ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
+        let mut timer = GpuTimer::new(&ctx, 512);
+        let mut enc = ctx.device.create_command_encoder(&Default::default());
+        ours.encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
+            .unwrap();
+        timer.resolve(&mut enc);
+        ctx.submit_and_wait(enc, "bench sort passes").unwrap();
+        let t = timer.read(&ctx).unwrap().expect("timestamps");
+        let mut labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
+        labels.dedup();
+        labels.sort_unstable();
+        labels.dedup();
+        for label in labels {
+            let each: Vec<String> = t
+                .iter()
+                .filter(|p| p.label == label)
+                .map(|p| format!("{:.1}", p.ms * 1e3))
+                .collect();
+            eprintln!(
+                "sort.radix/{n} passes: {label} {:.1} µs in all ({} µs)",
+                ms(&t, |l| l == label) * 1e3,
+                each.join(", ")
+            );
+        }
         let pairs: Vec<u32> = keys.iter().zip(&vals).flat_map(|(&a, &b)| [a, b]).collect();
         let (inp, out) = (buffer(&ctx, &pairs), buffer(&ctx, &pairs));
         let mut g = c.benchmark_group("sort.lampshade");
