@@ -843,15 +843,8 @@ fn repeated_timings(
         .read(ctx)?
         .expect("timestamps were there for the probe");
     let k = passes as usize;
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        let m = v.len() / 2;
-        if v.len() % 2 == 1 {
-            v[m]
-        } else {
-            0.5 * (v[m - 1] + v[m])
-        }
-    };
+    // The same median as the experiments' (nearest rank).
+    let median = |v: Vec<f64>| manylights_lab::results::percentiles(&v).map_or(0.0, |p| p.0);
     let mut lines = format!("  {n} runs back to back (median per pass):\n");
     for j in 0..k {
         let ms = median((0..n as usize).map(|r| t[r * k + j].ms).collect());
