@@ -13,7 +13,6 @@ var<workgroup> wg_covered: atomic<u32>;
 @compute @workgroup_size(64)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let tile = wg.xy;
-    p_index = li;
     if li == 0u {
         atomicStore(&wg_zmin, 0x7f800000u);
         atomicStore(&wg_zmax, 0u);
@@ -24,29 +23,22 @@ fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
     let size = vec2<u32>(frame.viewport.xy);
     let origin = tile * cull.tile_size;
     let n = cull.tile_size * cull.tile_size;
-    // Depth in [0, 1) is a non-negative float: its bits order like its value. Each thread
-    // reduces its own pixels, then the workgroup's (reduce_bounds, in depth_reduce.wgsl or
-    // depth_reduce_subgroup.wgsl).
-    var zmin = 0x7f800000u;
-    var zmax = 0u;
-    var count = 0u;
+    // Depth in [0, 1) is a non-negative float: its bits order like its value.
     for (var i = li; i < n; i += 64u) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
             let z = textureLoad(depth_tex, p, 0);
             if z < 1.0 {
-                zmin = min(zmin, bitcast<u32>(z));
-                zmax = max(zmax, bitcast<u32>(z));
-                count += 1u;
+                atomicMin(&wg_zmin, bitcast<u32>(z));
+                atomicMax(&wg_zmax, bitcast<u32>(z));
+                atomicAdd(&wg_covered, 1u);
             }
         }
     }
-    reduce_bounds(zmin, zmax, count);
     workgroupBarrier();
     let covered = atomicLoad(&wg_covered);
     var t: TileDepth;
     t.covered = covered;
-    var mask = 0u;
     if covered > 0u {
         t.dmin = linear_depth(bitcast<f32>(atomicLoad(&wg_zmin)));
         t.dmax = linear_depth(bitcast<f32>(atomicLoad(&wg_zmax)));
@@ -56,12 +48,11 @@ fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
             if all(p < size) {
                 let z = textureLoad(depth_tex, p, 0);
                 if z < 1.0 {
-                    mask |= 1u << depth_cell(linear_depth(z), t.dmin, scale);
+                    atomicOr(&wg_mask, 1u << depth_cell(linear_depth(z), t.dmin, scale));
                 }
             }
         }
     }
-    reduce_mask(mask);
     workgroupBarrier();
     if li == 0u {
         t.mask = atomicLoad(&wg_mask);

@@ -163,23 +163,14 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
     var lines = 0u;
     let first = wg.z * cull.chunk;
     let end = min(first + cull.chunk, cull.light_count);
-    // Each batch's rectangles are loaded one batch ahead, so that the load's latency overlaps
-    // the batch before.
-    var next = vec2<u32>(1u, 0u);
-    if first + slot < end {
-        next = light_rects[first + slot];
-    }
     for (var b = first; b < end; b += 64u) {
         // This thread's light: its rectangle within the coarse tile, and the coarse tile's
         // depth slab. Its bit goes into the lines (columns, rows) the rectangle spans
         // (mark_lines, in gather_scan.wgsl or gather_scan_subgroup.wgsl).
         let i = b + slot;
         var spans = 0u;
-        let packed = next;
-        if b + 64u + slot < end {
-            next = light_rects[b + 64u + slot];
-        }
         if i < end {
+            let packed = light_rects[i];
             let rect = vec4<i32>(vec4<u32>(packed.x & 0xffffu, packed.x >> 16u, packed.y & 0xffffu, packed.y >> 16u)) - origin.xyxy;
             let lo = max(rect.xy, vec2<i32>(0));
             let hi = min(rect.zw, vec2<i32>(7));

@@ -17,7 +17,7 @@ pub const LISTS: ShaderFile = shader_file!("cull/lists.wgsl");
 /// The pixel-to-list lookup of every list consumer.
 pub const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
 
-/// `cull.depth_bounds`, with portable workgroup reductions.
+/// `cull.depth_bounds`.
 pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
     name: "cull.depth_bounds",
     consts: CULL_CONSTS,
@@ -27,21 +27,6 @@ pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
         SCENE,
         COMMON,
         shader_file!("cull/depth_bounds.wgsl"),
-        shader_file!("cull/depth_reduce.wgsl"),
-    ],
-};
-/// [`DEPTH_BOUNDS`] with its reductions in subgroup operations (built only where the device
-/// has them).
-pub const DEPTH_BOUNDS_SUBGROUP: ShaderDef = ShaderDef {
-    name: "cull.depth_bounds.subgroup",
-    consts: CULL_CONSTS,
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        COMMON,
-        shader_file!("cull/depth_bounds.wgsl"),
-        shader_file!("cull/depth_reduce_subgroup.wgsl"),
     ],
 };
 /// `cull.tiled_gather` (also `cull.depth_mask`, with its flag) and `cull.finalize`, with the
@@ -131,7 +116,6 @@ pub const EXACT: ShaderDef = ShaderDef {
 /// Every shader of this crate.
 pub const SHADERS: &[ShaderDef] = &[
     DEPTH_BOUNDS,
-    DEPTH_BOUNDS_SUBGROUP,
     TILED_GATHER,
     TILED_GATHER_SUBGROUP,
     TILED_SCATTER,
@@ -326,18 +310,8 @@ impl Culler {
             ],
         });
         let scene_layout = &scene.layout;
+        let [depth_bounds] = pipelines(d, &DEPTH_BOUNDS, scene_layout, &layout, ["depth_bounds"]);
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
-        let [depth_bounds] = pipelines(
-            d,
-            if gather_subgroups {
-                &DEPTH_BOUNDS_SUBGROUP
-            } else {
-                &DEPTH_BOUNDS
-            },
-            scene_layout,
-            &layout,
-            ["depth_bounds"],
-        );
         let [
             gather_count,
             gather_fill,
