@@ -268,20 +268,20 @@ fn infinite_range_reference_measures_the_cutoff() {
 
 /// Every strategy's lists come out in light order (gather and 2.5D fill in order, scatter sorts
 /// stably, clusters sort each list after their atomic fill): the same lists, order included,
-/// and bit-identical images on every run. The big case's clusters hold over 8,191 lights, so
-/// that both paths of `cull.clustered.order` (workgroup memory and in place) run whichever
-/// capacity the device allows, and gather's tiles take their candidates in many chunks.
+/// and bit-identical images on every run. The big case's clusters hold over 2,048 lights, so
+/// that both paths of `cull.clustered.order` (workgroup memory and in place) run, and gather's
+/// tiles take their coarse tile's candidates in more than one chunk of 2,048.
 #[test]
 fn ordered_strategies_render_bit_identical_frames() {
     let ctx = common::gpu();
     let (w, h) = (70, 45);
     let small = scene("atrium");
-    // 8,300 lights that each cover the whole view: every cluster's list is longer than the
+    // 2,100 lights that each cover the whole view: every cluster's list is longer than the
     // order pass's workgroup memory.
     let mut big = scene("atrium");
     big.lights = LightSpec {
         generator: LightGenerator::LightField,
-        count: 8300,
+        count: 2100,
         seed: 4,
         radius: RadiusRule::Fixed(big.light_bounds.extent().length() * 2.0),
         intensity: 0.05,
@@ -303,7 +303,7 @@ fn ordered_strategies_render_bit_identical_frames() {
         (&small, Strategy::TiledScatter { tile_size: 8 }),
         (&small, clusters),
         (&big, clusters),
-        // Gather's coarse level hands each tile its candidates in many chunks.
+        // Gather's coarse level hands each tile its candidates 2,048 at a time.
         (
             &big,
             Strategy::TiledGather {
@@ -361,7 +361,7 @@ fn ordered_strategies_render_bit_identical_frames() {
         }
         if std::ptr::eq(s, &big) {
             assert!(
-                longest > 8191,
+                longest > 2048,
                 "the big case must exceed workgroup memory: {longest}"
             );
         }

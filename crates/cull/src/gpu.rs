@@ -72,7 +72,7 @@ pub const TILED_SCATTER: ShaderDef = ShaderDef {
         shader_file!("cull/tiled_scatter.wgsl"),
     ],
 };
-/// `cull.clustered` and `cull.occupancy`.
+/// `cull.clustered`, `cull.clustered.order` and `cull.occupancy`.
 pub const CLUSTERED: ShaderDef = ShaderDef {
     name: "cull.clustered",
     consts: CULL_CONSTS,
@@ -85,37 +85,6 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
         shader_file!("cull/clustered.wgsl"),
     ],
 };
-/// `cull.clustered.order`, sorting lists of up to 2,048 lights in workgroup memory.
-pub const CLUSTER_ORDER: ShaderDef = ShaderDef {
-    name: "cull.clustered.order",
-    consts: CULL_CONSTS,
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        COMMON,
-        LISTS,
-        shader_file!("cull/order_local_2048.wgsl"),
-        shader_file!("cull/cluster_order.wgsl"),
-    ],
-};
-/// [`CLUSTER_ORDER`] with lists of up to 8,191 lights in workgroup memory (32 KB), where the
-/// device allows it ([`ORDER_LARGE_BYTES`]).
-pub const CLUSTER_ORDER_LARGE: ShaderDef = ShaderDef {
-    name: "cull.clustered.order.large",
-    consts: CULL_CONSTS,
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        COMMON,
-        LISTS,
-        shader_file!("cull/order_local_8191.wgsl"),
-        shader_file!("cull/cluster_order.wgsl"),
-    ],
-};
-/// Workgroup memory [`CLUSTER_ORDER_LARGE`] needs.
-pub const ORDER_LARGE_BYTES: u32 = 32 * 1024;
 /// `cull.lights_per_pixel`: the shared lookup, per pixel.
 pub const LIGHTS_PER_PIXEL: ShaderDef = ShaderDef {
     name: "cull.lights_per_pixel",
@@ -151,8 +120,6 @@ pub const SHADERS: &[ShaderDef] = &[
     TILED_GATHER_SUBGROUP,
     TILED_SCATTER,
     CLUSTERED,
-    CLUSTER_ORDER,
-    CLUSTER_ORDER_LARGE,
     LIGHTS_PER_PIXEL,
     EXACT,
     crate::scan::SHADER,
@@ -378,6 +345,7 @@ impl Culler {
             clustered_count_wide,
             clustered_fill_wide,
             clustered_wide_args,
+            cluster_order,
             occupancy,
         ] = pipelines(
             d,
@@ -390,21 +358,9 @@ impl Culler {
                 "clustered_count_wide",
                 "clustered_fill_wide",
                 "clustered_wide_args",
+                "cluster_order",
                 "cluster_occupancy",
             ],
-        );
-        // The longest lists the order pass sorts in workgroup memory: 8,191 where the device
-        // has 32 KB of it, else 2,048 (longer lists are sorted in place, slower).
-        let [cluster_order] = pipelines(
-            d,
-            if ctx.limits.max_compute_workgroup_storage_size >= ORDER_LARGE_BYTES {
-                &CLUSTER_ORDER_LARGE
-            } else {
-                &CLUSTER_ORDER
-            },
-            scene_layout,
-            &layout,
-            ["cluster_order"],
         );
         let scatter = pipelines(
             d,
