@@ -268,8 +268,9 @@ fn infinite_range_reference_measures_the_cutoff() {
 
 /// Every strategy's lists come out in light order (gather and 2.5D fill in order, scatter sorts
 /// stably, clusters sort each list after their atomic fill): the same lists, order included,
-/// and bit-identical images on every run. The big case's clusters hold over 2,048 lights, so
-/// that both paths of `cull.clustered.order` (workgroup memory and in place) run, and gather's
+/// and bit-identical images on every run. The small, mid and big cases' clusters hold at most
+/// 512, 1,000 and over 2,048 lights, so that `cull.clustered.order_short` and both paths of
+/// `cull.clustered.order` (workgroup memory and in place) run, and gather's
 /// tiles take their coarse tile's candidates in more than one chunk of 2,048.
 #[test]
 fn ordered_strategies_render_bit_identical_frames() {
@@ -278,18 +279,24 @@ fn ordered_strategies_render_bit_identical_frames() {
     let small = scene("atrium");
     // 2,100 lights that each cover the whole view: every cluster's list is longer than the
     // order pass's workgroup memory.
-    let mut big = scene("atrium");
-    big.lights = LightSpec {
-        generator: LightGenerator::LightField,
-        count: 2100,
-        seed: 4,
-        radius: RadiusRule::Fixed(big.light_bounds.extent().length() * 2.0),
-        intensity: 0.05,
-        spot_fraction: 0.0,
-        spot_outer_deg: 40.0,
-    }
-    .generate(&big)
-    .unwrap();
+    let covering = |count: u32| {
+        let mut s = scene("atrium");
+        s.lights = LightSpec {
+            generator: LightGenerator::LightField,
+            count,
+            seed: 4,
+            radius: RadiusRule::Fixed(s.light_bounds.extent().length() * 2.0),
+            intensity: 0.05,
+            spot_fraction: 0.0,
+            spot_outer_deg: 40.0,
+        }
+        .generate(&s)
+        .unwrap();
+        s
+    };
+    let big = covering(2100);
+    // Lists of 1,000: longer than the short lists' pass takes, within workgroup memory.
+    let mid = covering(1000);
     let clusters = Strategy::Clustered {
         tile_size: 16,
         slices: 8,
@@ -302,6 +309,7 @@ fn ordered_strategies_render_bit_identical_frames() {
         (&small, Strategy::depth_mask(16)),
         (&small, Strategy::TiledScatter { tile_size: 8 }),
         (&small, clusters),
+        (&mid, clusters),
         (&big, clusters),
         // Gather's coarse level hands each tile its candidates 2,048 at a time.
         (

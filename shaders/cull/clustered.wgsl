@@ -250,7 +250,8 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         wg_len = n;
     }
     let n = workgroupUniformLoad(&wg_len);
-    if n < 2u {
+    // Short lists are cluster_order_short's.
+    if n <= ORDER_SHORT {
         return;
     }
     let base = bin_offsets[bin];
@@ -295,5 +296,56 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         for (var i = li; i < n; i += ORDER_THREADS) {
             out_indices[base + i] = wg_list[i];
         }
+    }
+}
+
+// cull.clustered.order_short: the lists of 2 to ORDER_SHORT lights, with the same network in
+// ORDER_SHORT words of workgroup memory, so that the many short lists do not pay cluster_order's
+// 8 KB a workgroup (workgroup memory bounds how many workgroups run at once).
+const ORDER_SHORT: u32 = 512u;
+var<workgroup> wg_short: array<u32, ORDER_SHORT>;
+
+@compute @workgroup_size(256)
+fn cluster_order_short(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let bin = wg.y * GROUPS_X + wg.x;
+    if li == 0u {
+        var n = 0u;
+        if bin < cull.bins {
+            n = atomicLoad(&bin_counts[bin]);
+        }
+        wg_len = n;
+    }
+    let n = workgroupUniformLoad(&wg_len);
+    if n < 2u || n > ORDER_SHORT {
+        return;
+    }
+    let base = bin_offsets[bin];
+    var size = 2u;
+    while size < n {
+        size <<= 1u;
+    }
+    for (var i = li; i < n; i += ORDER_THREADS) {
+        wg_short[i] = out_indices[base + i];
+    }
+    workgroupBarrier();
+    for (var k = 2u; k <= size; k <<= 1u) {
+        for (var d = k / 2u; d > 0u; d >>= 1u) {
+            let t = li;
+            if t < size / 2u {
+                let p = order_pair(t, k, d);
+                if p.y < n {
+                    let a = wg_short[p.x];
+                    let b = wg_short[p.y];
+                    if a > b {
+                        wg_short[p.x] = b;
+                        wg_short[p.y] = a;
+                    }
+                }
+            }
+            workgroupBarrier();
+        }
+    }
+    for (var i = li; i < n; i += ORDER_THREADS) {
+        out_indices[base + i] = wg_short[i];
     }
 }

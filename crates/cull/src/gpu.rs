@@ -246,6 +246,7 @@ pub struct Culler {
     clustered_fill_wide: wgpu::ComputePipeline,
     clustered_wide_args: wgpu::ComputePipeline,
     cluster_order: wgpu::ComputePipeline,
+    cluster_order_short: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
     cap: wgpu::ComputePipeline,
@@ -346,6 +347,7 @@ impl Culler {
             clustered_fill_wide,
             clustered_wide_args,
             cluster_order,
+            cluster_order_short,
             occupancy,
         ] = pipelines(
             d,
@@ -359,6 +361,7 @@ impl Culler {
                 "clustered_fill_wide",
                 "clustered_wide_args",
                 "cluster_order",
+                "cluster_order_short",
                 "cluster_occupancy",
             ],
         );
@@ -399,6 +402,7 @@ impl Culler {
             clustered_fill_wide,
             clustered_wide_args,
             cluster_order,
+            cluster_order_short,
             occupancy,
             finalize,
             cap,
@@ -658,14 +662,12 @@ impl Culler {
         let filling = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b| {
             phase(enc, timer, true, group_b);
             if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
-                f.pass(
-                    enc,
-                    timer,
-                    "cull.clustered.order",
-                    &self.cluster_order,
-                    group_b,
-                    groups_2d(p.bins, GROUPS_X),
-                );
+                for (label, pipe) in [
+                    ("cull.clustered.order_short", &self.cluster_order_short),
+                    ("cull.clustered.order", &self.cluster_order),
+                ] {
+                    f.pass(enc, timer, label, pipe, group_b, groups_2d(p.bins, GROUPS_X));
+                }
             }
             // (Coarse-to-fine gather's fill writes the ranges itself.)
             if !chunked {
