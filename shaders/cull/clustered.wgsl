@@ -300,12 +300,13 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
 }
 
 // cull.clustered.order_short: the lists of 2 to ORDER_SHORT lights, with the same network in
-// ORDER_SHORT words of workgroup memory, so that the many short lists do not pay cluster_order's
-// 8 KB a workgroup (workgroup memory bounds how many workgroups run at once).
+// ORDER_SHORT words of workgroup memory and 64 threads, so that the many short lists do not pay
+// cluster_order's 8 KB and 256 threads a workgroup (these bound how many workgroups run at
+// once).
 const ORDER_SHORT: u32 = 512u;
 var<workgroup> wg_short: array<u32, ORDER_SHORT>;
 
-@compute @workgroup_size(256)
+@compute @workgroup_size(64)
 fn cluster_order_short(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let bin = wg.y * GROUPS_X + wg.x;
     if li == 0u {
@@ -324,14 +325,13 @@ fn cluster_order_short(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invo
     while size < n {
         size <<= 1u;
     }
-    for (var i = li; i < n; i += ORDER_THREADS) {
+    for (var i = li; i < n; i += 64u) {
         wg_short[i] = out_indices[base + i];
     }
     workgroupBarrier();
     for (var k = 2u; k <= size; k <<= 1u) {
         for (var d = k / 2u; d > 0u; d >>= 1u) {
-            let t = li;
-            if t < size / 2u {
+            for (var t = li; t < size / 2u; t += 64u) {
                 let p = order_pair(t, k, d);
                 if p.y < n {
                     let a = wg_short[p.x];
@@ -345,7 +345,7 @@ fn cluster_order_short(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invo
             workgroupBarrier();
         }
     }
-    for (var i = li; i < n; i += ORDER_THREADS) {
+    for (var i = li; i < n; i += 64u) {
         out_indices[base + i] = wg_short[i];
     }
 }
