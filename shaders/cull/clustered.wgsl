@@ -239,9 +239,9 @@ fn order_pair(t: u32, k: u32, d: u32) -> vec2<u32> {
     return vec2<u32>(i, i + d);
 }
 
-@compute @workgroup_size(256)
-fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let bin = wg.y * GROUPS_X + wg.x;
+// The length of cluster `bin`'s list, the same in every thread of the workgroup. Called in
+// uniform control flow.
+fn list_len(bin: u32, li: u32) -> u32 {
     if li == 0u {
         var n = 0u;
         if bin < cull.bins {
@@ -249,16 +249,28 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         }
         wg_len = n;
     }
-    let n = workgroupUniformLoad(&wg_len);
+    return workgroupUniformLoad(&wg_len);
+}
+
+// The network's size: the smallest power of two (at least 2) not below `n`.
+fn padded(n: u32) -> u32 {
+    var size = 2u;
+    while size < n {
+        size <<= 1u;
+    }
+    return size;
+}
+
+@compute @workgroup_size(256)
+fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let bin = wg.y * GROUPS_X + wg.x;
+    let n = list_len(bin, li);
     // Short lists are cluster_order_short's.
     if n <= ORDER_SHORT {
         return;
     }
     let base = bin_offsets[bin];
-    var size = 2u;
-    while size < n {
-        size <<= 1u;
-    }
+    let size = padded(n);
     let local = n <= ORDER_LOCAL;
     if local {
         for (var i = li; i < n; i += ORDER_THREADS) {
@@ -309,22 +321,12 @@ var<workgroup> wg_short: array<u32, ORDER_SHORT>;
 @compute @workgroup_size(64)
 fn cluster_order_short(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let bin = wg.y * GROUPS_X + wg.x;
-    if li == 0u {
-        var n = 0u;
-        if bin < cull.bins {
-            n = atomicLoad(&bin_counts[bin]);
-        }
-        wg_len = n;
-    }
-    let n = workgroupUniformLoad(&wg_len);
+    let n = list_len(bin, li);
     if n < 2u || n > ORDER_SHORT {
         return;
     }
     let base = bin_offsets[bin];
-    var size = 2u;
-    while size < n {
-        size <<= 1u;
-    }
+    let size = padded(n);
     for (var i = li; i < n; i += 64u) {
         wg_short[i] = out_indices[base + i];
     }
