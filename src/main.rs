@@ -734,8 +734,14 @@ fn cull(args: &CullArgs) -> Result<()> {
     let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
     let timings = timer.read(&ctx)?;
     let repeated = if args.repeat > 0 {
+        // The culling passes of the run above (the prepass is its one raster pass).
+        let passes = timings.as_ref().map(|t| {
+            t.iter()
+                .filter(|p| p.kind == manylights_gpu::timing::PassKind::Compute)
+                .count() as u32
+        });
         repeated_timings(
-            &ctx, &culler, &gpu_scene, &depth, &strategy, &settings, &out, args,
+            &ctx, &culler, &gpu_scene, &depth, &strategy, &settings, &out, passes, args,
         )?
     } else {
         String::new()
@@ -819,14 +825,13 @@ fn repeated_timings(
     strategy: &Strategy,
     settings: &CullSettings,
     first: &CullOutput,
+    passes: Option<u32>,
     args: &CullArgs,
 ) -> Result<String> {
     use std::fmt::Write as _;
     let n = args.repeat;
-    // The passes of one run, counted on a run of its own.
-    let mut probe = GpuTimer::new(ctx, MAX_QUERIES / 2);
-    culler.run(ctx, scene, depth, strategy, settings, &mut probe)?;
-    let Some(passes) = probe.read(ctx)?.map(|t| t.len() as u32) else {
+    // `passes`: those of `first`, or none without timestamp queries.
+    let Some(passes) = passes else {
         return Ok("  (no GPU timings: the adapter has no timestamp queries)\n".into());
     };
     let most = MAX_QUERIES / 2 / passes.max(1);
@@ -841,7 +846,7 @@ fn repeated_timings(
     culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut timer)?;
     let t = timer
         .read(ctx)?
-        .expect("timestamps were there for the probe");
+        .expect("timestamps were there for the first run");
     let k = passes as usize;
     // The same median as the experiments' (nearest rank).
     let median = |v: Vec<f64>| manylights_lab::results::percentiles(&v).map_or(0.0, |p| p.0);

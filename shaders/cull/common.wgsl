@@ -80,10 +80,10 @@ fn linear_depth(z: f32) -> f32 {
     return -(b - d * z) / (c * z - a);
 }
 
-// NDC rectangle (x0, y0, x1, y1) of a square of `size` pixels at `tile` (in units of `size`),
-// clamped to the image (the last row and column may be partial when the resolution is not a
-// multiple of the size). A coarse tile's edges on its outer tiles' edges are the same floats.
-fn tile_ndc(tile: vec2<u32>, size: u32) -> vec4<f32> {
+// NDC rectangle (x0, y0, x1, y1) of tile `tile`, clamped to the image (the last row and
+// column may be partial when the resolution is not a multiple of the tile size).
+fn tile_ndc(tile: vec2<u32>) -> vec4<f32> {
+    let size = cull.tile_size;
     let px0 = f32(tile.x * size);
     let px1 = f32(min((tile.x + 1u) * size, u32(frame.viewport.x)));
     let py0 = f32(tile.y * size);
@@ -103,12 +103,7 @@ fn normalize_plane(p: vec4<f32>) -> vec4<f32> {
 
 // The four side planes of a tile's frustum: x >= x0 w, x <= x1 w, y >= y0 w, y <= y1 w.
 fn tile_side_planes(tile: vec2<u32>) -> array<vec4<f32>, 4> {
-    return square_side_planes(tile, cull.tile_size);
-}
-
-// The side planes of the frustum of a square of `size` pixels (see tile_ndc).
-fn square_side_planes(tile: vec2<u32>, size: u32) -> array<vec4<f32>, 4> {
-    let r = tile_ndc(tile, size);
+    let r = tile_ndc(tile);
     let r0 = clip_row(0u);
     let r1 = clip_row(1u);
     let r3 = clip_row(3u);

@@ -22,8 +22,9 @@ pub fn linear_depth(frame: &GpuFrame, z: f32) -> f32 {
     -(b - d * z) / (c * z - a)
 }
 
-/// WGSL `tile_ndc`: the NDC rectangle of the square of `size` pixels at `tile`.
-pub fn tile_ndc(frame: &GpuFrame, tile: [u32; 2], size: u32) -> Vec4 {
+/// WGSL `tile_ndc`: the NDC rectangle of tile `tile`.
+pub fn tile_ndc(frame: &GpuFrame, p: &GpuCullParams, tile: [u32; 2]) -> Vec4 {
+    let size = p.tile_size;
     let (w, h) = (frame.viewport.x as u32, frame.viewport.y as u32);
     let px0 = (tile[0] * size) as f32;
     let px1 = ((tile[0] + 1) * size).min(w) as f32;
@@ -43,12 +44,7 @@ fn normalize_plane(p: Vec4) -> Vec4 {
 
 /// WGSL `tile_side_planes`.
 pub fn tile_side_planes(frame: &GpuFrame, p: &GpuCullParams, tile: [u32; 2]) -> [Vec4; 4] {
-    square_side_planes(frame, tile, p.tile_size)
-}
-
-/// WGSL `square_side_planes`: the side planes of the square of `size` pixels at `tile`.
-pub fn square_side_planes(frame: &GpuFrame, tile: [u32; 2], size: u32) -> [Vec4; 4] {
-    let r = tile_ndc(frame, tile, size);
+    let r = tile_ndc(frame, p, tile);
     let m = &frame.clip_from_view;
     let (r0, r1, r3) = (row(m, 0), row(m, 1), row(m, 3));
     [

@@ -666,7 +666,14 @@ impl Culler {
                     ("cull.clustered.order_short", &self.cluster_order_short),
                     ("cull.clustered.order", &self.cluster_order),
                 ] {
-                    f.pass(enc, timer, label, pipe, group_b, groups_2d(p.bins, GROUPS_X));
+                    f.pass(
+                        enc,
+                        timer,
+                        label,
+                        pipe,
+                        group_b,
+                        groups_2d(p.bins, GROUPS_X),
+                    );
                 }
             }
             // (Coarse-to-fine gather's fill writes the ranges itself.)
