@@ -137,8 +137,8 @@ fn cull(c: &mut Criterion) {
 /// The GPU time of `iters` runs of `strategy`: every `cull.*`, `scan.*` and `sort.*` pass.
 ///
 /// The runs go back to back, as frames do: a first, untimed run sizes the lists, then batches
-/// of runs are each one submission with no host round trip inside ([`Culler::run_repeated`]),
-/// so the GPU stays busy and its clocks settle. `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run
+/// of runs are each one submission with no host round trip inside ([`Culler::run_repeated`]).
+/// (Both methods gave the same figures on the H200: docs/BENCHMARKS.md, Method.) `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run
 /// on its own instead (two submissions and a readback of the list size each, the GPU idle in
 /// between), the method of the figures before 2026-11-21T12:00Z.
 fn cull_time(
@@ -341,7 +341,6 @@ fn sort(c: &mut Criterion) {
         ctx.submit_and_wait(enc, "bench sort passes").unwrap();
         let t = timer.read(&ctx).unwrap().expect("timestamps");
         let mut labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
-        labels.dedup();
         labels.sort_unstable();
         labels.dedup();
         for label in labels {
