@@ -70,25 +70,22 @@ fn field(lo: vec4<u32>, hi: vec4<u32>, d: u32) -> u32 {
     return (v[(d & 7u) >> 1u] >> ((d & 1u) * 16u)) & 0xffffu;
 }
 
-// Adds one to 16-bit field `d` of the packed counters.
-fn bump(lo: ptr<function, vec4<u32>>, hi: ptr<function, vec4<u32>>, d: u32) {
-    let one = 1u << ((d & 1u) * 16u);
-    if d < 8u {
-        (*lo)[d >> 1u] += one;
-    } else {
-        (*hi)[(d - 8u) >> 1u] += one;
-    }
-}
-
 // One stable counting sort of the block on the nibble at bit `at` of the packed slots: thread
 // li holds positions li * SORT_PER_THREAD + k, in order, and writes each to its sorted place in
-// sh_slots. Called in uniform control flow; ends with a barrier. Nothing is indexed by data
-// but the packed counters, so everything stays in registers.
+// sh_slots. Called in uniform control flow; ends with a barrier.
 fn split(li: u32, p: ptr<function, array<u32, SORT_PER_THREAD>>, at: u32) {
+    var rank: array<u32, SORT_PER_THREAD>;
     var lo = vec4<u32>(0u);
     var hi = vec4<u32>(0u);
     for (var k = 0u; k < SORT_PER_THREAD; k++) {
-        bump(&lo, &hi, ((*p)[k] >> at) & 15u);
+        let d = ((*p)[k] >> at) & 15u;
+        rank[k] = field(lo, hi, d);
+        let one = 1u << ((d & 1u) * 16u);
+        if d < 8u {
+            lo[d >> 1u] += one;
+        } else {
+            hi[(d - 8u) >> 1u] += one;
+        }
     }
     sh_lo[li] = lo;
     sh_hi[li] = hi;
@@ -105,26 +102,20 @@ fn split(li: u32, p: ptr<function, array<u32, SORT_PER_THREAD>>, at: u32) {
         sh_hi[li] += th;
         workgroupBarrier();
     }
-    // Each bin's start in the block (an exclusive prefix of the block's totals, packed the same
-    // way; no field exceeds SORT_BLOCK) plus the counts of the threads before this one.
+    // Exclusive: counts of the threads before this one; bin starts from the block's totals.
+    let ex_lo = sh_lo[li] - lo;
+    let ex_hi = sh_hi[li] - hi;
     let tot_lo = sh_lo[SORT_THREADS - 1u];
     let tot_hi = sh_hi[SORT_THREADS - 1u];
-    var next_lo = sh_lo[li] - lo;
-    var next_hi = sh_hi[li] - hi;
+    var start: array<u32, 16>;
     var acc = 0u;
     for (var d = 0u; d < 16u; d++) {
-        let add = acc << ((d & 1u) * 16u);
-        if d < 8u {
-            next_lo[d >> 1u] += add;
-        } else {
-            next_hi[(d - 8u) >> 1u] += add;
-        }
+        start[d] = acc;
         acc += field(tot_lo, tot_hi, d);
     }
     for (var k = 0u; k < SORT_PER_THREAD; k++) {
         let d = ((*p)[k] >> at) & 15u;
-        sh_slots[skew(field(next_lo, next_hi, d))] = (*p)[k];
-        bump(&next_lo, &next_hi, d);
+        sh_slots[skew(start[d] + field(ex_lo, ex_hi, d) + rank[k])] = (*p)[k];
     }
     workgroupBarrier();
 }
@@ -168,22 +159,13 @@ fn sort_scatter(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_
         }
     }
     workgroupBarrier();
-    // Every read before any write: the storage buffers may alias as far as the compiler knows,
-    // so interleaving them would serialise each load behind the stores before it.
-    var key: array<u32, SORT_PER_THREAD>;
-    var val: array<u32, SORT_PER_THREAD>;
     for (var k = 0u; k < SORT_PER_THREAD; k++) {
-        if k * SORT_THREADS + li < valid {
+        let s = k * SORT_THREADS + li;
+        if s < valid {
             let e = p[k] & 0xffffu;
-            key[k] = keys_in[base + e];
-            val[k] = vals_in[base + e];
-            p[k] = sh_off[p[k] >> 16u] + k * SORT_THREADS + li;
-        }
-    }
-    for (var k = 0u; k < SORT_PER_THREAD; k++) {
-        if k * SORT_THREADS + li < valid {
-            keys_out[p[k]] = key[k];
-            vals_out[p[k]] = val[k];
+            let dest = sh_off[p[k] >> 16u] + s;
+            keys_out[dest] = keys_in[base + e];
+            vals_out[dest] = vals_in[base + e];
         }
     }
 }
