@@ -109,10 +109,9 @@ fn key_sets(n: usize, rng: &mut rand_pcg::Pcg64) -> Vec<(&'static str, Vec<u32>)
 }
 
 /// Keys random, all equal, already sorted, reverse sorted and with few distinct values; counts
-/// 0, 1, non-powers of two and block edges (4,096 keys); all 32 key bits and partial keys (13
-/// bits, the tile index of 1080p at 16 px: a last pass of 5 bits; 12 bits: a last pass of 4
-/// bits, which skips the in-block sort's second nibble). Values are the input positions, so
-/// equality with the standard library's stable sort checks stability too.
+/// 0, 1, non-powers of two and block edges; all 32 key bits and a partial key (13 bits, the tile
+/// index of 1080p at 16 px). Values are the input positions, so equality with the standard
+/// library's stable sort checks stability too.
 #[test]
 fn radix_sort_portable_matches_std_stable_sort() {
     let ctx = common::gpu();
@@ -134,10 +133,10 @@ fn radix_sort_subgroup_matches_std_stable_sort() {
 fn check_against_std(ctx: &GpuContext, sort: &RadixSort) {
     let mut lamp = lampshade::KeyValueSorter::new(&ctx.device, &ctx.queue);
     let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
-    for n in [0usize, 1, 2, 3, 1000, 1025, 4095, 4096, 4097, 8193, 100_003] {
+    for n in [0usize, 1, 2, 3, 1000, 1023, 1024, 1025, 4097, 100_003] {
         for (kind, keys) in key_sets(n, &mut rng) {
             let vals: Vec<u32> = (0..n as u32).collect();
-            for bits in [32, 13, 12] {
+            for bits in [32, 13] {
                 let expect = radix_sort::cpu(&keys, &vals, bits);
                 let got = gpu_sort(ctx, sort, &keys, &vals, bits);
                 assert!(

@@ -3,10 +3,8 @@
 //! subgroup size. Tested against the standard library's stable sort and the `lampshade` crate.
 //!
 //! Per pass of [`RADIX_BITS`] bits: `sort.radix.count` (per-block digit histograms, digit-major),
-//! the scan over them, `sort.radix.scatter` (the block sorted by digit in workgroup memory by two
-//! stable 4-bit counting sorts, then written out in that order). Only the key bits asked for are
-//! sorted: sorting tile indices of 8,160 tiles takes 13 bits, two passes, the second of 5 bits
-//! with a histogram of 32 digits a block.
+//! the portable scan over them, `sort.radix.scatter` (stable in-block ranks). Only the key bits
+//! asked for are sorted: sorting tile indices of 8,160 tiles takes 13 bits, four passes.
 
 use manylights_gpu::shader_file;
 use manylights_gpu::shaders::{ShaderDef, WgslConst};
@@ -18,17 +16,14 @@ use crate::layout::GROUPS_X;
 use crate::scan::{Scan, ScanPath, groups_2d};
 
 /// Bits sorted per pass.
-pub const RADIX_BITS: u32 = 8;
+pub const RADIX_BITS: u32 = 4;
 /// Threads per workgroup.
 pub const SORT_THREADS: u32 = 256;
 /// Keys per thread.
-pub const SORT_PER_THREAD: u32 = 16;
-/// Keys per block (workgroup): a 16-bit rank field holds up to 65,535, and a packed slot keeps
-/// the position in the block in 16 bits.
+pub const SORT_PER_THREAD: u32 = 4;
+/// Keys per block (workgroup); a 16-bit rank field holds up to 65,535.
 pub const SORT_BLOCK: u32 = SORT_THREADS * SORT_PER_THREAD;
 const _: () = assert!(SORT_BLOCK < 1 << 16);
-// One thread per digit clears and writes the block's histogram.
-const _: () = assert!(SORT_THREADS == 1 << RADIX_BITS);
 
 /// The sort shader.
 pub const SHADER: ShaderDef = ShaderDef {
@@ -118,13 +113,12 @@ impl RadixSort {
         if n <= 1 {
             return Ok(SortedIn::Input);
         }
-        let bits = key_bits.clamp(1, 32);
         let blocks = n.div_ceil(SORT_BLOCK);
-        let full_len = u64::from(blocks) << RADIX_BITS;
-        ctx.check_storage("radix sort histogram", full_len * 4)?;
+        let hist_len = blocks * (1 << RADIX_BITS);
+        ctx.check_storage("radix sort histogram", u64::from(hist_len) * 4)?;
         let hist = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("sort.radix.hist"),
-            size: full_len * 4,
+            size: u64::from(hist_len) * 4,
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
@@ -135,9 +129,6 @@ impl RadixSort {
             } else {
                 (keys_tmp, vals_tmp, keys, vals)
             };
-            // The digits of this pass; a last pass past the key bits asked for has fewer.
-            let digits = 1u32 << RADIX_BITS.min(bits - pass * RADIX_BITS);
-            let hist_len = blocks * digits;
             let params = ctx
                 .device
                 .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -146,7 +137,7 @@ impl RadixSort {
                         n,
                         pass * RADIX_BITS,
                         blocks,
-                        digits - 1,
+                        (1u32 << RADIX_BITS.min(key_bits.clamp(1, 32) - pass * RADIX_BITS)) - 1,
                     ]),
                     usage: wgpu::BufferUsages::UNIFORM,
                 });
