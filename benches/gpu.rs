@@ -8,8 +8,8 @@
 //! - `cull.tiled_gather_single/...`: gather without its coarse level, `cull.clustered_unordered/...`
 //!   clusters without their order pass;
 //! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
-//!   lights, 8-pixel tiles), every strategy, and gather with other chunks of lights a
-//!   workgroup (`tiled_gather8_chunk<N>`);
+//!   lights, 8-pixel tiles), every strategy, gather with other chunks of lights a workgroup
+//!   (`tiled_gather8_chunk<N>`), and gather and 2.5D without tile masks (`*_unmasked`);
 //! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
 //!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
@@ -201,8 +201,8 @@ fn cull_time(
 
 /// The Forward+ paper's configuration, as experiments/harada2012.ron: the atrium with 3,072
 /// light-field lights of radius 2.5 m at 1280 x 720. `cull.harada2012/<variant>/3072` times
-/// every culling pass of: gather and 2.5D with 8-pixel tiles, with and without the coarse level;
-/// scatter with 8-pixel tiles; clusters (16-pixel tiles, 16 exponential slices), ordered and not.
+/// every culling pass of: gather and 2.5D with 8-pixel tiles, with and without the coarse level
+/// and with and without tile masks; gather with other chunk sizes; scatter with 8-pixel tiles; clusters (16-pixel tiles, 16 exponential slices), ordered and not.
 fn cull_paper(c: &mut Criterion) {
     let ctx = gpu();
     let (w, h, n) = if quick() {
@@ -273,6 +273,18 @@ fn cull_paper(c: &mut Criterion) {
                 })
             },
         );
+    }
+    // Gather and 2.5D without tile masks: the fill tests every light again.
+    culler.gather_min_chunk = manylights_cull::MIN_CHUNK;
+    culler.gather_mask_budget = 0;
+    for (label, strategy) in [
+        ("tiled_gather8_unmasked", Strategy::tiled_gather(8)),
+        ("depth_mask8_unmasked", Strategy::depth_mask(8)),
+    ] {
+        let culler = &culler;
+        g.bench_with_input(BenchmarkId::new(label, n), &n, |b, _| {
+            b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
+        });
     }
     g.finish();
 }

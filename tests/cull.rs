@@ -378,17 +378,30 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 sub.gather_subgroups, ctx.features.subgroups,
                 "gather must take its subgroup path where the device has subgroups"
             );
-            [sub, Culler::with_subgroups(&ctx, &r.gpu_scene, false)]
+            // Gather's chunked fill, which tests again, where tile masks would be used.
+            let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
+            unmasked.gather_mask_budget = 0;
+            [sub, Culler::with_subgroups(&ctx, &r.gpu_scene, false), unmasked]
         });
-        for (culler, s) in cullers
-            .iter()
-            .flat_map(|c| strategies().into_iter().map(move |s| (c, s)))
-        {
+        for (culler, s) in cullers.iter().flat_map(|c| {
+            strategies()
+                .into_iter()
+                .filter(|s| {
+                    c.gather_mask_budget > 0
+                        || matches!(
+                            s,
+                            Strategy::TiledGather { coarse: 1.., .. }
+                                | Strategy::DepthMask { coarse: 1.., .. }
+                        )
+                })
+                .map(move |s| (c, s))
+        }) {
             let what = format!(
-                "{} {} (subgroups: {})",
+                "{} {} (subgroups: {}, tile masks: {})",
                 case.label,
                 s.name(),
-                culler.gather_subgroups
+                culler.gather_subgroups,
+                culler.gather_mask_budget > 0
             );
             let out = run_gpu(&ctx, culler, &r, &case, &s);
             let p = out.params;

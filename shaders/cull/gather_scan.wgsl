@@ -25,12 +25,22 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
 
 @compute @workgroup_size(64)
 fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_chunk(wg, li, false);
+    gather_chunk(wg, li, CHUNK_COUNT);
 }
 
 @compute @workgroup_size(64)
 fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_chunk(wg, li, true);
+    gather_chunk(wg, li, CHUNK_FILL);
+}
+
+@compute @workgroup_size(64)
+fn gather_count_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    gather_chunk(wg, li, CHUNK_MASK);
+}
+
+@compute @workgroup_size(64)
+fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    gather_expand(wg.xy, li);
 }
 
 @compute @workgroup_size(64)

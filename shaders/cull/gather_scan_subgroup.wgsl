@@ -63,12 +63,22 @@ fn mark_lines(slot: u32, spans: u32, base: u32) {
 
 @compute @workgroup_size(64)
 fn gather_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
-    gather_chunk(wg, subgroup_slot(lane, size, id, count), false);
+    gather_chunk(wg, subgroup_slot(lane, size, id, count), CHUNK_COUNT);
 }
 
 @compute @workgroup_size(64)
 fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
-    gather_chunk(wg, subgroup_slot(lane, size, id, count), true);
+    gather_chunk(wg, subgroup_slot(lane, size, id, count), CHUNK_FILL);
+}
+
+@compute @workgroup_size(64)
+fn gather_count_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    gather_chunk(wg, subgroup_slot(lane, size, id, count), CHUNK_MASK);
+}
+
+@compute @workgroup_size(64)
+fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    gather_expand(wg.xy, subgroup_slot(lane, size, id, count));
 }
 
 @compute @workgroup_size(64)

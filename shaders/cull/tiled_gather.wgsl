@@ -24,6 +24,12 @@
 // skip lights that would fail those (a tile's slab lies within its coarse tile's, and the same
 // floats are compared), and cpu::gather states the same.
 //
+// Tile masks (where tiles x lights bits fit the host's budget, as at the Forward+ paper's
+// configuration): the count pass also stores each tile's kept lights as bits (tile_masks, a
+// word per 32 lights) and adds its count per tile, not per (tile, chunk); after the scan the
+// fill pass (gather_expand, a workgroup per tile) turns a tile's words into its list, in light
+// order, without testing any light again. The lists are the same as the chunked fill's.
+//
 // The single level (cull.coarse = 0): the paper's one workgroup per tile over every light; the
 // fill keeps each list in light order: in every batch of 64 lights, a light's slot is the
 // number of kept lights before it in the batch (a workgroup scan of the batch's flags) plus
@@ -44,6 +50,19 @@ var<workgroup> wg_light: array<CullLight, 64>;
 var<workgroup> wg_lines: array<atomic<u32>, 64>;
 // Each light's tile rectangle (cull.light_rects, coarse-to-fine gather and 2.5D).
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
+// Each tile's kept lights as bits, mask_words() words a tile (the tile masks' count pass).
+@group(1) @binding(11) var<storage, read_write> tile_masks: array<u32>;
+
+// What a coarse-to-fine pass does: count per (tile, chunk), fill, or count per tile and store
+// the tile masks.
+const CHUNK_COUNT: u32 = 0u;
+const CHUNK_FILL: u32 = 1u;
+const CHUNK_MASK: u32 = 2u;
+
+// Words of a tile's mask: two a batch of 64 lights.
+fn mask_words() -> u32 {
+    return (cull.light_count + 63u) / 64u * 2u;
+}
 
 // One batch of up to 64 candidate lights, light `i` at this thread (`valid` false past the
 // end). The count pass adds the survivors to `counted`, this thread's own count (one atomic
@@ -112,7 +131,8 @@ fn from_ordered_bits(u: u32) -> f32 {
 
 // Coarse-to-fine over coarse tile wg.xy and light chunk wg.z (see the top of this file); this
 // thread's tile is the slot-th of the coarse tile, row by row.
-fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
+fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
+    let fill = mode == CHUNK_FILL;
     if slot == 0u {
         atomicStore(&wg_cmin, 0xffffffffu);
         atomicStore(&wg_cmax, 0u);
@@ -193,23 +213,70 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, fill: bool) {
         if has_pixels {
             for (var w = 0u; w < 2u; w++) {
                 var m = atomicLoad(&wg_lines[lines + 2u * local.x + w]) & atomicLoad(&wg_lines[lines + 16u + 2u * local.y + w]);
+                var word = 0u;
                 while m != 0u {
-                    let k = w * 32u + firstTrailingBit(m);
+                    let bit = firstTrailingBit(m);
+                    let k = w * 32u + bit;
                     m &= m - 1u;
                     if tile_keeps(wg_light[k], planes, t) {
                         if fill {
                             out_indices[at + kept] = b + k;
                         }
+                        word |= 1u << bit;
                         kept += 1u;
                     }
+                }
+                if mode == CHUNK_MASK {
+                    // Every word of a tile with pixels is written on every run (chunks are
+                    // whole batches, so b / 32 + w is this batch's word w).
+                    tile_masks[bin * mask_words() + b / 32u + w] = word;
                 }
             }
         }
         workgroupBarrier();
         lines ^= 32u;
     }
-    if !fill && has_pixels {
+    if mode == CHUNK_COUNT && has_pixels {
         atomicStore(&bin_counts[entry], kept);
+    }
+    if mode == CHUNK_MASK && kept != 0u {
+        atomicAdd(&bin_counts[bin], kept);
+    }
+}
+
+// The tile masks' fill: tile `tile`'s range, and its list from its mask words, 64 words at a
+// time, each thread's lights placed after those of the words before it (a workgroup scan of
+// their bit counts). Only tiles with lights read their words: a tile without pixels kept none
+// and its words were not written.
+fn gather_expand(tile: vec2<u32>, slot: u32) {
+    let bin = tile.y * cull.tiles_x + tile.x;
+    let at = bin_offsets[bin];
+    if slot == 0u {
+        let n = bin_offsets[bin + 1u] - at;
+        out_ranges[bin] = vec2<u32>(at, n);
+        wg_covered = n;
+    }
+    // Uniform, so the scans' barriers are reached by all threads or none.
+    if workgroupUniformLoad(&wg_covered) == 0u {
+        return;
+    }
+    let words = mask_words();
+    var acc = at;
+    for (var first = 0u; first < words; first += 64u) {
+        let w = first + slot;
+        var m = 0u;
+        if w < words {
+            m = tile_masks[bin * words + w];
+        }
+        let c = countOneBits(m);
+        let scan = scan_keep(slot, c);
+        var pos = acc + scan.x - c;
+        while m != 0u {
+            out_indices[pos] = w * 32u + firstTrailingBit(m);
+            m &= m - 1u;
+            pos += 1u;
+        }
+        acc += scan.y;
     }
 }
 

@@ -235,7 +235,14 @@ pub struct Culler {
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
     /// ([`crate::MIN_CHUNK`] by default; larger trades parallelism for less repeated set-up).
     pub gather_min_chunk: u32,
+    /// The most bytes of tile masks gather's coarse-to-fine passes may use
+    /// ([`crate::MASK_BUDGET`] by default): where a bit per (tile, light) fits, the count pass
+    /// stores the kept lights as bits and the fill pass expands them without testing again;
+    /// past it (or at 0) the fill pass tests every light again.
+    pub gather_mask_budget: u64,
     gather_count: wgpu::ComputePipeline,
+    gather_count_masks: wgpu::ComputePipeline,
+    gather_fill_masks: wgpu::ComputePipeline,
     gather_rects: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
     gather_fill_flat: wgpu::ComputePipeline,
@@ -316,6 +323,8 @@ impl Culler {
         let [
             gather_count,
             gather_fill,
+            gather_count_masks,
+            gather_fill_masks,
             gather_count_flat,
             gather_fill_flat,
             gather_rects,
@@ -333,6 +342,8 @@ impl Culler {
             [
                 "gather_count",
                 "gather_fill",
+                "gather_count_masks",
+                "gather_fill_masks",
                 "gather_count_flat",
                 "gather_fill_flat",
                 "gather_rects",
@@ -391,8 +402,11 @@ impl Culler {
             depth_bounds,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
+            gather_mask_budget: crate::MASK_BUDGET,
             gather_count,
             gather_fill,
+            gather_count_masks,
+            gather_fill_masks,
             gather_count_flat,
             gather_fill_flat,
             gather_rects,
@@ -519,9 +533,23 @@ impl Culler {
         let p = f.params;
         let name = strategy.name();
         let clustered = matches!(strategy, Strategy::Clustered { .. });
+        // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
+        // count per (tile, chunk), or per tile with tile masks; each light's tile rectangle
+        // first.
+        let chunked = !clustered && p.coarse > 0;
+        let mask_bytes = u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8;
+        let masked = chunked
+            && mask_bytes
+                <= self.gather_mask_budget.min(
+                    ctx.limits
+                        .max_storage_buffer_binding_size
+                        .min(ctx.limits.max_buffer_size),
+                );
         let (count, fill_pipe) = if clustered {
             (&self.clustered_count, &self.clustered_fill)
-        } else if p.coarse > 0 {
+        } else if masked {
+            (&self.gather_count_masks, &self.gather_fill_masks)
+        } else if chunked {
             (&self.gather_count, &self.gather_fill)
         } else {
             (&self.gather_count_flat, &self.gather_fill_flat)
@@ -548,30 +576,39 @@ impl Culler {
                 }),
             )
         });
-        // Gather's coarse-to-fine passes: a workgroup per (coarse tile, chunk of lights), and a
-        // count per (tile, chunk); each light's tile rectangle first.
-        let chunked = !clustered && p.coarse > 0;
         let rects = chunked.then(|| f.buf("cull.light_rects", u64::from(p.light_count) * 8));
-        // Binding 9: the clusters' wide-light queue, or gather's light rectangles.
+        let masks = masked.then(|| f.buf("cull.tile_masks", mask_bytes));
+        // Binding 9: the clusters' wide-light queue, or gather's light rectangles; 11: the
+        // clusters' indirect arguments, or gather's tile masks.
         let (wide, wide_args) = match (&wide_bufs, &rects) {
             (Some((w, a)), _) => (w, a),
-            (None, Some(r)) => (r, placeholder),
+            (None, Some(r)) => (r, masks.as_ref().unwrap_or(placeholder)),
             (None, None) => (placeholder, placeholder),
         };
         // The indirect arguments are written in one pass and read by the next: a buffer bound
         // for storage in a dispatch cannot also be its indirect buffer.
-        let group_a = f.group(placeholder, wide, placeholder);
+        let group_a = f.group(placeholder, wide, if masked { wide_args } else { placeholder });
         let group_args = f.group(placeholder, wide, wide_args);
         let chunk_groups = [
             p.coarse_x,
             p.tiles_y.div_ceil(p.coarse.max(1)),
             p.light_count.div_ceil(p.chunk.max(1)),
         ];
-        let entries = f.entries_counted();
+        let entries = if masked {
+            p.bins
+        } else {
+            f.entries_counted()
+        };
         let groups = if chunked {
             chunk_groups
         } else {
             [main.0, main.1, 1]
+        };
+        // The tile masks' fill: a workgroup per tile.
+        let fill_groups = if masked {
+            [p.tiles_x, p.tiles_y, 1]
+        } else {
+            groups
         };
         // The count or fill pass, and for clusters its wide lights' pass (after the count
         // pass, the queue's dispatch arguments).
@@ -587,7 +624,7 @@ impl Culler {
                 &format!("cull.{name}.{what}"),
                 pipe,
                 group,
-                groups,
+                if fill { fill_groups } else { groups },
             );
             if clustered {
                 if !fill {
@@ -699,7 +736,7 @@ impl Culler {
                 f.bins_total(ctx, entries)?,
             )?;
             let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-            let group_b = f.group(&indices, wide, placeholder);
+            let group_b = f.group(&indices, wide, if masked { wide_args } else { placeholder });
             let mut enc = ctx.encoder("cull.fill");
             filling(&mut enc, timer, &group_b);
             timer.resolve(&mut enc);
@@ -707,7 +744,7 @@ impl Culler {
             return Ok(f.finish(indices, total)?);
         };
         let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
-        let group_b = f.group(&indices, wide, placeholder);
+        let group_b = f.group(&indices, wide, if masked { wide_args } else { placeholder });
         let mut enc = ctx.encoder("cull.repeated");
         for _ in 0..repeat.runs {
             counting(&mut enc, timer);
