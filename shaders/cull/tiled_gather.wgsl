@@ -26,9 +26,12 @@
 //
 // Tile masks (where tiles x lights bits fit the host's budget, as at the Forward+ paper's
 // configuration): the count pass also stores each tile's kept lights as bits (tile_masks, a
-// word per 32 lights) and adds its count per tile, not per (tile, chunk); after the scan the
-// fill pass (gather_expand, a workgroup per tile) turns a tile's words into its list, in light
-// order, without testing any light again. The lists are the same as the chunked fill's.
+// word per 32 lights) and adds its count per tile, not per (tile, chunk), and the total
+// (cull_stats[4]), from which the host sizes the lists. No scan: the fill pass (gather_expand,
+// a workgroup per tile) takes its tile's place in the list buffer with one atomic add
+// (cull_stats[5]) and turns the tile's words into its list, in light order, without testing
+// any light again. A tile's list is the same as the chunked fill's; only where it sits in the
+// buffer differs from run to run (its range says where).
 //
 // The single level (cull.coarse = 0): the paper's one workgroup per tile over every light; the
 // fill keeps each list in light order: in every batch of 64 lights, a light's slot is the
@@ -41,6 +44,9 @@ var<workgroup> wg_covered: u32;
 var<workgroup> wg_cmin: atomic<u32>;
 var<workgroup> wg_cmax: atomic<u32>;
 var<workgroup> wg_ccov: atomic<u32>;
+// The lights a workgroup kept (tile masks) and, in their fill, its tile's place in the list.
+var<workgroup> wg_kept: atomic<u32>;
+var<workgroup> wg_at: u32;
 // A batch's lights (those that reach the coarse tile), at their slots.
 var<workgroup> wg_light: array<CullLight, 64>;
 // Two sets of a batch's lines, 32 words each: words 2c and 2c + 1 of a set have bit k set
@@ -137,6 +143,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
         atomicStore(&wg_cmin, 0xffffffffu);
         atomicStore(&wg_cmax, 0u);
         atomicStore(&wg_ccov, 0u);
+        atomicStore(&wg_kept, 0u);
     }
     atomicStore(&wg_lines[slot], 0u);
     workgroupBarrier();
@@ -239,27 +246,42 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
     if mode == CHUNK_COUNT && has_pixels {
         atomicStore(&bin_counts[entry], kept);
     }
-    if mode == CHUNK_MASK && kept != 0u {
-        atomicAdd(&bin_counts[bin], kept);
+    if mode == CHUNK_MASK {
+        if kept != 0u {
+            atomicAdd(&bin_counts[bin], kept);
+            atomicAdd(&wg_kept, kept);
+        }
+        workgroupBarrier();
+        if slot == 0u {
+            let k = atomicLoad(&wg_kept);
+            if k != 0u {
+                atomicAdd(&cull_stats[4], k);
+            }
+        }
     }
 }
 
-// The tile masks' fill: tile `tile`'s range, and its list from its mask words, 64 words at a
-// time, each thread's lights placed after those of the words before it (a workgroup scan of
-// their bit counts). Only tiles with lights read their words: a tile without pixels kept none
-// and its words were not written.
+// The tile masks' fill: tile `tile`'s place in the list buffer (one atomic add), its range,
+// and its list from its mask words, 64 words at a time, each thread's lights placed after those
+// of the words before it (a workgroup scan of their bit counts). Only tiles with lights read
+// their words: a tile without pixels kept none and its words were not written.
 fn gather_expand(tile: vec2<u32>, slot: u32) {
     let bin = tile.y * cull.tiles_x + tile.x;
-    let at = bin_offsets[bin];
     if slot == 0u {
-        let n = bin_offsets[bin + 1u] - at;
+        let n = atomicLoad(&bin_counts[bin]);
+        var at = 0u;
+        if n != 0u {
+            at = atomicAdd(&cull_stats[5], n);
+        }
         out_ranges[bin] = vec2<u32>(at, n);
         wg_covered = n;
+        wg_at = at;
     }
     // Uniform, so the scans' barriers are reached by all threads or none.
     if workgroupUniformLoad(&wg_covered) == 0u {
         return;
     }
+    let at = wg_at;
     let words = mask_words();
     var acc = at;
     for (var first = 0u; first < words; first += 64u) {

@@ -538,7 +538,9 @@ impl Culler {
         // first.
         let chunked = !clustered && p.coarse > 0;
         let mask_bytes = u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8;
+        // (Also bounded so that the list total, at most bins x lights, fits a u32.)
         let masked = chunked
+            && u64::from(p.bins) * u64::from(p.light_count) < 1 << 32
             && mask_bytes
                 <= self.gather_mask_budget.min(
                     ctx.limits
@@ -594,11 +596,7 @@ impl Culler {
             p.tiles_y.div_ceil(p.coarse.max(1)),
             p.light_count.div_ceil(p.chunk.max(1)),
         ];
-        let entries = if masked {
-            p.bins
-        } else {
-            f.entries_counted()
-        };
+        let entries = f.entries_counted();
         let groups = if chunked {
             chunk_groups
         } else {
@@ -693,7 +691,19 @@ impl Culler {
                     groups_2d(p.bins.div_ceil(64), GROUPS_X),
                 );
             }
-            f.encode_scan(ctx, &self.scan, enc, entries, timer);
+            // (With tile masks the count pass sums the total itself and the fill places each
+            // tile's list with an atomic add: no scan.)
+            if !masked {
+                f.encode_scan(ctx, &self.scan, enc, entries, timer);
+            }
+        };
+        // The exact list total after the count pass.
+        let total_of = |ctx: &GpuContext| {
+            if masked {
+                f.masked_total(ctx)
+            } else {
+                f.bins_total(ctx, entries)
+            }
         };
         // The lists, once the index buffer is sized.
         let filling = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b| {
@@ -733,7 +743,7 @@ impl Culler {
                 ctx,
                 "light list bytes",
                 "light list entries",
-                f.bins_total(ctx, entries)?,
+                total_of(ctx)?,
             )?;
             let indices = f.buf("cull.light_indices", u64::from(total) * 4);
             let group_b = f.group(&indices, wide, if masked { wide_args } else { placeholder });
@@ -752,7 +762,7 @@ impl Culler {
         }
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: repeated runs")?;
-        repeat.check(f.bins_total(ctx, entries)?)?;
+        repeat.check(total_of(ctx)?)?;
         Ok(f.finish(indices, repeat.total)?)
     }
 
@@ -1051,7 +1061,7 @@ impl<'a> Frame<'a> {
             cursors: storage_buf(ctx, "cull.bin_cursors", bins * 4),
             ranges: storage_buf(ctx, "cull.bin_ranges", bins * 8),
             occupancy: storage_buf(ctx, "cull.occupancy", bins * 4),
-            stats: storage_buf(ctx, "cull.stats", 16),
+            stats: storage_buf(ctx, "cull.stats", 32),
         }
     }
 
@@ -1197,7 +1207,16 @@ impl<'a> Frame<'a> {
         }
     }
 
-    /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with
+    /// Gather's list total with tile masks, which its count pass sums (`cull_stats[4]`; it
+    /// cannot wrap: the masks' budget bounds bins x lights below 2^32).
+    fn masked_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
+        let bytes = readback::read_buffer(ctx, &self.stats, 16, 4)?;
+        Ok(u64::from(u32::from_le_bytes(
+            bytes[..4].try_into().expect("4 bytes"),
+        )))
+    }
+
+        /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with
     /// the carries in `cull_stats[2]`).
     fn pairs_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
         let sum = readback::read_buffer(ctx, &self.stats, 4, 8)?;
