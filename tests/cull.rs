@@ -360,7 +360,7 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
     for seed in [11u64, 12, 13, 14, 15, 16] {
         let mut case = random_case(seed);
         if seed >= 15 {
-            // Over 512 lights: gather's coarse-to-fine passes take them in several chunks.
+            // Over twice MIN_CHUNK lights: gather's coarse-to-fine passes take them in several chunks.
             let lights = case.scene.lights.clone();
             case.scene.lights = lights
                 .iter()
