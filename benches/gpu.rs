@@ -262,6 +262,7 @@ fn cull_paper(c: &mut Criterion) {
     // ones less repeated set-up.
     for chunk in [64, 128, 512, 1024] {
         culler.gather_min_chunk = chunk;
+        culler.gather_min_chunk_masked = chunk;
         let strategy = Strategy::tiled_gather(8);
         let culler = &culler;
         g.bench_with_input(
@@ -276,6 +277,7 @@ fn cull_paper(c: &mut Criterion) {
     }
     // Gather and 2.5D without tile masks: the fill tests every light again.
     culler.gather_min_chunk = manylights_cull::MIN_CHUNK;
+    culler.gather_min_chunk_masked = manylights_cull::MIN_CHUNK_MASKED;
     culler.gather_mask_budget = 0;
     for (label, strategy) in [
         ("tiled_gather8_unmasked", Strategy::tiled_gather(8)),

@@ -223,6 +223,11 @@ impl CullOutput {
     }
 }
 
+/// Bytes of gather's tile masks: two words a tile for each 64 lights.
+fn mask_bytes(p: &GpuCullParams) -> u64 {
+    u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8
+}
+
 /// Pipelines of every culling pass.
 pub struct Culler {
     layout: wgpu::BindGroupLayout,
@@ -235,6 +240,9 @@ pub struct Culler {
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
     /// ([`crate::MIN_CHUNK`] by default; larger trades parallelism for less repeated set-up).
     pub gather_min_chunk: u32,
+    /// The same with tile masks ([`crate::MIN_CHUNK_MASKED`] by default: without a scan over
+    /// (tile, chunk) counts, smaller chunks cost less).
+    pub gather_min_chunk_masked: u32,
     /// The most bytes of tile masks gather's coarse-to-fine passes may use
     /// ([`crate::MASK_BUDGET`] by default): where a bit per (tile, light) fits, the count pass
     /// stores the kept lights as bits and the fill pass expands them without testing again;
@@ -402,6 +410,7 @@ impl Culler {
             depth_bounds,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
+            gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
             gather_mask_budget: crate::MASK_BUDGET,
             gather_count,
             gather_fill,
@@ -427,6 +436,22 @@ impl Culler {
             sort: RadixSort::new(ctx),
             placeholder: storage_buf(ctx, "cull.placeholder", 16),
         }
+    }
+
+    /// Whether gather's coarse-to-fine passes over `p` use tile masks: a coarse level without a
+    /// capacity, masks within [`Culler::gather_mask_budget`] and the device's buffers, and
+    /// bins x lights within u32 (the masked count pass sums the total in a u32).
+    fn masks_fit(&self, ctx: &GpuContext, p: &GpuCullParams) -> bool {
+        p.coarse > 0
+            && p.capacity == 0
+            && p.light_count > 0
+            && u64::from(p.bins) * u64::from(p.light_count) < 1 << 32
+            && mask_bytes(p)
+                <= self.gather_mask_budget.min(
+                    ctx.limits
+                        .max_storage_buffer_binding_size
+                        .min(ctx.limits.max_buffer_size),
+                )
     }
 
     /// Runs `strategy` over the depth buffer `depth` of `scene` (whose frame uniform is set for
@@ -490,6 +515,13 @@ impl Culler {
         settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
         let mut params = strategy.params(w, h, scene.light_count, settings);
+        let min_chunk = if !matches!(strategy, Strategy::Clustered { .. })
+            && self.masks_fit(ctx, &params)
+        {
+            self.gather_min_chunk_masked
+        } else {
+            self.gather_min_chunk
+        };
         crate::fit_chunks(
             &mut params,
             (ctx.limits
@@ -498,7 +530,7 @@ impl Culler {
                 / 4)
             .min(crate::MAX_CHUNK_ENTRIES),
             ctx.limits.max_compute_workgroups_per_dimension,
-            self.gather_min_chunk,
+            min_chunk,
         );
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
         if matches!(strategy, Strategy::Clustered { .. }) {
@@ -537,16 +569,8 @@ impl Culler {
         // count per (tile, chunk), or per tile with tile masks; each light's tile rectangle
         // first.
         let chunked = !clustered && p.coarse > 0;
-        let mask_bytes = u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8;
-        // (Also bounded so that the list total, at most bins x lights, fits a u32.)
-        let masked = chunked
-            && u64::from(p.bins) * u64::from(p.light_count) < 1 << 32
-            && mask_bytes
-                <= self.gather_mask_budget.min(
-                    ctx.limits
-                        .max_storage_buffer_binding_size
-                        .min(ctx.limits.max_buffer_size),
-                );
+        let masked = chunked && self.masks_fit(ctx, &p);
+        let mask_bytes = mask_bytes(&p);
         let (count, fill_pipe) = if clustered {
             (&self.clustered_count, &self.clustered_fill)
         } else if masked {
