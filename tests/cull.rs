@@ -381,7 +381,11 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
             // Gather's chunked fill, which tests again, where tile masks would be used.
             let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
             unmasked.gather_mask_budget = 0;
-            [sub, Culler::with_subgroups(&ctx, &r.gpu_scene, false), unmasked]
+            [
+                sub,
+                Culler::with_subgroups(&ctx, &r.gpu_scene, false),
+                unmasked,
+            ]
         });
         for (culler, s) in cullers.iter().flat_map(|c| {
             strategies()

@@ -515,9 +515,11 @@ impl Culler {
         settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
         let mut params = strategy.params(w, h, scene.light_count, settings);
-        let min_chunk = if !matches!(strategy, Strategy::Clustered { .. })
-            && self.masks_fit(ctx, &params)
-        {
+        // Gather's tile masks, decided before the chunks are fitted (their chunks are smaller);
+        // fitting may still drop the coarse level, and the masks with it.
+        let masked =
+            !matches!(strategy, Strategy::Clustered { .. }) && self.masks_fit(ctx, &params);
+        let min_chunk = if masked {
             self.gather_min_chunk_masked
         } else {
             self.gather_min_chunk
@@ -532,6 +534,7 @@ impl Culler {
             ctx.limits.max_compute_workgroups_per_dimension,
             min_chunk,
         );
+        let masked = masked && params.coarse > 0;
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
         if matches!(strategy, Strategy::Clustered { .. }) {
             ctx.check_storage(
@@ -549,16 +552,18 @@ impl Culler {
         let f = Frame::new(self, ctx, scene, depth, params, per_light);
         match strategy {
             Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer, repeat),
-            _ => self.run_binned(ctx, f, strategy, timer, repeat),
+            _ => self.run_binned(ctx, f, strategy, masked, timer, repeat),
         }
     }
 
-    /// Gather, 2.5D and clusters: a count pass and a fill pass over bins.
+    /// Gather, 2.5D and clusters: a count pass and a fill pass over bins; `masked`: gather with
+    /// tile masks.
     fn run_binned(
         &self,
         ctx: &GpuContext,
         f: Frame<'_>,
         strategy: &Strategy,
+        masked: bool,
         timer: &mut GpuTimer,
         repeat: Option<Repeat>,
     ) -> Result<CullOutput, CullError> {
@@ -569,8 +574,6 @@ impl Culler {
         // count per (tile, chunk), or per tile with tile masks; each light's tile rectangle
         // first.
         let chunked = !clustered && p.coarse > 0;
-        let masked = chunked && self.masks_fit(ctx, &p);
-        let mask_bytes = mask_bytes(&p);
         let (count, fill_pipe) = if clustered {
             (&self.clustered_count, &self.clustered_fill)
         } else if masked {
@@ -603,7 +606,7 @@ impl Culler {
             )
         });
         let rects = chunked.then(|| f.buf("cull.light_rects", u64::from(p.light_count) * 8));
-        let masks = masked.then(|| f.buf("cull.tile_masks", mask_bytes));
+        let masks = masked.then(|| f.buf("cull.tile_masks", mask_bytes(&p)));
         // Binding 9: the clusters' wide-light queue, or gather's light rectangles; 11: the
         // clusters' indirect arguments, or gather's tile masks.
         let (wide, wide_args) = match (&wide_bufs, &rects) {
@@ -612,8 +615,10 @@ impl Culler {
             (None, None) => (placeholder, placeholder),
         };
         // The indirect arguments are written in one pass and read by the next: a buffer bound
-        // for storage in a dispatch cannot also be its indirect buffer.
-        let group_a = f.group(placeholder, wide, if masked { wide_args } else { placeholder });
+        // for storage in a dispatch cannot also be its indirect buffer. So binding 11 of the
+        // count and fill passes is the tile masks or nothing.
+        let binding_11 = if masked { wide_args } else { placeholder };
+        let group_a = f.group(placeholder, wide, binding_11);
         let group_args = f.group(placeholder, wide, wide_args);
         let chunk_groups = [
             p.coarse_x,
@@ -770,7 +775,7 @@ impl Culler {
                 total_of(ctx)?,
             )?;
             let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-            let group_b = f.group(&indices, wide, if masked { wide_args } else { placeholder });
+            let group_b = f.group(&indices, wide, binding_11);
             let mut enc = ctx.encoder("cull.fill");
             filling(&mut enc, timer, &group_b);
             timer.resolve(&mut enc);
@@ -778,7 +783,7 @@ impl Culler {
             return Ok(f.finish(indices, total)?);
         };
         let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
-        let group_b = f.group(&indices, wide, if masked { wide_args } else { placeholder });
+        let group_b = f.group(&indices, wide, binding_11);
         let mut enc = ctx.encoder("cull.repeated");
         for _ in 0..repeat.runs {
             counting(&mut enc, timer);
@@ -1094,7 +1099,8 @@ impl<'a> Frame<'a> {
     }
 
     /// The culling group: `pair_keys` at binding 9 (tiled scatter's pair keys, the clusters'
-    /// wide-light queue), `args` at 11 (the clusters' indirect dispatch).
+    /// wide-light queue, gather's light rectangles), `args` at 11 (the clusters' indirect
+    /// dispatch, gather's tile masks).
     fn group(
         &self,
         indices: &wgpu::Buffer,
@@ -1212,40 +1218,33 @@ impl<'a> Frame<'a> {
         scan.encode(ctx, enc, &self.offsets, n + 1, timer);
     }
 
-    /// The exact total of the `n` counts after [`Frame::scan`]: the scan's u32 total
+    /// The exact total of the `n` counts after [`Frame::encode_scan`]: the scan's u32 total
     /// (`offsets[n]`), or, where the counts could sum past u32 (bins x lights > 2^32), the
     /// counts read back and summed in u64, so that a wrapped total never sizes the lists short.
     fn bins_total(&self, ctx: &GpuContext, n: u32) -> Result<u64, GpuError> {
-        let read_u32s = |buf: &wgpu::Buffer, offset: u64, count: u64| {
-            readback::read_buffer(ctx, buf, offset, count * 4).map(|bytes| {
-                bytes
-                    .chunks_exact(4)
-                    .map(|c| u64::from(u32::from_le_bytes(c.try_into().expect("4 bytes"))))
-                    .collect::<Vec<u64>>()
-            })
-        };
         if u64::from(self.params.bins) * u64::from(self.params.light_count) > u64::from(u32::MAX) {
-            Ok(read_u32s(&self.counts, 0, u64::from(n))?.iter().sum())
+            Ok(read_u32s(ctx, &self.counts, 0, u64::from(n))?
+                .iter()
+                .map(|&c| u64::from(c))
+                .sum())
         } else {
-            Ok(read_u32s(&self.offsets, u64::from(n) * 4, 1)?[0])
+            Ok(u64::from(
+                read_u32s(ctx, &self.offsets, u64::from(n), 1)?[0],
+            ))
         }
     }
 
     /// Gather's list total with tile masks, which its count pass sums (`cull_stats[4]`; it
     /// cannot wrap: the masks' budget bounds bins x lights below 2^32).
     fn masked_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
-        let bytes = readback::read_buffer(ctx, &self.stats, 16, 4)?;
-        Ok(u64::from(u32::from_le_bytes(
-            bytes[..4].try_into().expect("4 bytes"),
-        )))
+        Ok(u64::from(read_u32s(ctx, &self.stats, 4, 1)?[0]))
     }
 
-        /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with
+    /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with
     /// the carries in `cull_stats[2]`).
     fn pairs_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
-        let sum = readback::read_buffer(ctx, &self.stats, 4, 8)?;
-        let word = |k: usize| u64::from(u32::from_le_bytes(sum[k..k + 4].try_into().expect("4")));
-        Ok(word(0) | (word(4) << 32))
+        let sum = read_u32s(ctx, &self.stats, 1, 2)?;
+        Ok(u64::from(sum[0]) | (u64::from(sum[1]) << 32))
     }
 
     /// `entries` list entries, checked: they must fit one storage binding (`what_bytes`) and
@@ -1268,8 +1267,7 @@ impl<'a> Frame<'a> {
     /// The output; reads back the dropped count where a capacity was set.
     fn finish(self, indices: wgpu::Buffer, total: u32) -> Result<CullOutput, GpuError> {
         let dropped = if self.params.capacity != 0 {
-            let bytes = readback::read_buffer(self.ctx, &self.stats, 0, 4)?;
-            u32::from_le_bytes(bytes[..4].try_into().expect("4 bytes"))
+            read_u32s(self.ctx, &self.stats, 0, 1)?[0]
         } else {
             0
         };
@@ -1322,6 +1320,21 @@ fn chunks(p: &GpuCullParams) -> u64 {
 /// workgroup of 64 (sizes are powers of two, so at most 64).
 fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
     ctx.features.subgroups && ctx.features.subgroup_size.1 <= 64
+}
+
+/// `count` u32 words of `buf` from word `first`, read back.
+fn read_u32s(
+    ctx: &GpuContext,
+    buf: &wgpu::Buffer,
+    first: u64,
+    count: u64,
+) -> Result<Vec<u32>, GpuError> {
+    Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+        ctx,
+        buf,
+        first * 4,
+        count * 4,
+    )?))
 }
 
 /// A storage buffer (at least 4 bytes) that can be cleared and read back.
