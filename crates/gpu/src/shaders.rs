@@ -3,11 +3,47 @@
 //! of files, concatenated in order. Files are embedded at compile time, so the binary runs
 //! anywhere without the source tree.
 //!
+//! For ablations without a rebuild, `MANYLIGHTS_SHADER_DIR` names a directory laid out like
+//! `shaders/`: a file found there replaces the embedded one (each replacement is printed as a
+//! warning, once), and the rest stay embedded. A named directory that does not exist, or a file
+//! there that cannot be read, is an error, not a silent fallback.
+//!
 //! Every [`ShaderDef`] of every crate is listed by that crate (`SHADERS`) and validated with naga
 //! in a test that needs no GPU; the same test fails if a `.wgsl` file under `shaders/` is used by
 //! no definition.
 
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
 use crate::layout::wgsl_prelude;
+
+/// The environment variable naming a directory of replacement shader files (see the module
+/// documentation).
+pub const SHADER_DIR_ENV: &str = "MANYLIGHTS_SHADER_DIR";
+
+/// The replacement directory from [`SHADER_DIR_ENV`], read once; an error when it is named but
+/// is not a directory.
+fn override_dir() -> Result<Option<&'static Path>, String> {
+    static DIR: OnceLock<Result<Option<PathBuf>, String>> = OnceLock::new();
+    DIR.get_or_init(|| match std::env::var_os(SHADER_DIR_ENV) {
+        None => Ok(None),
+        Some(v) if v.is_empty() => Ok(None),
+        Some(v) => {
+            let dir = PathBuf::from(v);
+            if dir.is_dir() {
+                Ok(Some(dir))
+            } else {
+                Err(format!(
+                    "{SHADER_DIR_ENV}={}: not a directory (expected a directory laid out like shaders/, or unset)",
+                    dir.display()
+                ))
+            }
+        }
+    })
+    .as_ref()
+    .map(|d| d.as_deref())
+    .map_err(Clone::clone)
+}
 
 /// One WGSL file of the shader tree.
 #[derive(Clone, Copy, Debug)]
@@ -65,8 +101,15 @@ pub struct ShaderDef {
 }
 
 impl ShaderDef {
-    /// The full WGSL text.
+    /// The full WGSL text, from the embedded files.
     pub fn compose(&self) -> String {
+        self.compose_from(None)
+            .expect("embedded shader files need no reading")
+    }
+
+    /// The full WGSL text, each file taken from `dir` (laid out like `shaders/`) where it exists
+    /// there, and embedded otherwise. Errors name the file that could not be read.
+    pub fn compose_from(&self, dir: Option<&Path>) -> Result<String, String> {
         let mut s = wgsl_prelude();
         for c in self.consts {
             match c {
@@ -75,19 +118,56 @@ impl ShaderDef {
             }
         }
         for f in self.files {
+            let replaced = dir.map(|d| d.join(f.path)).filter(|p| p.is_file());
             s.push_str("\n// ---- shaders/");
             s.push_str(f.path);
-            s.push_str(" ----\n");
-            s.push_str(f.source);
+            match replaced {
+                Some(p) => {
+                    let text =
+                        std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                    s.push_str(&format!(" (replaced by {}) ----\n", p.display()));
+                    s.push_str(&text);
+                }
+                None => {
+                    s.push_str(" ----\n");
+                    s.push_str(f.source);
+                }
+            }
         }
-        s
+        Ok(s)
     }
 
-    /// Compiles the shader on `device`.
+    /// Compiles the shader on `device`, with the files of `MANYLIGHTS_SHADER_DIR` where it is
+    /// set (a warning names each replaced file, once).
+    ///
+    /// # Panics
+    /// When `MANYLIGHTS_SHADER_DIR` is set but is not a directory, or a file there cannot be
+    /// read: a measurement must not silently run other shaders than asked for.
     pub fn create(&self, device: &wgpu::Device) -> wgpu::ShaderModule {
+        let source = match override_dir() {
+            Ok(None) => self.compose(),
+            Ok(Some(dir)) => {
+                static WARNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+                for f in self.files {
+                    let p = dir.join(f.path);
+                    if p.is_file() {
+                        let mut warned = WARNED.lock().unwrap_or_else(|e| e.into_inner());
+                        if !warned.contains(&p) {
+                            // Printed, not only logged: benches install no log subscriber,
+                            // and a replaced shader must never go unnoticed.
+                            eprintln!("warning: shaders/{} replaced by {}", f.path, p.display());
+                            warned.push(p);
+                        }
+                    }
+                }
+                self.compose_from(Some(dir))
+                    .unwrap_or_else(|e| panic!("{SHADER_DIR_ENV}: {e}"))
+            }
+            Err(e) => panic!("{e}"),
+        };
         device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(self.name),
-            source: wgpu::ShaderSource::Wgsl(self.compose().into()),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
         })
     }
 }
@@ -101,3 +181,25 @@ pub const PREPASS: ShaderDef = ShaderDef {
 
 /// Every shader this crate defines.
 pub const SHADERS: &[ShaderDef] = &[PREPASS];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn replacement_files_take_the_place_of_embedded_ones() {
+        let dir = std::env::temp_dir().join(format!("manylights-shaders-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("common")).unwrap();
+        std::fs::write(dir.join("common/vertex.wgsl"), "// replaced vertex stage\n").unwrap();
+        let embedded = PREPASS.compose();
+        let replaced = PREPASS.compose_from(Some(&dir)).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(embedded.contains(VERTEX.source));
+        assert!(!replaced.contains(VERTEX.source));
+        assert!(replaced.contains("// replaced vertex stage"));
+        assert!(replaced.contains("(replaced by "));
+        // FRAME has no replacement there: still embedded.
+        assert!(replaced.contains(FRAME.source));
+        assert_eq!(PREPASS.compose_from(None).unwrap(), embedded);
+    }
+}
