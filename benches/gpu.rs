@@ -9,7 +9,8 @@
 //!   clusters without their order pass;
 //! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
 //!   lights, 8-pixel tiles), every strategy, gather with other chunks of lights a workgroup
-//!   (`tiled_gather8_chunk<N>`), and gather and 2.5D without tile masks (`*_unmasked`);
+//!   (`tiled_gather8_chunk<N>`), and gather, 2.5D and scatter without tile masks
+//!   (`*_unmasked`; scatter then sorts its pairs);
 //! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
 //!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
@@ -275,13 +276,18 @@ fn cull_paper(c: &mut Criterion) {
             },
         );
     }
-    // Gather and 2.5D without tile masks: the fill tests every light again.
+    // Gather and 2.5D without tile masks (the fill tests every light again), and scatter
+    // without them (its pairs and their radix sort).
     culler.gather_min_chunk = manylights_cull::MIN_CHUNK;
     culler.gather_min_chunk_masked = manylights_cull::MIN_CHUNK_MASKED;
-    culler.gather_mask_budget = 0;
+    culler.mask_budget = 0;
     for (label, strategy) in [
         ("tiled_gather8_unmasked", Strategy::tiled_gather(8)),
         ("depth_mask8_unmasked", Strategy::depth_mask(8)),
+        (
+            "tiled_scatter8_unmasked",
+            Strategy::TiledScatter { tile_size: 8 },
+        ),
     ] {
         let culler = &culler;
         g.bench_with_input(BenchmarkId::new(label, n), &n, |b, _| {

@@ -378,9 +378,10 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 sub.gather_subgroups, ctx.features.subgroups,
                 "gather must take its subgroup path where the device has subgroups"
             );
-            // Gather's chunked fill, which tests again, where tile masks would be used.
+            // Gather's chunked fill, which tests again, and scatter's pairs and sort, where tile
+            // masks would be used.
             let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
-            unmasked.gather_mask_budget = 0;
+            unmasked.mask_budget = 0;
             [
                 sub,
                 Culler::with_subgroups(&ctx, &r.gpu_scene, false),
@@ -391,11 +392,12 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
             strategies()
                 .into_iter()
                 .filter(|s| {
-                    c.gather_mask_budget > 0
+                    c.mask_budget > 0
                         || matches!(
                             s,
                             Strategy::TiledGather { coarse: 1.., .. }
                                 | Strategy::DepthMask { coarse: 1.., .. }
+                                | Strategy::TiledScatter { .. }
                         )
                 })
                 .map(move |s| (c, s))
@@ -405,11 +407,28 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 case.label,
                 s.name(),
                 culler.gather_subgroups,
-                culler.gather_mask_budget > 0
+                culler.mask_budget > 0
             );
             let out = run_gpu(&ctx, culler, &r, &case, &s);
             let p = out.params;
             let gpu = out.read(&ctx).unwrap();
+            // Tile masks where they fit (these scenes are small), and all zero after the fill,
+            // as the next count pass needs.
+            let masks = out.read_tile_masks(&ctx).unwrap();
+            let maskable = p.capacity == 0
+                && match s {
+                    Strategy::TiledScatter { .. } => true,
+                    Strategy::TiledGather { .. } | Strategy::DepthMask { .. } => p.coarse > 0,
+                    _ => false,
+                };
+            assert_eq!(
+                masks.is_some(),
+                maskable && culler.mask_budget > 0,
+                "{what}: tile masks used"
+            );
+            if let Some(m) = masks {
+                assert!(m.iter().all(|&w| w == 0), "{what}: tile masks left set");
+            }
             let oracle = match s {
                 Strategy::Clustered { .. } => {
                     let occ = out.read_occupancy(&ctx).unwrap();

@@ -40,7 +40,7 @@ fn gather_count_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
 
 @compute @workgroup_size(64)
 fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_expand(wg.xy, li);
+    masks_expand(wg.xy, li);
 }
 
 @compute @workgroup_size(64)

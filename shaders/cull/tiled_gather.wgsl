@@ -25,13 +25,10 @@
 // floats are compared), and cpu::gather states the same.
 //
 // Tile masks (where tiles x lights bits fit the host's budget, as at the Forward+ paper's
-// configuration): the count pass also stores each tile's kept lights as bits (tile_masks, a
-// word per 32 lights) and adds its count per tile, not per (tile, chunk), and the total
-// (cull_stats[4]), from which the host sizes the lists. No scan: the fill pass (gather_expand,
-// a workgroup per tile) takes its tile's place in the list buffer with one atomic add
-// (cull_stats[5]) and turns the tile's words into its list, in light order, without testing
-// any light again. A tile's list is the same as the chunked fill's; only where it sits in the
-// buffer differs from run to run (its range says where).
+// configuration; tile_masks.wgsl): the count pass stores each tile's kept lights as bits
+// instead of counting per (tile, chunk), and sums the total (cull_stats[4]), from which the
+// host sizes the lists. No scan: the fill pass (masks_expand, a workgroup per tile) turns the
+// tile's words into its list, in light order, without testing any light again.
 //
 // The single level (cull.coarse = 0): the paper's one workgroup per tile over every light; the
 // fill keeps each list in light order: in every batch of 64 lights, a light's slot is the
@@ -44,9 +41,8 @@ var<workgroup> wg_covered: u32;
 var<workgroup> wg_cmin: atomic<u32>;
 var<workgroup> wg_cmax: atomic<u32>;
 var<workgroup> wg_ccov: atomic<u32>;
-// The lights a workgroup kept (tile masks) and, in their fill, its tile's place in the list.
+// The lights a workgroup kept (tile masks).
 var<workgroup> wg_kept: atomic<u32>;
-var<workgroup> wg_at: u32;
 // A batch's lights (those that reach the coarse tile), at their slots.
 var<workgroup> wg_light: array<CullLight, 64>;
 // Two sets of a batch's lines, 32 words each: words 2c and 2c + 1 of a set have bit k set
@@ -56,19 +52,12 @@ var<workgroup> wg_light: array<CullLight, 64>;
 var<workgroup> wg_lines: array<atomic<u32>, 64>;
 // Each light's tile rectangle (cull.light_rects, coarse-to-fine gather and 2.5D).
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
-// Each tile's kept lights as bits, mask_words() words a tile (the tile masks' count pass).
-@group(1) @binding(11) var<storage, read_write> tile_masks: array<u32>;
 
-// What a coarse-to-fine pass does: count per (tile, chunk), fill, or count per tile and store
-// the tile masks.
+// What a coarse-to-fine pass does: count per (tile, chunk), fill, or store the tile masks and
+// sum their total.
 const CHUNK_COUNT: u32 = 0u;
 const CHUNK_FILL: u32 = 1u;
 const CHUNK_MASK: u32 = 2u;
-
-// Words of a tile's mask: two a batch of 64 lights.
-fn mask_words() -> u32 {
-    return (cull.light_count + 63u) / 64u * 2u;
-}
 
 // One batch of up to 64 candidate lights, light `i` at this thread (`valid` false past the
 // end). The count pass adds the survivors to `counted`, this thread's own count (one atomic
@@ -233,10 +222,11 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                         kept += 1u;
                     }
                 }
-                if mode == CHUNK_MASK {
-                    // Every word of a tile with pixels is written on every run (chunks are
-                    // whole batches, so b / 32 + w is this batch's word w).
-                    tile_masks[bin * mask_words() + b / 32u + w] = word;
+                if mode == CHUNK_MASK && word != 0u {
+                    // Masks start each run at zero (the fill clears them), so only nonzero
+                    // words are stored (chunks are whole batches, so b / 32 + w is this
+                    // batch's word w).
+                    atomicStore(&tile_masks[bin * mask_words() + b / 32u + w], word);
                 }
             }
         }
@@ -248,7 +238,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
     }
     if mode == CHUNK_MASK {
         if kept != 0u {
-            atomicAdd(&bin_counts[bin], kept);
             atomicAdd(&wg_kept, kept);
         }
         workgroupBarrier();
@@ -258,47 +247,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                 atomicAdd(&cull_stats[4], k);
             }
         }
-    }
-}
-
-// The tile masks' fill: tile `tile`'s place in the list buffer (one atomic add), its range,
-// and its list from its mask words, 64 words at a time, each thread's lights placed after those
-// of the words before it (a workgroup scan of their bit counts). Only tiles with lights read
-// their words: a tile without pixels kept none and its words were not written.
-fn gather_expand(tile: vec2<u32>, slot: u32) {
-    let bin = tile.y * cull.tiles_x + tile.x;
-    if slot == 0u {
-        let n = atomicLoad(&bin_counts[bin]);
-        var at = 0u;
-        if n != 0u {
-            at = atomicAdd(&cull_stats[5], n);
-        }
-        out_ranges[bin] = vec2<u32>(at, n);
-        wg_covered = n;
-        wg_at = at;
-    }
-    // Uniform, so the scans' barriers are reached by all threads or none.
-    if workgroupUniformLoad(&wg_covered) == 0u {
-        return;
-    }
-    let at = wg_at;
-    let words = mask_words();
-    var acc = at;
-    for (var first = 0u; first < words; first += 64u) {
-        let w = first + slot;
-        var m = 0u;
-        if w < words {
-            m = tile_masks[bin * words + w];
-        }
-        let c = countOneBits(m);
-        let scan = scan_keep(slot, c);
-        var pos = acc + scan.x - c;
-        while m != 0u {
-            out_indices[pos] = w * 32u + firstTrailingBit(m);
-            m &= m - 1u;
-            pos += 1u;
-        }
-        acc += scan.y;
     }
 }
 

@@ -16,6 +16,9 @@ pub const COMMON: ShaderFile = shader_file!("cull/common.wgsl");
 pub const LISTS: ShaderFile = shader_file!("cull/lists.wgsl");
 /// The pixel-to-list lookup of every list consumer.
 pub const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
+/// Tile masks: their fill, and tiled scatter's count pass that sets them (in the gather
+/// modules, which hold the workgroup scan the fill uses).
+pub const TILE_MASKS: ShaderFile = shader_file!("cull/tile_masks.wgsl");
 
 /// `cull.depth_bounds`.
 pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
@@ -29,8 +32,8 @@ pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
         shader_file!("cull/depth_bounds.wgsl"),
     ],
 };
-/// `cull.tiled_gather` (also `cull.depth_mask`, with its flag) and `cull.finalize`, with the
-/// portable workgroup scan.
+/// `cull.tiled_gather` (also `cull.depth_mask`, with its flag), `cull.finalize`, and the tile
+/// masks' passes (also tiled scatter's with masks), with the portable workgroup scan.
 pub const TILED_GATHER: ShaderDef = ShaderDef {
     name: "cull.tiled_gather",
     consts: CULL_CONSTS,
@@ -41,6 +44,7 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
         COMMON,
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
+        TILE_MASKS,
         shader_file!("cull/gather_scan.wgsl"),
     ],
 };
@@ -56,6 +60,7 @@ pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
         COMMON,
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
+        TILE_MASKS,
         shader_file!("cull/gather_scan_subgroup.wgsl"),
     ],
 };
@@ -169,6 +174,10 @@ pub struct CullOutput {
     pub tile_depth: wgpu::Buffer,
     /// Cluster occupancy (clusters with `skip_empty`).
     pub occupancy: wgpu::Buffer,
+    /// The tile masks, where the run used them (gather's and 2.5D's coarse-to-fine passes, and
+    /// tiled scatter, within [`Culler::mask_budget`]). Every fill leaves them all zero, as the
+    /// next count pass needs (see `shaders/cull/tile_masks.wgsl`).
+    pub tile_masks: Option<wgpu::Buffer>,
 }
 
 impl CullOutput {
@@ -212,6 +221,21 @@ impl CullOutput {
         )?))
     }
 
+    /// Reads the tile masks back, where the run used them.
+    pub fn read_tile_masks(&self, ctx: &GpuContext) -> Result<Option<Vec<u32>>, GpuError> {
+        self.tile_masks
+            .as_ref()
+            .map(|m| {
+                Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+                    ctx,
+                    m,
+                    0,
+                    mask_bytes(&self.params),
+                )?))
+            })
+            .transpose()
+    }
+
     /// Reads the cluster occupancy back (meaningful with `skip_empty`).
     pub fn read_occupancy(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
@@ -223,7 +247,7 @@ impl CullOutput {
     }
 }
 
-/// Bytes of gather's tile masks: two words a tile for each 64 lights.
+/// Bytes of the tile masks: two words a tile for each 64 lights.
 fn mask_bytes(p: &GpuCullParams) -> u64 {
     u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8
 }
@@ -243,14 +267,16 @@ pub struct Culler {
     /// The same with tile masks ([`crate::MIN_CHUNK_MASKED`] by default: without a scan over
     /// (tile, chunk) counts, smaller chunks cost less).
     pub gather_min_chunk_masked: u32,
-    /// The most bytes of tile masks gather's coarse-to-fine passes may use
+    /// The most bytes of tile masks gather's coarse-to-fine passes and tiled scatter may use
     /// ([`crate::MASK_BUDGET`] by default): where a bit per (tile, light) fits, the count pass
-    /// stores the kept lights as bits and the fill pass expands them without testing again;
-    /// past it (or at 0) the fill pass tests every light again.
-    pub gather_mask_budget: u64,
+    /// stores the kept lights as bits and the fill pass expands them without testing again
+    /// (scatter: without pairs and their sort); past it (or at 0) gather's fill tests every
+    /// light again and scatter sorts its pairs.
+    pub mask_budget: u64,
     gather_count: wgpu::ComputePipeline,
     gather_count_masks: wgpu::ComputePipeline,
     gather_fill_masks: wgpu::ComputePipeline,
+    scatter_masks: wgpu::ComputePipeline,
     gather_rects: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
     gather_fill_flat: wgpu::ComputePipeline,
@@ -336,6 +362,7 @@ impl Culler {
             gather_count_flat,
             gather_fill_flat,
             gather_rects,
+            scatter_masks,
             finalize,
             cap,
         ] = pipelines(
@@ -355,6 +382,7 @@ impl Culler {
                 "gather_count_flat",
                 "gather_fill_flat",
                 "gather_rects",
+                "scatter_masks",
                 "finalize",
                 "cap_counts",
             ],
@@ -411,11 +439,12 @@ impl Culler {
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
-            gather_mask_budget: crate::MASK_BUDGET,
+            mask_budget: crate::MASK_BUDGET,
             gather_count,
             gather_fill,
             gather_count_masks,
             gather_fill_masks,
+            scatter_masks,
             gather_count_flat,
             gather_fill_flat,
             gather_rects,
@@ -438,16 +467,15 @@ impl Culler {
         }
     }
 
-    /// Whether gather's coarse-to-fine passes over `p` use tile masks: a coarse level without a
-    /// capacity, masks within [`Culler::gather_mask_budget`] and the device's buffers, and
-    /// bins x lights within u32 (the masked count pass sums the total in a u32).
+    /// Whether tile masks may serve `p` (gather also needs its coarse level): no capacity,
+    /// masks within [`Culler::mask_budget`] and the device's buffers, and bins x lights within
+    /// u32 (the masked count passes sum the total in a u32).
     fn masks_fit(&self, ctx: &GpuContext, p: &GpuCullParams) -> bool {
-        p.coarse > 0
-            && p.capacity == 0
+        p.capacity == 0
             && p.light_count > 0
             && u64::from(p.bins) * u64::from(p.light_count) < 1 << 32
             && mask_bytes(p)
-                <= self.gather_mask_budget.min(
+                <= self.mask_budget.min(
                     ctx.limits
                         .max_storage_buffer_binding_size
                         .min(ctx.limits.max_buffer_size),
@@ -517,8 +545,9 @@ impl Culler {
         let mut params = strategy.params(w, h, scene.light_count, settings);
         // Gather's tile masks, decided before the chunks are fitted (their chunks are smaller);
         // fitting may still drop the coarse level, and the masks with it.
-        let masked =
-            !matches!(strategy, Strategy::Clustered { .. }) && self.masks_fit(ctx, &params);
+        let masked = !matches!(strategy, Strategy::Clustered { .. })
+            && (params.coarse > 0 || matches!(strategy, Strategy::TiledScatter { .. }))
+            && self.masks_fit(ctx, &params);
         let min_chunk = if masked {
             self.gather_min_chunk_masked
         } else {
@@ -534,7 +563,8 @@ impl Culler {
             ctx.limits.max_compute_workgroups_per_dimension,
             min_chunk,
         );
-        let masked = masked && params.coarse > 0;
+        let per_light = matches!(strategy, Strategy::TiledScatter { .. });
+        let masked = masked && (params.coarse > 0 || per_light);
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
         if matches!(strategy, Strategy::Clustered { .. }) {
             ctx.check_storage(
@@ -542,15 +572,17 @@ impl Culler {
                 (u64::from(params.light_count) + 1) * 16,
             )?;
         }
-        let per_light = matches!(strategy, Strategy::TiledScatter { .. });
-        if per_light {
+        if per_light && !masked {
             ctx.check_storage(
                 "tiled scatter per-lane counts",
                 (u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES) + 1) * 4,
             )?;
         }
-        let f = Frame::new(self, ctx, scene, depth, params, per_light);
+        let f = Frame::new(self, ctx, scene, depth, params, per_light && !masked);
         match strategy {
+            Strategy::TiledScatter { .. } if masked => {
+                self.run_scatter_masks(ctx, f, timer, repeat)
+            }
             Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer, repeat),
             _ => self.run_binned(ctx, f, strategy, masked, timer, repeat),
         }
@@ -780,7 +812,7 @@ impl Culler {
             filling(&mut enc, timer, &group_b);
             timer.resolve(&mut enc);
             ctx.submit_and_wait(enc, "culling: fill")?;
-            return Ok(f.finish(indices, total)?);
+            return Ok(f.finish(indices, total, masks.clone())?);
         };
         let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
         let group_b = f.group(&indices, wide, binding_11);
@@ -792,7 +824,81 @@ impl Culler {
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: repeated runs")?;
         repeat.check(total_of(ctx)?)?;
-        Ok(f.finish(indices, repeat.total)?)
+        Ok(f.finish(indices, repeat.total, masks.clone())?)
+    }
+
+    /// Tiled scatter with tile masks: each light sets its bit in every tile of its rectangle
+    /// that keeps it (a workgroup a light), and the fill expands each tile's bits into its list
+    /// (`shaders/cull/tile_masks.wgsl`): no pairs, no sort.
+    fn run_scatter_masks(
+        &self,
+        ctx: &GpuContext,
+        f: Frame<'_>,
+        timer: &mut GpuTimer,
+        repeat: Option<Repeat>,
+    ) -> Result<CullOutput, CullError> {
+        let p = f.params;
+        let placeholder = &self.placeholder;
+        let masks = f.buf("cull.tile_masks", mask_bytes(&p));
+        let group_a = f.group(placeholder, placeholder, &masks);
+        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
+            f.clear(enc);
+            f.pass(
+                enc,
+                timer,
+                "cull.depth_bounds",
+                &self.depth_bounds,
+                &group_a,
+                (p.tiles_x, p.tiles_y),
+            );
+            f.pass(
+                enc,
+                timer,
+                "cull.tiled_scatter.count",
+                &self.scatter_masks,
+                &group_a,
+                groups_2d(p.light_count, GROUPS_X),
+            );
+        };
+        let filling = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b| {
+            f.pass(
+                enc,
+                timer,
+                "cull.tiled_scatter.fill",
+                &self.gather_fill_masks,
+                group_b,
+                (p.tiles_x, p.tiles_y),
+            );
+        };
+        let Some(repeat) = repeat else {
+            let mut enc = ctx.encoder("cull.tiled_scatter.count");
+            counting(&mut enc, timer);
+            ctx.submit_and_wait(enc, "culling: count")?;
+            let total = Frame::entries(
+                ctx,
+                "light list bytes",
+                "light list entries",
+                f.masked_total(ctx)?,
+            )?;
+            let indices = f.buf("cull.light_indices", u64::from(total) * 4);
+            let group_b = f.group(&indices, placeholder, &masks);
+            let mut enc = ctx.encoder("cull.tiled_scatter.fill");
+            filling(&mut enc, timer, &group_b);
+            timer.resolve(&mut enc);
+            ctx.submit_and_wait(enc, "culling: fill")?;
+            return Ok(f.finish(indices, total, Some(masks.clone()))?);
+        };
+        let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
+        let group_b = f.group(&indices, placeholder, &masks);
+        let mut enc = ctx.encoder("cull.repeated");
+        for _ in 0..repeat.runs {
+            counting(&mut enc, timer);
+            filling(&mut enc, timer, &group_b);
+        }
+        timer.resolve(&mut enc);
+        ctx.submit_and_wait(enc, "culling: repeated runs")?;
+        repeat.check(f.masked_total(ctx)?)?;
+        Ok(f.finish(indices, repeat.total, Some(masks.clone()))?)
     }
 
     /// Tiled scatter: per-light pair counts, their scan, the pairs, the radix sort by tile, and
@@ -906,7 +1012,7 @@ impl Culler {
             SortedIn::Input => vals,
             SortedIn::Scratch => vals_tmp,
         };
-        Ok(f.finish(vals, pairs)?)
+        Ok(f.finish(vals, pairs, None)?)
     }
 
     /// The length of the list each pixel reads through the shared lookup (0 for background).
@@ -1265,7 +1371,12 @@ impl<'a> Frame<'a> {
     }
 
     /// The output; reads back the dropped count where a capacity was set.
-    fn finish(self, indices: wgpu::Buffer, total: u32) -> Result<CullOutput, GpuError> {
+    fn finish(
+        self,
+        indices: wgpu::Buffer,
+        total: u32,
+        tile_masks: Option<wgpu::Buffer>,
+    ) -> Result<CullOutput, GpuError> {
         let dropped = if self.params.capacity != 0 {
             read_u32s(self.ctx, &self.stats, 0, 1)?[0]
         } else {
@@ -1280,6 +1391,7 @@ impl<'a> Frame<'a> {
             total,
             tile_depth: self.tile_depth,
             occupancy: self.occupancy,
+            tile_masks,
         })
     }
 }

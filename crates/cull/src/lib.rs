@@ -127,7 +127,7 @@ pub const MIN_CHUNK: u32 = 256;
 pub const MIN_CHUNK_MASKED: u32 = 128;
 
 /// The default most bytes of gather's tile masks (a bit per tile and light;
-/// [`crate::Culler::gather_mask_budget`]): 5.5 MB at the Forward+ paper's configuration (3,072
+/// [`crate::Culler::mask_budget`]): 5.5 MB at the Forward+ paper's configuration (3,072
 /// lights, 1280x720 in 8-pixel tiles), 16.7 MB at 16,384 lights and 1080p in 16-pixel tiles;
 /// past it the fill tests every light again. On the H200, masks of 66 MB were slower than
 /// testing again (16,384 lights at 4K: 412 against 336 µs), those of 16.6 MB faster.
