@@ -385,6 +385,11 @@ struct CullArgs {
     /// them: steady-state times, as the benchmarks measure. 0: only the single run.
     #[arg(long, default_value_t = 0)]
     repeat: u32,
+    /// Build the lists without tile masks (a bit per tile and light, used where they fit 16
+    /// MiB): gather's and 2.5D's fill then tests every light again, and tiled scatter writes
+    /// (tile, light) pairs and radix-sorts them, as Harada et al. 2012 describe.
+    #[arg(long)]
+    no_tile_masks: bool,
 }
 
 /// A culling strategy and its parameters.
@@ -729,7 +734,10 @@ fn cull(args: &CullArgs) -> Result<()> {
         &mut timer,
     );
     ctx.submit_and_wait(enc, "depth prepass")?;
-    let culler = Culler::new(&ctx, &gpu_scene);
+    let mut culler = Culler::new(&ctx, &gpu_scene);
+    if args.no_tile_masks {
+        culler.mask_budget = 0;
+    }
     let settings = args.cull.settings(&scene.camera)?;
     let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
     let timings = timer.read(&ctx)?;

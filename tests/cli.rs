@@ -211,35 +211,52 @@ fn cull_reports_metrics_and_writes_heatmaps() {
 fn cull_repeat_times_runs_back_to_back() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("cull");
-    let o = manylights(&[
-        "cull",
-        "--scene",
-        "pillars",
-        "--lights",
-        "64",
-        "--strategy",
-        "tiled-scatter",
-        "--width",
-        "40",
-        "--height",
-        "23",
-        "--repeat",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let after = stdout
-        .split("3 runs back to back (median per pass):")
-        .nth(1)
-        .unwrap_or_else(|| panic!("no back-to-back timings: {stdout}"));
-    for pass in [
-        "cull.tiled_scatter.count",
-        "sort.radix.scatter",
-        "total (median run)",
+    // Tiled scatter with its pairs and radix sort, then with tile masks (the default where
+    // they fit): each prints its passes' medians.
+    for (flags, passes, absent) in [
+        (
+            &["--no-tile-masks"][..],
+            &["cull.tiled_scatter.count", "sort.radix.scatter"][..],
+            "cull.tiled_scatter.fill",
+        ),
+        (
+            &[][..],
+            &["cull.tiled_scatter.count", "cull.tiled_scatter.fill"][..],
+            "sort.radix",
+        ),
     ] {
-        assert!(after.contains(pass), "{pass} missing: {stdout}");
+        let mut args = vec![
+            "cull",
+            "--scene",
+            "pillars",
+            "--lights",
+            "64",
+            "--strategy",
+            "tiled-scatter",
+            "--width",
+            "40",
+            "--height",
+            "23",
+            "--repeat",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(flags);
+        let o = manylights(&args);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let after = stdout
+            .split("3 runs back to back (median per pass):")
+            .nth(1)
+            .unwrap_or_else(|| panic!("no back-to-back timings: {stdout}"));
+        for pass in passes.iter().chain(&["total (median run)"]) {
+            assert!(after.contains(pass), "{flags:?}: {pass} missing: {stdout}");
+        }
+        assert!(
+            !stdout.contains(absent),
+            "{flags:?}: {absent} ran: {stdout}"
+        );
     }
 }
 

@@ -837,3 +837,53 @@ fn capacity_drops_are_counted() {
         assert_eq!(full.dropped, 0);
     }
 }
+
+/// Tile masks of over 64 words a tile (over 4,096 lights, so each fill thread takes several
+/// words, and the last threads none): gather's, 2.5D's and scatter's lists equal their CPU
+/// oracles, each in light order, and the masks are left zero.
+#[test]
+fn tile_masks_of_many_words_equal_the_oracle() {
+    let ctx = common::gpu();
+    let (w, h) = (72, 40);
+    let mut case = random_case(21);
+    let lights = case.scene.lights.clone();
+    case.scene.lights = lights.iter().cycle().take(4100).cloned().collect();
+    let r = render(&ctx, &case, w, h);
+    let culler = Culler::new(&ctx, &r.gpu_scene);
+    for s in [
+        Strategy::tiled_gather(8),
+        Strategy::depth_mask(8),
+        Strategy::TiledScatter { tile_size: 8 },
+    ] {
+        let what = format!("{} {}", case.label, s.name());
+        let out = run_gpu(&ctx, &culler, &r, &case, &s);
+        let masks = out
+            .read_tile_masks(&ctx)
+            .unwrap()
+            .unwrap_or_else(|| panic!("{what}: tile masks must fit"));
+        assert!(
+            masks.len() / out.params.bins as usize > 64,
+            "{what}: over 64 words a tile"
+        );
+        assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
+        let td = out.read_tile_depth(&ctx).unwrap();
+        let gpu = out.read(&ctx).unwrap();
+        let oracle = match s {
+            Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &out.params, &r.lights, &td),
+            _ => cpu::gather(&r.frame, &out.params, &r.lights, &td),
+        };
+        oracle
+            .compare(&gpu)
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let mut kept = 0;
+        for b in 0..gpu.ranges.len() {
+            let list = gpu.list(b);
+            assert!(
+                list.windows(2).all(|p| p[0] < p[1]),
+                "{what}: bin {b} in light order"
+            );
+            kept += list.len();
+        }
+        assert!(kept > 0, "{what}: some tile keeps a light");
+    }
+}

@@ -15,8 +15,7 @@
 // only where it sits in the buffer differs from run to run (its range says where).
 @group(1) @binding(11) var<storage, read_write> tile_masks: array<atomic<u32>>;
 
-// The fill's tile total and place, and the scatter's kept lights, shared by a workgroup.
-var<workgroup> wg_mask_n: u32;
+// The fill's place for its tile, and the scatter's kept lights, shared by a workgroup.
 var<workgroup> wg_mask_at: u32;
 var<workgroup> wg_mask_kept: atomic<u32>;
 
@@ -25,51 +24,46 @@ fn mask_words() -> u32 {
     return (cull.light_count + 63u) / 64u * 2u;
 }
 
-// The fill: tile `tile`'s bits counted (a workgroup scan of each thread's words), its place in
-// the list buffer and its range, then its list from its words, 64 words at a time, each
-// thread's lights placed after those of the words before it. A tile without lights writes an
-// empty range.
+// The fill: thread `slot` takes words [slot k, slot k + k) of tile `tile`'s mask (k = words /
+// 64, rounded up), so that the threads' words follow light order; one workgroup scan of their
+// bit counts gives each thread its place in the tile's list and the tile's total, from which
+// the first thread takes the tile's place in the list buffer (one atomic add) and writes its
+// range. Each thread then turns its words into list entries, clearing each nonzero word. A
+// tile without lights writes an empty range.
 fn masks_expand(tile: vec2<u32>, slot: u32) {
     let bin = tile.y * cull.tiles_x + tile.x;
     let words = mask_words();
-    let base = bin * words;
+    let k = (words + 63u) / 64u;
+    let first = bin * words + min(slot * k, words);
+    let end = bin * words + min(slot * k + k, words);
     var c = 0u;
-    for (var w = slot; w < words; w += 64u) {
-        c += countOneBits(atomicLoad(&tile_masks[base + w]));
+    for (var w = first; w < end; w++) {
+        c += countOneBits(atomicLoad(&tile_masks[w]));
     }
-    let n = scan_keep(slot, c).y;
+    let scan = scan_keep(slot, c);
     if slot == 0u {
         var at = 0u;
-        if n != 0u {
-            at = atomicAdd(&cull_stats[5], n);
+        if scan.y != 0u {
+            at = atomicAdd(&cull_stats[5], scan.y);
         }
-        out_ranges[bin] = vec2<u32>(at, n);
-        wg_mask_n = n;
+        out_ranges[bin] = vec2<u32>(at, scan.y);
         wg_mask_at = at;
     }
-    // Uniform, so the scans' barriers are reached by all threads or none.
-    if workgroupUniformLoad(&wg_mask_n) == 0u {
+    var pos = workgroupUniformLoad(&wg_mask_at) + scan.x - c;
+    if c == 0u {
         return;
     }
-    var acc = wg_mask_at;
-    for (var first = 0u; first < words; first += 64u) {
-        let w = first + slot;
-        var m = 0u;
-        if w < words {
-            m = atomicLoad(&tile_masks[base + w]);
-            if m != 0u {
-                atomicStore(&tile_masks[base + w], 0u);
+    for (var w = first; w < end; w++) {
+        var m = atomicLoad(&tile_masks[w]);
+        if m != 0u {
+            atomicStore(&tile_masks[w], 0u);
+            let light = (w - bin * words) * 32u;
+            while m != 0u {
+                out_indices[pos] = light + firstTrailingBit(m);
+                m &= m - 1u;
+                pos += 1u;
             }
         }
-        let bits = countOneBits(m);
-        let scan = scan_keep(slot, bits);
-        var pos = acc + scan.x - bits;
-        while m != 0u {
-            out_indices[pos] = w * 32u + firstTrailingBit(m);
-            m &= m - 1u;
-            pos += 1u;
-        }
-        acc += scan.y;
     }
 }
 
