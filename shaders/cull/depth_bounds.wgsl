@@ -1,61 +1,66 @@
-// cull.depth_bounds: one workgroup per tile. The nearest and farthest covered pixel (linear
+// cull.depth_bounds: DEPTH_TILES tiles a workgroup (tiles DEPTH_TILES x + j of row y for
+// workgroup (x, y)), 64 threads a tile: fewer, larger workgroups, as launching a workgroup
+// costs more than a tile's work at small tiles. The nearest and farthest covered pixel (linear
 // view depth) and the 2.5D geometry mask of every tile (Harada 2012, GPU Pro 4 section 5.6.1:
 // 32 cells over [dmin, dmax]). Background pixels (depth 1.0, the clear value) are not covered
 // and need no lights, so they do not widen the bounds.
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
 
-var<workgroup> wg_zmin: atomic<u32>;
-var<workgroup> wg_zmax: atomic<u32>;
-var<workgroup> wg_mask: atomic<u32>;
-var<workgroup> wg_covered: atomic<u32>;
+var<workgroup> wg_zmin: array<atomic<u32>, DEPTH_TILES>;
+var<workgroup> wg_zmax: array<atomic<u32>, DEPTH_TILES>;
+var<workgroup> wg_mask: array<atomic<u32>, DEPTH_TILES>;
+var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
 
-@compute @workgroup_size(64)
-fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let tile = wg.xy;
+@compute @workgroup_size(64 * DEPTH_TILES)
+fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    let j = index / 64u;
+    let li = index % 64u;
+    let tile = vec2<u32>(wg.x * DEPTH_TILES + j, wg.y);
     if li == 0u {
-        atomicStore(&wg_zmin, 0x7f800000u);
-        atomicStore(&wg_zmax, 0u);
-        atomicStore(&wg_mask, 0u);
-        atomicStore(&wg_covered, 0u);
+        atomicStore(&wg_zmin[j], 0x7f800000u);
+        atomicStore(&wg_zmax[j], 0u);
+        atomicStore(&wg_mask[j], 0u);
+        atomicStore(&wg_covered[j], 0u);
     }
     workgroupBarrier();
     let size = vec2<u32>(frame.viewport.xy);
     let origin = tile * cull.tile_size;
-    let n = cull.tile_size * cull.tile_size;
+    // A tile past the last column (in the last workgroup of a row) has no pixels here.
+    let n = select(0u, cull.tile_size * cull.tile_size, tile.x < cull.tiles_x);
     // Depth in [0, 1) is a non-negative float: its bits order like its value.
     for (var i = li; i < n; i += 64u) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
             let z = textureLoad(depth_tex, p, 0);
             if z < 1.0 {
-                atomicMin(&wg_zmin, bitcast<u32>(z));
-                atomicMax(&wg_zmax, bitcast<u32>(z));
-                atomicAdd(&wg_covered, 1u);
+                atomicMin(&wg_zmin[j], bitcast<u32>(z));
+                atomicMax(&wg_zmax[j], bitcast<u32>(z));
+                atomicAdd(&wg_covered[j], 1u);
             }
         }
     }
     workgroupBarrier();
-    let covered = atomicLoad(&wg_covered);
+    let covered = atomicLoad(&wg_covered[j]);
     var t: TileDepth;
     t.covered = covered;
     if covered > 0u {
-        t.dmin = linear_depth(bitcast<f32>(atomicLoad(&wg_zmin)));
-        t.dmax = linear_depth(bitcast<f32>(atomicLoad(&wg_zmax)));
+        t.dmin = linear_depth(bitcast<f32>(atomicLoad(&wg_zmin[j])));
+        t.dmax = linear_depth(bitcast<f32>(atomicLoad(&wg_zmax[j])));
         let scale = depth_cell_scale(t);
         for (var i = li; i < n; i += 64u) {
             let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
             if all(p < size) {
                 let z = textureLoad(depth_tex, p, 0);
                 if z < 1.0 {
-                    atomicOr(&wg_mask, 1u << depth_cell(linear_depth(z), t.dmin, scale));
+                    atomicOr(&wg_mask[j], 1u << depth_cell(linear_depth(z), t.dmin, scale));
                 }
             }
         }
     }
     workgroupBarrier();
-    if li == 0u {
-        t.mask = atomicLoad(&wg_mask);
+    if li == 0u && tile.x < cull.tiles_x {
+        t.mask = atomicLoad(&wg_mask[j]);
         tile_depth[tile.y * cull.tiles_x + tile.x] = t;
     }
 }

@@ -247,6 +247,11 @@ impl CullOutput {
     }
 }
 
+/// Workgroups of `cull.depth_bounds`: [`crate::layout::DEPTH_TILES`] tiles of a row each.
+fn depth_groups(p: &GpuCullParams) -> (u32, u32) {
+    (p.tiles_x.div_ceil(crate::layout::DEPTH_TILES), p.tiles_y)
+}
+
 /// Bytes of the tile masks: two words a tile for each 64 lights.
 fn mask_bytes(p: &GpuCullParams) -> u64 {
     u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8
@@ -728,7 +733,7 @@ impl Culler {
                     "cull.depth_bounds",
                     &self.depth_bounds,
                     &group_a,
-                    (p.tiles_x, p.tiles_y),
+                    depth_groups(&p),
                 );
             }
             if chunked {
@@ -849,7 +854,7 @@ impl Culler {
                 "cull.depth_bounds",
                 &self.depth_bounds,
                 &group_a,
-                (p.tiles_x, p.tiles_y),
+                depth_groups(&p),
             );
             f.pass(
                 enc,
@@ -924,7 +929,7 @@ impl Culler {
                 "cull.depth_bounds",
                 &self.depth_bounds,
                 &group_a,
-                (p.tiles_x, p.tiles_y),
+                depth_groups(&p),
             );
             f.pass(
                 enc,

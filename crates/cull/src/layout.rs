@@ -41,9 +41,14 @@ pub const CLUSTER_LANES: u32 = 32;
 /// the scan runs over lights x SCATTER_LANES entries.
 pub const SCATTER_LANES: u32 = 16;
 
+/// Tiles a `cull.depth_bounds` workgroup takes, 64 threads each: launching workgroups costs
+/// more than a small tile's work (see docs/BENCHMARKS.md).
+pub const DEPTH_TILES: u32 = 4;
+
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
+    WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),
