@@ -188,6 +188,11 @@ fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
     return true;
 }
 
+// Words of a tile's mask in the tile masks (tile_masks.wgsl): two a batch of 64 lights.
+fn mask_words() -> u32 {
+    return (cull.light_count + 63u) / 64u * 2u;
+}
+
 // Depth slice in [0, slices - 1] of linear depth d.
 fn depth_slice(d: f32) -> u32 {
     var s: f32;

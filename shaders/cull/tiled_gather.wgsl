@@ -226,7 +226,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                     // Masks start each run at zero (the fill clears them), so only nonzero
                     // words are stored (chunks are whole batches, so b / 32 + w is this
                     // batch's word w).
-                    atomicStore(&tile_masks[bin * mask_words() + b / 32u + w], word);
+                    tile_masks[bin * mask_words() + b / 32u + w] = word;
                 }
             }
         }

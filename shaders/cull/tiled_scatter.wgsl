@@ -5,6 +5,10 @@
 // Group 1 here: bin_counts/bin_offsets are per light (pair counts and their scan), bin_cursors
 // holds each tile's end, out_indices the pairs' lights, pair_keys their tiles.
 @group(1) @binding(9) var<storage, read_write> pair_keys: array<u32>;
+// The tile masks (tile_masks.wgsl), as atomics: lights set their bits concurrently.
+@group(1) @binding(11) var<storage, read_write> tile_masks: array<atomic<u32>>;
+// The lights a scatter_masks workgroup kept.
+var<workgroup> wg_mask_kept: atomic<u32>;
 
 // Visits the tiles that keep light t / SCATTER_LANES, the lane t % SCATTER_LANES taking every
 // SCATTER_LANES-th tile of its rectangle, so that a light covering the screen is shared by many
@@ -94,5 +98,48 @@ fn scatter_finalize(@builtin(global_invocation_id) id: vec3<u32>) {
             count = cull.capacity;
         }
         out_ranges[b] = vec2<u32>(select(0u, start, count > 0u), count);
+    }
+}
+
+// The count pass with tile masks (tile_masks.wgsl; the fill is the masks' fill of the gather
+// modules): workgroup wg a light; its SCATTER_MASK_THREADS threads take every
+// SCATTER_MASK_THREADS-th tile of its rectangle, so that a light covering much of the screen
+// is shared by many threads.
+@compute @workgroup_size(SCATTER_MASK_THREADS)
+fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) slot: u32) {
+    let i = wg.y * GROUPS_X + wg.x;
+    if slot == 0u {
+        atomicStore(&wg_mask_kept, 0u);
+    }
+    workgroupBarrier();
+    var kept = 0u;
+    if i < cull.light_count {
+        let l = cull_light(lights[i]);
+        let rect = light_tiles(l);
+        if rect.x <= rect.z && rect.y <= rect.w {
+            let width = u32(rect.z - rect.x + 1);
+            let count = width * u32(rect.w - rect.y + 1);
+            let word = i / 32u;
+            let bit = 1u << (i % 32u);
+            let words = mask_words();
+            for (var k = slot; k < count; k += SCATTER_MASK_THREADS) {
+                let tile = vec2<u32>(u32(rect.x) + k % width, u32(rect.y) + k / width);
+                let bin = tile.y * cull.tiles_x + tile.x;
+                if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {
+                    atomicOr(&tile_masks[bin * words + word], bit);
+                    kept += 1u;
+                }
+            }
+        }
+    }
+    if kept != 0u {
+        atomicAdd(&wg_mask_kept, kept);
+    }
+    workgroupBarrier();
+    if slot == 0u {
+        let k = atomicLoad(&wg_mask_kept);
+        if k != 0u {
+            atomicAdd(&cull_stats[4], k);
+        }
     }
 }

@@ -16,8 +16,8 @@ pub const COMMON: ShaderFile = shader_file!("cull/common.wgsl");
 pub const LISTS: ShaderFile = shader_file!("cull/lists.wgsl");
 /// The pixel-to-list lookup of every list consumer.
 pub const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
-/// Tile masks: their fill, and tiled scatter's count pass that sets them (in the gather
-/// modules, which hold the workgroup scan the fill uses).
+/// Tile masks and their fill (in the gather modules, which hold the workgroup scan the fill
+/// uses; tiled scatter's count pass that sets them is in its own module).
 pub const TILE_MASKS: ShaderFile = shader_file!("cull/tile_masks.wgsl");
 
 /// `cull.depth_bounds`.
@@ -33,7 +33,7 @@ pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
     ],
 };
 /// `cull.tiled_gather` (also `cull.depth_mask`, with its flag), `cull.finalize`, and the tile
-/// masks' passes (also tiled scatter's with masks), with the portable workgroup scan.
+/// masks' fill (also tiled scatter's), with the portable workgroup scan.
 pub const TILED_GATHER: ShaderDef = ShaderDef {
     name: "cull.tiled_gather",
     consts: CULL_CONSTS,
@@ -64,7 +64,7 @@ pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
         shader_file!("cull/gather_scan_subgroup.wgsl"),
     ],
 };
-/// `cull.tiled_scatter`.
+/// `cull.tiled_scatter`: its pairs, and with tile masks its count pass.
 pub const TILED_SCATTER: ShaderDef = ShaderDef {
     name: "cull.tiled_scatter",
     consts: CULL_CONSTS,
@@ -367,7 +367,6 @@ impl Culler {
             gather_count_flat,
             gather_fill_flat,
             gather_rects,
-            scatter_masks,
             finalize,
             cap,
         ] = pipelines(
@@ -387,7 +386,6 @@ impl Culler {
                 "gather_count_flat",
                 "gather_fill_flat",
                 "gather_rects",
-                "scatter_masks",
                 "finalize",
                 "cap_counts",
             ],
@@ -417,7 +415,13 @@ impl Culler {
                 "cluster_occupancy",
             ],
         );
-        let scatter = pipelines(
+        let [
+            scatter_count,
+            scatter_pairs,
+            scatter_ranges,
+            scatter_finalize,
+            scatter_masks,
+        ] = pipelines(
             d,
             &TILED_SCATTER,
             scene_layout,
@@ -427,8 +431,10 @@ impl Culler {
                 "scatter_pairs",
                 "scatter_ranges",
                 "scatter_finalize",
+                "scatter_masks",
             ],
         );
+        let scatter = [scatter_count, scatter_pairs, scatter_ranges, scatter_finalize];
         let [lights_per_pixel] = pipelines(
             d,
             &LIGHTS_PER_PIXEL,
