@@ -169,21 +169,13 @@ fn light_depth_mask(l: CullLight, t: TileDepth) -> u32 {
 }
 
 // Whether a light may reach any covered pixel of a tile: the tile frustum between the tile's
-// depth bounds, and with CULL_FLAG_DEPTH_MASK the 2.5D masks. A conjunction of tests: planes 0
-// and 1 depend only on the tile's column and planes 2 and 3 only on its row (tile_side_planes),
-// so a caller may test those once per column and row and the rest (tile_keeps_depth) per tile,
-// with the same result.
+// depth bounds, and with CULL_FLAG_DEPTH_MASK the 2.5D masks.
 fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
-    // Written out, not a loop: a dynamically indexed array may go to local memory.
-    if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
+    if t.covered == 0u {
         return false;
     }
-    return tile_keeps_depth(l, t);
-}
-
-// tile_keeps without the side planes: covered pixels, the depth bounds and the 2.5D masks.
-fn tile_keeps_depth(l: CullLight, t: TileDepth) -> bool {
-    if t.covered == 0u {
+    // Written out, not a loop: a dynamically indexed array may go to local memory.
+    if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
         return false;
     }
     // Depth bounds as planes: -z >= dmin and -z <= dmax.

@@ -47,13 +47,9 @@ var<workgroup> wg_kept: atomic<u32>;
 var<workgroup> wg_light: array<CullLight, 64>;
 // Two sets of a batch's lines, 32 words each: words 2c and 2c + 1 of a set have bit k set
 // for the batch's light at slot 32 * (word % 2) + k when its rectangle spans column c of the
-// coarse tile (c < 8), or row c - 8 (c >= 8), and it is not outside that column's side planes
-// (planes 0 and 1 of its tiles) or that row's (planes 2 and 3). A tile's candidates are its
-// column's bits and its row's: they pass its side planes, and only its depth tests remain.
+// coarse tile (c < 8), or row c - 8 (c >= 8). A tile's candidates are its column's bits and
+// its row's.
 var<workgroup> wg_lines: array<atomic<u32>, 64>;
-// The coarse tile's lines' side planes: column c's at 2c and 2c + 1, row r's at 16 + 2r and
-// 17 + 2r (tile_side_planes of their tiles).
-var<workgroup> wg_line_planes: array<vec4<f32>, 32>;
 // Each light's tile rectangle (cull.light_rects, coarse-to-fine gather and 2.5D).
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 
@@ -145,23 +141,15 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
     let inside = tile.x < cull.tiles_x && tile.y < cull.tiles_y;
     let bin = tile.y * cull.tiles_x + tile.x;
     var t: TileDepth;
+    var planes: array<vec4<f32>, 4>;
     if inside {
         t = tile_depth[bin];
         if t.covered != 0u {
             atomicMin(&wg_cmin, ordered_bits(t.dmin));
             atomicMax(&wg_cmax, ordered_bits(t.dmax));
             atomicAdd(&wg_ccov, t.covered);
+            planes = tile_side_planes(tile);
         }
-    }
-    // Column `slot`'s planes (its tile in the coarse tile's first row), row `slot - 8`'s (its
-    // tile in the first column).
-    if slot < 16u {
-        let line = slot % 8u;
-        let first = select(vec2<u32>(line, 0u), vec2<u32>(0u, line), slot >= 8u);
-        let planes = tile_side_planes(wg.xy * 8u + first);
-        let side = select(0u, 2u, slot >= 8u);
-        wg_line_planes[2u * slot] = planes[side];
-        wg_line_planes[2u * slot + 1u] = planes[side + 1u];
     }
     workgroupBarrier();
     if slot == 0u {
@@ -206,23 +194,9 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                 let l = cull_light(lights[i]);
                 if !outside_plane(vec4<f32>(0.0, 0.0, -1.0, -cmin), l) && !outside_plane(vec4<f32>(0.0, 0.0, 1.0, cmax), l) {
                     wg_light[slot] = l;
-                    // Bits lo..=hi of the columns (0..7) and of the rows (8..15) whose side
-                    // planes the light is not outside of.
-                    var cols = 0u;
-                    for (var c = u32(lo.x); c <= u32(hi.x); c++) {
-                        if !outside_plane(wg_line_planes[2u * c], l) && !outside_plane(wg_line_planes[2u * c + 1u], l) {
-                            cols |= 1u << c;
-                        }
-                    }
-                    var rows = 0u;
-                    if cols != 0u {
-                        for (var r = u32(lo.y); r <= u32(hi.y); r++) {
-                            if !outside_plane(wg_line_planes[16u + 2u * r], l) && !outside_plane(wg_line_planes[17u + 2u * r], l) {
-                                rows |= 1u << r;
-                            }
-                        }
-                    }
-                    spans = select(0u, cols | (rows << 8u), rows != 0u);
+                    // Bits lo..=hi of the columns (0..7) and of the rows (8..15).
+                    let span = (vec2<u32>(0xffu) << vec2<u32>(lo)) & (vec2<u32>(0xffu) >> vec2<u32>(7 - hi));
+                    spans = span.x | (span.y << 8u);
                 }
             }
         }
@@ -240,7 +214,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                     let bit = firstTrailingBit(m);
                     let k = w * 32u + bit;
                     m &= m - 1u;
-                    if tile_keeps_depth(wg_light[k], t) {
+                    if tile_keeps(wg_light[k], planes, t) {
                         if fill {
                             out_indices[at + kept] = b + k;
                         }
