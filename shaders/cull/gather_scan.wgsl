@@ -1,24 +1,26 @@
 // The portable workgroup scan of cull.tiled_gather and its count and fill entry points (see
 // tiled_gather.wgsl); gather_scan_subgroup.wgsl is the same with subgroup operations. Here a
 // thread's slot is its local_invocation_index.
-var<workgroup> wg_keep: array<u32, 64>;
+var<workgroup> wg_keep: array<u32, 64 * MASK_FILL_TILES>;
 
-// (inclusive prefix of `value` over slots 0..=slot, total over the workgroup): a Hillis-Steele
-// scan, 6 steps for 64 threads. Called in uniform control flow; workgroup memory is free again
-// when it returns.
+// (inclusive prefix of `value` over slots 64 (slot / 64)..=slot, total over those 64 slots):
+// each 64 slots of the workgroup (one, or MASK_FILL_TILES in the masks' fill) are scanned on
+// their own. A Hillis-Steele scan, 6 steps. Called in uniform control flow; workgroup memory
+// is free again when it returns.
 fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
+    let lane = slot % 64u;
     wg_keep[slot] = value;
     workgroupBarrier();
     for (var off = 1u; off < 64u; off <<= 1u) {
         var v = 0u;
-        if slot >= off {
+        if lane >= off {
             v = wg_keep[slot - off];
         }
         workgroupBarrier();
         wg_keep[slot] += v;
         workgroupBarrier();
     }
-    let r = vec2<u32>(wg_keep[slot], wg_keep[63]);
+    let r = vec2<u32>(wg_keep[slot], wg_keep[slot - lane + 63u]);
     workgroupBarrier();
     return r;
 }
@@ -38,7 +40,7 @@ fn gather_count_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoc
     gather_chunk(wg, li, CHUNK_MASK);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(64 * MASK_FILL_TILES)
 fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     masks_expand(wg.xy, li);
 }

@@ -2,7 +2,7 @@
 // entry points (see tiled_gather.wgsl and the portable gather_scan.wgsl). A thread's slot is
 // subgroup_id * subgroup_size + lane, so that lane order is slot order whatever the layout of
 // subgroups in the workgroup (any subgroup size that divides 64).
-var<workgroup> sg_sums: array<u32, 64>;
+var<workgroup> sg_sums: array<u32, 64 * MASK_FILL_TILES>;
 var<private> g_lane: u32;
 var<private> g_sg_size: u32;
 var<private> g_sg_id: u32;
@@ -16,9 +16,11 @@ fn subgroup_slot(lane: u32, size: u32, id: u32, count: u32) -> u32 {
     return id * size + lane;
 }
 
-// (inclusive prefix of `value` over slots 0..=slot, total over the workgroup): an inclusive add
-// within each subgroup, the subgroups' totals across them; two barriers. Called in uniform
-// control flow; workgroup memory is free again when it returns.
+// (inclusive prefix of `value` over slots 64 (slot / 64)..=slot, total over those 64 slots):
+// each 64 slots of the workgroup (one, or MASK_FILL_TILES in the masks' fill) are scanned on
+// their own. An inclusive add within each subgroup, the totals of the segment's subgroups
+// across them; two barriers. Called in uniform control flow; workgroup memory is free again
+// when it returns.
 fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
     let inclusive = subgroupInclusiveAdd(value);
     if g_lane == g_sg_size - 1u {
@@ -27,7 +29,10 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
     workgroupBarrier();
     var before = 0u;
     var total = 0u;
-    for (var s = 0u; s < g_sg_count; s++) {
+    // The subgroups of this slot's 64 (subgroup sizes divide 64).
+    let per = 64u / g_sg_size;
+    let seg = g_sg_id / per * per;
+    for (var s = seg; s < seg + per; s++) {
         let v = sg_sums[s];
         if s < g_sg_id {
             before += v;
@@ -74,7 +79,7 @@ fn gather_count_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_in
     gather_chunk(wg, subgroup_slot(lane, size, id, count), CHUNK_MASK);
 }
 
-@compute @workgroup_size(64)
+@compute @workgroup_size(64 * MASK_FILL_TILES)
 fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     masks_expand(wg.xy, subgroup_slot(lane, size, id, count));
 }

@@ -7,7 +7,7 @@
 //   atomics): a workgroup a light sets its bit in every tile of its rectangle that keeps it,
 //   with atomicOr;
 // and both sum the lights kept over all tiles into cull_stats[4], from which the host sizes the
-// lists. One reader, the fill (masks_expand, a workgroup per tile), counts its tile's bits,
+// lists. One reader, the fill (masks_expand, 64 threads a tile), counts its tile's bits,
 // takes the tile's place in the list buffer with one atomic add (cull_stats[5]), writes its
 // range, and turns the words into its list, in light order, clearing each nonzero word as it
 // goes: the masks are all zero again after every fill, as they were when created, so the next
@@ -15,35 +15,42 @@
 // only where it sits in the buffer differs from run to run (its range says where).
 @group(1) @binding(11) var<storage, read_write> tile_masks: array<u32>;
 
-// The fill's place for its tile.
-var<workgroup> wg_mask_at: u32;
+// The fill's places for its tiles.
+var<workgroup> wg_mask_at: array<u32, MASK_FILL_TILES>;
 
-// The fill: thread `slot` takes words [slot k, slot k + k) of tile `tile`'s mask (k = words /
-// 64, rounded up), so that the threads' words follow light order; one workgroup scan of their
-// bit counts gives each thread its place in the tile's list and the tile's total, from which
-// the first thread takes the tile's place in the list buffer (one atomic add) and writes its
-// range. Each thread then turns its words into list entries, clearing each nonzero word. A
-// tile without lights writes an empty range.
-fn masks_expand(tile: vec2<u32>, slot: u32) {
+// The fill: workgroup wg takes MASK_FILL_TILES tiles of a row (tiles MASK_FILL_TILES wg.x + j
+// of row wg.y), 64 threads each (fewer, larger workgroups: launching them costs more than a
+// tile's work). Thread `lane` of a tile takes words [lane k, lane k + k) of its mask (k = words
+// / 64, rounded up), so that the threads' words follow light order; one scan of their bit
+// counts over the tile's 64 threads gives each thread its place in the tile's list and the
+// tile's total, from which the tile's first thread takes its place in the list buffer (one
+// atomic add) and writes its range. Each thread then turns its words into list entries,
+// clearing each nonzero word. A tile without lights writes an empty range.
+fn masks_expand(wg: vec2<u32>, slot: u32) {
+    let j = slot / 64u;
+    let lane = slot % 64u;
+    let tile = vec2<u32>(wg.x * MASK_FILL_TILES + j, wg.y);
     let bin = tile.y * cull.tiles_x + tile.x;
-    let words = mask_words();
+    // A tile past the last column (in the last workgroup of a row) takes no words.
+    let words = select(0u, mask_words(), tile.x < cull.tiles_x);
     let k = (words + 63u) / 64u;
-    let first = bin * words + min(slot * k, words);
-    let end = bin * words + min(slot * k + k, words);
+    let first = bin * words + min(lane * k, words);
+    let end = bin * words + min(lane * k + k, words);
     var c = 0u;
     for (var w = first; w < end; w++) {
         c += countOneBits(tile_masks[w]);
     }
     let scan = scan_keep(slot, c);
-    if slot == 0u {
+    if lane == 0u && words != 0u {
         var at = 0u;
         if scan.y != 0u {
             at = atomicAdd(&cull_stats[5], scan.y);
         }
         out_ranges[bin] = vec2<u32>(at, scan.y);
-        wg_mask_at = at;
+        wg_mask_at[j] = at;
     }
-    var pos = workgroupUniformLoad(&wg_mask_at) + scan.x - c;
+    workgroupBarrier();
+    var pos = wg_mask_at[j] + scan.x - c;
     if c == 0u {
         return;
     }

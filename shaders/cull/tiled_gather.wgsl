@@ -27,7 +27,7 @@
 // Tile masks (where tiles x lights bits fit the host's budget, as at the Forward+ paper's
 // configuration; tile_masks.wgsl): the count pass stores each tile's kept lights as bits
 // instead of counting per (tile, chunk), and sums the total (cull_stats[4]), from which the
-// host sizes the lists. No scan: the fill pass (masks_expand, a workgroup per tile) turns the
+// host sizes the lists. No scan: the fill pass (masks_expand, 64 threads a tile) turns the
 // tile's words into its list, in light order, without testing any light again.
 //
 // The single level (cull.coarse = 0): the paper's one workgroup per tile over every light; the

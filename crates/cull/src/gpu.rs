@@ -252,6 +252,11 @@ fn depth_groups(p: &GpuCullParams) -> (u32, u32) {
     (p.tiles_x.div_ceil(crate::layout::DEPTH_TILES), p.tiles_y)
 }
 
+/// Workgroups of the tile masks' fill: [`crate::layout::MASK_FILL_TILES`] tiles of a row each.
+fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
+    (p.tiles_x.div_ceil(crate::layout::MASK_FILL_TILES), p.tiles_y)
+}
+
 /// Bytes of the tile masks: two words a tile for each 64 lights.
 fn mask_bytes(p: &GpuCullParams) -> u64 {
     u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8
@@ -674,9 +679,10 @@ impl Culler {
         } else {
             [main.0, main.1, 1]
         };
-        // The tile masks' fill: a workgroup per tile.
+        // The tile masks' fill: MASK_FILL_TILES tiles a workgroup.
         let fill_groups = if masked {
-            [p.tiles_x, p.tiles_y, 1]
+            let (x, y) = mask_fill_groups(&p);
+            [x, y, 1]
         } else {
             groups
         };
@@ -878,7 +884,7 @@ impl Culler {
                 "cull.tiled_scatter.fill",
                 &self.gather_fill_masks,
                 group_b,
-                (p.tiles_x, p.tiles_y),
+                mask_fill_groups(&p),
             );
         };
         let Some(repeat) = repeat else {

@@ -50,10 +50,14 @@ pub const DEPTH_TILES: u32 = 4;
 /// lights nearest the camera cover thousands of tiles.
 pub const SCATTER_MASK_THREADS: u32 = 256;
 
+/// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
+pub const MASK_FILL_TILES: u32 = 4;
+
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
+    WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),
