@@ -4,8 +4,27 @@
 // view depth) and the 2.5D geometry mask of every tile (Harada 2012, GPU Pro 4 section 5.6.1:
 // 32 cells over [dmin, dmax]). Background pixels (depth 1.0, the clear value) are not covered
 // and need no lights, so they do not widen the bounds.
+//
+// For gather's and 2.5D's coarse-to-fine passes the host adds rows of workgroups past the
+// tiles' (wg.y >= tiles_y), which store each light's tile rectangle instead (light_tiles,
+// as scatter and clusters use: its view-space box cut at the near plane, projected), packed as
+// (x0 | y0 << 16, x1 | y1 << 16), an empty one as (1, 0) (x0 > x1): one pass, not two, as
+// each pass has a fixed cost larger than this work.
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
+@group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
+
+// Light `i`'s tile rectangle into light_rects.
+fn store_light_rect(i: u32) {
+    if i < cull.light_count {
+        let r = light_tiles(cull_light(lights[i]));
+        if r.x > r.z || r.y > r.w {
+            light_rects[i] = vec2<u32>(1u, 0u);
+        } else {
+            light_rects[i] = vec2<u32>(u32(r.x) | (u32(r.y) << 16u), u32(r.z) | (u32(r.w) << 16u));
+        }
+    }
+}
 
 var<workgroup> wg_zmin: array<atomic<u32>, DEPTH_TILES>;
 var<workgroup> wg_zmax: array<atomic<u32>, DEPTH_TILES>;
@@ -13,7 +32,12 @@ var<workgroup> wg_mask: array<atomic<u32>, DEPTH_TILES>;
 var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
 
 @compute @workgroup_size(64 * DEPTH_TILES)
-fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    // Uniform (a workgroup's id), so the barriers below are reached by all threads or none.
+    if wg.y >= cull.tiles_y {
+        store_light_rect(((wg.y - cull.tiles_y) * groups.x + wg.x) * 64u * DEPTH_TILES + index);
+        return;
+    }
     let j = index / 64u;
     let li = index % 64u;
     let tile = vec2<u32>(wg.x * DEPTH_TILES + j, wg.y);

@@ -3,10 +3,10 @@
 // between the tile's depth bounds (and the 2.5D masks). Entry points, in gather_scan.wgsl or,
 // with subgroup operations, gather_scan_subgroup.wgsl (which also define the workgroup scan
 // `scan_keep`): gather_count / gather_fill (count and fill passes, coarse-to-fine) and
-// gather_count_flat / gather_fill_flat (the single level); here gather_rects. A thread's
+// gather_count_flat / gather_fill_flat (the single level). A thread's
 // `slot` (0..63) orders its light within a batch.
 //
-// Coarse-to-fine (cull.coarse = 8): cull.light_rects first stores each light's tile rectangle
+// Coarse-to-fine (cull.coarse = 8): cull.depth_bounds also stores each light's tile rectangle
 // (light_tiles, as scatter and clusters use: its view-space box cut at the near plane,
 // projected). Then workgroup (x, y, z) takes coarse tile (x, y), 8 x 8 tiles, one tile a
 // thread, and chunk z of the lights (cull.chunk lights in light order). For each 64 lights of
@@ -50,7 +50,7 @@ var<workgroup> wg_light: array<CullLight, 64>;
 // coarse tile (c < 8), or row c - 8 (c >= 8). A tile's candidates are its column's bits and
 // its row's.
 var<workgroup> wg_lines: array<atomic<u32>, 64>;
-// Each light's tile rectangle (cull.light_rects, coarse-to-fine gather and 2.5D).
+// Each light's tile rectangle (from cull.depth_bounds, for coarse-to-fine gather and 2.5D).
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 
 // What a coarse-to-fine pass does: count per (tile, chunk), fill, or store the tile masks and
@@ -246,21 +246,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
             if k != 0u {
                 atomicAdd(&cull_stats[4], k);
             }
-        }
-    }
-}
-
-// cull.light_rects: each light's tile rectangle (light_tiles), packed as
-// (x0 | y0 << 16, x1 | y1 << 16); an empty one as (1, 0) (x0 > x1).
-@compute @workgroup_size(64)
-fn gather_rects(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = id.y * GROUPS_X * 64u + id.x;
-    if i < cull.light_count {
-        let r = light_tiles(cull_light(lights[i]));
-        if r.x > r.z || r.y > r.w {
-            light_rects[i] = vec2<u32>(1u, 0u);
-        } else {
-            light_rects[i] = vec2<u32>(u32(r.x) | (u32(r.y) << 16u), u32(r.z) | (u32(r.w) << 16u));
         }
     }
 }

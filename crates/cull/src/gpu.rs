@@ -247,9 +247,16 @@ impl CullOutput {
     }
 }
 
-/// Workgroups of `cull.depth_bounds`: [`crate::layout::DEPTH_TILES`] tiles of a row each.
-fn depth_groups(p: &GpuCullParams) -> (u32, u32) {
-    (p.tiles_x.div_ceil(crate::layout::DEPTH_TILES), p.tiles_y)
+/// Workgroups of `cull.depth_bounds`: [`crate::layout::DEPTH_TILES`] tiles of a row each, and
+/// with `rects` rows after the tiles' that store the lights' tile rectangles, a light a thread.
+fn depth_groups(p: &GpuCullParams, rects: bool) -> (u32, u32) {
+    let x = p.tiles_x.div_ceil(crate::layout::DEPTH_TILES);
+    let rows = if rects {
+        p.light_count.div_ceil(x * 64 * crate::layout::DEPTH_TILES)
+    } else {
+        0
+    };
+    (x, p.tiles_y + rows)
 }
 
 /// Workgroups of the tile masks' fill: [`crate::layout::MASK_FILL_TILES`] tiles of a row each.
@@ -287,7 +294,6 @@ pub struct Culler {
     gather_count_masks: wgpu::ComputePipeline,
     gather_fill_masks: wgpu::ComputePipeline,
     scatter_masks: wgpu::ComputePipeline,
-    gather_rects: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
     gather_fill_flat: wgpu::ComputePipeline,
     gather_fill: wgpu::ComputePipeline,
@@ -371,7 +377,6 @@ impl Culler {
             gather_fill_masks,
             gather_count_flat,
             gather_fill_flat,
-            gather_rects,
             finalize,
             cap,
         ] = pipelines(
@@ -390,7 +395,6 @@ impl Culler {
                 "gather_fill_masks",
                 "gather_count_flat",
                 "gather_fill_flat",
-                "gather_rects",
                 "finalize",
                 "cap_counts",
             ],
@@ -463,7 +467,6 @@ impl Culler {
             scatter_masks,
             gather_count_flat,
             gather_fill_flat,
-            gather_rects,
             clustered_count,
             clustered_fill,
             clustered_count_wide,
@@ -587,6 +590,19 @@ impl Culler {
                 "clusters' wide-light queue",
                 (u64::from(params.light_count) + 1) * 16,
             )?;
+        }
+        let (_, depth_rows) = depth_groups(
+            &params,
+            params.coarse > 0 && !matches!(strategy, Strategy::Clustered { .. }),
+        );
+        if depth_rows > ctx.limits.max_compute_workgroups_per_dimension {
+            return Err(GpuError::OverLimit {
+                what: "cull.depth_bounds workgroup rows (tiles and light rectangles)".into(),
+                value: depth_rows.into(),
+                limit: ctx.limits.max_compute_workgroups_per_dimension.into(),
+                limit_name: "max_compute_workgroups_per_dimension",
+            }
+            .into());
         }
         if per_light && !masked {
             ctx.check_storage(
@@ -739,23 +755,14 @@ impl Culler {
                     );
                 }
             } else {
+                // With the lights' rectangles for the coarse-to-fine passes (binding 9).
                 f.pass(
                     enc,
                     timer,
                     "cull.depth_bounds",
                     &self.depth_bounds,
                     &group_a,
-                    depth_groups(&p),
-                );
-            }
-            if chunked {
-                f.pass(
-                    enc,
-                    timer,
-                    "cull.light_rects",
-                    &self.gather_rects,
-                    &group_a,
-                    groups_2d(p.light_count.div_ceil(64), GROUPS_X),
+                    depth_groups(&p, chunked),
                 );
             }
             phase(enc, timer, false, &group_a);
@@ -866,7 +873,7 @@ impl Culler {
                 "cull.depth_bounds",
                 &self.depth_bounds,
                 &group_a,
-                depth_groups(&p),
+                depth_groups(&p, false),
             );
             f.pass(
                 enc,
@@ -941,7 +948,7 @@ impl Culler {
                 "cull.depth_bounds",
                 &self.depth_bounds,
                 &group_a,
-                depth_groups(&p),
+                depth_groups(&p, false),
             );
             f.pass(
                 enc,
