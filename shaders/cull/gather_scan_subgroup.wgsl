@@ -44,20 +44,22 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
 }
 
 // Coarse-to-fine gather's lines (tiled_gather.wgsl): the bit of `slot` into line c of the set
-// at `base` for each bit c of `spans`. A ballot per line, all 16 in a fixed loop, each written
-// by lane c % size, and only where some lane spans the line: no workgroup atomics contend when
-// large lights span many lines, and no loop over the lines in use. Called in uniform control
-// flow.
+// at `base` for each bit c of `spans`. A ballot per line that some lane of the subgroup spans,
+// written by the subgroup's first lane: no workgroup atomics contend when large lights span
+// many lines. Called in uniform control flow.
 fn mark_lines(slot: u32, spans: u32, base: u32) {
-    let first = g_sg_id * g_sg_size;
-    for (var c = 0u; c < 16u; c++) {
+    var used = subgroupOr(spans);
+    while used != 0u {
+        let c = firstTrailingBit(used);
+        used &= used - 1u;
         let b = subgroupBallot(((spans >> c) & 1u) != 0u);
-        if g_lane == (c & (g_sg_size - 1u)) && (b.x | b.y) != 0u {
+        if g_lane == 0u {
             let word = base + 2u * c;
             if g_sg_size == 64u {
                 atomicStore(&wg_lines[word], b.x);
                 atomicStore(&wg_lines[word + 1u], b.y);
             } else {
+                let first = g_sg_id * g_sg_size;
                 atomicOr(&wg_lines[word + first / 32u], b.x << (first % 32u));
             }
         }
