@@ -887,3 +887,49 @@ fn tile_masks_of_many_words_equal_the_oracle() {
         assert!(kept > 0, "{what}: some tile keeps a light");
     }
 }
+
+/// Lights covering the whole screen of 32 x 24 tiles (768 tiles, three blocks of tiled
+/// scatter's masks count pass each, shared among its workgroups): scatter's and gather's lists
+/// equal their CPU oracles, with tile masks, and the masks are left zero.
+#[test]
+fn tile_masks_with_lights_over_many_blocks_equal_the_oracle() {
+    let ctx = common::gpu();
+    let (w, h) = (128, 96);
+    let mut case = random_case(31);
+    let reach = case.scene.light_bounds.extent().length() * 2.0;
+    for l in &mut case.scene.lights {
+        l.radius = reach;
+    }
+    let r = render(&ctx, &case, w, h);
+    let culler = Culler::new(&ctx, &r.gpu_scene);
+    for s in [
+        Strategy::TiledScatter { tile_size: 4 },
+        Strategy::tiled_gather(4),
+    ] {
+        let what = format!("{} {} ({} lights)", case.label, s.name(), r.lights.len());
+        let out = run_gpu(&ctx, &culler, &r, &case, &s);
+        assert_eq!(out.params.bins, 32 * 24, "{what}");
+        let masks = out
+            .read_tile_masks(&ctx)
+            .unwrap()
+            .unwrap_or_else(|| panic!("{what}: tile masks must fit"));
+        assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
+        let td = out.read_tile_depth(&ctx).unwrap();
+        let gpu = out.read(&ctx).unwrap();
+        let oracle = match s {
+            Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &out.params, &r.lights, &td),
+            _ => cpu::gather(&r.frame, &out.params, &r.lights, &td),
+        };
+        oracle
+            .compare(&gpu)
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let longest = (0..gpu.ranges.len())
+            .map(|b| gpu.list(b).len())
+            .max()
+            .unwrap_or(0);
+        assert!(
+            longest * 2 > r.lights.len(),
+            "{what}: most lights reach some tile ({longest} at most)"
+        );
+    }
+}

@@ -9,20 +9,57 @@
 // tiles' (wg.y >= tiles_y), which store each light's tile rectangle instead (light_tiles,
 // as scatter and clusters use: its view-space box cut at the near plane, projected), packed as
 // (x0 | y0 << 16, x1 | y1 << 16), an empty one as (1, 0) (x0 > x1): one pass, not two, as
-// each pass has a fixed cost larger than this work.
+// each pass has a fixed cost larger than this work. For tiled scatter with tile masks
+// (depth_bounds_blocks) those rows also queue each light's blocks of SCATTER_MASK_THREADS
+// tiles of its rectangle, (light, block) pairs in block_queue, their number in
+// cull_stats[6], so that the count pass (scatter_masks, tiled_scatter.wgsl) shares a large
+// light's tiles among many workgroups.
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
+@group(1) @binding(7) var<storage, read_write> block_queue: array<u32>;
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
+@group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
 
-// Light `i`'s tile rectangle into light_rects.
-fn store_light_rect(i: u32) {
+// A workgroup's blocks and their place in the queue.
+var<workgroup> wg_blocks: atomic<u32>;
+var<workgroup> wg_block_at: u32;
+
+// Light `i`'s tile rectangle into light_rects, and with `blocks` its blocks into the queue
+// (one atomic add a workgroup). Called in uniform control flow.
+fn store_light_rect(i: u32, index: u32, blocks: bool) {
+    var n = 0u;
     if i < cull.light_count {
         let r = light_tiles(cull_light(lights[i]));
         if r.x > r.z || r.y > r.w {
             light_rects[i] = vec2<u32>(1u, 0u);
         } else {
             light_rects[i] = vec2<u32>(u32(r.x) | (u32(r.y) << 16u), u32(r.z) | (u32(r.w) << 16u));
+            n = (u32(r.z - r.x + 1) * u32(r.w - r.y + 1) + SCATTER_MASK_THREADS - 1u) / SCATTER_MASK_THREADS;
         }
+    }
+    if !blocks {
+        return;
+    }
+    if index == 0u {
+        atomicStore(&wg_blocks, 0u);
+    }
+    workgroupBarrier();
+    var at = 0u;
+    if n != 0u {
+        at = atomicAdd(&wg_blocks, n);
+    }
+    workgroupBarrier();
+    if index == 0u {
+        let total = atomicLoad(&wg_blocks);
+        if total != 0u {
+            wg_block_at = atomicAdd(&cull_stats[6], total);
+        }
+    }
+    workgroupBarrier();
+    at += wg_block_at;
+    for (var b = 0u; b < n; b++) {
+        block_queue[2u * (at + b)] = i;
+        block_queue[2u * (at + b) + 1u] = b;
     }
 }
 
@@ -33,11 +70,25 @@ var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    // Uniform (a workgroup's id), so the barriers below are reached by all threads or none.
+    // Uniform (a workgroup's id), so the barriers are reached by all threads or none.
     if wg.y >= cull.tiles_y {
-        store_light_rect(((wg.y - cull.tiles_y) * groups.x + wg.x) * 64u * DEPTH_TILES + index);
+        store_light_rect(((wg.y - cull.tiles_y) * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, false);
         return;
     }
+    tile_bounds(wg, index);
+}
+
+@compute @workgroup_size(64 * DEPTH_TILES)
+fn depth_bounds_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    if wg.y >= cull.tiles_y {
+        store_light_rect(((wg.y - cull.tiles_y) * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, true);
+        return;
+    }
+    tile_bounds(wg, index);
+}
+
+// The depth data of workgroup wg's tiles (see the top of this file).
+fn tile_bounds(wg: vec3<u32>, index: u32) {
     let j = index / 64u;
     let li = index % 64u;
     let tile = vec2<u32>(wg.x * DEPTH_TILES + j, wg.y);

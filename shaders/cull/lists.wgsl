@@ -10,8 +10,9 @@
 @group(1) @binding(7) var<storage, read_write> out_indices: array<u32>;
 
 // Statistics: [0] = lights dropped by a deliberate capacity; [1], [2] = tiled scatter's pair
-// total, low word and carries; [4] = gather's list total with tile masks, [5] = the cursor
-// from which its fill places each tile's list.
+// total, low word and carries; [4] = the list total with tile masks, [5] = the cursor from
+// which their fill places each tile's list; [6] = the blocks tiled scatter queued for its
+// masks' count pass (depth_bounds.wgsl).
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
 
 // Appends light `light` to bin `bin` (count pass: counts; fill pass: writes, up to the

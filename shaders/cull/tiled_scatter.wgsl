@@ -7,8 +7,9 @@
 @group(1) @binding(9) var<storage, read_write> pair_keys: array<u32>;
 // The tile masks (tile_masks.wgsl), as atomics: lights set their bits concurrently.
 @group(1) @binding(11) var<storage, read_write> tile_masks: array<atomic<u32>>;
-// The lights a scatter_masks workgroup kept.
+// The lights a scatter_masks workgroup kept, and the queued blocks.
 var<workgroup> wg_mask_kept: atomic<u32>;
+var<workgroup> wg_mask_blocks: u32;
 
 // Visits the tiles that keep light t / SCATTER_LANES, the lane t % SCATTER_LANES taking every
 // SCATTER_LANES-th tile of its rectangle, so that a light covering the screen is shared by many
@@ -102,33 +103,33 @@ fn scatter_finalize(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 // The count pass with tile masks (tile_masks.wgsl; the fill is the masks' fill of the gather
-// modules): workgroup wg a light; its SCATTER_MASK_THREADS threads take every
-// SCATTER_MASK_THREADS-th tile of its rectangle, so that a light covering much of the screen
-// is shared by many threads.
+// modules): the blocks cull.depth_bounds queued (block_queue, here in out_indices), a block of
+// SCATTER_MASK_THREADS tiles of a light's rectangle at a time, a tile a thread, each workgroup
+// taking every n-th block for n workgroups: a large light's tiles are shared by many
+// workgroups, and no workgroup walks one light's thousands of tiles alone. The rectangles are
+// in pair_keys (two words a light).
 @compute @workgroup_size(SCATTER_MASK_THREADS)
-fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) slot: u32) {
-    let i = wg.y * GROUPS_X + wg.x;
+fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) slot: u32) {
     if slot == 0u {
         atomicStore(&wg_mask_kept, 0u);
+        wg_mask_blocks = atomicLoad(&cull_stats[6]);
     }
-    workgroupBarrier();
+    let blocks = workgroupUniformLoad(&wg_mask_blocks);
+    let words = mask_words();
     var kept = 0u;
-    if i < cull.light_count {
-        let l = cull_light(lights[i]);
-        let rect = light_tiles(l);
-        if rect.x <= rect.z && rect.y <= rect.w {
-            let width = u32(rect.z - rect.x + 1);
-            let count = width * u32(rect.w - rect.y + 1);
-            let word = i / 32u;
-            let bit = 1u << (i % 32u);
-            let words = mask_words();
-            for (var k = slot; k < count; k += SCATTER_MASK_THREADS) {
-                let tile = vec2<u32>(u32(rect.x) + k % width, u32(rect.y) + k / width);
-                let bin = tile.y * cull.tiles_x + tile.x;
-                if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {
-                    atomicOr(&tile_masks[bin * words + word], bit);
-                    kept += 1u;
-                }
+    for (var q = wg.x; q < blocks; q += groups.x) {
+        let i = out_indices[2u * q];
+        let k = out_indices[2u * q + 1u] * SCATTER_MASK_THREADS + slot;
+        let packed = vec2<u32>(pair_keys[2u * i], pair_keys[2u * i + 1u]);
+        let rect = vec4<u32>(packed.x & 0xffffu, packed.x >> 16u, packed.y & 0xffffu, packed.y >> 16u);
+        let width = rect.z - rect.x + 1u;
+        if k < width * (rect.w - rect.y + 1u) {
+            let l = cull_light(lights[i]);
+            let tile = vec2<u32>(rect.x + k % width, rect.y + k / width);
+            let bin = tile.y * cull.tiles_x + tile.x;
+            if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {
+                atomicOr(&tile_masks[bin * words + i / 32u], 1u << (i % 32u));
+                kept += 1u;
             }
         }
     }

@@ -261,7 +261,10 @@ fn depth_groups(p: &GpuCullParams, rects: bool) -> (u32, u32) {
 
 /// Workgroups of the tile masks' fill: [`crate::layout::MASK_FILL_TILES`] tiles of a row each.
 fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
-    (p.tiles_x.div_ceil(crate::layout::MASK_FILL_TILES), p.tiles_y)
+    (
+        p.tiles_x.div_ceil(crate::layout::MASK_FILL_TILES),
+        p.tiles_y,
+    )
 }
 
 /// Bytes of the tile masks: two words a tile for each 64 lights.
@@ -276,6 +279,7 @@ pub struct Culler {
     /// 1 ranges, 2 indices, 3 depth, 4 a per-pixel output.
     pub lists_layout: wgpu::BindGroupLayout,
     depth_bounds: wgpu::ComputePipeline,
+    depth_bounds_blocks: wgpu::ComputePipeline,
     /// Whether gather's scans use subgroup operations.
     pub gather_subgroups: bool,
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
@@ -368,7 +372,13 @@ impl Culler {
             ],
         });
         let scene_layout = &scene.layout;
-        let [depth_bounds] = pipelines(d, &DEPTH_BOUNDS, scene_layout, &layout, ["depth_bounds"]);
+        let [depth_bounds, depth_bounds_blocks] = pipelines(
+            d,
+            &DEPTH_BOUNDS,
+            scene_layout,
+            &layout,
+            ["depth_bounds", "depth_bounds_blocks"],
+        );
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         let [
             gather_count,
@@ -443,7 +453,12 @@ impl Culler {
                 "scatter_masks",
             ],
         );
-        let scatter = [scatter_count, scatter_pairs, scatter_ranges, scatter_finalize];
+        let scatter = [
+            scatter_count,
+            scatter_pairs,
+            scatter_ranges,
+            scatter_finalize,
+        ];
         let [lights_per_pixel] = pipelines(
             d,
             &LIGHTS_PER_PIXEL,
@@ -456,6 +471,7 @@ impl Culler {
             layout,
             lists_layout,
             depth_bounds,
+            depth_bounds_blocks,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
@@ -591,9 +607,11 @@ impl Culler {
                 (u64::from(params.light_count) + 1) * 16,
             )?;
         }
+        // Rows of light rectangles: gather's coarse-to-fine passes, and scatter's masks.
         let (_, depth_rows) = depth_groups(
             &params,
-            params.coarse > 0 && !matches!(strategy, Strategy::Clustered { .. }),
+            (params.coarse > 0 && !matches!(strategy, Strategy::Clustered { .. }))
+                || (per_light && masked),
         );
         if depth_rows > ctx.limits.max_compute_workgroups_per_dimension {
             return Err(GpuError::OverLimit {
@@ -851,9 +869,10 @@ impl Culler {
         Ok(f.finish(indices, repeat.total, masks.clone())?)
     }
 
-    /// Tiled scatter with tile masks: each light sets its bit in every tile of its rectangle
-    /// that keeps it (a workgroup a light), and the fill expands each tile's bits into its list
-    /// (`shaders/cull/tile_masks.wgsl`): no pairs, no sort.
+    /// Tiled scatter with tile masks: the depth-bounds pass also stores each light's rectangle
+    /// and queues its blocks of tiles; the count pass sets each light's bit in every tile of
+    /// its rectangle that keeps it, a block a workgroup at a time; and the fill expands each
+    /// tile's bits into its list (`shaders/cull/tile_masks.wgsl`): no pairs, no sort.
     fn run_scatter_masks(
         &self,
         ctx: &GpuContext,
@@ -862,18 +881,26 @@ impl Culler {
         repeat: Option<Repeat>,
     ) -> Result<CullOutput, CullError> {
         let p = f.params;
-        let placeholder = &self.placeholder;
         let masks = f.buf("cull.tile_masks", mask_bytes(&p));
-        let group_a = f.group(placeholder, placeholder, &masks);
+        let rects = f.buf("cull.light_rects", u64::from(p.light_count) * 8);
+        // At most every tile of the screen for each light, in blocks.
+        let blocks = u64::from(p.light_count)
+            * u64::from(p.bins.div_ceil(crate::layout::SCATTER_MASK_THREADS));
+        ctx.check_storage("tiled scatter's block queue", blocks * 8)?;
+        let queue = f.buf("cull.tiled_scatter.blocks", blocks * 8);
+        // Binding 7: the block queue, until the fill binds the lists there.
+        let group_a = f.group(&queue, &rects, &masks);
+        let groups = u32::try_from(blocks.min(u64::from(crate::layout::SCATTER_MASK_GROUPS)))
+            .expect("at most SCATTER_MASK_GROUPS");
         let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
             f.clear(enc);
             f.pass(
                 enc,
                 timer,
                 "cull.depth_bounds",
-                &self.depth_bounds,
+                &self.depth_bounds_blocks,
                 &group_a,
-                depth_groups(&p, false),
+                depth_groups(&p, true),
             );
             f.pass(
                 enc,
@@ -881,7 +908,7 @@ impl Culler {
                 "cull.tiled_scatter.count",
                 &self.scatter_masks,
                 &group_a,
-                groups_2d(p.light_count, GROUPS_X),
+                (groups.max(1), 1),
             );
         };
         let filling = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b| {
@@ -905,7 +932,7 @@ impl Culler {
                 f.masked_total(ctx)?,
             )?;
             let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-            let group_b = f.group(&indices, placeholder, &masks);
+            let group_b = f.group(&indices, &rects, &masks);
             let mut enc = ctx.encoder("cull.tiled_scatter.fill");
             filling(&mut enc, timer, &group_b);
             timer.resolve(&mut enc);
@@ -913,7 +940,7 @@ impl Culler {
             return Ok(f.finish(indices, total, Some(masks.clone()))?);
         };
         let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
-        let group_b = f.group(&indices, placeholder, &masks);
+        let group_b = f.group(&indices, &rects, &masks);
         let mut enc = ctx.encoder("cull.repeated");
         for _ in 0..repeat.runs {
             counting(&mut enc, timer);

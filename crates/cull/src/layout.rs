@@ -45,10 +45,12 @@ pub const SCATTER_LANES: u32 = 16;
 /// more than a small tile's work (see docs/BENCHMARKS.md).
 pub const DEPTH_TILES: u32 = 4;
 
-/// Threads of a `cull.tiled_scatter.count` workgroup with tile masks (a workgroup a light):
-/// 90 against 158 µs with 64 at the Forward+ paper's configuration on the H200, where the
-/// lights nearest the camera cover thousands of tiles.
+/// Threads of a `cull.tiled_scatter.count` workgroup with tile masks, and the tiles of a block
+/// of a light's rectangle that the workgroup takes at a time (a tile a thread).
 pub const SCATTER_MASK_THREADS: u32 = 256;
+/// Workgroups of that pass, each taking every `SCATTER_MASK_GROUPS`-th queued block (fewer
+/// where fewer blocks can be queued).
+pub const SCATTER_MASK_GROUPS: u32 = 2048;
 
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
