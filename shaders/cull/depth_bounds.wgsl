@@ -5,8 +5,8 @@
 // 32 cells over [dmin, dmax]). Background pixels (depth 1.0, the clear value) are not covered
 // and need no lights, so they do not widen the bounds.
 //
-// For gather's and 2.5D's coarse-to-fine passes the host adds rows of workgroups past the
-// tiles' (wg.y >= tiles_y), which store each light's tile rectangle instead (light_tiles,
+// For gather's and 2.5D's coarse-to-fine passes the host adds rows of workgroups before the
+// tiles' (wg.y < the rows past tiles_y), which store each light's tile rectangle instead (light_tiles,
 // as scatter and clusters use: its view-space box cut at the near plane, projected), packed as
 // (x0 | y0 << 16, x1 | y1 << 16), an empty one as (1, 0) (x0 > x1): one pass, not two, as
 // each pass has a fixed cost larger than this work. For tiled scatter with tile masks
@@ -70,21 +70,24 @@ var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    // Uniform (a workgroup's id), so the barriers are reached by all threads or none.
-    if wg.y >= cull.tiles_y {
-        store_light_rect(((wg.y - cull.tiles_y) * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, false);
+    // The lights' rows first, so that their longer chains start early. Uniform (a workgroup's
+    // id), so the barriers are reached by all threads or none.
+    let light_rows = groups.y - cull.tiles_y;
+    if wg.y < light_rows {
+        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, false);
         return;
     }
-    tile_bounds(wg, index);
+    tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
 }
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    if wg.y >= cull.tiles_y {
-        store_light_rect(((wg.y - cull.tiles_y) * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, true);
+    let light_rows = groups.y - cull.tiles_y;
+    if wg.y < light_rows {
+        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, true);
         return;
     }
-    tile_bounds(wg, index);
+    tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
 }
 
 // The depth data of workgroup wg's tiles (see the top of this file).

@@ -10,6 +10,7 @@
 // The lights a scatter_masks workgroup kept, and the queued blocks.
 var<workgroup> wg_mask_kept: atomic<u32>;
 var<workgroup> wg_mask_blocks: u32;
+var<workgroup> wg_mask_light: CullLight;
 
 // Visits the tiles that keep light t / SCATTER_LANES, the lane t % SCATTER_LANES taking every
 // SCATTER_LANES-th tile of its rectangle, so that a light covering the screen is shared by many
@@ -120,11 +121,17 @@ fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) 
     for (var q = wg.x; q < blocks; q += groups.x) {
         let i = out_indices[2u * q];
         let k = out_indices[2u * q + 1u] * SCATTER_MASK_THREADS + slot;
+        // The light in view space, once a block.
+        if slot == 0u {
+            wg_mask_light = cull_light(lights[i]);
+        }
+        workgroupBarrier();
+        let l = wg_mask_light;
+        workgroupBarrier();
         let packed = vec2<u32>(pair_keys[2u * i], pair_keys[2u * i + 1u]);
         let rect = vec4<u32>(packed.x & 0xffffu, packed.x >> 16u, packed.y & 0xffffu, packed.y >> 16u);
         let width = rect.z - rect.x + 1u;
         if k < width * (rect.w - rect.y + 1u) {
-            let l = cull_light(lights[i]);
             let tile = vec2<u32>(rect.x + k % width, rect.y + k / width);
             let bin = tile.y * cull.tiles_x + tile.x;
             if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {

@@ -248,7 +248,7 @@ impl CullOutput {
 }
 
 /// Workgroups of `cull.depth_bounds`: [`crate::layout::DEPTH_TILES`] tiles of a row each, and
-/// with `rects` rows after the tiles' that store the lights' tile rectangles, a light a thread.
+/// with `rects` rows before the tiles' that store the lights' tile rectangles, a light a thread.
 fn depth_groups(p: &GpuCullParams, rects: bool) -> (u32, u32) {
     let x = p.tiles_x.div_ceil(crate::layout::DEPTH_TILES);
     let rows = if rects {
