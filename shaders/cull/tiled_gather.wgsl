@@ -25,9 +25,9 @@
 // floats are compared), and cpu::gather states the same.
 //
 // Tile masks (where tiles x lights bits fit the host's budget, as at the Forward+ paper's
-// configuration; tile_masks.wgsl): the count pass stores each tile's kept lights as bits,
-// counts per tile instead of per (tile, chunk), and sums the total (cull_stats[4]), from
-// which the host sizes the lists. No scan: the fill pass (masks_expand, 64 threads a tile) turns the
+// configuration; tile_masks.wgsl): the count pass stores each tile's kept lights as bits
+// instead of counting per (tile, chunk), and sums the total (cull_stats[4]), from which the
+// host sizes the lists. No scan: the fill pass (masks_expand, 64 threads a tile) turns the
 // tile's words into its list, in light order, without testing any light again.
 //
 // The single level (cull.coarse = 0): the paper's one workgroup per tile over every light; the
@@ -53,8 +53,8 @@ var<workgroup> wg_lines: array<atomic<u32>, 64>;
 // Each light's tile rectangle (from cull.depth_bounds, for coarse-to-fine gather and 2.5D).
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 
-// What a coarse-to-fine pass does: count per (tile, chunk), fill, or store the tile masks,
-// count per tile and sum the total.
+// What a coarse-to-fine pass does: count per (tile, chunk), fill, or store the tile masks and
+// sum their total.
 const CHUNK_COUNT: u32 = 0u;
 const CHUNK_FILL: u32 = 1u;
 const CHUNK_MASK: u32 = 2u;
@@ -238,7 +238,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
     }
     if mode == CHUNK_MASK {
         if kept != 0u {
-            atomicAdd(&bin_counts[bin], kept);
             atomicAdd(&wg_kept, kept);
         }
         workgroupBarrier();

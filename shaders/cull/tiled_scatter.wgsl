@@ -136,7 +136,6 @@ fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) 
             let bin = tile.y * cull.tiles_x + tile.x;
             if tile_keeps(l, tile_side_planes(tile), tile_depth[bin]) {
                 atomicOr(&tile_masks[bin * words + i / 32u], 1u << (i % 32u));
-                atomicAdd(&bin_counts[bin], 1u);
                 kept += 1u;
             }
         }
