@@ -838,6 +838,35 @@ fn capacity_drops_are_counted() {
     }
 }
 
+/// Runs `s` where tile masks must be used, checks they are left zero and that the lists equal
+/// the CPU oracle's (over the GPU's tile depth data); returns the masks' words a tile and the
+/// lists.
+fn masked_lists_match_oracle(
+    ctx: &GpuContext,
+    culler: &Culler,
+    r: &Rendered,
+    case: &Case,
+    s: &Strategy,
+    what: &str,
+) -> (usize, manylights_cull::BinLists) {
+    let out = run_gpu(ctx, culler, r, case, s);
+    let masks = out
+        .read_tile_masks(ctx)
+        .unwrap()
+        .unwrap_or_else(|| panic!("{what}: tile masks must fit"));
+    assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
+    let td = out.read_tile_depth(ctx).unwrap();
+    let gpu = out.read(ctx).unwrap();
+    let oracle = match s {
+        Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &out.params, &r.lights, &td),
+        _ => cpu::gather(&r.frame, &out.params, &r.lights, &td),
+    };
+    oracle
+        .compare(&gpu)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    (masks.len() / out.params.bins as usize, gpu)
+}
+
 /// Tile masks of over 64 words a tile (over 4,096 lights, so each fill thread takes several
 /// words, and the last threads none): gather's, 2.5D's and scatter's lists equal their CPU
 /// oracles, each in light order, and the masks are left zero.
@@ -856,25 +885,8 @@ fn tile_masks_of_many_words_equal_the_oracle() {
         Strategy::TiledScatter { tile_size: 8 },
     ] {
         let what = format!("{} {}", case.label, s.name());
-        let out = run_gpu(&ctx, &culler, &r, &case, &s);
-        let masks = out
-            .read_tile_masks(&ctx)
-            .unwrap()
-            .unwrap_or_else(|| panic!("{what}: tile masks must fit"));
-        assert!(
-            masks.len() / out.params.bins as usize > 64,
-            "{what}: over 64 words a tile"
-        );
-        assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
-        let td = out.read_tile_depth(&ctx).unwrap();
-        let gpu = out.read(&ctx).unwrap();
-        let oracle = match s {
-            Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &out.params, &r.lights, &td),
-            _ => cpu::gather(&r.frame, &out.params, &r.lights, &td),
-        };
-        oracle
-            .compare(&gpu)
-            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let (words, gpu) = masked_lists_match_oracle(&ctx, &culler, &r, &case, &s, &what);
+        assert!(words > 64, "{what}: over 64 words a tile");
         let mut kept = 0;
         for b in 0..gpu.ranges.len() {
             let list = gpu.list(b);
@@ -907,22 +919,8 @@ fn tile_masks_with_lights_over_many_blocks_equal_the_oracle() {
         Strategy::tiled_gather(4),
     ] {
         let what = format!("{} {} ({} lights)", case.label, s.name(), r.lights.len());
-        let out = run_gpu(&ctx, &culler, &r, &case, &s);
-        assert_eq!(out.params.bins, 32 * 24, "{what}");
-        let masks = out
-            .read_tile_masks(&ctx)
-            .unwrap()
-            .unwrap_or_else(|| panic!("{what}: tile masks must fit"));
-        assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
-        let td = out.read_tile_depth(&ctx).unwrap();
-        let gpu = out.read(&ctx).unwrap();
-        let oracle = match s {
-            Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &out.params, &r.lights, &td),
-            _ => cpu::gather(&r.frame, &out.params, &r.lights, &td),
-        };
-        oracle
-            .compare(&gpu)
-            .unwrap_or_else(|e| panic!("{what}: {e}"));
+        let (_, gpu) = masked_lists_match_oracle(&ctx, &culler, &r, &case, &s, &what);
+        assert_eq!(gpu.ranges.len(), 32 * 24, "{what}");
         let longest = (0..gpu.ranges.len())
             .map(|b| gpu.list(b).len())
             .max()

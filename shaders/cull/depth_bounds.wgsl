@@ -70,24 +70,24 @@ var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    // The lights' rows first, so that their longer chains start early. Uniform (a workgroup's
-    // id), so the barriers are reached by all threads or none.
-    let light_rows = groups.y - cull.tiles_y;
-    if wg.y < light_rows {
-        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, false);
-        return;
-    }
-    tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
+    lights_or_tiles(wg, groups, index, false);
 }
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    lights_or_tiles(wg, groups, index, true);
+}
+
+// Workgroup wg's lights (the rows before the tiles', so that their longer chains start early;
+// with `blocks` also queued) or tiles. Uniform (a workgroup's id), so the barriers are reached
+// by all threads or none.
+fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, blocks: bool) {
     let light_rows = groups.y - cull.tiles_y;
     if wg.y < light_rows {
-        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, true);
-        return;
+        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, blocks);
+    } else {
+        tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
     }
-    tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
 }
 
 // The depth data of workgroup wg's tiles (see the top of this file).

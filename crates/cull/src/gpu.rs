@@ -722,7 +722,10 @@ impl Culler {
         };
         // The count or fill pass, and for clusters its wide lights' pass (after the count
         // pass, the queue's dispatch arguments).
-        let phase = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, fill: bool, group| {
+        let phase = |enc: &mut wgpu::CommandEncoder,
+                     timer: &mut GpuTimer,
+                     fill: bool,
+                     group: &wgpu::BindGroup| {
             let (what, pipe, wide_pipe) = if fill {
                 ("fill", fill_pipe, &self.clustered_fill_wide)
             } else {
@@ -809,64 +812,45 @@ impl Culler {
             }
         };
         // The lists, once the index buffer is sized.
-        let filling = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b| {
-            phase(enc, timer, true, group_b);
-            if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
-                for (label, pipe) in [
-                    ("cull.clustered.order_short", &self.cluster_order_short),
-                    ("cull.clustered.order", &self.cluster_order),
-                ] {
+        let filling =
+            |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b: &wgpu::BindGroup| {
+                phase(enc, timer, true, group_b);
+                if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
+                    for (label, pipe) in [
+                        ("cull.clustered.order_short", &self.cluster_order_short),
+                        ("cull.clustered.order", &self.cluster_order),
+                    ] {
+                        f.pass(
+                            enc,
+                            timer,
+                            label,
+                            pipe,
+                            group_b,
+                            groups_2d(p.bins, GROUPS_X),
+                        );
+                    }
+                }
+                // (Coarse-to-fine gather's fill writes the ranges itself.)
+                if !chunked {
                     f.pass(
                         enc,
                         timer,
-                        label,
-                        pipe,
+                        "cull.finalize",
+                        &self.finalize,
                         group_b,
-                        groups_2d(p.bins, GROUPS_X),
+                        groups_2d(p.bins.div_ceil(64), GROUPS_X),
                     );
                 }
-            }
-            // (Coarse-to-fine gather's fill writes the ranges itself.)
-            if !chunked {
-                f.pass(
-                    enc,
-                    timer,
-                    "cull.finalize",
-                    &self.finalize,
-                    group_b,
-                    groups_2d(p.bins.div_ceil(64), GROUPS_X),
-                );
-            }
-        };
-        let Some(repeat) = repeat else {
-            let mut enc = ctx.encoder("cull.count");
-            counting(&mut enc, timer);
-            ctx.submit_and_wait(enc, "culling: count and scan")?;
-            let total = Frame::entries(
-                ctx,
-                "light list bytes",
-                "light list entries",
-                total_of(ctx)?,
-            )?;
-            let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-            let group_b = f.group(&indices, wide, binding_11);
-            let mut enc = ctx.encoder("cull.fill");
-            filling(&mut enc, timer, &group_b);
-            timer.resolve(&mut enc);
-            ctx.submit_and_wait(enc, "culling: fill")?;
-            return Ok(f.finish(indices, total, masks.clone())?);
-        };
-        let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
-        let group_b = f.group(&indices, wide, binding_11);
-        let mut enc = ctx.encoder("cull.repeated");
-        for _ in 0..repeat.runs {
-            counting(&mut enc, timer);
-            filling(&mut enc, timer, &group_b);
-        }
-        timer.resolve(&mut enc);
-        ctx.submit_and_wait(enc, "culling: repeated runs")?;
-        repeat.check(total_of(ctx)?)?;
-        Ok(f.finish(indices, repeat.total, masks.clone())?)
+            };
+        let (indices, total) = f.count_then_fill(
+            timer,
+            repeat,
+            &counting,
+            &total_of,
+            &|indices| f.group(indices, wide, binding_11),
+            &filling,
+        )?;
+        Ok(f.finish(indices, total, masks.clone())?)
     }
 
     /// Tiled scatter with tile masks: the depth-bounds pass also stores each light's rectangle
@@ -911,45 +895,26 @@ impl Culler {
                 (groups.max(1), 1),
             );
         };
-        let filling = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b| {
-            f.pass(
-                enc,
-                timer,
-                "cull.tiled_scatter.fill",
-                &self.gather_fill_masks,
-                group_b,
-                mask_fill_groups(&p),
-            );
-        };
-        let Some(repeat) = repeat else {
-            let mut enc = ctx.encoder("cull.tiled_scatter.count");
-            counting(&mut enc, timer);
-            ctx.submit_and_wait(enc, "culling: count")?;
-            let total = Frame::entries(
-                ctx,
-                "light list bytes",
-                "light list entries",
-                f.masked_total(ctx)?,
-            )?;
-            let indices = f.buf("cull.light_indices", u64::from(total) * 4);
-            let group_b = f.group(&indices, &rects, &masks);
-            let mut enc = ctx.encoder("cull.tiled_scatter.fill");
-            filling(&mut enc, timer, &group_b);
-            timer.resolve(&mut enc);
-            ctx.submit_and_wait(enc, "culling: fill")?;
-            return Ok(f.finish(indices, total, Some(masks.clone()))?);
-        };
-        let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
-        let group_b = f.group(&indices, &rects, &masks);
-        let mut enc = ctx.encoder("cull.repeated");
-        for _ in 0..repeat.runs {
-            counting(&mut enc, timer);
-            filling(&mut enc, timer, &group_b);
-        }
-        timer.resolve(&mut enc);
-        ctx.submit_and_wait(enc, "culling: repeated runs")?;
-        repeat.check(f.masked_total(ctx)?)?;
-        Ok(f.finish(indices, repeat.total, Some(masks.clone()))?)
+        let filling =
+            |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b: &wgpu::BindGroup| {
+                f.pass(
+                    enc,
+                    timer,
+                    "cull.tiled_scatter.fill",
+                    &self.gather_fill_masks,
+                    group_b,
+                    mask_fill_groups(&p),
+                );
+            };
+        let (indices, total) = f.count_then_fill(
+            timer,
+            repeat,
+            &counting,
+            &|ctx| f.masked_total(ctx),
+            &|indices| f.group(indices, &rects, &masks),
+            &filling,
+        )?;
+        Ok(f.finish(indices, total, Some(masks.clone()))?)
     }
 
     /// Tiled scatter: per-light pair counts, their scan, the pairs, the radix sort by tile, and
@@ -1419,6 +1384,56 @@ impl<'a> Frame<'a> {
             limit: u32::MAX.into(),
             limit_name: "u32 list offsets",
         })
+    }
+
+    /// The two phases of a binned run: `counting` (up to the list total, which `total_of`
+    /// reads back), then `filling` into lists of that size (bound by `group_for`). Without
+    /// `repeat`, once, the lists sized exactly between two submissions; with it, `repeat.runs`
+    /// times back to back in one submission, sized from the earlier run and checked against
+    /// it. Returns the lists' index buffer and entries.
+    #[allow(
+        clippy::type_complexity,
+        reason = "the phases as the callers' closures"
+    )]
+    fn count_then_fill(
+        &self,
+        timer: &mut GpuTimer,
+        repeat: Option<Repeat>,
+        counting: &dyn Fn(&mut wgpu::CommandEncoder, &mut GpuTimer),
+        total_of: &dyn Fn(&GpuContext) -> Result<u64, GpuError>,
+        group_for: &dyn Fn(&wgpu::Buffer) -> wgpu::BindGroup,
+        filling: &dyn Fn(&mut wgpu::CommandEncoder, &mut GpuTimer, &wgpu::BindGroup),
+    ) -> Result<(wgpu::Buffer, u32), CullError> {
+        let ctx = self.ctx;
+        let Some(repeat) = repeat else {
+            let mut enc = ctx.encoder("cull.count");
+            counting(&mut enc, timer);
+            ctx.submit_and_wait(enc, "culling: count")?;
+            let total = Frame::entries(
+                ctx,
+                "light list bytes",
+                "light list entries",
+                total_of(ctx)?,
+            )?;
+            let indices = self.buf("cull.light_indices", u64::from(total) * 4);
+            let group = group_for(&indices);
+            let mut enc = ctx.encoder("cull.fill");
+            filling(&mut enc, timer, &group);
+            timer.resolve(&mut enc);
+            ctx.submit_and_wait(enc, "culling: fill")?;
+            return Ok((indices, total));
+        };
+        let indices = self.buf("cull.light_indices", u64::from(repeat.total) * 4);
+        let group = group_for(&indices);
+        let mut enc = ctx.encoder("cull.repeated");
+        for _ in 0..repeat.runs {
+            counting(&mut enc, timer);
+            filling(&mut enc, timer, &group);
+        }
+        timer.resolve(&mut enc);
+        ctx.submit_and_wait(enc, "culling: repeated runs")?;
+        repeat.check(total_of(ctx)?)?;
+        Ok((indices, repeat.total))
     }
 
     /// The output; reads back the dropped count where a capacity was set.

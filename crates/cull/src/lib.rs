@@ -467,7 +467,7 @@ mod tests {
         // One tile and 33.5M lights: the chunks must fit one dispatch dimension.
         let mut p = gather_params(8, 4, 33_554_431);
         fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
-        assert!(p.chunk % CHUNK_STEP == 0 && 33_554_431u32.div_ceil(p.chunk) <= 65_535);
+        assert!(p.chunk.is_multiple_of(CHUNK_STEP) && 33_554_431u32.div_ceil(p.chunk) <= 65_535);
         // No lights, a capacity, or asked for none: the single level.
         let mut p = gather_params(64, 64, 0);
         fit_chunks(&mut p, MAX_CHUNK_ENTRIES, 65_535, MIN_CHUNK);
