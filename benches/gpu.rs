@@ -203,7 +203,9 @@ fn cull_time(
 /// The Forward+ paper's configuration, as experiments/harada2012.ron: the atrium with 3,072
 /// light-field lights of radius 2.5 m at 1280 x 720. `cull.harada2012/<variant>/3072` times
 /// every culling pass of: gather and 2.5D with 8-pixel tiles, with and without the coarse level
-/// and with and without tile masks; gather with other chunk sizes; scatter with 8-pixel tiles; clusters (16-pixel tiles, 16 exponential slices), ordered and not.
+/// and with and without tile masks; gather with other chunk sizes; scatter with 8-pixel tiles,
+/// with and without tile masks; clusters (16-pixel tiles, 16 exponential slices), ordered and
+/// not.
 fn cull_paper(c: &mut Criterion) {
     let ctx = gpu();
     let (w, h, n) = if quick() {

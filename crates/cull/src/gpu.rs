@@ -578,11 +578,13 @@ impl Culler {
         settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
         let mut params = strategy.params(w, h, scene.light_count, settings);
-        // Gather's tile masks, decided before the chunks are fitted (their chunks are smaller);
-        // fitting may still drop the coarse level, and the masks with it.
-        let masked = !matches!(strategy, Strategy::Clustered { .. })
-            && (params.coarse > 0 || matches!(strategy, Strategy::TiledScatter { .. }))
-            && self.masks_fit(ctx, &params);
+        let clustered = matches!(strategy, Strategy::Clustered { .. });
+        let per_light = matches!(strategy, Strategy::TiledScatter { .. });
+        // Tile masks serve scatter and gather's coarse-to-fine passes.
+        let maskable = |p: &GpuCullParams| per_light || (!clustered && p.coarse > 0);
+        // Decided before the chunks are fitted (their chunks are smaller); fitting may still
+        // drop gather's coarse level, and the masks with it.
+        let masked = maskable(&params) && self.masks_fit(ctx, &params);
         let min_chunk = if masked {
             self.gather_min_chunk_masked
         } else {
@@ -598,10 +600,9 @@ impl Culler {
             ctx.limits.max_compute_workgroups_per_dimension,
             min_chunk,
         );
-        let per_light = matches!(strategy, Strategy::TiledScatter { .. });
-        let masked = masked && (params.coarse > 0 || per_light);
+        let masked = masked && maskable(&params);
         ctx.check_storage("cull bins", u64::from(params.bins) * 8)?;
-        if matches!(strategy, Strategy::Clustered { .. }) {
+        if clustered {
             ctx.check_storage(
                 "clusters' wide-light queue",
                 (u64::from(params.light_count) + 1) * 16,
@@ -610,8 +611,7 @@ impl Culler {
         // Rows of light rectangles: gather's coarse-to-fine passes, and scatter's masks.
         let (_, depth_rows) = depth_groups(
             &params,
-            (params.coarse > 0 && !matches!(strategy, Strategy::Clustered { .. }))
-                || (per_light && masked),
+            (!clustered && params.coarse > 0) || (per_light && masked),
         );
         if depth_rows > ctx.limits.max_compute_workgroups_per_dimension {
             return Err(GpuError::OverLimit {
@@ -892,7 +892,7 @@ impl Culler {
                 "cull.tiled_scatter.count",
                 &self.scatter_masks,
                 &group_a,
-                (groups.max(1), 1),
+                (groups, 1),
             );
         };
         let filling =
@@ -1220,9 +1220,10 @@ impl<'a> Frame<'a> {
         storage_buf(self.ctx, label, size)
     }
 
-    /// The culling group: `pair_keys` at binding 9 (tiled scatter's pair keys, the clusters'
-    /// wide-light queue, gather's light rectangles), `args` at 11 (the clusters' indirect
-    /// dispatch, gather's tile masks).
+    /// The culling group: `indices` at binding 7 (the lists, or before them tiled scatter's
+    /// block queue with tile masks), `pair_keys` at 9 (tiled scatter's pair keys, the clusters'
+    /// wide-light queue, the light rectangles), `args` at 11 (the clusters' indirect dispatch,
+    /// the tile masks).
     fn group(
         &self,
         indices: &wgpu::Buffer,
