@@ -879,6 +879,10 @@ fn repeated_timings(
 fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     init_logging(cli.verbose);
+    if let Err(e) = manylights_gpu::shaders::check_override_dir() {
+        eprintln!("error: {e}");
+        return std::process::ExitCode::FAILURE;
+    }
     let result = match &cli.command {
         Command::Render(args) => render(args),
         Command::Cull(args) => cull(args),

@@ -464,3 +464,24 @@ fn verbose_run_logs_stages() {
     }
     assert!(out.join("results.csv").is_file());
 }
+
+#[test]
+fn a_shader_dir_that_is_not_a_directory_is_a_clean_error() {
+    let tmp = tempfile::tempdir().unwrap();
+    let missing = tmp.path().join("no-such-shaders");
+    let o = Command::new(env!("CARGO_BIN_EXE_manylights"))
+        .args(["cull", "--width", "32", "--height", "16", "--lights", "4"])
+        .arg("--out")
+        .arg(tmp.path().join("out"))
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .env("MANYLIGHTS_SHADER_DIR", &missing)
+        .output()
+        .expect("run manylights");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "stderr: {stderr}");
+    assert!(
+        stderr.contains("MANYLIGHTS_SHADER_DIR") && stderr.contains("not a directory"),
+        "{stderr}"
+    );
+    assert!(!tmp.path().join("out").exists());
+}

@@ -21,6 +21,13 @@ use crate::layout::wgsl_prelude;
 /// documentation).
 pub const SHADER_DIR_ENV: &str = "MANYLIGHTS_SHADER_DIR";
 
+/// Checks [`SHADER_DIR_ENV`] up front: an error naming it and its value when it is set but is
+/// not a directory, so that a command fails cleanly before any shader is built (building one
+/// would panic with the same message).
+pub fn check_override_dir() -> Result<(), String> {
+    override_dir().map(|_| ())
+}
+
 /// The replacement directory from [`SHADER_DIR_ENV`], read once; an error when it is named but
 /// is not a directory.
 fn override_dir() -> Result<Option<&'static Path>, String> {
