@@ -510,10 +510,7 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 if let Some(t) = timer.read(&ctx).unwrap() {
                     let counts = t
                         .iter()
-                        .filter(|p| {
-                            p.label.starts_with("cull.")
-                                && (p.label.ends_with(".count") || p.label.ends_with(".lists"))
-                        })
+                        .filter(|p| p.label.starts_with("cull.") && p.label.ends_with(".count"))
                         .count();
                     assert_eq!(counts, 3, "{what}: three runs timed");
                 }

@@ -168,30 +168,24 @@ fn light_depth_mask(l: CullLight, t: TileDepth) -> u32 {
     return bit_range(lo, hi);
 }
 
-// outside_plane without branches (the same floats, the same verdict): the sphere's and the
-// cone's tests both computed, then combined, so that a thread's tests of several planes (and
-// lights) overlap instead of waiting on each other.
-fn outside_plane_flat(p: vec4<f32>, l: CullLight) -> bool {
-    let dc = dot(p.xyz, l.center) + p.w;
-    let base = dot(p.xyz, l.center + l.axis * l.radius) + p.w;
-    let n_perp = p.xyz - dot(p.xyz, l.axis) * l.axis;
-    let reach = max(dc, base + l.radius * l.tan_outer * length(n_perp));
-    return (dc < -(l.radius + l.slack)) | (l.is_cone & (reach < -l.slack));
-}
-
 // Whether a light may reach any covered pixel of a tile: the tile frustum between the tile's
-// depth bounds, and with CULL_FLAG_DEPTH_MASK the 2.5D masks. Without branches (but the
-// strategy's uniform one), as the hot loops of the gather passes call it: the six planes are
-// tested at once, not one after another.
+// depth bounds, and with CULL_FLAG_DEPTH_MASK the 2.5D masks.
 fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
-    // Written out, not a loop: a dynamically indexed array may go to local memory. Depth
-    // bounds as planes: -z >= dmin and -z <= dmax.
-    let outside = outside_plane_flat(planes[0], l) | outside_plane_flat(planes[1], l) | outside_plane_flat(planes[2], l) | outside_plane_flat(planes[3], l) | outside_plane_flat(vec4<f32>(0.0, 0.0, -1.0, -t.dmin), l) | outside_plane_flat(vec4<f32>(0.0, 0.0, 1.0, t.dmax), l);
-    var keep = (t.covered != 0u) & !outside;
-    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
-        keep = keep & ((light_depth_mask(l, t) & t.mask) != 0u);
+    if t.covered == 0u {
+        return false;
     }
-    return keep;
+    // Written out, not a loop: a dynamically indexed array may go to local memory.
+    if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
+        return false;
+    }
+    // Depth bounds as planes: -z >= dmin and -z <= dmax.
+    if outside_plane(vec4<f32>(0.0, 0.0, -1.0, -t.dmin), l) || outside_plane(vec4<f32>(0.0, 0.0, 1.0, t.dmax), l) {
+        return false;
+    }
+    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
+        return (light_depth_mask(l, t) & t.mask) != 0u;
+    }
+    return true;
 }
 
 // Words of a tile's mask in the tile masks (tile_masks.wgsl): two a batch of 64 lights.

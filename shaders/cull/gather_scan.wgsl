@@ -67,21 +67,3 @@ fn mark_lines(slot: u32, spans: u32, base: u32) {
         atomicOr(&wg_lines[word + 2u * c], bit);
     }
 }
-
-// The lines of cull.tiled_gather.lists (gather_lists.wgsl), LISTS_LINE_WORDS words a line,
-// through workgroup atomics. Called in uniform control flow.
-fn mark_lines_lists(slot: u32, spans: u32, base: u32) {
-    let bit = 1u << (slot % 32u);
-    let word = base + slot / 32u;
-    var s = spans;
-    while s != 0u {
-        let c = firstTrailingBit(s);
-        s &= s - 1u;
-        atomicOr(&wl_lines[word + LISTS_LINE_WORDS * c], bit);
-    }
-}
-
-@compute @workgroup_size(LISTS_THREADS)
-fn gather_lists_pass(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_lists(wg.xy, li);
-}

@@ -95,31 +95,3 @@ fn gather_count_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_inv
 fn gather_fill_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     gather_flat(wg.xy, subgroup_slot(lane, size, id, count), true);
 }
-
-// The lines of cull.tiled_gather.lists (gather_lists.wgsl), LISTS_LINE_WORDS words a line: as
-// mark_lines, a ballot per line in use, written by the subgroup's first lane. Called in uniform
-// control flow.
-fn mark_lines_lists(slot: u32, spans: u32, base: u32) {
-    var used = subgroupOr(spans);
-    while used != 0u {
-        let c = firstTrailingBit(used);
-        used &= used - 1u;
-        let b = subgroupBallot(((spans >> c) & 1u) != 0u);
-        if g_lane == 0u {
-            let first = g_sg_id * g_sg_size;
-            let word = base + LISTS_LINE_WORDS * c + first / 32u;
-            if g_sg_size >= 32u {
-                for (var k = 0u; k < g_sg_size / 32u; k++) {
-                    atomicStore(&wl_lines[word + k], b[k]);
-                }
-            } else {
-                atomicOr(&wl_lines[word], b.x << (first % 32u));
-            }
-        }
-    }
-}
-
-@compute @workgroup_size(LISTS_THREADS)
-fn gather_lists_pass(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
-    gather_lists(wg.xy, subgroup_slot(lane, size, id, count));
-}

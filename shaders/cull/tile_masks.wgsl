@@ -13,7 +13,7 @@
 // goes: the masks are all zero again after every fill, as they were when created, so the next
 // count pass starts from zero without a clear. A tile's list is the same as without masks;
 // only where it sits in the buffer differs from run to run (its range says where).
-@group(1) @binding(11) var<storage, read_write> tile_masks: array<atomic<u32>>;
+@group(1) @binding(11) var<storage, read_write> tile_masks: array<u32>;
 
 // The fill's places for its tiles.
 var<workgroup> wg_mask_at: array<u32, MASK_FILL_TILES>;
@@ -38,7 +38,7 @@ fn masks_expand(wg: vec2<u32>, slot: u32) {
     let end = bin * words + min(lane * k + k, words);
     var c = 0u;
     for (var w = first; w < end; w++) {
-        c += countOneBits(atomicLoad(&tile_masks[w]));
+        c += countOneBits(tile_masks[w]);
     }
     let scan = scan_keep(slot, c);
     if lane == 0u && words != 0u {
@@ -55,9 +55,9 @@ fn masks_expand(wg: vec2<u32>, slot: u32) {
         return;
     }
     for (var w = first; w < end; w++) {
-        var m = atomicLoad(&tile_masks[w]);
+        var m = tile_masks[w];
         if m != 0u {
-            atomicStore(&tile_masks[w], 0u);
+            tile_masks[w] = 0u;
             let light = (w - bin * words) * 32u;
             while m != 0u {
                 out_indices[pos] = light + firstTrailingBit(m);

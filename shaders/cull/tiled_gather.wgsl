@@ -210,28 +210,15 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
             for (var w = 0u; w < 2u; w++) {
                 var m = atomicLoad(&wg_lines[lines + 2u * local.x + w]) & atomicLoad(&wg_lines[lines + 16u + 2u * local.y + w]);
                 var word = 0u;
-                // Two candidates at a time, their tests overlapping (tile_keeps has no
-                // branches): a thread's tests are a chain of dependent latencies otherwise.
                 while m != 0u {
-                    let b0 = firstTrailingBit(m);
+                    let bit = firstTrailingBit(m);
+                    let k = w * 32u + bit;
                     m &= m - 1u;
-                    let two = m != 0u;
-                    let b1 = select(b0, firstTrailingBit(m), two);
-                    m &= m - 1u;
-                    let keep0 = tile_keeps(wg_light[w * 32u + b0], planes, t);
-                    let keep1 = two & tile_keeps(wg_light[w * 32u + b1], planes, t);
-                    if keep0 {
+                    if tile_keeps(wg_light[k], planes, t) {
                         if fill {
-                            out_indices[at + kept] = b + w * 32u + b0;
+                            out_indices[at + kept] = b + k;
                         }
-                        word |= 1u << b0;
-                        kept += 1u;
-                    }
-                    if keep1 {
-                        if fill {
-                            out_indices[at + kept] = b + w * 32u + b1;
-                        }
-                        word |= 1u << b1;
+                        word |= 1u << bit;
                         kept += 1u;
                     }
                 }
@@ -239,7 +226,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                     // Masks start each run at zero (the fill clears them), so only nonzero
                     // words are stored (chunks are whole batches, so b / 32 + w is this
                     // batch's word w).
-                    atomicStore(&tile_masks[bin * mask_words() + b / 32u + w], word);
+                    tile_masks[bin * mask_words() + b / 32u + w] = word;
                 }
             }
         }

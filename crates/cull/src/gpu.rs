@@ -45,7 +45,6 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
         TILE_MASKS,
-        shader_file!("cull/gather_lists.wgsl"),
         shader_file!("cull/gather_scan.wgsl"),
     ],
 };
@@ -62,7 +61,6 @@ pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
         TILE_MASKS,
-        shader_file!("cull/gather_lists.wgsl"),
         shader_file!("cull/gather_scan_subgroup.wgsl"),
     ],
 };
@@ -299,7 +297,6 @@ pub struct Culler {
     gather_count: wgpu::ComputePipeline,
     gather_count_masks: wgpu::ComputePipeline,
     gather_fill_masks: wgpu::ComputePipeline,
-    gather_lists: wgpu::ComputePipeline,
     scatter_masks: wgpu::ComputePipeline,
     gather_count_flat: wgpu::ComputePipeline,
     gather_fill_flat: wgpu::ComputePipeline,
@@ -388,7 +385,6 @@ impl Culler {
             gather_fill,
             gather_count_masks,
             gather_fill_masks,
-            gather_lists,
             gather_count_flat,
             gather_fill_flat,
             finalize,
@@ -407,7 +403,6 @@ impl Culler {
                 "gather_fill",
                 "gather_count_masks",
                 "gather_fill_masks",
-                "gather_lists_pass",
                 "gather_count_flat",
                 "gather_fill_flat",
                 "finalize",
@@ -485,7 +480,6 @@ impl Culler {
             gather_fill,
             gather_count_masks,
             gather_fill_masks,
-            gather_lists,
             scatter_masks,
             gather_count_flat,
             gather_fill_flat,
@@ -640,9 +634,6 @@ impl Culler {
                 self.run_scatter_masks(ctx, f, timer, repeat)
             }
             Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer, repeat),
-            Strategy::TiledGather { .. } | Strategy::DepthMask { .. } if masked => {
-                self.run_gather_lists(ctx, f, strategy, timer, repeat)
-            }
             _ => self.run_binned(ctx, f, strategy, masked, timer, repeat),
         }
     }
@@ -860,78 +851,6 @@ impl Culler {
             &filling,
         )?;
         Ok(f.finish(indices, total, masks.clone())?)
-    }
-
-    /// Gather and 2.5D with tile masks: the depth-bounds pass (with the lights' rectangles),
-    /// then one pass that tests, sets the masks and writes the lists, a workgroup a coarse tile
-    /// (`shaders/cull/gather_lists.wgsl`). Without `repeat`, a first run with no room for the
-    /// lists and no timer sums their total, and a second, timed, writes them into a buffer of
-    /// that size; with it, `repeat.runs` runs back to back into lists sized from the earlier
-    /// run. Either way the last run's total is checked against the size.
-    fn run_gather_lists(
-        &self,
-        ctx: &GpuContext,
-        f: Frame<'_>,
-        strategy: &Strategy,
-        timer: &mut GpuTimer,
-        repeat: Option<Repeat>,
-    ) -> Result<CullOutput, CullError> {
-        let p = f.params;
-        let name = strategy.name();
-        let masks = f.buf("cull.tile_masks", mask_bytes(&p));
-        let rects = f.buf("cull.light_rects", u64::from(p.light_count) * 8);
-        let groups = (p.coarse_x, p.tiles_y.div_ceil(p.coarse));
-        let run =
-            |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group: &wgpu::BindGroup| {
-                f.clear(enc);
-                f.pass(
-                    enc,
-                    timer,
-                    "cull.depth_bounds",
-                    &self.depth_bounds,
-                    group,
-                    depth_groups(&p, true),
-                );
-                f.pass(
-                    enc,
-                    timer,
-                    &format!("cull.{name}.lists"),
-                    &self.gather_lists,
-                    group,
-                    groups,
-                );
-            };
-        let repeat = match repeat {
-            Some(r) => r,
-            None => {
-                // The sizing run: no room for lists (the pass writes none then), no timer.
-                let none = f.buf("cull.light_indices", 4);
-                let mut enc = ctx.encoder("cull.lists.size");
-                run(
-                    &mut enc,
-                    &mut GpuTimer::off(),
-                    &f.group(&none, &rects, &masks),
-                );
-                ctx.submit_and_wait(enc, "culling: list total")?;
-                let total = Frame::entries(
-                    ctx,
-                    "light list bytes",
-                    "light list entries",
-                    f.lists_total(ctx)?,
-                )?;
-                Repeat { total, runs: 1 }
-            }
-        };
-        let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
-        let group = f.group(&indices, &rects, &masks);
-        let mut enc = ctx.encoder("cull.lists");
-        for _ in 0..repeat.runs {
-            run(&mut enc, timer, &group);
-        }
-        timer.resolve(&mut enc);
-        ctx.submit_and_wait(enc, "culling: lists")?;
-        repeat.check(f.lists_total(ctx)?)?;
-        Ok(f.finish(indices, repeat.total, Some(masks.clone()))?)
     }
 
     /// Tiled scatter with tile masks: the depth-bounds pass also stores each light's rectangle
@@ -1442,12 +1361,6 @@ impl<'a> Frame<'a> {
     /// cannot wrap: the masks' budget bounds bins x lights below 2^32).
     fn masked_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
         Ok(u64::from(read_u32s(ctx, &self.stats, 4, 1)?[0]))
-    }
-
-    /// The list total that gather's one-pass lists placed (`cull_stats[5]`), whether or not
-    /// the lists had room.
-    fn lists_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
-        Ok(u64::from(read_u32s(ctx, &self.stats, 5, 1)?[0]))
     }
 
     /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with

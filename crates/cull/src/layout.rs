@@ -55,36 +55,11 @@ pub const SCATTER_MASK_GROUPS: u32 = 2048;
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
 
-/// Threads of a workgroup of gather's and 2.5D's one-pass lists with tile masks
-/// (`shaders/cull/gather_lists.wgsl`): four a tile of a coarse tile of 8 x 8 tiles. Their
-/// workgroup scan is the masks' fill's, so the two have the same width.
-pub const LISTS_THREADS: u32 = 256;
-const _: () = assert!(LISTS_THREADS == 64 * MASK_FILL_TILES);
-/// Light rectangles each thread of that pass tests against its coarse tile in a window.
-pub const LISTS_RECTS: u32 = 4;
-/// Lights a window of candidates spans: [`LISTS_RECTS`] a thread.
-pub const LISTS_WINDOW: u32 = LISTS_THREADS * LISTS_RECTS;
-/// Candidates a batch of that pass tests (transformed once into workgroup memory), and the
-/// 32-bit words of each line of a batch.
-pub const LISTS_BATCH: u32 = 128;
-/// Words a line of a batch takes (a bit a candidate); a tile's four quarters test one each.
-pub const LISTS_LINE_WORDS: u32 = LISTS_BATCH / 32;
-const _: () = assert!(LISTS_LINE_WORDS <= 4);
-/// Candidates the ring of that pass holds: a window's and what waits from the one before.
-pub const LISTS_RING: u32 = 2048;
-const _: () = assert!(LISTS_RING.is_power_of_two() && LISTS_RING >= LISTS_WINDOW + LISTS_BATCH);
-
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
-    WgslConst::U32("LISTS_THREADS", LISTS_THREADS),
-    WgslConst::U32("LISTS_RECTS", LISTS_RECTS),
-    WgslConst::U32("LISTS_WINDOW", LISTS_WINDOW),
-    WgslConst::U32("LISTS_BATCH", LISTS_BATCH),
-    WgslConst::U32("LISTS_LINE_WORDS", LISTS_LINE_WORDS),
-    WgslConst::U32("LISTS_RING", LISTS_RING),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),
