@@ -117,6 +117,66 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
     }
 }
 
+/// The tile-mask budget as an experiment parameter: swept over the default and 0 for gather,
+/// 2.5D and tiled scatter, the `tile_masks` column says which cells used masks (the default
+/// budget at this size: all three; 0: none), their lists are the same (the list metrics equal,
+/// no false negatives), and `params` names the budget where one is set.
+#[test]
+fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
+    let ctx = common::gpu();
+    let tmp = tempfile::tempdir().unwrap();
+    let src = r#"Experiment(
+        name: "masks",
+        config: Config(
+            scene: Atrium(bays: 2),
+            lights: (generator: Uniform, count: 96, seed: 5, radius: Fixed(1.5)),
+            resolution: (64, 40),
+            frames: 1,
+            warmup: 0,
+            accuracy: false,
+        ),
+        sweep: (
+            strategy: [TiledGather(tile_size: 8), DepthMask(tile_size: 8), TiledScatter(tile_size: 8)],
+            mask_budget: [None, Some(0)],
+        ),
+    )"#;
+    let path = tmp.path().join("masks.ron");
+    let e = Experiment::parse(src, &path).unwrap();
+    assert_eq!(e.cells().len(), 6);
+    let s = run_parsed(&ctx, &e, src, tmp.path(), &tmp.path().join("out"), &opts()).unwrap();
+    assert_eq!(s.rows.len(), 6);
+    for pair in s.rows.chunks(2) {
+        let (on, off) = (&pair[0], &pair[1]);
+        assert_eq!(on.strategy, off.strategy);
+        assert_eq!(on.tile_masks, Some(true), "{}: masks fit", on.cell);
+        assert_eq!(off.tile_masks, Some(false), "{}: budget 0", off.cell);
+        assert!(!on.params.contains("mask_budget"), "{}", on.params);
+        assert!(off.params.ends_with(";mask_budget=0"), "{}", off.params);
+        assert!(off.cell.contains("mask_budget=0"), "{}", off.cell);
+        for r in [on, off] {
+            assert_eq!(r.false_negatives, Some(0), "{}", r.cell);
+        }
+        assert_eq!(on.list_bytes, off.list_bytes, "{}", on.cell);
+        assert_eq!(
+            on.max_lights_per_tile, off.max_lights_per_tile,
+            "{}",
+            on.cell
+        );
+        assert_eq!(
+            on.lights_per_pixel_mean, off.lights_per_pixel_mean,
+            "{}",
+            on.cell
+        );
+        assert_eq!(
+            on.false_positive_ratio, off.false_positive_ratio,
+            "{}",
+            on.cell
+        );
+    }
+    let csv = std::fs::read_to_string(tmp.path().join("out/results.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().ends_with(",tile_masks"));
+}
+
 /// The columns of a row that do not depend on timing, and its image error rounded. The order of
 /// lights within a list depends on the GPU's atomics (fills append), so the float sum of a
 /// pixel's lights may differ in its last bits between runs: PSNR of identical images is infinite

@@ -293,6 +293,7 @@ pub struct Culler {
     /// stores the kept lights as bits and the fill pass expands them without testing again
     /// (scatter: without pairs and their sort); past it (or at 0) gather's fill tests every
     /// light again and scatter sorts its pairs.
+    /// A run's [`CullSettings::mask_budget`] overrides it.
     pub mask_budget: u64,
     gather_count: wgpu::ComputePipeline,
     gather_count_masks: wgpu::ComputePipeline,
@@ -505,12 +506,12 @@ impl Culler {
     /// Whether tile masks may serve `p` (gather also needs its coarse level): no capacity,
     /// masks within [`Culler::mask_budget`] and the device's buffers, and bins x lights within
     /// u32 (the masked count passes sum the total in a u32).
-    fn masks_fit(&self, ctx: &GpuContext, p: &GpuCullParams) -> bool {
+    fn masks_fit(&self, ctx: &GpuContext, p: &GpuCullParams, settings: &CullSettings) -> bool {
         p.capacity == 0
             && p.light_count > 0
             && u64::from(p.bins) * u64::from(p.light_count) < 1 << 32
             && mask_bytes(p)
-                <= self.mask_budget.min(
+                <= settings.mask_budget.unwrap_or(self.mask_budget).min(
                     ctx.limits
                         .max_storage_buffer_binding_size
                         .min(ctx.limits.max_buffer_size),
@@ -584,7 +585,7 @@ impl Culler {
         let maskable = |p: &GpuCullParams| per_light || (!clustered && p.coarse > 0);
         // Decided before the chunks are fitted (their chunks are smaller); fitting may still
         // drop gather's coarse level, and the masks with it.
-        let masked = maskable(&params) && self.masks_fit(ctx, &params);
+        let masked = maskable(&params) && self.masks_fit(ctx, &params, settings);
         let min_chunk = if masked {
             self.gather_min_chunk_masked
         } else {

@@ -310,6 +310,7 @@ impl Strategy {
             far,
             slack,
             capacity,
+            ..
         } = *settings;
         let ts = self.tile_size();
         let (tiles_x, tiles_y) = (width.div_ceil(ts), height.div_ceil(ts));
@@ -395,6 +396,10 @@ pub struct CullSettings {
     /// A deliberate cap on each list's length; lights beyond it are dropped and counted in
     /// [`CullOutput::dropped`]. `None` (the default): lists are sized exactly, nothing dropped.
     pub capacity: Option<u32>,
+    /// Most bytes of tile masks (a bit per tile and light) for this run: gather, 2.5D and tiled
+    /// scatter use them where they fit (docs/STRATEGIES.md); `Some(0)` never. `None` (the
+    /// default): the culler's own budget ([`Culler::mask_budget`], [`MASK_BUDGET`]).
+    pub mask_budget: Option<u64>,
 }
 
 impl CullSettings {
@@ -406,6 +411,7 @@ impl CullSettings {
             far,
             slack: layout::DEFAULT_SLACK,
             capacity: None,
+            mask_budget: None,
         }
     }
 
@@ -443,6 +449,7 @@ mod tests {
                 far: 100.0,
                 slack: layout::DEFAULT_SLACK,
                 capacity: None,
+                mask_budget: None,
             },
         )
     }

@@ -151,6 +151,9 @@ pub struct Variant {
     /// Capacity override.
     #[serde(default)]
     pub capacity: Option<u32>,
+    /// Tile-mask budget override, bytes.
+    #[serde(default)]
+    pub mask_budget: Option<u64>,
 }
 
 /// Lists of values for the fields of [`Config`]; the cells are their cartesian product.
@@ -177,6 +180,8 @@ pub struct Sweep {
     pub backend: Option<Vec<Backend>>,
     /// Capacities (`None` entries mean none).
     pub capacity: Option<Vec<Option<u32>>>,
+    /// Tile-mask budgets, bytes (`None` entries mean the default).
+    pub mask_budget: Option<Vec<Option<u64>>>,
     /// Device limits (`None` entries mean none).
     pub device_limit: Option<Vec<Option<DeviceLimit>>>,
     /// Combined overrides.
@@ -207,6 +212,11 @@ pub struct Config {
     /// A deliberate cap on list lengths (dropped lights are counted).
     #[serde(default)]
     pub capacity: Option<u32>,
+    /// Most bytes of tile masks (a bit per tile and light) the strategy may use: gather, 2.5D
+    /// and tiled scatter use them where they fit; 0 never. Default (none): the culler's, 16 MiB.
+    /// Whether a cell used them is the `tile_masks` result column.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mask_budget: Option<u64>,
     /// Conservative culling slack.
     #[serde(default = "slack")]
     pub slack: f32,
@@ -392,6 +402,9 @@ pub fn params_label(c: &Config) -> String {
     if let Some(cap) = c.capacity {
         p.push_str(&format!(";capacity={cap}"));
     }
+    if let Some(b) = c.mask_budget {
+        p.push_str(&format!(";mask_budget={b}"));
+    }
     p
 }
 
@@ -460,6 +473,7 @@ impl Experiment {
             ("strategy", s.strategy.as_ref().map(Vec::len)),
             ("backend", s.backend.as_ref().map(Vec::len)),
             ("capacity", s.capacity.as_ref().map(Vec::len)),
+            ("mask_budget", s.mask_budget.as_ref().map(Vec::len)),
             ("variants", s.variants.as_ref().map(Vec::len)),
         ];
         for (field, len) in lens {
@@ -548,6 +562,13 @@ impl Experiment {
             c.capacity = v;
             format!("capacity={}", v.map_or("none".into(), |x| x.to_string()))
         });
+        axis!(s.mask_budget, |c: &mut Config, v: Option<u64>| {
+            c.mask_budget = v;
+            format!(
+                "mask_budget={}",
+                v.map_or("default".into(), |x| x.to_string())
+            )
+        });
         axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
             c.device_limit = v;
             format!(
@@ -564,6 +585,9 @@ impl Experiment {
             }
             if v.capacity.is_some() {
                 c.capacity = v.capacity;
+            }
+            if v.mask_budget.is_some() {
+                c.mask_budget = v.mask_budget;
             }
             let auto = format!(
                 "{}+{}",
@@ -660,6 +684,7 @@ impl Config {
             far: 1.0,
             slack: self.slack,
             capacity: self.capacity,
+            mask_budget: self.mask_budget,
         };
         settings.validate().map_err(|e| ("slack", e.to_string()))?;
         match &self.camera {

@@ -121,6 +121,10 @@ pub struct Row {
     /// the reference's peak: flicker that the reference does not have.
     #[serde(default)]
     pub temporal_flicker: Option<f64>,
+    /// Whether the strategy kept its lists through tile masks (a bit per tile and light, where
+    /// they fit the cell's `mask_budget`; clusters never do); empty for naive forward.
+    #[serde(default)]
+    pub tile_masks: Option<bool>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -214,6 +218,7 @@ pub const COLUMNS: &[&str] = &[
     "temporal_change",
     "temporal_change_reference",
     "temporal_flicker",
+    "tile_masks",
 ];
 
 fn one() -> u32 {

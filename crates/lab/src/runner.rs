@@ -257,6 +257,7 @@ fn run_cell(
     let settings = |cam: &Camera| CullSettings {
         slack: c.slack,
         capacity: c.capacity,
+        mask_budget: c.mask_budget,
         ..CullSettings::for_camera(cam)
     };
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
@@ -415,6 +416,7 @@ fn run_cell(
         temporal_change: temporal.map(|t| t.0),
         temporal_change_reference: temporal.map(|t| t.1),
         temporal_flicker: temporal.map(|t| t.2),
+        tile_masks: first.tile_masks,
         passes,
         index: cell.index,
         id,
@@ -435,6 +437,7 @@ struct PoseEval {
     gbuffer_bytes: u64,
     dropped: u64,
     nonfinite: u64,
+    tile_masks: Option<bool>,
 }
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
@@ -466,9 +469,11 @@ fn evaluate(
     let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
     let mut metrics: Option<ListMetrics> = None;
     let (mut list_bytes, mut dropped) = (0, 0);
+    let mut tile_masks = None;
     let per_pixel: Vec<u32> = match &o.lists {
         Some(lists) => {
             list_bytes = lists.list_bytes();
+            tile_masks = Some(lists.tile_masks.is_some());
             dropped = u64::from(lists.dropped);
             if c.exact_stride > 0 {
                 let bins =
@@ -542,6 +547,7 @@ fn evaluate(
         list_bytes,
         gbuffer_bytes: o.gbuffer_bytes,
         dropped,
+        tile_masks,
     })
 }
 
