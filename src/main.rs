@@ -388,8 +388,12 @@ struct CullArgs {
     /// Build the lists without tile masks (a bit per tile and light, used where they fit 16
     /// MiB): gather's and 2.5D's fill then tests every light again, and tiled scatter writes
     /// (tile, light) pairs and radix-sorts them, as Harada et al. 2012 describe.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "mask_budget")]
     no_tile_masks: bool,
+    /// Most bytes of tile masks the run may use (default: 16 MiB; 0 is --no-tile-masks), as an
+    /// experiment's `mask_budget`. The output says whether the run used them.
+    #[arg(long, value_name = "BYTES")]
+    mask_budget: Option<u64>,
 }
 
 /// A culling strategy and its parameters.
@@ -738,7 +742,10 @@ fn cull(args: &CullArgs) -> Result<()> {
     if args.no_tile_masks {
         culler.mask_budget = 0;
     }
-    let settings = args.cull.settings(&scene.camera)?;
+    let settings = CullSettings {
+        mask_budget: args.mask_budget,
+        ..args.cull.settings(&scene.camera)?
+    };
     let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
     let timings = timer.read(&ctx)?;
     let repeated = if args.repeat > 0 {
@@ -803,6 +810,13 @@ fn cull(args: &CullArgs) -> Result<()> {
         out.list_bytes()
     );
     println!("  dropped lights          {}", out.dropped);
+    println!(
+        "  tile masks              {}",
+        match &out.tile_masks {
+            Some(m) => format!("used ({} bytes)", m.size()),
+            None => "not used".into(),
+        }
+    );
     print_timings(timings.as_deref());
     print!("{repeated}");
     println!(

@@ -211,19 +211,38 @@ fn cull_reports_metrics_and_writes_heatmaps() {
 fn cull_repeat_times_runs_back_to_back() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("cull");
-    // Tiled scatter with its pairs and radix sort, then with tile masks (the default where
-    // they fit): each prints its passes' medians.
-    for (flags, passes, absent) in [
+    // Tiled scatter with its pairs and radix sort (without tile masks, or with a budget they
+    // do not fit), then with tile masks (the default where they fit, or a budget they fit):
+    // each prints its passes' medians and whether it used masks.
+    let pairs = &["cull.tiled_scatter.count", "sort.radix.scatter"][..];
+    let masked = &["cull.tiled_scatter.count", "cull.tiled_scatter.fill"][..];
+    for (flags, passes, absent, masks) in [
         (
             &["--no-tile-masks"][..],
-            &["cull.tiled_scatter.count", "sort.radix.scatter"][..],
+            pairs,
             "cull.tiled_scatter.fill",
+            "not used",
         ),
         (
-            &[][..],
-            &["cull.tiled_scatter.count", "cull.tiled_scatter.fill"][..],
-            "sort.radix",
+            &["--mask-budget", "0"][..],
+            pairs,
+            "cull.tiled_scatter.fill",
+            "not used",
         ),
+        // 3 x 2 tiles of 16 pixels, 64 lights: 6 x 2 words of 4 bytes.
+        (
+            &["--mask-budget", "47"][..],
+            pairs,
+            "cull.tiled_scatter.fill",
+            "not used",
+        ),
+        (
+            &["--mask-budget", "48"][..],
+            masked,
+            "sort.radix",
+            "used (48 bytes)",
+        ),
+        (&[][..], masked, "sort.radix", "used (48 bytes)"),
     ] {
         let mut args = vec![
             "cull",
@@ -256,6 +275,10 @@ fn cull_repeat_times_runs_back_to_back() {
         assert!(
             !stdout.contains(absent),
             "{flags:?}: {absent} ran: {stdout}"
+        );
+        assert!(
+            stdout.contains(&format!("tile masks              {masks}\n")),
+            "{flags:?}: tile masks {masks}: {stdout}"
         );
     }
 }
