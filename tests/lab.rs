@@ -77,6 +77,22 @@ fn every_shipped_experiment_parses() {
     );
 }
 
+/// The annotated example in docs/EXPERIMENTS.md is a valid experiment with the values it shows.
+#[test]
+fn the_documented_example_parses() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/EXPERIMENTS.md");
+    let doc = std::fs::read_to_string(&path).unwrap();
+    let start = doc.find("```ron\n").expect("a ```ron block") + "```ron\n".len();
+    let len = doc[start..].find("```").expect("the block's end");
+    let e = Experiment::parse(&doc[start..start + len], &path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(e.config.capacity, Some(64));
+    assert_eq!(e.config.mask_budget, Some(0));
+    let variants = e.sweep.variants.as_ref().unwrap();
+    assert_eq!(variants.last().unwrap().mask_budget, Some(0));
+    // Light counts x strategies x variants.
+    assert_eq!(e.cells().len(), 2 * 2 * 3);
+}
+
 /// A tiny variant of every shipped experiment (48 x 27 at most, one frame, at most 256 lights)
 /// runs end to end: every cell has a row, no false negatives anywhere, and a report.
 #[test]
