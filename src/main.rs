@@ -738,12 +738,13 @@ fn cull(args: &CullArgs) -> Result<()> {
         &mut timer,
     );
     ctx.submit_and_wait(enc, "depth prepass")?;
-    let mut culler = Culler::new(&ctx, &gpu_scene);
-    if args.no_tile_masks {
-        culler.mask_budget = 0;
-    }
+    let culler = Culler::new(&ctx, &gpu_scene);
     let settings = CullSettings {
-        mask_budget: args.mask_budget,
+        mask_budget: if args.no_tile_masks {
+            Some(0)
+        } else {
+            args.mask_budget
+        },
         ..args.cull.settings(&scene.camera)?
     };
     let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;

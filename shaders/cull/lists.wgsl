@@ -15,6 +15,25 @@
 // masks' count pass (depth_bounds.wgsl).
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
 
+// The lights a workgroup kept into tile masks (zeroed by its first thread at the start).
+var<workgroup> wg_kept: atomic<u32>;
+
+// Adds this thread's `kept` lights to the tile masks' list total, cull_stats[4] (gather's and
+// tiled scatter's masked count passes): summed in the workgroup first, then one atomic add a
+// workgroup. Called in uniform control flow.
+fn add_kept_total(slot: u32, kept: u32) {
+    if kept != 0u {
+        atomicAdd(&wg_kept, kept);
+    }
+    workgroupBarrier();
+    if slot == 0u {
+        let k = atomicLoad(&wg_kept);
+        if k != 0u {
+            atomicAdd(&cull_stats[4], k);
+        }
+    }
+}
+
 // Appends light `light` to bin `bin` (count pass: counts; fill pass: writes, up to the
 // capacity when one is set).
 fn emit(bin: u32, light: u32, fill: bool) {

@@ -41,8 +41,6 @@ var<workgroup> wg_covered: u32;
 var<workgroup> wg_cmin: atomic<u32>;
 var<workgroup> wg_cmax: atomic<u32>;
 var<workgroup> wg_ccov: atomic<u32>;
-// The lights a workgroup kept (tile masks).
-var<workgroup> wg_kept: atomic<u32>;
 // A batch's lights (those that reach the coarse tile), at their slots.
 var<workgroup> wg_light: array<CullLight, 64>;
 // Two sets of a batch's lines, 32 words each: words 2c and 2c + 1 of a set have bit k set
@@ -237,15 +235,6 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
         atomicStore(&bin_counts[entry], kept);
     }
     if mode == CHUNK_MASK {
-        if kept != 0u {
-            atomicAdd(&wg_kept, kept);
-        }
-        workgroupBarrier();
-        if slot == 0u {
-            let k = atomicLoad(&wg_kept);
-            if k != 0u {
-                atomicAdd(&cull_stats[4], k);
-            }
-        }
+        add_kept_total(slot, kept);
     }
 }

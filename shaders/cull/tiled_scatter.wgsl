@@ -7,8 +7,7 @@
 @group(1) @binding(9) var<storage, read_write> pair_keys: array<u32>;
 // The tile masks (tile_masks.wgsl), as atomics: lights set their bits concurrently.
 @group(1) @binding(11) var<storage, read_write> tile_masks: array<atomic<u32>>;
-// The lights a scatter_masks workgroup kept, and the queued blocks.
-var<workgroup> wg_mask_kept: atomic<u32>;
+// The blocks queued for scatter_masks.
 var<workgroup> wg_mask_blocks: u32;
 var<workgroup> wg_mask_light: CullLight;
 
@@ -112,7 +111,7 @@ fn scatter_finalize(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(SCATTER_MASK_THREADS)
 fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) slot: u32) {
     if slot == 0u {
-        atomicStore(&wg_mask_kept, 0u);
+        atomicStore(&wg_kept, 0u);
         wg_mask_blocks = atomicLoad(&cull_stats[6]);
     }
     let blocks = workgroupUniformLoad(&wg_mask_blocks);
@@ -140,14 +139,5 @@ fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) 
             }
         }
     }
-    if kept != 0u {
-        atomicAdd(&wg_mask_kept, kept);
-    }
-    workgroupBarrier();
-    if slot == 0u {
-        let k = atomicLoad(&wg_mask_kept);
-        if k != 0u {
-            atomicAdd(&cull_stats[4], k);
-        }
-    }
+    add_kept_total(slot, kept);
 }
