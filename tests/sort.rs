@@ -3,7 +3,7 @@
 
 mod common;
 
-use manylights_cull::radix_sort::{self, RadixSort, SortedIn};
+use manylights_cull::radix_sort::{self, RadixSort, SortPath, SortedIn};
 use manylights_cull::scan::ScanPath;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, readback};
@@ -130,10 +130,59 @@ fn radix_sort_subgroup_matches_std_stable_sort() {
     check_against_std(&ctx, &sort);
 }
 
+/// The onesweep path (8-bit digits, decoupled look-back) on the same cases, plus partition edges.
+#[test]
+fn radix_sort_onesweep_matches_std_stable_sort() {
+    let ctx = common::gpu();
+    assert_eq!(RadixSort::new(&ctx).path(), SortPath::Onesweep);
+    let sort = onesweep(&ctx);
+    check_against_std(&ctx, &sort);
+    check_sizes(&ctx, &sort, &[3839, 3840, 3841, 7681], None);
+}
+
+/// The look-back's fallback alone (every predecessor counted from its keys, none read from its
+/// status), and look-back without spinning (a predecessor not ready at the first poll is
+/// counted): the same pairs as the standard library's stable sort.
+#[test]
+fn radix_sort_onesweep_fallback_matches_std_stable_sort() {
+    let ctx = common::gpu();
+    let mut sort = onesweep(&ctx);
+    sort.fallback_only = true;
+    check_sizes(&ctx, &sort, &[2, 3841, 7680, 100_003], None);
+    sort.fallback_only = false;
+    sort.max_spin = 0;
+    check_sizes(&ctx, &sort, &[3841, 100_003, 1_000_001], None);
+}
+
+fn onesweep(ctx: &GpuContext) -> RadixSort {
+    RadixSort::onesweep(ctx).unwrap_or_else(|| {
+        panic!(
+            "adapter {} has no subgroups of 8 to 32 invocations (has {:?}: {})",
+            ctx.info.name,
+            ctx.features.subgroup_size,
+            ctx.summary()
+        )
+    })
+}
+
 fn check_against_std(ctx: &GpuContext, sort: &RadixSort) {
     let mut lamp = lampshade::KeyValueSorter::new(&ctx.device, &ctx.queue);
+    check_sizes(
+        ctx,
+        sort,
+        &[0, 1, 2, 3, 1000, 1023, 1024, 1025, 4097, 100_003],
+        Some(&mut lamp),
+    );
+}
+
+fn check_sizes(
+    ctx: &GpuContext,
+    sort: &RadixSort,
+    sizes: &[usize],
+    mut lamp: Option<&mut lampshade::KeyValueSorter>,
+) {
     let mut rng = rand_pcg::Pcg64::seed_from_u64(9);
-    for n in [0usize, 1, 2, 3, 1000, 1023, 1024, 1025, 4097, 100_003] {
+    for &n in sizes {
         for (kind, keys) in key_sets(n, &mut rng) {
             let vals: Vec<u32> = (0..n as u32).collect();
             for bits in [32, 13] {
@@ -144,7 +193,9 @@ fn check_against_std(ctx: &GpuContext, sort: &RadixSort) {
                     "{n} keys, {kind}, {bits} bits: {}",
                     first_diff(&got, &expect).unwrap()
                 );
-                if n > 0 {
+                if let Some(lamp) = lamp.as_deref_mut()
+                    && n > 0
+                {
                     // lampshade takes partial keys only when they fit their bits: compare both
                     // sorts on the keys masked to `bits`.
                     let mask = if bits == 32 {
@@ -158,7 +209,7 @@ fn check_against_std(ctx: &GpuContext, sort: &RadixSort) {
                     } else {
                         gpu_sort(ctx, sort, &masked, &vals, bits)
                     };
-                    let theirs = lampshade_sort(&mut lamp, &masked, &vals, bits);
+                    let theirs = lampshade_sort(lamp, &masked, &vals, bits);
                     assert!(
                         first_diff(&got, &theirs).is_none(),
                         "{n} keys, {kind}, {bits} bits vs lampshade: {}",

@@ -130,6 +130,7 @@ pub const SHADERS: &[ShaderDef] = &[
     crate::scan::SHADER,
     crate::scan::SUBGROUP_SHADER,
     crate::radix_sort::SHADER,
+    crate::radix_sort::ONESWEEP_SHADER,
 ];
 
 /// Light lists read back to the host.
