@@ -27,11 +27,12 @@ mod common;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use manylights_cull::radix_sort::{RadixSort, SortedIn};
+use manylights_cull::radix_sort::{RadixSort, SortPath, SortedIn};
+use manylights_cull::scan::ScanPath;
 use manylights_cull::{CullSettings, Culler, Strategy};
 use manylights_gpu::prepass::{DepthPrepass, depth_target};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
-use manylights_gpu::{GpuContext, GpuScene};
+use manylights_gpu::{GpuContext, GpuScene, readback};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::{Backend, Renderer};
@@ -312,6 +313,37 @@ fn buffer(ctx: &GpuContext, data: &[u32]) -> wgpu::Buffer {
     b
 }
 
+/// Panics unless the pairs in (`k`, `v`) are `keys` (with values 0..n, their positions) sorted
+/// stably: keys in order, equal keys in input order, every value once with its own key.
+fn check_sorted(ctx: &GpuContext, name: &str, keys: &[u32], k: &wgpu::Buffer, v: &wgpu::Buffer) {
+    let n = keys.len();
+    let read = |b: &wgpu::Buffer| -> Vec<u32> {
+        bytemuck::pod_collect_to_vec(&readback::read_buffer(ctx, b, 0, n as u64 * 4).unwrap())
+    };
+    let (sk, sv) = (read(k), read(v));
+    let mut seen = vec![false; n];
+    for i in 0..n {
+        let j = sv[i] as usize;
+        assert!(
+            j < n && !seen[j],
+            "{name}/{n}: value {j} at {i} out of range or repeated"
+        );
+        seen[j] = true;
+        assert_eq!(
+            sk[i], keys[j],
+            "{name}/{n}: key at {i} is not its value's key"
+        );
+        if i > 0 {
+            assert!(
+                (sk[i - 1], sv[i - 1]) < (sk[i], sv[i]),
+                "{name}/{n}: pairs {} and {i} out of order or unstable",
+                i - 1
+            );
+        }
+    }
+    eprintln!("{name}/{n}: checked, sorted and stable");
+}
+
 fn sort(c: &mut Criterion) {
     let ctx = gpu();
     let sizes: Vec<usize> = if quick() {
@@ -319,7 +351,22 @@ fn sort(c: &mut Criterion) {
     } else {
         vec![1 << 20, 1 << 22, 1 << 24, 1 << 26]
     };
-    let ours = RadixSort::new(&ctx);
+    // The default sort (onesweep where the adapter takes it) and the portable 4-bit one.
+    let mut sorts = vec![("sort.radix", RadixSort::new(&ctx))];
+    if sorts[0].1.path() != SortPath::Portable {
+        sorts.push((
+            "sort.radix_portable",
+            RadixSort::with_scan_path(
+                &ctx,
+                if ctx.features.subgroups {
+                    ScanPath::Subgroup
+                } else {
+                    ScanPath::Portable
+                },
+            )
+            .expect("scan path"),
+        ));
+    }
     let mut lamp = lampshade::KeyValueSorter::new(&ctx.device, &ctx.queue);
     let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
     for n in sizes {
@@ -331,51 +378,56 @@ fn sort(c: &mut Criterion) {
             buffer(&ctx, &vals),
             buffer(&ctx, &vals),
         );
-        let mut g = c.benchmark_group("sort.radix");
-        configure(&mut g);
-        g.throughput(Throughput::Elements(n as u64));
-        g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-            b.iter_custom(|iters| {
-                let mut total = 0.0;
-                for _ in 0..iters {
-                    ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
-                    let mut timer = GpuTimer::new(&ctx, 512);
-                    let mut enc = ctx.device.create_command_encoder(&Default::default());
-                    let at = ours
-                        .encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
-                        .unwrap();
-                    assert_eq!(at, SortedIn::Input, "32 bits: an even number of passes");
-                    timer.resolve(&mut enc);
-                    ctx.submit_and_wait(enc, "bench sort").unwrap();
-                    total += ms(&timer.read(&ctx).unwrap().expect("timestamps"), |_| true);
-                }
-                Duration::from_secs_f64(total * 1e-3)
-            })
-        });
-        g.finish();
-        // One more sort, its passes summed by label: where the time goes at this size.
-        ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
-        let mut timer = GpuTimer::new(&ctx, 512);
-        let mut enc = ctx.device.create_command_encoder(&Default::default());
-        ours.encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
-            .unwrap();
-        timer.resolve(&mut enc);
-        ctx.submit_and_wait(enc, "bench sort passes").unwrap();
-        let t = timer.read(&ctx).unwrap().expect("timestamps");
-        let mut labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
-        labels.sort_unstable();
-        labels.dedup();
-        for label in labels {
-            let each: Vec<String> = t
-                .iter()
-                .filter(|p| p.label == label)
-                .map(|p| format!("{:.1}", p.ms * 1e3))
-                .collect();
-            eprintln!(
-                "sort.radix/{n} passes: {label} {:.1} µs in all ({} µs)",
-                ms(&t, |l| l == label) * 1e3,
-                each.join(", ")
-            );
+        for (name, ours) in &sorts {
+            let mut g = c.benchmark_group(*name);
+            configure(&mut g);
+            g.throughput(Throughput::Elements(n as u64));
+            g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+                b.iter_custom(|iters| {
+                    let mut total = 0.0;
+                    for _ in 0..iters {
+                        ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
+                        ctx.queue.write_buffer(&v, 0, bytemuck::cast_slice(&vals));
+                        let mut timer = GpuTimer::new(&ctx, 512);
+                        let mut enc = ctx.device.create_command_encoder(&Default::default());
+                        let at = ours
+                            .encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
+                            .unwrap();
+                        assert_eq!(at, SortedIn::Input, "32 bits: an even number of passes");
+                        timer.resolve(&mut enc);
+                        ctx.submit_and_wait(enc, "bench sort").unwrap();
+                        total += ms(&timer.read(&ctx).unwrap().expect("timestamps"), |_| true);
+                    }
+                    Duration::from_secs_f64(total * 1e-3)
+                })
+            });
+            g.finish();
+            // One more sort, checked, its passes summed by label: where the time goes.
+            ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
+            ctx.queue.write_buffer(&v, 0, bytemuck::cast_slice(&vals));
+            let mut timer = GpuTimer::new(&ctx, 512);
+            let mut enc = ctx.device.create_command_encoder(&Default::default());
+            ours.encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
+                .unwrap();
+            timer.resolve(&mut enc);
+            ctx.submit_and_wait(enc, "bench sort passes").unwrap();
+            check_sorted(&ctx, name, &keys, &k, &v);
+            let t = timer.read(&ctx).unwrap().expect("timestamps");
+            let mut labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
+            labels.sort_unstable();
+            labels.dedup();
+            for label in labels {
+                let each: Vec<String> = t
+                    .iter()
+                    .filter(|p| p.label == label)
+                    .map(|p| format!("{:.1}", p.ms * 1e3))
+                    .collect();
+                eprintln!(
+                    "{name}/{n} passes: {label} {:.1} µs in all ({} µs)",
+                    ms(&t, |l| l == label) * 1e3,
+                    each.join(", ")
+                );
+            }
         }
         let pairs: Vec<u32> = keys.iter().zip(&vals).flat_map(|(&a, &b)| [a, b]).collect();
         let (inp, out) = (buffer(&ctx, &pairs), buffer(&ctx, &pairs));

@@ -324,7 +324,10 @@ impl RadixSort {
             })
         };
         let status = scratch("sort.radix.status", status_len);
-        let hist = scratch("sort.radix.hist", u64::from(ONESWEEP_PASSES_MAX << ONESWEEP_BITS));
+        let hist = scratch(
+            "sort.radix.hist",
+            u64::from(ONESWEEP_PASSES_MAX << ONESWEEP_BITS),
+        );
         let counters = scratch("sort.radix.counters", u64::from(ONESWEEP_PASSES_MAX));
         let groups: Vec<wgpu::BindGroup> = (0..passes)
             .map(|pass| {
@@ -359,7 +362,9 @@ impl RadixSort {
                     &ctx.device,
                     "sort.radix.onesweep",
                     layout,
-                    &[&params, src_k, src_v, dst_k, dst_v, &hist, &status, &counters],
+                    &[
+                        &params, src_k, src_v, dst_k, dst_v, &hist, &status, &counters,
+                    ],
                 )
             })
             .collect();
@@ -450,7 +455,14 @@ fn encode_portable(
             layout,
             &[&params, src_k, src_v, dst_k, dst_v, &hist],
         );
-        pipeline::dispatch(encoder, timer, "sort.radix.count", count, &[&group], (gx, gy));
+        pipeline::dispatch(
+            encoder,
+            timer,
+            "sort.radix.count",
+            count,
+            &[&group],
+            (gx, gy),
+        );
         scan.encode(ctx, encoder, &hist, hist_len, timer);
         pipeline::dispatch(
             encoder,
