@@ -11,13 +11,17 @@
 //!   lights, 8-pixel tiles), every strategy, gather with other chunks of lights a workgroup
 //!   (`tiled_gather8_chunk<N>`), and gather, 2.5D and scatter without tile masks
 //!   (`*_unmasked`; scatter then sorts its pairs);
-//! - `sort.radix/<keys>` and `sort.lampshade/<keys>`: (u32 key, u32 value) radix sorts of
-//!   random 32-bit keys, ours against the `lampshade` crate's on the same device;
+//! - `sort.radix/<keys>`, `sort.radix_portable/<keys>` and `sort.lampshade/<keys>`: (u32 key,
+//!   u32 value) radix sorts of random 32-bit keys, ours (the default path, onesweep where the
+//!   adapter takes it, and the portable 4-bit path) against the `lampshade` crate's on the same
+//!   device; one more sort of each size is checked sorted and stable;
 //! - `shade.<pass>/<backend>` and `frame.<backend>`: shading passes and whole frames at 4,096
 //!   lights and 1920 x 1080, raster and compute passes apart.
 //!
 //! Culling runs go back to back in one submission after a run that sizes the lists (see
 //! `cull_time`); `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run on its own instead.
+//!
+//! `MANYLIGHTS_SORT_MAX_SPIN=N` sets the onesweep sort's polls before its look-back falls back.
 //!
 //! `MANYLIGHTS_BENCH_QUICK=1` shrinks everything (light counts, resolutions, key counts) so the
 //! benches can be smoke-run on lavapipe; figures come only from the GPU machine.
@@ -344,6 +348,10 @@ fn check_sorted(ctx: &GpuContext, name: &str, keys: &[u32], k: &wgpu::Buffer, v:
     eprintln!("{name}/{n}: checked, sorted and stable");
 }
 
+/// Sorts timed in one submission (each sort's passes fit a timer: the portable path's 32-bit
+/// sort has fewer than 64 passes).
+const SORT_BATCH: u64 = 16;
+
 fn sort(c: &mut Criterion) {
     let ctx = gpu();
     let sizes: Vec<usize> = if quick() {
@@ -353,6 +361,13 @@ fn sort(c: &mut Criterion) {
     };
     // The default sort (onesweep where the adapter takes it) and the portable 4-bit one.
     let mut sorts = vec![("sort.radix", RadixSort::new(&ctx))];
+    if let Some(spin) = std::env::var("MANYLIGHTS_SORT_MAX_SPIN")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        eprintln!("sort.radix: onesweep max_spin {spin} (MANYLIGHTS_SORT_MAX_SPIN)");
+        sorts[0].1.max_spin = spin;
+    }
     if sorts[0].1.path() != SortPath::Portable {
         sorts.push((
             "sort.radix_portable",
@@ -372,7 +387,9 @@ fn sort(c: &mut Criterion) {
     for n in sizes {
         let keys: Vec<u32> = (0..n).map(|_| rng.random::<u32>()).collect();
         let vals: Vec<u32> = (0..n as u32).collect();
-        let (k, v, kt, vt) = (
+        let (k0, v0, k, v, kt, vt) = (
+            buffer(&ctx, &keys),
+            buffer(&ctx, &vals),
             buffer(&ctx, &keys),
             buffer(&ctx, &vals),
             buffer(&ctx, &vals),
@@ -384,16 +401,24 @@ fn sort(c: &mut Criterion) {
             g.throughput(Throughput::Elements(n as u64));
             g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
                 b.iter_custom(|iters| {
+                    // Sorts back to back, SORT_BATCH to a submission, each from a fresh copy
+                    // of the input (copies outside the timed passes): the GPU stays busy, as
+                    // in CUB's measurement, instead of idling while the host uploads.
                     let mut total = 0.0;
-                    for _ in 0..iters {
-                        ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
-                        ctx.queue.write_buffer(&v, 0, bytemuck::cast_slice(&vals));
-                        let mut timer = GpuTimer::new(&ctx, 512);
+                    let mut left = iters;
+                    while left > 0 {
+                        let batch = left.min(SORT_BATCH);
+                        left -= batch;
+                        let mut timer = GpuTimer::new(&ctx, MAX_QUERIES / 2);
                         let mut enc = ctx.device.create_command_encoder(&Default::default());
-                        let at = ours
-                            .encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
-                            .unwrap();
-                        assert_eq!(at, SortedIn::Input, "32 bits: an even number of passes");
+                        for _ in 0..batch {
+                            enc.copy_buffer_to_buffer(&k0, 0, &k, 0, None);
+                            enc.copy_buffer_to_buffer(&v0, 0, &v, 0, None);
+                            let at = ours
+                                .encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
+                                .unwrap();
+                            assert_eq!(at, SortedIn::Input, "32 bits: an even number of passes");
+                        }
                         timer.resolve(&mut enc);
                         ctx.submit_and_wait(enc, "bench sort").unwrap();
                         total += ms(&timer.read(&ctx).unwrap().expect("timestamps"), |_| true);
@@ -402,17 +427,21 @@ fn sort(c: &mut Criterion) {
                 })
             });
             g.finish();
-            // One more sort, checked, its passes summed by label: where the time goes.
-            ctx.queue.write_buffer(&k, 0, bytemuck::cast_slice(&keys));
-            ctx.queue.write_buffer(&v, 0, bytemuck::cast_slice(&vals));
-            let mut timer = GpuTimer::new(&ctx, 512);
+            // Four more sorts back to back; the last one checked, and its passes summed by
+            // label: where the time goes at this size.
+            let mut timer = GpuTimer::new(&ctx, MAX_QUERIES / 2);
             let mut enc = ctx.device.create_command_encoder(&Default::default());
-            ours.encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
-                .unwrap();
+            for _ in 0..4 {
+                enc.copy_buffer_to_buffer(&k0, 0, &k, 0, None);
+                enc.copy_buffer_to_buffer(&v0, 0, &v, 0, None);
+                ours.encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
+                    .unwrap();
+            }
             timer.resolve(&mut enc);
             ctx.submit_and_wait(enc, "bench sort passes").unwrap();
             check_sorted(&ctx, name, &keys, &k, &v);
             let t = timer.read(&ctx).unwrap().expect("timestamps");
+            let t = t[t.len() / 4 * 3..].to_vec();
             let mut labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
             labels.sort_unstable();
             labels.dedup();

@@ -120,8 +120,8 @@ var<workgroup> wg_start: array<u32, OS_RADIX>;
 var<workgroup> wg_base: array<u32, OS_RADIX>;
 var<workgroup> wg_sums: array<u32, OS_MAX_SUBGROUPS * 2u>;
 var<workgroup> wg_fallback: array<atomic<u32>, OS_RADIX>;
-var<workgroup> wg_flags: array<atomic<u32>, 2>;
-var<workgroup> wg_uniform: array<u32, 2>;
+var<workgroup> wg_flags: array<atomic<u32>, 1>;
+var<workgroup> wg_uniform: array<u32, 1>;
 
 fn field16(w: u32, d: u32) -> u32 {
     return (w >> ((d & 1u) * 16u)) & 0xffffu;
@@ -247,64 +247,64 @@ fn sort_onesweep(
             status_word(select(FLAG_AGGREGATE, FLAG_INCLUSIVE, part == 0u), real),
         );
     }
+    // Each digit walks back on its own (no barriers) until it meets an inclusive count or a
+    // predecessor still not ready after op.max_spin polls. Then the workgroup counts the keys
+    // of the latest such predecessor, the digits stuck there take that count and step past it,
+    // and the rest walk on; each round resolves one partition at least.
     var prefix = 0u;
     var done = t >= OS_RADIX || part == 0u;
     var q = part;
     if li == 0u {
         atomicStore(&wg_flags[0], 0u);
-        atomicStore(&wg_flags[1], 0u);
     }
     workgroupBarrier();
-    while part != 0u {
-        q -= 1u;
-        var fall_back = false;
-        if !done {
-            var w = atomicLoad(&status[q * OS_RADIX + t]);
-            for (var spin = 0u; spin < op.max_spin && status_flag(w) == 0u && op.fallback_only == 0u; spin++) {
-                w = atomicLoad(&status[q * OS_RADIX + t]);
-            }
+    loop {
+        var stuck = false;
+        var spins = 0u;
+        while !done {
+            let w = atomicLoad(&status[(q - 1u) * OS_RADIX + t]);
             let flag = select(status_flag(w), 0u, op.fallback_only != 0u);
-            if flag == 0u {
-                fall_back = true;
-                atomicStore(&wg_flags[0], 1u);
-            } else {
+            if flag != 0u {
                 prefix += w & COUNT_MASK;
+                q -= 1u;
+                spins = 0u;
                 done = flag == FLAG_INCLUSIVE || q == 0u;
+            } else {
+                spins += 1u;
+                if spins > op.max_spin || op.fallback_only != 0u {
+                    stuck = true;
+                    break;
+                }
             }
         }
-        if fall_back && q == 0u {
-            // Partition 0's count is inclusive; counted below.
-            done = true;
-        }
-        if !done || fall_back {
-            atomicStore(&wg_flags[1], 1u);
+        if stuck {
+            atomicMax(&wg_flags[0], q);
         }
         workgroupBarrier();
         if li == 0u {
             wg_uniform[0] = atomicLoad(&wg_flags[0]);
-            wg_uniform[1] = atomicLoad(&wg_flags[1]);
             atomicStore(&wg_flags[0], 0u);
-            atomicStore(&wg_flags[1], 0u);
         }
-        if workgroupUniformLoad(&wg_uniform[0]) != 0u {
-            // Count partition q's digits from its keys (it is whole: it is not the last).
-            for (var i = li; i < OS_RADIX; i += OS_THREADS) {
-                atomicStore(&wg_fallback[i], 0u);
-            }
-            workgroupBarrier();
-            for (var k = 0u; k < OS_PER_THREAD; k++) {
-                atomicAdd(&wg_fallback[os_digit(keys_in[q * OS_PART + k * OS_THREADS + li])], 1u);
-            }
-            workgroupBarrier();
-            if fall_back {
-                prefix += atomicLoad(&wg_fallback[t]);
-            }
-        }
-        // wg_uniform[1]: some digit still looks back past q.
-        if workgroupUniformLoad(&wg_uniform[1]) == 0u || q == 0u {
+        // Partition after the latest one not ready; 0: every digit is done.
+        let after = workgroupUniformLoad(&wg_uniform[0]);
+        if after == 0u {
             break;
         }
-        // A digit that fell back has not reached an inclusive count: go on.
+        // Count partition after - 1 from its keys (it is whole: it is not the last).
+        for (var i = li; i < OS_RADIX; i += OS_THREADS) {
+            atomicStore(&wg_fallback[i], 0u);
+        }
+        workgroupBarrier();
+        for (var k = 0u; k < OS_PER_THREAD; k++) {
+            let key = keys_in[(after - 1u) * OS_PART + k * OS_THREADS + li];
+            atomicAdd(&wg_fallback[os_digit(key)], 1u);
+        }
+        workgroupBarrier();
+        if stuck && q == after {
+            prefix += atomicLoad(&wg_fallback[t]);
+            q -= 1u;
+            done = q == 0u;
+        }
     }
     if t < OS_RADIX {
         if part != 0u {
