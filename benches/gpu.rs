@@ -21,6 +21,7 @@
 //! Culling runs go back to back in one submission after a run that sizes the lists (see
 //! `cull_time`); `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run on its own instead.
 //!
+//! `MANYLIGHTS_BENCH_SORT_KEYS=N,M,...` picks the sorts' key counts.
 //! `MANYLIGHTS_SORT_MAX_SPIN=N` sets the onesweep sort's polls before its look-back falls back.
 //!
 //! `MANYLIGHTS_BENCH_QUICK=1` shrinks everything (light counts, resolutions, key counts) so the
@@ -318,8 +319,25 @@ fn buffer(ctx: &GpuContext, data: &[u32]) -> wgpu::Buffer {
 }
 
 /// Panics unless the pairs in (`k`, `v`) are `keys` (with values 0..n, their positions) sorted
-/// stably: keys in order, equal keys in input order, every value once with its own key.
+/// stably: keys in order, equal keys in input order, every value once with its own key. With
+/// replaced shaders (`MANYLIGHTS_SHADER_DIR`, an ablation) it prints the failure instead.
 fn check_sorted(ctx: &GpuContext, name: &str, keys: &[u32], k: &wgpu::Buffer, v: &wgpu::Buffer) {
+    let n = keys.len();
+    match sorted_stably(ctx, keys, k, v) {
+        Ok(()) => eprintln!("{name}/{n}: checked, sorted and stable"),
+        Err(e) if std::env::var_os(manylights_gpu::shaders::SHADER_DIR_ENV).is_some() => {
+            eprintln!("{name}/{n}: NOT SORTED with replaced shaders: {e}");
+        }
+        Err(e) => panic!("{name}/{n}: {e}"),
+    }
+}
+
+fn sorted_stably(
+    ctx: &GpuContext,
+    keys: &[u32],
+    k: &wgpu::Buffer,
+    v: &wgpu::Buffer,
+) -> Result<(), String> {
     let n = keys.len();
     let read = |b: &wgpu::Buffer| -> Vec<u32> {
         bytemuck::pod_collect_to_vec(&readback::read_buffer(ctx, b, 0, n as u64 * 4).unwrap())
@@ -328,24 +346,18 @@ fn check_sorted(ctx: &GpuContext, name: &str, keys: &[u32], k: &wgpu::Buffer, v:
     let mut seen = vec![false; n];
     for i in 0..n {
         let j = sv[i] as usize;
-        assert!(
-            j < n && !seen[j],
-            "{name}/{n}: value {j} at {i} out of range or repeated"
-        );
+        if j >= n || seen[j] {
+            return Err(format!("value {j} at {i} out of range or repeated"));
+        }
         seen[j] = true;
-        assert_eq!(
-            sk[i], keys[j],
-            "{name}/{n}: key at {i} is not its value's key"
-        );
-        if i > 0 {
-            assert!(
-                (sk[i - 1], sv[i - 1]) < (sk[i], sv[i]),
-                "{name}/{n}: pairs {} and {i} out of order or unstable",
-                i - 1
-            );
+        if sk[i] != keys[j] {
+            return Err(format!("key at {i} is not its value's key"));
+        }
+        if i > 0 && (sk[i - 1], sv[i - 1]) >= (sk[i], sv[i]) {
+            return Err(format!("pairs {} and {i} out of order or unstable", i - 1));
         }
     }
-    eprintln!("{name}/{n}: checked, sorted and stable");
+    Ok(())
 }
 
 /// Sorts timed in one submission (each sort's passes fit a timer: the portable path's 32-bit
@@ -354,7 +366,15 @@ const SORT_BATCH: u64 = 16;
 
 fn sort(c: &mut Criterion) {
     let ctx = gpu();
-    let sizes: Vec<usize> = if quick() {
+    let sizes: Vec<usize> = if let Ok(list) = std::env::var("MANYLIGHTS_BENCH_SORT_KEYS") {
+        list.split(',')
+            .map(|v| {
+                v.trim().parse().unwrap_or_else(|_| {
+                    panic!("MANYLIGHTS_BENCH_SORT_KEYS={list}: {v:?} is not a key count")
+                })
+            })
+            .collect()
+    } else if quick() {
         vec![1 << 16]
     } else {
         vec![1 << 20, 1 << 22, 1 << 24, 1 << 26]
