@@ -52,15 +52,20 @@ def main():
     cubp = {r["n"]: r for r in cub["rows"] if r["kind"] == "pairs"}
     cubk = {r["n"]: r for r in cub["rows"] if r["kind"] == "keys"}
     p(f"\n**Radix sort of (u32 key, u32 value) pairs, random 32-bit keys** (CUB through CuPy {cub['cupy']}: argsort = SortPairs of (key, index); keys-only for reference)\n")
-    p("| keys | sort.radix | G pairs/s | lampshade | G pairs/s | CUB pairs | G pairs/s | ours / CUB | CUB keys only |")
-    p("|---|---|---|---|---|---|---|---|---|")
+    p("| keys | sort.radix | G pairs/s | sort.radix_portable | G pairs/s | lampshade | G pairs/s | CUB pairs | G pairs/s | ours / CUB | CUB keys only |")
+    p("|---|---|---|---|---|---|---|---|---|---|---|")
+
+    def cell(v, n):
+        return f"{ms(v)} | {n / v / 1e6:.2f}" if v else "- | -"
+
     for n in sorted(cubp):
         ours = gpu.get(f"sort.radix/{n}")
-        lamp = gpu.get(f"sort.lampshade/{n}")
         if not ours:
             continue
-        o, l, c = ours[1], lamp[1] if lamp else None, cubp[n]["ms"]
-        p(f"| {n:,} | {ms(o)} | {n / o / 1e6:.2f} | {ms(l) if l else '-'} | {n / l / 1e6:.2f} | {ms(c)} | {n / c / 1e6:.2f} | {c / o:.0%} | {ms(cubk[n]['ms'])} |" if l else "")
+        port = gpu.get(f"sort.radix_portable/{n}")
+        lamp = gpu.get(f"sort.lampshade/{n}")
+        o, c = ours[1], cubp[n]["ms"]
+        p(f"| {n:,} | {cell(o, n)} | {cell(port[1] if port else None, n)} | {cell(lamp[1] if lamp else None, n)} | {cell(c, n)} | {c / o:.0%} | {ms(cubk[n]['ms'])} |")
     # Shading.
     p("\n**Shading at 4,096 lights, atrium, 1920x1080** (tiled gather 16 px lists; raster and compute passes apart)\n")
     p("| backend | frame | geometry pass (raster) | shading pass | shading kind |")
