@@ -172,15 +172,7 @@ impl RadixSort {
             return None;
         }
         let d = &ctx.device;
-        let c = wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![pipeline::entry(0, c, pipeline::UNIFORM)];
-        entries.extend((1..=7).map(|b| pipeline::entry(b, c, pipeline::storage(false))));
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("sort.radix.onesweep"),
-            entries: &entries,
-        });
-        let module = ONESWEEP_SHADER.create(d);
-        let pl = pipeline::layout(d, "sort.radix.onesweep", &[&layout]);
+        let (layout, module, pl) = uniform_and_storage(ctx, &ONESWEEP_SHADER, 7);
         Some(Self {
             pipelines: Pipelines::Onesweep {
                 init: pipeline::compute(d, &module, &pl, "sort_init"),
@@ -195,15 +187,7 @@ impl RadixSort {
 
     fn with_scan(ctx: &GpuContext, scan: Scan) -> Self {
         let d = &ctx.device;
-        let c = wgpu::ShaderStages::COMPUTE;
-        let mut entries = vec![pipeline::entry(0, c, pipeline::UNIFORM)];
-        entries.extend((1..=5).map(|b| pipeline::entry(b, c, pipeline::storage(false))));
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("sort.radix"),
-            entries: &entries,
-        });
-        let module = SHADER.create(d);
-        let pl = pipeline::layout(d, "sort.radix", &[&layout]);
+        let (layout, module, pl) = uniform_and_storage(ctx, &SHADER, 5);
         Self {
             pipelines: Pipelines::Portable {
                 count: pipeline::compute(d, &module, &pl, "sort_count"),
@@ -235,7 +219,11 @@ impl RadixSort {
     /// Where a sort of `key_bits` bits leaves the pairs: the input buffers after an even number
     /// of passes.
     pub fn sorted_in(&self, key_bits: u32) -> SortedIn {
-        if key_bits.clamp(1, 32).div_ceil(self.radix_bits()) % 2 == 0 {
+        if key_bits
+            .clamp(1, 32)
+            .div_ceil(self.radix_bits())
+            .is_multiple_of(2)
+        {
             SortedIn::Input
         } else {
             SortedIn::Scratch
@@ -402,6 +390,29 @@ impl RadixSort {
         }
         Ok(())
     }
+}
+
+/// A bind-group layout of a uniform at binding 0 and `storage` read-write storage buffers
+/// after it, `shader`'s module, and the pipeline layout of that one group.
+fn uniform_and_storage(
+    ctx: &GpuContext,
+    shader: &ShaderDef,
+    storage: u32,
+) -> (
+    wgpu::BindGroupLayout,
+    wgpu::ShaderModule,
+    wgpu::PipelineLayout,
+) {
+    let d = &ctx.device;
+    let c = wgpu::ShaderStages::COMPUTE;
+    let mut entries = vec![pipeline::entry(0, c, pipeline::UNIFORM)];
+    entries.extend((1..=storage).map(|b| pipeline::entry(b, c, pipeline::storage(false))));
+    let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(shader.name),
+        entries: &entries,
+    });
+    let pl = pipeline::layout(d, shader.name, &[&layout]);
+    (layout, shader.create(d), pl)
 }
 
 #[expect(
