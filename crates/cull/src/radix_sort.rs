@@ -54,6 +54,16 @@ pub const ONESWEEP_MAX_PAIRS: u32 = (1 << 28) - 1;
 /// Default polls of a predecessor's look-back status before counting its keys instead.
 pub const ONESWEEP_MAX_SPIN: u32 = 256;
 const ONESWEEP_MAX_SUBGROUPS: u32 = ONESWEEP_THREADS / ONESWEEP_MIN_SUBGROUP;
+const ONESWEEP_SHARED_WORDS: u32 =
+    if ONESWEEP_MAX_SUBGROUPS * (1 << (ONESWEEP_BITS - 1)) > ONESWEEP_PART {
+        ONESWEEP_MAX_SUBGROUPS * (1 << (ONESWEEP_BITS - 1))
+    } else {
+        ONESWEEP_PART
+    };
+/// Workgroup memory of `sort_onesweep`: the shared counts and reorder space, four arrays of a
+/// word a digit, the subgroup sums and a few words.
+const ONESWEEP_WORKGROUP_BYTES: u32 =
+    4 * (ONESWEEP_SHARED_WORDS + 4 * (1 << ONESWEEP_BITS) + 2 * ONESWEEP_MAX_SUBGROUPS + 3);
 const ONESWEEP_PASSES_MAX: u32 = 32 / ONESWEEP_BITS;
 const _: () = assert!(ONESWEEP_PART < 1 << 16);
 const _: () = assert!(ONESWEEP_THREADS >= 1 << ONESWEEP_BITS);
@@ -80,14 +90,7 @@ pub const ONESWEEP_SHADER: ShaderDef = ShaderDef {
         WgslConst::U32("OS_PER_THREAD", ONESWEEP_PER_THREAD),
         WgslConst::U32("OS_PART", ONESWEEP_PART),
         WgslConst::U32("OS_MAX_SUBGROUPS", ONESWEEP_MAX_SUBGROUPS),
-        WgslConst::U32(
-            "OS_SHARED_WORDS",
-            if ONESWEEP_MAX_SUBGROUPS * (1 << (ONESWEEP_BITS - 1)) > ONESWEEP_PART {
-                ONESWEEP_MAX_SUBGROUPS * (1 << (ONESWEEP_BITS - 1))
-            } else {
-                ONESWEEP_PART
-            },
-        ),
+        WgslConst::U32("OS_SHARED_WORDS", ONESWEEP_SHARED_WORDS),
         WgslConst::U32("OS_HIST_BINS", ONESWEEP_PASSES_MAX << ONESWEEP_BITS),
         WgslConst::U32("OS_HIST_KEYS", ONESWEEP_HIST_KEYS),
         WgslConst::U32("GROUPS_X", GROUPS_X),
@@ -151,7 +154,7 @@ pub fn onesweep_supported(ctx: &GpuContext) -> bool {
     ctx.features.subgroups
         && min >= ONESWEEP_MIN_SUBGROUP
         && max <= ONESWEEP_MAX_SUBGROUP
-        && ctx.limits.max_compute_workgroup_storage_size >= 24 * 1024
+        && ctx.limits.max_compute_workgroup_storage_size >= ONESWEEP_WORKGROUP_BYTES
 }
 
 impl RadixSort {
