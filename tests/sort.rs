@@ -256,3 +256,31 @@ fn radix_sort_matches_std_and_lampshade_on_millions() {
         );
     }
 }
+
+/// More pairs than the onesweep path's 28-bit look-back counts hold is an error naming the
+/// limit, before any work is encoded.
+#[test]
+fn radix_sort_onesweep_refuses_more_pairs_than_it_counts() {
+    let ctx = common::gpu();
+    let sort = onesweep(&ctx);
+    let b = upload(&ctx, &[0; 4]);
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    let err = sort
+        .encode(
+            &ctx,
+            &mut enc,
+            &b,
+            &b,
+            &b,
+            &b,
+            radix_sort::ONESWEEP_MAX_PAIRS + 1,
+            32,
+            &mut GpuTimer::new(&ctx, 16),
+        )
+        .expect_err("2^28 pairs")
+        .to_string();
+    assert!(
+        err.contains("268435456") && err.contains("268435455") && err.contains("onesweep"),
+        "{err}"
+    );
+}
