@@ -273,11 +273,12 @@ impl RadixSort {
                 onesweep,
             } => {
                 if n > ONESWEEP_MAX_PAIRS {
-                    return Err(GpuError::OverLimit {
+                    return Err(GpuError::OverCapacity {
                         what: "radix sort pairs (onesweep path)".into(),
                         value: n.into(),
                         limit: ONESWEEP_MAX_PAIRS.into(),
-                        limit_name: "28-bit look-back counts",
+                        why: "its 28-bit look-back counts hold; the portable path \
+                              (RadixSort::with_scan_path) sorts up to 2^32 - 1",
                     });
                 }
                 let stages = [init, histogram, onesweep];

@@ -32,6 +32,18 @@ pub enum GpuError {
         /// The name of the wgpu limit.
         limit_name: &'static str,
     },
+    /// A size over what an algorithm of this project handles (not a device limit).
+    #[error("{what} = {value} exceeds {limit}, the most {why}")]
+    OverCapacity {
+        /// What was asked for.
+        what: String,
+        /// The value.
+        value: u64,
+        /// The largest value handled.
+        limit: u64,
+        /// Why, and what to do instead.
+        why: &'static str,
+    },
     /// A wgpu validation or out-of-memory error caught on the device, or a lost device.
     #[error("GPU error during {during}: {message}")]
     Runtime {
