@@ -1,5 +1,6 @@
-//! The GPU radix sort (`sort.radix`) and the scan under it, against the standard library's
-//! stable sort and against the published `lampshade` radix sort, on the same device.
+//! The GPU radix sort (`sort.radix`, both paths: onesweep and portable) and the scan under the
+//! portable path, against the standard library's stable sort and against the published
+//! `lampshade` radix sort, on the same device.
 
 mod common;
 
