@@ -416,51 +416,44 @@ fn sort(c: &mut Criterion) {
             buffer(&ctx, &vals),
         );
         for (name, ours) in &sorts {
+            // `count` sorts back to back in one submission, each from a fresh copy of the
+            // input (copies outside the timed passes): the GPU stays busy, as in CUB's
+            // measurement, instead of idling while the host uploads. Their passes' timings.
+            let sorts_back_to_back = |count: u64| {
+                let mut timer = GpuTimer::new(&ctx, MAX_QUERIES / 2);
+                let mut enc = ctx.device.create_command_encoder(&Default::default());
+                for _ in 0..count {
+                    enc.copy_buffer_to_buffer(&k0, 0, &k, 0, None);
+                    enc.copy_buffer_to_buffer(&v0, 0, &v, 0, None);
+                    let at = ours
+                        .encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
+                        .unwrap();
+                    assert_eq!(at, SortedIn::Input, "32 bits: an even number of passes");
+                }
+                timer.resolve(&mut enc);
+                ctx.submit_and_wait(enc, "bench sort").unwrap();
+                timer.read(&ctx).unwrap().expect("timestamps")
+            };
             let mut g = c.benchmark_group(*name);
             configure(&mut g);
             g.throughput(Throughput::Elements(n as u64));
             g.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
                 b.iter_custom(|iters| {
-                    // Sorts back to back, SORT_BATCH to a submission, each from a fresh copy
-                    // of the input (copies outside the timed passes): the GPU stays busy, as
-                    // in CUB's measurement, instead of idling while the host uploads.
                     let mut total = 0.0;
                     let mut left = iters;
                     while left > 0 {
                         let batch = left.min(SORT_BATCH);
                         left -= batch;
-                        let mut timer = GpuTimer::new(&ctx, MAX_QUERIES / 2);
-                        let mut enc = ctx.device.create_command_encoder(&Default::default());
-                        for _ in 0..batch {
-                            enc.copy_buffer_to_buffer(&k0, 0, &k, 0, None);
-                            enc.copy_buffer_to_buffer(&v0, 0, &v, 0, None);
-                            let at = ours
-                                .encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
-                                .unwrap();
-                            assert_eq!(at, SortedIn::Input, "32 bits: an even number of passes");
-                        }
-                        timer.resolve(&mut enc);
-                        ctx.submit_and_wait(enc, "bench sort").unwrap();
-                        total += ms(&timer.read(&ctx).unwrap().expect("timestamps"), |_| true);
+                        total += ms(&sorts_back_to_back(batch), |_| true);
                     }
                     Duration::from_secs_f64(total * 1e-3)
                 })
             });
             g.finish();
-            // Four more sorts back to back; the last one checked, and its passes summed by
-            // label: where the time goes at this size.
-            let mut timer = GpuTimer::new(&ctx, MAX_QUERIES / 2);
-            let mut enc = ctx.device.create_command_encoder(&Default::default());
-            for _ in 0..4 {
-                enc.copy_buffer_to_buffer(&k0, 0, &k, 0, None);
-                enc.copy_buffer_to_buffer(&v0, 0, &v, 0, None);
-                ours.encode(&ctx, &mut enc, &k, &v, &kt, &vt, n as u32, 32, &mut timer)
-                    .unwrap();
-            }
-            timer.resolve(&mut enc);
-            ctx.submit_and_wait(enc, "bench sort passes").unwrap();
+            // Four more sorts; the last one checked, and its passes summed by label: where the
+            // time goes at this size.
+            let t = sorts_back_to_back(4);
             check_sorted(&ctx, name, &keys, &k, &v);
-            let t = timer.read(&ctx).unwrap().expect("timestamps");
             let t = t[t.len() / 4 * 3..].to_vec();
             let mut labels: Vec<&str> = t.iter().map(|p| p.label.as_str()).collect();
             labels.sort_unstable();

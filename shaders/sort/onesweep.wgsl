@@ -120,8 +120,9 @@ var<workgroup> wg_start: array<u32, OS_RADIX>;
 var<workgroup> wg_base: array<u32, OS_RADIX>;
 var<workgroup> wg_sums: array<u32, OS_MAX_SUBGROUPS * 2u>;
 var<workgroup> wg_fallback: array<atomic<u32>, OS_RADIX>;
-var<workgroup> wg_flags: array<atomic<u32>, 1>;
-var<workgroup> wg_uniform: array<u32, 1>;
+// The latest partition a digit is stuck behind, plus one (0: none), and its uniform copy.
+var<workgroup> wg_stuck: atomic<u32>;
+var<workgroup> wg_after: u32;
 
 fn field16(w: u32, d: u32) -> u32 {
     return (w >> ((d & 1u) * 16u)) & 0xffffu;
@@ -258,7 +259,7 @@ fn sort_onesweep(
     var done = t >= OS_RADIX || part == 0u;
     var q = part;
     if li == 0u {
-        atomicStore(&wg_flags[0], 0u);
+        atomicStore(&wg_stuck, 0u);
     }
     workgroupBarrier();
     loop {
@@ -281,15 +282,15 @@ fn sort_onesweep(
             }
         }
         if stuck {
-            atomicMax(&wg_flags[0], q);
+            atomicMax(&wg_stuck, q);
         }
         workgroupBarrier();
         if li == 0u {
-            wg_uniform[0] = atomicLoad(&wg_flags[0]);
-            atomicStore(&wg_flags[0], 0u);
+            wg_after = atomicLoad(&wg_stuck);
+            atomicStore(&wg_stuck, 0u);
         }
         // Partition after the latest one not ready; 0: every digit is done.
-        let after = workgroupUniformLoad(&wg_uniform[0]);
+        let after = workgroupUniformLoad(&wg_after);
         if after == 0u {
             break;
         }

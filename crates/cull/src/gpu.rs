@@ -3,7 +3,6 @@
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, ShaderDef, ShaderFile};
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuError, GpuScene, pipeline, readback, shader_file};
-use wgpu::util::DeviceExt;
 
 use crate::layout::{CULL_CONSTS, GROUPS_X, GpuCullParams, GpuTileDepth};
 use crate::radix_sort::{RadixSort, SortedIn, key_bits_for};
@@ -1110,11 +1109,7 @@ impl Culler {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let exact = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("cull.exact.params"),
-            contents: uniform,
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let exact = pipeline::uniform_buffer(d, "cull.exact.params", uniform);
         let view = depth.create_view(&wgpu::TextureViewDescriptor {
             aspect: wgpu::TextureAspect::DepthOnly,
             ..Default::default()
@@ -1189,13 +1184,8 @@ impl<'a> Frame<'a> {
         } else {
             bins * chunks(&params)
         };
-        let params_buf = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("cull.params"),
-                contents: bytemuck::bytes_of(&params),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let params_buf =
+            pipeline::uniform_buffer(&ctx.device, "cull.params", bytemuck::bytes_of(&params));
         Self {
             ctx,
             scene,

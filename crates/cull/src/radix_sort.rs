@@ -20,7 +20,6 @@ use manylights_gpu::shader_file;
 use manylights_gpu::shaders::{ShaderDef, WgslConst};
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuError, pipeline};
-use wgpu::util::DeviceExt;
 
 use crate::layout::GROUPS_X;
 use crate::scan::{Scan, ScanPath, groups_2d};
@@ -298,7 +297,7 @@ impl RadixSort {
         encoder: &mut wgpu::CommandEncoder,
         layout: &wgpu::BindGroupLayout,
         [init, histogram, onesweep]: [&wgpu::ComputePipeline; 3],
-        [keys, vals, keys_tmp, vals_tmp]: [&wgpu::Buffer; 4],
+        buffers: [&wgpu::Buffer; 4],
         n: u32,
         key_bits: u32,
         timer: &mut GpuTimer,
@@ -323,11 +322,7 @@ impl RadixSort {
         let counters = scratch("sort.radix.counters", u64::from(ONESWEEP_PASSES_MAX));
         let groups: Vec<wgpu::BindGroup> = (0..passes)
             .map(|pass| {
-                let (src_k, src_v, dst_k, dst_v) = if pass % 2 == 0 {
-                    (keys, vals, keys_tmp, vals_tmp)
-                } else {
-                    (keys_tmp, vals_tmp, keys, vals)
-                };
+                let [src_k, src_v, dst_k, dst_v] = ping_pong(pass, buffers);
                 let digit_bits = ONESWEEP_BITS.min(key_bits - pass * ONESWEEP_BITS);
                 let params = [
                     n,
@@ -343,13 +338,11 @@ impl RadixSort {
                     0,
                     0,
                 ];
-                let params = ctx
-                    .device
-                    .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("sort.radix.params"),
-                        contents: bytemuck::cast_slice(&params),
-                        usage: wgpu::BufferUsages::UNIFORM,
-                    });
+                let params = pipeline::uniform_buffer(
+                    &ctx.device,
+                    "sort.radix.params",
+                    bytemuck::cast_slice(&params),
+                );
                 pipeline::buffers_group(
                     &ctx.device,
                     "sort.radix.onesweep",
@@ -396,6 +389,16 @@ impl RadixSort {
     }
 }
 
+/// Pass `pass`'s (source keys, source values, destination keys, destination values) of a
+/// ping-pong sort over (keys, values, scratch keys, scratch values): even passes read the input.
+fn ping_pong(pass: u32, [k, v, kt, vt]: [&wgpu::Buffer; 4]) -> [&wgpu::Buffer; 4] {
+    if pass.is_multiple_of(2) {
+        [k, v, kt, vt]
+    } else {
+        [kt, vt, k, v]
+    }
+}
+
 /// A bind-group layout of a uniform at binding 0 and `storage` read-write storage buffers
 /// after it, `shader`'s module, and the pipeline layout of that one group.
 fn uniform_and_storage(
@@ -430,7 +433,7 @@ fn encode_portable(
     count: &wgpu::ComputePipeline,
     scatter: &wgpu::ComputePipeline,
     scan: &Scan,
-    [keys, vals, keys_tmp, vals_tmp]: [&wgpu::Buffer; 4],
+    buffers: [&wgpu::Buffer; 4],
     n: u32,
     key_bits: u32,
     timer: &mut GpuTimer,
@@ -447,23 +450,17 @@ fn encode_portable(
     });
     let (gx, gy) = groups_2d(blocks, GROUPS_X);
     for pass in 0..passes {
-        let (src_k, src_v, dst_k, dst_v) = if pass % 2 == 0 {
-            (keys, vals, keys_tmp, vals_tmp)
-        } else {
-            (keys_tmp, vals_tmp, keys, vals)
-        };
-        let params = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("sort.radix.params"),
-                contents: bytemuck::cast_slice(&[
-                    n,
-                    pass * RADIX_BITS,
-                    blocks,
-                    (1u32 << RADIX_BITS.min(key_bits - pass * RADIX_BITS)) - 1,
-                ]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let [src_k, src_v, dst_k, dst_v] = ping_pong(pass, buffers);
+        let params = pipeline::uniform_buffer(
+            &ctx.device,
+            "sort.radix.params",
+            bytemuck::cast_slice(&[
+                n,
+                pass * RADIX_BITS,
+                blocks,
+                (1u32 << RADIX_BITS.min(key_bits - pass * RADIX_BITS)) - 1,
+            ]),
+        );
         let group = pipeline::buffers_group(
             &ctx.device,
             "sort.radix",

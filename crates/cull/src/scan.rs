@@ -6,7 +6,6 @@ use manylights_gpu::shader_file;
 use manylights_gpu::shaders::ShaderDef;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, pipeline};
-use wgpu::util::DeviceExt;
 
 use crate::layout::{SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X};
 
@@ -119,13 +118,11 @@ impl Scan {
             usage: wgpu::BufferUsages::STORAGE,
             mapped_at_creation: false,
         });
-        let params = ctx
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("scan.params"),
-                contents: bytemuck::cast_slice(&[n, 0, 0, 0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            });
+        let params = pipeline::uniform_buffer(
+            &ctx.device,
+            "scan.params",
+            bytemuck::cast_slice(&[n, 0, 0, 0]),
+        );
         let group =
             pipeline::buffers_group(&ctx.device, "scan", &self.layout, &[&params, data, &sums]);
         let (gx, gy) = groups_2d(blocks, SCAN_MAX_GROUPS_X);

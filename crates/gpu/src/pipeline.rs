@@ -13,6 +13,16 @@ pub enum DepthTest {
     Equal,
 }
 
+/// A uniform buffer holding `contents`.
+pub fn uniform_buffer(device: &wgpu::Device, label: &str, contents: &[u8]) -> wgpu::Buffer {
+    use wgpu::util::DeviceExt;
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents,
+        usage: wgpu::BufferUsages::UNIFORM,
+    })
+}
+
 /// A pipeline layout over `groups` (group 0 first), with no immediates.
 pub fn layout(
     device: &wgpu::Device,
