@@ -381,10 +381,10 @@ fn sort(c: &mut Criterion) {
     };
     // The default sort (onesweep where the adapter takes it) and the portable 4-bit one.
     let mut sorts = vec![("sort.radix", RadixSort::new(&ctx))];
-    if let Some(spin) = std::env::var("MANYLIGHTS_SORT_MAX_SPIN")
-        .ok()
-        .and_then(|v| v.parse().ok())
-    {
+    if let Ok(v) = std::env::var("MANYLIGHTS_SORT_MAX_SPIN") {
+        let spin: u32 = v.trim().parse().unwrap_or_else(|_| {
+            panic!("MANYLIGHTS_SORT_MAX_SPIN={v:?}: expected a poll count (0 to 4294967295)")
+        });
         eprintln!("sort.radix: onesweep max_spin {spin} (MANYLIGHTS_SORT_MAX_SPIN)");
         sorts[0].1.max_spin = spin;
     }
