@@ -8,10 +8,9 @@
 //! - `cull.tiled_gather_single/...`: gather without its coarse level, `cull.clustered_unordered/...`
 //!   clusters without their order pass;
 //! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
-//!   lights, 8-pixel tiles), every strategy (gather and 2.5D take their one-pass lists there),
-//!   gather and 2.5D with their count and fill passes instead (`*_passes`), gather's passes
-//!   with other chunks of lights a workgroup (`tiled_gather8_chunk<N>`), and gather, 2.5D and
-//!   scatter without tile masks (`*_unmasked`; scatter then sorts its pairs);
+//!   lights, 8-pixel tiles), every strategy, gather with other chunks of lights a workgroup
+//!   (`tiled_gather8_chunk<N>`), and gather, 2.5D and scatter without tile masks
+//!   (`*_unmasked`; scatter then sorts its pairs);
 //! - `sort.radix/<keys>`, `sort.radix_portable/<keys>` and `sort.lampshade/<keys>`: (u32 key,
 //!   u32 value) radix sorts of random 32-bit keys, ours (the default path, onesweep where the
 //!   adapter takes it, and the portable 4-bit path) against the `lampshade` crate's on the same
@@ -268,20 +267,8 @@ fn cull_paper(c: &mut Criterion) {
             b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
         });
     }
-    // Gather and 2.5D with their count and fill passes (tile masks where they fit), not the
-    // one-pass lists; the variants below all take those passes.
-    culler.lists_max_lights = 0;
-    for (label, strategy) in [
-        ("tiled_gather8_passes", Strategy::tiled_gather(8)),
-        ("depth_mask8_passes", Strategy::depth_mask(8)),
-    ] {
-        let culler = &culler;
-        g.bench_with_input(BenchmarkId::new(label, n), &n, |b, _| {
-            b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
-        });
-    }
-    // Gather's passes with other chunks of lights a workgroup: smaller ones give more
-    // workgroups, larger ones less repeated set-up.
+    // Gather with other chunks of lights a workgroup: smaller ones give more workgroups, larger
+    // ones less repeated set-up.
     for chunk in [64, 128, 512, 1024] {
         culler.gather_min_chunk = chunk;
         culler.gather_min_chunk_masked = chunk;

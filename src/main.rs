@@ -394,11 +394,6 @@ struct CullArgs {
     /// experiment's `mask_budget`. The output says whether the run used them.
     #[arg(long, value_name = "BYTES")]
     mask_budget: Option<u64>,
-    /// Build gather's and 2.5D's lists with their count and fill passes even where the one-pass
-    /// lists serve (a workgroup a block of 4 x 4 tiles from depth to lists, up to 4,096
-    /// lights). The output says which the run took.
-    #[arg(long)]
-    no_one_pass: bool,
 }
 
 /// A culling strategy and its parameters.
@@ -743,10 +738,7 @@ fn cull(args: &CullArgs) -> Result<()> {
         &mut timer,
     );
     ctx.submit_and_wait(enc, "depth prepass")?;
-    let mut culler = Culler::new(&ctx, &gpu_scene);
-    if args.no_one_pass {
-        culler.lists_max_lights = 0;
-    }
+    let culler = Culler::new(&ctx, &gpu_scene);
     let settings = CullSettings {
         mask_budget: if args.no_tile_masks {
             Some(0)
@@ -826,19 +818,6 @@ fn cull(args: &CullArgs) -> Result<()> {
             None => "not used".into(),
         }
     );
-    if matches!(
-        strategy,
-        Strategy::TiledGather { .. } | Strategy::DepthMask { .. }
-    ) {
-        println!(
-            "  lists                   {}",
-            if out.one_pass {
-                "one pass (cull.light_rects, then a workgroup a block of tiles)"
-            } else {
-                "count and fill passes"
-            }
-        );
-    }
     print_timings(timings.as_deref());
     print!("{repeated}");
     println!(

@@ -356,7 +356,6 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
     let ctx = common::gpu();
     let (w, h) = (70, 45);
     let mut total_border = 0;
-    let mut one_pass_runs = 0;
     let mut cullers = None;
     for seed in [11u64, 12, 13, 14, 15, 16] {
         let mut case = random_case(seed);
@@ -383,14 +382,11 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
             // masks would be used.
             let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
             unmasked.mask_budget = 0;
-            unmasked.lists_max_lights = 0;
-            // Gather's and 2.5D's count and fill passes with tile masks, where the one-pass
-            // lists would be used.
-            let mut passes = Culler::new(&ctx, &r.gpu_scene);
-            passes.lists_max_lights = 0;
-            let mut portable = Culler::with_subgroups(&ctx, &r.gpu_scene, false);
-            portable.lists_max_lights = 0;
-            [sub, portable, unmasked, passes]
+            [
+                sub,
+                Culler::with_subgroups(&ctx, &r.gpu_scene, false),
+                unmasked,
+            ]
         });
         for (culler, s) in cullers.iter().flat_map(|c| {
             strategies()
@@ -407,31 +403,19 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 .map(move |s| (c, s))
         }) {
             let what = format!(
-                "{} {} (subgroups: {}, tile masks: {}, one-pass lists up to {} lights)",
+                "{} {} (subgroups: {}, tile masks: {})",
                 case.label,
                 s.name(),
                 culler.gather_subgroups,
-                culler.mask_budget > 0,
-                culler.lists_max_lights
+                culler.mask_budget > 0
             );
             let out = run_gpu(&ctx, culler, &r, &case, &s);
             let p = out.params;
-            // The one-pass lists serve gather and 2.5D with their coarse level here (lavapipe's
-            // workgroup memory holds them; these scenes have under 4,096 lights).
-            let one_pass = culler.lists_max_lights > 0
-                && matches!(
-                    s,
-                    Strategy::TiledGather { coarse: 1.., .. }
-                        | Strategy::DepthMask { coarse: 1.., .. }
-                );
-            assert_eq!(out.one_pass, one_pass, "{what}: one-pass lists");
-            one_pass_runs += usize::from(one_pass);
             let gpu = out.read(&ctx).unwrap();
             // Tile masks where they fit (these scenes are small), and all zero after the fill,
             // as the next count pass needs.
             let masks = out.read_tile_masks(&ctx).unwrap();
             let maskable = p.capacity == 0
-                && !one_pass
                 && match s {
                     Strategy::TiledScatter { .. } => true,
                     Strategy::TiledGather { .. } | Strategy::DepthMask { .. } => p.coarse > 0,
@@ -526,10 +510,7 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 if let Some(t) = timer.read(&ctx).unwrap() {
                     let counts = t
                         .iter()
-                        .filter(|p| {
-                            p.label.starts_with("cull.")
-                                && (p.label.ends_with(".count") || p.label.ends_with(".lists"))
-                        })
+                        .filter(|p| p.label.starts_with("cull.") && p.label.ends_with(".count"))
                         .count();
                     assert_eq!(counts, 3, "{what}: three runs timed");
                 }
@@ -561,10 +542,6 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
         }
     }
     println!("borderline decisions tolerated: {total_border}");
-    assert!(
-        one_pass_runs >= 6 * 3,
-        "one-pass lists ran {one_pass_runs} times"
-    );
 }
 
 /// Zero false negatives for every strategy's CPU oracle over 200 random scene/light/camera
@@ -936,9 +913,7 @@ fn tile_masks_with_lights_over_many_blocks_equal_the_oracle() {
         l.radius = reach;
     }
     let r = render(&ctx, &case, w, h);
-    let mut culler = Culler::new(&ctx, &r.gpu_scene);
-    // Gather's count and fill passes, not its one-pass lists (one_pass_lists_equal_the_oracle).
-    culler.lists_max_lights = 0;
+    let culler = Culler::new(&ctx, &r.gpu_scene);
     for s in [
         Strategy::TiledScatter { tile_size: 4 },
         Strategy::tiled_gather(4),
@@ -953,77 +928,6 @@ fn tile_masks_with_lights_over_many_blocks_equal_the_oracle() {
         assert!(
             longest * 2 > r.lights.len(),
             "{what}: most lights reach some tile ({longest} at most)"
-        );
-    }
-}
-
-/// Gather's and 2.5D's one-pass lists (a workgroup a block of tiles, from depth to lists):
-/// equal to their CPU oracles, in light order, with lights that cover every tile (every light
-/// a candidate of every block), at exactly the most lights the pass takes (a mask of 128 words
-/// a tile), with blocks cut by the image's edge; one light more takes the count and fill
-/// passes.
-#[test]
-fn one_pass_lists_equal_the_oracle() {
-    let ctx = common::gpu();
-    let check = |case: &Case, w: u32, h: u32, strategies: &[Strategy], one_pass: bool| {
-        let r = render(&ctx, case, w, h);
-        let culler = Culler::new(&ctx, &r.gpu_scene);
-        for s in strategies {
-            let what = format!(
-                "{} {} ({} lights, {w}x{h})",
-                case.label,
-                s.name(),
-                r.lights.len()
-            );
-            let out = run_gpu(&ctx, &culler, &r, case, s);
-            assert_eq!(out.one_pass, one_pass, "{what}: one-pass lists");
-            let td = out.read_tile_depth(&ctx).unwrap();
-            let (cpu_td, _) = cpu::depth_bounds(&r.frame, &out.params, &r.depth, w, h);
-            for (t, (g, c)) in td.iter().zip(&cpu_td).enumerate() {
-                assert_eq!(g.covered, c.covered, "{what}: tile {t} covered");
-            }
-            let gpu = out.read(&ctx).unwrap();
-            cpu::gather(&r.frame, &out.params, &r.lights, &td)
-                .compare(&gpu)
-                .unwrap_or_else(|e| panic!("{what}: {e}"));
-            let mut kept = 0;
-            for b in 0..gpu.ranges.len() {
-                let list = gpu.list(b);
-                assert!(
-                    list.windows(2).all(|p| p[0] < p[1]),
-                    "{what}: bin {b} in light order"
-                );
-                kept += list.len();
-            }
-            assert!(kept > 0, "{what}: some tile keeps a light");
-            assert_eq!(kept as u32, out.total, "{what}: list total");
-        }
-    };
-    // Every light reaches every tile: 32 x 24 tiles of 4 pixels, 8 x 6 blocks.
-    let mut huge = random_case(31);
-    let reach = huge.scene.light_bounds.extent().length() * 2.0;
-    for l in &mut huge.scene.lights {
-        l.radius = reach;
-    }
-    check(
-        &huge,
-        128,
-        96,
-        &[Strategy::tiled_gather(4), Strategy::depth_mask(8)],
-        true,
-    );
-    // The most lights the pass takes, then one more; 72 x 40 pixels: blocks cut at the edges.
-    let mut many = random_case(21);
-    let lights = many.scene.lights.clone();
-    let max = manylights_cull::layout::LISTS_MAX_LIGHTS as usize;
-    for (n, one_pass) in [(max, true), (max + 1, false)] {
-        many.scene.lights = lights.iter().cycle().take(n).cloned().collect();
-        check(
-            &many,
-            72,
-            40,
-            &[Strategy::tiled_gather(8), Strategy::depth_mask(16)],
-            one_pass,
         );
     }
 }

@@ -168,27 +168,6 @@ fn light_depth_mask(l: CullLight, t: TileDepth) -> u32 {
     return bit_range(lo, hi);
 }
 
-// Whether the light is inside both of a pair of a tile's side planes: a column's (planes 0 and
-// 1 of tile_side_planes, which depend only on the tile's column) or a row's (planes 2 and 3).
-fn sides_keep(a: vec4<f32>, b: vec4<f32>, l: CullLight) -> bool {
-    return !outside_plane(a, l) && !outside_plane(b, l);
-}
-
-// Whether a light may reach a tile's covered pixels along depth: the tile's depth bounds as
-// planes (-z >= dmin and -z <= dmax), and with CULL_FLAG_DEPTH_MASK the 2.5D masks.
-fn depth_keeps(l: CullLight, t: TileDepth) -> bool {
-    if t.covered == 0u {
-        return false;
-    }
-    if outside_plane(vec4<f32>(0.0, 0.0, -1.0, -t.dmin), l) || outside_plane(vec4<f32>(0.0, 0.0, 1.0, t.dmax), l) {
-        return false;
-    }
-    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
-        return (light_depth_mask(l, t) & t.mask) != 0u;
-    }
-    return true;
-}
-
 // Whether a light may reach any covered pixel of a tile: the tile frustum between the tile's
 // depth bounds, and with CULL_FLAG_DEPTH_MASK the 2.5D masks.
 fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
@@ -196,7 +175,17 @@ fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
         return false;
     }
     // Written out, not a loop: a dynamically indexed array may go to local memory.
-    return sides_keep(planes[0], planes[1], l) && sides_keep(planes[2], planes[3], l) && depth_keeps(l, t);
+    if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
+        return false;
+    }
+    // Depth bounds as planes: -z >= dmin and -z <= dmax.
+    if outside_plane(vec4<f32>(0.0, 0.0, -1.0, -t.dmin), l) || outside_plane(vec4<f32>(0.0, 0.0, 1.0, t.dmax), l) {
+        return false;
+    }
+    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
+        return (light_depth_mask(l, t) & t.mask) != 0u;
+    }
+    return true;
 }
 
 // Words of a tile's mask in the tile masks (tile_masks.wgsl): two a batch of 64 lights.

@@ -1,6 +1,9 @@
 // cull.depth_bounds: DEPTH_TILES tiles a workgroup (tiles DEPTH_TILES x + j of row y for
 // workgroup (x, y)), 64 threads a tile: fewer, larger workgroups, as launching a workgroup
-// costs more than a tile's work at small tiles. Each tile's depth data (tile_bounds.wgsl).
+// costs more than a tile's work at small tiles. The nearest and farthest covered pixel (linear
+// view depth) and the 2.5D geometry mask of every tile (Harada 2012, GPU Pro 4 section 5.6.1:
+// 32 cells over [dmin, dmax]). Background pixels (depth 1.0, the clear value) are not covered
+// and need no lights, so they do not widen the bounds.
 //
 // For gather's and 2.5D's coarse-to-fine passes the host adds rows of workgroups before the
 // tiles' (wg.y < the rows past tiles_y), which store each light's tile rectangle instead (light_tiles,
@@ -11,6 +14,7 @@
 // tiles of its rectangle, (light, block) pairs in block_queue, their number in
 // cull_stats[6], so that the count pass (scatter_masks, tiled_scatter.wgsl) shares a large
 // light's tiles among many workgroups.
+@group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
 @group(1) @binding(7) var<storage, read_write> block_queue: array<u32>;
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
@@ -59,6 +63,11 @@ fn store_light_rect(i: u32, index: u32, blocks: bool) {
     }
 }
 
+var<workgroup> wg_zmin: array<atomic<u32>, DEPTH_TILES>;
+var<workgroup> wg_zmax: array<atomic<u32>, DEPTH_TILES>;
+var<workgroup> wg_mask: array<atomic<u32>, DEPTH_TILES>;
+var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
+
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
     lights_or_tiles(wg, groups, index, false);
@@ -81,19 +90,55 @@ fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, blocks: bool) {
     }
 }
 
-// The depth data of workgroup wg's tiles (see the top of this file; tile_bounds.wgsl).
+// The depth data of workgroup wg's tiles (see the top of this file).
 fn tile_bounds(wg: vec3<u32>, index: u32) {
     let j = index / 64u;
+    let li = index % 64u;
     let tile = vec2<u32>(wg.x * DEPTH_TILES + j, wg.y);
-    let t = tile_depth_of(tile, j, index % 64u, 64u);
-    if index % 64u == 0u && tile.x < cull.tiles_x {
+    if li == 0u {
+        atomicStore(&wg_zmin[j], 0x7f800000u);
+        atomicStore(&wg_zmax[j], 0u);
+        atomicStore(&wg_mask[j], 0u);
+        atomicStore(&wg_covered[j], 0u);
+    }
+    workgroupBarrier();
+    let size = vec2<u32>(frame.viewport.xy);
+    let origin = tile * cull.tile_size;
+    // A tile past the last column (in the last workgroup of a row) has no pixels here.
+    let n = select(0u, cull.tile_size * cull.tile_size, tile.x < cull.tiles_x);
+    // Depth in [0, 1) is a non-negative float: its bits order like its value.
+    for (var i = li; i < n; i += 64u) {
+        let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
+        if all(p < size) {
+            let z = textureLoad(depth_tex, p, 0);
+            if z < 1.0 {
+                atomicMin(&wg_zmin[j], bitcast<u32>(z));
+                atomicMax(&wg_zmax[j], bitcast<u32>(z));
+                atomicAdd(&wg_covered[j], 1u);
+            }
+        }
+    }
+    workgroupBarrier();
+    let covered = atomicLoad(&wg_covered[j]);
+    var t: TileDepth;
+    t.covered = covered;
+    if covered > 0u {
+        t.dmin = linear_depth(bitcast<f32>(atomicLoad(&wg_zmin[j])));
+        t.dmax = linear_depth(bitcast<f32>(atomicLoad(&wg_zmax[j])));
+        let scale = depth_cell_scale(t);
+        for (var i = li; i < n; i += 64u) {
+            let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
+            if all(p < size) {
+                let z = textureLoad(depth_tex, p, 0);
+                if z < 1.0 {
+                    atomicOr(&wg_mask[j], 1u << depth_cell(linear_depth(z), t.dmin, scale));
+                }
+            }
+        }
+    }
+    workgroupBarrier();
+    if li == 0u && tile.x < cull.tiles_x {
+        t.mask = atomicLoad(&wg_mask[j]);
         tile_depth[tile.y * cull.tiles_x + tile.x] = t;
     }
-}
-
-// cull.light_rects: only the lights' rectangles, a thread a light, for the one-pass lists of
-// gather and 2.5D (gather_lists.wgsl), which find their tiles' depth data themselves.
-@compute @workgroup_size(64 * DEPTH_TILES)
-fn light_rects_only(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, false);
 }

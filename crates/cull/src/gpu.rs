@@ -19,10 +19,7 @@ pub const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
 /// uses; tiled scatter's count pass that sets them is in its own module).
 pub const TILE_MASKS: ShaderFile = shader_file!("cull/tile_masks.wgsl");
 
-/// A tile's depth data from the depth buffer (`cull.depth_bounds` and the one-pass lists).
-pub const TILE_BOUNDS: ShaderFile = shader_file!("cull/tile_bounds.wgsl");
-
-/// `cull.depth_bounds` and `cull.light_rects`.
+/// `cull.depth_bounds`.
 pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
     name: "cull.depth_bounds",
     consts: CULL_CONSTS,
@@ -31,23 +28,7 @@ pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
         LIGHT,
         SCENE,
         COMMON,
-        TILE_BOUNDS,
         shader_file!("cull/depth_bounds.wgsl"),
-    ],
-};
-/// `cull.tiled_gather.lists` and `cull.depth_mask.lists`: gather and 2.5D in one pass after
-/// `cull.light_rects`, where the lights are few enough.
-pub const GATHER_LISTS: ShaderDef = ShaderDef {
-    name: "cull.gather_lists",
-    consts: CULL_CONSTS,
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        COMMON,
-        LISTS,
-        TILE_BOUNDS,
-        shader_file!("cull/gather_lists.wgsl"),
     ],
 };
 /// `cull.tiled_gather` (also `cull.depth_mask`, with its flag), `cull.finalize`, and the tile
@@ -139,7 +120,6 @@ pub const EXACT: ShaderDef = ShaderDef {
 /// Every shader of this crate.
 pub const SHADERS: &[ShaderDef] = &[
     DEPTH_BOUNDS,
-    GATHER_LISTS,
     TILED_GATHER,
     TILED_GATHER_SUBGROUP,
     TILED_SCATTER,
@@ -198,8 +178,6 @@ pub struct CullOutput {
     /// tiled scatter, within [`Culler::mask_budget`]). Every fill leaves them all zero, as the
     /// next count pass needs (see `shaders/cull/tile_masks.wgsl`).
     pub tile_masks: Option<wgpu::Buffer>,
-    /// Whether the run took gather's and 2.5D's one-pass lists ([`Culler::takes_one_pass`]).
-    pub one_pass: bool,
 }
 
 impl CullOutput {
@@ -302,14 +280,6 @@ pub struct Culler {
     pub lists_layout: wgpu::BindGroupLayout,
     depth_bounds: wgpu::ComputePipeline,
     depth_bounds_blocks: wgpu::ComputePipeline,
-    light_rects: wgpu::ComputePipeline,
-    /// Gather's and 2.5D's one-pass lists (`None` where the device's workgroup memory cannot
-    /// hold them).
-    gather_lists: Option<wgpu::ComputePipeline>,
-    /// The most lights for which gather and 2.5D (with their coarse level, without a
-    /// capacity) take the one-pass lists ([`crate::layout::LISTS_MAX_LIGHTS`] by default, the
-    /// most the pass can take; 0: never). Past it they take the count and fill passes.
-    pub lists_max_lights: u32,
     /// Whether gather's scans use subgroup operations.
     pub gather_subgroups: bool,
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
@@ -403,20 +373,13 @@ impl Culler {
             ],
         });
         let scene_layout = &scene.layout;
-        let [depth_bounds, depth_bounds_blocks, light_rects] = pipelines(
+        let [depth_bounds, depth_bounds_blocks] = pipelines(
             d,
             &DEPTH_BOUNDS,
             scene_layout,
             &layout,
-            ["depth_bounds", "depth_bounds_blocks", "light_rects_only"],
+            ["depth_bounds", "depth_bounds_blocks"],
         );
-        let gather_lists = (ctx.limits.max_compute_workgroup_storage_size
-            >= crate::layout::LISTS_WORKGROUP_BYTES
-            && ctx.limits.max_compute_invocations_per_workgroup >= crate::layout::LISTS_THREADS)
-            .then(|| {
-                let [p] = pipelines(d, &GATHER_LISTS, scene_layout, &layout, ["gather_lists"]);
-                p
-            });
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         let [
             gather_count,
@@ -510,9 +473,6 @@ impl Culler {
             lists_layout,
             depth_bounds,
             depth_bounds_blocks,
-            light_rects,
-            gather_lists,
-            lists_max_lights: crate::layout::LISTS_MAX_LIGHTS,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
@@ -541,23 +501,6 @@ impl Culler {
             sort: RadixSort::new(ctx),
             placeholder: storage_buf(ctx, "cull.placeholder", 16),
         }
-    }
-
-    /// Whether `strategy` with parameters `p` (before [`crate::fit_chunks`]) takes the one-pass
-    /// lists: gather or 2.5D with its coarse level (whose lists are bounded by the lights'
-    /// rectangles), no capacity, at most [`Culler::lists_max_lights`] lights, and a device
-    /// whose workgroup memory holds the pass.
-    pub fn takes_one_pass(&self, strategy: &Strategy, p: &GpuCullParams) -> bool {
-        self.gather_lists.is_some()
-            && matches!(
-                strategy,
-                Strategy::TiledGather { .. } | Strategy::DepthMask { .. }
-            )
-            && p.coarse > 0
-            && p.capacity == 0
-            && p.light_count > 0
-            && p.light_count <= self.lists_max_lights.min(crate::layout::LISTS_MAX_LIGHTS)
-            && u64::from(p.bins) * u64::from(p.light_count) < 1 << 32
     }
 
     /// Whether tile masks may serve `p` (gather also needs its coarse level): no capacity,
@@ -636,10 +579,6 @@ impl Culler {
         settings.validate()?;
         let (w, h) = (depth.width(), depth.height());
         let mut params = strategy.params(w, h, scene.light_count, settings);
-        if self.takes_one_pass(strategy, &params) {
-            let f = Frame::new(self, ctx, scene, depth, params, false);
-            return self.run_gather_lists(ctx, f, strategy, timer, repeat);
-        }
         let clustered = matches!(strategy, Strategy::Clustered { .. });
         let per_light = matches!(strategy, Strategy::TiledScatter { .. });
         // Tile masks serve scatter and gather's coarse-to-fine passes.
@@ -913,84 +852,6 @@ impl Culler {
             &filling,
         )?;
         Ok(f.finish(indices, total, masks.clone())?)
-    }
-
-    /// Gather and 2.5D in one pass after the lights' rectangles (`cull.light_rects`): a
-    /// workgroup a block of tiles finds their depth data, tests, and writes their lists
-    /// (`shaders/cull/gather_lists.wgsl`). Without `repeat`, a first run with no room for the
-    /// lists and no timer sums their total, and a second, timed, writes them into a buffer of
-    /// that size; with it, `repeat.runs` runs back to back into lists sized from the earlier
-    /// run. Either way the last run's total is checked against the size.
-    fn run_gather_lists(
-        &self,
-        ctx: &GpuContext,
-        f: Frame<'_>,
-        strategy: &Strategy,
-        timer: &mut GpuTimer,
-        repeat: Option<Repeat>,
-    ) -> Result<CullOutput, CullError> {
-        let p = f.params;
-        let pipe = self
-            .gather_lists
-            .as_ref()
-            .expect("takes_one_pass checks the pipeline");
-        let label = format!("cull.{}.lists", strategy.name());
-        let rects = f.buf("cull.light_rects", u64::from(p.light_count) * 8);
-        let block = crate::layout::LISTS_BLOCK;
-        let groups = (p.tiles_x.div_ceil(block), p.tiles_y.div_ceil(block));
-        let rect_groups = groups_2d(
-            p.light_count.div_ceil(64 * crate::layout::DEPTH_TILES),
-            GROUPS_X,
-        );
-        let run =
-            |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group: &wgpu::BindGroup| {
-                // Only the list cursor needs clearing: the pass writes every tile's range and
-                // depth data.
-                enc.clear_buffer(&f.stats, 0, None);
-                f.pass(
-                    enc,
-                    timer,
-                    "cull.light_rects",
-                    &self.light_rects,
-                    group,
-                    rect_groups,
-                );
-                f.pass(enc, timer, &label, pipe, group, groups);
-            };
-        let placeholder = &self.placeholder;
-        let repeat = match repeat {
-            Some(r) => r,
-            None => {
-                // The sizing run: no room for lists (the pass writes none then), no timer.
-                let none = f.buf("cull.light_indices", 4);
-                let mut enc = ctx.encoder("cull.lists.size");
-                run(
-                    &mut enc,
-                    &mut GpuTimer::off(),
-                    &f.group(&none, &rects, placeholder),
-                );
-                ctx.submit_and_wait(enc, "culling: list total")?;
-                let total = Frame::entries(
-                    ctx,
-                    "light list bytes",
-                    "light list entries",
-                    f.lists_total(ctx)?,
-                )?;
-                Repeat { total, runs: 1 }
-            }
-        };
-        let indices = f.buf("cull.light_indices", u64::from(repeat.total) * 4);
-        let group = f.group(&indices, &rects, placeholder);
-        let mut enc = ctx.encoder("cull.lists");
-        for _ in 0..repeat.runs {
-            run(&mut enc, timer, &group);
-        }
-        timer.resolve(&mut enc);
-        ctx.submit_and_wait(enc, "culling: lists")?;
-        repeat.check(f.lists_total(ctx)?)?;
-        let mut out = f.finish(indices, repeat.total, None)?;
-        out.one_pass = true;
-        Ok(out)
     }
 
     /// Tiled scatter with tile masks: the depth-bounds pass also stores each light's rectangle
@@ -1494,12 +1355,6 @@ impl<'a> Frame<'a> {
         Ok(u64::from(read_u32s(ctx, &self.stats, 4, 1)?[0]))
     }
 
-    /// The list total that the one-pass lists placed (`cull_stats[5]`), whether or not the
-    /// lists had room.
-    fn lists_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
-        Ok(u64::from(read_u32s(ctx, &self.stats, 5, 1)?[0]))
-    }
-
     /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with
     /// the carries in `cull_stats[2]`).
     fn pairs_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
@@ -1596,7 +1451,6 @@ impl<'a> Frame<'a> {
             tile_depth: self.tile_depth,
             occupancy: self.occupancy,
             tile_masks,
-            one_pass: false,
         })
     }
 }

@@ -55,47 +55,11 @@ pub const SCATTER_MASK_GROUPS: u32 = 2048;
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
 
-/// Tile slots of the workgroup arrays of `shaders/cull/tile_bounds.wgsl` (the most tiles one
-/// workgroup finds the depth data of: [`DEPTH_TILES`] in `cull.depth_bounds`, a block in the
-/// one-pass lists).
-pub const BOUNDS_TILES: u32 = 16;
-
-/// Side in tiles of the block that a workgroup of gather's and 2.5D's one-pass lists takes
-/// (`shaders/cull/gather_lists.wgsl`).
-pub const LISTS_BLOCK: u32 = 4;
-/// Threads of a tile in that pass.
-pub const LISTS_TILE_THREADS: u32 = 16;
-/// Threads of a workgroup of that pass.
-pub const LISTS_THREADS: u32 = LISTS_BLOCK * LISTS_BLOCK * LISTS_TILE_THREADS;
-/// The most lights that pass takes: its block's tile masks and candidates are in workgroup
-/// memory.
-pub const LISTS_MAX_LIGHTS: u32 = 4096;
-/// Words of a tile's mask in that pass.
-pub const LISTS_WORDS: u32 = LISTS_MAX_LIGHTS / 32;
-/// Bytes of workgroup memory that pass declares (masks, candidates, the per-thread counts,
-/// the depth slots and the rest, rounded up).
-pub const LISTS_WORKGROUP_BYTES: u32 = LISTS_BLOCK * LISTS_BLOCK * LISTS_WORDS * 4
-    + LISTS_MAX_LIGHTS * 4
-    + LISTS_THREADS * 4
-    + BOUNDS_TILES * 16
-    + LISTS_BLOCK * LISTS_BLOCK * (16 + 8)
-    + LISTS_BLOCK * 64
-    + 64;
-const _: () = assert!(BOUNDS_TILES >= DEPTH_TILES && BOUNDS_TILES >= LISTS_BLOCK * LISTS_BLOCK);
-const _: () = assert!(LISTS_BLOCK <= 4 && LISTS_MAX_LIGHTS <= 1 << 16);
-const _: () = assert!(LISTS_THREADS <= 256);
-
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
-    WgslConst::U32("BOUNDS_TILES", BOUNDS_TILES),
-    WgslConst::U32("LISTS_BLOCK", LISTS_BLOCK),
-    WgslConst::U32("LISTS_TILE_THREADS", LISTS_TILE_THREADS),
-    WgslConst::U32("LISTS_THREADS", LISTS_THREADS),
-    WgslConst::U32("LISTS_MAX_LIGHTS", LISTS_MAX_LIGHTS),
-    WgslConst::U32("LISTS_WORDS", LISTS_WORDS),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),

@@ -81,16 +81,6 @@ impl GpuTimer {
         }
     }
 
-    /// A timer that records nothing (a run whose times nobody reads).
-    pub fn off() -> Self {
-        Self {
-            set: None,
-            resolve: None,
-            passes: Vec::new(),
-            capacity: 1,
-        }
-    }
-
     /// Whether this timer records anything.
     pub fn enabled(&self) -> bool {
         self.set.is_some()
