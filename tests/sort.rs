@@ -139,6 +139,23 @@ fn radix_sort_onesweep_matches_std_stable_sort() {
     let sort = onesweep(&ctx);
     check_against_std(&ctx, &sort);
     check_sizes(&ctx, &sort, &[3839, 3840, 3841, 7681], None);
+    // One-pass sorts (8 and 5 key bits) back to back with one sorter, which reuses its scratch
+    // buffers for as many pairs: each sort must start from a cleared look-back status, not
+    // read the one before's (whose words carry the same pass).
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+    for n in [3841, 100_003] {
+        for bits in [8, 8, 5, 8] {
+            let keys: Vec<u32> = (0..n).map(|_| rng.random::<u32>()).collect();
+            let vals: Vec<u32> = (0..n as u32).collect();
+            let got = gpu_sort(&ctx, &sort, &keys, &vals, bits);
+            let expect = radix_sort::cpu(&keys, &vals, bits);
+            assert!(
+                first_diff(&got, &expect).is_none(),
+                "{n} keys, {bits} bits, sorted after another: {}",
+                first_diff(&got, &expect).unwrap()
+            );
+        }
+    }
 }
 
 /// The look-back's fallback alone (every predecessor counted from its keys, none read from its

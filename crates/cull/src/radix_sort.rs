@@ -16,6 +16,8 @@
 //! Only the key bits asked for are sorted: sorting tile indices of 8,160 tiles takes 13 bits,
 //! two onesweep passes or four portable ones.
 
+use std::sync::{Mutex, PoisonError};
+
 use manylights_gpu::shader_file;
 use manylights_gpu::shaders::{ShaderDef, WgslConst};
 use manylights_gpu::timing::GpuTimer;
@@ -115,6 +117,18 @@ pub struct RadixSort {
     /// Counts every predecessor's keys instead of reading its status (onesweep only): the
     /// look-back's fallback alone, for tests.
     pub fallback_only: bool,
+    /// The onesweep path's scratch buffers of the last sort (look-back status, histograms,
+    /// partition counters), reused by the next sort of as many pairs: a renderer sorting every
+    /// frame allocates them once, not every frame.
+    scratch: Mutex<Option<OnesweepScratch>>,
+}
+
+/// The onesweep path's scratch buffers for `status_words` look-back status words.
+struct OnesweepScratch {
+    status_words: u64,
+    status: wgpu::Buffer,
+    hist: wgpu::Buffer,
+    counters: wgpu::Buffer,
 }
 
 enum Pipelines {
@@ -184,6 +198,7 @@ impl RadixSort {
             },
             max_spin: ONESWEEP_MAX_SPIN,
             fallback_only: false,
+            scratch: Mutex::new(None),
         })
     }
 
@@ -199,6 +214,7 @@ impl RadixSort {
             },
             max_spin: ONESWEEP_MAX_SPIN,
             fallback_only: false,
+            scratch: Mutex::new(None),
         }
     }
 
@@ -287,6 +303,41 @@ impl RadixSort {
         Ok(self.sorted_in(key_bits))
     }
 
+    /// The onesweep path's scratch buffers for `status_words` status words: the last sort's
+    /// where it had as many (`sort.radix.init` zeroes them in every sort), new ones otherwise.
+    fn onesweep_scratch(
+        &self,
+        ctx: &GpuContext,
+        status_words: u64,
+    ) -> (wgpu::Buffer, wgpu::Buffer, wgpu::Buffer) {
+        let mut cached = self.scratch.lock().unwrap_or_else(PoisonError::into_inner);
+        let s = match cached.take() {
+            Some(s) if s.status_words == status_words => s,
+            _ => {
+                let scratch = |label: &str, words: u64| {
+                    ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size: words * 4,
+                        usage: wgpu::BufferUsages::STORAGE,
+                        mapped_at_creation: false,
+                    })
+                };
+                OnesweepScratch {
+                    status_words,
+                    status: scratch("sort.radix.status", status_words),
+                    hist: scratch(
+                        "sort.radix.hist",
+                        u64::from(ONESWEEP_PASSES_MAX << ONESWEEP_BITS),
+                    ),
+                    counters: scratch("sort.radix.counters", u64::from(ONESWEEP_PASSES_MAX)),
+                }
+            }
+        };
+        let out = (s.status.clone(), s.hist.clone(), s.counters.clone());
+        *cached = Some(s);
+        out
+    }
+
     #[expect(
         clippy::too_many_arguments,
         reason = "the pipelines and buffers of one sort"
@@ -306,20 +357,7 @@ impl RadixSort {
         let parts = n.div_ceil(ONESWEEP_PART);
         let status_len = u64::from(parts) << ONESWEEP_BITS;
         ctx.check_storage("radix sort look-back status", status_len * 4)?;
-        let scratch = |label: &str, words: u64| {
-            ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: words * 4,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            })
-        };
-        let status = scratch("sort.radix.status", status_len);
-        let hist = scratch(
-            "sort.radix.hist",
-            u64::from(ONESWEEP_PASSES_MAX << ONESWEEP_BITS),
-        );
-        let counters = scratch("sort.radix.counters", u64::from(ONESWEEP_PASSES_MAX));
+        let (status, hist, counters) = self.onesweep_scratch(ctx, status_len);
         let groups: Vec<wgpu::BindGroup> = (0..passes)
             .map(|pass| {
                 let [src_k, src_v, dst_k, dst_v] = ping_pong(pass, buffers);
