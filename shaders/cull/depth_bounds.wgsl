@@ -13,66 +13,31 @@
 // (depth_bounds_blocks) those rows also queue each light's blocks of SCATTER_MASK_THREADS
 // tiles of its rectangle, (light, block) pairs in block_queue, their number in
 // cull_stats[6], so that the count pass (scatter_masks, tiled_scatter.wgsl) shares a large
-// light's tiles among many workgroups. For gather's and 2.5D's count pass with tile masks
-// (depth_bounds_cands) those rows also store each light in view space (view_lights, three
-// vec4s: (centre, radius), (axis, tan_outer), (slack, 1 for a cone test, 0, 0)) and set its bit
-// in the candidate masks of every coarse tile its rectangle meets (coarse_masks: a bit per
-// (coarse tile, light), mask_words() words a coarse tile), so that the count pass reads its
-// coarse tile's candidates instead of testing every light's rectangle.
+// light's tiles among many workgroups.
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
 @group(1) @binding(7) var<storage, read_write> block_queue: array<u32>;
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
-@group(1) @binding(12) var<storage, read_write> coarse_masks: array<atomic<u32>>;
-@group(1) @binding(13) var<storage, read_write> view_lights: array<vec4<f32>>;
-
-// What the light rows store besides the rectangles.
-const RECTS_ONLY: u32 = 0u;
-// Tiled scatter with tile masks: the blocks' queue.
-const RECTS_BLOCKS: u32 = 1u;
-// Gather and 2.5D with tile masks: view-space lights and coarse candidate masks.
-const RECTS_CANDIDATES: u32 = 2u;
 
 // A workgroup's blocks and their place in the queue.
 var<workgroup> wg_blocks: atomic<u32>;
 var<workgroup> wg_block_at: u32;
 
-// Light `i` in view space, and its bit in the candidate masks of the coarse tiles that its
-// tile rectangle `r` (not empty) meets.
-fn store_candidate(i: u32, l: CullLight, r: vec4<i32>) {
-    view_lights[3u * i] = vec4<f32>(l.center, l.radius);
-    view_lights[3u * i + 1u] = vec4<f32>(l.axis, l.tan_outer);
-    view_lights[3u * i + 2u] = vec4<f32>(l.slack, select(0.0, 1.0, l.is_cone), 0.0, 0.0);
-    let words = mask_words();
-    let c0 = vec2<u32>(r.xy) / cull.coarse;
-    let c1 = vec2<u32>(r.zw) / cull.coarse;
-    let bit = 1u << (i % 32u);
-    for (var y = c0.y; y <= c1.y; y++) {
-        for (var x = c0.x; x <= c1.x; x++) {
-            atomicOr(&coarse_masks[(y * cull.coarse_x + x) * words + i / 32u], bit);
-        }
-    }
-}
-
-// Light `i`'s tile rectangle into light_rects, and (`mode`) its blocks into the queue (one
-// atomic add a workgroup) or its candidate bits. Called in uniform control flow.
-fn store_light_rect(i: u32, index: u32, mode: u32) {
+// Light `i`'s tile rectangle into light_rects, and with `blocks` its blocks into the queue
+// (one atomic add a workgroup). Called in uniform control flow.
+fn store_light_rect(i: u32, index: u32, blocks: bool) {
     var n = 0u;
     if i < cull.light_count {
-        let l = cull_light(lights[i]);
-        let r = light_tiles(l);
+        let r = light_tiles(cull_light(lights[i]));
         if r.x > r.z || r.y > r.w {
             light_rects[i] = vec2<u32>(1u, 0u);
         } else {
             light_rects[i] = vec2<u32>(u32(r.x) | (u32(r.y) << 16u), u32(r.z) | (u32(r.w) << 16u));
             n = (u32(r.z - r.x + 1) * u32(r.w - r.y + 1) + SCATTER_MASK_THREADS - 1u) / SCATTER_MASK_THREADS;
-            if mode == RECTS_CANDIDATES {
-                store_candidate(i, l, r);
-            }
         }
     }
-    if mode != RECTS_BLOCKS {
+    if !blocks {
         return;
     }
     if index == 0u {
@@ -105,26 +70,21 @@ var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    lights_or_tiles(wg, groups, index, RECTS_ONLY);
+    lights_or_tiles(wg, groups, index, false);
 }
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    lights_or_tiles(wg, groups, index, RECTS_BLOCKS);
-}
-
-@compute @workgroup_size(64 * DEPTH_TILES)
-fn depth_bounds_cands(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    lights_or_tiles(wg, groups, index, RECTS_CANDIDATES);
+    lights_or_tiles(wg, groups, index, true);
 }
 
 // Workgroup wg's lights (the rows before the tiles', so that their longer chains start early;
-// with `mode` also queued, or as candidates) or tiles. Uniform (a workgroup's id), so the
-// barriers are reached by all threads or none.
-fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, mode: u32) {
+// with `blocks` also queued) or tiles. Uniform (a workgroup's id), so the barriers are reached
+// by all threads or none.
+fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, blocks: bool) {
     let light_rows = groups.y - cull.tiles_y;
     if wg.y < light_rows {
-        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, mode);
+        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, blocks);
     } else {
         tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
     }

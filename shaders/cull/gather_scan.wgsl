@@ -37,7 +37,7 @@ fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_i
 
 @compute @workgroup_size(64)
 fn gather_count_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    gather_candidates(wg, li);
+    gather_chunk(wg, li, CHUNK_MASK);
 }
 
 @compute @workgroup_size(64 * MASK_FILL_TILES)

@@ -78,7 +78,7 @@ fn gather_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocatio
 
 @compute @workgroup_size(64)
 fn gather_count_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
-    gather_candidates(wg, subgroup_slot(lane, size, id, count));
+    gather_chunk(wg, subgroup_slot(lane, size, id, count), CHUNK_MASK);
 }
 
 @compute @workgroup_size(64 * MASK_FILL_TILES)

@@ -25,14 +25,10 @@
 // floats are compared), and cpu::gather states the same.
 //
 // Tile masks (where tiles x lights bits fit the host's budget, as at the Forward+ paper's
-// configuration; tile_masks.wgsl): the count pass (gather_candidates) stores each tile's kept
-// lights as bits instead of counting per (tile, chunk), and sums the total (cull_stats[4]),
-// from which the host sizes the lists. Its candidates come ready: cull.depth_bounds
-// (depth_bounds_cands) stores each light in view space and sets its bit in the candidate mask
-// of every coarse tile its rectangle meets, so a workgroup reads its chunk's words of its
-// coarse tile's mask and loads only those lights, with no per-batch barriers. No scan: the
-// fill pass (masks_expand, 64 threads a tile) turns the tile's words into its list, in light
-// order, without testing any light again.
+// configuration; tile_masks.wgsl): the count pass stores each tile's kept lights as bits
+// instead of counting per (tile, chunk), and sums the total (cull_stats[4]), from which the
+// host sizes the lists. No scan: the fill pass (masks_expand, 64 threads a tile) turns the
+// tile's words into its list, in light order, without testing any light again.
 //
 // The single level (cull.coarse = 0): the paper's one workgroup per tile over every light; the
 // fill keeps each list in light order: in every batch of 64 lights, a light's slot is the
@@ -55,14 +51,11 @@ var<workgroup> wg_lines: array<atomic<u32>, 64>;
 // Each light's tile rectangle (from cull.depth_bounds, for coarse-to-fine gather and 2.5D).
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 
-// Each coarse tile's candidates and the lights in view space, from cull.depth_bounds
-// (depth_bounds.wgsl, store_candidate), for the count pass with tile masks.
-@group(1) @binding(12) var<storage, read_write> coarse_masks: array<u32>;
-@group(1) @binding(13) var<storage, read_write> view_lights: array<vec4<f32>>;
-
-// What a coarse-to-fine pass without tile masks does: count per (tile, chunk), or fill.
+// What a coarse-to-fine pass does: count per (tile, chunk), fill, or store the tile masks and
+// sum their total.
 const CHUNK_COUNT: u32 = 0u;
 const CHUNK_FILL: u32 = 1u;
+const CHUNK_MASK: u32 = 2u;
 
 // One batch of up to 64 candidate lights, light `i` at this thread (`valid` false past the
 // end). The count pass adds the survivors to `counted`, this thread's own count (one atomic
@@ -214,6 +207,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
         if has_pixels {
             for (var w = 0u; w < 2u; w++) {
                 var m = atomicLoad(&wg_lines[lines + 2u * local.x + w]) & atomicLoad(&wg_lines[lines + 16u + 2u * local.y + w]);
+                var word = 0u;
                 while m != 0u {
                     let bit = firstTrailingBit(m);
                     let k = w * 32u + bit;
@@ -222,8 +216,15 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                         if fill {
                             out_indices[at + kept] = b + k;
                         }
+                        word |= 1u << bit;
                         kept += 1u;
                     }
+                }
+                if mode == CHUNK_MASK && word != 0u {
+                    // Masks start each run at zero (the fill clears them), so only nonzero
+                    // words are stored (chunks are whole batches, so b / 32 + w is this
+                    // batch's word w).
+                    tile_masks[bin * mask_words() + b / 32u + w] = word;
                 }
             }
         }
@@ -233,110 +234,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
     if mode == CHUNK_COUNT && has_pixels {
         atomicStore(&bin_counts[entry], kept);
     }
-}
-
-// Light `i` in view space, as cull.depth_bounds stored it (store_candidate).
-fn view_light(i: u32) -> CullLight {
-    let a = view_lights[3u * i];
-    let c = view_lights[3u * i + 2u];
-    var l: CullLight;
-    l.center = a.xyz;
-    l.radius = a.w;
-    l.slack = c.x;
-    l.is_cone = c.y != 0.0;
-    if l.is_cone {
-        let b = view_lights[3u * i + 1u];
-        l.axis = b.xyz;
-        l.tan_outer = b.w;
+    if mode == CHUNK_MASK {
+        add_kept_total(slot, kept);
     }
-    return l;
-}
-
-// The coarse tile's depth slab, bit-inverted smallest bound first so that zero-initialised
-// workgroup memory starts every reduction; and whether any of its tiles has pixels.
-var<workgroup> wg_cmin_inv: atomic<u32>;
-var<workgroup> wg_cmax_bits: atomic<u32>;
-var<workgroup> wg_any: atomic<u32>;
-// Up to 32 words of the chunk's candidates, read (and cleared) once for the workgroup.
-var<workgroup> wg_words: array<u32, 32>;
-
-// The count pass with tile masks: coarse tile wg.xy (this thread's tile is the slot-th of it,
-// row by row) and chunk wg.z of the lights. The chunk's words of the coarse tile's candidate
-// mask go to workgroup memory (their reader clears them for the next run); each thread then
-// takes every candidate in light order: one that reaches the coarse tile's depth slab (the
-// same test for the whole workgroup) and whose rectangle holds the thread's tile is tested
-// against the tile, and kept lights become the tile's mask bits. The decisions are those of
-// gather_chunk: a tile keeps exactly the lights whose rectangle holds it and that pass its
-// tile test (the slab only skips lights that would fail it).
-fn gather_candidates(wg: vec3<u32>, slot: u32) {
-    let local = vec2<u32>(slot % 8u, slot / 8u);
-    let tile = wg.xy * 8u + local;
-    let inside = tile.x < cull.tiles_x && tile.y < cull.tiles_y;
-    let bin = tile.y * cull.tiles_x + tile.x;
-    var t: TileDepth;
-    var planes: array<vec4<f32>, 4>;
-    if inside {
-        t = tile_depth[bin];
-        if t.covered != 0u {
-            atomicMax(&wg_cmin_inv, ~ordered_bits(t.dmin));
-            atomicMax(&wg_cmax_bits, ordered_bits(t.dmax));
-            atomicOr(&wg_any, 1u);
-            planes = tile_side_planes(tile);
-        }
-    }
-    let has_pixels = inside && t.covered != 0u;
-    let words = mask_words();
-    let chunk_words = cull.chunk / 32u;
-    let first = wg.z * chunk_words;
-    let count = min(chunk_words, words - min(first, words));
-    let cands = (wg.y * cull.coarse_x + wg.x) * words + first;
-    var kept = 0u;
-    for (var base = 0u; base < count; base += 32u) {
-        if base != 0u {
-            workgroupBarrier();
-        }
-        if slot < 32u && base + slot < count {
-            let m = coarse_masks[cands + base + slot];
-            if m != 0u {
-                coarse_masks[cands + base + slot] = 0u;
-            }
-            wg_words[slot] = m;
-        }
-        workgroupBarrier();
-        // (No barrier below: the test need not be uniform.)
-        if atomicLoad(&wg_any) == 0u {
-            continue;
-        }
-        let cmin = from_ordered_bits(~atomicLoad(&wg_cmin_inv));
-        let cmax = from_ordered_bits(atomicLoad(&wg_cmax_bits));
-        for (var w = 0u; w < min(32u, count - base); w++) {
-            var m = wg_words[w];
-            var word = 0u;
-            let light0 = (first + base + w) * 32u;
-            while m != 0u {
-                let bit = firstTrailingBit(m);
-                m &= m - 1u;
-                let i = light0 + bit;
-                let l = view_light(i);
-                if outside_plane(vec4<f32>(0.0, 0.0, -1.0, -cmin), l) || outside_plane(vec4<f32>(0.0, 0.0, 1.0, cmax), l) {
-                    continue;
-                }
-                if has_pixels {
-                    let r = light_rects[i];
-                    let lo = vec2<u32>(r.x & 0xffffu, r.x >> 16u);
-                    let hi = vec2<u32>(r.y & 0xffffu, r.y >> 16u);
-                    if all(tile >= lo) && all(tile <= hi) && tile_keeps(l, planes, t) {
-                        word |= 1u << bit;
-                        kept += 1u;
-                    }
-                }
-            }
-            // Masks start each run at zero (the fill clears them): only nonzero words are
-            // stored.
-            if word != 0u {
-                tile_masks[bin * words + first + base + w] = word;
-            }
-        }
-    }
-    add_kept_total(slot, kept);
 }

@@ -267,14 +267,9 @@ fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
     )
 }
 
-/// Words of a tile's (or coarse tile's) mask: two for each 64 lights.
-fn mask_words(p: &GpuCullParams) -> u64 {
-    u64::from(p.light_count.div_ceil(64)) * 2
-}
-
-/// Bytes of the tile masks.
+/// Bytes of the tile masks: two words a tile for each 64 lights.
 fn mask_bytes(p: &GpuCullParams) -> u64 {
-    u64::from(p.bins) * mask_words(p) * 4
+    u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8
 }
 
 /// Pipelines of every culling pass.
@@ -285,7 +280,6 @@ pub struct Culler {
     pub lists_layout: wgpu::BindGroupLayout,
     depth_bounds: wgpu::ComputePipeline,
     depth_bounds_blocks: wgpu::ComputePipeline,
-    depth_bounds_cands: wgpu::ComputePipeline,
     /// Whether gather's scans use subgroup operations.
     pub gather_subgroups: bool,
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
@@ -362,7 +356,7 @@ impl Culler {
     pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
         let d = &ctx.device;
         let mut entries = vec![entry(0, UNIFORM), entry(1, DEPTH)];
-        entries.extend((2..=13).map(|b| entry(b, storage(false))));
+        entries.extend((2..=11).map(|b| entry(b, storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.group1"),
             entries: &entries,
@@ -379,12 +373,12 @@ impl Culler {
             ],
         });
         let scene_layout = &scene.layout;
-        let [depth_bounds, depth_bounds_blocks, depth_bounds_cands] = pipelines(
+        let [depth_bounds, depth_bounds_blocks] = pipelines(
             d,
             &DEPTH_BOUNDS,
             scene_layout,
             &layout,
-            ["depth_bounds", "depth_bounds_blocks", "depth_bounds_cands"],
+            ["depth_bounds", "depth_bounds_blocks"],
         );
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         let [
@@ -479,7 +473,6 @@ impl Culler {
             lists_layout,
             depth_bounds,
             depth_bounds_blocks,
-            depth_bounds_cands,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
@@ -636,10 +629,7 @@ impl Culler {
                 (u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES) + 1) * 4,
             )?;
         }
-        let mut f = Frame::new(self, ctx, scene, depth, params, per_light && !masked);
-        if masked && !per_light {
-            f = f.with_candidates();
-        }
+        let f = Frame::new(self, ctx, scene, depth, params, per_light && !masked);
         match strategy {
             Strategy::TiledScatter { .. } if masked => {
                 self.run_scatter_masks(ctx, f, timer, repeat)
@@ -787,17 +777,12 @@ impl Culler {
                     );
                 }
             } else {
-                // With the lights' rectangles for the coarse-to-fine passes (binding 9), and
-                // with tile masks the candidates (bindings 12 and 13).
+                // With the lights' rectangles for the coarse-to-fine passes (binding 9).
                 f.pass(
                     enc,
                     timer,
                     "cull.depth_bounds",
-                    if masked {
-                        &self.depth_bounds_cands
-                    } else {
-                        &self.depth_bounds
-                    },
+                    &self.depth_bounds,
                     &group_a,
                     depth_groups(&p, chunked),
                 );
@@ -1168,7 +1153,6 @@ struct Frame<'a> {
     ctx: &'a GpuContext,
     scene: &'a GpuScene,
     layout: &'a wgpu::BindGroupLayout,
-    placeholder: &'a wgpu::Buffer,
     params: GpuCullParams,
     w: u32,
     h: u32,
@@ -1181,9 +1165,6 @@ struct Frame<'a> {
     ranges: wgpu::Buffer,
     occupancy: wgpu::Buffer,
     stats: wgpu::Buffer,
-    /// Gather's and 2.5D's candidates with tile masks (bindings 12 and 13): each coarse tile's
-    /// candidate mask and the lights in view space, written by `cull.depth_bounds`.
-    candidates: Option<(wgpu::Buffer, wgpu::Buffer)>,
 }
 
 impl<'a> Frame<'a> {
@@ -1209,7 +1190,6 @@ impl<'a> Frame<'a> {
             ctx,
             scene,
             layout: &culler.layout,
-            placeholder: &culler.placeholder,
             params,
             w: depth.width(),
             h: depth.height(),
@@ -1225,21 +1205,7 @@ impl<'a> Frame<'a> {
             ranges: storage_buf(ctx, "cull.bin_ranges", bins * 8),
             occupancy: storage_buf(ctx, "cull.occupancy", bins * 4),
             stats: storage_buf(ctx, "cull.stats", 32),
-            candidates: None,
         }
-    }
-
-    /// Adds the buffers of gather's candidates ([`Frame::candidates`]): a mask of
-    /// [`mask_words`] words for each coarse tile, three vec4s a light. Every count pass clears
-    /// the words it reads, so they start each run at zero.
-    fn with_candidates(mut self) -> Self {
-        let p = &self.params;
-        let coarse_tiles = u64::from(p.coarse_x) * u64::from(p.tiles_y.div_ceil(p.coarse.max(1)));
-        self.candidates = Some((
-            self.buf("cull.coarse_masks", coarse_tiles * mask_words(p) * 4),
-            self.buf("cull.view_lights", u64::from(p.light_count) * 48),
-        ));
-        self
     }
 
     fn buf(&self, label: &str, size: u64) -> wgpu::Buffer {
@@ -1273,14 +1239,6 @@ impl<'a> Frame<'a> {
                 pair_keys.as_entire_binding(),
                 self.stats.as_entire_binding(),
                 args.as_entire_binding(),
-                self.candidates
-                    .as_ref()
-                    .map_or(self.placeholder, |c| &c.0)
-                    .as_entire_binding(),
-                self.candidates
-                    .as_ref()
-                    .map_or(self.placeholder, |c| &c.1)
-                    .as_entire_binding(),
             ],
         )
     }
