@@ -51,6 +51,12 @@ pub fn round_trip() -> bool {
     std::env::var("MANYLIGHTS_BENCH_ROUNDTRIP").is_ok_and(|v| v != "0")
 }
 
+/// Whether `MANYLIGHTS_BENCH_SPANS` asks for one pair of timestamps a culling run (see
+/// [`cull_time`]).
+pub fn spans() -> bool {
+    std::env::var("MANYLIGHTS_BENCH_SPANS").is_ok_and(|v| v != "0")
+}
+
 /// The atrium with `n` uniformly placed lights of radius 0.5 m (as experiments/scaling-1m.ron).
 fn atrium(n: u32) -> Scene {
     atrium_with(LightSpec {
@@ -147,7 +153,10 @@ fn cull(c: &mut Criterion) {
 /// of runs are each one submission with no host round trip inside ([`Culler::run_repeated`]).
 /// (Both methods gave the same figures on the H200: docs/BENCHMARKS.md, Method.) `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run
 /// on its own instead (two submissions and a readback of the list size each, the GPU idle in
-/// between), the method of the figures before 2026-11-21T12:00Z.
+/// between), the method of the figures before 2026-11-21T12:00Z. `MANYLIGHTS_BENCH_SPANS=1`
+/// times each back-to-back run with one pair of timestamps around all its passes instead of a
+/// pair per pass ([`GpuTimer::spans`]): the run's time including the gaps between its passes,
+/// without the passes' own timestamps.
 fn cull_time(
     ctx: &GpuContext,
     culler: &Culler,
@@ -187,7 +196,12 @@ fn cull_time(
     let mut left = iters;
     while left > 0 {
         let runs = left.min(batch);
-        let mut timer = GpuTimer::new(ctx, (runs * passes) as u32);
+        let mut timer = if spans() {
+            GpuTimer::spans(ctx, runs as u32)
+                .expect("MANYLIGHTS_BENCH_SPANS needs timestamps between passes")
+        } else {
+            GpuTimer::new(ctx, (runs * passes) as u32)
+        };
         culler
             .run_repeated(
                 ctx,

@@ -382,7 +382,9 @@ struct CullArgs {
     slice: Option<u32>,
     /// Also time this many runs back to back in one submission (no host round trip between
     /// or inside them, the lists sized from the first run) and print each pass's median over
-    /// them: steady-state times, as the benchmarks measure. 0: only the single run.
+    /// them: steady-state times, as the benchmarks measure; then the same runs timed with one
+    /// pair of timestamps around each run's passes (where the device can write timestamps
+    /// between passes), their median as `span`. 0: only the single run.
     #[arg(long, default_value_t = 0)]
     repeat: u32,
     /// Build the lists without tile masks (a bit per tile and light, used where they fit 16
@@ -888,6 +890,20 @@ fn repeated_timings(
         "  {:<28} {:>8} {total:>10.3} ms",
         "total (median run)", ""
     )?;
+    // The same runs again with one pair of timestamps around each run's passes, none between
+    // them: whether the per-pass timestamps cost time of their own.
+    if let Some(mut spans) = GpuTimer::spans(ctx, n) {
+        culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut spans)?;
+        let t = spans
+            .read(ctx)?
+            .expect("timestamps were there for the first run");
+        let span = median(t.iter().map(|p| p.ms).collect());
+        writeln!(
+            lines,
+            "  {:<28} {:>8} {span:>10.3} ms",
+            "span (one timestamp pair)", ""
+        )?;
+    }
     Ok(lines)
 }
 

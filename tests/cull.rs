@@ -514,6 +514,34 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                         .count();
                     assert_eq!(counts, 3, "{what}: three runs timed");
                 }
+                // Timed as spans, one timestamp pair a run around all its passes: three spans
+                // named for the strategy, and the same lists.
+                let mut spans = GpuTimer::spans(&ctx, 3)
+                    .expect("the device writes timestamps between passes (lavapipe does)");
+                let spanned = culler
+                    .run_repeated(
+                        &ctx,
+                        &r.gpu_scene,
+                        &r.depth_tex,
+                        &s,
+                        &CullSettings::for_camera(&case.camera),
+                        &out,
+                        3,
+                        &mut spans,
+                    )
+                    .unwrap()
+                    .read(&ctx)
+                    .unwrap();
+                for b in 0..gpu.ranges.len() {
+                    assert_eq!(spanned.sorted(b), gpu.sorted(b), "{what}: spans, bin {b}");
+                }
+                let t = spans.read(&ctx).unwrap().expect("timestamps");
+                let name = format!("cull.{}", s.name());
+                assert_eq!(t.len(), 3, "{what}: three spans");
+                assert!(
+                    t.iter().all(|p| p.label == name && p.ms > 0.0),
+                    "{what}: spans {t:?}"
+                );
             }
             // The shared WGSL lookup reads the same lists as the CPU lookup.
             let per_pixel = culler

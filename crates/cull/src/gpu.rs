@@ -538,7 +538,8 @@ impl Culler {
     /// timing measures. The lists are sized from `earlier`, a [`Culler::run`] of the same
     /// scene, depth, strategy and settings; the last run's total is read back and checked
     /// against it ([`CullError::SizeChanged`] where it differs). `timer` needs room for
-    /// `runs` times the passes of one run.
+    /// `runs` times the passes of one run; a timer of spans ([`GpuTimer::spans`]) times each
+    /// run as one span, `cull.<strategy>`, with no timestamps between its passes.
     #[allow(
         clippy::too_many_arguments,
         reason = "the inputs of a run, as `run` takes them, and the repeat"
@@ -629,7 +630,8 @@ impl Culler {
                 (u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES) + 1) * 4,
             )?;
         }
-        let f = Frame::new(self, ctx, scene, depth, params, per_light && !masked);
+        let mut f = Frame::new(self, ctx, scene, depth, params, per_light && !masked);
+        f.span = format!("cull.{}", strategy.name());
         match strategy {
             Strategy::TiledScatter { .. } if masked => {
                 self.run_scatter_masks(ctx, f, timer, repeat)
@@ -763,7 +765,7 @@ impl Culler {
         };
         // Everything up to the scanned counts.
         let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
-            f.clear(enc);
+            f.clear(enc, masked);
             if clustered {
                 enc.clear_buffer(wide, 0, Some(4));
                 if p.flags & crate::layout::CULL_FLAG_SKIP_EMPTY != 0 {
@@ -878,7 +880,7 @@ impl Culler {
         let groups = u32::try_from(blocks.min(u64::from(crate::layout::SCATTER_MASK_GROUPS)))
             .expect("at most SCATTER_MASK_GROUPS");
         let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
-            f.clear(enc);
+            f.clear(enc, true);
             f.pass(
                 enc,
                 timer,
@@ -934,7 +936,7 @@ impl Culler {
         let placeholder = &self.placeholder;
         let group_a = f.group(placeholder, placeholder, placeholder);
         let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
-            f.clear(enc);
+            f.clear(enc, false);
             f.pass(
                 enc,
                 timer,
@@ -1016,9 +1018,11 @@ impl Culler {
         let mut sorted = SortedIn::Input;
         for _ in 0..repeat.map_or(1, |r| r.runs) {
             if repeat.is_some() {
+                timer.span_begin(&mut enc, &f.span);
                 counting(&mut enc, timer);
             }
             sorted = sorting(&mut enc, timer)?;
+            timer.span_end(&mut enc);
         }
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: tiled scatter")?;
@@ -1165,6 +1169,8 @@ struct Frame<'a> {
     ranges: wgpu::Buffer,
     occupancy: wgpu::Buffer,
     stats: wgpu::Buffer,
+    /// What a timer of spans calls one run: `cull.<strategy>`.
+    span: String,
 }
 
 impl<'a> Frame<'a> {
@@ -1205,6 +1211,7 @@ impl<'a> Frame<'a> {
             ranges: storage_buf(ctx, "cull.bin_ranges", bins * 8),
             occupancy: storage_buf(ctx, "cull.occupancy", bins * 4),
             stats: storage_buf(ctx, "cull.stats", 32),
+            span: String::new(),
         }
     }
 
@@ -1243,8 +1250,14 @@ impl<'a> Frame<'a> {
         )
     }
 
-    /// Clears the counters at the start of a run.
-    fn clear(&self, enc: &mut wgpu::CommandEncoder) {
+    /// Clears the counters at the start of a run. With tile masks (`masked`) only the stats:
+    /// those passes use no counts, cursors or occupancy, and the masks' fill writes every
+    /// tile's range. (Each clear is a transfer between passes, which costs time of its own.)
+    fn clear(&self, enc: &mut wgpu::CommandEncoder, masked: bool) {
+        if masked {
+            enc.clear_buffer(&self.stats, 0, None);
+            return;
+        }
         for b in [
             &self.counts,
             &self.cursors,
@@ -1420,8 +1433,10 @@ impl<'a> Frame<'a> {
         let group = group_for(&indices);
         let mut enc = ctx.encoder("cull.repeated");
         for _ in 0..repeat.runs {
+            timer.span_begin(&mut enc, &self.span);
             counting(&mut enc, timer);
             filling(&mut enc, timer, &group);
+            timer.span_end(&mut enc);
         }
         timer.resolve(&mut enc);
         ctx.submit_and_wait(enc, "culling: repeated runs")?;

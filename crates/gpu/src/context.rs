@@ -70,6 +70,9 @@ pub struct GpuOptions {
 pub struct Negotiated {
     /// Timestamp queries at pass boundaries (`TIMESTAMP_QUERY`).
     pub timestamps: bool,
+    /// Timestamps written between passes (`TIMESTAMP_QUERY_INSIDE_ENCODERS`), for timing a span
+    /// of passes with one pair ([`crate::GpuTimer::spans`]).
+    pub encoder_timestamps: bool,
     /// Subgroup operations in compute shaders (`SUBGROUP`).
     pub subgroups: bool,
     /// Smallest and largest subgroup size the adapter reports.
@@ -187,7 +190,11 @@ impl GpuContext {
         let info = infos[index].clone();
         let offered = adapter.features();
         let mut required = wgpu::Features::empty();
-        for f in [wgpu::Features::TIMESTAMP_QUERY, wgpu::Features::SUBGROUP] {
+        for f in [
+            wgpu::Features::TIMESTAMP_QUERY,
+            wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            wgpu::Features::SUBGROUP,
+        ] {
             if offered.contains(f) {
                 required |= f;
             }
@@ -222,6 +229,9 @@ impl GpuContext {
         });
         let features = Negotiated {
             timestamps: required.contains(wgpu::Features::TIMESTAMP_QUERY),
+            encoder_timestamps: required.contains(
+                wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
+            ),
             subgroups: required.contains(wgpu::Features::SUBGROUP),
             subgroup_size: (info.subgroup_min_size, info.subgroup_max_size),
         };

@@ -43,11 +43,18 @@ pub struct PassTiming {
 pub const MAX_QUERIES: u32 = 4096;
 
 /// Timestamp queries for up to `capacity` passes of one submission.
+///
+/// A timer made by [`GpuTimer::spans`] times spans of passes instead: no pass writes
+/// timestamps, and [`GpuTimer::span_begin`] and [`GpuTimer::span_end`] write one pair between
+/// passes around each span. That answers whether the timestamps of every pass cost time of
+/// their own: a span's time against the sum of its passes' times.
 pub struct GpuTimer {
     set: Option<wgpu::QuerySet>,
     resolve: Option<wgpu::Buffer>,
     passes: Vec<(String, PassKind)>,
     capacity: u32,
+    spans: bool,
+    open: Option<u32>,
 }
 
 impl GpuTimer {
@@ -60,6 +67,8 @@ impl GpuTimer {
                 resolve: None,
                 passes: Vec::new(),
                 capacity,
+                spans: false,
+                open: None,
             };
         }
         let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -78,6 +87,43 @@ impl GpuTimer {
             resolve: Some(resolve),
             passes: Vec::new(),
             capacity,
+            spans: false,
+            open: None,
+        }
+    }
+
+    /// A timer for up to `capacity` spans of passes (see [`GpuTimer`]); `None` where the device
+    /// cannot write timestamps between passes.
+    pub fn spans(ctx: &GpuContext, capacity: u32) -> Option<Self> {
+        ctx.features.encoder_timestamps.then(|| Self {
+            spans: true,
+            ..Self::new(ctx, capacity)
+        })
+    }
+
+    /// Whether this timer times spans, not passes.
+    pub fn times_spans(&self) -> bool {
+        self.spans
+    }
+
+    /// Starts a span named `label` (a timer of spans only; ends any span still open).
+    pub fn span_begin(&mut self, encoder: &mut wgpu::CommandEncoder, label: &str) {
+        if !self.spans {
+            return;
+        }
+        self.span_end(encoder);
+        if let Some(q) = self.push(label, PassKind::Compute)
+            && let Some(set) = &self.set
+        {
+            encoder.write_timestamp(set, q);
+            self.open = Some(q + 1);
+        }
+    }
+
+    /// Ends the open span, if any.
+    pub fn span_end(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let (Some(q), Some(set)) = (self.open.take(), &self.set) {
+            encoder.write_timestamp(set, q);
         }
     }
 
@@ -86,16 +132,26 @@ impl GpuTimer {
         self.set.is_some()
     }
 
-    fn next(&mut self, label: &str, kind: PassKind) -> Option<(&wgpu::QuerySet, u32)> {
-        let set = self.set.as_ref()?;
+    /// The first of the next pair of queries, recorded as `label`; none without timestamps.
+    fn push(&mut self, label: &str, kind: PassKind) -> Option<u32> {
+        self.set.as_ref()?;
         let i = self.passes.len() as u32;
         assert!(
             i < self.capacity,
-            "GpuTimer: more than {} passes in one timer",
+            "GpuTimer: more than {} passes or spans in one timer",
             self.capacity
         );
         self.passes.push((label.to_owned(), kind));
-        Some((set, i * 2))
+        Some(i * 2)
+    }
+
+    /// The next pair of queries for a pass, or none for a pass of a timer of spans.
+    fn next(&mut self, label: &str, kind: PassKind) -> Option<(&wgpu::QuerySet, u32)> {
+        if self.spans {
+            return None;
+        }
+        let q = self.push(label, kind)?;
+        Some((self.set.as_ref()?, q))
     }
 
     /// Timestamp writes for a render pass named `label`.
