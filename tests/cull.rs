@@ -485,19 +485,22 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
             assert_eq!(m.false_negatives, 0, "{what}: false negatives on the GPU");
             if seed == 16 {
                 // Back-to-back runs in one submission, sized from this run: the same lists.
+                let three_runs = |timer: &mut GpuTimer| {
+                    culler
+                        .run_repeated(
+                            &ctx,
+                            &r.gpu_scene,
+                            &r.depth_tex,
+                            &s,
+                            &CullSettings::for_camera(&case.camera),
+                            &out,
+                            3,
+                            timer,
+                        )
+                        .unwrap()
+                };
                 let mut timer = GpuTimer::new(&ctx, 256);
-                let again = culler
-                    .run_repeated(
-                        &ctx,
-                        &r.gpu_scene,
-                        &r.depth_tex,
-                        &s,
-                        &CullSettings::for_camera(&case.camera),
-                        &out,
-                        3,
-                        &mut timer,
-                    )
-                    .unwrap();
+                let again = three_runs(&mut timer);
                 let again = again.read(&ctx).unwrap();
                 assert_eq!(
                     again.ranges.len(),
@@ -518,20 +521,7 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 // named for the strategy, and the same lists.
                 let mut spans = GpuTimer::spans(&ctx, 3)
                     .expect("the device writes timestamps between passes (lavapipe does)");
-                let spanned = culler
-                    .run_repeated(
-                        &ctx,
-                        &r.gpu_scene,
-                        &r.depth_tex,
-                        &s,
-                        &CullSettings::for_camera(&case.camera),
-                        &out,
-                        3,
-                        &mut spans,
-                    )
-                    .unwrap()
-                    .read(&ctx)
-                    .unwrap();
+                let spanned = three_runs(&mut spans).read(&ctx).unwrap();
                 for b in 0..gpu.ranges.len() {
                     assert_eq!(spanned.sorted(b), gpu.sorted(b), "{what}: spans, bin {b}");
                 }
