@@ -891,7 +891,7 @@ fn repeated_timings(
         "total (median run)", ""
     )?;
     // The same runs again with one pair of timestamps around each run's passes, none between
-    // them: whether the per-pass timestamps cost time of their own.
+    // them: the run as a frame waits for it, clears and gaps between passes included.
     if let Some(mut spans) = GpuTimer::spans(ctx, n) {
         culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut spans)?;
         let t = spans

@@ -630,8 +630,15 @@ impl Culler {
                 (u64::from(params.light_count) * u64::from(crate::layout::SCATTER_LANES) + 1) * 4,
             )?;
         }
-        let mut f = Frame::new(self, ctx, scene, depth, params, per_light && !masked);
-        f.span = format!("cull.{}", strategy.name());
+        let f = Frame::new(
+            self,
+            ctx,
+            scene,
+            depth,
+            strategy,
+            params,
+            per_light && !masked,
+        );
         match strategy {
             Strategy::TiledScatter { .. } if masked => {
                 self.run_scatter_masks(ctx, f, timer, repeat)
@@ -1179,6 +1186,7 @@ impl<'a> Frame<'a> {
         ctx: &'a GpuContext,
         scene: &'a GpuScene,
         depth: &wgpu::Texture,
+        strategy: &Strategy,
         params: GpuCullParams,
         per_light: bool,
     ) -> Self {
@@ -1211,7 +1219,7 @@ impl<'a> Frame<'a> {
             ranges: storage_buf(ctx, "cull.bin_ranges", bins * 8),
             occupancy: storage_buf(ctx, "cull.occupancy", bins * 4),
             stats: storage_buf(ctx, "cull.stats", 32),
-            span: String::new(),
+            span: format!("cull.{}", strategy.name()),
         }
     }
 

@@ -46,8 +46,8 @@ pub const MAX_QUERIES: u32 = 4096;
 ///
 /// A timer made by [`GpuTimer::spans`] times spans of passes instead: no pass writes
 /// timestamps, and [`GpuTimer::span_begin`] and [`GpuTimer::span_end`] write one pair between
-/// passes around each span. That answers whether the timestamps of every pass cost time of
-/// their own: a span's time against the sum of its passes' times.
+/// passes around each span. A span also counts what per-pass timestamps leave out: transfers
+/// between passes (buffer clears and copies) and the gaps between dependent passes.
 pub struct GpuTimer {
     set: Option<wgpu::QuerySet>,
     resolve: Option<wgpu::Buffer>,
