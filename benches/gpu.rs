@@ -9,7 +9,8 @@
 //!   clusters without their order pass;
 //! - `cull.harada2012/<variant>/3072`: the Forward+ paper's configuration (1280 x 720, 3,072
 //!   lights, 8-pixel tiles), every strategy, gather with other chunks of lights a workgroup
-//!   (`tiled_gather8_chunk<N>`), and gather, 2.5D and scatter without tile masks
+//!   (`tiled_gather8_chunk<N>`), gather and 2.5D with tile masks stored by their count pass
+//!   instead of their lines path (`*_stored`), and gather, 2.5D and scatter without tile masks
 //!   (`*_unmasked`; scatter then sorts its pairs);
 //! - `sort.radix/<keys>`, `sort.radix_portable/<keys>` and `sort.lampshade/<keys>`: (u32 key,
 //!   u32 value) radix sorts of random 32-bit keys, ours (the default path, onesweep where the
@@ -22,6 +23,7 @@
 //! `cull_time`); `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run on its own instead.
 //!
 //! `MANYLIGHTS_BENCH_SORT_KEYS=N,M,...` picks the sorts' key counts.
+//! `MANYLIGHTS_BENCH_GATHER_LINES=0` turns gather's and 2.5D's lines path off everywhere.
 //! `MANYLIGHTS_SORT_MAX_SPIN=N` sets the onesweep sort's polls before its look-back falls back.
 //!
 //! `MANYLIGHTS_BENCH_QUICK=1` shrinks everything (light counts, resolutions, key counts) so the
@@ -55,6 +57,14 @@ pub fn round_trip() -> bool {
 /// [`cull_time`]).
 pub fn spans() -> bool {
     std::env::var("MANYLIGHTS_BENCH_SPANS").is_ok_and(|v| v != "0")
+}
+
+/// A culler; `MANYLIGHTS_BENCH_GATHER_LINES=0` turns gather's and 2.5D's lines path off (their
+/// count pass then stores tile masks and the fill expands them), to compare both in one run.
+fn new_culler(ctx: &GpuContext, gs: &GpuScene) -> Culler {
+    let mut c = Culler::new(ctx, gs);
+    c.gather_lines = !std::env::var("MANYLIGHTS_BENCH_GATHER_LINES").is_ok_and(|v| v == "0");
+    c
 }
 
 /// The atrium with `n` uniformly placed lights of radius 0.5 m (as experiments/scaling-1m.ron).
@@ -112,7 +122,7 @@ fn cull(c: &mut Criterion) {
         for &n in &counts {
             let scene = atrium(n);
             let (gs, depth) = prepared(&ctx, &scene, w, h);
-            let culler = Culler::new(&ctx, &gs);
+            let culler = new_culler(&ctx, &gs);
             let settings = CullSettings::for_camera(&scene.camera);
             // The defaults; clusters without their order pass (what ordering costs); gather
             // without its coarse level (what coarse-to-fine saves).
@@ -242,7 +252,7 @@ fn cull_paper(c: &mut Criterion) {
         ..LightSpec::default()
     });
     let (gs, depth) = prepared(&ctx, &scene, w, h);
-    let culler = Culler::new(&ctx, &gs);
+    let culler = new_culler(&ctx, &gs);
     let settings = CullSettings::for_camera(&scene.camera);
     let clusters = |ordered| Strategy::Clustered {
         tile_size: 16,
@@ -281,8 +291,20 @@ fn cull_paper(c: &mut Criterion) {
             b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
         });
     }
-    // Gather with other chunks of lights a workgroup: smaller ones give more workgroups, larger
-    // ones less repeated set-up.
+    // Gather and 2.5D with tile masks stored by their count pass and expanded by their fill,
+    // not their lines path.
+    culler.gather_lines = false;
+    for (label, strategy) in [
+        ("tiled_gather8_stored", Strategy::tiled_gather(8)),
+        ("depth_mask8_stored", Strategy::depth_mask(8)),
+    ] {
+        let culler = &culler;
+        g.bench_with_input(BenchmarkId::new(label, n), &n, |b, _| {
+            b.iter_custom(|iters| cull_time(&ctx, culler, &gs, &depth, &strategy, &settings, iters))
+        });
+    }
+    // Gather with other chunks of lights a workgroup (with stored tile masks, which have
+    // chunks): smaller ones give more workgroups, larger ones less repeated set-up.
     for chunk in [64, 128, 512, 1024] {
         culler.gather_min_chunk = chunk;
         culler.gather_min_chunk_masked = chunk;

@@ -815,9 +815,10 @@ fn cull(args: &CullArgs) -> Result<()> {
     println!("  dropped lights          {}", out.dropped);
     println!(
         "  tile masks              {}",
-        match &out.tile_masks {
-            Some(m) => format!("used ({} bytes)", m.size()),
-            None => "not used".into(),
+        match (&out.tile_masks, &out.tile_lines) {
+            (Some(m), _) => format!("used ({} bytes)", m.size()),
+            (None, Some(l)) => format!("used as tile lines ({} bytes)", l.size()),
+            (None, None) => "not used".into(),
         }
     );
     print_timings(timings.as_deref());

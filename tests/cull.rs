@@ -382,32 +382,39 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
             // masks would be used.
             let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
             unmasked.mask_budget = 0;
+            // Gather's and 2.5D's tile masks stored by the count pass, not their lines path.
+            let mut stored = Culler::new(&ctx, &r.gpu_scene);
+            stored.gather_lines = false;
             [
                 sub,
                 Culler::with_subgroups(&ctx, &r.gpu_scene, false),
                 unmasked,
+                stored,
             ]
         });
+        let coarse_gather = |s: &Strategy| {
+            matches!(
+                s,
+                Strategy::TiledGather { coarse: 1.., .. } | Strategy::DepthMask { coarse: 1.., .. }
+            )
+        };
         for (culler, s) in cullers.iter().flat_map(|c| {
             strategies()
                 .into_iter()
                 .filter(|s| {
-                    c.mask_budget > 0
-                        || matches!(
-                            s,
-                            Strategy::TiledGather { coarse: 1.., .. }
-                                | Strategy::DepthMask { coarse: 1.., .. }
-                                | Strategy::TiledScatter { .. }
-                        )
+                    (c.mask_budget > 0 && c.gather_lines)
+                        || coarse_gather(s)
+                        || (c.mask_budget == 0 && matches!(s, Strategy::TiledScatter { .. }))
                 })
                 .map(move |s| (c, s))
         }) {
             let what = format!(
-                "{} {} (subgroups: {}, tile masks: {})",
+                "{} {} (subgroups: {}, tile masks: {}, lines: {})",
                 case.label,
                 s.name(),
                 culler.gather_subgroups,
-                culler.mask_budget > 0
+                culler.mask_budget > 0,
+                culler.gather_lines
             );
             let out = run_gpu(&ctx, culler, &r, &case, &s);
             let p = out.params;
@@ -415,19 +422,39 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
             // Tile masks where they fit (these scenes are small), and all zero after the fill,
             // as the next count pass needs.
             let masks = out.read_tile_masks(&ctx).unwrap();
+            let lines = out.read_tile_lines(&ctx).unwrap();
+            let gathers = matches!(s, Strategy::TiledGather { .. } | Strategy::DepthMask { .. });
             let maskable = p.capacity == 0
+                && culler.mask_budget > 0
                 && match s {
                     Strategy::TiledScatter { .. } => true,
-                    Strategy::TiledGather { .. } | Strategy::DepthMask { .. } => p.coarse > 0,
-                    _ => false,
+                    _ => gathers && p.coarse > 0,
                 };
+            let by_lines = gathers && culler.gather_lines;
             assert_eq!(
                 masks.is_some(),
-                maskable && culler.mask_budget > 0,
+                maskable && !by_lines,
                 "{what}: tile masks used"
             );
+            assert_eq!(
+                lines.is_some(),
+                maskable && by_lines,
+                "{what}: tile lines used"
+            );
+            assert_eq!(out.used_tile_masks(), maskable, "{what}: the result column");
             if let Some(m) = masks {
                 assert!(m.iter().all(|&w| w == 0), "{what}: tile masks left set");
+            }
+            if let Some(l) = lines {
+                // Every bit the oracle sets at the lower slack, none it leaves clear at the upper.
+                let [lo, hi] = cpu::tile_lines(&r.frame, &p, &r.lights);
+                assert_eq!(l.len(), lo.len(), "{what}: tile line words");
+                for (k, ((&g, &a), &b)) in l.iter().zip(&lo).zip(&hi).enumerate() {
+                    assert!(
+                        a & !g == 0 && g & !b == 0,
+                        "{what}: tile line word {k}: GPU {g:#034b}, oracle {a:#034b} .. {b:#034b}"
+                    );
+                }
             }
             let oracle = match s {
                 Strategy::Clustered { .. } => {
@@ -511,11 +538,9 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                     assert_eq!(again.sorted(b), gpu.sorted(b), "{what}: repeated, bin {b}");
                 }
                 if let Some(t) = timer.read(&ctx).unwrap() {
-                    let counts = t
-                        .iter()
-                        .filter(|p| p.label.starts_with("cull.") && p.label.ends_with(".count"))
-                        .count();
-                    assert_eq!(counts, 3, "{what}: three runs timed");
+                    // Each run's first pass, once a run.
+                    let first = t.iter().filter(|p| p.label == t[0].label).count();
+                    assert_eq!(first, 3, "{what}: three runs timed");
                 }
                 // Timed as spans, one timestamp pair a run around all its passes: three spans
                 // named for the strategy, and the same lists.
@@ -868,11 +893,19 @@ fn masked_lists_match_oracle(
     what: &str,
 ) -> (usize, manylights_cull::BinLists) {
     let out = run_gpu(ctx, culler, r, case, s);
-    let masks = out
-        .read_tile_masks(ctx)
-        .unwrap()
-        .unwrap_or_else(|| panic!("{what}: tile masks must fit"));
-    assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
+    let p = out.params;
+    // Gather and 2.5D take their lines path, scatter stores tile masks.
+    let words = match (
+        out.read_tile_masks(ctx).unwrap(),
+        out.read_tile_lines(ctx).unwrap(),
+    ) {
+        (Some(masks), None) => {
+            assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
+            masks.len() / p.bins as usize
+        }
+        (None, Some(lines)) => lines.len() / (p.tiles_x + p.tiles_y) as usize,
+        _ => panic!("{what}: tile masks or tile lines must fit"),
+    };
     let td = out.read_tile_depth(ctx).unwrap();
     let gpu = out.read(ctx).unwrap();
     let oracle = match s {
@@ -882,7 +915,7 @@ fn masked_lists_match_oracle(
     oracle
         .compare(&gpu)
         .unwrap_or_else(|e| panic!("{what}: {e}"));
-    (masks.len() / out.params.bins as usize, gpu)
+    (words, gpu)
 }
 
 /// Tile masks of over 64 words a tile (over 4,096 lights, so each fill thread takes several

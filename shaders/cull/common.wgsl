@@ -178,7 +178,12 @@ fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
     if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
         return false;
     }
-    // Depth bounds as planes: -z >= dmin and -z <= dmax.
+    return depth_keeps(l, t);
+}
+
+// The depth part of tile_keeps: the tile's depth bounds as planes (-z >= dmin and -z <= dmax),
+// and with CULL_FLAG_DEPTH_MASK the 2.5D masks.
+fn depth_keeps(l: CullLight, t: TileDepth) -> bool {
     if outside_plane(vec4<f32>(0.0, 0.0, -1.0, -t.dmin), l) || outside_plane(vec4<f32>(0.0, 0.0, 1.0, t.dmax), l) {
         return false;
     }
@@ -186,6 +191,19 @@ fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
         return (light_depth_mask(l, t) & t.mask) != 0u;
     }
     return true;
+}
+
+// Tile lines (gather's and 2.5D's lines path): line c < tiles_x is column c of tiles, line
+// tiles_x + r row r. A tile's side planes 0 and 1 depend only on its column and 2 and 3 only
+// on its row (tile_ndc), so a line's two planes are those of each of its tiles, the same
+// floats.
+fn line_planes(line: u32) -> array<vec4<f32>, 2> {
+    if line < cull.tiles_x {
+        let p = tile_side_planes(vec2<u32>(line, 0u));
+        return array<vec4<f32>, 2>(p[0], p[1]);
+    }
+    let p = tile_side_planes(vec2<u32>(0u, line - cull.tiles_x));
+    return array<vec4<f32>, 2>(p[2], p[3]);
 }
 
 // Words of a tile's mask in the tile masks (tile_masks.wgsl): two a batch of 64 lights.

@@ -13,12 +13,16 @@
 // (depth_bounds_blocks) those rows also queue each light's blocks of SCATTER_MASK_THREADS
 // tiles of its rectangle, (light, block) pairs in block_queue, their number in
 // cull_stats[6], so that the count pass (scatter_masks, tiled_scatter.wgsl) shares a large
-// light's tiles among many workgroups.
+// light's tiles among many workgroups. For gather's and 2.5D's lines path (depth_bounds_lines;
+// see tile_lines.wgsl) each workgroup of those rows takes 64 DEPTH_TILES lights and writes their
+// words of the tile lines instead (store_light_lines).
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
 @group(1) @binding(7) var<storage, read_write> block_queue: array<u32>;
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
+// The tile lines (tile_lines.wgsl): word w of line `line` at line * mask_words() + w.
+@group(1) @binding(11) var<storage, read_write> tile_lines: array<u32>;
 
 // A workgroup's blocks and their place in the queue.
 var<workgroup> wg_blocks: atomic<u32>;
@@ -63,6 +67,58 @@ fn store_light_rect(i: u32, index: u32, blocks: bool) {
     }
 }
 
+// A workgroup's lights (view space) and tile rectangles, for its words of the tile lines.
+var<workgroup> wg_line_light: array<CullLight, 64 * DEPTH_TILES>;
+var<workgroup> wg_line_rect: array<vec4<i32>, 64 * DEPTH_TILES>;
+
+// Lights first .. first + 64 DEPTH_TILES (2 DEPTH_TILES words of the tile lines): each
+// thread takes one light into workgroup memory (view space, and its tile rectangle: none past
+// the last light), then the threads take the workgroup's (line, word) pairs, consecutive threads
+// consecutive words of a line. A pair's word has bit k set when light 32 word + k's rectangle
+// spans the line (its columns for a column, its rows for a row) and the light is inside both of
+// the line's planes (line_planes). A tile's candidates are then its column's bits and its row's:
+// exactly the lights whose rectangle holds it and that pass its four side planes. Every word of
+// every line below mask_words() is written, so the lines need no clear. Called in uniform
+// control flow.
+fn store_light_lines(first: u32, index: u32) {
+    let i = first + index;
+    var rect = vec4<i32>(0, 0, -1, -1);
+    if i < cull.light_count {
+        let l = cull_light(lights[i]);
+        rect = light_tiles(l);
+        wg_line_light[index] = l;
+    }
+    wg_line_rect[index] = rect;
+    workgroupBarrier();
+    let words = mask_words();
+    let lines = cull.tiles_x + cull.tiles_y;
+    let per = 2u * DEPTH_TILES;
+    for (var item = index; item < lines * per; item += 64u * DEPTH_TILES) {
+        let line = item / per;
+        let w = item % per;
+        let word = first / 32u + w;
+        if word >= words {
+            continue;
+        }
+        let column = line < cull.tiles_x;
+        let at = i32(select(line - cull.tiles_x, line, column));
+        let planes = line_planes(line);
+        var bits = 0u;
+        for (var k = 0u; k < 32u; k++) {
+            let s = w * 32u + k;
+            let r = wg_line_rect[s];
+            let span = select(r.yw, r.xz, column);
+            if span.x <= at && at <= span.y {
+                let l = wg_line_light[s];
+                if !outside_plane(planes[0], l) && !outside_plane(planes[1], l) {
+                    bits |= 1u << k;
+                }
+            }
+        }
+        tile_lines[line * words + word] = bits;
+    }
+}
+
 var<workgroup> wg_zmin: array<atomic<u32>, DEPTH_TILES>;
 var<workgroup> wg_zmax: array<atomic<u32>, DEPTH_TILES>;
 var<workgroup> wg_mask: array<atomic<u32>, DEPTH_TILES>;
@@ -70,21 +126,33 @@ var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    lights_or_tiles(wg, groups, index, false);
+    lights_or_tiles(wg, groups, index, LIGHT_ROWS_RECTS);
 }
 
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    lights_or_tiles(wg, groups, index, true);
+    lights_or_tiles(wg, groups, index, LIGHT_ROWS_BLOCKS);
 }
 
-// Workgroup wg's lights (the rows before the tiles', so that their longer chains start early;
-// with `blocks` also queued) or tiles. Uniform (a workgroup's id), so the barriers are reached
-// by all threads or none.
-fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, blocks: bool) {
+@compute @workgroup_size(64 * DEPTH_TILES)
+fn depth_bounds_lines(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    lights_or_tiles(wg, groups, index, LIGHT_ROWS_LINES);
+}
+
+// What the light rows store: rectangles, rectangles and blocks, or the tile lines.
+const LIGHT_ROWS_RECTS: u32 = 0u;
+const LIGHT_ROWS_BLOCKS: u32 = 1u;
+const LIGHT_ROWS_LINES: u32 = 2u;
+
+// Workgroup wg's lights (the rows before the tiles', so that their longer chains start early)
+// or tiles. Uniform (a workgroup's id), so the barriers are reached by all threads or none.
+fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, rows: u32) {
     let light_rows = groups.y - cull.tiles_y;
-    if wg.y < light_rows {
-        store_light_rect((wg.y * groups.x + wg.x) * 64u * DEPTH_TILES + index, index, blocks);
+    let first = (wg.y * groups.x + wg.x) * 64u * DEPTH_TILES;
+    if wg.y < light_rows && rows == LIGHT_ROWS_LINES {
+        store_light_lines(first, index);
+    } else if wg.y < light_rows {
+        store_light_rect(first + index, index, rows == LIGHT_ROWS_BLOCKS);
     } else {
         tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
     }

@@ -45,6 +45,16 @@ fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoca
     masks_expand(wg.xy, li);
 }
 
+@compute @workgroup_size(64 * MASK_FILL_TILES)
+fn gather_lines_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    lines_tile(wg.xy, li, false);
+}
+
+@compute @workgroup_size(64 * MASK_FILL_TILES)
+fn gather_lines_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    lines_tile(wg.xy, li, true);
+}
+
 @compute @workgroup_size(64)
 fn gather_count_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     gather_flat(wg.xy, li, false);

@@ -86,6 +86,16 @@ fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_inv
     masks_expand(wg.xy, subgroup_slot(lane, size, id, count));
 }
 
+@compute @workgroup_size(64 * MASK_FILL_TILES)
+fn gather_lines_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    lines_tile(wg.xy, subgroup_slot(lane, size, id, count), false);
+}
+
+@compute @workgroup_size(64 * MASK_FILL_TILES)
+fn gather_lines_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
+    lines_tile(wg.xy, subgroup_slot(lane, size, id, count), true);
+}
+
 @compute @workgroup_size(64)
 fn gather_count_flat(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     gather_flat(wg.xy, subgroup_slot(lane, size, id, count), false);

@@ -9,8 +9,8 @@
 use manylights_gpu::layout::{GpuFrame, GpuLight};
 
 use crate::geometry::{
-    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, linear_depth, tile_keeps,
-    tile_side_planes,
+    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, line_planes, linear_depth,
+    outside_plane, tile_keeps, tile_side_planes,
 };
 use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth};
 
@@ -187,6 +187,37 @@ pub fn gather(
         }
     }
     out
+}
+
+/// Oracle of the tile lines that `cull.depth_bounds` writes for gather's and 2.5D's lines path
+/// (`shaders/cull/tile_lines.wgsl`): for each column of tiles, then each row, two words for
+/// each 64 lights, bit `i % 32` of word `i / 32` set when light `i`'s rectangle spans the line
+/// and the light is inside the line's two side planes. Returned at the slack moved down and up
+/// by [`BORDER`]: a GPU's word must hold every bit of the first and no bit outside the second.
+pub fn tile_lines(frame: &GpuFrame, p: &GpuCullParams, lights: &[GpuLight]) -> [Vec<u32>; 2] {
+    let words = lights.len().div_ceil(64) * 2;
+    let lines = (p.tiles_x + p.tiles_y) as usize;
+    [1.0 - BORDER, 1.0 + BORDER].map(|k| {
+        let mut out = vec![0u32; lines * words];
+        for (i, l) in lights.iter().enumerate() {
+            let c = CullLight::new(frame, l, p.slack * k);
+            let r = light_tiles(frame, p, &c);
+            for line in 0..p.tiles_x + p.tiles_y {
+                let (at, lo, hi) = if line < p.tiles_x {
+                    (line as i32, r[0], r[2])
+                } else {
+                    ((line - p.tiles_x) as i32, r[1], r[3])
+                };
+                let inside = line_planes(frame, p, line)
+                    .iter()
+                    .all(|&pl| !outside_plane(pl, &c));
+                if lo <= at && at <= hi && inside {
+                    out[line as usize * words + i / 32] |= 1 << (i % 32);
+                }
+            }
+        }
+        out
+    })
 }
 
 /// Oracle of `cull.occupancy`: 1 for each cluster holding a covered pixel.

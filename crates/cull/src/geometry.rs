@@ -55,6 +55,17 @@ pub fn tile_side_planes(frame: &GpuFrame, p: &GpuCullParams, tile: [u32; 2]) -> 
     ]
 }
 
+/// WGSL `line_planes`: the two side planes of tile line `line` (columns, then rows).
+pub fn line_planes(frame: &GpuFrame, p: &GpuCullParams, line: u32) -> [Vec4; 2] {
+    if line < p.tiles_x {
+        let [a, b, _, _] = tile_side_planes(frame, p, [line, 0]);
+        [a, b]
+    } else {
+        let [_, _, a, b] = tile_side_planes(frame, p, [0, line - p.tiles_x]);
+        [a, b]
+    }
+}
+
 /// WGSL `CullLight`.
 #[derive(Clone, Copy, Debug)]
 pub struct CullLight {
@@ -135,6 +146,11 @@ pub fn tile_keeps(p: &GpuCullParams, l: &CullLight, planes: &[Vec4; 4], t: &GpuT
     if t.covered == 0 || planes.iter().any(|&pl| outside_plane(pl, l)) {
         return false;
     }
+    depth_keeps(p, l, t)
+}
+
+/// WGSL `depth_keeps`: the depth part of [`tile_keeps`].
+pub fn depth_keeps(p: &GpuCullParams, l: &CullLight, t: &GpuTileDepth) -> bool {
     if outside_plane(Vec4::new(0.0, 0.0, -1.0, -t.dmin), l)
         || outside_plane(Vec4::new(0.0, 0.0, 1.0, t.dmax), l)
     {

@@ -44,6 +44,7 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
         TILE_MASKS,
+        shader_file!("cull/tile_lines.wgsl"),
         shader_file!("cull/gather_scan.wgsl"),
     ],
 };
@@ -60,6 +61,7 @@ pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
         LISTS,
         shader_file!("cull/tiled_gather.wgsl"),
         TILE_MASKS,
+        shader_file!("cull/tile_lines.wgsl"),
         shader_file!("cull/gather_scan_subgroup.wgsl"),
     ],
 };
@@ -178,9 +180,39 @@ pub struct CullOutput {
     /// tiled scatter, within [`Culler::mask_budget`]). Every fill leaves them all zero, as the
     /// next count pass needs (see `shaders/cull/tile_masks.wgsl`).
     pub tile_masks: Option<wgpu::Buffer>,
+    /// The tile lines, where the run took gather's and 2.5D's lines path (within
+    /// [`Culler::mask_budget`], with [`Culler::gather_lines`]): for each column of tiles, then
+    /// each row, two words for each 64 lights (see `shaders/cull/tile_lines.wgsl`).
+    pub tile_lines: Option<wgpu::Buffer>,
 }
 
 impl CullOutput {
+    /// Whether the run decided its lists as a bit per (tile, light): with tile masks, or with
+    /// tile lines (whose per-tile words are never stored). The `tile_masks` result column.
+    pub fn used_tile_masks(&self) -> bool {
+        self.tile_masks.is_some() || self.tile_lines.is_some()
+    }
+
+    fn with_lines(mut self, lines: wgpu::Buffer) -> Self {
+        self.tile_lines = Some(lines);
+        self
+    }
+
+    /// Reads the tile lines back, where the run used them.
+    pub fn read_tile_lines(&self, ctx: &GpuContext) -> Result<Option<Vec<u32>>, GpuError> {
+        self.tile_lines
+            .as_ref()
+            .map(|m| {
+                Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+                    ctx,
+                    m,
+                    0,
+                    lines_bytes(&self.params),
+                )?))
+            })
+            .transpose()
+    }
+
     /// The lists' bindings 0, 1, 2 (`CullParams`, `bin_ranges`, `light_indices`), as every
     /// consumer's bind group starts.
     pub fn list_bindings(&self) -> [wgpu::BindingResource<'_>; 3] {
@@ -267,6 +299,12 @@ fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
     )
 }
 
+/// Bytes of the tile lines (`shaders/cull/tile_lines.wgsl`): two words a column or row of
+/// tiles for each 64 lights.
+fn lines_bytes(p: &GpuCullParams) -> u64 {
+    u64::from(p.tiles_x + p.tiles_y) * u64::from(p.light_count.div_ceil(64)) * 8
+}
+
 /// Bytes of the tile masks: two words a tile for each 64 lights.
 fn mask_bytes(p: &GpuCullParams) -> u64 {
     u64::from(p.bins) * u64::from(p.light_count.div_ceil(64)) * 8
@@ -280,6 +318,7 @@ pub struct Culler {
     pub lists_layout: wgpu::BindGroupLayout,
     depth_bounds: wgpu::ComputePipeline,
     depth_bounds_blocks: wgpu::ComputePipeline,
+    depth_bounds_lines: wgpu::ComputePipeline,
     /// Whether gather's scans use subgroup operations.
     pub gather_subgroups: bool,
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
@@ -295,7 +334,14 @@ pub struct Culler {
     /// light again and scatter sorts its pairs.
     /// A run's [`CullSettings::mask_budget`] overrides it.
     pub mask_budget: u64,
+    /// Whether gather and 2.5D take their lines path where tile masks fit (true by default):
+    /// the tile lines in `cull.depth_bounds`, then one pass that decides and writes each tile's
+    /// list (`shaders/cull/tile_lines.wgsl`); false: the count pass stores tile masks and the
+    /// fill expands them.
+    pub gather_lines: bool,
     gather_count: wgpu::ComputePipeline,
+    gather_lines_count: wgpu::ComputePipeline,
+    gather_lines_fill: wgpu::ComputePipeline,
     gather_count_masks: wgpu::ComputePipeline,
     gather_fill_masks: wgpu::ComputePipeline,
     scatter_masks: wgpu::ComputePipeline,
@@ -373,12 +419,12 @@ impl Culler {
             ],
         });
         let scene_layout = &scene.layout;
-        let [depth_bounds, depth_bounds_blocks] = pipelines(
+        let [depth_bounds, depth_bounds_blocks, depth_bounds_lines] = pipelines(
             d,
             &DEPTH_BOUNDS,
             scene_layout,
             &layout,
-            ["depth_bounds", "depth_bounds_blocks"],
+            ["depth_bounds", "depth_bounds_blocks", "depth_bounds_lines"],
         );
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         let [
@@ -386,6 +432,8 @@ impl Culler {
             gather_fill,
             gather_count_masks,
             gather_fill_masks,
+            gather_lines_count,
+            gather_lines_fill,
             gather_count_flat,
             gather_fill_flat,
             finalize,
@@ -404,6 +452,8 @@ impl Culler {
                 "gather_fill",
                 "gather_count_masks",
                 "gather_fill_masks",
+                "gather_lines_count",
+                "gather_lines_fill",
                 "gather_count_flat",
                 "gather_fill_flat",
                 "finalize",
@@ -473,11 +523,15 @@ impl Culler {
             lists_layout,
             depth_bounds,
             depth_bounds_blocks,
+            depth_bounds_lines,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
             mask_budget: crate::MASK_BUDGET,
+            gather_lines: true,
             gather_count,
+            gather_lines_count,
+            gather_lines_fill,
             gather_fill,
             gather_count_masks,
             gather_fill_masks,
@@ -644,6 +698,7 @@ impl Culler {
                 self.run_scatter_masks(ctx, f, timer, repeat)
             }
             Strategy::TiledScatter { .. } => self.run_scatter(ctx, f, timer, repeat),
+            _ if masked && self.gather_lines => self.run_lines(f, strategy, timer, repeat),
             _ => self.run_binned(ctx, f, strategy, masked, timer, repeat),
         }
     }
@@ -771,7 +826,7 @@ impl Culler {
             }
         };
         // Everything up to the scanned counts.
-        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
+        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, _sized: bool| {
             f.clear(enc, masked);
             if clustered {
                 enc.clear_buffer(wide, 0, Some(4));
@@ -822,36 +877,38 @@ impl Culler {
             }
         };
         // The lists, once the index buffer is sized.
-        let filling =
-            |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b: &wgpu::BindGroup| {
-                phase(enc, timer, true, group_b);
-                if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
-                    for (label, pipe) in [
-                        ("cull.clustered.order_short", &self.cluster_order_short),
-                        ("cull.clustered.order", &self.cluster_order),
-                    ] {
-                        f.pass(
-                            enc,
-                            timer,
-                            label,
-                            pipe,
-                            group_b,
-                            groups_2d(p.bins, GROUPS_X),
-                        );
-                    }
-                }
-                // (Coarse-to-fine gather's fill writes the ranges itself.)
-                if !chunked {
+        let filling = |enc: &mut wgpu::CommandEncoder,
+                       timer: &mut GpuTimer,
+                       group_b: &wgpu::BindGroup,
+                       _sized: bool| {
+            phase(enc, timer, true, group_b);
+            if matches!(strategy, Strategy::Clustered { ordered: true, .. }) {
+                for (label, pipe) in [
+                    ("cull.clustered.order_short", &self.cluster_order_short),
+                    ("cull.clustered.order", &self.cluster_order),
+                ] {
                     f.pass(
                         enc,
                         timer,
-                        "cull.finalize",
-                        &self.finalize,
+                        label,
+                        pipe,
                         group_b,
-                        groups_2d(p.bins.div_ceil(64), GROUPS_X),
+                        groups_2d(p.bins, GROUPS_X),
                     );
                 }
-            };
+            }
+            // (Coarse-to-fine gather's fill writes the ranges itself.)
+            if !chunked {
+                f.pass(
+                    enc,
+                    timer,
+                    "cull.finalize",
+                    &self.finalize,
+                    group_b,
+                    groups_2d(p.bins.div_ceil(64), GROUPS_X),
+                );
+            }
+        };
         let (indices, total) = f.count_then_fill(
             timer,
             repeat,
@@ -861,6 +918,71 @@ impl Culler {
             &filling,
         )?;
         Ok(f.finish(indices, total, masks.clone())?)
+    }
+
+    /// Gather's and 2.5D's lines path: `cull.depth_bounds` with the tile lines, then each
+    /// tile's list decided and written in one pass (`shaders/cull/tile_lines.wgsl`). Alone, a
+    /// count pass first sizes the lists; back to back, a run is the two passes.
+    fn run_lines(
+        &self,
+        f: Frame<'_>,
+        strategy: &Strategy,
+        timer: &mut GpuTimer,
+        repeat: Option<Repeat>,
+    ) -> Result<CullOutput, CullError> {
+        let p = f.params;
+        let name = strategy.name();
+        let lines = f.buf("cull.tile_lines", lines_bytes(&p));
+        let placeholder = &self.placeholder;
+        let group_a = f.group(placeholder, placeholder, &lines);
+        let groups = mask_fill_groups(&p);
+        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, sized: bool| {
+            f.clear(enc, true);
+            f.pass(
+                enc,
+                timer,
+                "cull.depth_bounds",
+                &self.depth_bounds_lines,
+                &group_a,
+                depth_groups(&p, true),
+            );
+            if !sized {
+                f.pass(
+                    enc,
+                    timer,
+                    &format!("cull.{name}.count"),
+                    &self.gather_lines_count,
+                    &group_a,
+                    groups,
+                );
+            }
+        };
+        let filling = |enc: &mut wgpu::CommandEncoder,
+                       timer: &mut GpuTimer,
+                       group_b: &wgpu::BindGroup,
+                       sized: bool| {
+            if !sized {
+                // The count pass left its total in the fill's cursor.
+                enc.clear_buffer(&f.stats, 20, Some(4));
+            }
+            f.pass(
+                enc,
+                timer,
+                &format!("cull.{name}.fill"),
+                &self.gather_lines_fill,
+                group_b,
+                groups,
+            );
+        };
+        let (indices, total) = f.count_then_fill(
+            timer,
+            repeat,
+            &counting,
+            &|ctx| f.lines_total(ctx),
+            &|indices| f.group(indices, placeholder, &lines),
+            &filling,
+        )?;
+        Ok(f.finish(indices, total, None)?.with_lines(lines.clone()))
     }
 
     /// Tiled scatter with tile masks: the depth-bounds pass also stores each light's rectangle
@@ -886,7 +1008,7 @@ impl Culler {
         let group_a = f.group(&queue, &rects, &masks);
         let groups = u32::try_from(blocks.min(u64::from(crate::layout::SCATTER_MASK_GROUPS)))
             .expect("at most SCATTER_MASK_GROUPS");
-        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer| {
+        let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, _sized: bool| {
             f.clear(enc, true);
             f.pass(
                 enc,
@@ -905,17 +1027,19 @@ impl Culler {
                 (groups, 1),
             );
         };
-        let filling =
-            |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, group_b: &wgpu::BindGroup| {
-                f.pass(
-                    enc,
-                    timer,
-                    "cull.tiled_scatter.fill",
-                    &self.gather_fill_masks,
-                    group_b,
-                    mask_fill_groups(&p),
-                );
-            };
+        let filling = |enc: &mut wgpu::CommandEncoder,
+                       timer: &mut GpuTimer,
+                       group_b: &wgpu::BindGroup,
+                       _sized: bool| {
+            f.pass(
+                enc,
+                timer,
+                "cull.tiled_scatter.fill",
+                &self.gather_fill_masks,
+                group_b,
+                mask_fill_groups(&p),
+            );
+        };
         let (indices, total) = f.count_then_fill(
             timer,
             repeat,
@@ -1376,6 +1500,12 @@ impl<'a> Frame<'a> {
         Ok(u64::from(read_u32s(ctx, &self.stats, 4, 1)?[0]))
     }
 
+    /// The list total of the lines path, which its count and fill passes sum into
+    /// `cull_stats[5]`.
+    fn lines_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
+        Ok(u64::from(read_u32s(ctx, &self.stats, 5, 1)?[0]))
+    }
+
     /// Tiled scatter's pair total, which its count pass sums in 64 bits (`cull_stats[1]`, with
     /// the carries in `cull_stats[2]`).
     fn pairs_total(&self, ctx: &GpuContext) -> Result<u64, GpuError> {
@@ -1413,15 +1543,15 @@ impl<'a> Frame<'a> {
         &self,
         timer: &mut GpuTimer,
         repeat: Option<Repeat>,
-        counting: &dyn Fn(&mut wgpu::CommandEncoder, &mut GpuTimer),
+        counting: &dyn Fn(&mut wgpu::CommandEncoder, &mut GpuTimer, bool),
         total_of: &dyn Fn(&GpuContext) -> Result<u64, GpuError>,
         group_for: &dyn Fn(&wgpu::Buffer) -> wgpu::BindGroup,
-        filling: &dyn Fn(&mut wgpu::CommandEncoder, &mut GpuTimer, &wgpu::BindGroup),
+        filling: &dyn Fn(&mut wgpu::CommandEncoder, &mut GpuTimer, &wgpu::BindGroup, bool),
     ) -> Result<(wgpu::Buffer, u32), CullError> {
         let ctx = self.ctx;
         let Some(repeat) = repeat else {
             let mut enc = ctx.encoder("cull.count");
-            counting(&mut enc, timer);
+            counting(&mut enc, timer, false);
             ctx.submit_and_wait(enc, "culling: count")?;
             let total = Frame::entries(
                 ctx,
@@ -1432,7 +1562,7 @@ impl<'a> Frame<'a> {
             let indices = self.buf("cull.light_indices", u64::from(total) * 4);
             let group = group_for(&indices);
             let mut enc = ctx.encoder("cull.fill");
-            filling(&mut enc, timer, &group);
+            filling(&mut enc, timer, &group, false);
             timer.resolve(&mut enc);
             ctx.submit_and_wait(enc, "culling: fill")?;
             return Ok((indices, total));
@@ -1442,8 +1572,8 @@ impl<'a> Frame<'a> {
         let mut enc = ctx.encoder("cull.repeated");
         for _ in 0..repeat.runs {
             timer.span_begin(&mut enc, &self.span);
-            counting(&mut enc, timer);
-            filling(&mut enc, timer, &group);
+            counting(&mut enc, timer, true);
+            filling(&mut enc, timer, &group, true);
             timer.span_end(&mut enc);
         }
         timer.resolve(&mut enc);
@@ -1474,6 +1604,7 @@ impl<'a> Frame<'a> {
             tile_depth: self.tile_depth,
             occupancy: self.occupancy,
             tile_masks,
+            tile_lines: None,
         })
     }
 }

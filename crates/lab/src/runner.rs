@@ -473,7 +473,7 @@ fn evaluate(
     let per_pixel: Vec<u32> = match &o.lists {
         Some(lists) => {
             list_bytes = lists.list_bytes();
-            tile_masks = Some(lists.tile_masks.is_some());
+            tile_masks = Some(lists.used_tile_masks());
             dropped = u64::from(lists.dropped);
             if c.exact_stride > 0 {
                 let bins =

@@ -1,0 +1,118 @@
+// Gather's and 2.5D's lines path (where a bit per (tile, light) fits the host's budget, as at
+// the Forward+ paper's configuration): two passes, no stored tile masks, no chunks, no scan.
+//
+// 1. cull.depth_bounds (depth_bounds_lines) writes, besides the tiles' depth data, the tile
+//    lines: for each column of tiles and each row, a bit per light, set when the light's tile
+//    rectangle spans the line and the light is inside the line's two side planes
+//    (store_light_lines in depth_bounds.wgsl). A tile's side planes 0 and 1 are its column's and
+//    2 and 3 its row's, so the AND of a tile's column word and row word is exactly the lights of
+//    that word whose rectangle holds the tile and that pass its four side planes.
+// 2. The count or fill pass (lines_tile), MASK_FILL_TILES tiles a workgroup, 64 threads a tile
+//    (as the masks' fill in tile_masks.wgsl): thread `lane` of a tile takes words [lane k,
+//    lane k + k) of the tile's mask (k = words / 64, rounded up), ANDs the tile's column and row
+//    words, and keeps each candidate that passes the rest of its tile test (depth_keeps: the
+//    depth bounds and the 2.5D masks). So the kept bits are those of tile_keeps with the
+//    rectangle, as cpu::gather states them. One scan of the threads' bit counts over the tile's
+//    64 threads gives the tile's total and each thread's place in the tile's list. The count
+//    pass adds each tile's total to cull_stats[5]; the fill pass takes the tile's place in the
+//    list buffer with one atomic add on cull_stats[5] (so it too ends holding the total),
+//    writes the tile's range, and turns the words into list entries in light order, writing
+//    none past the buffer's end (the host checks the total against the buffer's size). A
+//    thread keeps its first two words' verdicts in registers and decides any others again for
+//    the fill. A tile without covered pixels takes no words and gets an empty range.
+//
+// Back to back (the host already knows the total, Culler::run_repeated), a run is the two
+// passes: depth bounds, then the fill. Alone, the count pass runs first and the host sizes the
+// lists from its total.
+//
+// Binding 11 (declared as tile_masks in tile_masks.wgsl) holds the tile lines in these runs.
+
+fn line_word(line: u32, w: u32) -> u32 {
+    return tile_masks[line * mask_words() + w];
+}
+
+// Word w of tile `tile`'s kept lights.
+fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth) -> u32 {
+    var m = line_word(tile.x, w) & line_word(cull.tiles_x + tile.y, w);
+    var keep = 0u;
+    while m != 0u {
+        let bit = firstTrailingBit(m);
+        m &= m - 1u;
+        if depth_keeps(cull_light(lights[w * 32u + bit]), t) {
+            keep |= 1u << bit;
+        }
+    }
+    return keep;
+}
+
+// Tiles MASK_FILL_TILES wg.x + j of row wg.y, 64 threads each (see the top of this file).
+// Called in uniform control flow.
+fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
+    let j = slot / 64u;
+    let lane = slot % 64u;
+    let tile = vec2<u32>(wg.x * MASK_FILL_TILES + j, wg.y);
+    let inside = tile.x < cull.tiles_x;
+    let bin = tile.y * cull.tiles_x + tile.x;
+    var t: TileDepth;
+    var words = 0u;
+    if inside {
+        t = tile_depth[bin];
+        if t.covered != 0u {
+            words = mask_words();
+        }
+    }
+    let k = (mask_words() + 63u) / 64u;
+    let first = min(lane * k, words);
+    let end = min(lane * k + k, words);
+    var w0 = 0u;
+    var w1 = 0u;
+    var c = 0u;
+    for (var w = first; w < end; w++) {
+        let d = lines_decide(tile, w, t);
+        if w == first {
+            w0 = d;
+        } else if w == first + 1u {
+            w1 = d;
+        }
+        c += countOneBits(d);
+    }
+    let scan = scan_keep(slot, c);
+    if !fill {
+        if lane == 0u && scan.y != 0u {
+            atomicAdd(&cull_stats[5], scan.y);
+        }
+        return;
+    }
+    if lane == 0u && inside {
+        var at = 0u;
+        if scan.y != 0u {
+            at = atomicAdd(&cull_stats[5], scan.y);
+        }
+        out_ranges[bin] = vec2<u32>(at, scan.y);
+        wg_mask_at[j] = at;
+    }
+    workgroupBarrier();
+    if c == 0u {
+        return;
+    }
+    var pos = wg_mask_at[j] + scan.x - c;
+    let cap = arrayLength(&out_indices);
+    for (var w = first; w < end; w++) {
+        var m: u32;
+        if w == first {
+            m = w0;
+        } else if w == first + 1u {
+            m = w1;
+        } else {
+            m = lines_decide(tile, w, t);
+        }
+        let light = w * 32u;
+        while m != 0u {
+            if pos < cap {
+                out_indices[pos] = light + firstTrailingBit(m);
+            }
+            m &= m - 1u;
+            pos += 1u;
+        }
+    }
+}
