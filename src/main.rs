@@ -873,7 +873,12 @@ fn repeated_timings(
     let t = timer
         .read(ctx)?
         .expect("timestamps were there for the first run");
-    let k = passes as usize;
+    // Passes a run: back to back, a run may take fewer than `first` did (gather's lines path
+    // needs no count pass once the lists are sized).
+    let k = t.len() / n.max(1) as usize;
+    if k == 0 || t.len() % k != 0 {
+        bail!("{} timed passes do not split into {n} runs", t.len());
+    }
     // The same median as the experiments' (nearest rank).
     let median = |v: Vec<f64>| manylights_lab::results::percentiles(&v).map_or(0.0, |p| p.0);
     let mut lines = format!("  {n} runs back to back (median per pass):\n");

@@ -193,6 +193,38 @@ fn depth_keeps(l: CullLight, t: TileDepth) -> bool {
     return true;
 }
 
+// A light's depth extent for depth_keeps, computed once a light (gather's lines path):
+// (lo, hi, sphere lo, sphere hi). A tile's depth planes keep the light when dmin <= hi and
+// dmax >= lo: the sphere's extent along z, narrowed by the cone's for a spot (outside_plane with
+// the planes' normals (0, 0, -1) and (0, 0, 1), solved for dmin and dmax). Only rounding
+// differs from outside_plane's, far inside the slack's borderline band (cpu::BORDER). The
+// sphere's extent, the same floats as light_depth_mask's, gives the 2.5D mask.
+fn light_depth_extent(l: CullLight) -> vec4<f32> {
+    let s_lo = -l.center.z - l.radius - l.slack;
+    let s_hi = -l.center.z + l.radius + l.slack;
+    var lo = s_lo;
+    var hi = s_hi;
+    if l.is_cone {
+        let n_perp = length(vec3<f32>(0.0, 0.0, 1.0) - l.axis.z * l.axis);
+        let spread = l.radius * l.tan_outer * n_perp;
+        hi = min(hi, max(-l.center.z, -(l.center.z + l.axis.z * l.radius) + spread) + l.slack);
+        lo = max(lo, -max(l.center.z, l.center.z + l.axis.z * l.radius + spread) - l.slack);
+    }
+    return vec4<f32>(lo, hi, s_lo, s_hi);
+}
+
+// depth_keeps over a light's depth extent (light_depth_extent).
+fn extent_keeps(e: vec4<f32>, t: TileDepth) -> bool {
+    if t.dmin > e.y || t.dmax < e.x {
+        return false;
+    }
+    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
+        let scale = depth_cell_scale(t);
+        return (bit_range(depth_cell(e.z, t.dmin, scale), depth_cell(e.w, t.dmin, scale)) & t.mask) != 0u;
+    }
+    return true;
+}
+
 // Tile lines (gather's and 2.5D's lines path): line c < tiles_x is column c of tiles, line
 // tiles_x + r row r. A tile's side planes 0 and 1 depend only on its column and 2 and 3 only
 // on its row (tile_ndc), so a line's two planes are those of each of its tiles, the same

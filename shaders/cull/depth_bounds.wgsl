@@ -14,14 +14,16 @@
 // tiles of its rectangle, (light, block) pairs in block_queue, their number in
 // cull_stats[6], so that the count pass (scatter_masks, tiled_scatter.wgsl) shares a large
 // light's tiles among many workgroups. For gather's and 2.5D's lines path (depth_bounds_lines;
-// see tile_lines.wgsl) each workgroup of those rows takes 64 DEPTH_TILES lights and writes their
-// words of the tile lines instead (store_light_lines).
+// see tile_lines.wgsl) the workgroups of those rows take 64 DEPTH_TILES lights and a chunk of
+// lines each and write those words of the tile lines instead, and the lights' depth extents
+// (store_light_lines).
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
 @group(1) @binding(7) var<storage, read_write> block_queue: array<u32>;
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
-// The tile lines (tile_lines.wgsl): word w of line `line` at line * mask_words() + w.
+// The tile lines (tile_lines.wgsl): word w of line `line` at line * mask_words() + w; then
+// each light's depth extent, four words (f32 bits) a light.
 @group(1) @binding(11) var<storage, read_write> tile_lines: array<u32>;
 
 // A workgroup's blocks and their place in the queue.
@@ -71,52 +73,66 @@ fn store_light_rect(i: u32, index: u32, blocks: bool) {
 var<workgroup> wg_line_light: array<CullLight, 64 * DEPTH_TILES>;
 var<workgroup> wg_line_rect: array<vec4<i32>, 64 * DEPTH_TILES>;
 
-// Lights first .. first + 64 DEPTH_TILES (2 DEPTH_TILES words of the tile lines): each
-// thread takes one light into workgroup memory (view space, and its tile rectangle: none past
-// the last light), then the threads take the workgroup's (line, word) pairs, consecutive threads
-// consecutive words of a line. A pair's word has bit k set when light 32 word + k's rectangle
-// spans the line (its columns for a column, its rows for a row) and the light is inside both of
-// the line's planes (line_planes). A tile's candidates are then its column's bits and its row's:
-// exactly the lights whose rectangle holds it and that pass its four side planes. Every word of
-// every line below mask_words() is written, so the lines need no clear. Called in uniform
-// control flow.
-fn store_light_lines(first: u32, index: u32) {
+// Light-row workgroup `group`: lights 64 DEPTH_TILES g .. (g + 1) 64 DEPTH_TILES (2 DEPTH_TILES
+// words of the tile lines) and lines LINES_PER_GROUP c .. (c + 1) LINES_PER_GROUP, for g and c
+// the quotient and remainder of `group` by the line chunks. Each thread takes one light into
+// workgroup memory (view space, and its tile rectangle: none past the last light), and the
+// first line chunk's also stores its depth extent (light_depth_extent) after the lines; then
+// each thread takes one (line, word) pair, consecutive threads consecutive words of a line. A
+// pair's word has bit k set when light 32 word + k's rectangle spans the line (its columns for a
+// column, its rows for a row) and the light is inside both of the line's planes (line_planes).
+// A tile's candidates are then its column's bits and its row's: exactly the lights whose
+// rectangle holds it and that pass its four side planes. Every word of every line below
+// mask_words() is written, so the lines need no clear. Called in uniform control flow.
+fn store_light_lines(group: u32, index: u32) {
+    let lines = cull.tiles_x + cull.tiles_y;
+    let chunks = (lines + LINES_PER_GROUP - 1u) / LINES_PER_GROUP;
+    let first = group / chunks * 64u * DEPTH_TILES;
+    let chunk = group % chunks;
+    if first >= cull.light_count {
+        return;
+    }
+    let words = mask_words();
     let i = first + index;
     var rect = vec4<i32>(0, 0, -1, -1);
     if i < cull.light_count {
         let l = cull_light(lights[i]);
         rect = light_tiles(l);
         wg_line_light[index] = l;
+        if chunk == 0u {
+            let e = light_depth_extent(l);
+            let at = lines * words + 4u * i;
+            tile_lines[at] = bitcast<u32>(e.x);
+            tile_lines[at + 1u] = bitcast<u32>(e.y);
+            tile_lines[at + 2u] = bitcast<u32>(e.z);
+            tile_lines[at + 3u] = bitcast<u32>(e.w);
+        }
     }
     wg_line_rect[index] = rect;
     workgroupBarrier();
-    let words = mask_words();
-    let lines = cull.tiles_x + cull.tiles_y;
     let per = 2u * DEPTH_TILES;
-    for (var item = index; item < lines * per; item += 64u * DEPTH_TILES) {
-        let line = item / per;
-        let w = item % per;
-        let word = first / 32u + w;
-        if word >= words {
-            continue;
-        }
-        let column = line < cull.tiles_x;
-        let at = i32(select(line - cull.tiles_x, line, column));
-        let planes = line_planes(line);
-        var bits = 0u;
-        for (var k = 0u; k < 32u; k++) {
-            let s = w * 32u + k;
-            let r = wg_line_rect[s];
-            let span = select(r.yw, r.xz, column);
-            if span.x <= at && at <= span.y {
-                let l = wg_line_light[s];
-                if !outside_plane(planes[0], l) && !outside_plane(planes[1], l) {
-                    bits |= 1u << k;
-                }
+    let line = chunk * LINES_PER_GROUP + index / per;
+    let w = index % per;
+    let word = first / 32u + w;
+    if line >= lines || word >= words {
+        return;
+    }
+    let column = line < cull.tiles_x;
+    let at = i32(select(line - cull.tiles_x, line, column));
+    let planes = line_planes(line);
+    var bits = 0u;
+    for (var k = 0u; k < 32u; k++) {
+        let s = w * 32u + k;
+        let r = wg_line_rect[s];
+        let span = select(r.yw, r.xz, column);
+        if span.x <= at && at <= span.y {
+            let l = wg_line_light[s];
+            if !outside_plane(planes[0], l) && !outside_plane(planes[1], l) {
+                bits |= 1u << k;
             }
         }
-        tile_lines[line * words + word] = bits;
     }
+    tile_lines[line * words + word] = bits;
 }
 
 var<workgroup> wg_zmin: array<atomic<u32>, DEPTH_TILES>;
@@ -150,7 +166,7 @@ fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, rows: u32) {
     let light_rows = groups.y - cull.tiles_y;
     let first = (wg.y * groups.x + wg.x) * 64u * DEPTH_TILES;
     if wg.y < light_rows && rows == LIGHT_ROWS_LINES {
-        store_light_lines(first, index);
+        store_light_lines(wg.y * groups.x + wg.x, index);
     } else if wg.y < light_rows {
         store_light_rect(first + index, index, rows == LIGHT_ROWS_BLOCKS);
     } else {

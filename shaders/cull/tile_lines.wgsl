@@ -38,7 +38,9 @@ fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth) -> u32 {
     while m != 0u {
         let bit = firstTrailingBit(m);
         m &= m - 1u;
-        if depth_keeps(cull_light(lights[w * 32u + bit]), t) {
+        let at = (cull.tiles_x + cull.tiles_y) * mask_words() + 4u * (w * 32u + bit);
+        let e = vec4<f32>(bitcast<f32>(tile_masks[at]), bitcast<f32>(tile_masks[at + 1u]), bitcast<f32>(tile_masks[at + 2u]), bitcast<f32>(tile_masks[at + 3u]));
+        if extent_keeps(e, t) {
             keep |= 1u << bit;
         }
     }

@@ -291,6 +291,16 @@ fn depth_groups(p: &GpuCullParams, rects: bool) -> (u32, u32) {
     (x, p.tiles_y + rows)
 }
 
+/// Workgroups of `cull.depth_bounds` for gather's lines path: the tiles' rows, and before them
+/// rows of light workgroups, one for each 64 `DEPTH_TILES` lights and
+/// [`crate::layout::LINES_PER_GROUP`] lines of tiles.
+fn depth_groups_lines(p: &GpuCullParams) -> (u32, u32) {
+    let x = p.tiles_x.div_ceil(crate::layout::DEPTH_TILES);
+    let chunks = (p.tiles_x + p.tiles_y).div_ceil(crate::layout::LINES_PER_GROUP);
+    let light_groups = p.light_count.div_ceil(64 * crate::layout::DEPTH_TILES) * chunks;
+    (x, p.tiles_y + light_groups.div_ceil(x))
+}
+
 /// Workgroups of the tile masks' fill: [`crate::layout::MASK_FILL_TILES`] tiles of a row each.
 fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
     (
@@ -303,6 +313,11 @@ fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
 /// tiles for each 64 lights.
 fn lines_bytes(p: &GpuCullParams) -> u64 {
     u64::from(p.tiles_x + p.tiles_y) * u64::from(p.light_count.div_ceil(64)) * 8
+}
+
+/// Bytes of the tile lines and, after them, each light's depth extent (four f32).
+fn lines_buffer_bytes(p: &GpuCullParams) -> u64 {
+    lines_bytes(p) + u64::from(p.light_count) * 16
 }
 
 /// Bytes of the tile masks: two words a tile for each 64 lights.
@@ -665,10 +680,14 @@ impl Culler {
             )?;
         }
         // Rows of light rectangles: gather's coarse-to-fine passes, and scatter's masks.
-        let (_, depth_rows) = depth_groups(
-            &params,
-            (!clustered && params.coarse > 0) || (per_light && masked),
-        );
+        let (_, depth_rows) = if masked && !per_light && self.gather_lines {
+            depth_groups_lines(&params)
+        } else {
+            depth_groups(
+                &params,
+                (!clustered && params.coarse > 0) || (per_light && masked),
+            )
+        };
         if depth_rows > ctx.limits.max_compute_workgroups_per_dimension {
             return Err(GpuError::OverLimit {
                 what: "cull.depth_bounds workgroup rows (tiles and light rectangles)".into(),
@@ -932,7 +951,7 @@ impl Culler {
     ) -> Result<CullOutput, CullError> {
         let p = f.params;
         let name = strategy.name();
-        let lines = f.buf("cull.tile_lines", lines_bytes(&p));
+        let lines = f.buf("cull.tile_lines", lines_buffer_bytes(&p));
         let placeholder = &self.placeholder;
         let group_a = f.group(placeholder, placeholder, &lines);
         let groups = mask_fill_groups(&p);
@@ -944,7 +963,7 @@ impl Culler {
                 "cull.depth_bounds",
                 &self.depth_bounds_lines,
                 &group_a,
-                depth_groups(&p, true),
+                depth_groups_lines(&p),
             );
             if !sized {
                 f.pass(

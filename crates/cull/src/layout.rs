@@ -52,6 +52,10 @@ pub const SCATTER_MASK_THREADS: u32 = 256;
 /// where fewer blocks can be queued).
 pub const SCATTER_MASK_GROUPS: u32 = 2048;
 
+/// Lines of tiles (columns, then rows) that a light-row workgroup of `cull.depth_bounds` takes
+/// for gather's lines path, with 64 [`DEPTH_TILES`] lights: one (line, word) pair a thread.
+pub const LINES_PER_GROUP: u32 = 32;
+
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
 
@@ -60,6 +64,7 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
+    WgslConst::U32("LINES_PER_GROUP", LINES_PER_GROUP),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),
