@@ -14,9 +14,10 @@
 // tiles of its rectangle, (light, block) pairs in block_queue, their number in
 // cull_stats[6], so that the count pass (scatter_masks, tiled_scatter.wgsl) shares a large
 // light's tiles among many workgroups. For gather's and 2.5D's lines path (depth_bounds_lines;
-// see tile_lines.wgsl) the workgroups of those rows take 64 DEPTH_TILES lights and a chunk of
-// lines each and write those words of the tile lines instead, and the lights' depth extents
-// (store_light_lines).
+// see tile_lines.wgsl) this module's cull.tile_lines pass (tile_lines_pass) has only light
+// workgroups, each taking 64 DEPTH_TILES lights and a chunk of lines, and writing those words
+// of the tile lines and the lights' depth extents (store_light_lines); that path's list passes
+// compute the tiles' depth data themselves.
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
 @group(1) @binding(7) var<storage, read_write> block_queue: array<u32>;
@@ -135,11 +136,6 @@ fn store_light_lines(group: u32, index: u32) {
     tile_lines[line * words + word] = bits;
 }
 
-var<workgroup> wg_zmin: array<atomic<u32>, DEPTH_TILES>;
-var<workgroup> wg_zmax: array<atomic<u32>, DEPTH_TILES>;
-var<workgroup> wg_mask: array<atomic<u32>, DEPTH_TILES>;
-var<workgroup> wg_covered: array<atomic<u32>, DEPTH_TILES>;
-
 @compute @workgroup_size(64 * DEPTH_TILES)
 fn depth_bounds(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
     lights_or_tiles(wg, groups, index, LIGHT_ROWS_RECTS);
@@ -150,79 +146,24 @@ fn depth_bounds_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgr
     lights_or_tiles(wg, groups, index, LIGHT_ROWS_BLOCKS);
 }
 
+// cull.tile_lines: gather's lines path, light workgroups only (store_light_lines).
 @compute @workgroup_size(64 * DEPTH_TILES)
-fn depth_bounds_lines(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
-    lights_or_tiles(wg, groups, index, LIGHT_ROWS_LINES);
+fn tile_lines_pass(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) index: u32) {
+    store_light_lines(wg.y * groups.x + wg.x, index);
 }
 
-// What the light rows store: rectangles, rectangles and blocks, or the tile lines.
+// What the light rows store: rectangles, or rectangles and blocks.
 const LIGHT_ROWS_RECTS: u32 = 0u;
 const LIGHT_ROWS_BLOCKS: u32 = 1u;
-const LIGHT_ROWS_LINES: u32 = 2u;
 
 // Workgroup wg's lights (the rows before the tiles', so that their longer chains start early)
 // or tiles. Uniform (a workgroup's id), so the barriers are reached by all threads or none.
 fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, rows: u32) {
     let light_rows = groups.y - cull.tiles_y;
     let first = (wg.y * groups.x + wg.x) * 64u * DEPTH_TILES;
-    if wg.y < light_rows && rows == LIGHT_ROWS_LINES {
-        store_light_lines(wg.y * groups.x + wg.x, index);
-    } else if wg.y < light_rows {
+    if wg.y < light_rows {
         store_light_rect(first + index, index, rows == LIGHT_ROWS_BLOCKS);
     } else {
-        tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
-    }
-}
-
-// The depth data of workgroup wg's tiles (see the top of this file).
-fn tile_bounds(wg: vec3<u32>, index: u32) {
-    let j = index / 64u;
-    let li = index % 64u;
-    let tile = vec2<u32>(wg.x * DEPTH_TILES + j, wg.y);
-    if li == 0u {
-        atomicStore(&wg_zmin[j], 0x7f800000u);
-        atomicStore(&wg_zmax[j], 0u);
-        atomicStore(&wg_mask[j], 0u);
-        atomicStore(&wg_covered[j], 0u);
-    }
-    workgroupBarrier();
-    let size = vec2<u32>(frame.viewport.xy);
-    let origin = tile * cull.tile_size;
-    // A tile past the last column (in the last workgroup of a row) has no pixels here.
-    let n = select(0u, cull.tile_size * cull.tile_size, tile.x < cull.tiles_x);
-    // Depth in [0, 1) is a non-negative float: its bits order like its value.
-    for (var i = li; i < n; i += 64u) {
-        let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
-        if all(p < size) {
-            let z = textureLoad(depth_tex, p, 0);
-            if z < 1.0 {
-                atomicMin(&wg_zmin[j], bitcast<u32>(z));
-                atomicMax(&wg_zmax[j], bitcast<u32>(z));
-                atomicAdd(&wg_covered[j], 1u);
-            }
-        }
-    }
-    workgroupBarrier();
-    let covered = atomicLoad(&wg_covered[j]);
-    var t: TileDepth;
-    t.covered = covered;
-    if covered > 0u {
-        t.dmin = linear_depth(bitcast<f32>(atomicLoad(&wg_zmin[j])));
-        t.dmax = linear_depth(bitcast<f32>(atomicLoad(&wg_zmax[j])));
-        let scale = depth_cell_scale(t);
-        for (var i = li; i < n; i += 64u) {
-            let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
-            if all(p < size) {
-                let z = textureLoad(depth_tex, p, 0);
-                if z < 1.0 {
-                    atomicOr(&wg_mask[j], 1u << depth_cell(linear_depth(z), t.dmin, scale));
-                }
-            }
-        }
-    }
-    workgroupBarrier();
-    if li == 0u && tile.x < cull.tiles_x {
-        t.mask = atomicLoad(&wg_mask[j]);
-        tile_depth[tile.y * cull.tiles_x + tile.x] = t;
+        _ = tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
     }
 }

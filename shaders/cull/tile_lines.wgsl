@@ -1,14 +1,14 @@
 // Gather's and 2.5D's lines path (where a bit per (tile, light) fits the host's budget, as at
 // the Forward+ paper's configuration): two passes, no stored tile masks, no chunks, no scan.
 //
-// 1. cull.depth_bounds (depth_bounds_lines) writes, besides the tiles' depth data, the tile
-//    lines: for each column of tiles and each row, a bit per light, set when the light's tile
+// 1. cull.tile_lines (tile_lines_pass in depth_bounds.wgsl) writes the tile lines: for each column of tiles and each row, a bit per light, set when the light's tile
 //    rectangle spans the line and the light is inside the line's two side planes
 //    (store_light_lines in depth_bounds.wgsl). A tile's side planes 0 and 1 are its column's and
 //    2 and 3 its row's, so the AND of a tile's column word and row word is exactly the lights of
 //    that word whose rectangle holds the tile and that pass its four side planes.
 // 2. The count or fill pass (lines_tile), MASK_FILL_TILES tiles a workgroup, 64 threads a tile
-//    (as the masks' fill in tile_masks.wgsl): thread `lane` of a tile takes words [lane k,
+//    (as the masks' fill in tile_masks.wgsl, and as cull.depth_bounds, whose tile_bounds
+//    (tile_depth.wgsl) it runs first for its tiles' depth data): thread `lane` of a tile takes words [lane k,
 //    lane k + k) of the tile's mask (k = words / 64, rounded up), ANDs the tile's column and row
 //    words, and keeps each candidate that passes the rest of its tile test (depth_keeps: the
 //    depth bounds and the 2.5D masks). So the kept bits are those of tile_keeps with the
@@ -22,10 +22,12 @@
 //    the fill. A tile without covered pixels takes no words and gets an empty range.
 //
 // Back to back (the host already knows the total, Culler::run_repeated), a run is the two
-// passes: depth bounds, then the fill. Alone, the count pass runs first and the host sizes the
+// passes: the lines, then the fill. Alone, the count pass runs first and the host sizes the
 // lists from its total.
 //
 // Binding 11 (declared as tile_masks in tile_masks.wgsl) holds the tile lines in these runs.
+
+@group(1) @binding(1) var depth_tex: texture_depth_2d;
 
 fn line_word(line: u32, w: u32) -> u32 {
     return tile_masks[line * mask_words() + w];
@@ -55,13 +57,11 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
     let tile = vec2<u32>(wg.x * MASK_FILL_TILES + j, wg.y);
     let inside = tile.x < cull.tiles_x;
     let bin = tile.y * cull.tiles_x + tile.x;
-    var t: TileDepth;
+    // The tiles' depth data, computed here (and stored) rather than read from an earlier pass.
+    let t = tile_bounds(vec3<u32>(wg, 0u), slot);
     var words = 0u;
-    if inside {
-        t = tile_depth[bin];
-        if t.covered != 0u {
-            words = mask_words();
-        }
+    if inside && t.covered != 0u {
+        words = mask_words();
     }
     let k = (mask_words() + 63u) / 64u;
     let first = min(lane * k, words);

@@ -19,7 +19,9 @@ pub const LOOKUP: ShaderFile = shader_file!("cull/lookup.wgsl");
 /// uses; tiled scatter's count pass that sets them is in its own module).
 pub const TILE_MASKS: ShaderFile = shader_file!("cull/tile_masks.wgsl");
 
-/// `cull.depth_bounds`.
+/// The tiles' depth data (`cull.depth_bounds`, and gather's lines path's list passes).
+pub const TILE_DEPTH: ShaderFile = shader_file!("cull/tile_depth.wgsl");
+/// `cull.depth_bounds`, and `cull.tile_lines` (gather's lines path).
 pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
     name: "cull.depth_bounds",
     consts: CULL_CONSTS,
@@ -29,6 +31,7 @@ pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
         SCENE,
         COMMON,
         shader_file!("cull/depth_bounds.wgsl"),
+        TILE_DEPTH,
     ],
 };
 /// `cull.tiled_gather` (also `cull.depth_mask`, with its flag), `cull.finalize`, and the tile
@@ -45,6 +48,7 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
         shader_file!("cull/tiled_gather.wgsl"),
         TILE_MASKS,
         shader_file!("cull/tile_lines.wgsl"),
+        TILE_DEPTH,
         shader_file!("cull/gather_scan.wgsl"),
     ],
 };
@@ -62,6 +66,7 @@ pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
         shader_file!("cull/tiled_gather.wgsl"),
         TILE_MASKS,
         shader_file!("cull/tile_lines.wgsl"),
+        TILE_DEPTH,
         shader_file!("cull/gather_scan_subgroup.wgsl"),
     ],
 };
@@ -291,14 +296,12 @@ fn depth_groups(p: &GpuCullParams, rects: bool) -> (u32, u32) {
     (x, p.tiles_y + rows)
 }
 
-/// Workgroups of `cull.depth_bounds` for gather's lines path: the tiles' rows, and before them
-/// rows of light workgroups, one for each 64 `DEPTH_TILES` lights and
-/// [`crate::layout::LINES_PER_GROUP`] lines of tiles.
-fn depth_groups_lines(p: &GpuCullParams) -> (u32, u32) {
-    let x = p.tiles_x.div_ceil(crate::layout::DEPTH_TILES);
+/// Workgroups of `cull.tile_lines` (gather's lines path): one for each 64 `DEPTH_TILES` lights
+/// and [`crate::layout::LINES_PER_GROUP`] lines of tiles.
+fn tile_lines_groups(p: &GpuCullParams) -> (u32, u32) {
     let chunks = (p.tiles_x + p.tiles_y).div_ceil(crate::layout::LINES_PER_GROUP);
-    let light_groups = p.light_count.div_ceil(64 * crate::layout::DEPTH_TILES) * chunks;
-    (x, p.tiles_y + light_groups.div_ceil(x))
+    let groups = p.light_count.div_ceil(64 * crate::layout::DEPTH_TILES) * chunks;
+    groups_2d(groups, GROUPS_X)
 }
 
 /// Workgroups of the tile masks' fill: [`crate::layout::MASK_FILL_TILES`] tiles of a row each.
@@ -333,7 +336,7 @@ pub struct Culler {
     pub lists_layout: wgpu::BindGroupLayout,
     depth_bounds: wgpu::ComputePipeline,
     depth_bounds_blocks: wgpu::ComputePipeline,
-    depth_bounds_lines: wgpu::ComputePipeline,
+    tile_lines: wgpu::ComputePipeline,
     /// Whether gather's scans use subgroup operations.
     pub gather_subgroups: bool,
     /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
@@ -434,12 +437,12 @@ impl Culler {
             ],
         });
         let scene_layout = &scene.layout;
-        let [depth_bounds, depth_bounds_blocks, depth_bounds_lines] = pipelines(
+        let [depth_bounds, depth_bounds_blocks, tile_lines] = pipelines(
             d,
             &DEPTH_BOUNDS,
             scene_layout,
             &layout,
-            ["depth_bounds", "depth_bounds_blocks", "depth_bounds_lines"],
+            ["depth_bounds", "depth_bounds_blocks", "tile_lines_pass"],
         );
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         let [
@@ -538,7 +541,7 @@ impl Culler {
             lists_layout,
             depth_bounds,
             depth_bounds_blocks,
-            depth_bounds_lines,
+            tile_lines,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
@@ -680,14 +683,10 @@ impl Culler {
             )?;
         }
         // Rows of light rectangles: gather's coarse-to-fine passes, and scatter's masks.
-        let (_, depth_rows) = if masked && !per_light && self.gather_lines {
-            depth_groups_lines(&params)
-        } else {
-            depth_groups(
-                &params,
-                (!clustered && params.coarse > 0) || (per_light && masked),
-            )
-        };
+        let (_, depth_rows) = depth_groups(
+            &params,
+            (!clustered && params.coarse > 0) || (per_light && masked),
+        );
         if depth_rows > ctx.limits.max_compute_workgroups_per_dimension {
             return Err(GpuError::OverLimit {
                 what: "cull.depth_bounds workgroup rows (tiles and light rectangles)".into(),
@@ -939,9 +938,9 @@ impl Culler {
         Ok(f.finish(indices, total, masks.clone())?)
     }
 
-    /// Gather's and 2.5D's lines path: `cull.depth_bounds` with the tile lines, then each
-    /// tile's list decided and written in one pass (`shaders/cull/tile_lines.wgsl`). Alone, a
-    /// count pass first sizes the lists; back to back, a run is the two passes.
+    /// Gather's and 2.5D's lines path: `cull.tile_lines`, then each tile's depth data and list
+    /// in one pass (`shaders/cull/tile_lines.wgsl`). Alone, a count pass of the same kind first
+    /// sizes the lists; back to back, a run is the two passes.
     fn run_lines(
         &self,
         f: Frame<'_>,
@@ -960,10 +959,10 @@ impl Culler {
             f.pass(
                 enc,
                 timer,
-                "cull.depth_bounds",
-                &self.depth_bounds_lines,
+                "cull.tile_lines",
+                &self.tile_lines,
                 &group_a,
-                depth_groups_lines(&p),
+                tile_lines_groups(&p),
             );
             if !sized {
                 f.pass(

@@ -59,6 +59,10 @@ pub const LINES_PER_GROUP: u32 = 32;
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
 
+// Gather's lines path computes its tiles' depth data in its list passes with
+// `cull.depth_bounds`'s code: four tiles a workgroup either way.
+const _: () = assert!(MASK_FILL_TILES == DEPTH_TILES);
+
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
