@@ -225,8 +225,17 @@ fn extent_keeps(e: vec4<f32>, t: TileDepth) -> bool {
     return true;
 }
 
+// Depth bin of linear depth d (layout::ZBINS): monotone in d; every depth in bin 0 where the
+// near plane is not in front of the eye.
+fn zbin(d: f32) -> u32 {
+    if !(cull.near > 0.0) {
+        return 0u;
+    }
+    return min((bitcast<u32>(max(d, cull.near)) - bitcast<u32>(cull.near)) >> ZBIN_SHIFT, ZBINS - 1u);
+}
+
 // Tile lines (gather's and 2.5D's lines path): line c < tiles_x is column c of tiles, line
-// tiles_x + r row r. A tile's side planes 0 and 1 depend only on its column and 2 and 3 only
+// tiles_x + r row r, and line tiles_x + tiles_y + b depth bin b (zbin). A tile's side planes 0 and 1 depend only on its column and 2 and 3 only
 // on its row (tile_ndc), so a line's two planes are those of each of its tiles, the same
 // floats.
 fn line_planes(line: u32) -> array<vec4<f32>, 2> {

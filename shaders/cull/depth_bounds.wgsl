@@ -73,6 +73,8 @@ fn store_light_rect(i: u32, index: u32, blocks: bool) {
 // A workgroup's lights (view space) and tile rectangles, for its words of the tile lines.
 var<workgroup> wg_line_light: array<CullLight, 64 * DEPTH_TILES>;
 var<workgroup> wg_line_rect: array<vec4<i32>, 64 * DEPTH_TILES>;
+// And their depth bins (first, last), from their depth extents.
+var<workgroup> wg_line_bins: array<vec2<i32>, 64 * DEPTH_TILES>;
 
 // Light-row workgroup `group`: lights 64 DEPTH_TILES g .. (g + 1) 64 DEPTH_TILES (2 DEPTH_TILES
 // words of the tile lines) and lines LINES_PER_GROUP c .. (c + 1) LINES_PER_GROUP, for g and c
@@ -86,7 +88,7 @@ var<workgroup> wg_line_rect: array<vec4<i32>, 64 * DEPTH_TILES>;
 // rectangle holds it and that pass its four side planes. Every word of every line below
 // mask_words() is written, so the lines need no clear. Called in uniform control flow.
 fn store_light_lines(group: u32, index: u32) {
-    let lines = cull.tiles_x + cull.tiles_y;
+    let lines = cull.tiles_x + cull.tiles_y + ZBINS;
     let chunks = (lines + LINES_PER_GROUP - 1u) / LINES_PER_GROUP;
     let first = group / chunks * 64u * DEPTH_TILES;
     let chunk = group % chunks;
@@ -96,12 +98,16 @@ fn store_light_lines(group: u32, index: u32) {
     let words = mask_words();
     let i = first + index;
     var rect = vec4<i32>(0, 0, -1, -1);
+    var bins = vec2<i32>(1, 0);
     if i < cull.light_count {
         let l = cull_light(lights[i]);
         rect = light_tiles(l);
         wg_line_light[index] = l;
+        let e = light_depth_extent(l);
+        // (A cone's narrowed extent may be empty, lo > hi: its bins are then those between, so
+        // that every tile whose depth bounds extent_keeps passes shares a bin with it.)
+        bins = vec2<i32>(i32(zbin(min(e.x, e.y))), i32(zbin(max(e.x, e.y))));
         if chunk == 0u {
-            let e = light_depth_extent(l);
             let at = lines * words + 4u * i;
             tile_lines[at] = bitcast<u32>(e.x);
             tile_lines[at + 1u] = bitcast<u32>(e.y);
@@ -110,6 +116,7 @@ fn store_light_lines(group: u32, index: u32) {
         }
     }
     wg_line_rect[index] = rect;
+    wg_line_bins[index] = bins;
     workgroupBarrier();
     let per = 2u * DEPTH_TILES;
     let line = chunk * LINES_PER_GROUP + index / per;
@@ -118,10 +125,23 @@ fn store_light_lines(group: u32, index: u32) {
     if line >= lines || word >= words {
         return;
     }
+    var bits = 0u;
+    let side = cull.tiles_x + cull.tiles_y;
+    if line >= side {
+        // A depth bin: the lights whose bins hold it.
+        let b = i32(line - side);
+        for (var k = 0u; k < 32u; k++) {
+            let r = wg_line_bins[w * 32u + k];
+            if r.x <= b && b <= r.y {
+                bits |= 1u << k;
+            }
+        }
+        tile_lines[line * words + word] = bits;
+        return;
+    }
     let column = line < cull.tiles_x;
     let at = i32(select(line - cull.tiles_x, line, column));
     let planes = line_planes(line);
-    var bits = 0u;
     for (var k = 0u; k < 32u; k++) {
         let s = w * 32u + k;
         let r = wg_line_rect[s];

@@ -33,14 +33,23 @@ fn line_word(line: u32, w: u32) -> u32 {
     return tile_masks[line * mask_words() + w];
 }
 
-// Word w of tile `tile`'s kept lights.
-fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth) -> u32 {
+// Word w of tile `tile`'s kept lights; `bins`: the tile's depth bins (first, last).
+fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
     var m = line_word(tile.x, w) & line_word(cull.tiles_x + tile.y, w);
+    if m != 0u && bins.y - bins.x < ZBIN_MAX_SPAN {
+        // The depth bins' prefilter: only lights sharing a bin with the tile can pass its depth
+        // test (both bin ranges are monotone images of overlapping intervals).
+        var z = 0u;
+        for (var b = bins.x; b <= bins.y; b++) {
+            z |= line_word(cull.tiles_x + cull.tiles_y + b, w);
+        }
+        m &= z;
+    }
     var keep = 0u;
     while m != 0u {
         let bit = firstTrailingBit(m);
         m &= m - 1u;
-        let at = (cull.tiles_x + cull.tiles_y) * mask_words() + 4u * (w * 32u + bit);
+        let at = (cull.tiles_x + cull.tiles_y + ZBINS) * mask_words() + 4u * (w * 32u + bit);
         let e = vec4<f32>(bitcast<f32>(tile_masks[at]), bitcast<f32>(tile_masks[at + 1u]), bitcast<f32>(tile_masks[at + 2u]), bitcast<f32>(tile_masks[at + 3u]));
         if extent_keeps(e, t) {
             keep |= 1u << bit;
@@ -60,8 +69,10 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
     // The tiles' depth data, computed here (and stored) rather than read from an earlier pass.
     let t = tile_bounds(vec3<u32>(wg, 0u), slot);
     var words = 0u;
+    var bins = vec2<u32>(0u);
     if inside && t.covered != 0u {
         words = mask_words();
+        bins = vec2<u32>(zbin(t.dmin), zbin(t.dmax));
     }
     let k = (mask_words() + 63u) / 64u;
     let first = min(lane * k, words);
@@ -70,7 +81,7 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
     var w1 = 0u;
     var c = 0u;
     for (var w = first; w < end; w++) {
-        let d = lines_decide(tile, w, t);
+        let d = lines_decide(tile, w, t, bins);
         if w == first {
             w0 = d;
         } else if w == first + 1u {
@@ -106,7 +117,7 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         } else if w == first + 1u {
             m = w1;
         } else {
-            m = lines_decide(tile, w, t);
+            m = lines_decide(tile, w, t, bins);
         }
         let light = w * 32u;
         while m != 0u {

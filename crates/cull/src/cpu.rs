@@ -9,10 +9,10 @@
 use manylights_gpu::layout::{GpuFrame, GpuLight};
 
 use crate::geometry::{
-    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_tiles, line_planes, linear_depth,
-    outside_plane, tile_keeps, tile_side_planes,
+    self, CullLight, bin_of, depth_cell, depth_cell_scale, light_depth_extent, light_tiles,
+    line_planes, linear_depth, outside_plane, tile_keeps, tile_side_planes, zbin,
 };
-use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth};
+use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth, ZBINS};
 
 /// Relative band around the slack inside which a decision is borderline.
 pub const BORDER: f32 = 0.1;
@@ -190,17 +190,23 @@ pub fn gather(
 }
 
 /// Oracle of the tile lines that `cull.depth_bounds` writes for gather's and 2.5D's lines path
-/// (`shaders/cull/tile_lines.wgsl`): for each column of tiles, then each row, two words for
-/// each 64 lights, bit `i % 32` of word `i / 32` set when light `i`'s rectangle spans the line
-/// and the light is inside the line's two side planes. Returned at the slack moved down and up
+/// (`shaders/cull/tile_lines.wgsl`): for each column of tiles, then each row, then each depth
+/// bin, two words for each 64 lights, bit `i % 32` of word `i / 32` set when light `i`'s
+/// rectangle spans the line and the light is inside the line's two side planes, or for a bin
+/// when the bins of its depth extent hold it. Returned at the slack moved down and up
 /// by [`BORDER`]: a GPU's word must hold every bit of the first and no bit outside the second.
 pub fn tile_lines(frame: &GpuFrame, p: &GpuCullParams, lights: &[GpuLight]) -> [Vec<u32>; 2] {
     let words = lights.len().div_ceil(64) * 2;
-    let lines = (p.tiles_x + p.tiles_y) as usize;
+    let side = p.tiles_x + p.tiles_y;
+    let lines = (side + ZBINS) as usize;
     [1.0 - BORDER, 1.0 + BORDER].map(|k| {
         let mut out = vec![0u32; lines * words];
         for (i, l) in lights.iter().enumerate() {
             let c = CullLight::new(frame, l, p.slack * k);
+            let [lo, hi, _, _] = light_depth_extent(&c);
+            for b in zbin(p, lo.min(hi))..=zbin(p, lo.max(hi)) {
+                out[(side + b) as usize * words + i / 32] |= 1 << (i % 32);
+            }
             let r = light_tiles(frame, p, &c);
             for line in 0..p.tiles_x + p.tiles_y {
                 let (at, lo, hi) = if line < p.tiles_x {

@@ -55,6 +55,30 @@ pub fn tile_side_planes(frame: &GpuFrame, p: &GpuCullParams, tile: [u32; 2]) -> 
     ]
 }
 
+/// WGSL `light_depth_extent`: (lo, hi, sphere lo, sphere hi).
+pub fn light_depth_extent(l: &CullLight) -> [f32; 4] {
+    let s_lo = -l.center.z - l.radius - l.slack;
+    let s_hi = -l.center.z + l.radius + l.slack;
+    let (mut lo, mut hi) = (s_lo, s_hi);
+    if l.is_cone {
+        let n_perp = (Vec3::Z - l.axis.z * l.axis).length();
+        let spread = l.radius * l.tan_outer * n_perp;
+        hi = hi.min((-l.center.z).max(-(l.center.z + l.axis.z * l.radius) + spread) + l.slack);
+        lo = lo.max(-(l.center.z.max(l.center.z + l.axis.z * l.radius + spread)) - l.slack);
+    }
+    [lo, hi, s_lo, s_hi]
+}
+
+/// WGSL `zbin`: the depth bin of linear depth `d` ([`crate::layout::ZBINS`]).
+pub fn zbin(p: &GpuCullParams, d: f32) -> u32 {
+    // (Written so that a NaN near plane also gives bin 0, as the WGSL's negated test does.)
+    if !(p.near > 0.0) {
+        return 0;
+    }
+    ((d.max(p.near).to_bits() - p.near.to_bits()) >> crate::layout::ZBIN_SHIFT)
+        .min(crate::layout::ZBINS - 1)
+}
+
 /// WGSL `line_planes`: the two side planes of tile line `line` (columns, then rows).
 pub fn line_planes(frame: &GpuFrame, p: &GpuCullParams, line: u32) -> [Vec4; 2] {
     if line < p.tiles_x {

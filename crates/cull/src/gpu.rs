@@ -299,7 +299,8 @@ fn depth_groups(p: &GpuCullParams, rects: bool) -> (u32, u32) {
 /// Workgroups of `cull.tile_lines` (gather's lines path): one for each 64 `DEPTH_TILES` lights
 /// and [`crate::layout::LINES_PER_GROUP`] lines of tiles.
 fn tile_lines_groups(p: &GpuCullParams) -> (u32, u32) {
-    let chunks = (p.tiles_x + p.tiles_y).div_ceil(crate::layout::LINES_PER_GROUP);
+    let chunks =
+        (p.tiles_x + p.tiles_y + crate::layout::ZBINS).div_ceil(crate::layout::LINES_PER_GROUP);
     let groups = p.light_count.div_ceil(64 * crate::layout::DEPTH_TILES) * chunks;
     groups_2d(groups, GROUPS_X)
 }
@@ -313,9 +314,11 @@ fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
 }
 
 /// Bytes of the tile lines (`shaders/cull/tile_lines.wgsl`): two words a column or row of
-/// tiles for each 64 lights.
+/// tiles or depth bin for each 64 lights.
 fn lines_bytes(p: &GpuCullParams) -> u64 {
-    u64::from(p.tiles_x + p.tiles_y) * u64::from(p.light_count.div_ceil(64)) * 8
+    u64::from(p.tiles_x + p.tiles_y + crate::layout::ZBINS)
+        * u64::from(p.light_count.div_ceil(64))
+        * 8
 }
 
 /// Bytes of the tile lines and, after them, each light's depth extent (four f32).

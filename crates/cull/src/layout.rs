@@ -56,6 +56,18 @@ pub const SCATTER_MASK_GROUPS: u32 = 2048;
 /// for gather's lines path, with 64 [`DEPTH_TILES`] lights: one (line, word) pair a thread.
 pub const LINES_PER_GROUP: u32 = 32;
 
+/// Depth bins of gather's lines path (z-bins after the columns and rows of tiles): bin
+/// `(bits(max(d, near)) - bits(near)) >> ZBIN_SHIFT` of linear depth `d`, clamped to the last,
+/// with `near` the camera's near plane (> 0; otherwise every light is in bin 0). Float bits
+/// order like positive floats, so the bin is monotone in `d` without rounding: four bins an
+/// octave from the near plane, 16 octaves.
+pub const ZBINS: u32 = 64;
+/// See [`ZBINS`].
+pub const ZBIN_SHIFT: u32 = 21;
+/// Tiles spanning more depth bins than this skip the bins' prefilter (it would load many words
+/// to reject few lights).
+pub const ZBIN_MAX_SPAN: u32 = 8;
+
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
 
@@ -69,6 +81,9 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
     WgslConst::U32("LINES_PER_GROUP", LINES_PER_GROUP),
+    WgslConst::U32("ZBINS", ZBINS),
+    WgslConst::U32("ZBIN_SHIFT", ZBIN_SHIFT),
+    WgslConst::U32("ZBIN_MAX_SPAN", ZBIN_MAX_SPAN),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),
