@@ -75,16 +75,13 @@ var<workgroup> wg_line_light: array<CullLight, 64 * DEPTH_TILES>;
 var<workgroup> wg_line_rect: array<vec4<i32>, 64 * DEPTH_TILES>;
 // And their depth bins (first, last), from their depth extents.
 var<workgroup> wg_line_bins: array<vec2<i32>, 64 * DEPTH_TILES>;
-// The words of the workgroup's (line, word) pairs.
-var<workgroup> wg_line_bits: array<atomic<u32>, 64 * DEPTH_TILES / LINE_SPLIT>;
 
 // Light-row workgroup `group`: lights 64 DEPTH_TILES g .. (g + 1) 64 DEPTH_TILES (2 DEPTH_TILES
 // words of the tile lines) and lines LINES_PER_GROUP c .. (c + 1) LINES_PER_GROUP, for g and c
 // the quotient and remainder of `group` by the line chunks. Each thread takes one light into
 // workgroup memory (view space, and its tile rectangle: none past the last light), and the
 // first line chunk's also stores its depth extent (light_depth_extent) after the lines; then
-// each LINE_SPLIT threads take one (line, word) pair, consecutive pairs consecutive words of a
-// line. A
+// each thread takes one (line, word) pair, consecutive threads consecutive words of a line. A
 // pair's word has bit k set when light 32 word + k's rectangle spans the line (its columns for a
 // column, its rows for a row) and the light is inside both of the line's planes (line_planes).
 // A tile's candidates are then its column's bits and its row's: exactly the lights whose
@@ -120,55 +117,43 @@ fn store_light_lines(group: u32, index: u32) {
     }
     wg_line_rect[index] = rect;
     wg_line_bins[index] = bins;
-    if index < 64u * DEPTH_TILES / LINE_SPLIT {
-        atomicStore(&wg_line_bits[index], 0u);
-    }
     workgroupBarrier();
-    // LINE_SPLIT threads a (line, word) pair, each taking 32 / LINE_SPLIT of its lights; their
-    // bits meet in workgroup memory.
     let per = 2u * DEPTH_TILES;
-    let q = index % LINE_SPLIT;
-    let pair = index / LINE_SPLIT;
-    let line = chunk * LINES_PER_GROUP + pair / per;
-    let w = pair % per;
+    let line = chunk * LINES_PER_GROUP + index / per;
+    let w = index % per;
     let word = first / 32u + w;
-    let valid = line < lines && word < words;
+    if line >= lines || word >= words {
+        return;
+    }
     var bits = 0u;
     let side = cull.tiles_x + cull.tiles_y;
-    let k0 = q * (32u / LINE_SPLIT);
-    let k1 = k0 + 32u / LINE_SPLIT;
-    if valid && line >= side {
+    if line >= side {
         // A depth bin: the lights whose bins hold it.
         let b = i32(line - side);
-        for (var k = k0; k < k1; k++) {
+        for (var k = 0u; k < 32u; k++) {
             let r = wg_line_bins[w * 32u + k];
             if r.x <= b && b <= r.y {
                 bits |= 1u << k;
             }
         }
-    } else if valid {
-        let column = line < cull.tiles_x;
-        let at = i32(select(line - cull.tiles_x, line, column));
-        let planes = line_planes(line);
-        for (var k = k0; k < k1; k++) {
-            let s = w * 32u + k;
-            let r = wg_line_rect[s];
-            let span = select(r.yw, r.xz, column);
-            if span.x <= at && at <= span.y {
-                let l = wg_line_light[s];
-                if !outside_plane(planes[0], l) && !outside_plane(planes[1], l) {
-                    bits |= 1u << k;
-                }
+        tile_lines[line * words + word] = bits;
+        return;
+    }
+    let column = line < cull.tiles_x;
+    let at = i32(select(line - cull.tiles_x, line, column));
+    let planes = line_planes(line);
+    for (var k = 0u; k < 32u; k++) {
+        let s = w * 32u + k;
+        let r = wg_line_rect[s];
+        let span = select(r.yw, r.xz, column);
+        if span.x <= at && at <= span.y {
+            let l = wg_line_light[s];
+            if !outside_plane(planes[0], l) && !outside_plane(planes[1], l) {
+                bits |= 1u << k;
             }
         }
     }
-    if bits != 0u {
-        atomicOr(&wg_line_bits[pair], bits);
-    }
-    workgroupBarrier();
-    if valid && q == 0u {
-        tile_lines[line * words + word] = atomicLoad(&wg_line_bits[pair]);
-    }
+    tile_lines[line * words + word] = bits;
 }
 
 @compute @workgroup_size(64 * DEPTH_TILES)

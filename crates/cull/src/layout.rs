@@ -52,13 +52,9 @@ pub const SCATTER_MASK_THREADS: u32 = 256;
 /// where fewer blocks can be queued).
 pub const SCATTER_MASK_GROUPS: u32 = 2048;
 
-/// Threads that share one (line, word of 32 lights) pair in `cull.tile_lines`, each taking 32 /
-/// LINE_SPLIT lights: more threads, shorter loops.
-pub const LINE_SPLIT: u32 = 4;
-/// Lines (columns and rows of tiles, depth bins) that a `cull.tile_lines` workgroup takes for
-/// its 64 [`DEPTH_TILES`] lights (2 [`DEPTH_TILES`] words a line, [`LINE_SPLIT`] threads a
-/// word).
-pub const LINES_PER_GROUP: u32 = 32 / LINE_SPLIT;
+/// Lines of tiles (columns, then rows) that a light-row workgroup of `cull.depth_bounds` takes
+/// for gather's lines path, with 64 [`DEPTH_TILES`] lights: one (line, word) pair a thread.
+pub const LINES_PER_GROUP: u32 = 32;
 
 /// Depth bins of gather's lines path (z-bins after the columns and rows of tiles): bin
 /// `(bits(max(d, near)) - bits(near)) >> ZBIN_SHIFT` of linear depth `d`, clamped to the last,
@@ -85,7 +81,6 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
     WgslConst::U32("LINES_PER_GROUP", LINES_PER_GROUP),
-    WgslConst::U32("LINE_SPLIT", LINE_SPLIT),
     WgslConst::U32("ZBINS", ZBINS),
     WgslConst::U32("ZBIN_SHIFT", ZBIN_SHIFT),
     WgslConst::U32("ZBIN_MAX_SPAN", ZBIN_MAX_SPAN),
