@@ -71,8 +71,8 @@ pub fn light_depth_extent(l: &CullLight) -> [f32; 4] {
 
 /// WGSL `zbin`: the depth bin of linear depth `d` ([`crate::layout::ZBINS`]).
 pub fn zbin(p: &GpuCullParams, d: f32) -> u32 {
-    // (Written so that a NaN near plane also gives bin 0, as the WGSL's negated test does.)
-    if !(p.near > 0.0) {
+    // A NaN near plane also gives bin 0, as in the WGSL.
+    if p.near.is_nan() || p.near <= 0.0 {
         return 0;
     }
     ((d.max(p.near).to_bits() - p.near.to_bits()) >> crate::layout::ZBIN_SHIFT)
