@@ -284,6 +284,53 @@ fn cull_repeat_times_runs_back_to_back() {
     }
 }
 
+/// `cull --repeat N` with gather's lines path: the single run counts, then fills; back to back
+/// a run is `cull.tile_lines` and the fill, no count pass, and each pass's median is over the
+/// N runs (the timed passes split by runs, not by the first run's passes).
+#[test]
+fn cull_repeat_times_gathers_lines_path_in_two_passes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cull");
+    let o = manylights(&[
+        "cull",
+        "--scene",
+        "pillars",
+        "--lights",
+        "64",
+        "--strategy",
+        "tiled-gather",
+        "--width",
+        "40",
+        "--height",
+        "23",
+        "--repeat",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("tile masks              used as tile lines ("),
+        "{stdout}"
+    );
+    let (single, after) = stdout
+        .split_once("3 runs back to back (median per pass):")
+        .unwrap_or_else(|| panic!("no back-to-back timings: {stdout}"));
+    assert!(single.contains("cull.tiled_gather.count"), "{stdout}");
+    let runs: Vec<&str> = after
+        .lines()
+        .take_while(|l| !l.contains("total (median run)"))
+        .filter(|l| l.trim_start().starts_with("cull."))
+        .map(|l| l.split_whitespace().next().unwrap())
+        .collect();
+    assert_eq!(
+        runs,
+        ["cull.tile_lines", "cull.tiled_gather.fill"],
+        "{stdout}"
+    );
+}
+
 #[test]
 fn cull_rejects_bad_parameters() {
     rejects_cmd(
