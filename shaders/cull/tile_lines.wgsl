@@ -96,19 +96,11 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         }
         return;
     }
-    if lane == 0u && inside {
-        var at = 0u;
-        if scan.y != 0u {
-            at = atomicAdd(&cull_stats[5], scan.y);
-        }
-        out_ranges[bin] = vec2<u32>(at, scan.y);
-        wg_mask_at[j] = at;
-    }
-    workgroupBarrier();
+    let at = place_tile(lane, j, bin, scan.y, inside);
     if c == 0u {
         return;
     }
-    var pos = wg_mask_at[j] + scan.x - c;
+    var pos = at + scan.x - c;
     let cap = arrayLength(&out_indices);
     for (var w = first; w < end; w++) {
         var m: u32;

@@ -18,6 +18,22 @@
 // The fill's places for its tiles.
 var<workgroup> wg_mask_at: array<u32, MASK_FILL_TILES>;
 
+// The place in the list buffer of tile j of the workgroup (`bin`, `total` lights; `has`: a tile
+// of the image): its first thread takes it with one atomic add on cull_stats[5] and writes the
+// tile's range; every thread of the workgroup gets it. Called in uniform control flow.
+fn place_tile(lane: u32, j: u32, bin: u32, total: u32, has: bool) -> u32 {
+    if lane == 0u && has {
+        var at = 0u;
+        if total != 0u {
+            at = atomicAdd(&cull_stats[5], total);
+        }
+        out_ranges[bin] = vec2<u32>(at, total);
+        wg_mask_at[j] = at;
+    }
+    workgroupBarrier();
+    return wg_mask_at[j];
+}
+
 // The fill: workgroup wg takes MASK_FILL_TILES tiles of a row (tiles MASK_FILL_TILES wg.x + j
 // of row wg.y), 64 threads each (fewer, larger workgroups: launching them costs more than a
 // tile's work). Thread `lane` of a tile takes words [lane k, lane k + k) of its mask (k = words
@@ -41,16 +57,7 @@ fn masks_expand(wg: vec2<u32>, slot: u32) {
         c += countOneBits(tile_masks[w]);
     }
     let scan = scan_keep(slot, c);
-    if lane == 0u && words != 0u {
-        var at = 0u;
-        if scan.y != 0u {
-            at = atomicAdd(&cull_stats[5], scan.y);
-        }
-        out_ranges[bin] = vec2<u32>(at, scan.y);
-        wg_mask_at[j] = at;
-    }
-    workgroupBarrier();
-    var pos = wg_mask_at[j] + scan.x - c;
+    var pos = place_tile(lane, j, bin, scan.y, words != 0u) + scan.x - c;
     if c == 0u {
         return;
     }

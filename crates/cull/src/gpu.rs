@@ -203,19 +203,10 @@ impl CullOutput {
         self
     }
 
-    /// Reads the tile lines back, where the run used them.
+    /// Reads the tile lines back (their words, not the lights' depth extents after them),
+    /// where the run used them.
     pub fn read_tile_lines(&self, ctx: &GpuContext) -> Result<Option<Vec<u32>>, GpuError> {
-        self.tile_lines
-            .as_ref()
-            .map(|m| {
-                Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
-                    ctx,
-                    m,
-                    0,
-                    lines_bytes(&self.params),
-                )?))
-            })
-            .transpose()
+        read_words(ctx, self.tile_lines.as_ref(), lines_bytes(&self.params))
     }
 
     /// The lists' bindings 0, 1, 2 (`CullParams`, `bin_ranges`, `light_indices`), as every
@@ -260,17 +251,7 @@ impl CullOutput {
 
     /// Reads the tile masks back, where the run used them.
     pub fn read_tile_masks(&self, ctx: &GpuContext) -> Result<Option<Vec<u32>>, GpuError> {
-        self.tile_masks
-            .as_ref()
-            .map(|m| {
-                Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
-                    ctx,
-                    m,
-                    0,
-                    mask_bytes(&self.params),
-                )?))
-            })
-            .transpose()
+        read_words(ctx, self.tile_masks.as_ref(), mask_bytes(&self.params))
     }
 
     /// Reads the cluster occupancy back (meaningful with `skip_empty`).
@@ -311,6 +292,20 @@ fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
         p.tiles_x.div_ceil(crate::layout::MASK_FILL_TILES),
         p.tiles_y,
     )
+}
+
+/// The first `bytes` of `buf` as words, where there is a buffer.
+fn read_words(
+    ctx: &GpuContext,
+    buf: Option<&wgpu::Buffer>,
+    bytes: u64,
+) -> Result<Option<Vec<u32>>, GpuError> {
+    buf.map(|b| {
+        Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+            ctx, b, 0, bytes,
+        )?))
+    })
+    .transpose()
 }
 
 /// Bytes of the tile lines (`shaders/cull/tile_lines.wgsl`): two words a column or row of
