@@ -86,12 +86,17 @@ var<workgroup> wg_line_bins: array<vec2<i32>, 64 * DEPTH_TILES>;
 // column, its rows for a row) and the light is inside both of the line's planes (line_planes).
 // A tile's candidates are then its column's bits and its row's: exactly the lights whose
 // rectangle holds it and that pass its four side planes. Every word of every line below
-// mask_words() is written, so the lines need no clear. Called in uniform control flow.
+// mask_words() is written, so the lines need no clear. Workgroup 0 also zeroes the list passes'
+// cursor, cull_stats[5]. Called in uniform control flow.
 fn store_light_lines(group: u32, index: u32) {
     let lines = cull.tiles_x + cull.tiles_y + ZBINS;
     let chunks = (lines + LINES_PER_GROUP - 1u) / LINES_PER_GROUP;
     let first = group / chunks * 64u * DEPTH_TILES;
     let chunk = group % chunks;
+    // The list passes' cursor starts each run at zero (back-to-back runs clear nothing).
+    if group == 0u && index == 0u {
+        atomicStore(&cull_stats[5], 0u);
+    }
     if first >= cull.light_count {
         return;
     }

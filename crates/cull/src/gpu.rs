@@ -953,7 +953,11 @@ impl Culler {
         let group_a = f.group(placeholder, placeholder, &lines);
         let groups = mask_fill_groups(&p);
         let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, sized: bool| {
-            f.clear(enc, true);
+            // Back to back, no clear: `cull.tile_lines` zeroes the fill's cursor, the only
+            // counter these runs use (a clear is a transfer of its own between passes).
+            if !sized {
+                f.clear(enc, true);
+            }
             f.pass(
                 enc,
                 timer,
