@@ -81,7 +81,7 @@ var<workgroup> wg_line_bins: array<vec2<i32>, 64 * DEPTH_TILES>;
 // the quotient and remainder of `group` by the line chunks. Each thread takes one light into
 // workgroup memory (view space, and its tile rectangle: none past the last light), and the
 // first line chunk's also stores its depth extent (light_depth_extent) after the lines; then
-// each thread takes one (line, word) pair, consecutive threads consecutive words of a line. A
+// each thread takes one (line, word) pair, consecutive threads consecutive lines of a word. A
 // pair's word has bit k set when light 32 word + k's rectangle spans the line (its columns for a
 // column, its rows for a row) and the light is inside both of the line's planes (line_planes).
 // A tile's candidates are then its column's bits and its row's: exactly the lights whose
@@ -123,9 +123,11 @@ fn store_light_lines(group: u32, index: u32) {
     wg_line_rect[index] = rect;
     wg_line_bins[index] = bins;
     workgroupBarrier();
-    let per = 2u * DEPTH_TILES;
-    let line = chunk * LINES_PER_GROUP + index / per;
-    let w = index % per;
+    // Consecutive threads take consecutive lines of one word, so that a subgroup tests one
+    // light at a time (one workgroup-memory address, and lines next to each other mostly agree
+    // on whether the light's rectangle spans them).
+    let line = chunk * LINES_PER_GROUP + index % LINES_PER_GROUP;
+    let w = index / LINES_PER_GROUP;
     let word = first / 32u + w;
     if line >= lines || word >= words {
         return;
@@ -189,6 +191,6 @@ fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, rows: u32) {
     if wg.y < light_rows {
         store_light_rect(first + index, index, rows == LIGHT_ROWS_BLOCKS);
     } else {
-        _ = tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index);
+        _ = tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index, true);
     }
 }

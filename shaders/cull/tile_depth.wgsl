@@ -12,8 +12,9 @@ var<workgroup> wg_tile_covered: array<atomic<u32>, DEPTH_TILES>;
 
 // The depth data of workgroup wg's tiles, DEPTH_TILES tiles of row wg.y a workgroup, 64
 // threads a tile (thread `index`'s tile is the index / 64-th): stored in tile_depth and
-// returned to every thread of the tile. Called in uniform control flow.
-fn tile_bounds(wg: vec3<u32>, index: u32) -> TileDepth {
+// returned to every thread of the tile; with `with_mask` false, the 2.5D mask is left 0 (one
+// look at the pixels, not two). Called in uniform control flow.
+fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool) -> TileDepth {
     let j = index / 64u;
     let li = index % 64u;
     let tile = vec2<u32>(wg.x * DEPTH_TILES + j, wg.y);
@@ -47,6 +48,8 @@ fn tile_bounds(wg: vec3<u32>, index: u32) -> TileDepth {
     if covered > 0u {
         t.dmin = linear_depth(bitcast<f32>(atomicLoad(&wg_tile_zmin[j])));
         t.dmax = linear_depth(bitcast<f32>(atomicLoad(&wg_tile_zmax[j])));
+    }
+    if covered > 0u && with_mask {
         let scale = depth_cell_scale(t);
         for (var i = li; i < n; i += 64u) {
             let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);

@@ -1,29 +1,34 @@
 // Gather's and 2.5D's lines path (where a bit per (tile, light) fits the host's budget, as at
 // the Forward+ paper's configuration): two passes, no stored tile masks, no chunks, no scan.
 //
-// 1. cull.tile_lines (tile_lines_pass in depth_bounds.wgsl) writes the tile lines: for each column of tiles and each row, a bit per light, set when the light's tile
-//    rectangle spans the line and the light is inside the line's two side planes
-//    (store_light_lines in depth_bounds.wgsl). A tile's side planes 0 and 1 are its column's and
-//    2 and 3 its row's, so the AND of a tile's column word and row word is exactly the lights of
-//    that word whose rectangle holds the tile and that pass its four side planes.
+// 1. cull.tile_lines (store_light_lines in depth_bounds.wgsl) writes the tile lines: for each
+//    column of tiles and each row, a bit per light, set when the light's tile rectangle spans
+//    the line and the light is inside the line's two side planes; for each depth bin (zbin), a
+//    bit per light whose depth extent's bins hold it; and after the lines each light's depth
+//    extent (light_depth_extent). A tile's side planes 0 and 1 are its column's and 2 and 3
+//    its row's, so the AND of a tile's column word and row word is exactly the lights of that
+//    word whose rectangle holds the tile and that pass its four side planes.
 // 2. The count or fill pass (lines_tile), MASK_FILL_TILES tiles a workgroup, 64 threads a tile
-//    (as the masks' fill in tile_masks.wgsl, and as cull.depth_bounds, whose tile_bounds
-//    (tile_depth.wgsl) it runs first for its tiles' depth data): thread `lane` of a tile takes words [lane k,
-//    lane k + k) of the tile's mask (k = words / 64, rounded up), ANDs the tile's column and row
-//    words, and keeps each candidate that passes the rest of its tile test (depth_keeps: the
-//    depth bounds and the 2.5D masks). So the kept bits are those of tile_keeps with the
-//    rectangle, as cpu::gather states them. One scan of the threads' bit counts over the tile's
-//    64 threads gives the tile's total and each thread's place in the tile's list. The count
-//    pass adds each tile's total to cull_stats[5]; the fill pass takes the tile's place in the
-//    list buffer with one atomic add on cull_stats[5] (so it too ends holding the total),
-//    writes the tile's range, and turns the words into list entries in light order, writing
-//    none past the buffer's end (the host checks the total against the buffer's size). A
-//    thread keeps its first two words' verdicts in registers and decides any others again for
-//    the fill. A tile without covered pixels takes no words and gets an empty range.
+//    (as the masks' fill in tile_masks.wgsl), first computes its tiles' depth data (tile_bounds,
+//    tile_depth.wgsl, the code of cull.depth_bounds; the 2.5D mask only for 2.5D). Thread `lane`
+//    of a tile takes words [lane k, lane k + k) of the tile's mask (k = words / 64, rounded up),
+//    ANDs the tile's column and row words and the OR of its depth bins' words (only lights that
+//    share a bin with the tile can pass its depth test; skipped for tiles over ZBIN_MAX_SPAN
+//    bins), and keeps each candidate whose depth extent passes the tile's depth bounds and 2.5D
+//    mask (extent_keeps). So the kept bits are those of tile_keeps with the rectangle, as
+//    cpu::gather states them (up to rounding in its borderline band). One scan of the threads'
+//    bit counts over the tile's 64 threads gives the tile's total and each thread's place in
+//    the tile's list. The count pass adds each tile's total to cull_stats[5]; the fill pass
+//    places the workgroup's tiles with one atomic add on cull_stats[5] (place_tile; so it too
+//    ends holding the total), writes each tile's range, and turns the words into list entries
+//    in light order, writing none past the buffer's end (the host checks the total against the
+//    buffer's size). A thread keeps its first two words' verdicts in registers and decides any
+//    others again for the fill. A tile without covered pixels takes no words and gets an empty
+//    range.
 //
 // Back to back (the host already knows the total, Culler::run_repeated), a run is the two
-// passes: the lines, then the fill. Alone, the count pass runs first and the host sizes the
-// lists from its total.
+// passes and no clear (cull.tile_lines zeroes cull_stats[5]). Alone, the count pass runs first
+// and the host sizes the lists from its total.
 //
 // Binding 11 (declared as tile_masks in tile_masks.wgsl) holds the tile lines in these runs.
 
@@ -66,8 +71,9 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
     let tile = vec2<u32>(wg.x * MASK_FILL_TILES + j, wg.y);
     let inside = tile.x < cull.tiles_x;
     let bin = tile.y * cull.tiles_x + tile.x;
-    // The tiles' depth data, computed here (and stored) rather than read from an earlier pass.
-    let t = tile_bounds(vec3<u32>(wg, 0u), slot);
+    // The tiles' depth data, computed here (and stored) rather than read from an earlier pass;
+    // the 2.5D mask only for 2.5D (gather's tile depth keeps mask 0).
+    let t = tile_bounds(vec3<u32>(wg, 0u), slot, (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u);
     var words = 0u;
     var bins = vec2<u32>(0u);
     if inside && t.covered != 0u {
@@ -96,7 +102,7 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         }
         return;
     }
-    let at = place_tile(lane, j, bin, scan.y, inside);
+    let at = place_tile(slot, lane, j, bin, scan.y, inside);
     if c == 0u {
         return;
     }
