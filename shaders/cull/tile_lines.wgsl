@@ -38,15 +38,9 @@ fn line_word(line: u32, w: u32) -> u32 {
     return tile_masks[line * mask_words() + w];
 }
 
-// Word w of the lights that pass tile `tile`'s side planes within their rectangles.
-fn side_word(tile: vec2<u32>, w: u32) -> u32 {
-    return line_word(tile.x, w) & line_word(cull.tiles_x + tile.y, w);
-}
-
-// Word w of tile `tile`'s kept lights, from its side word `side`; `bins`: the tile's depth bins
-// (first, last).
-fn lines_decide(side: u32, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
-    var m = side;
+// Word w of tile `tile`'s kept lights; `bins`: the tile's depth bins (first, last).
+fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
+    var m = line_word(tile.x, w) & line_word(cull.tiles_x + tile.y, w);
     if m != 0u && bins.y - bins.x < ZBIN_MAX_SPAN {
         // The depth bins' prefilter: only lights sharing a bin with the tile can pass its depth
         // test (both bin ranges are monotone images of overlapping intervals).
@@ -77,17 +71,6 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
     let tile = vec2<u32>(wg.x * MASK_FILL_TILES + j, wg.y);
     let inside = tile.x < cull.tiles_x;
     let bin = tile.y * cull.tiles_x + tile.x;
-    let k = (mask_words() + 63u) / 64u;
-    // This thread's first two side words, loaded before the depth data so that their loads
-    // overlap its reduction.
-    var s0 = 0u;
-    var s1 = 0u;
-    if inside && lane * k < mask_words() {
-        s0 = side_word(tile, lane * k);
-        if k > 1u && lane * k + 1u < mask_words() {
-            s1 = side_word(tile, lane * k + 1u);
-        }
-    }
     // The tiles' depth data, computed here (and stored) rather than read from an earlier pass;
     // the 2.5D mask only for 2.5D (gather's tile depth keeps mask 0).
     let t = tile_bounds(vec3<u32>(wg, 0u), slot, (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u);
@@ -97,21 +80,14 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         words = mask_words();
         bins = vec2<u32>(zbin(t.dmin), zbin(t.dmax));
     }
+    let k = (mask_words() + 63u) / 64u;
     let first = min(lane * k, words);
     let end = min(lane * k + k, words);
     var w0 = 0u;
     var w1 = 0u;
     var c = 0u;
     for (var w = first; w < end; w++) {
-        var side: u32;
-        if w == first {
-            side = s0;
-        } else if w == first + 1u {
-            side = s1;
-        } else {
-            side = side_word(tile, w);
-        }
-        let d = lines_decide(side, w, t, bins);
+        let d = lines_decide(tile, w, t, bins);
         if w == first {
             w0 = d;
         } else if w == first + 1u {
@@ -139,7 +115,7 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         } else if w == first + 1u {
             m = w1;
         } else {
-            m = lines_decide(side_word(tile, w), w, t, bins);
+            m = lines_decide(tile, w, t, bins);
         }
         let light = w * 32u;
         while m != 0u {
