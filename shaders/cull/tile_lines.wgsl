@@ -19,8 +19,8 @@
 //    cpu::gather states them (up to rounding in its borderline band). One scan of the threads'
 //    bit counts over the tile's 64 threads gives the tile's total and each thread's place in
 //    the tile's list. The count pass adds each tile's total to cull_stats[5]; the fill pass
-//    places the workgroup's tiles with one atomic add on cull_stats[5] (place_tile; so it too
-//    ends holding the total), writes each tile's range, and turns the words into list entries
+//    places each tile with one atomic add on cull_stats[5] (place_tile; so it too ends
+//    holding the total), writes the tile's range, and turns the words into list entries
 //    in light order, writing none past the buffer's end (the host checks the total against the
 //    buffer's size). A thread keeps its first two words' verdicts in registers and decides any
 //    others again for the fill. A tile without covered pixels takes no words and gets an empty
@@ -102,7 +102,7 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         }
         return;
     }
-    let at = place_tile(slot, lane, j, bin, scan.y, inside);
+    let at = place_tile(lane, j, bin, scan.y, inside);
     if c == 0u {
         return;
     }

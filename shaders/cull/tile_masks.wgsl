@@ -15,40 +15,24 @@
 // only where it sits in the buffer differs from run to run (its range says where).
 @group(1) @binding(11) var<storage, read_write> tile_masks: array<u32>;
 
-// The fill's places for its tiles (first their totals, then their offsets in the workgroup's
-// place), and that place.
+// The fill's places for its tiles.
 var<workgroup> wg_mask_at: array<u32, MASK_FILL_TILES>;
-var<workgroup> wg_place_base: u32;
 
 // The place in the list buffer of tile j of the workgroup (`bin`, `total` lights; `has`: a tile
-// of the image): the workgroup's tiles take theirs together, one after another, with one atomic
-// add on cull_stats[5] (not one a tile: fewer atomics on one address), and each tile's first
-// thread writes its range; every thread of the tile gets it. Called in uniform control flow.
-fn place_tile(slot: u32, lane: u32, j: u32, bin: u32, total: u32, has: bool) -> u32 {
-    if lane == 0u {
-        wg_mask_at[j] = select(0u, total, has);
-    }
-    workgroupBarrier();
-    if slot == 0u {
-        // The tiles' exclusive prefix, in place, then the workgroup's place.
-        var sum = 0u;
-        for (var k = 0u; k < MASK_FILL_TILES; k++) {
-            let n = wg_mask_at[k];
-            wg_mask_at[k] = sum;
-            sum += n;
-        }
-        var base = 0u;
-        if sum != 0u {
-            base = atomicAdd(&cull_stats[5], sum);
-        }
-        wg_place_base = base;
-    }
-    workgroupBarrier();
-    let at = wg_place_base + wg_mask_at[j];
+// of the image): its first thread takes it with one atomic add on cull_stats[5] and writes the
+// tile's range; every thread of the tile gets it. (One atomic add a workgroup for its tiles
+// together, with one more barrier, measured slower.) Called in uniform control flow.
+fn place_tile(lane: u32, j: u32, bin: u32, total: u32, has: bool) -> u32 {
     if lane == 0u && has {
+        var at = 0u;
+        if total != 0u {
+            at = atomicAdd(&cull_stats[5], total);
+        }
         out_ranges[bin] = vec2<u32>(at, total);
+        wg_mask_at[j] = at;
     }
-    return at;
+    workgroupBarrier();
+    return wg_mask_at[j];
 }
 
 // The fill: workgroup wg takes MASK_FILL_TILES tiles of a row (tiles MASK_FILL_TILES wg.x + j
@@ -56,8 +40,8 @@ fn place_tile(slot: u32, lane: u32, j: u32, bin: u32, total: u32, has: bool) -> 
 // tile's work). Thread `lane` of a tile takes words [lane k, lane k + k) of its mask (k = words
 // / 64, rounded up), so that the threads' words follow light order; one scan of their bit
 // counts over the tile's 64 threads gives each thread its place in the tile's list and the
-// tile's total, from which the tiles take their places in the list buffer (one atomic add a
-// workgroup, place_tile) and their first threads write their ranges. Each thread then turns
+// tile's total, from which the tile's first thread takes its place in the list buffer (one
+// atomic add, place_tile) and writes its range. Each thread then turns
 // its words into list entries, clearing each nonzero word. A tile without lights writes an empty range.
 fn masks_expand(wg: vec2<u32>, slot: u32) {
     let j = slot / 64u;
@@ -74,7 +58,7 @@ fn masks_expand(wg: vec2<u32>, slot: u32) {
         c += countOneBits(tile_masks[w]);
     }
     let scan = scan_keep(slot, c);
-    var pos = place_tile(slot, lane, j, bin, scan.y, words != 0u) + scan.x - c;
+    var pos = place_tile(lane, j, bin, scan.y, words != 0u) + scan.x - c;
     if c == 0u {
         return;
     }
