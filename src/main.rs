@@ -876,7 +876,7 @@ fn repeated_timings(
     // Passes a run: back to back, a run may take fewer than `first` did (gather's lines path
     // needs no count pass once the lists are sized).
     let k = t.len() / n.max(1) as usize;
-    if k == 0 || t.len() % k != 0 {
+    if k == 0 || t.len() != k * n as usize {
         bail!("{} timed passes do not split into {n} runs", t.len());
     }
     // The same median as the experiments' (nearest rank).

@@ -235,9 +235,9 @@ fn zbin(d: f32) -> u32 {
 }
 
 // Tile lines (gather's and 2.5D's lines path): line c < tiles_x is column c of tiles, line
-// tiles_x + r row r, and line tiles_x + tiles_y + b depth bin b (zbin). A tile's side planes 0 and 1 depend only on its column and 2 and 3 only
-// on its row (tile_ndc), so a line's two planes are those of each of its tiles, the same
-// floats.
+// tiles_x + r row r, and line tiles_x + tiles_y + b depth bin b (zbin). A tile's side planes
+// 0 and 1 depend only on its column and 2 and 3 only on its row (tile_ndc), so a column's or
+// row's two planes are those of each of its tiles, the same floats.
 fn line_planes(line: u32) -> array<vec4<f32>, 2> {
     if line < cull.tiles_x {
         let p = tile_side_planes(vec2<u32>(line, 0u));

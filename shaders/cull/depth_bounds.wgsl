@@ -13,8 +13,8 @@
 // (depth_bounds_blocks) those rows also queue each light's blocks of SCATTER_MASK_THREADS
 // tiles of its rectangle, (light, block) pairs in block_queue, their number in
 // cull_stats[6], so that the count pass (scatter_masks, tiled_scatter.wgsl) shares a large
-// light's tiles among many workgroups. For gather's and 2.5D's lines path (depth_bounds_lines;
-// see tile_lines.wgsl) this module's cull.tile_lines pass (tile_lines_pass) has only light
+// light's tiles among many workgroups. For gather's and 2.5D's lines path (see
+// tile_lines.wgsl) this module's cull.tile_lines pass (tile_lines_pass) has only light
 // workgroups, each taking 64 DEPTH_TILES lights and a chunk of lines, and writing those words
 // of the tile lines and the lights' depth extents (store_light_lines); that path's list passes
 // compute the tiles' depth data themselves.

@@ -38,6 +38,12 @@ fn line_word(line: u32, w: u32) -> u32 {
     return tile_masks[line * mask_words() + w];
 }
 
+// Light i's depth extent (light_depth_extent), stored after the lines.
+fn light_extent(i: u32) -> vec4<f32> {
+    let at = (cull.tiles_x + cull.tiles_y + ZBINS) * mask_words() + 4u * i;
+    return bitcast<vec4<f32>>(vec4<u32>(tile_masks[at], tile_masks[at + 1u], tile_masks[at + 2u], tile_masks[at + 3u]));
+}
+
 // Word w of tile `tile`'s kept lights; `bins`: the tile's depth bins (first, last).
 fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
     var m = line_word(tile.x, w) & line_word(cull.tiles_x + tile.y, w);
@@ -54,9 +60,7 @@ fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
     while m != 0u {
         let bit = firstTrailingBit(m);
         m &= m - 1u;
-        let at = (cull.tiles_x + cull.tiles_y + ZBINS) * mask_words() + 4u * (w * 32u + bit);
-        let e = vec4<f32>(bitcast<f32>(tile_masks[at]), bitcast<f32>(tile_masks[at + 1u]), bitcast<f32>(tile_masks[at + 2u]), bitcast<f32>(tile_masks[at + 3u]));
-        if extent_keeps(e, t) {
+        if extent_keeps(light_extent(w * 32u + bit), t) {
             keep |= 1u << bit;
         }
     }

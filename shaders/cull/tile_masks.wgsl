@@ -41,8 +41,8 @@ fn place_tile(lane: u32, j: u32, bin: u32, total: u32, has: bool) -> u32 {
 // / 64, rounded up), so that the threads' words follow light order; one scan of their bit
 // counts over the tile's 64 threads gives each thread its place in the tile's list and the
 // tile's total, from which the tile's first thread takes its place in the list buffer (one
-// atomic add, place_tile) and writes its range. Each thread then turns
-// its words into list entries, clearing each nonzero word. A tile without lights writes an empty range.
+// atomic add, place_tile) and writes its range. Each thread then turns its words into list
+// entries, clearing each nonzero word. A tile without lights writes an empty range.
 fn masks_expand(wg: vec2<u32>, slot: u32) {
     let j = slot / 64u;
     let lane = slot % 64u;

@@ -187,7 +187,8 @@ pub struct CullOutput {
     pub tile_masks: Option<wgpu::Buffer>,
     /// The tile lines, where the run took gather's and 2.5D's lines path (within
     /// [`Culler::mask_budget`], with [`Culler::gather_lines`]): for each column of tiles, then
-    /// each row, two words for each 64 lights (see `shaders/cull/tile_lines.wgsl`).
+    /// each row, then each depth bin, two words for each 64 lights, and after them each light's
+    /// depth extent (see `shaders/cull/tile_lines.wgsl`).
     pub tile_lines: Option<wgpu::Buffer>,
 }
 
@@ -196,11 +197,6 @@ impl CullOutput {
     /// tile lines (whose per-tile words are never stored). The `tile_masks` result column.
     pub fn used_tile_masks(&self) -> bool {
         self.tile_masks.is_some() || self.tile_lines.is_some()
-    }
-
-    fn with_lines(mut self, lines: wgpu::Buffer) -> Self {
-        self.tile_lines = Some(lines);
-        self
     }
 
     /// Reads the tile lines back (their words, not the lights' depth extents after them),
@@ -351,9 +347,9 @@ pub struct Culler {
     /// A run's [`CullSettings::mask_budget`] overrides it.
     pub mask_budget: u64,
     /// Whether gather and 2.5D take their lines path where tile masks fit (true by default):
-    /// the tile lines in `cull.depth_bounds`, then one pass that decides and writes each tile's
-    /// list (`shaders/cull/tile_lines.wgsl`); false: the count pass stores tile masks and the
-    /// fill expands them.
+    /// `cull.tile_lines`, then one pass that computes each tile's depth data and decides and
+    /// writes its list (`shaders/cull/tile_lines.wgsl`); false: the count pass stores tile masks
+    /// and the fill expands them.
     pub gather_lines: bool,
     gather_count: wgpu::ComputePipeline,
     gather_lines_count: wgpu::ComputePipeline,
@@ -933,7 +929,7 @@ impl Culler {
             &|indices| f.group(indices, wide, binding_11),
             &filling,
         )?;
-        Ok(f.finish(indices, total, masks.clone())?)
+        Ok(f.finish(indices, total, masks.clone(), None)?)
     }
 
     /// Gather's and 2.5D's lines path: `cull.tile_lines`, then each tile's depth data and list
@@ -952,12 +948,9 @@ impl Culler {
         let placeholder = &self.placeholder;
         let group_a = f.group(placeholder, placeholder, &lines);
         let groups = mask_fill_groups(&p);
+        // No clear: `cull.tile_lines` zeroes the list passes' cursor, the only counter these
+        // runs use (a clear is a transfer of its own between passes).
         let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, sized: bool| {
-            // Back to back, no clear: `cull.tile_lines` zeroes the fill's cursor, the only
-            // counter these runs use (a clear is a transfer of its own between passes).
-            if !sized {
-                f.clear(enc, true);
-            }
             f.pass(
                 enc,
                 timer,
@@ -1002,7 +995,7 @@ impl Culler {
             &|indices| f.group(indices, placeholder, &lines),
             &filling,
         )?;
-        Ok(f.finish(indices, total, None)?.with_lines(lines.clone()))
+        Ok(f.finish(indices, total, None, Some(lines.clone()))?)
     }
 
     /// Tiled scatter with tile masks: the depth-bounds pass also stores each light's rectangle
@@ -1068,7 +1061,7 @@ impl Culler {
             &|indices| f.group(indices, &rects, &masks),
             &filling,
         )?;
-        Ok(f.finish(indices, total, Some(masks.clone()))?)
+        Ok(f.finish(indices, total, Some(masks.clone()), None)?)
     }
 
     /// Tiled scatter: per-light pair counts, their scan, the pairs, the radix sort by tile, and
@@ -1184,7 +1177,7 @@ impl Culler {
             SortedIn::Input => vals,
             SortedIn::Scratch => vals_tmp,
         };
-        Ok(f.finish(vals, pairs, None)?)
+        Ok(f.finish(vals, pairs, None, None)?)
     }
 
     /// The length of the list each pixel reads through the shared lookup (0 for background).
@@ -1608,6 +1601,7 @@ impl<'a> Frame<'a> {
         indices: wgpu::Buffer,
         total: u32,
         tile_masks: Option<wgpu::Buffer>,
+        tile_lines: Option<wgpu::Buffer>,
     ) -> Result<CullOutput, GpuError> {
         let dropped = if self.params.capacity != 0 {
             read_u32s(self.ctx, &self.stats, 0, 1)?[0]
@@ -1624,7 +1618,7 @@ impl<'a> Frame<'a> {
             tile_depth: self.tile_depth,
             occupancy: self.occupancy,
             tile_masks,
-            tile_lines: None,
+            tile_lines,
         })
     }
 }

@@ -52,7 +52,7 @@ pub const SCATTER_MASK_THREADS: u32 = 256;
 /// where fewer blocks can be queued).
 pub const SCATTER_MASK_GROUPS: u32 = 2048;
 
-/// Lines of tiles (columns, then rows) that a light-row workgroup of `cull.depth_bounds` takes
+/// Lines (columns of tiles, rows of tiles, depth bins) that a `cull.tile_lines` workgroup takes
 /// for gather's lines path, with 64 [`DEPTH_TILES`] lights: one (line, word) pair a thread.
 pub const LINES_PER_GROUP: u32 = 32;
 
