@@ -191,6 +191,6 @@ fn lights_or_tiles(wg: vec3<u32>, groups: vec3<u32>, index: u32, rows: u32) {
     if wg.y < light_rows {
         store_light_rect(first + index, index, rows == LIGHT_ROWS_BLOCKS);
     } else {
-        _ = tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index, true);
+        _ = tile_bounds(vec3<u32>(wg.x, wg.y - light_rows, 0u), index, true, DEPTH_TILES, 64u);
     }
 }

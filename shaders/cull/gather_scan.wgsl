@@ -8,10 +8,15 @@ var<workgroup> wg_keep: array<u32, 64 * MASK_FILL_TILES>;
 // their own. A Hillis-Steele scan, 6 steps. Called in uniform control flow; workgroup memory
 // is free again when it returns.
 fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
-    let lane = slot % 64u;
+    return scan_keep_n(slot, value, 64u);
+}
+
+// As scan_keep, over each n slots (a power of two up to 64).
+fn scan_keep_n(slot: u32, value: u32, n: u32) -> vec2<u32> {
+    let lane = slot % n;
     wg_keep[slot] = value;
     workgroupBarrier();
-    for (var off = 1u; off < 64u; off <<= 1u) {
+    for (var off = 1u; off < n; off <<= 1u) {
         var v = 0u;
         if lane >= off {
             v = wg_keep[slot - off];
@@ -20,7 +25,7 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
         wg_keep[slot] += v;
         workgroupBarrier();
     }
-    let r = vec2<u32>(wg_keep[slot], wg_keep[slot - lane + 63u]);
+    let r = vec2<u32>(wg_keep[slot], wg_keep[slot - lane + n - 1u]);
     workgroupBarrier();
     return r;
 }
@@ -45,12 +50,12 @@ fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoca
     masks_expand(wg.xy, li);
 }
 
-@compute @workgroup_size(64 * MASK_FILL_TILES)
+@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
 fn gather_lines_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     lines_tile(wg.xy, li, false);
 }
 
-@compute @workgroup_size(64 * MASK_FILL_TILES)
+@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
 fn gather_lines_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     lines_tile(wg.xy, li, true);
 }

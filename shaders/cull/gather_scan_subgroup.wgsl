@@ -22,6 +22,12 @@ fn subgroup_slot(lane: u32, size: u32, id: u32, count: u32) -> u32 {
 // across them; two barriers. Called in uniform control flow; workgroup memory is free again
 // when it returns.
 fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
+    return scan_keep_n(slot, value, 64u);
+}
+
+// As scan_keep, over each n slots (a power of two up to 64, and no smaller than a subgroup:
+// gather_subgroups_fit on the host).
+fn scan_keep_n(slot: u32, value: u32, n: u32) -> vec2<u32> {
     let inclusive = subgroupInclusiveAdd(value);
     if g_lane == g_sg_size - 1u {
         sg_sums[g_sg_id] = inclusive;
@@ -29,8 +35,8 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
     workgroupBarrier();
     var before = 0u;
     var total = 0u;
-    // The subgroups of this slot's 64 (subgroup sizes divide 64).
-    let per = 64u / g_sg_size;
+    // The subgroups of this slot's n (subgroup sizes divide n).
+    let per = n / g_sg_size;
     let seg = g_sg_id / per * per;
     for (var s = seg; s < seg + per; s++) {
         let v = sg_sums[s];
@@ -86,12 +92,12 @@ fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_inv
     masks_expand(wg.xy, subgroup_slot(lane, size, id, count));
 }
 
-@compute @workgroup_size(64 * MASK_FILL_TILES)
+@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
 fn gather_lines_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     lines_tile(wg.xy, subgroup_slot(lane, size, id, count), false);
 }
 
-@compute @workgroup_size(64 * MASK_FILL_TILES)
+@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
 fn gather_lines_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     lines_tile(wg.xy, subgroup_slot(lane, size, id, count), true);
 }

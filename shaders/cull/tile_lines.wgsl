@@ -8,23 +8,24 @@
 //    extent (light_depth_extent). A tile's side planes 0 and 1 are its column's and 2 and 3
 //    its row's, so the AND of a tile's column word and row word is exactly the lights of that
 //    word whose rectangle holds the tile and that pass its four side planes.
-// 2. The count or fill pass (lines_tile), MASK_FILL_TILES tiles a workgroup, 64 threads a tile
-//    (as the masks' fill in tile_masks.wgsl), first computes its tiles' depth data (tile_bounds,
-//    tile_depth.wgsl, the code of cull.depth_bounds; the 2.5D mask only for 2.5D). Thread `lane`
-//    of a tile takes words [lane k, lane k + k) of the tile's mask (k = words / 64, rounded up),
-//    ANDs the tile's column and row words and the OR of its depth bins' words (only lights that
-//    share a bin with the tile can pass its depth test; skipped for tiles over ZBIN_MAX_SPAN
-//    bins), and keeps each candidate whose depth extent passes the tile's depth bounds and 2.5D
-//    mask (extent_keeps). So the kept bits are those of tile_keeps with the rectangle, as
+// 2. The count or fill pass (lines_tile), LINE_FILL_TILES tiles a workgroup, LINE_THREADS
+//    threads a tile (half as many as the masks' fill in tile_masks.wgsl: measured faster),
+//    first computes its tiles' depth data (tile_bounds, tile_depth.wgsl, the code of
+//    cull.depth_bounds; the 2.5D mask only for 2.5D). Thread `lane` of a tile takes words
+//    [lane k, lane k + k) of the tile's mask (k = words / LINE_THREADS, rounded up), ANDs the
+//    tile's column and row words and the OR of its depth bins' words (only lights that share a
+//    bin with the tile can pass its depth test; skipped for tiles over ZBIN_MAX_SPAN bins), and
+//    keeps each candidate whose depth extent passes the tile's depth bounds and 2.5D mask
+//    (extent_keeps). Its first two words go together (lines_decide_pair), so that their loads
+//    are in flight at once. So the kept bits are those of tile_keeps with the rectangle, as
 //    cpu::gather states them (up to rounding in its borderline band). One scan of the threads'
-//    bit counts over the tile's 64 threads gives the tile's total and each thread's place in
-//    the tile's list. The count pass adds each tile's total to cull_stats[5]; the fill pass
-//    places each tile with one atomic add on cull_stats[5] (place_tile; so it too ends
-//    holding the total), writes the tile's range, and turns the words into list entries
-//    in light order, writing none past the buffer's end (the host checks the total against the
-//    buffer's size). A thread keeps its first two words' verdicts in registers and decides any
-//    others again for the fill. A tile without covered pixels takes no words and gets an empty
-//    range.
+//    bit counts over the tile's threads gives the tile's total and each thread's place in the
+//    tile's list. The count pass adds each tile's total to cull_stats[5]; the fill pass places
+//    each tile with one atomic add on cull_stats[5] (place_tile; so it too ends holding the
+//    total), writes the tile's range, and turns the words into list entries in light order,
+//    writing none past the buffer's end (the host checks the total against the buffer's size).
+//    A thread keeps its first two words' verdicts in registers and decides any others again
+//    for the fill. A tile without covered pixels takes no words and gets an empty range.
 //
 // Back to back (the host already knows the total, Culler::run_repeated), a run is the two
 // passes and no clear (cull.tile_lines zeroes cull_stats[5]). Alone, the count pass runs first
@@ -67,39 +68,103 @@ fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
     return keep;
 }
 
-// Tiles MASK_FILL_TILES wg.x + j of row wg.y, 64 threads each (see the top of this file).
+// Words w and (with `two`) w + 1 of tile `tile`'s kept lights, as lines_decide, with their
+// loads side by side: both words' side words, then both words' bin words, then candidates two
+// at a time, so that each step's loads of the two words are in flight together.
+fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec2<u32>) -> vec2<u32> {
+    let column = tile.x;
+    let row = cull.tiles_x + tile.y;
+    var m = vec2<u32>(line_word(column, w) & line_word(row, w), 0u);
+    if two {
+        m.y = line_word(column, w + 1u) & line_word(row, w + 1u);
+    }
+    if any(m != vec2<u32>(0u)) && bins.y - bins.x < ZBIN_MAX_SPAN {
+        var z = vec2<u32>(0u);
+        for (var b = bins.x; b <= bins.y; b++) {
+            let line = cull.tiles_x + cull.tiles_y + b;
+            z.x |= line_word(line, w);
+            if two {
+                z.y |= line_word(line, w + 1u);
+            }
+        }
+        m &= z;
+    }
+    var keep = vec2<u32>(0u);
+    while any(m != vec2<u32>(0u)) {
+        // Up to two candidates: the lowest bits of the first word, then of the second.
+        let a0 = m.x != 0u;
+        let bit0 = firstTrailingBit(select(m.y, m.x, a0));
+        if a0 {
+            m.x &= m.x - 1u;
+        } else {
+            m.y &= m.y - 1u;
+        }
+        let a1 = m.x != 0u;
+        let second = select(m.y, m.x, a1);
+        let bit1 = firstTrailingBit(second);
+        if second != 0u {
+            if a1 {
+                m.x &= m.x - 1u;
+            } else {
+                m.y &= m.y - 1u;
+            }
+        }
+        let i0 = (w + select(1u, 0u, a0)) * 32u + bit0;
+        let i1 = select(i0, (w + select(1u, 0u, a1)) * 32u + bit1, second != 0u);
+        let e0 = light_extent(i0);
+        let e1 = light_extent(i1);
+        if extent_keeps(e0, t) {
+            if a0 {
+                keep.x |= 1u << bit0;
+            } else {
+                keep.y |= 1u << bit0;
+            }
+        }
+        if second != 0u && extent_keeps(e1, t) {
+            if a1 {
+                keep.x |= 1u << bit1;
+            } else {
+                keep.y |= 1u << bit1;
+            }
+        }
+    }
+    return keep;
+}
+
+// Tiles LINE_FILL_TILES wg.x + j of row wg.y, LINE_THREADS threads each (see the top of this
+// file).
 // Called in uniform control flow.
 fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
-    let j = slot / 64u;
-    let lane = slot % 64u;
-    let tile = vec2<u32>(wg.x * MASK_FILL_TILES + j, wg.y);
+    let j = slot / LINE_THREADS;
+    let lane = slot % LINE_THREADS;
+    let tile = vec2<u32>(wg.x * LINE_FILL_TILES + j, wg.y);
     let inside = tile.x < cull.tiles_x;
     let bin = tile.y * cull.tiles_x + tile.x;
     // The tiles' depth data, computed here (and stored) rather than read from an earlier pass;
     // the 2.5D mask only for 2.5D (gather's tile depth keeps mask 0).
-    let t = tile_bounds(vec3<u32>(wg, 0u), slot, (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u);
+    let t = tile_bounds(vec3<u32>(wg, 0u), slot, (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u, LINE_FILL_TILES, LINE_THREADS);
     var words = 0u;
     var bins = vec2<u32>(0u);
     if inside && t.covered != 0u {
         words = mask_words();
         bins = vec2<u32>(zbin(t.dmin), zbin(t.dmax));
     }
-    let k = (mask_words() + 63u) / 64u;
+    let k = (mask_words() + LINE_THREADS - 1u) / LINE_THREADS;
     let first = min(lane * k, words);
     let end = min(lane * k + k, words);
     var w0 = 0u;
     var w1 = 0u;
     var c = 0u;
-    for (var w = first; w < end; w++) {
-        let d = lines_decide(tile, w, t, bins);
-        if w == first {
-            w0 = d;
-        } else if w == first + 1u {
-            w1 = d;
-        }
-        c += countOneBits(d);
+    if first < end {
+        let d = lines_decide_pair(tile, first, first + 1u < end, t, bins);
+        w0 = d.x;
+        w1 = d.y;
+        c = countOneBits(d.x) + countOneBits(d.y);
     }
-    let scan = scan_keep(slot, c);
+    for (var w = first + 2u; w < end; w++) {
+        c += countOneBits(lines_decide(tile, w, t, bins));
+    }
+    let scan = scan_keep_n(slot, c, LINE_THREADS);
     if !fill {
         if lane == 0u && scan.y != 0u {
             atomicAdd(&cull_stats[5], scan.y);

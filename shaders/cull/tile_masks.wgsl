@@ -15,8 +15,8 @@
 // only where it sits in the buffer differs from run to run (its range says where).
 @group(1) @binding(11) var<storage, read_write> tile_masks: array<u32>;
 
-// The fill's places for its tiles.
-var<workgroup> wg_mask_at: array<u32, MASK_FILL_TILES>;
+// The fill's places for its tiles (and the lines path's).
+var<workgroup> wg_mask_at: array<u32, TILE_SLOTS>;
 
 // The place in the list buffer of tile j of the workgroup (`bin`, `total` lights; `has`: a tile
 // of the image): its first thread takes it with one atomic add on cull_stats[5] and writes the

@@ -290,6 +290,15 @@ fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
     )
 }
 
+/// Workgroups of the list passes of gather's lines path: [`crate::layout::LINE_FILL_TILES`]
+/// tiles of a row each.
+fn lines_fill_groups(p: &GpuCullParams) -> (u32, u32) {
+    (
+        p.tiles_x.div_ceil(crate::layout::LINE_FILL_TILES),
+        p.tiles_y,
+    )
+}
+
 /// The first `bytes` of `buf` as words, where there is a buffer.
 fn read_words(
     ctx: &GpuContext,
@@ -947,7 +956,7 @@ impl Culler {
         let lines = f.buf("cull.tile_lines", lines_buffer_bytes(&p));
         let placeholder = &self.placeholder;
         let group_a = f.group(placeholder, placeholder, &lines);
-        let groups = mask_fill_groups(&p);
+        let groups = lines_fill_groups(&p);
         // No clear: `cull.tile_lines` zeroes the list passes' cursor, the only counter these
         // runs use (a clear is a transfer of its own between passes).
         let counting = |enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, sized: bool| {
@@ -1655,10 +1664,12 @@ fn chunks(p: &GpuCullParams) -> u64 {
     }
 }
 
-/// Whether gather's subgroup scans apply: subgroup operations, with subgroups that tile a
-/// workgroup of 64 (sizes are powers of two, so at most 64).
+/// Whether gather's subgroup scans apply: subgroup operations, with subgroups that tile each
+/// scan's segment (sizes are powers of two; the smallest segment is a lines-path tile's
+/// [`crate::layout::LINE_THREADS`]). Elsewhere (64-wide subgroups) gather takes the portable
+/// scans.
 fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
-    ctx.features.subgroups && ctx.features.subgroup_size.1 <= 64
+    ctx.features.subgroups && ctx.features.subgroup_size.1 <= crate::layout::LINE_THREADS
 }
 
 /// `count` u32 words of `buf` from word `first`, read back.

@@ -71,15 +71,36 @@ pub const ZBIN_MAX_SPAN: u32 = 8;
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
 
-// Gather's lines path computes its tiles' depth data in its list passes with
-// `cull.depth_bounds`'s code: four tiles a workgroup either way.
-const _: () = assert!(MASK_FILL_TILES == DEPTH_TILES);
+/// Threads a tile in the list passes of gather's lines path (a tile's 64 pixels two a thread,
+/// its mask words three a thread at 3,072 lights): half the threads of 64 a tile measured 8%
+/// faster on an H200 (docs/BENCHMARKS.md). Gather's subgroup scans need subgroups of at most
+/// this many invocations (`gather_subgroups_fit`).
+pub const LINE_THREADS: u32 = 32;
+/// Tiles a workgroup of those passes takes.
+pub const LINE_FILL_TILES: u32 = 4;
+
+/// Tiles whose depth data one workgroup computes (`tile_bounds`): the most of
+/// `cull.depth_bounds`'s and the lines path's.
+pub const TILE_SLOTS: u32 = if DEPTH_TILES > LINE_FILL_TILES {
+    DEPTH_TILES
+} else {
+    LINE_FILL_TILES
+};
+
+// The workgroup scans' memory holds 64 MASK_FILL_TILES slots; the lines path's workgroups
+// use no more, and their tiles' threads are a power of two (the scans' segments).
+const _: () = assert!(LINE_THREADS * LINE_FILL_TILES <= 64 * MASK_FILL_TILES);
+const _: () = assert!(LINE_THREADS.is_power_of_two() && LINE_THREADS <= 64);
+const _: () = assert!(MASK_FILL_TILES <= TILE_SLOTS);
 
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
+    WgslConst::U32("LINE_THREADS", LINE_THREADS),
+    WgslConst::U32("LINE_FILL_TILES", LINE_FILL_TILES),
+    WgslConst::U32("TILE_SLOTS", TILE_SLOTS),
     WgslConst::U32("LINES_PER_GROUP", LINES_PER_GROUP),
     WgslConst::U32("ZBINS", ZBINS),
     WgslConst::U32("ZBIN_SHIFT", ZBIN_SHIFT),
