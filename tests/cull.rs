@@ -4,7 +4,7 @@
 mod common;
 
 use glam::Vec3;
-use manylights_cull::layout::GpuCullParams;
+use manylights_cull::layout::{GpuCullParams, line_threads};
 use manylights_cull::metrics::{ListMetrics, evaluate, exact_sets, surface_points};
 use manylights_cull::{BinLists, CullSettings, Culler, Slicing, Strategy, cpu, geometry, scan};
 use manylights_gpu::layout::{GpuFrame, GpuLight};
@@ -922,35 +922,43 @@ fn masked_lists_match_oracle(
 }
 
 /// Tile masks of over 64 words a tile (over 4,096 lights, so each fill thread takes several
-/// words, and the last threads none): gather's, 2.5D's and scatter's lists equal their CPU
-/// oracles, each in light order, and the masks are left zero.
+/// words, and the last threads none; with the lines path 32, 64 and 128 threads a tile): gather's, 2.5D's and scatter's lists equal their CPU oracles, each in
+/// light order, and the masks are left zero.
 #[test]
 fn tile_masks_of_many_words_equal_the_oracle() {
     let ctx = common::gpu();
     let (w, h) = (72, 40);
-    let mut case = random_case(21);
-    let lights = case.scene.lights.clone();
-    case.scene.lights = lights.iter().cycle().take(4100).cloned().collect();
-    let r = render(&ctx, &case, w, h);
-    let culler = Culler::new(&ctx, &r.gpu_scene);
-    for s in [
-        Strategy::tiled_gather(8),
-        Strategy::depth_mask(8),
-        Strategy::TiledScatter { tile_size: 8 },
-    ] {
-        let what = format!("{} {}", case.label, s.name());
-        let (words, gpu) = masked_lists_match_oracle(&ctx, &culler, &r, &case, &s, &what);
-        assert!(words > 64, "{what}: over 64 words a tile");
-        let mut kept = 0;
-        for b in 0..gpu.ranges.len() {
-            let list = gpu.list(b);
-            assert!(
-                list.windows(2).all(|p| p[0] < p[1]),
-                "{what}: bin {b} in light order"
-            );
-            kept += list.len();
+    for (count, threads) in [(4100, 32), (9000, 64), (17000, 128)] {
+        assert_eq!(line_threads(count), threads, "{count} lights");
+        let mut case = random_case(21);
+        let lights = case.scene.lights.clone();
+        case.scene.lights = lights
+            .iter()
+            .cycle()
+            .take(count as usize)
+            .cloned()
+            .collect();
+        let r = render(&ctx, &case, w, h);
+        let culler = Culler::new(&ctx, &r.gpu_scene);
+        for s in [
+            Strategy::tiled_gather(8),
+            Strategy::depth_mask(8),
+            Strategy::TiledScatter { tile_size: 8 },
+        ] {
+            let what = format!("{} {} {count} lights", case.label, s.name());
+            let (words, gpu) = masked_lists_match_oracle(&ctx, &culler, &r, &case, &s, &what);
+            assert!(words > 64, "{what}: over 64 words a tile");
+            let mut kept = 0;
+            for b in 0..gpu.ranges.len() {
+                let list = gpu.list(b);
+                assert!(
+                    list.windows(2).all(|p| p[0] < p[1]),
+                    "{what}: bin {b} in light order"
+                );
+                kept += list.len();
+            }
+            assert!(kept > 0, "{what}: some tile keeps a light");
         }
-        assert!(kept > 0, "{what}: some tile keeps a light");
     }
 }
 

@@ -11,7 +11,7 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
     return scan_keep_n(slot, value, 64u);
 }
 
-// As scan_keep, over each n slots (a power of two up to 64).
+// As scan_keep, over each n slots (a power of two up to the workgroup's size).
 fn scan_keep_n(slot: u32, value: u32, n: u32) -> vec2<u32> {
     let lane = slot % n;
     wg_keep[slot] = value;
@@ -50,12 +50,12 @@ fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invoca
     masks_expand(wg.xy, li);
 }
 
-@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
+@compute @workgroup_size(LINE_GROUP_THREADS)
 fn gather_lines_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     lines_tile(wg.xy, li, false);
 }
 
-@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
+@compute @workgroup_size(LINE_GROUP_THREADS)
 fn gather_lines_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     lines_tile(wg.xy, li, true);
 }

@@ -25,8 +25,8 @@ fn scan_keep(slot: u32, value: u32) -> vec2<u32> {
     return scan_keep_n(slot, value, 64u);
 }
 
-// As scan_keep, over each n slots (a power of two up to 64, and no smaller than a subgroup:
-// gather_subgroups_fit on the host).
+// As scan_keep, over each n slots (a power of two up to the workgroup's size, and no smaller
+// than a subgroup: gather_subgroups_fit on the host).
 fn scan_keep_n(slot: u32, value: u32, n: u32) -> vec2<u32> {
     let inclusive = subgroupInclusiveAdd(value);
     if g_lane == g_sg_size - 1u {
@@ -92,12 +92,12 @@ fn gather_fill_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_inv
     masks_expand(wg.xy, subgroup_slot(lane, size, id, count));
 }
 
-@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
+@compute @workgroup_size(LINE_GROUP_THREADS)
 fn gather_lines_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     lines_tile(wg.xy, subgroup_slot(lane, size, id, count), false);
 }
 
-@compute @workgroup_size(LINE_THREADS * LINE_FILL_TILES)
+@compute @workgroup_size(LINE_GROUP_THREADS)
 fn gather_lines_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(subgroup_invocation_id) lane: u32, @builtin(subgroup_size) size: u32, @builtin(subgroup_id) id: u32, @builtin(num_subgroups) count: u32) {
     lines_tile(wg.xy, subgroup_slot(lane, size, id, count), true);
 }

@@ -8,11 +8,13 @@
 //    extent (light_depth_extent). A tile's side planes 0 and 1 are its column's and 2 and 3
 //    its row's, so the AND of a tile's column word and row word is exactly the lights of that
 //    word whose rectangle holds the tile and that pass its four side planes.
-// 2. The count or fill pass (lines_tile), LINE_FILL_TILES tiles a workgroup, LINE_THREADS
-//    threads a tile (half as many as the masks' fill in tile_masks.wgsl: measured faster),
-//    first computes its tiles' depth data (tile_bounds, tile_depth.wgsl, the code of
-//    cull.depth_bounds; the 2.5D mask only for 2.5D). Thread `lane` of a tile takes words
-//    [lane k, lane k + k) of the tile's mask (k = words / LINE_THREADS, rounded up), ANDs the
+// 2. The count or fill pass (lines_tile), line_threads() threads a tile (32 to
+//    LINE_GROUP_THREADS, the fewest that leave a thread at most LINE_WORDS words: 32 up to
+//    8,192 lights, half the masks' fill's 64 in tile_masks.wgsl, measured faster) and as many
+//    tiles as fill a workgroup of LINE_GROUP_THREADS, first computes its tiles' depth data
+//    (tile_bounds, tile_depth.wgsl, the code of cull.depth_bounds; the 2.5D mask only for
+//    2.5D). Thread `lane` of a tile takes words
+//    [lane k, lane k + k) of the tile's mask (k = words / line_threads(), rounded up), ANDs the
 //    tile's column and row words and the OR of its depth bins' words (only lights that share a
 //    bin with the tile can pass its depth test; skipped for tiles over ZBIN_MAX_SPAN bins), and
 //    keeps each candidate whose depth extent passes the tile's depth bounds and 2.5D mask
@@ -131,25 +133,34 @@ fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec
     return keep;
 }
 
-// Tiles LINE_FILL_TILES wg.x + j of row wg.y, LINE_THREADS threads each (see the top of this
-// file).
-// Called in uniform control flow.
+// Threads a tile (layout::line_threads on the host, which sizes the dispatch from it).
+fn line_threads() -> u32 {
+    let per = (mask_words() + LINE_WORDS - 1u) / LINE_WORDS;
+    // The next power of two (per >= 1 at any light count; a tile of 0 lights takes the least).
+    let pow = select(1u << (32u - countLeadingZeros(per - 1u)), 1u, per <= 1u);
+    return clamp(pow, LINE_THREADS_MIN, LINE_GROUP_THREADS);
+}
+
+// Tile (LINE_GROUP_THREADS / line_threads()) wg.x + j of row wg.y, line_threads() threads
+// each (see the top of this file). Called in uniform control flow.
 fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
-    let j = slot / LINE_THREADS;
-    let lane = slot % LINE_THREADS;
-    let tile = vec2<u32>(wg.x * LINE_FILL_TILES + j, wg.y);
+    let threads = line_threads();
+    let tiles = LINE_GROUP_THREADS / threads;
+    let j = slot / threads;
+    let lane = slot % threads;
+    let tile = vec2<u32>(wg.x * tiles + j, wg.y);
     let inside = tile.x < cull.tiles_x;
     let bin = tile.y * cull.tiles_x + tile.x;
     // The tiles' depth data, computed here (and stored) rather than read from an earlier pass;
     // the 2.5D mask only for 2.5D (gather's tile depth keeps mask 0).
-    let t = tile_bounds(vec3<u32>(wg, 0u), slot, (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u, LINE_FILL_TILES, LINE_THREADS);
+    let t = tile_bounds(vec3<u32>(wg, 0u), slot, (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u, tiles, threads);
     var words = 0u;
     var bins = vec2<u32>(0u);
     if inside && t.covered != 0u {
         words = mask_words();
         bins = vec2<u32>(zbin(t.dmin), zbin(t.dmax));
     }
-    let k = (mask_words() + LINE_THREADS - 1u) / LINE_THREADS;
+    let k = (mask_words() + threads - 1u) / threads;
     let first = min(lane * k, words);
     let end = min(lane * k + k, words);
     var w0 = 0u;
@@ -164,7 +175,7 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
     for (var w = first + 2u; w < end; w++) {
         c += countOneBits(lines_decide(tile, w, t, bins));
     }
-    let scan = scan_keep_n(slot, c, LINE_THREADS);
+    let scan = scan_keep_n(slot, c, threads);
     if !fill {
         if lane == 0u && scan.y != 0u {
             atomicAdd(&cull_stats[5], scan.y);

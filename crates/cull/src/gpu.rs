@@ -290,13 +290,11 @@ fn mask_fill_groups(p: &GpuCullParams) -> (u32, u32) {
     )
 }
 
-/// Workgroups of the list passes of gather's lines path: [`crate::layout::LINE_FILL_TILES`]
-/// tiles of a row each.
+/// Workgroups of the list passes of gather's lines path:
+/// [`crate::layout::LINE_GROUP_THREADS`] / [`crate::layout::line_threads`] tiles of a row each.
 fn lines_fill_groups(p: &GpuCullParams) -> (u32, u32) {
-    (
-        p.tiles_x.div_ceil(crate::layout::LINE_FILL_TILES),
-        p.tiles_y,
-    )
+    let tiles = crate::layout::LINE_GROUP_THREADS / crate::layout::line_threads(p.light_count);
+    (p.tiles_x.div_ceil(tiles), p.tiles_y)
 }
 
 /// The first `bytes` of `buf` as words, where there is a buffer.
@@ -1666,10 +1664,10 @@ fn chunks(p: &GpuCullParams) -> u64 {
 
 /// Whether gather's subgroup scans apply: subgroup operations, with subgroups that tile each
 /// scan's segment (sizes are powers of two; the smallest segment is a lines-path tile's
-/// [`crate::layout::LINE_THREADS`]). Elsewhere (64-wide subgroups) gather takes the portable
+/// [`crate::layout::LINE_THREADS_MIN`]). Elsewhere (64-wide subgroups) gather takes the portable
 /// scans.
 fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
-    ctx.features.subgroups && ctx.features.subgroup_size.1 <= crate::layout::LINE_THREADS
+    ctx.features.subgroups && ctx.features.subgroup_size.1 <= crate::layout::LINE_THREADS_MIN
 }
 
 /// `count` u32 words of `buf` from word `first`, read back.

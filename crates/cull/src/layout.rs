@@ -71,26 +71,42 @@ pub const ZBIN_MAX_SPAN: u32 = 8;
 /// Tiles a workgroup of the tile masks' fill takes, 64 threads each (as [`DEPTH_TILES`]).
 pub const MASK_FILL_TILES: u32 = 4;
 
-/// Threads a tile in the list passes of gather's lines path (a tile's 64 pixels two a thread,
-/// its mask words three a thread at 3,072 lights): half the threads of 64 a tile measured 8%
-/// faster on an H200 (docs/BENCHMARKS.md). Gather's subgroup scans need subgroups of at most
+/// Threads of a workgroup of the list passes of gather's lines path. A tile takes
+/// [`line_threads`] of them, so a workgroup takes `LINE_GROUP_THREADS / line_threads` tiles.
+pub const LINE_GROUP_THREADS: u32 = 128;
+/// The fewest threads a tile in those passes. Gather's subgroup scans need subgroups of at most
 /// this many invocations (`gather_subgroups_fit`).
-pub const LINE_THREADS: u32 = 32;
-/// Tiles a workgroup of those passes takes.
-pub const LINE_FILL_TILES: u32 = 4;
+pub const LINE_THREADS_MIN: u32 = 32;
+/// Mask words a thread of those passes aims at: a tile takes the fewest threads (a power of
+/// two from [`LINE_THREADS_MIN`] to [`LINE_GROUP_THREADS`]) that leave each at most this many.
+pub const LINE_WORDS: u32 = 8;
+
+/// Threads a tile in the list passes of gather's lines path, for `light_count` lights (the
+/// shaders' `line_threads`): 32 up to 8,192 lights (three mask words a thread at the Forward+
+/// paper's 3,072: half the threads of 64 a tile measured 8% faster on an H100), 64 up to
+/// 16,384 (where 32 measured 20% slower), 128 beyond. Aiming at 4 or 2 words a thread instead
+/// measured no faster anywhere and slower at 4K (docs/BENCHMARKS.md).
+pub fn line_threads(light_count: u32) -> u32 {
+    let words = light_count.div_ceil(64) * 2;
+    words
+        .div_ceil(LINE_WORDS)
+        .next_power_of_two()
+        .clamp(LINE_THREADS_MIN, LINE_GROUP_THREADS)
+}
 
 /// Tiles whose depth data one workgroup computes (`tile_bounds`): the most of
 /// `cull.depth_bounds`'s and the lines path's.
-pub const TILE_SLOTS: u32 = if DEPTH_TILES > LINE_FILL_TILES {
+pub const TILE_SLOTS: u32 = if DEPTH_TILES > LINE_GROUP_THREADS / LINE_THREADS_MIN {
     DEPTH_TILES
 } else {
-    LINE_FILL_TILES
+    LINE_GROUP_THREADS / LINE_THREADS_MIN
 };
 
-// The workgroup scans' memory holds 64 MASK_FILL_TILES slots; the lines path's workgroups
-// use no more, and their tiles' threads are a power of two (the scans' segments).
-const _: () = assert!(LINE_THREADS * LINE_FILL_TILES <= 64 * MASK_FILL_TILES);
-const _: () = assert!(LINE_THREADS.is_power_of_two() && LINE_THREADS <= 64);
+// The workgroup scans' memory holds 64 MASK_FILL_TILES slots; the lines path's workgroups use
+// no more, and their tiles' threads are powers of two (the scans' segments).
+const _: () = assert!(LINE_GROUP_THREADS <= 64 * MASK_FILL_TILES);
+const _: () = assert!(LINE_THREADS_MIN.is_power_of_two() && LINE_GROUP_THREADS.is_power_of_two());
+const _: () = assert!(LINE_THREADS_MIN <= LINE_GROUP_THREADS);
 const _: () = assert!(MASK_FILL_TILES <= TILE_SLOTS);
 
 /// Constants of the culling shaders, generated into their prelude.
@@ -98,8 +114,9 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("GROUPS_X", GROUPS_X),
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
-    WgslConst::U32("LINE_THREADS", LINE_THREADS),
-    WgslConst::U32("LINE_FILL_TILES", LINE_FILL_TILES),
+    WgslConst::U32("LINE_GROUP_THREADS", LINE_GROUP_THREADS),
+    WgslConst::U32("LINE_THREADS_MIN", LINE_THREADS_MIN),
+    WgslConst::U32("LINE_WORDS", LINE_WORDS),
     WgslConst::U32("TILE_SLOTS", TILE_SLOTS),
     WgslConst::U32("LINES_PER_GROUP", LINES_PER_GROUP),
     WgslConst::U32("ZBINS", ZBINS),
