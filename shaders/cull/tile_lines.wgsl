@@ -8,13 +8,13 @@
 //    extent (light_depth_extent). A tile's side planes 0 and 1 are its column's and 2 and 3
 //    its row's, so the AND of a tile's column word and row word is exactly the lights of that
 //    word whose rectangle holds the tile and that pass its four side planes.
-// 2. The count or fill pass (lines_tile), line_threads() threads a tile (32 to
+// 2. The count or fill pass (lines_tile), LINE_THREADS threads a tile (32 to
 //    LINE_GROUP_THREADS, the fewest that leave a thread at most LINE_WORDS words: 32 up to
 //    8,192 lights, half the masks' fill's 64 in tile_masks.wgsl, measured faster) and as many
 //    tiles as fill a workgroup of LINE_GROUP_THREADS, first computes its tiles' depth data
 //    (tile_bounds, tile_depth.wgsl, the code of cull.depth_bounds; the 2.5D mask only for
 //    2.5D). Thread `lane` of a tile takes words
-//    [lane k, lane k + k) of the tile's mask (k = words / line_threads(), rounded up), ANDs the
+//    [lane k, lane k + k) of the tile's mask (k = words / LINE_THREADS, rounded up), ANDs the
 //    tile's column and row words and the OR of its depth bins' words (only lights that share a
 //    bin with the tile can pass its depth test; skipped for tiles over ZBIN_MAX_SPAN bins), and
 //    keeps each candidate whose depth extent passes the tile's depth bounds and 2.5D mask
@@ -133,18 +133,15 @@ fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec
     return keep;
 }
 
-// Threads a tile (layout::line_threads on the host, which sizes the dispatch from it).
-fn line_threads() -> u32 {
-    let per = (mask_words() + LINE_WORDS - 1u) / LINE_WORDS;
-    // The next power of two (per >= 1 at any light count; a tile of 0 lights takes the least).
-    let pow = select(1u << (32u - countLeadingZeros(per - 1u)), 1u, per <= 1u);
-    return clamp(pow, LINE_THREADS_MIN, LINE_GROUP_THREADS);
-}
+// Threads a tile: each list pass is built once for each of layout::LINE_THREAD_COUNTS, and the
+// host takes the one for its light count (layout::line_threads), which also sizes the
+// dispatch. An override, so that the divisions by it are by a constant.
+override LINE_THREADS: u32 = 32u;
 
-// Tile (LINE_GROUP_THREADS / line_threads()) wg.x + j of row wg.y, line_threads() threads
-// each (see the top of this file). Called in uniform control flow.
+// Tile (LINE_GROUP_THREADS / LINE_THREADS) wg.x + j of row wg.y, LINE_THREADS threads each
+// (see the top of this file). Called in uniform control flow.
 fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
-    let threads = line_threads();
+    let threads = LINE_THREADS;
     let tiles = LINE_GROUP_THREADS / threads;
     let j = slot / threads;
     let lane = slot % threads;

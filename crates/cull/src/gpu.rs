@@ -359,8 +359,9 @@ pub struct Culler {
     /// and the fill expands them.
     pub gather_lines: bool,
     gather_count: wgpu::ComputePipeline,
-    gather_lines_count: wgpu::ComputePipeline,
-    gather_lines_fill: wgpu::ComputePipeline,
+    /// For each of `layout::LINE_THREAD_COUNTS`.
+    gather_lines_count: [wgpu::ComputePipeline; 3],
+    gather_lines_fill: [wgpu::ComputePipeline; 3],
     gather_count_masks: wgpu::ComputePipeline,
     gather_fill_masks: wgpu::ComputePipeline,
     scatter_masks: wgpu::ComputePipeline,
@@ -410,6 +411,39 @@ fn pipelines<const N: usize>(
     entries.map(|e| pipeline::compute(d, &module, &pl, e))
 }
 
+/// An entry point of `def` built once for each of [`crate::layout::LINE_THREAD_COUNTS`] (the
+/// shader's `LINE_THREADS` override): the lines path's list passes.
+fn line_pipelines(
+    d: &wgpu::Device,
+    def: &ShaderDef,
+    scene_layout: &wgpu::BindGroupLayout,
+    group1: &wgpu::BindGroupLayout,
+    entry: &str,
+) -> [wgpu::ComputePipeline; 3] {
+    let module = def.create(d);
+    let pl = pipeline::layout(d, def.name, &[scene_layout, group1]);
+    crate::layout::LINE_THREAD_COUNTS.map(|t| {
+        let constants = [("LINE_THREADS", f64::from(t))];
+        // (Without zeroing workgroup memory, which these passes do not need, measured the same
+        // on an H100.)
+        let options = wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        };
+        pipeline::compute_with(d, &module, &pl, entry, &options)
+    })
+}
+
+/// The lines path's pipeline of `set` for `light_count` lights ([`crate::layout::line_threads`]).
+fn line_pipeline(set: &[wgpu::ComputePipeline; 3], light_count: u32) -> &wgpu::ComputePipeline {
+    let t = crate::layout::line_threads(light_count);
+    let i = crate::layout::LINE_THREAD_COUNTS
+        .iter()
+        .position(|&c| c == t)
+        .expect("line_threads returns one of LINE_THREAD_COUNTS");
+    &set[i]
+}
+
 impl Culler {
     /// Builds every pipeline for scenes laid out as [`GpuScene`].
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
@@ -446,24 +480,27 @@ impl Culler {
             ["depth_bounds", "depth_bounds_blocks", "tile_lines_pass"],
         );
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
+        let gather_def = if gather_subgroups {
+            &TILED_GATHER_SUBGROUP
+        } else {
+            &TILED_GATHER
+        };
+        let gather_lines_count =
+            line_pipelines(d, gather_def, scene_layout, &layout, "gather_lines_count");
+        let gather_lines_fill =
+            line_pipelines(d, gather_def, scene_layout, &layout, "gather_lines_fill");
         let [
             gather_count,
             gather_fill,
             gather_count_masks,
             gather_fill_masks,
-            gather_lines_count,
-            gather_lines_fill,
             gather_count_flat,
             gather_fill_flat,
             finalize,
             cap,
         ] = pipelines(
             d,
-            if gather_subgroups {
-                &TILED_GATHER_SUBGROUP
-            } else {
-                &TILED_GATHER
-            },
+            gather_def,
             scene_layout,
             &layout,
             [
@@ -471,8 +508,6 @@ impl Culler {
                 "gather_fill",
                 "gather_count_masks",
                 "gather_fill_masks",
-                "gather_lines_count",
-                "gather_lines_fill",
                 "gather_count_flat",
                 "gather_fill_flat",
                 "finalize",
@@ -971,7 +1006,7 @@ impl Culler {
                     enc,
                     timer,
                     &format!("cull.{name}.count"),
-                    &self.gather_lines_count,
+                    line_pipeline(&self.gather_lines_count, p.light_count),
                     &group_a,
                     groups,
                 );
@@ -989,7 +1024,7 @@ impl Culler {
                 enc,
                 timer,
                 &format!("cull.{name}.fill"),
-                &self.gather_lines_fill,
+                line_pipeline(&self.gather_lines_fill, p.light_count),
                 group_b,
                 groups,
             );

@@ -81,8 +81,17 @@ pub const LINE_THREADS_MIN: u32 = 32;
 /// two from [`LINE_THREADS_MIN`] to [`LINE_GROUP_THREADS`]) that leave each at most this many.
 pub const LINE_WORDS: u32 = 8;
 
-/// Threads a tile in the list passes of gather's lines path, for `light_count` lights (the
-/// shaders' `line_threads`): 32 up to 8,192 lights (three mask words a thread at the Forward+
+/// The threads a tile that [`line_threads`] takes: each list pass of the lines path is built
+/// once for each (the shaders' `LINE_THREADS` override).
+pub const LINE_THREAD_COUNTS: [u32; 3] = [32, 64, 128];
+const _: () = assert!(
+    LINE_THREAD_COUNTS[0] == LINE_THREADS_MIN
+        && LINE_THREAD_COUNTS[1] == 2 * LINE_THREADS_MIN
+        && LINE_THREAD_COUNTS[2] == LINE_GROUP_THREADS
+);
+
+/// Threads a tile in the list passes of gather's lines path, for `light_count` lights (one of
+/// [`LINE_THREAD_COUNTS`]): 32 up to 8,192 lights (three mask words a thread at the Forward+
 /// paper's 3,072: half the threads of 64 a tile measured 8% faster on an H100), 64 up to
 /// 16,384 (where 32 measured 20% slower), 128 beyond. Aiming at 4 or 2 words a thread instead
 /// measured no faster anywhere and slower at 4K (docs/BENCHMARKS.md).
@@ -116,7 +125,6 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
     WgslConst::U32("LINE_GROUP_THREADS", LINE_GROUP_THREADS),
     WgslConst::U32("LINE_THREADS_MIN", LINE_THREADS_MIN),
-    WgslConst::U32("LINE_WORDS", LINE_WORDS),
     WgslConst::U32("TILE_SLOTS", TILE_SLOTS),
     WgslConst::U32("LINES_PER_GROUP", LINES_PER_GROUP),
     WgslConst::U32("ZBINS", ZBINS),

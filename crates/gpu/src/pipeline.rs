@@ -97,12 +97,30 @@ pub fn compute(
     layout: &wgpu::PipelineLayout,
     entry: &str,
 ) -> wgpu::ComputePipeline {
+    compute_with(
+        device,
+        module,
+        layout,
+        entry,
+        &wgpu::PipelineCompilationOptions::default(),
+    )
+}
+
+/// As [`compute`], with compilation options (values of the shader's `override` constants;
+/// whether workgroup memory starts zeroed).
+pub fn compute_with(
+    device: &wgpu::Device,
+    module: &wgpu::ShaderModule,
+    layout: &wgpu::PipelineLayout,
+    entry: &str,
+    options: &wgpu::PipelineCompilationOptions<'_>,
+) -> wgpu::ComputePipeline {
     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: Some(entry),
         layout: Some(layout),
         module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: options.clone(),
         cache: None,
     })
 }
