@@ -860,7 +860,7 @@ fn repeated_timings(
     let Some(passes) = passes else {
         return Ok("  (no GPU timings: the adapter has no timestamp queries)\n".into());
     };
-    let most = MAX_QUERIES / 2 / passes.max(1);
+    let most = manylights_lab::steady::max_runs(passes);
     if n > most {
         bail!(
             "invalid --repeat {n}: this strategy runs {passes} passes, and one timer holds {} \
@@ -868,42 +868,22 @@ fn repeated_timings(
             MAX_QUERIES / 2
         );
     }
-    let mut timer = GpuTimer::new(ctx, n * passes);
-    culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut timer)?;
-    let t = timer
-        .read(ctx)?
-        .expect("timestamps were there for the first run");
-    // Passes a run: back to back, a run may take fewer than `first` did (gather's lines path
-    // needs no count pass once the lists are sized).
-    let k = t.len() / n.max(1) as usize;
-    if k == 0 || t.len() != k * n as usize {
-        bail!("{} timed passes do not split into {n} runs", t.len());
-    }
-    // The same median as the experiments' (nearest rank).
-    let median = |v: Vec<f64>| manylights_lab::results::percentiles(&v).map_or(0.0, |p| p.0);
+    let s = manylights_lab::steady::steady_cull(
+        ctx, culler, scene, depth, strategy, settings, first, passes, n,
+    )?
+    .expect("timestamps were there for the first run");
     let mut lines = format!("  {n} runs back to back (median per pass):\n");
-    for j in 0..k {
-        let ms = median((0..n as usize).map(|r| t[r * k + j].ms).collect());
-        let (label, kind) = (&t[j].label, t[j].kind.as_str());
-        writeln!(lines, "  {label:<28} {kind:>8} {ms:>10.3} ms")?;
+    for (label, kind, ms) in &s.passes {
+        writeln!(lines, "  {label:<28} {:>8} {ms:>10.3} ms", kind.as_str())?;
     }
-    let totals = (0..n as usize)
-        .map(|r| t[r * k..(r + 1) * k].iter().map(|p| p.ms).sum())
-        .collect();
-    let total = median(totals);
     writeln!(
         lines,
-        "  {:<28} {:>8} {total:>10.3} ms",
-        "total (median run)", ""
+        "  {:<28} {:>8} {:>10.3} ms",
+        "total (median run)", "", s.total_ms
     )?;
     // The same runs again with one pair of timestamps around each run's passes, none between
     // them: the run as a frame waits for it, clears and gaps between passes included.
-    if let Some(mut spans) = GpuTimer::spans(ctx, n) {
-        culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut spans)?;
-        let t = spans
-            .read(ctx)?
-            .expect("timestamps were there for the first run");
-        let span = median(t.iter().map(|p| p.ms).collect());
+    if let Some(span) = s.span_ms {
         writeln!(
             lines,
             "  {:<28} {:>8} {span:>10.3} ms",

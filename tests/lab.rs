@@ -119,6 +119,22 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                 "{name} {}: no GPU time",
                 r.cell
             );
+            // Steady-state culling for every culling cell, none for naive forward.
+            if r.backend == "naive_forward" {
+                assert_eq!(r.gpu_ms_cull_steady, None, "{name} {}", r.cell);
+                assert_eq!(r.gpu_ms_cull_span, None, "{name} {}", r.cell);
+            } else {
+                assert!(
+                    r.gpu_ms_cull_steady.is_some_and(|t| t > 0.0),
+                    "{name} {}: no steady-state culling time",
+                    r.cell
+                );
+                assert!(
+                    r.gpu_ms_cull_span.is_none_or(|t| t > 0.0),
+                    "{name} {}: span",
+                    r.cell
+                );
+            }
             assert_eq!(r.experiment, name);
         }
         let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
@@ -190,7 +206,12 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
         );
     }
     let csv = std::fs::read_to_string(tmp.path().join("out/results.csv")).unwrap();
-    assert!(csv.lines().next().unwrap().ends_with(",tile_masks"));
+    assert!(
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with(",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span")
+    );
 }
 
 /// The columns of a row that do not depend on timing, and its image error rounded. The order of

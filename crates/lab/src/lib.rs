@@ -1,5 +1,6 @@
 //! Experiments of manylights: the RON schema and its sweeps ([`experiment`]), the durable,
-//! resumable, shardable runner ([`runner`]), results as CSV and JSON ([`results`]), and
+//! resumable, shardable runner ([`runner`]), results as CSV and JSON ([`results`]), culling
+//! timed in steady state ([`steady`]), and
 //! paper-style reports in Markdown and HTML with figures ([`report`]).
 //!
 //! Depends on every other crate; nothing depends on it but the CLI.
@@ -9,6 +10,7 @@ pub mod report;
 pub mod results;
 pub mod runner;
 pub mod stability;
+pub mod steady;
 
 pub use experiment::{Cell, Config, Experiment};
 pub use results::Row;

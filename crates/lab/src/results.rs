@@ -125,6 +125,17 @@ pub struct Row {
     /// they fit the cell's `mask_budget`; clusters never do); empty for naive forward.
     #[serde(default)]
     pub tile_masks: Option<bool>,
+    /// Culling in steady state: the median over back-to-back runs (as many as the measured
+    /// frames, at the first pose) of a run's summed passes, ms, as the benches time it; lists
+    /// sized from an earlier run, so no count pass where a single run needs one. Empty for naive
+    /// forward and without timestamp queries.
+    #[serde(default)]
+    pub gpu_ms_cull_steady: Option<f64>,
+    /// The same runs' median span, ms: one timestamp pair around each run's passes, so clears
+    /// and the gaps between dependent passes count. Empty where the adapter cannot write
+    /// timestamps between passes.
+    #[serde(default)]
+    pub gpu_ms_cull_span: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -219,6 +230,8 @@ pub const COLUMNS: &[&str] = &[
     "temporal_change_reference",
     "temporal_flicker",
     "tile_masks",
+    "gpu_ms_cull_steady",
+    "gpu_ms_cull_span",
 ];
 
 fn one() -> u32 {

@@ -2,9 +2,10 @@
 //! it finishes, so that a killed run loses nothing finished and a rerun skips what is done.
 //!
 //! Per cell: build the scene and lights; render `warmup` frames, then `frames` measured frames
-//! (GPU times from timestamp queries, medians with p10 and p90); at the first camera pose, the
-//! list metrics from the exact per-pixel oracle (on the GPU, on every `exact_stride`-th pixel)
-//! and, with `accuracy`, the image error against the reference and the infinite-range
+//! (GPU times from timestamp queries, medians with p10 and p90); at the first camera pose,
+//! culling timed in steady state (`frames` runs back to back, [`crate::steady`]), the list
+//! metrics from the exact per-pixel oracle (on the GPU, on every `exact_stride`-th pixel) and,
+//! with `accuracy`, the image error against the reference and the infinite-range
 //! reference; a small render and lights-per-pixel heatmap for the report.
 
 use std::collections::BTreeSet;
@@ -23,6 +24,7 @@ use manylights_shade::{Backend, HdrImage, ReferenceRenderer, Renderer};
 
 use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
 use crate::results::{Row, load_cells, percentiles, save_cell, write_results};
+use crate::steady::steady_cull;
 use crate::{LabError, write_atomic};
 
 /// How to run.
@@ -302,6 +304,8 @@ fn run_cell(
             cam,
             &settings(cam),
             &pose,
+            // Steady-state culling at the first pose, over as many runs as measured frames.
+            (k == 0 && timed).then_some(c.frames),
         )?);
     }
     let first = &evals[0];
@@ -417,6 +421,8 @@ fn run_cell(
         temporal_change_reference: temporal.map(|t| t.1),
         temporal_flicker: temporal.map(|t| t.2),
         tile_masks: first.tile_masks,
+        gpu_ms_cull_steady: first.steady.map(|s| s.0),
+        gpu_ms_cull_span: first.steady.and_then(|s| s.1),
         passes,
         index: cell.index,
         id,
@@ -438,6 +444,8 @@ struct PoseEval {
     dropped: u64,
     nonfinite: u64,
     tile_masks: Option<bool>,
+    /// Steady-state culling (run median, span), ms, where it was timed.
+    steady: Option<(f64, Option<f64>)>,
 }
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
@@ -456,6 +464,7 @@ fn evaluate(
     cam: &Camera,
     settings: &CullSettings,
     pose: &str,
+    steady_runs: Option<u32>,
 ) -> Result<PoseEval, LabError> {
     let light_count = u64::from(gpu_scene.light_count);
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
@@ -470,6 +479,7 @@ fn evaluate(
     let mut metrics: Option<ListMetrics> = None;
     let (mut list_bytes, mut dropped) = (0, 0);
     let mut tile_masks = None;
+    let mut steady = None;
     let per_pixel: Vec<u32> = match &o.lists {
         Some(lists) => {
             list_bytes = lists.list_bytes();
@@ -490,6 +500,24 @@ fn evaluate(
                 })
                 .map_err(|e| other(&e))?;
                 metrics = Some(from_gpu_counts(&counts, &bins));
+            }
+            if let (Some(runs), Some(t)) = (steady_runs, &o.timings) {
+                let passes = t.iter().filter(|p| category(&p.label) == "cull").count() as u32;
+                let timed = stage(pose, "culling timed back to back", || {
+                    steady_cull(
+                        ctx,
+                        &renderer.culler,
+                        gpu_scene,
+                        &o.depth,
+                        &c.strategy,
+                        settings,
+                        lists,
+                        passes,
+                        runs,
+                    )
+                })
+                .map_err(|e| other(&e))?;
+                steady = timed.map(|s| (s.total_ms, s.span_ms));
             }
             stage(pose, "lights per pixel", || {
                 renderer
@@ -548,6 +576,7 @@ fn evaluate(
         gbuffer_bytes: o.gbuffer_bytes,
         dropped,
         tile_masks,
+        steady,
     })
 }
 

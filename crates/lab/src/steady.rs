@@ -1,0 +1,115 @@
+//! Culling timed in steady state, as the benches time it: runs back to back in one submission
+//! (`Culler::run_repeated`, sized from an earlier run and checked against it), each pass's and
+//! each run's median, and the median span (one timestamp pair around each run's passes, so
+//! clears and the gaps between dependent passes count). `manylights cull --repeat` prints it;
+//! experiments write its run median and span as `gpu_ms_cull_steady` and `gpu_ms_cull_span`.
+//!
+//! A single run (a frame of an experiment, `gpu_ms_cull`) also times what sizes its lists: the
+//! count pass and the read-back between its two submissions. Back to back, the lists are
+//! already sized and gather's lines path runs two passes, not three.
+
+use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
+use manylights_gpu::timing::{GpuTimer, MAX_QUERIES, PassKind};
+use manylights_gpu::{GpuContext, GpuScene};
+
+use crate::results::percentiles;
+
+/// Steady-state culling times, ms.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SteadyCull {
+    /// Runs timed.
+    pub runs: u32,
+    /// Each pass of a run: its label, kind and median over the runs.
+    pub passes: Vec<(String, PassKind, f64)>,
+    /// Median over the runs of the sum of a run's passes.
+    pub total_ms: f64,
+    /// Median span of a run (one timestamp pair around its passes); `None` where the adapter
+    /// cannot write timestamps between passes.
+    pub span_ms: Option<f64>,
+}
+
+/// The most runs one timer holds for a strategy whose single run took `passes` passes.
+pub fn max_runs(passes: u32) -> u32 {
+    MAX_QUERIES / 2 / passes.max(1)
+}
+
+/// Why steady-state timing failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SteadyError {
+    /// The culling itself.
+    #[error(transparent)]
+    Cull(#[from] CullError),
+    /// A GPU error reading the timestamps.
+    #[error(transparent)]
+    Gpu(#[from] manylights_gpu::GpuError),
+    /// The timed passes do not split evenly into the runs.
+    #[error("{passes} timed passes do not split into {runs} runs")]
+    Uneven {
+        /// Passes timed.
+        passes: usize,
+        /// Runs.
+        runs: u32,
+    },
+}
+
+/// `runs` runs (at least 1, at most [`max_runs`] of `passes`, the single run's passes) of
+/// `strategy` back to back, sized from `first`, timed per pass and then as spans. `None`
+/// without timestamp queries.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the inputs of the run being repeated"
+)]
+pub fn steady_cull(
+    ctx: &GpuContext,
+    culler: &Culler,
+    scene: &GpuScene,
+    depth: &wgpu::Texture,
+    strategy: &Strategy,
+    settings: &CullSettings,
+    first: &CullOutput,
+    passes: u32,
+    runs: u32,
+) -> Result<Option<SteadyCull>, SteadyError> {
+    let n = runs.clamp(1, max_runs(passes));
+    let mut timer = GpuTimer::new(ctx, n * passes.max(1));
+    culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut timer)?;
+    let Some(t) = timer.read(ctx)? else {
+        return Ok(None);
+    };
+    // Passes a run: back to back, a run may take fewer than `first` did.
+    let k = t.len() / n as usize;
+    if k == 0 || t.len() != k * n as usize {
+        return Err(SteadyError::Uneven {
+            passes: t.len(),
+            runs: n,
+        });
+    }
+    // The experiments' median (nearest rank).
+    let median = |v: Vec<f64>| percentiles(&v).map_or(0.0, |p| p.0);
+    let passes = (0..k)
+        .map(|j| {
+            let ms = median((0..n as usize).map(|r| t[r * k + j].ms).collect());
+            (t[j].label.clone(), t[j].kind, ms)
+        })
+        .collect();
+    let total_ms = median(
+        (0..n as usize)
+            .map(|r| t[r * k..(r + 1) * k].iter().map(|p| p.ms).sum())
+            .collect(),
+    );
+    let span_ms = match GpuTimer::spans(ctx, n) {
+        Some(mut spans) => {
+            culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut spans)?;
+            spans
+                .read(ctx)?
+                .map(|t| median(t.iter().map(|p| p.ms).collect()))
+        }
+        None => None,
+    };
+    Ok(Some(SteadyCull {
+        runs: n,
+        passes,
+        total_ms,
+        span_ms,
+    }))
+}
