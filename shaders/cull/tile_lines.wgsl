@@ -9,9 +9,9 @@
 //    its row's, so the AND of a tile's column word and row word is exactly the lights of that
 //    word whose rectangle holds the tile and that pass its four side planes.
 // 2. The count or fill pass (lines_tile), LINE_THREADS threads a tile (32 to
-//    LINE_GROUP_THREADS, the fewest that leave a thread at most LINE_WORDS words: 32 up to
-//    8,192 lights, half the masks' fill's 64 in tile_masks.wgsl, measured faster) and as many
-//    tiles as fill a workgroup of LINE_GROUP_THREADS, first computes its tiles' depth data
+//    LINE_GROUP_THREADS, the fewest that leave a thread at most layout::LINE_WORDS words: 32
+//    up to 8,192 lights, half the masks' fill's 64 in tile_masks.wgsl, measured faster) and as
+//    many tiles as fill a workgroup of LINE_GROUP_THREADS, first computes its tiles' depth data
 //    (tile_bounds, tile_depth.wgsl, the code of cull.depth_bounds; the 2.5D mask only for
 //    2.5D). Thread `lane` of a tile takes words
 //    [lane k, lane k + k) of the tile's mask (k = words / LINE_THREADS, rounded up), ANDs the

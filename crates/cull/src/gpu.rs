@@ -398,6 +398,19 @@ fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
 
 use pipeline::{DEPTH_TEXTURE as DEPTH, UNIFORM, storage};
 
+/// The module of one shader and its pipeline layout, over group 0 (the scene) and `group1`.
+fn program(
+    d: &wgpu::Device,
+    def: &ShaderDef,
+    scene_layout: &wgpu::BindGroupLayout,
+    group1: &wgpu::BindGroupLayout,
+) -> (wgpu::ShaderModule, wgpu::PipelineLayout) {
+    (
+        def.create(d),
+        pipeline::layout(d, def.name, &[scene_layout, group1]),
+    )
+}
+
 /// Compute pipelines for the entry points of one shader, over group 0 (the scene) and `group1`.
 fn pipelines<const N: usize>(
     d: &wgpu::Device,
@@ -406,22 +419,19 @@ fn pipelines<const N: usize>(
     group1: &wgpu::BindGroupLayout,
     entries: [&str; N],
 ) -> [wgpu::ComputePipeline; N] {
-    let module = def.create(d);
-    let pl = pipeline::layout(d, def.name, &[scene_layout, group1]);
+    let (module, pl) = program(d, def, scene_layout, group1);
     entries.map(|e| pipeline::compute(d, &module, &pl, e))
 }
 
-/// An entry point of `def` built once for each of [`crate::layout::LINE_THREAD_COUNTS`] (the
-/// shader's `LINE_THREADS` override): the lines path's list passes.
+/// Entry point `entry` of `module` built once for each of
+/// [`crate::layout::LINE_THREAD_COUNTS`] (the shader's `LINE_THREADS` override): the lines
+/// path's list passes.
 fn line_pipelines(
     d: &wgpu::Device,
-    def: &ShaderDef,
-    scene_layout: &wgpu::BindGroupLayout,
-    group1: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+    pl: &wgpu::PipelineLayout,
     entry: &str,
 ) -> [wgpu::ComputePipeline; 3] {
-    let module = def.create(d);
-    let pl = pipeline::layout(d, def.name, &[scene_layout, group1]);
     crate::layout::LINE_THREAD_COUNTS.map(|t| {
         let constants = [("LINE_THREADS", f64::from(t))];
         // (Without zeroing workgroup memory, which these passes do not need, measured the same
@@ -430,7 +440,7 @@ fn line_pipelines(
             constants: &constants,
             ..Default::default()
         };
-        pipeline::compute_with(d, &module, &pl, entry, &options)
+        pipeline::compute_with(d, module, pl, entry, &options)
     })
 }
 
@@ -485,10 +495,11 @@ impl Culler {
         } else {
             &TILED_GATHER
         };
+        // One module for all of gather's pipelines.
+        let (gather_module, gather_pl) = program(d, gather_def, scene_layout, &layout);
         let gather_lines_count =
-            line_pipelines(d, gather_def, scene_layout, &layout, "gather_lines_count");
-        let gather_lines_fill =
-            line_pipelines(d, gather_def, scene_layout, &layout, "gather_lines_fill");
+            line_pipelines(d, &gather_module, &gather_pl, "gather_lines_count");
+        let gather_lines_fill = line_pipelines(d, &gather_module, &gather_pl, "gather_lines_fill");
         let [
             gather_count,
             gather_fill,
@@ -498,22 +509,17 @@ impl Culler {
             gather_fill_flat,
             finalize,
             cap,
-        ] = pipelines(
-            d,
-            gather_def,
-            scene_layout,
-            &layout,
-            [
-                "gather_count",
-                "gather_fill",
-                "gather_count_masks",
-                "gather_fill_masks",
-                "gather_count_flat",
-                "gather_fill_flat",
-                "finalize",
-                "cap_counts",
-            ],
-        );
+        ] = [
+            "gather_count",
+            "gather_fill",
+            "gather_count_masks",
+            "gather_fill_masks",
+            "gather_count_flat",
+            "gather_fill_flat",
+            "finalize",
+            "cap_counts",
+        ]
+        .map(|e| pipeline::compute(d, &gather_module, &gather_pl, e));
         let [
             clustered_count,
             clustered_fill,

@@ -124,7 +124,6 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),
     WgslConst::U32("LINE_GROUP_THREADS", LINE_GROUP_THREADS),
-    WgslConst::U32("LINE_THREADS_MIN", LINE_THREADS_MIN),
     WgslConst::U32("TILE_SLOTS", TILE_SLOTS),
     WgslConst::U32("LINES_PER_GROUP", LINES_PER_GROUP),
     WgslConst::U32("ZBINS", ZBINS),
