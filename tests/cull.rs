@@ -3,12 +3,15 @@
 
 mod common;
 
+use std::collections::HashSet;
+
 use glam::Vec3;
 use manylights_cull::layout::{GpuCullParams, line_threads};
 use manylights_cull::metrics::{ListMetrics, evaluate, exact_sets, surface_points};
+use manylights_cull::record::{Buf, StepInfo};
 use manylights_cull::{BinLists, CullSettings, Culler, Slicing, Strategy, cpu, geometry, scan};
 use manylights_gpu::layout::{GpuFrame, GpuLight};
-use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, readback};
 use manylights_scene::procedural::{
     AtriumParams, CityParams, PillarsParams, ProceduralScene, TopdownParams,
@@ -265,7 +268,7 @@ fn run_gpu(
     s: &Strategy,
 ) -> manylights_cull::CullOutput {
     let mut timer = GpuTimer::new(ctx, 16);
-    culler
+    let out = culler
         .run(
             ctx,
             &r.gpu_scene,
@@ -274,7 +277,50 @@ fn run_gpu(
             &CullSettings::for_camera(&case.camera),
             &mut timer,
         )
-        .unwrap()
+        .unwrap();
+    check_plan(
+        &format!("{} {}", case.label, s.name()),
+        &out.passes,
+        timer.read(ctx).unwrap(),
+        1,
+    );
+    out
+}
+
+/// A run's declared steps (`CullOutput::passes`): every buffer a pass reads is an input of the
+/// run or written by an earlier step of it, and the timer recorded exactly the declared passes,
+/// in order, `runs` times (besides the scan's and the sort's own).
+fn check_plan(what: &str, passes: &[StepInfo], timed: Option<Vec<PassTiming>>, runs: usize) {
+    assert!(
+        passes.iter().any(|s| s.name.starts_with("cull.")),
+        "{what}: no culling pass declared"
+    );
+    let mut written: HashSet<Buf> = Buf::INPUTS.into_iter().collect();
+    for s in passes {
+        for b in &s.reads {
+            assert!(
+                written.contains(b),
+                "{what}: {} reads {} before any step writes it",
+                s.name,
+                b.name()
+            );
+        }
+        written.extend(s.writes.iter().copied());
+    }
+    if let Some(timed) = timed {
+        let declared: Vec<&str> = passes
+            .iter()
+            .map(|s| s.name.as_str())
+            .filter(|n| !matches!(*n, "clear" | "scan" | "sort"))
+            .collect::<Vec<_>>()
+            .repeat(runs);
+        let timed: Vec<&str> = timed
+            .iter()
+            .map(|p| p.label.as_str())
+            .filter(|l| !l.starts_with("scan.") && !l.starts_with("sort."))
+            .collect();
+        assert_eq!(declared, timed, "{what}: passes declared and timed");
+    }
 }
 
 #[test]
@@ -531,6 +577,12 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
                 };
                 let mut timer = GpuTimer::new(&ctx, 256);
                 let again = three_runs(&mut timer);
+                check_plan(
+                    &format!("{what}, repeated"),
+                    &again.passes,
+                    timer.read(&ctx).unwrap(),
+                    3,
+                );
                 let again = again.read(&ctx).unwrap();
                 assert_eq!(
                     again.ranges.len(),

@@ -15,7 +15,7 @@ fn all_shaders() -> Vec<ShaderDef> {
     manylights_gpu::shaders::SHADERS
         .iter()
         .chain(manylights_shade::SHADERS)
-        .chain(manylights_cull::gpu::SHADERS)
+        .chain(manylights_cull::shaders::SHADERS)
         .copied()
         .collect()
 }
@@ -116,7 +116,7 @@ fn host_structs_match_wgsl_layout() {
     check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
         direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer"]);
     check!(GpuMaterial, "Material", [base_color => "base_color", specular => "specular"]);
-    let cull = validate(&manylights_cull::gpu::DEPTH_BOUNDS);
+    let cull = validate(&manylights_cull::shaders::DEPTH_BOUNDS);
     let (size, members) = wgsl_layout(&cull, "CullParams");
     assert_eq!(size as usize, size_of::<GpuCullParams>());
     let expect = [

@@ -190,7 +190,7 @@ pub fn gather(
 }
 
 /// Oracle of the tile lines that `cull.tile_lines` writes for gather's and 2.5D's lines path
-/// (`shaders/cull/tile_lines.wgsl`): for each column of tiles, then each row, then each depth
+/// (`shaders/cull/common/tile_lines.wgsl`): for each column of tiles, then each row, then each depth
 /// bin, two words for each 64 lights, bit `i % 32` of word `i / 32` set when light `i`'s
 /// rectangle spans the line and the light is inside the line's two side planes, or for a bin
 /// when the bins of its depth extent hold it. Returned at the slack moved down and up

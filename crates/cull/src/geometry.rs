@@ -1,4 +1,4 @@
-//! The culling geometry on the CPU: an f32 mirror of `shaders/cull/common.wgsl`, function for
+//! The culling geometry on the CPU: an f32 mirror of `shaders/cull/common/geometry.wgsl`, function for
 //! function and in the same order of operations, used by the CPU oracles. GPUs may fuse
 //! multiply-adds or round divisions differently, so a decision within a hair of its boundary can
 //! differ; the oracles detect such borderline decisions (see [`crate::cpu`]) instead of hiding

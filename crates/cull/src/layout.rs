@@ -147,7 +147,7 @@ pub const SCAN_CONSTS: &[WgslConst] = &[
     WgslConst::U32("SCAN_MAX_GROUPS_X", SCAN_MAX_GROUPS_X),
 ];
 
-/// Mirror of WGSL `CullParams` (`shaders/cull/common.wgsl`).
+/// Mirror of WGSL `CullParams` (`shaders/cull/common/geometry.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GpuCullParams {
@@ -186,7 +186,7 @@ pub struct GpuCullParams {
 }
 const _: () = assert!(size_of::<GpuCullParams>() == 64);
 
-/// Mirror of WGSL `ExactParams` (`shaders/cull/exact.wgsl`).
+/// Mirror of WGSL `ExactParams` (`shaders/cull/per_pixel/exact.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GpuExactParams {
@@ -199,7 +199,7 @@ pub struct GpuExactParams {
 }
 const _: () = assert!(size_of::<GpuExactParams>() == 80);
 
-/// Mirror of WGSL `TileDepth` (`shaders/cull/common.wgsl`).
+/// Mirror of WGSL `TileDepth` (`shaders/cull/common/geometry.wgsl`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct GpuTileDepth {

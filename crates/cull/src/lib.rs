@@ -3,32 +3,50 @@
 //! A strategy takes the depth buffer (where it uses one), the camera and the lights, and writes
 //! light lists in one format for every strategy: `bin_ranges[bin] = (offset, count)` into
 //! `light_indices`, where a bin is a screen tile or a cluster (tile x depth slice). Every
-//! shading backend reads them through `shaders/cull/lookup.wgsl` (`light_list(pixel, depth)`).
+//! shading backend reads them through `shaders/cull/common/lookup.wgsl`
+//! (`light_list(pixel, depth)`).
 //!
-//! Passes, in order (profiler scopes in brackets):
-//! 1. `cull.depth_bounds` (tiled strategies): per tile, the nearest and farthest covered depth
-//!    and the 2.5D geometry mask.
-//! 2. `cull.occupancy` (clusters with `skip_empty`): clusters that hold covered pixels.
-//! 3. `cull.<strategy>.count`: each bin's light count. 4. `scan.*`: exclusive scan of the
-//!    counts into offsets; the total sizes `light_indices` exactly (no capacity, nothing
-//!    dropped). 5. `cull.<strategy>.fill`: the lists. 6. `cull.finalize`: the ranges.
+//! The crate, by concept:
+//! - [`strategies`]: a module a strategy (`tiled_gather`, Harada, McKee, Yang 2012, section
+//!   4.1; `tiled_scatter`, section 4.2; `depth_mask`, 2.5D culling, Harada 2012; `clustered`,
+//!   Olsson, Billeter, Assarsson 2012), each owning its pipelines and declaring the passes of a
+//!   run as data;
+//! - [`blocks`], [`scan`], [`radix_sort`]: the building blocks strategies compose (tile depth,
+//!   tile masks, tile lines, list finalisation; the exclusive scan; the radix sort);
+//! - [`record`]: passes as data and the one recorder that encodes, labels and times them;
+//!   `frame` runs a plan once (sized exactly between two submissions) or back to back;
+//! - [`Culler`]: builds every pipeline once and runs a strategy; [`CullOutput`] is what a run
+//!   leaves on the GPU;
+//! - [`cpu`]: the CPU oracle of every pass; [`metrics`]: the exact per-pixel oracle and list
+//!   metrics; [`per_pixel`]: the per-pixel list consumers on the GPU; [`geometry`]: the
+//!   culling geometry both sides share; [`layout`]: host mirrors of the WGSL structs and shared
+//!   constants.
 //!
-//! Strategies ([`Strategy`]): `tiled_gather` (Harada, McKee, Yang 2012, section 4.1),
-//! `tiled_scatter` (same paper, section 4.2; pairs sorted by [`radix_sort`]),
-//! `depth_mask` (2.5D culling, Harada 2012), `clustered` (Olsson, Billeter, Assarsson 2012).
-//! Each has a CPU oracle in [`cpu`]; [`metrics`] holds the exact per-pixel oracle. See
-//! docs/STRATEGIES.md for the methods, their tests, parameters, memory and false positives.
+//! Lists are sized exactly: a count pass counts each bin's lights, a scan gives the total, and
+//! the host sizes `light_indices` from it before the fill (no capacity, nothing dropped unless
+//! a run asks for a capacity, and then the dropped lights are counted). docs/STRATEGIES.md
+//! describes the methods, their tests, parameters, memory and false positives; docs/
+//! ARCHITECTURE.md says how to add a strategy.
 
+pub mod blocks;
 pub mod cpu;
+mod culler;
+mod frame;
 pub mod geometry;
-pub mod gpu;
 pub mod heatmap;
 pub mod layout;
 pub mod metrics;
+mod output;
+pub mod per_pixel;
+mod program;
 pub mod radix_sort;
+pub mod record;
 pub mod scan;
+pub mod shaders;
+pub mod strategies;
 
-pub use gpu::{BinLists, CullOutput, Culler};
+pub use culler::Culler;
+pub use output::{BinLists, CullOutput};
 
 use serde::{Deserialize, Serialize};
 

@@ -248,6 +248,16 @@ impl RadixSort {
         }
     }
 
+    /// Where a sort of `n` pairs of `key_bits` bits leaves them: as [`RadixSort::sorted_in`],
+    /// and in the input buffers where there is nothing to sort (`n` <= 1).
+    pub fn sorted_for(&self, n: u32, key_bits: u32) -> SortedIn {
+        if n <= 1 {
+            SortedIn::Input
+        } else {
+            self.sorted_in(key_bits)
+        }
+    }
+
     /// Encodes a stable sort of the first `n` pairs of (`keys`, `vals`) by the low `key_bits`
     /// bits of the keys, ping-ponging with (`keys_tmp`, `vals_tmp`) (each at least `n`
     /// elements). Returns which pair of buffers holds the result ([`RadixSort::sorted_in`]).

@@ -11,8 +11,8 @@
 //!
 //! All three use the one shading model of `shaders/common/shading.wgsl`.
 
-use manylights_cull::gpu::{COMMON, LOOKUP};
 use manylights_cull::layout::CULL_CONSTS;
+use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::{DepthPrepass, depth_target};
@@ -33,7 +33,7 @@ pub const FORWARD: ShaderDef = ShaderDef {
         SCENE,
         SHADING,
         VERTEX,
-        COMMON,
+        GEOMETRY,
         LOOKUP,
         shader_file!("render/forward.wgsl"),
     ],
@@ -60,7 +60,7 @@ pub const DEFERRED: ShaderDef = ShaderDef {
         LIGHT,
         SCENE,
         SHADING,
-        COMMON,
+        GEOMETRY,
         LOOKUP,
         shader_file!("render/deferred.wgsl"),
     ],

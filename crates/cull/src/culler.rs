@@ -1,0 +1,260 @@
+//! The orchestration: [`Culler`] builds every strategy's and building block's pipelines once, and
+//! a run checks its inputs, computes the parameters and hands them to the strategy's module
+//! ([`crate::strategies`]), which records its plan through [`crate::frame::execute`].
+
+use manylights_gpu::pipeline::{self, DEPTH_TEXTURE as DEPTH, UNIFORM, storage};
+use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::{GpuContext, GpuScene};
+
+use crate::blocks::lists::Lists;
+use crate::blocks::tile_depth::TileDepth;
+use crate::blocks::tile_lines::TileLines;
+use crate::blocks::tile_masks::TileMasks;
+use crate::frame::{self, Done, Frame, Repeat};
+use crate::layout::{GpuCullParams, LINE_THREADS_MIN};
+use crate::per_pixel::PerPixel;
+use crate::program::Program;
+use crate::radix_sort::RadixSort;
+use crate::record::Recorder;
+use crate::scan::Scan;
+use crate::shaders::{CLUSTERED, DEPTH_BOUNDS, TILED_GATHER, TILED_GATHER_SUBGROUP, TILED_SCATTER};
+use crate::strategies::{Plan, clustered, depth_mask, tiled_gather, tiled_scatter};
+use crate::{CullError, CullOutput, CullSettings, Strategy};
+
+/// Pipelines of every culling pass, and the knobs of the runs.
+pub struct Culler {
+    layout: wgpu::BindGroupLayout,
+    /// Layout of group 1 for list consumers (shading, `cull.lights_per_pixel`): 0 params,
+    /// 1 ranges, 2 indices, 3 depth, 4 a per-pixel output, 5 a pass-specific uniform.
+    pub lists_layout: wgpu::BindGroupLayout,
+    /// Whether gather's scans use subgroup operations.
+    pub gather_subgroups: bool,
+    /// The fewest lights a workgroup of gather's coarse-to-fine passes takes
+    /// ([`crate::MIN_CHUNK`] by default; larger trades parallelism for less repeated set-up).
+    pub gather_min_chunk: u32,
+    /// The same with tile masks ([`crate::MIN_CHUNK_MASKED`] by default: without a scan over
+    /// (tile, chunk) counts, smaller chunks cost less).
+    pub gather_min_chunk_masked: u32,
+    /// The most bytes of tile masks gather's coarse-to-fine passes and tiled scatter may use
+    /// ([`crate::MASK_BUDGET`] by default): where a bit per (tile, light) fits, the count pass
+    /// stores the kept lights as bits and the fill pass expands them without testing again
+    /// (scatter: without pairs and their sort); past it (or at 0) gather's fill tests every
+    /// light again and scatter sorts its pairs.
+    /// A run's [`CullSettings::mask_budget`] overrides it.
+    pub mask_budget: u64,
+    /// Whether gather and 2.5D take their lines path where tile masks fit (true by default):
+    /// `cull.tile_lines`, then one pass that computes each tile's depth data and decides and
+    /// writes its list ([`crate::blocks::tile_lines`]); false: the count pass stores tile masks
+    /// and the fill expands them.
+    pub gather_lines: bool,
+    pub(crate) tile_depth: TileDepth,
+    pub(crate) tile_lines: TileLines,
+    pub(crate) tile_masks: TileMasks,
+    pub(crate) lists: Lists,
+    pub(crate) gather: tiled_gather::Pipelines,
+    pub(crate) scatter: tiled_scatter::Pipelines,
+    pub(crate) clustered: clustered::Pipelines,
+    pub(crate) per_pixel: PerPixel,
+    scan: Scan,
+    pub(crate) sort: RadixSort,
+    /// Bound where a strategy has no buffer for a binding (made once, not per run).
+    pub(crate) placeholder: wgpu::Buffer,
+}
+
+/// A binding of the culling groups (visible to compute and, for list consumers, fragments).
+fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+    pipeline::entry(
+        binding,
+        wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT,
+        ty,
+    )
+}
+
+impl Culler {
+    /// Builds every pipeline for scenes laid out as [`GpuScene`].
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        Self::with_subgroups(ctx, scene, true)
+    }
+
+    /// As [`Culler::new`]; with `subgroups` false, gather keeps its portable scans even where
+    /// the device has subgroup operations (both paths give the same lists; the tests run both).
+    pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
+        let d = &ctx.device;
+        let mut entries = vec![entry(0, UNIFORM), entry(1, DEPTH)];
+        entries.extend((2..=11).map(|b| entry(b, storage(false))));
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cull.group1"),
+            entries: &entries,
+        });
+        let lists_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lists.group1"),
+            entries: &[
+                entry(0, UNIFORM),
+                entry(1, storage(true)),
+                entry(2, storage(true)),
+                entry(3, DEPTH),
+                entry(4, storage(false)),
+                entry(5, UNIFORM),
+            ],
+        });
+        let program = |def| Program::new(d, def, &scene.layout, &layout);
+        let depth = program(&DEPTH_BOUNDS);
+        let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
+        // One module for all of gather's pipelines, and the blocks' whose passes it holds.
+        let gather = program(if gather_subgroups {
+            &TILED_GATHER_SUBGROUP
+        } else {
+            &TILED_GATHER
+        });
+        Self {
+            tile_depth: TileDepth::new(d, &depth),
+            tile_lines: TileLines::new(d, &depth, &gather),
+            tile_masks: TileMasks::new(d, &gather),
+            lists: Lists::new(d, &gather),
+            gather: tiled_gather::Pipelines::new(d, &gather),
+            scatter: tiled_scatter::Pipelines::new(d, &program(&TILED_SCATTER)),
+            clustered: clustered::Pipelines::new(d, &program(&CLUSTERED)),
+            per_pixel: PerPixel::new(d, &scene.layout, &lists_layout),
+            layout,
+            lists_layout,
+            gather_subgroups,
+            gather_min_chunk: crate::MIN_CHUNK,
+            gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
+            mask_budget: crate::MASK_BUDGET,
+            gather_lines: true,
+            scan: Scan::new(ctx),
+            sort: RadixSort::new(ctx),
+            placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),
+        }
+    }
+
+    /// Runs `strategy` over the depth buffer `depth` of `scene` (whose frame uniform is set for
+    /// the depth buffer's size) with `settings`. Two submissions: counts and scan, then (with
+    /// the lists sized exactly from the total the scan read back) fill and finalize.
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        strategy: &Strategy,
+        settings: &CullSettings,
+        timer: &mut GpuTimer,
+    ) -> Result<CullOutput, CullError> {
+        self.run_with(ctx, scene, depth, strategy, settings, timer, None)
+    }
+
+    /// Runs `strategy` `runs` times back to back in one submission, with no host round trip
+    /// between or inside the runs, as a renderer does frame after frame: what steady-state
+    /// timing measures. The lists are sized from `earlier`, a [`Culler::run`] of the same
+    /// scene, depth, strategy and settings; the last run's total is read back and checked
+    /// against it ([`CullError::SizeChanged`] where it differs). `timer` needs room for
+    /// `runs` times the passes of one run; a timer of spans ([`GpuTimer::spans`]) times each
+    /// run as one span, `cull.<strategy>`, with no timestamps between its passes.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the inputs of a run, as `run` takes them, and the repeat"
+    )]
+    pub fn run_repeated(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        strategy: &Strategy,
+        settings: &CullSettings,
+        earlier: &CullOutput,
+        runs: u32,
+        timer: &mut GpuTimer,
+    ) -> Result<CullOutput, CullError> {
+        let repeat = Repeat {
+            total: earlier.total,
+            runs: runs.max(1),
+        };
+        self.run_with(ctx, scene, depth, strategy, settings, timer, Some(repeat))
+    }
+
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the inputs of a run, as `run` takes them, and the repeat"
+    )]
+    fn run_with(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        strategy: &Strategy,
+        settings: &CullSettings,
+        timer: &mut GpuTimer,
+        repeat: Option<Repeat>,
+    ) -> Result<CullOutput, CullError> {
+        strategy.validate()?;
+        settings.validate()?;
+        let params = strategy.params(depth.width(), depth.height(), scene.light_count, settings);
+        let inputs = RunInputs {
+            culler: self,
+            ctx,
+            rec: Recorder {
+                ctx,
+                scene: &scene.bind_group,
+                scan: &self.scan,
+                sort: &self.sort,
+            },
+            depth,
+            strategy,
+            settings,
+            repeat,
+        };
+        match strategy {
+            Strategy::TiledGather { .. } => tiled_gather::run(&inputs, params, timer),
+            Strategy::DepthMask { .. } => depth_mask::run(&inputs, params, timer),
+            Strategy::TiledScatter { .. } => tiled_scatter::run(&inputs, params, timer),
+            Strategy::Clustered { .. } => clustered::run(&inputs, params, timer),
+        }
+    }
+}
+
+/// What a strategy's `run` takes besides its parameters.
+pub(crate) struct RunInputs<'a> {
+    pub culler: &'a Culler,
+    pub ctx: &'a GpuContext,
+    pub rec: Recorder<'a>,
+    pub depth: &'a wgpu::Texture,
+    pub strategy: &'a Strategy,
+    pub settings: &'a CullSettings,
+    pub repeat: Option<Repeat>,
+}
+
+impl RunInputs<'_> {
+    /// The frame's buffers for `params`, with `items` count entries.
+    pub fn frame(&self, params: GpuCullParams, items: u64) -> Frame<'_> {
+        Frame::new(
+            self.ctx,
+            &self.culler.layout,
+            self.depth,
+            self.strategy,
+            params,
+            items,
+        )
+    }
+
+    /// Records and submits `plan` over `f`, once or back to back.
+    pub fn execute<P: Plan>(
+        &self,
+        f: &Frame<'_>,
+        plan: P,
+        timer: &mut GpuTimer,
+    ) -> Result<Done, CullError> {
+        frame::execute(f, &self.rec, plan, timer, self.repeat)
+    }
+
+    /// Checks that the bins' ranges fit a storage binding.
+    pub fn check_bins(&self, p: &GpuCullParams) -> Result<(), CullError> {
+        Ok(self.ctx.check_storage("cull bins", u64::from(p.bins) * 8)?)
+    }
+}
+
+/// Whether gather's subgroup scans apply: subgroup operations, with subgroups that tile each
+/// scan's segment (sizes are powers of two; the smallest segment is a lines-path tile's
+/// [`LINE_THREADS_MIN`]). Elsewhere (64-wide subgroups) gather takes the portable scans.
+fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
+    ctx.features.subgroups && ctx.features.subgroup_size.1 <= LINE_THREADS_MIN
+}

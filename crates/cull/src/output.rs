@@ -1,0 +1,155 @@
+//! The lists a culling run leaves on the GPU ([`CullOutput`]), ready for shading, and as read
+//! back to the host ([`BinLists`]).
+
+use manylights_gpu::{GpuContext, GpuError, readback};
+
+use crate::blocks::{tile_lines, tile_masks};
+use crate::layout::{GpuCullParams, GpuTileDepth};
+use crate::record::StepInfo;
+
+/// Light lists read back to the host.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct BinLists {
+    /// (offset, count) per bin.
+    pub ranges: Vec<[u32; 2]>,
+    /// Light indices.
+    pub indices: Vec<u32>,
+}
+
+impl BinLists {
+    /// The lights of bin `b`.
+    pub fn list(&self, b: usize) -> &[u32] {
+        let [o, c] = self.ranges[b];
+        &self.indices[o as usize..(o + c) as usize]
+    }
+
+    /// The lights of bin `b`, sorted.
+    pub fn sorted(&self, b: usize) -> Vec<u32> {
+        let mut v = self.list(b).to_vec();
+        v.sort_unstable();
+        v
+    }
+}
+
+/// The lists of one frame on the GPU, ready for shading.
+pub struct CullOutput {
+    /// The parameters they were built with.
+    pub params: GpuCullParams,
+    /// The `CullParams` uniform.
+    pub params_buf: wgpu::Buffer,
+    /// `bin_ranges`.
+    pub ranges: wgpu::Buffer,
+    /// `light_indices` (at least one element).
+    pub indices: wgpu::Buffer,
+    /// Total list entries.
+    pub total: u32,
+    /// Lights dropped by a deliberate capacity (0 without one).
+    pub dropped: u32,
+    /// Per-tile depth data (tiled strategies).
+    pub tile_depth: wgpu::Buffer,
+    /// Cluster occupancy (clusters with `skip_empty`).
+    pub occupancy: wgpu::Buffer,
+    /// The tile masks, where the run used them (gather's and 2.5D's coarse-to-fine passes, and
+    /// tiled scatter, within [`crate::Culler::mask_budget`]). Every fill leaves them all zero, as the
+    /// next count pass needs (see [`crate::blocks::tile_masks`]).
+    pub tile_masks: Option<wgpu::Buffer>,
+    /// The tile lines, where the run took gather's and 2.5D's lines path (within
+    /// [`crate::Culler::mask_budget`], with [`crate::Culler::gather_lines`]): for each column of tiles, then
+    /// each row, then each depth bin, two words for each 64 lights, and after them each light's
+    /// depth extent (see [`crate::blocks::tile_lines`]).
+    pub tile_lines: Option<wgpu::Buffer>,
+    /// The steps of the run as recorded (of one run, where runs went back to back), with the
+    /// buffers each reads and writes.
+    pub passes: Vec<StepInfo>,
+}
+
+impl CullOutput {
+    /// Whether the run decided its lists as a bit per (tile, light): with tile masks, or with
+    /// tile lines (whose per-tile words are never stored). The `tile_masks` result column.
+    pub fn used_tile_masks(&self) -> bool {
+        self.tile_masks.is_some() || self.tile_lines.is_some()
+    }
+
+    /// Reads the tile lines back (their words, not the lights' depth extents after them),
+    /// where the run used them.
+    pub fn read_tile_lines(&self, ctx: &GpuContext) -> Result<Option<Vec<u32>>, GpuError> {
+        read_words(
+            ctx,
+            self.tile_lines.as_ref(),
+            tile_lines::bytes(&self.params),
+        )
+    }
+
+    /// The lists' bindings 0, 1, 2 (`CullParams`, `bin_ranges`, `light_indices`), as every
+    /// consumer's bind group starts.
+    pub fn list_bindings(&self) -> [wgpu::BindingResource<'_>; 3] {
+        [
+            self.params_buf.as_entire_binding(),
+            self.ranges.as_entire_binding(),
+            self.indices.as_entire_binding(),
+        ]
+    }
+
+    /// Bytes of the lists: ranges plus indices.
+    pub fn list_bytes(&self) -> u64 {
+        u64::from(self.params.bins) * 8 + u64::from(self.total) * 4
+    }
+
+    /// Reads the lists back.
+    pub fn read(&self, ctx: &GpuContext) -> Result<BinLists, GpuError> {
+        let ranges = readback::read_buffer(ctx, &self.ranges, 0, u64::from(self.params.bins) * 8)?;
+        let indices = if self.total > 0 {
+            readback::read_buffer(ctx, &self.indices, 0, u64::from(self.total) * 4)?
+        } else {
+            Vec::new()
+        };
+        Ok(BinLists {
+            ranges: bytemuck::pod_collect_to_vec(&ranges),
+            indices: bytemuck::pod_collect_to_vec(&indices),
+        })
+    }
+
+    /// Reads the per-tile depth data back (meaningful for tiled strategies).
+    pub fn read_tile_depth(&self, ctx: &GpuContext) -> Result<Vec<GpuTileDepth>, GpuError> {
+        let n = u64::from(self.params.tiles_x * self.params.tiles_y);
+        Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+            ctx,
+            &self.tile_depth,
+            0,
+            n * 16,
+        )?))
+    }
+
+    /// Reads the tile masks back, where the run used them.
+    pub fn read_tile_masks(&self, ctx: &GpuContext) -> Result<Option<Vec<u32>>, GpuError> {
+        read_words(
+            ctx,
+            self.tile_masks.as_ref(),
+            tile_masks::bytes(&self.params),
+        )
+    }
+
+    /// Reads the cluster occupancy back (meaningful with `skip_empty`).
+    pub fn read_occupancy(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+            ctx,
+            &self.occupancy,
+            0,
+            u64::from(self.params.bins) * 4,
+        )?))
+    }
+}
+
+/// The first `bytes` of `buf` as words, where there is a buffer.
+fn read_words(
+    ctx: &GpuContext,
+    buf: Option<&wgpu::Buffer>,
+    bytes: u64,
+) -> Result<Option<Vec<u32>>, GpuError> {
+    buf.map(|b| {
+        Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+            ctx, b, 0, bytes,
+        )?))
+    })
+    .transpose()
+}

@@ -1,0 +1,148 @@
+//! Per-pixel consumers of the lists (`shaders/cull/per_pixel/`), a thread a pixel through the
+//! shared lookup: `cull.lights_per_pixel` (the lengths behind the heatmaps, checked against the
+//! CPU's lookup) and `cull.exact` (the exact per-pixel oracle on the GPU, for images too large
+//! for the CPU's O(pixels x lights); [`crate::metrics`]).
+
+use manylights_gpu::{GpuContext, GpuError, GpuScene, pipeline, readback};
+
+use crate::program::Program;
+use crate::shaders::{EXACT, LIGHTS_PER_PIXEL};
+use crate::{CullOutput, Culler};
+
+/// The consumers' pipelines, over group 1 of [`Culler::lists_layout`].
+pub(crate) struct PerPixel {
+    lights_per_pixel: wgpu::ComputePipeline,
+    exact: wgpu::ComputePipeline,
+}
+
+impl PerPixel {
+    /// Their pipelines over the scene's group and the lists' group.
+    pub fn new(
+        d: &wgpu::Device,
+        scene_layout: &wgpu::BindGroupLayout,
+        lists_layout: &wgpu::BindGroupLayout,
+    ) -> Self {
+        let program = |def| Program::new(d, def, scene_layout, lists_layout);
+        Self {
+            lights_per_pixel: program(&LIGHTS_PER_PIXEL).pipeline(d, "lights_per_pixel"),
+            exact: program(&EXACT).pipeline(d, "exact_counts"),
+        }
+    }
+}
+
+impl Culler {
+    /// The length of the list each pixel reads through the shared lookup (0 for background).
+    pub fn lights_per_pixel(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        lists: &CullOutput,
+    ) -> Result<Vec<u32>, GpuError> {
+        self.per_pixel(
+            ctx,
+            scene,
+            depth,
+            lists,
+            &self.per_pixel.lights_per_pixel,
+            1,
+            bytemuck::bytes_of(&[0u32; 4]),
+        )
+    }
+
+    /// The exact per-pixel oracle on the GPU: per pixel `[evaluated, needed, found, covered]`
+    /// (see `shaders/cull/per_pixel/exact.wgsl`); `world_from_clip` is the inverse of the frame's
+    /// `clip_from_world`; only pixels on a grid of `stride` are evaluated (1: all).
+    pub fn exact_counts(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        lists: &CullOutput,
+        world_from_clip: glam::Mat4,
+        stride: u32,
+    ) -> Result<Vec<[u32; 4]>, GpuError> {
+        let params = crate::layout::GpuExactParams {
+            world_from_clip,
+            stride: stride.max(1),
+            _pad: [0; 3],
+        };
+        let flat = self.per_pixel(
+            ctx,
+            scene,
+            depth,
+            lists,
+            &self.per_pixel.exact,
+            4,
+            bytemuck::bytes_of(&params),
+        )?;
+        Ok(flat
+            .chunks_exact(4)
+            .map(|c| [c[0], c[1], c[2], c[3]])
+            .collect())
+    }
+
+    /// Runs a one-thread-per-pixel consumer of the lists with `uniform` at binding 5 and reads
+    /// back its `stride` u32 per pixel.
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "the lists, their consumer and its one parameter"
+    )]
+    fn per_pixel(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        lists: &CullOutput,
+        pipeline: &wgpu::ComputePipeline,
+        stride: u64,
+        uniform: &[u8],
+    ) -> Result<Vec<u32>, GpuError> {
+        let (w, h) = (depth.width(), depth.height());
+        let d = &ctx.device;
+        let bytes = u64::from(w) * u64::from(h) * 4 * stride;
+        ctx.check_storage("per-pixel output", bytes)?;
+        let out = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("cull.per_pixel"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let exact = pipeline::uniform_buffer(d, "cull.exact.params", uniform);
+        let view = depth.create_view(&wgpu::TextureViewDescriptor {
+            aspect: wgpu::TextureAspect::DepthOnly,
+            ..Default::default()
+        });
+        let [params, ranges, indices] = lists.list_bindings();
+        let group = pipeline::group(
+            d,
+            "lists.group1",
+            &self.lists_layout,
+            &[
+                params,
+                ranges,
+                indices,
+                wgpu::BindingResource::TextureView(&view),
+                out.as_entire_binding(),
+                exact.as_entire_binding(),
+            ],
+        );
+        let mut enc = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("cull.per_pixel"),
+        });
+        {
+            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("cull.per_pixel"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &scene.bind_group, &[]);
+            pass.set_bind_group(1, &group, &[]);
+            pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+        ctx.submit_and_wait(enc, "per-pixel list consumer")?;
+        Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
+            ctx, &out, 0, bytes,
+        )?))
+    }
+}

@@ -1,0 +1,50 @@
+//! A shader module and its pipeline layout, built once and shared by the pipelines of every
+//! entry point of it (a strategy's, and the building blocks' whose passes live in its files).
+
+use manylights_gpu::pipeline;
+use manylights_gpu::shaders::ShaderDef;
+
+/// A compiled shader over bind group 0 (the scene) and one group 1.
+pub(crate) struct Program {
+    module: wgpu::ShaderModule,
+    layout: wgpu::PipelineLayout,
+}
+
+impl Program {
+    /// `def` compiled, over `scene_layout` and `group1`.
+    pub fn new(
+        d: &wgpu::Device,
+        def: &ShaderDef,
+        scene_layout: &wgpu::BindGroupLayout,
+        group1: &wgpu::BindGroupLayout,
+    ) -> Self {
+        Self {
+            module: def.create(d),
+            layout: pipeline::layout(d, def.name, &[scene_layout, group1]),
+        }
+    }
+
+    /// The pipeline of entry point `entry`.
+    pub fn pipeline(&self, d: &wgpu::Device, entry: &str) -> wgpu::ComputePipeline {
+        pipeline::compute(d, &self.module, &self.layout, entry)
+    }
+
+    /// The pipelines of `entries`.
+    pub fn pipelines<const N: usize>(
+        &self,
+        d: &wgpu::Device,
+        entries: [&str; N],
+    ) -> [wgpu::ComputePipeline; N] {
+        entries.map(|e| self.pipeline(d, e))
+    }
+
+    /// The pipeline of `entry` with `options` (values of the shader's `override` constants).
+    pub fn pipeline_with(
+        &self,
+        d: &wgpu::Device,
+        entry: &str,
+        options: &wgpu::PipelineCompilationOptions<'_>,
+    ) -> wgpu::ComputePipeline {
+        pipeline::compute_with(d, &self.module, &self.layout, entry, options)
+    }
+}

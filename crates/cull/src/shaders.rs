@@ -1,0 +1,148 @@
+//! The culling crate's shaders, laid out like its Rust modules: `shaders/cull/common/` holds what
+//! several strategies share (the culling geometry, the lists, the lookup, and the building blocks'
+//! passes: tile depth, tile lines, tile masks), `shaders/cull/<strategy>/` what one strategy
+//! owns, and `shaders/cull/per_pixel/` the per-pixel list consumers (`crate::per_pixel`).
+//!
+//! A shader is a list of files after the generated prelude of [`CULL_CONSTS`]; a strategy whose
+//! entry points call a building block's functions composes that block's file.
+
+use manylights_gpu::shader_file;
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, ShaderDef, ShaderFile};
+
+use crate::layout::CULL_CONSTS;
+
+/// Shared culling geometry and parameters (the WGSL twin of [`crate::geometry`]).
+pub const GEOMETRY: ShaderFile = shader_file!("cull/common/geometry.wgsl");
+/// List buffers of the culling passes, the capacity cap and `cull.finalize`
+/// ([`crate::blocks::lists`]).
+pub const LISTS: ShaderFile = shader_file!("cull/common/lists.wgsl");
+/// The pixel-to-list lookup of every list consumer.
+pub const LOOKUP: ShaderFile = shader_file!("cull/common/lookup.wgsl");
+/// Tile masks and their fill ([`crate::blocks::tile_masks`]; composed into gather's module,
+/// which holds the workgroup scan the fill uses; tiled scatter's count pass that sets them is in
+/// its own module).
+pub const TILE_MASKS: ShaderFile = shader_file!("cull/common/tile_masks.wgsl");
+/// The tiles' depth data (`cull.depth_bounds`, and the lines path's list passes;
+/// [`crate::blocks::tile_depth`]).
+pub const TILE_DEPTH: ShaderFile = shader_file!("cull/common/tile_depth.wgsl");
+/// The lines path's list passes ([`crate::blocks::tile_lines`]).
+pub const TILE_LINES: ShaderFile = shader_file!("cull/common/tile_lines.wgsl");
+
+/// `cull.depth_bounds` (with the lights' rectangles, or scatter's blocks), and `cull.tile_lines`
+/// (the lines path's first pass).
+pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
+    name: "cull.depth_bounds",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        shader_file!("cull/common/depth_bounds.wgsl"),
+        TILE_DEPTH,
+    ],
+};
+/// `cull.tiled_gather` (also `cull.depth_mask`, with its flag), `cull.finalize`, `cull.cap`, the
+/// tile masks' fill (also tiled scatter's) and the lines path's list passes, with the portable
+/// workgroup scan.
+pub const TILED_GATHER: ShaderDef = ShaderDef {
+    name: "cull.tiled_gather",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        LISTS,
+        shader_file!("cull/tiled_gather/tiled_gather.wgsl"),
+        TILE_MASKS,
+        TILE_LINES,
+        TILE_DEPTH,
+        shader_file!("cull/tiled_gather/gather_scan.wgsl"),
+    ],
+};
+/// [`TILED_GATHER`] with its scans in subgroup operations (built only where the device has
+/// them).
+pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
+    name: "cull.tiled_gather.subgroup",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        LISTS,
+        shader_file!("cull/tiled_gather/tiled_gather.wgsl"),
+        TILE_MASKS,
+        TILE_LINES,
+        TILE_DEPTH,
+        shader_file!("cull/tiled_gather/gather_scan_subgroup.wgsl"),
+    ],
+};
+/// `cull.tiled_scatter`: its pairs, and with tile masks its count pass.
+pub const TILED_SCATTER: ShaderDef = ShaderDef {
+    name: "cull.tiled_scatter",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        LISTS,
+        shader_file!("cull/tiled_scatter/tiled_scatter.wgsl"),
+    ],
+};
+/// `cull.clustered`, `cull.clustered.order` and `cull.occupancy`.
+pub const CLUSTERED: ShaderDef = ShaderDef {
+    name: "cull.clustered",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        LISTS,
+        shader_file!("cull/clustered/clustered.wgsl"),
+    ],
+};
+/// `cull.lights_per_pixel`: the shared lookup, per pixel.
+pub const LIGHTS_PER_PIXEL: ShaderDef = ShaderDef {
+    name: "cull.lights_per_pixel",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        LOOKUP,
+        shader_file!("cull/per_pixel/lights_per_pixel.wgsl"),
+    ],
+};
+/// `cull.exact`: the exact per-pixel oracle on the GPU.
+pub const EXACT: ShaderDef = ShaderDef {
+    name: "cull.exact",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        LOOKUP,
+        shader_file!("cull/per_pixel/exact.wgsl"),
+    ],
+};
+
+/// Every shader of this crate.
+pub const SHADERS: &[ShaderDef] = &[
+    DEPTH_BOUNDS,
+    TILED_GATHER,
+    TILED_GATHER_SUBGROUP,
+    TILED_SCATTER,
+    CLUSTERED,
+    LIGHTS_PER_PIXEL,
+    EXACT,
+    crate::scan::SHADER,
+    crate::scan::SUBGROUP_SHADER,
+    crate::radix_sort::SHADER,
+    crate::radix_sort::ONESWEEP_SHADER,
+];

@@ -1,0 +1,258 @@
+//! 3D clusters (Olsson, Billeter, Assarsson, HPG 2012): the view frustum split into tiles and
+//! depth slices, lights assigned per light (`shaders/cull/clustered/`; oracle
+//! [`crate::cpu::clustered`]). The passes of a run:
+//!
+//! 1. `cull.occupancy` (with `skip_empty`): the clusters that hold covered pixels.
+//! 2. `cull.clustered.count`: a thread a light counts the clusters of its tiles and slices;
+//!    a light over [`crate::layout::CLUSTER_LANES`]-worth of tiles is queued instead, and
+//!    `cull.clustered.wide_args` turns the queue's length into the indirect dispatch of
+//!    `cull.clustered.count_wide`, [`crate::layout::CLUSTER_LANES`] threads a wide light (one
+//!    thread emitting a whole-screen light's 12,000 entries would idle the GPU).
+//! 3. The capacity cap and the scan ([`crate::blocks::lists`]).
+//! 4. `cull.clustered.fill` and `cull.clustered.fill_wide`, in the same split.
+//! 5. With `ordered` (the default), `cull.clustered.order_short` and `cull.clustered.order`
+//!    sort each cluster's list into light order, so that images are bit-identical run to run.
+//! 6. `cull.finalize`.
+
+use manylights_gpu::GpuError;
+use manylights_gpu::timing::GpuTimer;
+
+use crate::culler::RunInputs;
+use crate::frame::{Frame, Outputs};
+use crate::layout::{CULL_FLAG_SKIP_EMPTY, GROUPS_X, GpuCullParams};
+use crate::program::Program;
+use crate::record::{Buf, Dispatch, Step};
+use crate::scan::groups_2d;
+use crate::strategies::Plan;
+use crate::{CullError, CullOutput, Strategy};
+
+/// The clusters' pipelines.
+pub(crate) struct Pipelines {
+    count: wgpu::ComputePipeline,
+    fill: wgpu::ComputePipeline,
+    count_wide: wgpu::ComputePipeline,
+    fill_wide: wgpu::ComputePipeline,
+    wide_args: wgpu::ComputePipeline,
+    order: wgpu::ComputePipeline,
+    order_short: wgpu::ComputePipeline,
+    occupancy: wgpu::ComputePipeline,
+}
+
+impl Pipelines {
+    /// From the clusters' program.
+    pub fn new(d: &wgpu::Device, program: &Program) -> Self {
+        let [
+            count,
+            fill,
+            count_wide,
+            fill_wide,
+            wide_args,
+            order,
+            order_short,
+            occupancy,
+        ] = program.pipelines(
+            d,
+            [
+                "clustered_count",
+                "clustered_fill",
+                "clustered_count_wide",
+                "clustered_fill_wide",
+                "clustered_wide_args",
+                "cluster_order",
+                "cluster_order_short",
+                "cluster_occupancy",
+            ],
+        );
+        Self {
+            count,
+            fill,
+            count_wide,
+            fill_wide,
+            wide_args,
+            order,
+            order_short,
+            occupancy,
+        }
+    }
+}
+
+/// Runs the clusters.
+pub(crate) fn run(
+    r: &RunInputs<'_>,
+    params: GpuCullParams,
+    timer: &mut GpuTimer,
+) -> Result<CullOutput, CullError> {
+    r.check_bins(&params)?;
+    r.ctx.check_storage(
+        "clusters' wide-light queue",
+        (u64::from(params.light_count) + 1) * 16,
+    )?;
+    let f = r.frame(params, u64::from(params.bins));
+    let ordered = matches!(r.strategy, Strategy::Clustered { ordered: true, .. });
+    let done = r.execute(&f, ClusterPlan::new(r, &f, ordered), timer)?;
+    f.finish(done)
+}
+
+/// A run of the clusters.
+struct ClusterPlan<'a> {
+    r: &'a RunInputs<'a>,
+    f: &'a Frame<'a>,
+    ordered: bool,
+    /// The wide lights' queue (binding 9; its first word is its length).
+    wide: wgpu::Buffer,
+    /// Their indirect dispatch arguments (binding 11 of the pass that writes them; an indirect
+    /// buffer cannot also be bound for storage in the dispatch that reads it).
+    wide_args: wgpu::Buffer,
+    group_a: wgpu::BindGroup,
+    group_args: wgpu::BindGroup,
+    sized: Option<(wgpu::Buffer, wgpu::BindGroup)>,
+}
+
+impl<'a> ClusterPlan<'a> {
+    fn new(r: &'a RunInputs<'a>, f: &'a Frame<'a>, ordered: bool) -> Self {
+        let p = &f.params;
+        let placeholder = &r.culler.placeholder;
+        let wide = f.buf(Buf::WideLights.name(), (u64::from(p.light_count) + 1) * 16);
+        let wide_args = f.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(Buf::WideArgs.name()),
+            size: 16,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
+            mapped_at_creation: false,
+        });
+        Self {
+            r,
+            f,
+            ordered,
+            group_a: f.group(placeholder, &wide, placeholder),
+            group_args: f.group(placeholder, &wide, &wide_args),
+            wide,
+            wide_args,
+            sized: None,
+        }
+    }
+
+    /// A thread a light.
+    fn light_groups(&self) -> (u32, u32) {
+        groups_2d(self.f.params.light_count.div_ceil(64), GROUPS_X)
+    }
+}
+
+impl Plan for ClusterPlan<'_> {
+    fn count(&self, _sized: bool) -> Vec<Step<'_>> {
+        let (f, c) = (self.f, self.r.culler);
+        let g = &c.clustered;
+        let mut steps = f.clears(false);
+        steps.push(Step::Clear {
+            what: Buf::WideLights,
+            buffer: &self.wide,
+            offset: 0,
+            size: Some(4),
+        });
+        if f.params.flags & CULL_FLAG_SKIP_EMPTY != 0 {
+            let (w, h) = f.size;
+            steps.push(Step::pass(
+                "cull.occupancy",
+                &g.occupancy,
+                &self.group_a,
+                (w.div_ceil(8), h.div_ceil(8)),
+                &[Buf::Depth],
+                &[Buf::Occupancy],
+            ));
+        }
+        steps.extend([
+            Step::pass(
+                "cull.clustered.count",
+                &g.count,
+                &self.group_a,
+                self.light_groups(),
+                &[Buf::Lights, Buf::Occupancy],
+                &[Buf::Counts, Buf::WideLights],
+            ),
+            Step::pass(
+                "cull.clustered.wide_args",
+                &g.wide_args,
+                &self.group_args,
+                (1, 1),
+                &[Buf::WideLights],
+                &[Buf::WideArgs],
+            ),
+            Step::pass(
+                "cull.clustered.count_wide",
+                &g.count_wide,
+                &self.group_a,
+                Dispatch::Indirect(&self.wide_args),
+                &[Buf::WideLights, Buf::WideArgs, Buf::Lights, Buf::Occupancy],
+                &[Buf::Counts],
+            ),
+        ]);
+        steps.extend(c.lists.count_tail(f, &self.group_a, f.params.bins));
+        steps
+    }
+
+    fn total(&self) -> Result<u64, GpuError> {
+        self.f.bins_total(self.f.params.bins)
+    }
+
+    fn size(&mut self, total: u32) {
+        let indices = self.f.buf(Buf::Indices.name(), u64::from(total) * 4);
+        let group = self
+            .f
+            .group(&indices, &self.wide, &self.r.culler.placeholder);
+        self.sized = Some((indices, group));
+    }
+
+    fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
+        let (_, group) = self.sized.as_ref().expect("sized before the fill");
+        let (f, c) = (self.f, self.r.culler);
+        let g = &c.clustered;
+        let mut steps = vec![
+            Step::pass(
+                "cull.clustered.fill",
+                &g.fill,
+                group,
+                self.light_groups(),
+                &[Buf::Lights, Buf::Occupancy, Buf::Offsets],
+                &[Buf::Indices, Buf::Cursors],
+            ),
+            Step::pass(
+                "cull.clustered.fill_wide",
+                &g.fill_wide,
+                group,
+                Dispatch::Indirect(&self.wide_args),
+                &[
+                    Buf::WideLights,
+                    Buf::WideArgs,
+                    Buf::Lights,
+                    Buf::Occupancy,
+                    Buf::Offsets,
+                ],
+                &[Buf::Indices, Buf::Cursors],
+            ),
+        ];
+        if self.ordered {
+            for (name, pipeline) in [
+                ("cull.clustered.order_short", &g.order_short),
+                ("cull.clustered.order", &g.order),
+            ] {
+                steps.push(Step::pass(
+                    name,
+                    pipeline,
+                    group,
+                    groups_2d(f.params.bins, GROUPS_X),
+                    &[Buf::Offsets, Buf::Counts, Buf::Indices],
+                    &[Buf::Indices],
+                ));
+            }
+        }
+        steps.push(c.lists.finalize(f, group));
+        steps
+    }
+
+    fn outputs(self) -> Outputs {
+        Outputs {
+            indices: self.sized.expect("sized before the output").0,
+            tile_masks: None,
+            tile_lines: None,
+        }
+    }
+}
