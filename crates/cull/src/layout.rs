@@ -42,7 +42,7 @@ pub const CLUSTER_LANES: u32 = 32;
 pub const SCATTER_LANES: u32 = 16;
 
 /// Tiles a `cull.depth_bounds` workgroup takes, 64 threads each: launching workgroups costs
-/// more than a small tile's work (see docs/BENCHMARKS.md).
+/// more than a small tile's work (see docs/bench/HISTORY.md).
 pub const DEPTH_TILES: u32 = 4;
 
 /// Threads of a `cull.tiled_scatter.count` workgroup with tile masks, and the tiles of a block
@@ -94,7 +94,7 @@ const _: () = assert!(
 /// [`LINE_THREAD_COUNTS`]): 32 up to 8,192 lights (three mask words a thread at the Forward+
 /// paper's 3,072: half the threads of 64 a tile measured 8% faster on an H100), 64 up to
 /// 16,384 (where 32 measured 20% slower), 128 beyond. Aiming at 4 or 2 words a thread instead
-/// measured no faster anywhere and slower at 4K (docs/BENCHMARKS.md).
+/// measured no faster anywhere and slower at 4K (docs/bench/HISTORY.md).
 pub fn line_threads(light_count: u32) -> u32 {
     let words = light_count.div_ceil(64) * 2;
     words
