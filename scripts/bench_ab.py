@@ -3,22 +3,14 @@
 round, and B's median over rounds against A's.
 
 usage: bench_ab.py OUT_DIR A_COMMIT B_COMMIT > ab.md"""
-import json
 import os
 import re
 import statistics
 import sys
 from collections import defaultdict
 
-
-def load(root):
-    out = {}
-    for dirpath, _, files in os.walk(root):
-        if dirpath.endswith("/new") and "estimates.json" in files and "benchmark.json" in files:
-            b = json.load(open(os.path.join(dirpath, "benchmark.json")))
-            e = json.load(open(os.path.join(dirpath, "estimates.json")))
-            out[b["full_id"]] = e["median"]["point_estimate"] / 1e3  # ns -> µs
-    return out
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from bench_tables import load  # noqa: E402  (criterion's medians, in ms)
 
 
 def main():
@@ -29,8 +21,8 @@ def main():
         m = re.fullmatch(r"([AB])-(\d+)", d)
         if m:
             rounds.add(int(m.group(2)))
-            for bench, us in load(os.path.join(root, d)).items():
-                runs[bench][(m.group(1), int(m.group(2)))] = us
+            for bench, (_, ms) in load(os.path.join(root, d)).items():
+                runs[bench][(m.group(1), int(m.group(2)))] = ms * 1e3
     rounds = sorted(rounds)
     head = " | ".join(f"{s} {r}" for r in rounds for s in "AB")
     print(f"A = {a}, B = {b}; criterion medians in µs, interleaved A B per round\n")

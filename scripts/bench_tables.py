@@ -95,4 +95,5 @@ def main():
         p(f"| {fid} | {ms(cpu[fid][1])} |")
 
 
-main()
+if __name__ == "__main__":
+    main()

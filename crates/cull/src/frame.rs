@@ -101,6 +101,19 @@ impl<'a> Frame<'a> {
         )
     }
 
+    /// The lists' indices for `total` entries, and the culling group over them (with
+    /// `pair_keys` at binding 9 and `args` at 11, as [`Frame::group`]).
+    pub fn lists(
+        &self,
+        total: u32,
+        pair_keys: &wgpu::Buffer,
+        args: &wgpu::Buffer,
+    ) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let indices = self.buf(Buf::Indices.name(), u64::from(total) * 4);
+        let group = self.group(&indices, pair_keys, args);
+        (indices, group)
+    }
+
     /// The clears at the start of a run. With tile masks (`masked`) only the stats: those passes
     /// use no counts, cursors or occupancy, and the masks' fill writes every tile's range. (Each
     /// clear is a transfer between passes, which costs time of its own.)

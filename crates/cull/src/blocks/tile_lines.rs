@@ -159,9 +159,7 @@ impl Plan for LinesPlan<'_> {
     }
 
     fn size(&mut self, total: u32) {
-        let indices = self.f.buf(Buf::Indices.name(), u64::from(total) * 4);
-        let group = self.f.group(&indices, self.placeholder, &self.lines);
-        self.sized = Some((indices, group));
+        self.sized = Some(self.f.lists(total, self.placeholder, &self.lines));
     }
 
     fn fill(&self, sized: bool) -> Vec<Step<'_>> {

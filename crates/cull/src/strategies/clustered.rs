@@ -194,11 +194,7 @@ impl Plan for ClusterPlan<'_> {
     }
 
     fn size(&mut self, total: u32) {
-        let indices = self.f.buf(Buf::Indices.name(), u64::from(total) * 4);
-        let group = self
-            .f
-            .group(&indices, &self.wide, &self.r.culler.placeholder);
-        self.sized = Some((indices, group));
+        self.sized = Some(self.f.lists(total, &self.wide, &self.r.culler.placeholder));
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {

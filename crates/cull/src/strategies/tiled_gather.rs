@@ -112,22 +112,6 @@ fn chunks(p: &GpuCullParams) -> u64 {
     }
 }
 
-/// The culling group with `indices` at binding 7, the lights' rectangles at 9, the masks at 11
-/// (the placeholder where there is none).
-fn bind(
-    f: &Frame<'_>,
-    placeholder: &wgpu::Buffer,
-    indices: Option<&wgpu::Buffer>,
-    rects: Option<&wgpu::Buffer>,
-    masks: Option<&wgpu::Buffer>,
-) -> wgpu::BindGroup {
-    f.group(
-        indices.unwrap_or(placeholder),
-        rects.unwrap_or(placeholder),
-        masks.unwrap_or(placeholder),
-    )
-}
-
 /// A run of the coarse-to-fine or the single-level path.
 struct BinnedPlan<'a> {
     r: &'a RunInputs<'a>,
@@ -150,12 +134,12 @@ impl<'a> BinnedPlan<'a> {
         let chunked = p.coarse > 0;
         let rects = chunked.then(|| f.buf(Buf::LightRects.name(), u64::from(p.light_count) * 8));
         let masks = masked.then(|| tile_masks::buffer(f));
-        let group_a = bind(
-            f,
-            &r.culler.placeholder,
-            None,
-            rects.as_ref(),
-            masks.as_ref(),
+        let placeholder = &r.culler.placeholder;
+        // Binding 9: the lights' rectangles; 11: the tile masks (the lists at 7 come later).
+        let group_a = f.group(
+            placeholder,
+            rects.as_ref().unwrap_or(placeholder),
+            masks.as_ref().unwrap_or(placeholder),
         );
         Self {
             r,
@@ -250,16 +234,12 @@ impl Plan for BinnedPlan<'_> {
     }
 
     fn size(&mut self, total: u32) {
-        let indices = self.f.buf(Buf::Indices.name(), u64::from(total) * 4);
         let placeholder = &self.r.culler.placeholder;
-        let group = bind(
-            self.f,
-            placeholder,
-            Some(&indices),
-            self.rects.as_ref(),
-            self.masks.as_ref(),
-        );
-        self.sized = Some((indices, group));
+        self.sized = Some(self.f.lists(
+            total,
+            self.rects.as_ref().unwrap_or(placeholder),
+            self.masks.as_ref().unwrap_or(placeholder),
+        ));
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {

@@ -148,9 +148,7 @@ impl Plan for MasksPlan<'_> {
     }
 
     fn size(&mut self, total: u32) {
-        let indices = self.f.buf(Buf::Indices.name(), u64::from(total) * 4);
-        let group = self.f.group(&indices, &self.rects, &self.masks);
-        self.sized = Some((indices, group));
+        self.sized = Some(self.f.lists(total, &self.rects, &self.masks));
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
@@ -190,9 +188,16 @@ struct Pairs {
     vals_tmp: wgpu::Buffer,
     /// Over the pairs as written.
     group_pairs: wgpu::BindGroup,
-    /// Over the pairs where the sort leaves them.
-    group_sorted: wgpu::BindGroup,
+    /// Over the pairs in the scratch buffers, where the sort leaves them there.
+    group_scratch: Option<wgpu::BindGroup>,
     sorted: SortedIn,
+}
+
+impl Pairs {
+    /// The group over the pairs where the sort leaves them.
+    fn group_sorted(&self) -> &wgpu::BindGroup {
+        self.group_scratch.as_ref().unwrap_or(&self.group_pairs)
+    }
 }
 
 impl<'a> PairsPlan<'a> {
@@ -255,10 +260,8 @@ impl Plan for PairsPlan<'_> {
         );
         let sorted = self.r.culler.sort.sorted_for(n, self.bits());
         let group_pairs = f.group(&vals, &keys, placeholder);
-        let group_sorted = match sorted {
-            SortedIn::Input => f.group(&vals, &keys, placeholder),
-            SortedIn::Scratch => f.group(&vals_tmp, &keys_tmp, placeholder),
-        };
+        let group_scratch =
+            (sorted == SortedIn::Scratch).then(|| f.group(&vals_tmp, &keys_tmp, placeholder));
         self.sized = Some(Pairs {
             n,
             keys,
@@ -266,7 +269,7 @@ impl Plan for PairsPlan<'_> {
             keys_tmp,
             vals_tmp,
             group_pairs,
-            group_sorted,
+            group_scratch,
             sorted,
         });
     }
@@ -294,7 +297,7 @@ impl Plan for PairsPlan<'_> {
             Step::pass(
                 "cull.tiled_scatter.ranges",
                 &c.scatter.ranges,
-                &s.group_sorted,
+                s.group_sorted(),
                 groups_2d(s.n.div_ceil(64), GROUPS_X),
                 &[Buf::PairKeys, Buf::Offsets],
                 &[Buf::Ranges, Buf::Cursors],
@@ -302,7 +305,7 @@ impl Plan for PairsPlan<'_> {
             Step::pass(
                 "cull.finalize",
                 &c.scatter.finalize,
-                &s.group_sorted,
+                s.group_sorted(),
                 crate::blocks::lists::bin_groups(f),
                 &[Buf::Ranges, Buf::Cursors],
                 &[Buf::Ranges, Buf::Stats],
