@@ -1,0 +1,216 @@
+//! `cull`: one strategy's lists against the exact per-pixel oracle, heatmaps, and with
+//! `--repeat` steady-state timings.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use manylights_cull::{CullOutput, CullSettings, Culler, Strategy, heatmap, metrics};
+use manylights_gpu::prepass::{DepthPrepass, depth_target};
+use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
+use manylights_gpu::{GpuContext, GpuScene};
+use manylights_shade::image_out::write_atomic;
+
+use crate::options::{SceneArgs, StrategyArgs, print_timings};
+
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub(crate) struct CullArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    #[command(flatten)]
+    pub(crate) cull: StrategyArgs,
+    /// Top of the heatmaps' colour scale (default: the longest list shown), so that heatmaps
+    /// of several runs can share one scale.
+    #[arg(long)]
+    pub(crate) heat_max: Option<u32>,
+    /// For clusters, the depth slice the tile heatmap shows (default: the longest list over
+    /// all slices of each tile).
+    #[arg(long)]
+    pub(crate) slice: Option<u32>,
+    /// Also time this many runs back to back in one submission (no host round trip between
+    /// or inside them, the lists sized from the first run) and print each pass's median over
+    /// them: steady-state times, as the benchmarks measure; then the same runs timed with one
+    /// pair of timestamps around each run's passes (where the device can write timestamps
+    /// between passes), their median as `span`. 0: only the single run.
+    #[arg(long, default_value_t = 0)]
+    pub(crate) repeat: u32,
+    /// Build the lists without tile masks (a bit per tile and light, used where they fit 16
+    /// MiB): gather's and 2.5D's fill then tests every light again, and tiled scatter writes
+    /// (tile, light) pairs and radix-sorts them, as Harada et al. 2012 describe.
+    #[arg(long, conflicts_with = "mask_budget")]
+    pub(crate) no_tile_masks: bool,
+    /// Most bytes of tile masks the run may use (default: 16 MiB; 0 is --no-tile-masks), as an
+    /// experiment's `mask_budget`. The output says whether the run used them.
+    #[arg(long, value_name = "BYTES")]
+    pub(crate) mask_budget: Option<u64>,
+}
+
+pub(crate) fn cull(args: &CullArgs) -> Result<()> {
+    let a = &args.scene;
+    let strategy = args.cull.strategy()?;
+    let scene = a.build()?;
+    let ctx = a.gpu()?;
+    let (w, h) = (a.width, a.height);
+    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
+    let depth = depth_target(&ctx, w, h);
+    let mut timer = GpuTimer::new(&ctx, 64);
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    DepthPrepass::new(&ctx, &gpu_scene).encode(
+        &mut enc,
+        &gpu_scene,
+        &depth.create_view(&Default::default()),
+        &mut timer,
+    );
+    ctx.submit_and_wait(enc, "depth prepass")?;
+    let culler = Culler::new(&ctx, &gpu_scene);
+    let settings = CullSettings {
+        mask_budget: if args.no_tile_masks {
+            Some(0)
+        } else {
+            args.mask_budget
+        },
+        ..args.cull.settings(&scene.camera)?
+    };
+    let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
+    let timings = timer.read(&ctx)?;
+    let repeated = if args.repeat > 0 {
+        // The culling passes of the run above (the prepass is its one raster pass).
+        let passes = timings.as_ref().map(|t| {
+            t.iter()
+                .filter(|p| p.kind == manylights_gpu::timing::PassKind::Compute)
+                .count() as u32
+        });
+        repeated_timings(
+            &ctx, &culler, &gpu_scene, &depth, &strategy, &settings, &out, passes, args,
+        )?
+    } else {
+        String::new()
+    };
+    let lists = out.read(&ctx)?;
+    let frame =
+        manylights_gpu::layout::GpuFrame::new(&scene.camera, w, h, scene.lights.len() as u32);
+    let counts = culler.exact_counts(
+        &ctx,
+        &gpu_scene,
+        &depth,
+        &out,
+        frame.clip_from_world.inverse(),
+        1,
+    )?;
+    let m = metrics::from_gpu_counts(&counts, &lists);
+    let per_pixel: Vec<u32> = counts.iter().map(|c| c[0]).collect();
+    let tiles = heatmap::tile_counts(&out.params, &lists, args.slice);
+    let max = args
+        .heat_max
+        .unwrap_or_else(|| tiles.iter().copied().max().unwrap_or(0).max(1));
+    let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/cull"));
+    let tile_png = dir.join(format!("heatmap_tiles_{}.png", strategy.name()));
+    let pixel_png = dir.join(format!("heatmap_pixels_{}.png", strategy.name()));
+    for (path, img) in [
+        (&tile_png, heatmap::tiles(&out.params, &tiles, w, h, max)),
+        (&pixel_png, heatmap::pixels(&per_pixel, w, h, max)),
+    ] {
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        })?;
+    }
+    println!(
+        "{}: {} triangles, {} lights, {w}x{h}, {strategy:?}",
+        scene.name,
+        scene.triangle_count(),
+        scene.lights.len()
+    );
+    println!("  covered pixels          {}", m.covered_pixels);
+    println!("  false negatives         {}", m.false_negatives);
+    match m.false_positive_ratio {
+        Some(r) => println!("  false-positive ratio    {r:.3} (lights evaluated / lights needed)"),
+        None => println!("  false-positive ratio    n/a (no pixel needs a light)"),
+    }
+    println!("  lights per pixel        {:.2}", m.lights_per_pixel_mean);
+    println!("  max lights per bin      {}", m.max_lights_per_bin);
+    println!(
+        "  list entries / bytes    {} / {}",
+        out.total,
+        out.list_bytes()
+    );
+    println!("  dropped lights          {}", out.dropped);
+    println!(
+        "  tile masks              {}",
+        match (&out.tile_masks, &out.tile_lines) {
+            (Some(m), _) => format!("used ({} bytes)", m.size()),
+            (None, Some(l)) => format!("used as tile lines ({} bytes)", l.size()),
+            (None, None) => "not used".into(),
+        }
+    );
+    print_timings(timings.as_deref());
+    print!("{repeated}");
+    println!(
+        "heat scale 0..{max} lights; wrote {} and {}",
+        tile_png.display(),
+        pixel_png.display()
+    );
+    if m.false_negatives > 0 {
+        bail!(
+            "{} false negatives: a conservative strategy must have none (a bug, or --slack too small)",
+            m.false_negatives
+        );
+    }
+    Ok(())
+}
+
+/// `cull --repeat N`: N runs back to back in one submission; each pass's median over them, as
+/// lines to print.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the inputs of the run being repeated"
+)]
+pub(crate) fn repeated_timings(
+    ctx: &GpuContext,
+    culler: &Culler,
+    scene: &GpuScene,
+    depth: &wgpu::Texture,
+    strategy: &Strategy,
+    settings: &CullSettings,
+    first: &CullOutput,
+    passes: Option<u32>,
+    args: &CullArgs,
+) -> Result<String> {
+    use std::fmt::Write as _;
+    let n = args.repeat;
+    // `passes`: those of `first`, or none without timestamp queries.
+    let Some(passes) = passes else {
+        return Ok("  (no GPU timings: the adapter has no timestamp queries)\n".into());
+    };
+    let most = manylights_lab::steady::max_runs(passes);
+    if n > most {
+        bail!(
+            "invalid --repeat {n}: this strategy runs {passes} passes, and one timer holds {} \
+             passes, so at most {most} runs",
+            MAX_QUERIES / 2
+        );
+    }
+    let s = manylights_lab::steady::steady_cull(
+        ctx, culler, scene, depth, strategy, settings, first, passes, n,
+    )?
+    .expect("timestamps were there for the first run");
+    let mut lines = format!("  {n} runs back to back (median per pass):\n");
+    for (label, kind, ms) in &s.passes {
+        writeln!(lines, "  {label:<28} {:>8} {ms:>10.3} ms", kind.as_str())?;
+    }
+    writeln!(
+        lines,
+        "  {:<28} {:>8} {:>10.3} ms",
+        "total (median run)", "", s.total_ms
+    )?;
+    // The same runs again with one pair of timestamps around each run's passes, none between
+    // them: the run as a frame waits for it, clears and gaps between passes included.
+    if let Some(span) = s.span_ms {
+        writeln!(
+            lines,
+            "  {:<28} {:>8} {span:>10.3} ms",
+            "span (one timestamp pair)", ""
+        )?;
+    }
+    Ok(lines)
+}

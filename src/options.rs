@@ -1,0 +1,264 @@
+//! What `render` and `cull` share: the scene, its lights, the resolution and the adapter
+//! (`SceneArgs`), the culling strategy and its parameters (`StrategyArgs`), and the per-pass
+//! timings they print.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::ValueEnum;
+use manylights_cull::layout::DEFAULT_SLACK;
+use manylights_cull::{CullSettings, Slicing, Strategy};
+use manylights_gpu::{GpuContext, GpuOptions};
+use manylights_scene::gltf_import::{self, GltfOptions};
+use manylights_scene::procedural::{self, ProceduralScene};
+use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
+
+/// Scene, lights, resolution and adapter: shared by every subcommand.
+#[derive(clap::Args, Debug)]
+pub(crate) struct SceneArgs {
+    /// A procedural scene (atrium, pillars, topdown, city) or a path to a .gltf/.glb file.
+    #[arg(long, default_value = "atrium")]
+    pub(crate) scene: String,
+    /// Number of lights to generate (0 renders only the scene's own lights).
+    #[arg(long, default_value_t = 1024)]
+    pub(crate) lights: u32,
+    /// Where lights are placed.
+    #[arg(long, value_enum, default_value_t = Generator::Field)]
+    pub(crate) generator: Generator,
+    /// Seed of every random choice of the light generator.
+    #[arg(long, default_value_t = 1)]
+    pub(crate) seed: u64,
+    /// Fixed light radius in metres (the light contributes exactly nothing beyond it).
+    #[arg(long, default_value_t = 3.0, conflicts_with = "threshold")]
+    pub(crate) radius: f32,
+    /// Derive each radius from its intensity instead: the distance where intensity / d^2 falls
+    /// to this threshold.
+    #[arg(long)]
+    pub(crate) threshold: Option<f32>,
+    /// Intensity of every generated light.
+    #[arg(long, default_value_t = 4.0)]
+    pub(crate) intensity: f32,
+    /// Fraction of generated lights that are spot lights, in [0, 1].
+    #[arg(long, default_value_t = 0.0)]
+    pub(crate) spot_fraction: f32,
+    /// Image width in pixels (at most the device's max_texture_dimension_2d).
+    #[arg(long, default_value_t = 1280, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub(crate) width: u32,
+    /// Image height in pixels (at most the device's max_texture_dimension_2d).
+    #[arg(long, default_value_t = 720, value_parser = clap::value_parser!(u32).range(1..=65536))]
+    pub(crate) height: u32,
+    /// Output directory, created if needed (default: out/<subcommand>).
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+    /// GPU adapter: a substring of its name or its index (default: $MANYLIGHTS_ADAPTER, else the
+    /// first discrete GPU, else any adapter, lavapipe included).
+    #[arg(long)]
+    pub(crate) adapter: Option<String>,
+}
+
+/// A culling strategy and its parameters.
+#[derive(clap::Args, Debug)]
+pub(crate) struct StrategyArgs {
+    /// Culling strategy.
+    #[arg(long, value_enum, default_value_t = StrategyName::TiledGather)]
+    pub(crate) strategy: StrategyName,
+    /// Tile side in pixels (8, 16 and 32 are usual; 4..=256 accepted). Default: 16, or 64 for
+    /// clustered.
+    #[arg(long)]
+    pub(crate) tile_size: Option<u32>,
+    /// Depth slices of the cluster grid (clustered only).
+    #[arg(long, default_value_t = 24)]
+    pub(crate) slices: u32,
+    /// Slicing of the cluster grid (clustered only).
+    #[arg(long, value_enum, default_value_t = SlicingName::Exponential)]
+    pub(crate) slicing: SlicingName,
+    /// Emit lights only into clusters that hold geometry (clustered only).
+    #[arg(long)]
+    pub(crate) skip_empty: bool,
+    /// Keep the clusters' atomic fill order instead of sorting each list into light order
+    /// (clustered only; one pass less, images no longer bit-identical across runs).
+    #[arg(long)]
+    pub(crate) unordered: bool,
+    /// Gather and 2.5D: 8 culls lights against coarse tiles of 8 x 8 tiles first, and each tile
+    /// tests only its coarse tile's survivors; 0 tests every light at every tile (the paper's
+    /// single level).
+    #[arg(long, default_value_t = manylights_cull::DEFAULT_COARSE)]
+    pub(crate) coarse: u32,
+    /// Conservative slack, relative to each light's distance from the eye.
+    #[arg(long, default_value_t = DEFAULT_SLACK)]
+    pub(crate) slack: f32,
+    /// A deliberate cap on each list's length: lights beyond it are dropped and counted (the
+    /// default, none, sizes lists exactly and drops nothing).
+    #[arg(long)]
+    pub(crate) capacity: Option<u32>,
+}
+
+impl StrategyArgs {
+    pub(crate) fn strategy(&self) -> Result<Strategy> {
+        let default_tile = if matches!(self.strategy, StrategyName::Clustered) {
+            64
+        } else {
+            16
+        };
+        let tile_size = self.tile_size.unwrap_or(default_tile);
+        let strategy = match self.strategy {
+            StrategyName::TiledGather => Strategy::TiledGather {
+                tile_size,
+                coarse: self.coarse,
+            },
+            StrategyName::TiledScatter => Strategy::TiledScatter { tile_size },
+            StrategyName::DepthMask => Strategy::DepthMask {
+                tile_size,
+                coarse: self.coarse,
+            },
+            StrategyName::Clustered => Strategy::Clustered {
+                tile_size,
+                slices: self.slices,
+                slicing: match self.slicing {
+                    SlicingName::Linear => Slicing::Linear,
+                    SlicingName::Exponential => Slicing::Exponential,
+                },
+                skip_empty: self.skip_empty,
+                ordered: !self.unordered,
+            },
+        };
+        strategy.validate()?;
+        Ok(strategy)
+    }
+
+    pub(crate) fn settings(&self, camera: &manylights_scene::Camera) -> Result<CullSettings> {
+        let s = CullSettings {
+            slack: self.slack,
+            capacity: self.capacity,
+            ..CullSettings::for_camera(camera)
+        };
+        s.validate().context("invalid --slack or --capacity")?;
+        Ok(s)
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum BackendName {
+    /// The brute-force reference renderer.
+    Reference,
+    /// Forward+: depth prepass, culling, forward shading over the lists.
+    Forward,
+    /// Deferred: G-buffer, culling, compute lighting over the lists (position rebuilt from depth).
+    Deferred,
+    /// Deferred with the interpolated world position stored in the G-buffer.
+    DeferredStoredPosition,
+    /// Every light at every fragment, no culling.
+    NaiveForward,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum Generator {
+    /// Uniform in the scene's light volume.
+    Uniform,
+    /// On the scene's surfaces, lifted 0.1 m along the normal.
+    Surface,
+    /// Eight Gaussian hot spots of 1.5 m standard deviation.
+    Clustered,
+    /// A stratified field through the whole volume (the Forward+ paper's demo).
+    Field,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum StrategyName {
+    /// Forward+ tiled gather (Harada et al. 2012, 4.1).
+    TiledGather,
+    /// Forward+ tiled scatter with the GPU radix sort (Harada et al. 2012, 4.2).
+    TiledScatter,
+    /// 2.5D culling with depth masks (Harada 2012).
+    DepthMask,
+    /// 3D clusters (Olsson et al. 2012).
+    Clustered,
+}
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub(crate) enum SlicingName {
+    /// Equal depth per slice.
+    Linear,
+    /// Equal depth ratio per slice.
+    Exponential,
+}
+
+pub(crate) fn load_scene(name: &str) -> Result<Scene> {
+    let looks_like_file = name.ends_with(".gltf") || name.ends_with(".glb") || name.contains('/');
+    if looks_like_file {
+        let (scene, report) = gltf_import::load(Path::new(name), &GltfOptions::default())?;
+        if report.skipped_primitives + report.skipped_directional_lights > 0 {
+            eprintln!(
+                "note: {name}: skipped {} point/line primitives and {} directional lights (not supported)",
+                report.skipped_primitives, report.skipped_directional_lights
+            );
+        }
+        Ok(scene)
+    } else {
+        ProceduralScene::from_name(name)
+            .with_context(|| {
+                format!(
+                    "--scene {name}: not a file path (.gltf/.glb) and not one of {}",
+                    procedural::NAMES.join(", ")
+                )
+            })?
+            .build()
+            .map_err(Into::into)
+    }
+}
+
+impl SceneArgs {
+    /// The scene with its generated lights, validated.
+    pub(crate) fn build(&self) -> Result<Scene> {
+        let mut scene = load_scene(&self.scene)?;
+        let spec = LightSpec {
+            generator: match self.generator {
+                Generator::Uniform => LightGenerator::Uniform,
+                Generator::Surface => LightGenerator::SurfaceHugging { offset: 0.1 },
+                Generator::Clustered => LightGenerator::Clustered {
+                    clusters: 8,
+                    spread: 1.5,
+                },
+                Generator::Field => LightGenerator::LightField,
+            },
+            count: self.lights,
+            seed: self.seed,
+            radius: self
+                .threshold
+                .map_or(RadiusRule::Fixed(self.radius), RadiusRule::Threshold),
+            intensity: self.intensity,
+            spot_fraction: self.spot_fraction,
+            ..LightSpec::default()
+        };
+        let generated = spec.generate(&scene).context(
+            "invalid light options (--radius, --threshold, --intensity, --spot-fraction)",
+        )?;
+        scene.lights.extend(generated);
+        scene
+            .validate()
+            .with_context(|| format!("scene {}", scene.name))?;
+        Ok(scene)
+    }
+
+    /// The device, checked against the resolution.
+    pub(crate) fn gpu(&self) -> Result<GpuContext> {
+        let ctx = GpuContext::new(&GpuOptions {
+            adapter: self.adapter.clone(),
+        })?;
+        eprintln!("adapter: {}", ctx.summary());
+        ctx.check_resolution(self.width, self.height)
+            .context("invalid --width/--height")?;
+        Ok(ctx)
+    }
+}
+
+pub(crate) fn print_timings(timings: Option<&[manylights_gpu::timing::PassTiming]>) {
+    match timings {
+        Some(t) => {
+            for p in t {
+                println!("  {:<28} {:>8} {:>10.3} ms", p.label, p.kind.as_str(), p.ms);
+            }
+        }
+        None => println!("  (no GPU timings: the adapter has no timestamp queries)"),
+    }
+}

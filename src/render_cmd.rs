@@ -1,0 +1,153 @@
+//! `render`: a frame of the reference or of a backend over a strategy, its images, and with
+//! `--compare` its error against the references.
+
+use std::path::PathBuf;
+
+use anyhow::{Result, bail};
+use manylights_cull::heatmap;
+use manylights_gpu::GpuScene;
+use manylights_shade::image_out::write_atomic;
+use manylights_shade::{Backend, ReferenceRenderer, Renderer, accuracy};
+
+use crate::options::{BackendName, SceneArgs, StrategyArgs, print_timings};
+
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub(crate) struct RenderArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// Shading backend: the brute-force reference, or a backend over a culling strategy
+    /// (--strategy and its options; naive-forward culls nothing).
+    #[arg(long, value_enum, default_value_t = BackendName::Reference)]
+    pub(crate) backend: BackendName,
+    #[command(flatten)]
+    pub(crate) cull: StrategyArgs,
+    /// Also render the reference and the infinite-range reference, and print the image error
+    /// against each (max abs error, RMSE, PSNR, mean FLIP).
+    #[arg(long)]
+    pub(crate) compare: bool,
+    /// With --compare, also write the FLIP error map against the reference as a PNG.
+    #[arg(long, requires = "compare")]
+    pub(crate) flip_map: bool,
+    /// Exposure applied before tonemapping the PNG (and for FLIP).
+    #[arg(long, default_value_t = 1.0)]
+    pub(crate) exposure: f32,
+}
+
+pub(crate) fn render(args: &RenderArgs) -> Result<()> {
+    if !(args.exposure.is_finite() && args.exposure > 0.0) {
+        bail!("invalid --exposure {}: a finite value > 0", args.exposure);
+    }
+    let a = &args.scene;
+    let scene = a.build()?;
+    let strategy = args.cull.strategy()?;
+    let settings = args.cull.settings(&scene.camera)?;
+    let ctx = a.gpu()?;
+    let (w, h) = (a.width, a.height);
+    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
+    let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/render"));
+    println!(
+        "{}: {} triangles, {} lights, {w}x{h}",
+        scene.name,
+        scene.triangle_count(),
+        scene.lights.len()
+    );
+    let reference = ReferenceRenderer::new(&ctx, &gpu_scene);
+    let mut outputs: Vec<(PathBuf, image::RgbImage)> = Vec::new();
+    let (name, image) = if args.backend == BackendName::Reference {
+        let frame = reference.render(&ctx, &gpu_scene, w, h)?;
+        print_timings(frame.timings.as_deref());
+        ("reference", frame.color)
+    } else {
+        let backend = match args.backend {
+            BackendName::Forward => Backend::Forward,
+            BackendName::Deferred => Backend::Deferred,
+            BackendName::DeferredStoredPosition => Backend::DeferredStoredPosition,
+            BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
+        };
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;
+        if backend != Backend::NaiveForward {
+            println!("  strategy {strategy:?}");
+        }
+        print_timings(out.timings.as_deref());
+        let per_pixel: Vec<u32> = match &out.lists {
+            Some(lists) => renderer
+                .culler
+                .lights_per_pixel(&ctx, &gpu_scene, &out.depth, lists)?,
+            None => out
+                .color
+                .data
+                .iter()
+                .map(|c| {
+                    if c[3] > 0.0 {
+                        scene.lights.len() as u32
+                    } else {
+                        0
+                    }
+                })
+                .collect(),
+        };
+        if let Some(lists) = &out.lists {
+            println!(
+                "  list entries / bytes    {} / {}",
+                lists.total,
+                lists.list_bytes()
+            );
+            println!("  dropped lights          {}", lists.dropped);
+        }
+        if out.gbuffer_bytes > 0 {
+            println!("  G-buffer bytes          {}", out.gbuffer_bytes);
+        }
+        let covered = out.color.data.iter().filter(|c| c[3] > 0.0).count().max(1);
+        let max = per_pixel.iter().copied().max().unwrap_or(0).max(1);
+        let mean = per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>() / covered as f64;
+        println!("  lights per pixel        {mean:.2} (mean over covered pixels), {max} at most");
+        let heat = dir.join(format!("heatmap_lights_per_pixel_{}.png", backend.name()));
+        outputs.push((heat, heatmap::pixels(&per_pixel, w, h, max)));
+        (backend.name(), out.color)
+    };
+    let bad = image.non_finite_count();
+    if bad > 0 {
+        bail!("the render holds {bad} NaN/Inf pixels; nothing was written");
+    }
+    if args.compare {
+        let windowed = reference.render(&ctx, &gpu_scene, w, h)?.color;
+        let infinite = reference
+            .render_infinite(&ctx, &gpu_scene, &scene.camera, w, h)?
+            .color;
+        for (label, r) in [
+            ("reference", &windowed),
+            ("infinite-range reference", &infinite),
+        ] {
+            let e = accuracy::compare(&image, r, args.exposure);
+            println!(
+                "  vs {label:<25} max abs {:.3e} ({:.2e} of peak), RMSE {:.3e}, PSNR {:.2} dB, mean FLIP {:.5}",
+                e.max_abs_error,
+                e.max_abs_error / e.peak.max(f64::MIN_POSITIVE),
+                e.rmse,
+                e.psnr_db,
+                e.flip_mean
+            );
+        }
+        if args.flip_map {
+            outputs.push((
+                dir.join(format!("flip_{name}.png")),
+                accuracy::flip_map(&image, &windowed, args.exposure),
+            ));
+        }
+    }
+    let png = dir.join(format!("{name}.png"));
+    let exr = dir.join(format!("{name}.exr"));
+    image.write_exr(&exr)?;
+    image.write_png(&png, args.exposure)?;
+    for (path, img) in &outputs {
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        })?;
+        println!("wrote {}", path.display());
+    }
+    println!("wrote {} and {}", png.display(), exr.display());
+    Ok(())
+}
