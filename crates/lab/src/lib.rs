@@ -1,11 +1,15 @@
-//! Experiments of manylights: the RON schema and its sweeps ([`experiment`]), the durable,
-//! resumable, shardable runner ([`runner`]), results as CSV and JSON ([`results`]), culling
-//! timed in steady state ([`steady`]), and
-//! paper-style reports in Markdown and HTML with figures ([`report`]).
+//! Experiments of manylights: the RON schema ([`experiment`]) and its expansion into cells
+//! (`cells`), the durable, resumable, shardable runner ([`runner`]) and what it measures at each
+//! camera pose (`evaluate`), results as CSV and JSON ([`results`]), culling timed in steady
+//! state ([`steady`]), paper-style reports in Markdown and HTML ([`report`]) with their figures
+//! (`figures`), and the stability suite's verdicts ([`stability`]).
 //!
 //! Depends on every other crate; nothing depends on it but the CLI.
 
+mod cells;
+mod evaluate;
 pub mod experiment;
+mod figures;
 pub mod report;
 pub mod results;
 pub mod runner;

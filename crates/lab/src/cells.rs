@@ -1,0 +1,367 @@
+//! An experiment's expansion into cells: parsing with errors at the file, line and column,
+//! checks of every cell's configuration, the cartesian product of the sweep's axes (in the order
+//! of `Sweep`'s fields, `variants` last), each cell's readable name and stable identifier, and
+//! the labels of its parameters (the `params` column).
+
+use std::path::Path;
+
+use manylights_cull::Strategy;
+use manylights_scene::{LightGenerator, RadiusRule};
+use manylights_shade::Backend;
+use serde::Serialize;
+
+use crate::LabError;
+use crate::experiment::{CameraSpec, Config, DeviceLimit, Experiment, SceneSpec, Variant};
+
+/// One cell: a name and a configuration.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Cell {
+    /// Position in the sweep order.
+    pub index: usize,
+    /// Readable name from the swept values (`base` without a sweep).
+    pub name: String,
+    /// The configuration.
+    pub config: Config,
+}
+
+impl Cell {
+    /// A stable identifier of the configuration (FNV-1a of its JSON), the cell's file name.
+    pub fn id(&self) -> String {
+        let json = serde_json::to_string(&self.config).expect("configs serialise");
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        for b in json.bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x100_0000_01b3);
+        }
+        format!("{h:016x}")
+    }
+}
+
+/// Line and column (1-based) of the first occurrence of `needle` at or after `from` in `src`.
+fn locate(src: &str, needle: &str, from: usize) -> (usize, usize) {
+    let at = src[from.min(src.len())..]
+        .find(needle)
+        .map_or(0, |i| i + from);
+    let line = src[..at].matches('\n').count() + 1;
+    let col = at - src[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
+    (line, col)
+}
+
+fn strategy_label(s: &Strategy) -> String {
+    match *s {
+        Strategy::TiledScatter { tile_size } => format!("{}{tile_size}", s.name()),
+        // The default coarse level is not named, so that labels stay as they were.
+        Strategy::TiledGather { tile_size, coarse } | Strategy::DepthMask { tile_size, coarse } => {
+            if coarse == manylights_cull::DEFAULT_COARSE {
+                format!("{}{tile_size}", s.name())
+            } else {
+                format!("{}{tile_size}coarse{coarse}", s.name())
+            }
+        }
+        Strategy::Clustered {
+            tile_size,
+            slices,
+            slicing,
+            skip_empty,
+            ordered,
+        } => format!(
+            "clustered{tile_size}x{slices}{}{}{}",
+            match slicing {
+                manylights_cull::Slicing::Linear => "lin",
+                manylights_cull::Slicing::Exponential => "exp",
+            },
+            if skip_empty { "skip" } else { "" },
+            if ordered { "" } else { "unordered" }
+        ),
+    }
+}
+
+/// The strategy's parameters as `key=value` pairs (the `params` column).
+pub fn params_label(c: &Config) -> String {
+    let mut p = match c.strategy {
+        Strategy::TiledScatter { tile_size } => format!("tile_size={tile_size}"),
+        Strategy::TiledGather { tile_size, coarse } | Strategy::DepthMask { tile_size, coarse } => {
+            if coarse == manylights_cull::DEFAULT_COARSE {
+                format!("tile_size={tile_size}")
+            } else {
+                format!("tile_size={tile_size};coarse={coarse}")
+            }
+        }
+        Strategy::Clustered {
+            tile_size,
+            slices,
+            slicing,
+            skip_empty,
+            ordered,
+        } => {
+            // `ordered` is the default: named only when off, so that labels stay as they were.
+            let unordered = if ordered { "" } else { ";ordered=false" };
+            format!(
+                "tile_size={tile_size};slices={slices};slicing={slicing:?};skip_empty={skip_empty}{unordered}"
+            )
+            .to_lowercase()
+        }
+    };
+    if c.backend == Backend::NaiveForward {
+        p = "none".into();
+    }
+    if let Some(cap) = c.capacity {
+        p.push_str(&format!(";capacity={cap}"));
+    }
+    if let Some(b) = c.mask_budget {
+        p.push_str(&format!(";mask_budget={b}"));
+    }
+    p
+}
+
+impl Experiment {
+    /// Parses an experiment; errors name the file, line and column.
+    pub fn parse(src: &str, file: &Path) -> Result<Self, LabError> {
+        // `Atrium(bays: 7)` for newtype variants and `capacity: 4` for options read better.
+        let options = ron::Options::default().with_default_extension(
+            ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES
+                | ron::extensions::Extensions::IMPLICIT_SOME,
+        );
+        let exp: Experiment = options.from_str(src).map_err(|e| LabError::Parse {
+            file: file.display().to_string(),
+            line: e.span.start.line,
+            col: e.span.start.col,
+            message: e.code.to_string(),
+        })?;
+        exp.validate(src, file)?;
+        Ok(exp)
+    }
+
+    /// Reads and parses an experiment file.
+    pub fn load(path: &Path) -> Result<(Self, String), LabError> {
+        let src = std::fs::read_to_string(path).map_err(|e| LabError::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        })?;
+        Ok((Self::parse(&src, path)?, src))
+    }
+
+    fn validate(&self, src: &str, file: &Path) -> Result<(), LabError> {
+        // Validation errors point at the field (`name:`), inside `sweep:` for swept fields.
+        let bad = |field: &str, message: String| {
+            let sweep_at = src.find("sweep:").unwrap_or(0);
+            let from = if message.starts_with("sweep") {
+                sweep_at
+            } else {
+                src.find("config:").unwrap_or(0)
+            };
+            let (line, col) = locate(src, &format!("{field}:"), from);
+            LabError::Parse {
+                file: file.display().to_string(),
+                line,
+                col,
+                message,
+            }
+        };
+        if self.name.trim().is_empty() || self.name.contains(['/', '\\', ',']) {
+            return Err(bad(
+                "name",
+                format!(
+                    "name `{}`: a non-empty name without '/', '\\\\' or ','",
+                    self.name
+                ),
+            ));
+        }
+        let s = &self.sweep;
+        let lens = [
+            ("scene", s.scene.as_ref().map(Vec::len)),
+            ("light_count", s.light_count.as_ref().map(Vec::len)),
+            ("light_seed", s.light_seed.as_ref().map(Vec::len)),
+            ("generator", s.generator.as_ref().map(Vec::len)),
+            ("radius", s.radius.as_ref().map(Vec::len)),
+            ("camera", s.camera.as_ref().map(Vec::len)),
+            ("resolution", s.resolution.as_ref().map(Vec::len)),
+            ("strategy", s.strategy.as_ref().map(Vec::len)),
+            ("backend", s.backend.as_ref().map(Vec::len)),
+            ("capacity", s.capacity.as_ref().map(Vec::len)),
+            ("mask_budget", s.mask_budget.as_ref().map(Vec::len)),
+            ("variants", s.variants.as_ref().map(Vec::len)),
+        ];
+        for (field, len) in lens {
+            if len == Some(0) {
+                return Err(bad(
+                    field,
+                    format!(
+                        "sweep.{field} is empty: a swept field needs at least one value (or leave it out)"
+                    ),
+                ));
+            }
+        }
+        for cell in self.cells() {
+            cell.config.check().map_err(|(field, message)| {
+                bad(field, format!("cell `{}`: {message}", cell.name))
+            })?;
+        }
+        Ok(())
+    }
+
+    /// The cells, in sweep order.
+    pub fn cells(&self) -> Vec<Cell> {
+        type Apply = Box<dyn Fn(&mut Config) -> String>;
+        let s = &self.sweep;
+        let mut axes: Vec<Vec<Apply>> = Vec::new();
+        macro_rules! axis {
+            ($field:expr, $apply:expr) => {
+                if let Some(values) = &$field {
+                    axes.push(
+                        values
+                            .iter()
+                            .cloned()
+                            .map(|v| Box::new(move |c: &mut Config| $apply(c, v.clone())) as Apply)
+                            .collect(),
+                    );
+                }
+            };
+        }
+        axis!(s.scene, |c: &mut Config, v: SceneSpec| {
+            c.scene = v;
+            format!("scene={}", c.scene.name())
+        });
+        axis!(s.light_count, |c: &mut Config, v: u32| {
+            c.lights.count = v;
+            format!("lights={v}")
+        });
+        axis!(s.light_seed, |c: &mut Config, v: u64| {
+            c.lights.seed = v;
+            format!("seed={v}")
+        });
+        axis!(s.generator, |c: &mut Config, v: LightGenerator| {
+            c.lights.generator = v;
+            format!("generator={v:?}")
+        });
+        axis!(s.radius, |c: &mut Config, v: RadiusRule| {
+            c.lights.radius = v;
+            match v {
+                RadiusRule::Fixed(r) => format!("radius={r}"),
+                RadiusRule::Threshold(t) => format!("threshold={t}"),
+            }
+        });
+        let mut cam_i = 0usize;
+        let _ = &mut cam_i;
+        axis!(s.camera, |c: &mut Config, v: CameraSpec| {
+            let label = match &v {
+                CameraSpec::Default => "default".to_string(),
+                CameraSpec::Pose(p) => format!("pose({:?})", p.position),
+                CameraSpec::Path(p) => format!("path{}", p.len()),
+            };
+            c.camera = v;
+            format!("camera={label}")
+        });
+        axis!(s.resolution, |c: &mut Config, v: (u32, u32)| {
+            c.resolution = v;
+            format!("res={}x{}", v.0, v.1)
+        });
+        axis!(s.strategy, |c: &mut Config, v: Strategy| {
+            c.strategy = v;
+            format!("strategy={}", strategy_label(&v))
+        });
+        axis!(s.backend, |c: &mut Config, v: Backend| {
+            c.backend = v;
+            format!("backend={}", v.name())
+        });
+        axis!(s.capacity, |c: &mut Config, v: Option<u32>| {
+            c.capacity = v;
+            format!("capacity={}", v.map_or("none".into(), |x| x.to_string()))
+        });
+        axis!(s.mask_budget, |c: &mut Config, v: Option<u64>| {
+            c.mask_budget = v;
+            format!(
+                "mask_budget={}",
+                v.map_or("default".into(), |x| x.to_string())
+            )
+        });
+        axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
+            c.device_limit = v;
+            format!(
+                "limit={}",
+                v.map_or("none".into(), |x| format!("{x:?}").to_lowercase())
+            )
+        });
+        axis!(s.variants, |c: &mut Config, v: Variant| {
+            if let Some(st) = v.strategy {
+                c.strategy = st;
+            }
+            if let Some(b) = v.backend {
+                c.backend = b;
+            }
+            if v.capacity.is_some() {
+                c.capacity = v.capacity;
+            }
+            if v.mask_budget.is_some() {
+                c.mask_budget = v.mask_budget;
+            }
+            let auto = format!(
+                "{}+{}",
+                c.backend.name(),
+                if c.backend == Backend::NaiveForward {
+                    "none".into()
+                } else {
+                    strategy_label(&c.strategy)
+                }
+            );
+            format!("variant={}", v.label.unwrap_or(auto))
+        });
+        let mut cells = vec![(self.config.clone(), Vec::<String>::new())];
+        for axis in &axes {
+            let mut next = Vec::with_capacity(cells.len() * axis.len());
+            for (cfg, names) in &cells {
+                for apply in axis {
+                    let mut c = cfg.clone();
+                    let label = apply(&mut c);
+                    let mut n = names.clone();
+                    n.push(label);
+                    next.push((c, n));
+                }
+            }
+            cells = next;
+        }
+        cells
+            .into_iter()
+            .enumerate()
+            .map(|(index, (config, names))| Cell {
+                index,
+                name: if names.is_empty() {
+                    "base".into()
+                } else {
+                    names.join(",")
+                },
+                config,
+            })
+            .collect()
+    }
+
+    /// A tiny variant for tests: at most 48 x 27 pixels, one frame, no warm-up, at most 256
+    /// lights, light counts deduplicated.
+    pub fn tiny(&self) -> Self {
+        let mut e = self.clone();
+        let shrink = |(w, h): (u32, u32)| {
+            let s = (48.0 / w as f32).min(27.0 / h as f32).min(1.0);
+            (
+                ((w as f32 * s).round() as u32).max(1),
+                ((h as f32 * s).round() as u32).max(1),
+            )
+        };
+        e.config.resolution = shrink(e.config.resolution);
+        e.config.frames = 1;
+        e.config.warmup = 0;
+        e.config.lights.count = e.config.lights.count.min(256);
+        if let Some(r) = &mut e.sweep.resolution {
+            for v in r.iter_mut() {
+                *v = shrink(*v);
+            }
+            r.dedup();
+        }
+        if let Some(l) = &mut e.sweep.light_count {
+            for v in l.iter_mut() {
+                *v = (*v).min(256);
+            }
+            l.dedup();
+        }
+        e
+    }
+}

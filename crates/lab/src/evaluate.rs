@@ -1,0 +1,257 @@
+//! What a camera pose of an experiment cell measures ([`evaluate`]): one frame of the backend,
+//! the list metrics from the exact per-pixel oracle (on the GPU, on every `exact_stride`-th
+//! pixel), lights per pixel, steady-state culling at the first pose, and with `accuracy` the
+//! image error against the reference and the infinite-range reference; naive forward's metrics
+//! (every light at every pixel); and the temporal stability of a camera path's poses.
+
+use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
+use manylights_cull::{CullSettings, Strategy};
+use manylights_gpu::layout::GpuFrame;
+use manylights_gpu::{GpuContext, GpuScene};
+use manylights_scene::Camera;
+use manylights_shade::accuracy::{ImageError, compare};
+use manylights_shade::{HdrImage, ReferenceRenderer, Renderer};
+
+use crate::LabError;
+use crate::experiment::Config;
+use crate::runner::{category, stage};
+use crate::steady::steady_cull;
+
+/// What one camera pose measured.
+pub(crate) struct PoseEval {
+    pub(crate) metrics: Option<ListMetrics>,
+    pub(crate) per_pixel: Vec<u32>,
+    pub(crate) lights_per_pixel_mean: f64,
+    pub(crate) color: HdrImage,
+    pub(crate) reference: Option<HdrImage>,
+    pub(crate) acc: Option<ImageError>,
+    pub(crate) acc_inf: Option<ImageError>,
+    pub(crate) list_bytes: u64,
+    pub(crate) gbuffer_bytes: u64,
+    pub(crate) dropped: u64,
+    pub(crate) nonfinite: u64,
+    pub(crate) tile_masks: Option<bool>,
+    /// Steady-state culling (run median, span), ms, where it was timed.
+    pub(crate) steady: Option<(f64, Option<f64>)>,
+}
+
+/// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
+/// and (with `accuracy`) the error against the reference and the infinite-range reference.
+/// `pose` names the pose in the log.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one call site; the arguments are what one pose needs"
+)]
+pub(crate) fn evaluate(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    reference: Option<&ReferenceRenderer>,
+    gpu_scene: &GpuScene,
+    c: &Config,
+    cam: &Camera,
+    settings: &CullSettings,
+    pose: &str,
+    steady_runs: Option<u32>,
+) -> Result<PoseEval, LabError> {
+    let light_count = u64::from(gpu_scene.light_count);
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let (w, h) = c.resolution;
+    gpu_scene.set_view(ctx, cam, w, h, 0);
+    let o = stage(pose, "rendered", || {
+        renderer.render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
+    })
+    .map_err(|e| other(&e))?;
+    let frame = GpuFrame::new(cam, w, h, gpu_scene.light_count);
+    let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
+    let mut metrics: Option<ListMetrics> = None;
+    let (mut list_bytes, mut dropped) = (0, 0);
+    let mut tile_masks = None;
+    let mut steady = None;
+    let per_pixel: Vec<u32> = match &o.lists {
+        Some(lists) => {
+            list_bytes = lists.list_bytes();
+            tile_masks = Some(lists.used_tile_masks());
+            dropped = u64::from(lists.dropped);
+            if c.exact_stride > 0 {
+                let bins =
+                    stage(pose, "lists read back", || lists.read(ctx)).map_err(|e| other(&e))?;
+                let counts = stage(pose, "exact oracle", || {
+                    renderer.culler.exact_counts(
+                        ctx,
+                        gpu_scene,
+                        &o.depth,
+                        lists,
+                        frame.clip_from_world.inverse(),
+                        c.exact_stride,
+                    )
+                })
+                .map_err(|e| other(&e))?;
+                metrics = Some(from_gpu_counts(&counts, &bins));
+            }
+            if let (Some(runs), Some(t)) = (steady_runs, &o.timings) {
+                let passes = t.iter().filter(|p| category(&p.label) == "cull").count() as u32;
+                let timed = stage(pose, "culling timed back to back", || {
+                    steady_cull(
+                        ctx,
+                        &renderer.culler,
+                        gpu_scene,
+                        &o.depth,
+                        &c.strategy,
+                        settings,
+                        lists,
+                        passes,
+                        runs,
+                    )
+                })
+                .map_err(|e| other(&e))?;
+                steady = timed.map(|s| (s.total_ms, s.span_ms));
+            }
+            stage(pose, "lights per pixel", || {
+                renderer
+                    .culler
+                    .lights_per_pixel(ctx, gpu_scene, &o.depth, lists)
+            })
+            .map_err(|e| other(&e))?
+        }
+        None => {
+            if c.exact_stride > 0 {
+                metrics = Some(stage(pose, "exact oracle", || {
+                    naive_metrics(
+                        ctx,
+                        renderer,
+                        gpu_scene,
+                        &o.depth,
+                        &frame,
+                        c.exact_stride,
+                        light_count,
+                        settings,
+                    )
+                })?);
+            }
+            o.color
+                .data
+                .iter()
+                .map(|p| if p[3] > 0.0 { light_count as u32 } else { 0 })
+                .collect()
+        }
+    };
+    let (mut acc, mut acc_inf, mut reference_color) = (None, None, None);
+    if let Some(rr) = reference {
+        let r = stage(pose, "reference rendered", || {
+            rr.render(ctx, gpu_scene, w, h)
+        })
+        .map_err(|e| other(&e))?;
+        acc = Some(compare(&o.color, &r.color, 1.0));
+        let ri = stage(pose, "infinite-range reference rendered", || {
+            rr.render_infinite(ctx, gpu_scene, cam, w, h)
+        })
+        .map_err(|e| other(&e))?;
+        acc_inf = Some(compare(&o.color, &ri.color, 1.0));
+        reference_color = Some(r.color);
+    }
+    Ok(PoseEval {
+        metrics,
+        lights_per_pixel_mean: per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>()
+            / covered.max(1) as f64,
+        per_pixel,
+        nonfinite: o.color.non_finite_count() as u64,
+        color: o.color,
+        reference: reference_color,
+        acc,
+        acc_inf,
+        list_bytes,
+        gbuffer_bytes: o.gbuffer_bytes,
+        dropped,
+        tile_masks,
+        steady,
+    })
+}
+
+/// Naive forward evaluates every light; the exact oracle (run over any conservative lists)
+/// gives the lights needed.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one call site; the arguments are what one pose needs"
+)]
+pub(crate) fn naive_metrics(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    depth: &wgpu::Texture,
+    frame: &GpuFrame,
+    exact_stride: u32,
+    light_count: u64,
+    settings: &CullSettings,
+) -> Result<ListMetrics, LabError> {
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let mut timer = manylights_gpu::timing::GpuTimer::new(ctx, 32);
+    let probe = Strategy::tiled_gather(16);
+    let lists = renderer
+        .culler
+        .run(ctx, gpu_scene, depth, &probe, settings, &mut timer)
+        .map_err(|e| other(&e))?;
+    let counts = renderer
+        .culler
+        .exact_counts(
+            ctx,
+            gpu_scene,
+            depth,
+            &lists,
+            frame.clip_from_world.inverse(),
+            exact_stride,
+        )
+        .map_err(|e| other(&e))?;
+    let sampled = counts.iter().filter(|k| k[3] != 0).count() as u64;
+    let needed: u64 = counts.iter().map(|k| u64::from(k[1])).sum();
+    Ok(ListMetrics {
+        covered_pixels: sampled,
+        false_negatives: 0,
+        evaluated: sampled * light_count,
+        needed,
+        false_positive_ratio: (needed > 0).then(|| (sampled * light_count) as f64 / needed as f64),
+        lights_per_pixel_mean: light_count as f64,
+        max_lights_per_bin: light_count as u32,
+        histogram: Vec::new(),
+        dropped_lights: 0,
+    })
+}
+
+/// Temporal stability over consecutive poses (with accuracy and at least two poses):
+/// the mean absolute frame-to-frame change of the image and of the reference (per RGB channel,
+/// averaged over the pose pairs), and the flicker: the largest change of the image's error
+/// against the reference from one pose to the next, `max |(I_t - I_t-1) - (R_t - R_t-1)|`,
+/// relative to the reference's peak. Flicker caused by culling is zero for a conservative
+/// method: its images differ from the reference by float rounding only.
+pub(crate) fn temporal_stability(evals: &[PoseEval]) -> Option<(f64, f64, f64)> {
+    if evals.len() < 2 || evals.iter().any(|e| e.reference.is_none()) {
+        return None;
+    }
+    let (mut change, mut change_ref, mut flicker, mut peak) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut n = 0.0f64;
+    for pair in evals.windows(2) {
+        let (i0, i1) = (&pair[0].color.data, &pair[1].color.data);
+        let r0 = &pair[0].reference.as_ref()?.data;
+        let r1 = &pair[1].reference.as_ref()?.data;
+        peak = peak.max(f64::from(pair[0].reference.as_ref()?.peak()));
+        peak = peak.max(f64::from(pair[1].reference.as_ref()?.peak()));
+        let (mut c, mut cr) = (0.0f64, 0.0f64);
+        for p in 0..i0.len() {
+            for k in 0..3 {
+                let di = f64::from(i1[p][k]) - f64::from(i0[p][k]);
+                let dr = f64::from(r1[p][k]) - f64::from(r0[p][k]);
+                c += di.abs();
+                cr += dr.abs();
+                flicker = flicker.max((di - dr).abs());
+            }
+        }
+        let m = (i0.len() * 3).max(1) as f64;
+        change += c / m;
+        change_ref += cr / m;
+        n += 1.0;
+    }
+    Some((
+        change / n,
+        change_ref / n,
+        if peak > 0.0 { flicker / peak } else { flicker },
+    ))
+}
