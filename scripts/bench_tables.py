@@ -48,6 +48,14 @@ def main():
         p("|---|---|")
         for f, v in paper:
             p(f"| {f} | {ms(v)} |")
+    # Culling and deferred lighting together.
+    frames = sorted((b["function_id"], b["value_str"], v) for b, v in gpu.values() if b["group_id"] == "frame.cull_shade")
+    if frames:
+        p("\n**Culling and deferred lighting together** (`frame.cull_shade`: every culling pass and `shade.deferred` of back-to-back frames)\n")
+        p("| setting | resolution / lights | GPU time |")
+        p("|---|---|---|")
+        for f, size, v in frames:
+            p(f"| {f} | {size} | {ms(v)} |")
     # Sort.
     cubp = {r["n"]: r for r in cub["rows"] if r["kind"] == "pairs"}
     cubk = {r["n"]: r for r in cub["rows"] if r["kind"] == "keys"}
@@ -72,7 +80,7 @@ def main():
     p("|---|---|---|---|---|")
     rows = {}
     for fid, (b, v) in gpu.items():
-        if b["group_id"].startswith("frame."):
+        if b["group_id"].startswith("frame.") and b["group_id"] != "frame.cull_shade":
             rows[b["group_id"][6:]] = {"frame": v}
     for fid, (b, v) in gpu.items():
         g = b["group_id"]

@@ -12,5 +12,6 @@ nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$OUT_DIR/gpu
 date -u +%Y-%m-%dT%H:%M:%SZ > "$OUT_DIR/date.txt"
 cp .device/bench/commit.txt "$OUT_DIR/" 2>/dev/null || true
 .device/bench/gpu --bench 2>&1 | tee "$OUT_DIR/gpu.log" | grep -E "adapter|time:" | head -5
+.device/bench/frame --bench > "$OUT_DIR/frame.log" 2>&1
 .device/bench/cpu --bench > "$OUT_DIR/cpu.log" 2>&1
 python3 .device/bench/bench_cub.py "$OUT_DIR/cub.json" > "$OUT_DIR/cub.log" 2>&1 || echo "CUB script failed: see cub.log"

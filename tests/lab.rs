@@ -119,11 +119,19 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                 "{name} {}: no GPU time",
                 r.cell
             );
-            // Steady-state culling for every culling cell, none for naive forward.
+            // Steady-state culling, and culling with shading, for every culling cell; neither
+            // for naive forward.
             if r.backend == "naive_forward" {
                 assert_eq!(r.gpu_ms_cull_steady, None, "{name} {}", r.cell);
                 assert_eq!(r.gpu_ms_cull_span, None, "{name} {}", r.cell);
+                assert_eq!(r.gpu_ms_cull_shade, None, "{name} {}", r.cell);
             } else {
+                assert!(
+                    r.gpu_ms_cull_shade.is_some_and(|t| t > 0.0)
+                        && r.gpu_ms_cull_shade_span.is_none_or(|t| t > 0.0),
+                    "{name} {}: no steady-state culling and shading time",
+                    r.cell
+                );
                 assert!(
                     r.gpu_ms_cull_steady.is_some_and(|t| t > 0.0),
                     "{name} {}: no steady-state culling time",
@@ -134,6 +142,19 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                     "{name} {}: span",
                     r.cell
                 );
+            }
+            // The lights a pixel needs come with the false-positive ratio (both from the
+            // exact oracle), and a conservative list holds at least as many.
+            assert_eq!(
+                r.lights_needed_per_pixel_mean.is_some(),
+                r.false_negatives.is_some(),
+                "{name} {}: lights needed",
+                r.cell
+            );
+            if let (Some(needed), Some(ratio)) =
+                (r.lights_needed_per_pixel_mean, r.false_positive_ratio)
+            {
+                assert!(needed > 0.0 && ratio >= 1.0, "{name} {}", r.cell);
             }
             assert_eq!(r.experiment, name);
         }
@@ -206,12 +227,10 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
         );
     }
     let csv = std::fs::read_to_string(tmp.path().join("out/results.csv")).unwrap();
-    assert!(
-        csv.lines()
-            .next()
-            .unwrap()
-            .ends_with(",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span")
-    );
+    assert!(csv.lines().next().unwrap().ends_with(
+        ",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span,gpu_ms_cull_shade,\
+                 gpu_ms_cull_shade_span,lights_needed_per_pixel_mean"
+    ));
 }
 
 /// The columns of a row that do not depend on timing, and its image error rounded. The order of

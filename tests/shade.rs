@@ -19,7 +19,7 @@ mod common;
 
 use manylights_cull::{CullSettings, Slicing, Strategy};
 use manylights_gpu::GpuScene;
-use manylights_gpu::timing::PassKind;
+use manylights_gpu::timing::{GpuTimer, PassKind};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::accuracy::{ImageError, compare};
@@ -417,4 +417,64 @@ fn lost_device_is_an_error_not_a_panic() {
         Ok(Err(e)) => e.to_string(),
     };
     assert!(err.to_lowercase().contains("lost"), "{err}");
+}
+
+/// Culling back to back with the shading pass after each run (`Culler::run_repeated_with`, what
+/// `gpu_ms_cull_shade` times): every run's passes are timed, the culling passes and then the
+/// shading pass, and the last frame shaded equals the single frame, for every strategy and
+/// forward and deferred shading.
+#[test]
+fn culling_and_shading_back_to_back_equal_a_single_frame() {
+    let ctx = common::gpu();
+    let (w, h) = (64, 48);
+    let s = scene("atrium");
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    let renderer = Renderer::new(&ctx, &gpu_scene);
+    let settings = CullSettings::for_camera(&s.camera);
+    for strategy in strategies() {
+        for backend in [Backend::Forward, Backend::Deferred] {
+            let what = format!("{} {}", strategy.name(), backend.name());
+            let out = renderer
+                .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
+                .unwrap();
+            let lists = out.lists.as_ref().unwrap();
+            let mut pass = renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap();
+            let mut timer = GpuTimer::new(&ctx, 256);
+            let runs = 3;
+            renderer
+                .culler
+                .run_repeated_with(
+                    &ctx, &gpu_scene, &out.depth, &strategy, &settings, lists, runs, &mut timer,
+                    &mut pass,
+                )
+                .unwrap();
+            let shade = if backend == Backend::Forward {
+                "shade.forward"
+            } else {
+                "shade.deferred"
+            };
+            if let Some(t) = timer.read(&ctx).unwrap() {
+                let shaded: Vec<usize> = (0..t.len()).filter(|&i| t[i].label == shade).collect();
+                assert_eq!(shaded.len(), runs as usize, "{what}: a shading pass a run");
+                let per_run = t.len() / runs as usize;
+                assert_eq!(t.len(), per_run * runs as usize, "{what}: runs alike");
+                for (k, &i) in shaded.iter().enumerate() {
+                    assert_eq!(i, (k + 1) * per_run - 1, "{what}: shading ends each run");
+                    assert!(
+                        t[k * per_run..i]
+                            .iter()
+                            .all(|p| p.label.starts_with("cull.")
+                                || p.label.starts_with("scan.")
+                                || p.label.starts_with("sort.")),
+                        "{what}: culling before shading: {t:?}"
+                    );
+                }
+            }
+            let again = out.read_color(&ctx).unwrap();
+            assert!(
+                again.data == out.color.data,
+                "{what}: the frame shaded after back-to-back culling differs from the single frame"
+            );
+        }
+    }
 }

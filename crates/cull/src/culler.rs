@@ -15,7 +15,7 @@ use crate::layout::{GpuCullParams, LINE_THREADS_MIN};
 use crate::per_pixel::PerPixel;
 use crate::program::Program;
 use crate::radix_sort::RadixSort;
-use crate::record::Recorder;
+use crate::record::{ListPass, Recorder};
 use crate::scan::Scan;
 use crate::shaders::{CLUSTERED, DEPTH_BOUNDS, TILED_GATHER, TILED_GATHER_SUBGROUP, TILED_SCATTER};
 use crate::strategies::{Plan, clustered, depth_mask, tiled_gather, tiled_scatter};
@@ -140,7 +140,7 @@ impl Culler {
         settings: &CullSettings,
         timer: &mut GpuTimer,
     ) -> Result<CullOutput, CullError> {
-        self.run_with(ctx, scene, depth, strategy, settings, timer, None)
+        self.run_with(ctx, scene, depth, strategy, settings, timer, None, None)
     }
 
     /// Runs `strategy` `runs` times back to back in one submission, with no host round trip
@@ -169,7 +169,52 @@ impl Culler {
             total: earlier.total,
             runs: runs.max(1),
         };
-        self.run_with(ctx, scene, depth, strategy, settings, timer, Some(repeat))
+        self.run_with(
+            ctx,
+            scene,
+            depth,
+            strategy,
+            settings,
+            timer,
+            Some(repeat),
+            None,
+        )
+    }
+
+    /// As [`Culler::run_repeated`], each run followed by `then` (a pass reading its lists, such
+    /// as shading) inside its span: a frame's culling and the pass that pays for its lists,
+    /// timed together. `timer` needs room for `then`'s passes too.
+    #[allow(
+        clippy::too_many_arguments,
+        reason = "the inputs of a run, as `run` takes them, the repeat and the pass after it"
+    )]
+    pub fn run_repeated_with(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        strategy: &Strategy,
+        settings: &CullSettings,
+        earlier: &CullOutput,
+        runs: u32,
+        timer: &mut GpuTimer,
+        then: &mut dyn ListPass,
+    ) -> Result<CullOutput, CullError> {
+        let repeat = Repeat {
+            total: earlier.total,
+            runs: runs.max(1),
+        };
+        let then = Some(then);
+        self.run_with(
+            ctx,
+            scene,
+            depth,
+            strategy,
+            settings,
+            timer,
+            Some(repeat),
+            then,
+        )
     }
 
     #[allow(
@@ -185,6 +230,7 @@ impl Culler {
         settings: &CullSettings,
         timer: &mut GpuTimer,
         repeat: Option<Repeat>,
+        then: Option<&mut dyn ListPass>,
     ) -> Result<CullOutput, CullError> {
         strategy.validate()?;
         settings.validate()?;
@@ -203,11 +249,15 @@ impl Culler {
             settings,
             repeat,
         };
+        let t = Timing {
+            timer,
+            then: then.map(|p| p as &mut dyn ListPass),
+        };
         match strategy {
-            Strategy::TiledGather { .. } => tiled_gather::run(&inputs, params, timer),
-            Strategy::DepthMask { .. } => depth_mask::run(&inputs, params, timer),
-            Strategy::TiledScatter { .. } => tiled_scatter::run(&inputs, params, timer),
-            Strategy::Clustered { .. } => clustered::run(&inputs, params, timer),
+            Strategy::TiledGather { .. } => tiled_gather::run(&inputs, params, t),
+            Strategy::DepthMask { .. } => depth_mask::run(&inputs, params, t),
+            Strategy::TiledScatter { .. } => tiled_scatter::run(&inputs, params, t),
+            Strategy::Clustered { .. } => clustered::run(&inputs, params, t),
         }
     }
 }
@@ -221,6 +271,13 @@ pub(crate) struct RunInputs<'a> {
     pub strategy: &'a Strategy,
     pub settings: &'a CullSettings,
     pub repeat: Option<Repeat>,
+}
+
+/// Where a run's passes are timed, and the pass after each back-to-back run
+/// ([`Culler::run_repeated_with`]).
+pub(crate) struct Timing<'t> {
+    pub timer: &'t mut GpuTimer,
+    pub then: Option<&'t mut dyn ListPass>,
 }
 
 impl RunInputs<'_> {
@@ -241,9 +298,9 @@ impl RunInputs<'_> {
         &self,
         f: &Frame<'_>,
         plan: P,
-        timer: &mut GpuTimer,
+        t: Timing<'_>,
     ) -> Result<Done, CullError> {
-        frame::execute(f, &self.rec, plan, timer, self.repeat)
+        frame::execute(f, &self.rec, plan, t.timer, self.repeat, t.then)
     }
 
     /// Checks that the bins' ranges fit a storage binding.

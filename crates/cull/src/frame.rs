@@ -5,7 +5,7 @@ use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuError, pipeline, readback};
 
 use crate::layout::GpuCullParams;
-use crate::record::{Buf, Recorder, Step, StepInfo};
+use crate::record::{Buf, ListPass, Recorder, Step, StepInfo};
 use crate::strategies::Plan;
 use crate::{CullError, CullOutput, Strategy};
 
@@ -232,13 +232,15 @@ impl Repeat {
 /// Records and submits `plan`, a plan over `f`. Without `repeat`, once: the count phase, its
 /// total read back, the fill's buffers sized exactly from it, the fill phase (two
 /// submissions). With it, `repeat.runs` times back to back in one submission (each run a span
-/// `cull.<strategy>` for a timer of spans), sized from the earlier run and checked against it.
+/// `cull.<strategy>` for a timer of spans), sized from the earlier run and checked against it,
+/// each run followed by `then` (inside its span) where there is one.
 pub(crate) fn execute<P: Plan>(
     f: &Frame<'_>,
     rec: &Recorder<'_>,
     mut plan: P,
     timer: &mut GpuTimer,
     repeat: Option<Repeat>,
+    mut then: Option<&mut dyn ListPass>,
 ) -> Result<Done, CullError> {
     let ctx = f.ctx;
     let (total, passes) = match repeat {
@@ -263,6 +265,16 @@ pub(crate) fn execute<P: Plan>(
         }
         Some(r) => {
             plan.size(r.total);
+            if let Some(pass) = then.as_mut() {
+                pass.bind(
+                    ctx,
+                    [
+                        f.params_buf.as_entire_binding(),
+                        f.ranges.as_entire_binding(),
+                        plan.indices().as_entire_binding(),
+                    ],
+                );
+            }
             let steps: Vec<Step<'_>> = plan
                 .count(true)
                 .into_iter()
@@ -272,6 +284,9 @@ pub(crate) fn execute<P: Plan>(
             for _ in 0..r.runs {
                 timer.span_begin(&mut enc, &f.span);
                 rec.record(&mut enc, timer, &steps)?;
+                if let Some(pass) = then.as_ref() {
+                    pass.record(&mut enc, timer);
+                }
                 timer.span_end(&mut enc);
             }
             timer.resolve(&mut enc);

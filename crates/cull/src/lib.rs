@@ -47,6 +47,7 @@ pub mod strategies;
 
 pub use culler::Culler;
 pub use output::{BinLists, CullOutput};
+pub use record::ListPass;
 
 use serde::{Deserialize, Serialize};
 

@@ -32,6 +32,8 @@ pub struct ListMetrics {
     pub false_positive_ratio: Option<f64>,
     /// Mean list length over covered pixels.
     pub lights_per_pixel_mean: f64,
+    /// Mean exact set size over covered pixels: the lights a pixel needs.
+    pub lights_needed_per_pixel_mean: f64,
     /// Longest list of any bin.
     pub max_lights_per_bin: u32,
     /// Histogram of list lengths over bins: bucket 0 holds empty lists, bucket k >= 1 lengths
@@ -125,6 +127,7 @@ impl ListMetrics {
             needed: 0,
             false_positive_ratio: None,
             lights_per_pixel_mean: 0.0,
+            lights_needed_per_pixel_mean: 0.0,
             max_lights_per_bin: 0,
             histogram: Vec::new(),
             dropped_lights: 0,
@@ -140,6 +143,7 @@ impl ListMetrics {
         }
         if m.covered_pixels > 0 {
             m.lights_per_pixel_mean = m.evaluated as f64 / m.covered_pixels as f64;
+            m.lights_needed_per_pixel_mean = m.needed as f64 / m.covered_pixels as f64;
         }
         for n in bin_lengths {
             m.max_lights_per_bin = m.max_lights_per_bin.max(n);

@@ -306,3 +306,15 @@ impl Recorder<'_> {
         }
     }
 }
+
+/// A pass that reads the lists of each back-to-back run of
+/// [`crate::Culler::run_repeated_with`] (a shading pass), recorded after every run and inside
+/// its span: culling and the pass that pays for its lists, timed together as a frame does.
+pub trait ListPass {
+    /// Binds the lists once they are sized, before any run is recorded: `lists` are the
+    /// bindings 0, 1, 2 of every list consumer (`CullParams`, `bin_ranges`, `light_indices`;
+    /// [`crate::CullOutput::list_bindings`]).
+    fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3]);
+    /// Records the pass, timed as its name.
+    fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer);
+}

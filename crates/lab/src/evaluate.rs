@@ -15,7 +15,7 @@ use manylights_shade::{HdrImage, ReferenceRenderer, Renderer};
 use crate::LabError;
 use crate::experiment::Config;
 use crate::runner::{category, stage};
-use crate::steady::steady_cull;
+use crate::steady::{steady_cull, steady_cull_shade};
 
 /// What one camera pose measured.
 pub(crate) struct PoseEval {
@@ -33,6 +33,8 @@ pub(crate) struct PoseEval {
     pub(crate) tile_masks: Option<bool>,
     /// Steady-state culling (run median, span), ms, where it was timed.
     pub(crate) steady: Option<(f64, Option<f64>)>,
+    /// The same with the shading pass after each run (run median, span), ms.
+    pub(crate) steady_frame: Option<(f64, Option<f64>)>,
 }
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
@@ -67,6 +69,7 @@ pub(crate) fn evaluate(
     let (mut list_bytes, mut dropped) = (0, 0);
     let mut tile_masks = None;
     let mut steady = None;
+    let mut steady_frame = None;
     let per_pixel: Vec<u32> = match &o.lists {
         Some(lists) => {
             list_bytes = lists.list_bytes();
@@ -105,6 +108,26 @@ pub(crate) fn evaluate(
                 })
                 .map_err(|e| other(&e))?;
                 steady = timed.map(|s| (s.total_ms, s.span_ms));
+                // Culling and the shading pass that reads its lists, back to back: a frame's
+                // culling and what its lists cost in shading.
+                if let Some(mut pass) = renderer.shade_pass(ctx, gpu_scene, &o) {
+                    let timed = stage(pose, "culling and shading timed back to back", || {
+                        steady_cull_shade(
+                            ctx,
+                            &renderer.culler,
+                            gpu_scene,
+                            &o.depth,
+                            &c.strategy,
+                            settings,
+                            lists,
+                            passes + 1,
+                            runs,
+                            &mut pass,
+                        )
+                    })
+                    .map_err(|e| other(&e))?;
+                    steady_frame = timed.map(|s| (s.total_ms, s.span_ms));
+                }
             }
             stage(pose, "lights per pixel", || {
                 renderer
@@ -164,6 +187,7 @@ pub(crate) fn evaluate(
         dropped,
         tile_masks,
         steady,
+        steady_frame,
     })
 }
 
@@ -210,6 +234,11 @@ pub(crate) fn naive_metrics(
         needed,
         false_positive_ratio: (needed > 0).then(|| (sampled * light_count) as f64 / needed as f64),
         lights_per_pixel_mean: light_count as f64,
+        lights_needed_per_pixel_mean: if sampled > 0 {
+            needed as f64 / sampled as f64
+        } else {
+            0.0
+        },
         max_lights_per_bin: light_count as u32,
         histogram: Vec::new(),
         dropped_lights: 0,

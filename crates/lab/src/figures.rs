@@ -221,15 +221,38 @@ fn pareto(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
     front
 }
 
+/// One axis of a scatter: its name and its value in a row.
+pub(crate) type Axis<'a> = (&'a str, &'a dyn Fn(&Row) -> Option<f64>);
+
+/// Speed against accuracy: `time` against `accuracy`, one point per cell, the configurations
+/// apart, the Pareto front in black.
 pub(crate) fn speed_accuracy(
     rows: &[Row],
     path: &Path,
-    y_name: &str,
-    y: impl Fn(&Row) -> Option<f64>,
+    time: Axis<'_>,
+    accuracy: Axis<'_>,
+) -> Result<bool, LabError> {
+    let caption = format!(
+        "Speed against accuracy: {} and {} (Pareto front in black)",
+        time.0, accuracy.0
+    );
+    scatter(rows, path, &caption, time, accuracy, &series_key, true)
+}
+
+/// A scatter of `x` against `y`, one point per row that has both, coloured by `series`, with
+/// the Pareto front (smaller is better on both axes) where `front`.
+fn scatter(
+    rows: &[Row],
+    path: &Path,
+    caption: &str,
+    (x_name, x): Axis<'_>,
+    (y_name, y): Axis<'_>,
+    series: &dyn Fn(&Row) -> String,
+    front: bool,
 ) -> Result<bool, LabError> {
     let pts: Vec<(f64, f64, String)> = rows
         .iter()
-        .filter_map(|r| Some((r.gpu_ms_total?, y(r)?, series_key(r))))
+        .filter_map(|r| Some((x(r)?, y(r)?, series(r))))
         .collect();
     if pts.len() < 2 {
         return Ok(false);
@@ -241,10 +264,7 @@ pub(crate) fn speed_accuracy(
     let root = SVGBackend::new(path, (760, 460)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!("Speed against accuracy: GPU time and {y_name} (Pareto front in black)"),
-            (FONT, 16),
-        )
+        .caption(caption, (FONT, 16))
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(70)
@@ -252,7 +272,7 @@ pub(crate) fn speed_accuracy(
         .map_err(err)?;
     chart
         .configure_mesh()
-        .x_desc("GPU ms (median)")
+        .x_desc(x_name)
         .y_desc(y_name)
         .label_style((FONT, 12))
         .draw()
@@ -275,17 +295,19 @@ pub(crate) fn speed_accuracy(
             .label(key.clone())
             .legend(move |(x, y)| Circle::new((x + 6, y), 4, c.filled()));
     }
-    let front = pareto(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
-    chart
-        .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(2)))
-        .map_err(err)?;
-    chart
-        .draw_series(
-            front
-                .into_iter()
-                .map(|p| Circle::new(p, 6, BLACK.stroke_width(2))),
-        )
-        .map_err(err)?;
+    if front {
+        let front = pareto(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>());
+        chart
+            .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(2)))
+            .map_err(err)?;
+        chart
+            .draw_series(
+                front
+                    .into_iter()
+                    .map(|p| Circle::new(p, 6, BLACK.stroke_width(2))),
+            )
+            .map_err(err)?;
+    }
     if keys.len() <= 12 {
         chart
             .configure_series_labels()
@@ -298,6 +320,22 @@ pub(crate) fn speed_accuracy(
     }
     root.present().map_err(err)?;
     Ok(true)
+}
+
+/// What a loose list costs: the shading pass's time against the lights it evaluates per pixel,
+/// one point per cell, coloured by strategy (and backend, whose shading passes differ).
+pub(crate) fn shade_vs_lights(rows: &[Row], path: &Path) -> Result<bool, LabError> {
+    scatter(
+        rows,
+        path,
+        "Shading time against lights evaluated per pixel",
+        ("lights evaluated per pixel (mean)", &|r| {
+            r.lights_per_pixel_mean
+        }),
+        ("shading pass, GPU ms (median)", &|r| r.gpu_ms_shade),
+        &|r| format!("{}+{}", r.backend, r.strategy),
+        false,
+    )
 }
 
 #[cfg(test)]

@@ -12,7 +12,9 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use crate::figures::{passes, register_font, series_key, speed_accuracy, time_vs_lights};
+use crate::figures::{
+    Axis, passes, register_font, series_key, shade_vs_lights, speed_accuracy, time_vs_lights,
+};
 use crate::results::{Row, load_rows};
 use crate::{LabError, write_atomic};
 
@@ -186,15 +188,31 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         "Per-pass GPU time of each cell: the geometry pass (raster), culling (compute) and shading.",
         &|p| passes(&rows, p),
     )?;
+    let gpu: Axis<'_> = ("GPU ms (median)", &|r| r.gpu_ms_total);
+    let frame: Axis<'_> = ("culling + shading, GPU ms (steady state)", &|r| {
+        r.gpu_ms_cull_shade
+    });
+    let fp: Axis<'_> = ("false-positive ratio", &|r| r.false_positive_ratio);
+    let error: Axis<'_> = ("max abs error vs reference", &|r| r.max_abs_error);
     draw(
         "speed_fp.svg",
         "Speed against list quality: lights evaluated per light needed (1.0 is exact). Black: the Pareto front.",
-        &|p| speed_accuracy(&rows, p, "false-positive ratio", |r| r.false_positive_ratio),
+        &|p| speed_accuracy(&rows, p, gpu, fp),
     )?;
     draw(
         "speed_error.svg",
         "Speed against image error: maximum absolute error against the reference. Black: the Pareto front.",
-        &|p| speed_accuracy(&rows, p, "max abs error vs reference", |r| r.max_abs_error),
+        &|p| speed_accuracy(&rows, p, gpu, error),
+    )?;
+    draw(
+        "frame_fp.svg",
+        "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. Black: the Pareto front.",
+        &|p| speed_accuracy(&rows, p, frame, fp),
+    )?;
+    draw(
+        "shade_vs_lights.svg",
+        "What a loose list costs: the shading pass against the lights it evaluates per pixel, one point per cell.",
+        &|p| shade_vs_lights(&rows, p),
     )?;
 
     let name = rows[0].experiment.clone();
@@ -217,6 +235,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         "cull ms",
         "steady",
         "span",
+        "cull+shade",
         "shade ms",
         "geometry ms",
         "FN",
@@ -242,6 +261,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
                 fmt_opt(r.gpu_ms_cull, 3),
                 fmt_opt(r.gpu_ms_cull_steady, 3),
                 fmt_opt(r.gpu_ms_cull_span, 3),
+                fmt_opt(r.gpu_ms_cull_shade, 3),
                 fmt_opt(r.gpu_ms_shade, 3),
                 fmt_opt(r.gpu_ms_prepass, 3),
                 r.false_negatives.map_or("-".into(), |v| v.to_string()),

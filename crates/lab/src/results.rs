@@ -136,6 +136,20 @@ pub struct Row {
     /// timestamps between passes.
     #[serde(default)]
     pub gpu_ms_cull_span: Option<f64>,
+    /// A frame's culling and the shading pass that reads its lists, in steady state: the
+    /// median over back-to-back runs (as `gpu_ms_cull_steady`) of a run's culling passes and
+    /// shading pass (`shade.forward` or `shade.deferred`), ms. What a loose list costs shows
+    /// here, not in the culling time. Empty for naive forward and without timestamp queries.
+    #[serde(default)]
+    pub gpu_ms_cull_shade: Option<f64>,
+    /// The same runs' median span (culling and shading within one timestamp pair), ms.
+    #[serde(default)]
+    pub gpu_ms_cull_shade_span: Option<f64>,
+    /// Mean number of lights a covered pixel needs (its exact set), from the exact oracle over
+    /// the same pixels as `false_positive_ratio` (the worst pose of a camera path). Lights
+    /// evaluated per light needed is `lights_per_pixel_mean / lights_needed_per_pixel_mean`.
+    #[serde(default)]
+    pub lights_needed_per_pixel_mean: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -232,6 +246,9 @@ pub const COLUMNS: &[&str] = &[
     "tile_masks",
     "gpu_ms_cull_steady",
     "gpu_ms_cull_span",
+    "gpu_ms_cull_shade",
+    "gpu_ms_cull_shade_span",
+    "lights_needed_per_pixel_mean",
 ];
 
 fn one() -> u32 {

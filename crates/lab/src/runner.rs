@@ -420,6 +420,11 @@ fn run_cell(
         tile_masks: first.tile_masks,
         gpu_ms_cull_steady: first.steady.map(|s| s.0),
         gpu_ms_cull_span: first.steady.and_then(|s| s.1),
+        gpu_ms_cull_shade: first.steady_frame.map(|s| s.0),
+        gpu_ms_cull_shade_span: first.steady_frame.and_then(|s| s.1),
+        lights_needed_per_pixel_mean: max_f64(&|e| {
+            e.metrics.as_ref().map(|m| m.lights_needed_per_pixel_mean)
+        }),
         passes,
         index: cell.index,
         id,

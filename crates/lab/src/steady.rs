@@ -8,7 +8,7 @@
 //! count pass and the read-back between its two submissions. Back to back, the lists are
 //! already sized and gather's lines path runs two passes, not three.
 
-use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
+use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES, PassKind};
 use manylights_gpu::{GpuContext, GpuScene};
 
@@ -70,9 +70,60 @@ pub fn steady_cull(
     passes: u32,
     runs: u32,
 ) -> Result<Option<SteadyCull>, SteadyError> {
+    let inputs = (ctx, culler, scene, depth, strategy, settings, first);
+    steady(inputs, passes, runs, None)
+}
+
+/// As [`steady_cull`], each run followed by `then` (the shading pass that reads its lists,
+/// [`manylights_shade::Renderer::shade_pass`]) inside its span: culling and shading timed
+/// together as a frame pays them, for `gpu_ms_cull_shade`. `passes` counts the culling passes
+/// of a single run and the shading pass.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "the inputs of the run being repeated, and the pass after it"
+)]
+pub fn steady_cull_shade(
+    ctx: &GpuContext,
+    culler: &Culler,
+    scene: &GpuScene,
+    depth: &wgpu::Texture,
+    strategy: &Strategy,
+    settings: &CullSettings,
+    first: &CullOutput,
+    passes: u32,
+    runs: u32,
+    then: &mut dyn ListPass,
+) -> Result<Option<SteadyCull>, SteadyError> {
+    let inputs = (ctx, culler, scene, depth, strategy, settings, first);
+    steady(inputs, passes, runs, Some(then))
+}
+
+/// The inputs of the runs being repeated.
+type Inputs<'a> = (
+    &'a GpuContext,
+    &'a Culler,
+    &'a GpuScene,
+    &'a wgpu::Texture,
+    &'a Strategy,
+    &'a CullSettings,
+    &'a CullOutput,
+);
+
+fn steady(
+    (ctx, culler, scene, depth, strategy, settings, first): Inputs<'_>,
+    passes: u32,
+    runs: u32,
+    mut then: Option<&mut dyn ListPass>,
+) -> Result<Option<SteadyCull>, SteadyError> {
     let n = runs.clamp(1, max_runs(passes));
+    let mut repeat = |timer: &mut GpuTimer| match then.as_deref_mut() {
+        Some(pass) => {
+            culler.run_repeated_with(ctx, scene, depth, strategy, settings, first, n, timer, pass)
+        }
+        None => culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, timer),
+    };
     let mut timer = GpuTimer::new(ctx, n * passes.max(1));
-    culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut timer)?;
+    repeat(&mut timer)?;
     let Some(t) = timer.read(ctx)? else {
         return Ok(None);
     };
@@ -99,7 +150,7 @@ pub fn steady_cull(
     );
     let span_ms = match GpuTimer::spans(ctx, n) {
         Some(mut spans) => {
-            culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, &mut spans)?;
+            repeat(&mut spans)?;
             spans
                 .read(ctx)?
                 .map(|t| median(t.iter().map(|p| p.ms).collect()))

@@ -11,17 +11,19 @@
 //!
 //! All three use the one shading model of `shaders/common/shading.wgsl`.
 
+use manylights_cull::ListPass;
 use manylights_cull::layout::CULL_CONSTS;
 use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
 use manylights_gpu::pipeline;
-use manylights_gpu::prepass::{DepthPrepass, depth_target};
+use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene, readback, shader_file};
 use serde::{Deserialize, Serialize};
 
 use crate::HdrImage;
+use crate::shade_pass::{ShadePass, Targets};
 
 /// `shade.forward` and `shade.naive`.
 pub const FORWARD: ShaderDef = ShaderDef {
@@ -66,10 +68,10 @@ pub const DEFERRED: ShaderDef = ShaderDef {
     ],
 };
 
-const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
-const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
-const GB_POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub(crate) const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub(crate) const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub(crate) const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+pub(crate) const GB_POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 /// G-buffer bytes per pixel: normal and view depth (16), material index (4), depth (4).
 pub const GBUFFER_BYTES_PER_PIXEL: u64 = 24;
 
@@ -121,22 +123,35 @@ pub struct ShadeOutput {
     pub depth: wgpu::Texture,
     /// G-buffer bytes (deferred only; 0 otherwise).
     pub gbuffer_bytes: u64,
+    /// The backend that rendered it.
+    pub backend: Backend,
+    /// Its textures, for [`Renderer::shade_pass`].
+    targets: Targets,
+}
+
+impl ShadeOutput {
+    /// Reads the colour target again (after [`Renderer::shade_pass`] shaded into it anew).
+    pub fn read_color(&self, ctx: &GpuContext) -> Result<HdrImage, manylights_gpu::GpuError> {
+        let (w, h) = self.targets.size;
+        let bytes = readback::read_texture(ctx, &self.targets.color, wgpu::TextureAspect::All)?;
+        Ok(HdrImage::from_bytes(w, h, &bytes))
+    }
 }
 
 /// Pipelines of every backend for one scene layout, and the culler.
 pub struct Renderer {
     /// The culling strategies.
     pub culler: Culler,
-    prepass: DepthPrepass,
-    forward: wgpu::RenderPipeline,
-    naive: wgpu::RenderPipeline,
-    gbuffer: wgpu::RenderPipeline,
-    gbuffer_stored: wgpu::RenderPipeline,
-    deferred: wgpu::ComputePipeline,
-    deferred_stored: wgpu::ComputePipeline,
-    forward_lists: wgpu::BindGroupLayout,
-    deferred_lists: wgpu::BindGroupLayout,
-    deferred_gbuffer: wgpu::BindGroupLayout,
+    pub(crate) prepass: DepthPrepass,
+    pub(crate) forward: wgpu::RenderPipeline,
+    pub(crate) naive: wgpu::RenderPipeline,
+    pub(crate) gbuffer: wgpu::RenderPipeline,
+    pub(crate) gbuffer_stored: wgpu::RenderPipeline,
+    pub(crate) deferred: wgpu::ComputePipeline,
+    pub(crate) deferred_stored: wgpu::ComputePipeline,
+    pub(crate) forward_lists: wgpu::BindGroupLayout,
+    pub(crate) deferred_lists: wgpu::BindGroupLayout,
+    pub(crate) deferred_gbuffer: wgpu::BindGroupLayout,
 }
 
 fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
@@ -272,90 +287,17 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
-        let d = &ctx.device;
-        let tex =
-            |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
-        let color = tex(
-            "shade.color",
-            HDR,
-            wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-        );
-        let color_view = color.create_view(&Default::default());
-        let depth = depth_target(ctx, width, height);
-        let depth_view = depth.create_view(&Default::default());
+        let targets = Targets::new(ctx, backend, (width, height));
         let mut timer = GpuTimer::new(ctx, 64);
-        let mut gbuffer_bytes = 0;
-        let lists = match backend {
-            Backend::NaiveForward => {
-                let mut enc = ctx.encoder("shade");
+        // The geometry: the depth prepass, or the G-buffer pass.
+        let mut enc = ctx.encoder("shade");
+        match backend {
+            Backend::Forward | Backend::NaiveForward => {
                 self.prepass
-                    .encode(&mut enc, scene, &depth_view, &mut timer);
-                self.raster_pass(
-                    &mut enc,
-                    &mut timer,
-                    "shade.naive",
-                    &self.naive,
-                    scene,
-                    &[&color_view],
-                    &depth_view,
-                    true,
-                    None,
-                );
-                timer.resolve(&mut enc);
-                ctx.submit_and_wait(enc, "naive forward")?;
-                None
-            }
-            Backend::Forward => {
-                let mut enc = ctx.encoder("shade");
-                self.prepass
-                    .encode(&mut enc, scene, &depth_view, &mut timer);
-                ctx.submit_and_wait(enc, "depth prepass")?;
-                let lists = self
-                    .culler
-                    .run(ctx, scene, &depth, strategy, settings, &mut timer)?;
-                let group = self.lists_group(ctx, &self.forward_lists, &lists, None);
-                let mut enc = ctx.encoder("shade");
-                self.raster_pass(
-                    &mut enc,
-                    &mut timer,
-                    "shade.forward",
-                    &self.forward,
-                    scene,
-                    &[&color_view],
-                    &depth_view,
-                    true,
-                    Some(&group),
-                );
-                timer.resolve(&mut enc);
-                ctx.submit_and_wait(enc, "forward shading")?;
-                Some(lists)
+                    .encode(&mut enc, scene, &targets.depth_view, &mut timer)
             }
             Backend::Deferred | Backend::DeferredStoredPosition => {
                 let stored = backend == Backend::DeferredStoredPosition;
-                let usage =
-                    wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-                let (pw, ph) = if stored { (width, height) } else { (1, 1) };
-                let gb_pos =
-                    pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage);
-                let (gb_nd, gb_mat) = (
-                    tex("gbuffer.normal_depth", GB_NORMAL_DEPTH, usage),
-                    tex("gbuffer.material", GB_MATERIAL, usage),
-                );
-                let views = [
-                    gb_nd.create_view(&Default::default()),
-                    gb_mat.create_view(&Default::default()),
-                    gb_pos.create_view(&Default::default()),
-                ];
-                let per_pixel = GBUFFER_BYTES_PER_PIXEL + if stored { 16 } else { 0 };
-                gbuffer_bytes = u64::from(width) * u64::from(height) * per_pixel;
-                let targets: &[&wgpu::TextureView] = if stored {
-                    &[&views[0], &views[1], &views[2]]
-                } else {
-                    &[&views[0], &views[1]]
-                };
-                let mut enc = ctx.encoder("shade");
                 self.raster_pass(
                     &mut enc,
                     &mut timer,
@@ -366,71 +308,78 @@ impl Renderer {
                         &self.gbuffer
                     },
                     scene,
-                    targets,
-                    &depth_view,
+                    &targets.gbuffer_targets(stored),
+                    &targets.depth_view,
                     false,
                     None,
                 );
-                ctx.submit_and_wait(enc, "G-buffer")?;
-                let lists = self
-                    .culler
-                    .run(ctx, scene, &depth, strategy, settings, &mut timer)?;
-                let depth_only = depth.create_view(&wgpu::TextureViewDescriptor {
-                    aspect: wgpu::TextureAspect::DepthOnly,
-                    ..Default::default()
-                });
-                let group1 = self.lists_group(ctx, &self.deferred_lists, &lists, Some(&depth_only));
-                let group2 = pipeline::group(
-                    d,
-                    "shade.deferred.gbuffer",
-                    &self.deferred_gbuffer,
-                    &[
-                        wgpu::BindingResource::TextureView(&views[0]),
-                        wgpu::BindingResource::TextureView(&views[1]),
-                        wgpu::BindingResource::TextureView(&color_view),
-                        wgpu::BindingResource::TextureView(&views[2]),
-                    ],
-                );
-                let mut enc = ctx.encoder("shade");
-                pipeline::dispatch(
-                    &mut enc,
-                    &mut timer,
-                    "shade.deferred",
-                    if stored {
-                        &self.deferred_stored
-                    } else {
-                        &self.deferred
-                    },
-                    &[&scene.bind_group, &group1, &group2],
-                    (width.div_ceil(8), height.div_ceil(8)),
-                );
-                timer.resolve(&mut enc);
-                ctx.submit_and_wait(enc, "deferred lighting")?;
-                Some(lists)
             }
+        }
+        let lists = if backend == Backend::NaiveForward {
+            self.raster_pass(
+                &mut enc,
+                &mut timer,
+                "shade.naive",
+                &self.naive,
+                scene,
+                &[&targets.color_view],
+                &targets.depth_view,
+                true,
+                None,
+            );
+            timer.resolve(&mut enc);
+            ctx.submit_and_wait(enc, "naive forward")?;
+            None
+        } else {
+            let deferred = backend != Backend::Forward;
+            ctx.submit_and_wait(
+                enc,
+                if deferred {
+                    "G-buffer"
+                } else {
+                    "depth prepass"
+                },
+            )?;
+            let lists =
+                self.culler
+                    .run(ctx, scene, &targets.depth, strategy, settings, &mut timer)?;
+            let mut pass = ShadePass::new(ctx, self, scene, backend, &targets);
+            pass.bind(ctx, lists.list_bindings());
+            let mut enc = ctx.encoder("shade");
+            pass.record(&mut enc, &mut timer);
+            timer.resolve(&mut enc);
+            let during = if deferred {
+                "deferred lighting"
+            } else {
+                "forward shading"
+            };
+            ctx.submit_and_wait(enc, during)?;
+            Some(lists)
         };
-        let bytes = readback::read_texture(ctx, &color, wgpu::TextureAspect::All)?;
+        let bytes = readback::read_texture(ctx, &targets.color, wgpu::TextureAspect::All)?;
         Ok(ShadeOutput {
             color: HdrImage::from_bytes(width, height, &bytes),
             timings: timer.read(ctx)?,
             lists,
-            depth,
-            gbuffer_bytes,
+            depth: targets.depth.clone(),
+            gbuffer_bytes: targets.gbuffer_bytes,
+            backend,
+            targets,
         })
     }
 
-    fn lists_group(
-        &self,
+    /// The shading pass of the frame `out` rendered (forward or deferred; `None` for naive
+    /// forward), over its targets and the scene: bound to the lists of any culling run over
+    /// `out.depth` (`Culler::run_repeated_with` binds it to each run's lists and records it
+    /// after each run, timing a frame's culling and shading together).
+    pub fn shade_pass<'a>(
+        &'a self,
         ctx: &GpuContext,
-        layout: &wgpu::BindGroupLayout,
-        lists: &CullOutput,
-        depth: Option<&wgpu::TextureView>,
-    ) -> wgpu::BindGroup {
-        let mut resources = lists.list_bindings().to_vec();
-        if let Some(view) = depth {
-            resources.push(wgpu::BindingResource::TextureView(view));
-        }
-        pipeline::group(&ctx.device, "shade.lists", layout, &resources)
+        scene: &'a GpuScene,
+        out: &'a ShadeOutput,
+    ) -> Option<ShadePass<'a>> {
+        (out.backend != Backend::NaiveForward)
+            .then(|| ShadePass::new(ctx, self, scene, out.backend, &out.targets))
     }
 
     /// A raster pass drawing the scene into `targets` (cleared), testing depth with `Equal`
@@ -439,7 +388,7 @@ impl Renderer {
         clippy::too_many_arguments,
         reason = "a pass: where, what, into which targets, with which lists"
     )]
-    fn raster_pass(
+    pub(crate) fn raster_pass(
         &self,
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,

@@ -10,10 +10,12 @@ pub mod accuracy;
 pub mod backends;
 pub mod image_out;
 pub mod reference;
+pub mod shade_pass;
 
 pub use backends::{Backend, Renderer, ShadeOutput};
 pub use image_out::HdrImage;
 pub use reference::{ReferenceFrame, ReferenceRenderer};
+pub use shade_pass::ShadePass;
 
 /// Every shader this crate defines (validated by naga in `tests/shaders.rs`).
 pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[

@@ -162,6 +162,10 @@ impl Plan for LinesPlan<'_> {
         self.sized = Some(self.f.lists(total, self.placeholder, &self.lines));
     }
 
+    fn indices(&self) -> &wgpu::Buffer {
+        &self.sized.as_ref().expect("sized before the indices").0
+    }
+
     fn fill(&self, sized: bool) -> Vec<Step<'_>> {
         let (_, group) = self.sized.as_ref().expect("sized before the fill");
         let p = &self.f.params;

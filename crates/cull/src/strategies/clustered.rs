@@ -15,9 +15,8 @@
 //! 6. `cull.finalize`.
 
 use manylights_gpu::GpuError;
-use manylights_gpu::timing::GpuTimer;
 
-use crate::culler::RunInputs;
+use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::{CULL_FLAG_SKIP_EMPTY, GROUPS_X, GpuCullParams};
 use crate::program::Program;
@@ -80,7 +79,7 @@ impl Pipelines {
 pub(crate) fn run(
     r: &RunInputs<'_>,
     params: GpuCullParams,
-    timer: &mut GpuTimer,
+    t: Timing<'_>,
 ) -> Result<CullOutput, CullError> {
     r.check_bins(&params)?;
     r.ctx.check_storage(
@@ -89,7 +88,7 @@ pub(crate) fn run(
     )?;
     let f = r.frame(params, u64::from(params.bins));
     let ordered = matches!(r.strategy, Strategy::Clustered { ordered: true, .. });
-    let done = r.execute(&f, ClusterPlan::new(r, &f, ordered), timer)?;
+    let done = r.execute(&f, ClusterPlan::new(r, &f, ordered), t)?;
     f.finish(done)
 }
 
@@ -195,6 +194,10 @@ impl Plan for ClusterPlan<'_> {
 
     fn size(&mut self, total: u32) {
         self.sized = Some(self.f.lists(total, &self.wide, &self.r.culler.placeholder));
+    }
+
+    fn indices(&self) -> &wgpu::Buffer {
+        &self.sized.as_ref().expect("sized before the indices").0
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {

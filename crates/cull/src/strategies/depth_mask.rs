@@ -7,9 +7,7 @@
 //! pipelines of its own; its passes are named `cull.depth_mask.*`. The oracle is
 //! [`crate::cpu::gather`] with the same flag.
 
-use manylights_gpu::timing::GpuTimer;
-
-use crate::culler::RunInputs;
+use crate::culler::{RunInputs, Timing};
 use crate::layout::{CULL_FLAG_DEPTH_MASK, GpuCullParams};
 use crate::{CullError, CullOutput};
 
@@ -17,8 +15,8 @@ use crate::{CullError, CullOutput};
 pub(crate) fn run(
     r: &RunInputs<'_>,
     params: GpuCullParams,
-    timer: &mut GpuTimer,
+    t: Timing<'_>,
 ) -> Result<CullOutput, CullError> {
     debug_assert!(params.flags & CULL_FLAG_DEPTH_MASK != 0);
-    super::tiled_gather::run(r, params, timer)
+    super::tiled_gather::run(r, params, t)
 }

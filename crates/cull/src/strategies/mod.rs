@@ -32,6 +32,8 @@ pub(crate) trait Plan {
     }
     /// Creates the fill's buffers (the lists' indices, at least) for `total` entries.
     fn size(&mut self, total: u32);
+    /// The lists' indices (after `size`).
+    fn indices(&self) -> &wgpu::Buffer;
     /// The fill phase (after [`Plan::size`]).
     fn fill(&self, sized: bool) -> Vec<Step<'_>>;
     /// The buffers the output keeps.

@@ -16,11 +16,10 @@
 //! The chunk of lights a workgroup takes is fitted to the device by [`crate::fit_chunks`].
 
 use manylights_gpu::GpuError;
-use manylights_gpu::timing::GpuTimer;
 
 use crate::blocks::tile_depth::{self, Rows};
 use crate::blocks::tile_masks;
-use crate::culler::RunInputs;
+use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::GpuCullParams;
 use crate::program::Program;
@@ -65,7 +64,7 @@ impl Pipelines {
 pub(crate) fn run(
     r: &RunInputs<'_>,
     mut params: GpuCullParams,
-    timer: &mut GpuTimer,
+    t: Timing<'_>,
 ) -> Result<CullOutput, CullError> {
     let c = r.culler;
     let ctx = r.ctx;
@@ -95,9 +94,9 @@ pub(crate) fn run(
     let f = r.frame(params, entries);
     let name = r.strategy.name();
     let done = if masked && c.gather_lines {
-        r.execute(&f, c.tile_lines.plan(&f, name, &c.placeholder), timer)?
+        r.execute(&f, c.tile_lines.plan(&f, name, &c.placeholder), t)?
     } else {
-        r.execute(&f, BinnedPlan::new(r, &f, masked), timer)?
+        r.execute(&f, BinnedPlan::new(r, &f, masked), t)?
     };
     f.finish(done)
 }
@@ -240,6 +239,10 @@ impl Plan for BinnedPlan<'_> {
             self.rects.as_ref().unwrap_or(placeholder),
             self.masks.as_ref().unwrap_or(placeholder),
         ));
+    }
+
+    fn indices(&self) -> &wgpu::Buffer {
+        &self.sized.as_ref().expect("sized before the indices").0
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {

@@ -12,11 +12,10 @@
 //!    `cull.tiled_scatter.ranges` and `cull.finalize` find each tile's start and end.
 
 use manylights_gpu::GpuError;
-use manylights_gpu::timing::GpuTimer;
 
 use crate::blocks::tile_depth::{self, Rows};
 use crate::blocks::tile_masks;
-use crate::culler::RunInputs;
+use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::{
     GROUPS_X, GpuCullParams, SCATTER_LANES, SCATTER_MASK_GROUPS, SCATTER_MASK_THREADS,
@@ -64,7 +63,7 @@ impl Pipelines {
 pub(crate) fn run(
     r: &RunInputs<'_>,
     params: GpuCullParams,
-    timer: &mut GpuTimer,
+    t: Timing<'_>,
 ) -> Result<CullOutput, CullError> {
     let (c, ctx) = (r.culler, r.ctx);
     let budget = r.settings.mask_budget.unwrap_or(c.mask_budget);
@@ -73,14 +72,14 @@ pub(crate) fn run(
     tile_depth::check_rows(ctx, &params, masked)?;
     if masked {
         let f = r.frame(params, u64::from(params.bins));
-        let done = r.execute(&f, MasksPlan::new(r, &f)?, timer)?;
+        let done = r.execute(&f, MasksPlan::new(r, &f)?, t)?;
         return f.finish(done);
     }
     // Counts and offsets hold one entry per (light, lane).
     let lanes = u64::from(params.light_count) * u64::from(SCATTER_LANES);
     ctx.check_storage("tiled scatter per-lane counts", (lanes + 1) * 4)?;
     let f = r.frame(params, u64::from(params.bins).max(lanes));
-    let done = r.execute(&f, PairsPlan::new(r, &f), timer)?;
+    let done = r.execute(&f, PairsPlan::new(r, &f), t)?;
     f.finish(done)
 }
 
@@ -149,6 +148,10 @@ impl Plan for MasksPlan<'_> {
 
     fn size(&mut self, total: u32) {
         self.sized = Some(self.f.lists(total, &self.rects, &self.masks));
+    }
+
+    fn indices(&self) -> &wgpu::Buffer {
+        &self.sized.as_ref().expect("sized before the indices").0
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
@@ -272,6 +275,14 @@ impl Plan for PairsPlan<'_> {
             group_scratch,
             sorted,
         });
+    }
+
+    fn indices(&self) -> &wgpu::Buffer {
+        let s = self.sized.as_ref().expect("sized before the indices");
+        match s.sorted {
+            SortedIn::Input => &s.vals,
+            SortedIn::Scratch => &s.vals_tmp,
+        }
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {

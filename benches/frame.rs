@@ -1,0 +1,159 @@
+//! The frame, not the culling pass: culling and the deferred lighting pass that reads its lists,
+//! timed together (`frame.cull_shade/<setting>`). The measured time is the sum of the GPU
+//! timestamp deltas of every culling pass and `shade.deferred` of back-to-back frames
+//! (`Culler::run_repeated_with`: lists sized from a first frame, each run followed by the
+//! lighting pass, no host round trip), returned to criterion through `iter_custom`. The G-buffer
+//! is drawn once, outside the measurement (a raster pass, slow on compute chips and the same
+//! for every strategy).
+//!
+//! Settings (issue 21's table): the Forward+ paper's configuration (3,072 light-field lights of
+//! radius 2.5 m in the atrium, 1280 x 720) with gather's 8-pixel tiles and with clusters of 64
+//! pixels x 24 slices; 1M lights of radius 0.5 m in the atrium at 1920 x 1080 with clusters
+//! without their order pass.
+//!
+//! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
+//! lighting instead (clears and gaps between passes included). `MANYLIGHTS_BENCH_QUICK=1`
+//! shrinks everything for a smoke run on lavapipe; figures come only from the GPU machine.
+
+mod common;
+
+use std::time::Duration;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use manylights_cull::{CullSettings, Slicing, Strategy};
+use manylights_gpu::GpuScene;
+use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
+use manylights_scene::procedural::ProceduralScene;
+use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
+use manylights_shade::{Backend, Renderer};
+
+use common::{configure, gpu, quick};
+
+/// The atrium with the lights of `spec`.
+fn atrium(spec: LightSpec) -> Scene {
+    let mut s = ProceduralScene::from_name("atrium")
+        .unwrap()
+        .build()
+        .unwrap();
+    s.lights = spec.generate(&s).unwrap();
+    s
+}
+
+/// One setting: its name, scene, resolution and strategy.
+struct Setting {
+    name: &'static str,
+    scene: Scene,
+    size: (u32, u32),
+    strategy: Strategy,
+}
+
+fn settings() -> Vec<Setting> {
+    let q = quick();
+    let paper = || {
+        atrium(LightSpec {
+            generator: LightGenerator::LightField,
+            count: if q { 256 } else { 3072 },
+            seed: 2012,
+            radius: RadiusRule::Fixed(2.5),
+            intensity: 4.0,
+            ..LightSpec::default()
+        })
+    };
+    let clusters = |ordered| Strategy::Clustered {
+        tile_size: 64,
+        slices: 24,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered,
+    };
+    let paper_size = if q { (160, 90) } else { (1280, 720) };
+    vec![
+        Setting {
+            name: "harada2012_gather8",
+            scene: paper(),
+            size: paper_size,
+            strategy: Strategy::tiled_gather(8),
+        },
+        Setting {
+            name: "harada2012_clustered64x24",
+            scene: paper(),
+            size: paper_size,
+            strategy: clusters(true),
+        },
+        Setting {
+            name: "atrium_1m_clustered_unordered",
+            scene: atrium(LightSpec {
+                generator: LightGenerator::Uniform,
+                count: if q { 4096 } else { 1 << 20 },
+                seed: 1,
+                radius: RadiusRule::Fixed(0.5),
+                intensity: 0.5,
+                ..LightSpec::default()
+            }),
+            size: if q { (160, 90) } else { (1920, 1080) },
+            strategy: clusters(false),
+        },
+    ]
+}
+
+fn spans() -> bool {
+    std::env::var("MANYLIGHTS_BENCH_SPANS").is_ok_and(|v| v != "0")
+}
+
+fn cull_shade(c: &mut Criterion) {
+    let ctx = gpu();
+    let mut g = c.benchmark_group("frame.cull_shade");
+    configure(&mut g);
+    for s in settings() {
+        let (w, h) = s.size;
+        let gs = GpuScene::upload(&ctx, &s.scene, &s.scene.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gs);
+        let settings = CullSettings::for_camera(&s.scene.camera);
+        let first = renderer
+            .render(&ctx, &gs, Backend::Deferred, &s.strategy, &settings, (w, h))
+            .unwrap();
+        let lists = first.lists.as_ref().expect("deferred culls");
+        // Passes a frame: the single frame's culling and lighting (back to back, at most as
+        // many; the G-buffer pass is not repeated).
+        let passes = first.timings.as_ref().expect("timestamps").len() as u64;
+        let batch = (u64::from(MAX_QUERIES / 2) / passes.max(1)).clamp(1, 64);
+        let mut pass = renderer.shade_pass(&ctx, &gs, &first).expect("deferred");
+        let id = BenchmarkId::new(s.name, format!("{w}x{h}/{}", s.scene.lights.len()));
+        g.bench_function(id, |b| {
+            b.iter_custom(|iters| {
+                let mut total = 0.0;
+                let mut left = iters;
+                while left > 0 {
+                    let runs = left.min(batch);
+                    let mut timer = if spans() {
+                        GpuTimer::spans(&ctx, runs as u32).expect("timestamps between passes")
+                    } else {
+                        GpuTimer::new(&ctx, (runs * passes) as u32)
+                    };
+                    renderer
+                        .culler
+                        .run_repeated_with(
+                            &ctx,
+                            &gs,
+                            &first.depth,
+                            &s.strategy,
+                            &settings,
+                            lists,
+                            runs as u32,
+                            &mut timer,
+                            &mut pass,
+                        )
+                        .unwrap();
+                    let t = timer.read(&ctx).unwrap().expect("timestamps");
+                    total += t.iter().map(|p| p.ms).sum::<f64>();
+                    left -= runs;
+                }
+                Duration::from_secs_f64(total * 1e-3)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, cull_shade);
+criterion_main!(benches);

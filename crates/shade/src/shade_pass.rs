@@ -1,0 +1,187 @@
+//! A frame's targets ([`Targets`]: colour, depth, and the G-buffer where the backend has one)
+//! and the shading pass that reads a culling run's lists ([`ShadePass`]): `shade.forward` (the
+//! geometry again, depth test `Equal`) or `shade.deferred` (a compute pass over the pixels).
+//! The same pass serves a single frame ([`crate::Renderer::render`]) and back-to-back frames
+//! timed with their culling ([`manylights_cull::Culler::run_repeated_with`], through
+//! [`crate::Renderer::shade_pass`]), so that a frame's culling and shading are measured as one.
+
+use manylights_cull::ListPass;
+use manylights_gpu::prepass::depth_target;
+use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::{GpuContext, GpuScene, pipeline};
+
+use crate::backends::{
+    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, GBUFFER_BYTES_PER_PIXEL, HDR, Renderer,
+};
+
+/// The textures of one frame of a backend.
+pub struct Targets {
+    /// Width and height.
+    pub(crate) size: (u32, u32),
+    /// HDR radiance.
+    pub(crate) color: wgpu::Texture,
+    pub(crate) color_view: wgpu::TextureView,
+    /// The depth buffer (prepass or G-buffer pass).
+    pub(crate) depth: wgpu::Texture,
+    pub(crate) depth_view: wgpu::TextureView,
+    /// Deferred backends: normal and view depth, material, and (stored position) the world
+    /// position; a 1 x 1 placeholder for the position where it is rebuilt.
+    pub(crate) gbuffer: Option<[wgpu::TextureView; 3]>,
+    /// G-buffer bytes (0 without one).
+    pub(crate) gbuffer_bytes: u64,
+}
+
+impl Targets {
+    /// The targets of a `width` x `height` frame of `backend`.
+    pub(crate) fn new(ctx: &GpuContext, backend: Backend, (width, height): (u32, u32)) -> Self {
+        let d = &ctx.device;
+        let tex =
+            |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
+        let color = tex(
+            "shade.color",
+            HDR,
+            wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+        );
+        let depth = depth_target(ctx, width, height);
+        let stored = backend == Backend::DeferredStoredPosition;
+        let deferred = stored || backend == Backend::Deferred;
+        let gbuffer = deferred.then(|| {
+            let usage =
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+            let (pw, ph) = if stored { (width, height) } else { (1, 1) };
+            [
+                tex("gbuffer.normal_depth", GB_NORMAL_DEPTH, usage),
+                tex("gbuffer.material", GB_MATERIAL, usage),
+                pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage),
+            ]
+            .map(|t| t.create_view(&Default::default()))
+        });
+        let per_pixel = GBUFFER_BYTES_PER_PIXEL + if stored { 16 } else { 0 };
+        Self {
+            size: (width, height),
+            color_view: color.create_view(&Default::default()),
+            color,
+            depth_view: depth.create_view(&Default::default()),
+            depth,
+            gbuffer_bytes: if deferred {
+                u64::from(width) * u64::from(height) * per_pixel
+            } else {
+                0
+            },
+            gbuffer,
+        }
+    }
+
+    /// The G-buffer pass's colour targets (the stored position only where it is stored).
+    pub(crate) fn gbuffer_targets(&self, stored: bool) -> Vec<&wgpu::TextureView> {
+        let views = self.gbuffer.as_ref().expect("a deferred backend's targets");
+        let n = if stored { 3 } else { 2 };
+        views.iter().take(n).collect()
+    }
+}
+
+/// The shading pass of a forward or deferred frame over the lists it is bound to.
+pub struct ShadePass<'a> {
+    renderer: &'a Renderer,
+    scene: &'a GpuScene,
+    backend: Backend,
+    targets: &'a Targets,
+    /// The lists (and for deferred the depth), once bound.
+    lists: Option<wgpu::BindGroup>,
+    /// Deferred: the G-buffer and the colour target.
+    gbuffer: Option<wgpu::BindGroup>,
+}
+
+impl<'a> ShadePass<'a> {
+    /// The pass of `backend` (forward or deferred) over `targets`.
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        renderer: &'a Renderer,
+        scene: &'a GpuScene,
+        backend: Backend,
+        targets: &'a Targets,
+    ) -> Self {
+        let gbuffer = targets.gbuffer.as_ref().map(|views| {
+            pipeline::group(
+                &ctx.device,
+                "shade.deferred.gbuffer",
+                &renderer.deferred_gbuffer,
+                &[
+                    wgpu::BindingResource::TextureView(&views[0]),
+                    wgpu::BindingResource::TextureView(&views[1]),
+                    wgpu::BindingResource::TextureView(&targets.color_view),
+                    wgpu::BindingResource::TextureView(&views[2]),
+                ],
+            )
+        });
+        Self {
+            renderer,
+            scene,
+            backend,
+            targets,
+            lists: None,
+            gbuffer,
+        }
+    }
+}
+
+impl ListPass for ShadePass<'_> {
+    fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3]) {
+        let mut resources = lists.to_vec();
+        let depth_only;
+        let layout = if self.gbuffer.is_some() {
+            depth_only = self
+                .targets
+                .depth
+                .create_view(&wgpu::TextureViewDescriptor {
+                    aspect: wgpu::TextureAspect::DepthOnly,
+                    ..Default::default()
+                });
+            resources.push(wgpu::BindingResource::TextureView(&depth_only));
+            &self.renderer.deferred_lists
+        } else {
+            &self.renderer.forward_lists
+        };
+        self.lists = Some(pipeline::group(
+            &ctx.device,
+            "shade.lists",
+            layout,
+            &resources,
+        ));
+    }
+
+    fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        let lists = self.lists.as_ref().expect("bound before it is recorded");
+        let r = self.renderer;
+        match &self.gbuffer {
+            None => r.raster_pass(
+                enc,
+                timer,
+                "shade.forward",
+                &r.forward,
+                self.scene,
+                &[&self.targets.color_view],
+                &self.targets.depth_view,
+                true,
+                Some(lists),
+            ),
+            Some(gbuffer) => {
+                let (w, h) = self.targets.size;
+                pipeline::dispatch(
+                    enc,
+                    timer,
+                    "shade.deferred",
+                    if self.backend == Backend::DeferredStoredPosition {
+                        &r.deferred_stored
+                    } else {
+                        &r.deferred
+                    },
+                    &[&self.scene.bind_group, lists, gbuffer],
+                    (w.div_ceil(8), h.div_ceil(8)),
+                );
+            }
+        }
+    }
+}
