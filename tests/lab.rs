@@ -10,10 +10,11 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 8] = [
+const SHIPPED: [&str; 9] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
+    "cis5650-field",
     "tile-size",
     "cluster-grid",
     "depth-mask",

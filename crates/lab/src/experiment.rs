@@ -10,7 +10,7 @@ use std::path::Path;
 
 use manylights_cull::{CullSettings, Strategy};
 use manylights_scene::procedural::{
-    AtriumParams, CityParams, PillarsParams, ProceduralScene, TopdownParams,
+    AtriumParams, Cis5650Params, CityParams, PillarsParams, ProceduralScene, TopdownParams,
 };
 use manylights_scene::{Camera, LightGenerator, LightSpec, Projection, RadiusRule};
 use manylights_shade::Backend;
@@ -29,6 +29,8 @@ pub enum SceneSpec {
     Topdown(#[serde(default)] TopdownParams),
     /// A grid of boxes.
     City(#[serde(default)] CityParams),
+    /// The CIS 5650 hall: Sponza's extents, two rows of pillars.
+    Cis5650(#[serde(default)] Cis5650Params),
     /// A glTF file (relative paths are relative to the experiment file).
     Gltf(String),
 }
@@ -41,6 +43,7 @@ impl SceneSpec {
             Self::Pillars(_) => "pillars".into(),
             Self::Topdown(_) => "topdown".into(),
             Self::City(_) => "city".into(),
+            Self::Cis5650(_) => "cis5650".into(),
             Self::Gltf(p) => Path::new(p)
                 .file_stem()
                 .map_or_else(|| p.clone(), |s| s.to_string_lossy().into_owned()),
@@ -54,6 +57,7 @@ impl SceneSpec {
             Self::Pillars(p) => ProceduralScene::Pillars(*p),
             Self::Topdown(p) => ProceduralScene::Topdown(*p),
             Self::City(p) => ProceduralScene::City(*p),
+            Self::Cis5650(p) => ProceduralScene::Cis5650(*p),
             Self::Gltf(_) => return None,
         })
     }

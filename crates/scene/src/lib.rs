@@ -3,9 +3,10 @@
 //! This crate owns the camera (with its matrix conventions), triangle meshes with one material
 //! index per primitive, minimal materials, point and spot lights with the one falloff function of
 //! the project, deterministic light generators, the procedural scenes (`atrium`, `pillars`,
-//! `topdown`, `city`) and glTF import. It must not depend on wgpu or any GPU crate: the CPU
+//! `topdown`, `city`, `cis5650`) and glTF import. It must not depend on wgpu or any GPU crate: the CPU
 //! oracles of every GPU pass are written against these types alone.
 
+mod builder;
 pub mod camera;
 pub mod error;
 pub mod generate;

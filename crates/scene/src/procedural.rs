@@ -6,22 +6,27 @@
 //!   depth discontinuity (the case 2.5D culling exists for).
 //! - `topdown`: a flat ground seen from straight above (little depth variance).
 //! - `city`: a grid of boxes of varied height on a ground plane.
+//! - `cis5650`: a hall of Sponza's extents (x -15 to 14.5, y 0 to 11.5, z -9.5 to 8.8 m) with
+//!   two rows of pillars and galleries behind them; its camera at (-7, 2, 0) looks along +X
+//!   (45 degrees vertical field of view, near 0.1, far 1000) and its lights fill the box
+//!   (-10, 0, -5) to (10, 8, 5): the setting of the University of Pennsylvania CIS 5650
+//!   WebGPU project, with lights of radius 2.
 //!
 //! Every scene comes with a default camera and the volume its lights are generated in. Surfaces
 //! are two-sided in the renderers (the shading normal is turned towards the viewer), so winding
 //! does not matter here.
 
-use std::collections::BTreeMap;
 use std::f32::consts::PI;
 
 use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use serde::{Deserialize, Serialize};
 
-use crate::{Aabb, Camera, Material, Primitive, Scene, SceneError};
+use crate::builder::{FLOOR, MeshBuilder, STONE, base_materials, check_pos, check_u32};
+use crate::{Aabb, Camera, Scene, SceneError};
 
 /// The procedural scene names, as accepted by [`ProceduralScene::from_name`].
-pub const NAMES: [&str; 4] = ["atrium", "pillars", "topdown", "city"];
+pub const NAMES: [&str; 5] = ["atrium", "pillars", "topdown", "city", "cis5650"];
 
 /// Parameters of `atrium`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -108,6 +113,25 @@ impl Default for CityParams {
     }
 }
 
+/// Parameters of `cis5650`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Cis5650Params {
+    /// Pillars in each of the two rows, 1..=64.
+    pub pillars: u32,
+    /// Whether galleries (a slab at 6 m between each row and its wall) stand behind the rows.
+    pub galleries: bool,
+}
+
+impl Default for Cis5650Params {
+    fn default() -> Self {
+        Self {
+            pillars: 9,
+            galleries: true,
+        }
+    }
+}
+
 /// A procedural scene and its parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum ProceduralScene {
@@ -119,6 +143,8 @@ pub enum ProceduralScene {
     Topdown(TopdownParams),
     /// See [`CityParams`].
     City(CityParams),
+    /// See [`Cis5650Params`].
+    Cis5650(Cis5650Params),
 }
 
 impl ProceduralScene {
@@ -129,6 +155,7 @@ impl ProceduralScene {
             "pillars" => Self::Pillars(PillarsParams::default()),
             "topdown" => Self::Topdown(TopdownParams::default()),
             "city" => Self::City(CityParams::default()),
+            "cis5650" => Self::Cis5650(Cis5650Params::default()),
             _ => {
                 return Err(SceneError::UnknownScene {
                     name: name.to_owned(),
@@ -145,6 +172,7 @@ impl ProceduralScene {
             Self::Pillars(_) => "pillars",
             Self::Topdown(_) => "topdown",
             Self::City(_) => "city",
+            Self::Cis5650(_) => "cis5650",
         }
     }
 
@@ -155,152 +183,9 @@ impl ProceduralScene {
             Self::Pillars(p) => pillars(p),
             Self::Topdown(p) => topdown(p),
             Self::City(p) => city(p),
+            Self::Cis5650(p) => cis5650(p),
         }
     }
-}
-
-fn check_u32(field: &str, v: u32, lo: u32, hi: u32) -> Result<(), SceneError> {
-    if (lo..=hi).contains(&v) {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(
-            field,
-            v,
-            format!("an integer in {lo}..={hi}"),
-        ))
-    }
-}
-
-fn check_pos(field: &str, v: f32) -> Result<(), SceneError> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(SceneError::invalid(field, v, "a finite value > 0"))
-    }
-}
-
-/// Accumulates triangles per material.
-#[derive(Default)]
-struct MeshBuilder {
-    by_material: BTreeMap<u32, Primitive>,
-}
-
-impl MeshBuilder {
-    fn prim(&mut self, material: u32) -> &mut Primitive {
-        self.by_material
-            .entry(material)
-            .or_insert_with(|| Primitive {
-                material,
-                ..Primitive::default()
-            })
-    }
-
-    /// A parallelogram `corner, corner + u, corner + u + v, corner + v`, normal `u x v`.
-    fn quad(&mut self, material: u32, corner: Vec3, u: Vec3, v: Vec3) {
-        let n = u.cross(v).normalize();
-        let p = self.prim(material);
-        let base = p.positions.len() as u32;
-        p.positions
-            .extend([corner, corner + u, corner + u + v, corner + v]);
-        p.normals.extend([n; 4]);
-        p.indices
-            .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
-    }
-
-    /// An axis-aligned box with outward faces.
-    fn cuboid(&mut self, material: u32, min: Vec3, max: Vec3) {
-        let e = max - min;
-        let (x, y, z) = (Vec3::X * e.x, Vec3::Y * e.y, Vec3::Z * e.z);
-        self.quad(material, min, z, y); // -X
-        self.quad(material, min + x, y, z); // +X
-        self.quad(material, min, x, z); // -Y
-        self.quad(material, min + y, z, x); // +Y
-        self.quad(material, min, y, x); // -Z
-        self.quad(material, min + z, x, y); // +Z
-    }
-
-    /// A parametric surface sampled on an (nu+1) x (nv+1) grid; normals from averaged faces.
-    fn surface(&mut self, material: u32, nu: u32, nv: u32, f: impl Fn(f32, f32) -> Vec3) {
-        let p = self.prim(material);
-        let base = p.positions.len() as u32;
-        let stride = nu + 1;
-        let mut normals = vec![Vec3::ZERO; ((nu + 1) * (nv + 1)) as usize];
-        let mut positions = Vec::with_capacity(normals.len());
-        for j in 0..=nv {
-            for i in 0..=nu {
-                positions.push(f(i as f32 / nu as f32, j as f32 / nv as f32));
-            }
-        }
-        for j in 0..nv {
-            for i in 0..nu {
-                let (a, b, c, d) = (
-                    j * stride + i,
-                    j * stride + i + 1,
-                    (j + 1) * stride + i + 1,
-                    (j + 1) * stride + i,
-                );
-                let fnorm = (positions[c as usize] - positions[a as usize])
-                    .cross(positions[d as usize] - positions[b as usize]);
-                for k in [a, b, c, d] {
-                    normals[k as usize] += fnorm;
-                }
-                p.indices
-                    .extend([base + a, base + b, base + c, base + a, base + c, base + d]);
-            }
-        }
-        p.positions.extend(positions);
-        p.normals
-            .extend(normals.into_iter().map(|n| n.normalize_or(Vec3::Y)));
-    }
-
-    /// A vertical cylinder side (no caps).
-    fn column(&mut self, material: u32, base: Vec3, radius: f32, height: f32, segments: u32) {
-        self.surface(material, segments, 1, |u, v| {
-            let a = u * 2.0 * PI;
-            base + Vec3::new(radius * a.cos(), height * v, radius * a.sin())
-        });
-    }
-
-    /// A semicircular arch in the XY plane (spanning along X), centred at `center`, extruded
-    /// along Z by `depth`: intrados, extrados and both faces.
-    fn arch(
-        &mut self,
-        material: u32,
-        center: Vec3,
-        r_in: f32,
-        r_out: f32,
-        depth: f32,
-        segments: u32,
-    ) {
-        let ring =
-            |r: f32, u: f32, z: f32| center + Vec3::new(r * (PI * u).cos(), r * (PI * u).sin(), z);
-        let h = depth * 0.5;
-        self.surface(material, segments, 1, |u, v| ring(r_in, u, -h + depth * v));
-        self.surface(material, segments, 1, |u, v| ring(r_out, u, -h + depth * v));
-        self.surface(material, segments, 1, |u, v| {
-            ring(r_in + (r_out - r_in) * v, u, -h)
-        });
-        self.surface(material, segments, 1, |u, v| {
-            ring(r_in + (r_out - r_in) * v, u, h)
-        });
-    }
-
-    fn finish(self) -> Vec<Primitive> {
-        self.by_material.into_values().collect()
-    }
-}
-
-const STONE: u32 = 0;
-const FLOOR: u32 = 1;
-
-fn base_materials() -> Vec<Material> {
-    vec![
-        Material::new(Vec3::new(0.72, 0.66, 0.56), 0.1), // stone
-        Material::new(Vec3::new(0.45, 0.42, 0.38), 0.3), // floor
-        Material::new(Vec3::new(0.70, 0.12, 0.10), 0.0), // red cloth
-        Material::new(Vec3::new(0.12, 0.45, 0.16), 0.0), // green cloth
-        Material::new(Vec3::new(0.14, 0.20, 0.60), 0.0), // blue cloth
-    ]
 }
 
 /// Sponza-like atrium; see [`AtriumParams`].
@@ -536,6 +421,78 @@ pub fn city(params: &CityParams) -> Result<Scene, SceneError> {
     })
 }
 
+/// The CIS 5650 hall; see [`Cis5650Params`].
+pub fn cis5650(params: &Cis5650Params) -> Result<Scene, SceneError> {
+    check_u32("scene.pillars", params.pillars, 1, 64)?;
+    // Sponza's extents, as the course's setting gives them.
+    let (min, max) = (Vec3::new(-15.0, 0.0, -9.5), Vec3::new(14.5, 11.5, 8.8));
+    const WALL: f32 = 0.3;
+    const ROW_Z: f32 = 6.0; // the pillar rows, just outside the lights' box (z within 5)
+    const GALLERY_Y: f32 = 6.0;
+    let mut mb = MeshBuilder::default();
+    mb.quad(
+        FLOOR,
+        Vec3::new(min.x, 0.0, min.z),
+        Vec3::Z * (max.z - min.z),
+        Vec3::X * (max.x - min.x),
+    );
+    // The four walls, their inner faces on the hall's extents.
+    mb.cuboid(
+        STONE,
+        Vec3::new(min.x - WALL, 0.0, min.z),
+        Vec3::new(min.x, max.y, max.z),
+    );
+    mb.cuboid(
+        STONE,
+        Vec3::new(max.x, 0.0, min.z),
+        Vec3::new(max.x + WALL, max.y, max.z),
+    );
+    mb.cuboid(
+        STONE,
+        Vec3::new(min.x, 0.0, min.z - WALL),
+        Vec3::new(max.x, max.y, min.z),
+    );
+    mb.cuboid(
+        STONE,
+        Vec3::new(min.x, 0.0, max.z),
+        Vec3::new(max.x, max.y, max.z + WALL),
+    );
+    let n = params.pillars;
+    let (x0, x1) = (-12.0f32, 12.0f32);
+    for (z, wall) in [(-ROW_Z, min.z), (ROW_Z, max.z)] {
+        for i in 0..n {
+            let x = if n == 1 {
+                0.0
+            } else {
+                x0 + (x1 - x0) * i as f32 / (n - 1) as f32
+            };
+            mb.column(STONE, Vec3::new(x, 0.0, z), 0.45, max.y, 12);
+        }
+        if params.galleries {
+            mb.cuboid(
+                STONE,
+                Vec3::new(min.x, GALLERY_Y - 0.3, z.min(wall)),
+                Vec3::new(max.x, GALLERY_Y, z.max(wall)),
+            );
+        }
+    }
+    let camera = Camera::perspective(
+        Vec3::new(-7.0, 2.0, 0.0),
+        Vec3::new(0.0, 2.0, 0.0),
+        45.0,
+        0.1,
+        1000.0,
+    );
+    Ok(Scene {
+        name: "cis5650".into(),
+        primitives: mb.finish(),
+        materials: base_materials(),
+        lights: Vec::new(),
+        camera,
+        light_bounds: Aabb::new(Vec3::new(-10.0, 0.0, -5.0), Vec3::new(10.0, 8.0, 5.0)),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -562,7 +519,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.contains("sponza") && e.contains("atrium, pillars, topdown, city"),
+            e.contains("sponza") && e.contains("atrium, pillars, topdown, city, cis5650"),
             "{e}"
         );
     }
@@ -583,5 +540,33 @@ mod tests {
         .unwrap_err()
         .to_string();
         assert!(e.contains("scene.width = NaN"), "{e}");
+        let e = cis5650(&Cis5650Params {
+            pillars: 65,
+            ..Cis5650Params::default()
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("scene.pillars = 65"), "{e}");
+    }
+
+    #[test]
+    fn cis5650_is_the_course_setting() {
+        let s = ProceduralScene::from_name("cis5650")
+            .unwrap()
+            .build()
+            .unwrap();
+        assert_eq!(s.light_bounds.min, Vec3::new(-10.0, 0.0, -5.0));
+        assert_eq!(s.light_bounds.max, Vec3::new(10.0, 8.0, 5.0));
+        assert_eq!(s.camera.position, Vec3::new(-7.0, 2.0, 0.0));
+        assert_eq!(
+            (s.camera.target - s.camera.position).normalize(),
+            Vec3::X,
+            "looks along +X"
+        );
+        assert_eq!(s.camera.near_far(), (0.1, 1000.0));
+        // The hall spans Sponza's extents; the lights' box lies inside it, clear of the pillars.
+        let b = s.bounds();
+        assert!(b.min.x <= -15.0 && b.max.x >= 14.5 && b.min.z <= -9.5 && b.max.z >= 8.8);
+        assert!((b.max.y - 11.5).abs() < 1e-4, "height {}", b.max.y);
     }
 }
