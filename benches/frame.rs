@@ -8,8 +8,9 @@
 //!
 //! Settings (issue 21's table): the Forward+ paper's configuration (3,072 light-field lights of
 //! radius 2.5 m in the atrium, 1280 x 720) with gather's 8-pixel tiles and with clusters of 64
-//! pixels x 24 slices; 1M lights of radius 0.5 m in the atrium at 1920 x 1080 with clusters
-//! without their order pass.
+//! pixels x 24 slices; the CIS 5650 hall (`cis5650`) with 5,000 and 50,000 lights of radius 2 m
+//! at 1920 x 1080, gather's 16-pixel tiles, and at 50,000 clusters too; 1M lights of radius
+//! 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass.
 //!
 //! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
 //! lighting instead (clears and gaps between passes included). `MANYLIGHTS_BENCH_QUICK=1`
@@ -67,6 +68,25 @@ fn settings() -> Vec<Setting> {
         ordered,
     };
     let paper_size = if q { (160, 90) } else { (1280, 720) };
+    let full = if q { (160, 90) } else { (1920, 1080) };
+    // The CIS 5650 course's setting: lights of radius 2 uniform in the hall's light box.
+    let cis5650 = |count| {
+        let mut s = ProceduralScene::from_name("cis5650")
+            .unwrap()
+            .build()
+            .unwrap();
+        s.lights = LightSpec {
+            generator: LightGenerator::Uniform,
+            count,
+            seed: 5650,
+            radius: RadiusRule::Fixed(2.0),
+            intensity: 4.0,
+            ..LightSpec::default()
+        }
+        .generate(&s)
+        .unwrap();
+        s
+    };
     vec![
         Setting {
             name: "harada2012_gather8",
@@ -81,6 +101,24 @@ fn settings() -> Vec<Setting> {
             strategy: clusters(true),
         },
         Setting {
+            name: "cis5650_5k_gather",
+            scene: cis5650(if q { 500 } else { 5000 }),
+            size: full,
+            strategy: Strategy::tiled_gather(16),
+        },
+        Setting {
+            name: "cis5650_50k_gather",
+            scene: cis5650(if q { 2000 } else { 50_000 }),
+            size: full,
+            strategy: Strategy::tiled_gather(16),
+        },
+        Setting {
+            name: "cis5650_50k_clustered64x24",
+            scene: cis5650(if q { 2000 } else { 50_000 }),
+            size: full,
+            strategy: clusters(true),
+        },
+        Setting {
             name: "atrium_1m_clustered_unordered",
             scene: atrium(LightSpec {
                 generator: LightGenerator::Uniform,
@@ -90,7 +128,7 @@ fn settings() -> Vec<Setting> {
                 intensity: 0.5,
                 ..LightSpec::default()
             }),
-            size: if q { (160, 90) } else { (1920, 1080) },
+            size: full,
             strategy: clusters(false),
         },
     ]
