@@ -45,10 +45,6 @@ fn shade_pixel(pixel: vec2<u32>, stored: bool) {
         p = textureLoad(gb_position, id.xy, 0).xyz;
     }
     let v = view_dir(p);
-    let list = light_list(id.xy, z);
-    var c = vec3<f32>(0.0);
-    for (var k = 0u; k < list.y; k++) {
-        c += shade_light(lights[light_indices[list.x + k]], p, g.xyz, v, m);
-    }
+    let c = shade_list(light_list(id.xy, z), p, g.xyz, v, m);
     textureStore(out_color, id.xy, vec4<f32>(c, 1.0));
 }

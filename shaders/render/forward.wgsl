@@ -10,11 +10,7 @@ fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
     let list = light_list(vec2<u32>(in.clip.xy), in.clip.z);
-    var c = vec3<f32>(0.0);
-    for (var k = 0u; k < list.y; k++) {
-        c += shade_light(lights[light_indices[list.x + k]], in.world, n, v, m);
-    }
-    return vec4<f32>(c, 1.0);
+    return vec4<f32>(shade_list(list, in.world, n, v, m), 1.0);
 }
 
 @fragment

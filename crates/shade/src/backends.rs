@@ -17,7 +17,7 @@ use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
-use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene, readback, shader_file};
 use serde::{Deserialize, Serialize};
@@ -25,6 +25,8 @@ use serde::{Deserialize, Serialize};
 use crate::HdrImage;
 use crate::shade_pass::{ShadePass, Targets};
 
+/// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
+pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
 /// `shade.forward` and `shade.naive`.
 pub const FORWARD: ShaderDef = ShaderDef {
     name: "shade.forward",
@@ -37,6 +39,7 @@ pub const FORWARD: ShaderDef = ShaderDef {
         VERTEX,
         GEOMETRY,
         LOOKUP,
+        LIST_SHADING,
         shader_file!("render/forward.wgsl"),
     ],
 };
@@ -64,6 +67,7 @@ pub const DEFERRED: ShaderDef = ShaderDef {
         SHADING,
         GEOMETRY,
         LOOKUP,
+        LIST_SHADING,
         shader_file!("render/deferred.wgsl"),
     ],
 };
