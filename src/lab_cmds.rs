@@ -92,6 +92,7 @@ pub(crate) fn run_suite(args: &RunArgs) -> Result<()> {
     let opts = manylights_lab::runner::RunOptions {
         shard: args.shard,
         max_cells: None,
+        deadline: None,
         progress: show_progress(),
         commit: env!("MANYLIGHTS_COMMIT").to_string(),
     };
@@ -195,6 +196,7 @@ pub(crate) fn run_experiment(args: &RunArgs) -> Result<()> {
     let opts = manylights_lab::runner::RunOptions {
         shard: args.shard,
         max_cells: None,
+        deadline: None,
         progress: show_progress(),
         commit: env!("MANYLIGHTS_COMMIT").to_string(),
     };

@@ -8,6 +8,7 @@ mod cull_cmd;
 mod lab_cmds;
 mod options;
 mod render_cmd;
+mod tune_cmd;
 
 use std::path::{Path, PathBuf};
 
@@ -16,6 +17,7 @@ use clap::{Parser, Subcommand};
 use cull_cmd::{CullArgs, cull};
 use lab_cmds::{MergeArgs, ReportArgs, RunArgs, report, run_experiment};
 use render_cmd::{RenderArgs, render};
+use tune_cmd::{TuneArgs, run_tune};
 
 /// Light-culling research workbench: culling strategies and shading backends on wgpu,
 /// measured for speed and for exactness against a brute-force reference.
@@ -85,6 +87,12 @@ enum Command {
     Merge(MergeArgs),
     /// Write the paper-style report of a run directory: report.md and report.html with figures.
     Report(ReportArgs),
+    /// Find the fastest conservative configuration for a scene, light set and resolution on
+    /// this device: try every strategy with several tile sizes (and cluster grids), reject any
+    /// with a false negative, rank the rest by culling and shading together
+    /// (gpu_ms_cull_shade), print the table, and write the best as an experiment file
+    /// (OUT/best.ron) with the candidates' results and report in OUT (default out/tune).
+    Tune(TuneArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -110,6 +118,7 @@ fn main() -> std::process::ExitCode {
                 })
         }
         Command::Report(args) => report(&args.dir),
+        Command::Tune(args) => run_tune(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -211,7 +211,20 @@ impl SceneArgs {
     /// The scene with its generated lights, validated.
     pub(crate) fn build(&self) -> Result<Scene> {
         let mut scene = load_scene(&self.scene)?;
-        let spec = LightSpec {
+        let spec = self.light_spec();
+        let generated = spec.generate(&scene).context(
+            "invalid light options (--radius, --threshold, --intensity, --spot-fraction)",
+        )?;
+        scene.lights.extend(generated);
+        scene
+            .validate()
+            .with_context(|| format!("scene {}", scene.name))?;
+        Ok(scene)
+    }
+
+    /// The generated lights' description.
+    pub(crate) fn light_spec(&self) -> LightSpec {
+        LightSpec {
             generator: match self.generator {
                 Generator::Uniform => LightGenerator::Uniform,
                 Generator::Surface => LightGenerator::SurfaceHugging { offset: 0.1 },
@@ -229,15 +242,7 @@ impl SceneArgs {
             intensity: self.intensity,
             spot_fraction: self.spot_fraction,
             ..LightSpec::default()
-        };
-        let generated = spec.generate(&scene).context(
-            "invalid light options (--radius, --threshold, --intensity, --spot-fraction)",
-        )?;
-        scene.lights.extend(generated);
-        scene
-            .validate()
-            .with_context(|| format!("scene {}", scene.name))?;
-        Ok(scene)
+        }
     }
 
     /// The device, checked against the resolution.

@@ -693,6 +693,68 @@ fn gpu_strategies_have_no_false_negatives_over_10_seeds() {
     }
 }
 
+/// Deep views, where depth precision and the exponential slices are at their worst: the
+/// atrium and the CIS 5650 hall with near 0.01 and far 5000, and a street-level view down the
+/// city: every strategy keeps every light a pixel needs, on the GPU, at 97 x 61.
+#[test]
+fn gpu_strategies_have_no_false_negatives_in_deep_views() {
+    let ctx = common::gpu();
+    let (w, h) = (97, 61);
+    let deep = |name: &str| {
+        let mut scene = ProceduralScene::from_name(name).unwrap().build().unwrap();
+        scene.lights = LightSpec {
+            generator: LightGenerator::Uniform,
+            count: 300,
+            seed: 21,
+            radius: RadiusRule::Fixed(scene.light_bounds.extent().max_element() * 0.08),
+            ..LightSpec::default()
+        }
+        .generate(&scene)
+        .unwrap();
+        let mut camera = scene.camera;
+        if let Projection::Perspective { near, far, .. } = &mut camera.projection {
+            (*near, *far) = (0.01, 5000.0);
+        }
+        Case {
+            scene,
+            camera,
+            label: format!("{name}, near 0.01, far 5000"),
+        }
+    };
+    let mut cases = vec![deep("atrium"), deep("cis5650")];
+    // Street level: the eye 1.7 m above the ground between the city's blocks, looking down the
+    // street to the far side.
+    let mut city = deep("city");
+    let b = city.scene.bounds();
+    let street_z = b.min.z + 0.5;
+    city.camera = Camera::perspective(
+        Vec3::new(b.min.x + 1.0, 1.7, street_z),
+        Vec3::new(b.max.x, 1.7, street_z),
+        60.0,
+        0.01,
+        5000.0,
+    );
+    city.label = "city at street level, near 0.01, far 5000".into();
+    cases.push(city);
+    let mut culler = None;
+    for case in &cases {
+        let r = render(&ctx, case, w, h);
+        let culler = culler.get_or_insert_with(|| Culler::new(&ctx, &r.gpu_scene));
+        let covered = r.depth.iter().filter(|&&z| z < 1.0).count();
+        assert!(
+            covered > (w * h) as usize / 4,
+            "{}: {covered} pixels covered",
+            case.label
+        );
+        for s in strategies() {
+            let out = run_gpu(&ctx, culler, &r, case, &s);
+            let m = metrics(&r, &out.params, &out.read(&ctx).unwrap());
+            assert!(m.needed > 0, "{}: no light reaches a pixel", case.label);
+            assert_eq!(m.false_negatives, 0, "{} {}", case.label, s.name());
+        }
+    }
+}
+
 /// 2.5D culling keeps a subset of tiled gather's lists in every tile (over 20 seeds, on the
 /// GPU), and on `pillars` culls strictly more.
 #[test]

@@ -165,20 +165,8 @@ impl Culler {
         runs: u32,
         timer: &mut GpuTimer,
     ) -> Result<CullOutput, CullError> {
-        let repeat = Repeat {
-            total: earlier.total,
-            runs: runs.max(1),
-        };
-        self.run_with(
-            ctx,
-            scene,
-            depth,
-            strategy,
-            settings,
-            timer,
-            Some(repeat),
-            None,
-        )
+        let repeat = Some(Repeat::after(earlier, runs));
+        self.run_with(ctx, scene, depth, strategy, settings, timer, repeat, None)
     }
 
     /// As [`Culler::run_repeated`], each run followed by `then` (a pass reading its lists, such
@@ -200,21 +188,9 @@ impl Culler {
         timer: &mut GpuTimer,
         then: &mut dyn ListPass,
     ) -> Result<CullOutput, CullError> {
-        let repeat = Repeat {
-            total: earlier.total,
-            runs: runs.max(1),
-        };
+        let repeat = Some(Repeat::after(earlier, runs));
         let then = Some(then);
-        self.run_with(
-            ctx,
-            scene,
-            depth,
-            strategy,
-            settings,
-            timer,
-            Some(repeat),
-            then,
-        )
+        self.run_with(ctx, scene, depth, strategy, settings, timer, repeat, then)
     }
 
     #[allow(

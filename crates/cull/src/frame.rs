@@ -216,6 +216,14 @@ pub(crate) struct Repeat {
 }
 
 impl Repeat {
+    /// `runs` (at least one) runs sized from `earlier`, a single run of the same input.
+    pub fn after(earlier: &CullOutput, runs: u32) -> Self {
+        Self {
+            total: earlier.total,
+            runs: runs.max(1),
+        }
+    }
+
     /// The total the repeated runs needed, which must be the earlier run's.
     fn check(self, total: u64) -> Result<(), CullError> {
         if total == u64::from(self.total) {

@@ -50,6 +50,19 @@ impl SceneSpec {
         }
     }
 
+    /// The scene a command line names: a procedural scene's name (its default parameters) or
+    /// a glTF file's path.
+    pub fn from_name(name: &str) -> Self {
+        match ProceduralScene::from_name(name) {
+            Ok(ProceduralScene::Atrium(p)) => Self::Atrium(p),
+            Ok(ProceduralScene::Pillars(p)) => Self::Pillars(p),
+            Ok(ProceduralScene::Topdown(p)) => Self::Topdown(p),
+            Ok(ProceduralScene::City(p)) => Self::City(p),
+            Ok(ProceduralScene::Cis5650(p)) => Self::Cis5650(p),
+            Err(_) => Self::Gltf(name.to_owned()),
+        }
+    }
+
     /// The procedural scene, if this is one.
     pub fn procedural(&self) -> Option<ProceduralScene> {
         Some(match self {
@@ -165,30 +178,43 @@ pub struct Variant {
 #[serde(default, deny_unknown_fields)]
 pub struct Sweep {
     /// Scenes.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub scene: Option<Vec<SceneSpec>>,
     /// Light counts.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub light_count: Option<Vec<u32>>,
     /// Light seeds.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub light_seed: Option<Vec<u64>>,
     /// Light generators.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub generator: Option<Vec<LightGenerator>>,
     /// Radius rules.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub radius: Option<Vec<RadiusRule>>,
     /// Cameras.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub camera: Option<Vec<CameraSpec>>,
     /// Resolutions.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub resolution: Option<Vec<(u32, u32)>>,
     /// Strategies.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub strategy: Option<Vec<Strategy>>,
     /// Backends.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub backend: Option<Vec<Backend>>,
     /// Capacities (`None` entries mean none).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub capacity: Option<Vec<Option<u32>>>,
     /// Tile-mask budgets, bytes (`None` entries mean the default).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub mask_budget: Option<Vec<Option<u64>>>,
     /// Device limits (`None` entries mean none).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub device_limit: Option<Vec<Option<DeviceLimit>>>,
     /// Combined overrides.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub variants: Option<Vec<Variant>>,
 }
 

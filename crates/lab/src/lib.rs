@@ -1,7 +1,7 @@
 //! Experiments of manylights: the RON schema ([`experiment`]) and its expansion into cells
 //! (`cells`), the durable, resumable, shardable runner ([`runner`]) and what it measures at each
 //! camera pose (`evaluate`), results as CSV and JSON ([`results`]), culling timed in steady
-//! state ([`steady`]), paper-style reports in Markdown and HTML ([`report`]) with their figures
+//! state ([`steady`]), the tuner ([`tune`]), paper-style reports in Markdown and HTML ([`report`]) with their figures
 //! (`figures`), and the stability suite's verdicts ([`stability`]).
 //!
 //! Depends on every other crate; nothing depends on it but the CLI.
@@ -15,6 +15,7 @@ pub mod results;
 pub mod runner;
 pub mod stability;
 pub mod steady;
+pub mod tune;
 
 pub use experiment::{Cell, Config, Experiment};
 pub use results::Row;

@@ -31,6 +31,8 @@ pub struct RunOptions {
     pub shard: Option<(usize, usize)>,
     /// Stop after this many cells were run (as if the run were killed then).
     pub max_cells: Option<usize>,
+    /// Start no cell after this instant (a time budget; the cells left are not run).
+    pub deadline: Option<Instant>,
     /// Show a progress bar.
     pub progress: bool,
     /// The commit the binary was built from.
@@ -140,7 +142,9 @@ pub fn run_parsed(
     bar.set_position(skipped as u64);
     let mut ran = 0;
     for cell in todo {
-        if opts.max_cells.is_some_and(|m| ran >= m) {
+        if opts.max_cells.is_some_and(|m| ran >= m)
+            || opts.deadline.is_some_and(|d| Instant::now() >= d)
+        {
             break;
         }
         bar.set_message(cell.name.clone());

@@ -1,0 +1,191 @@
+//! `manylights tune`: the Forward+ paper's future work (an automatic tile size), generalised. For
+//! one scene, light set, camera and resolution, every culling strategy is tried with several
+//! parameters ([`candidates`]) on this device, as the cells of one experiment (so they are
+//! measured, persisted and resumed as any experiment's are); a configuration with a false
+//! negative or a dropped light is rejected; the rest are ranked by `gpu_ms_cull_shade` (culling
+//! and the shading pass that reads the lists, back to back: the frame, not the culling pass).
+//! The best is written as an experiment file of its own (`best.ron`) that `manylights run`
+//! reproduces. A time budget stops starting candidates; those left are reported as untried.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use manylights_cull::{Slicing, Strategy};
+use manylights_gpu::GpuContext;
+
+use crate::experiment::{Config, Experiment, Sweep, Variant};
+use crate::results::Row;
+use crate::runner::{RunOptions, run_parsed};
+use crate::{LabError, write_atomic};
+
+/// How to tune.
+#[derive(Clone, Debug)]
+pub struct TuneOptions {
+    /// Start no candidate after this long.
+    pub budget: Duration,
+    /// Show a progress bar.
+    pub progress: bool,
+    /// The commit the binary was built from.
+    pub commit: String,
+}
+
+/// What tuning found.
+#[derive(Clone, Debug)]
+pub struct TuneReport {
+    /// Conservative candidates (no false negative, no dropped light) with a culling-and-shading
+    /// time, fastest first.
+    pub ranked: Vec<Row>,
+    /// Candidates that finished but are not eligible, with why.
+    pub rejected: Vec<(Row, String)>,
+    /// Candidates the budget left untried (their cell names).
+    pub untried: Vec<String>,
+    /// The best candidate's experiment file, `best.ron` in the output directory.
+    pub best_file: PathBuf,
+}
+
+/// The strategies and parameters tried: tiles of 8, 16 and 32 pixels for gather, 2.5D and
+/// tiled scatter; clusters of 16, 32 and 64 pixels with 16 and 32 exponential slices, their
+/// lists in light order (bit-identical frames).
+pub fn candidates() -> Vec<Strategy> {
+    let mut v = Vec::new();
+    for tile in [8, 16, 32] {
+        v.push(Strategy::tiled_gather(tile));
+        v.push(Strategy::depth_mask(tile));
+        v.push(Strategy::TiledScatter { tile_size: tile });
+    }
+    for tile in [16, 32, 64] {
+        for slices in [16, 32] {
+            v.push(Strategy::Clustered {
+                tile_size: tile,
+                slices,
+                slicing: Slicing::Exponential,
+                skip_empty: false,
+                ordered: true,
+            });
+        }
+    }
+    v
+}
+
+/// An experiment's RON text, in the form the parser reads (newtype variants unwrapped,
+/// options implicit).
+fn to_ron(e: &Experiment) -> Result<String, LabError> {
+    let pretty = ron::ser::PrettyConfig::new().struct_names(true).extensions(
+        ron::extensions::Extensions::UNWRAP_VARIANT_NEWTYPES
+            | ron::extensions::Extensions::IMPLICIT_SOME,
+    );
+    ron::ser::to_string_pretty(e, pretty)
+        .map_err(|err| LabError::Other(format!("writing the experiment: {err}")))
+}
+
+/// Tries every candidate on `base` (its strategy is replaced; everything else is kept) and
+/// ranks them; the cells, results and report go to `out`.
+pub fn tune(
+    ctx: &GpuContext,
+    base: &Config,
+    out: &Path,
+    opts: &TuneOptions,
+) -> Result<TuneReport, LabError> {
+    let variants: Vec<Variant> = candidates()
+        .into_iter()
+        .map(|s| Variant {
+            strategy: Some(s),
+            ..Variant::default()
+        })
+        .collect();
+    let exp = Experiment {
+        name: "tune".into(),
+        description: format!(
+            "manylights tune: every strategy and parameter candidate with the {} backend, ranked by culling and shading together (gpu_ms_cull_shade).",
+            base.backend.name()
+        ),
+        config: base.clone(),
+        sweep: Sweep {
+            variants: Some(variants),
+            ..Sweep::default()
+        },
+    };
+    let src = to_ron(&exp)?;
+    // What is written is what a rerun reads.
+    Experiment::parse(&src, &out.join("experiment.ron"))?;
+    let run = run_parsed(
+        ctx,
+        &exp,
+        &src,
+        Path::new("."),
+        out,
+        &RunOptions {
+            deadline: Some(Instant::now() + opts.budget),
+            progress: opts.progress,
+            commit: opts.commit.clone(),
+            ..RunOptions::default()
+        },
+    )?;
+    let cells = exp.cells();
+    let untried = cells
+        .iter()
+        .filter(|c| !run.rows.iter().any(|r| r.id == c.id()))
+        .map(|c| c.name.clone())
+        .collect();
+    let (mut ranked, mut rejected) = (Vec::new(), Vec::new());
+    for r in run.rows {
+        match why_not(&r) {
+            None => ranked.push(r),
+            Some(why) => rejected.push((r, why)),
+        }
+    }
+    let time = |r: &Row| r.gpu_ms_cull_shade.unwrap_or(f64::INFINITY);
+    ranked.sort_by(|a, b| time(a).total_cmp(&time(b)));
+    let best = ranked.first().ok_or_else(|| {
+        LabError::Other(format!(
+            "no candidate was eligible within the budget of {} s ({} rejected, {} untried): \
+             raise --budget-s, or see {} for the rejected ones",
+            opts.budget.as_secs(),
+            rejected.len(),
+            cells.len() - rejected.len(),
+            out.join("results.csv").display()
+        ))
+    })?;
+    let cell = cells
+        .iter()
+        .find(|c| c.id() == best.id)
+        .expect("every row is a cell of the experiment");
+    let best_exp = Experiment {
+        name: "tuned".into(),
+        description: format!(
+            "The fastest conservative configuration manylights tune found on {} ({} + {}, {}: {:.3} ms of culling and shading).",
+            best.adapter,
+            best.backend,
+            best.strategy,
+            best.params,
+            best.gpu_ms_cull_shade.unwrap_or(f64::NAN)
+        ),
+        config: cell.config.clone(),
+        sweep: Sweep::default(),
+    };
+    let best_file = out.join("best.ron");
+    write_atomic(&best_file, to_ron(&best_exp)?.as_bytes())?;
+    Ok(TuneReport {
+        ranked,
+        rejected,
+        untried,
+        best_file,
+    })
+}
+
+/// Why a finished candidate cannot be the answer: a false negative, a dropped light, or no
+/// time for culling and shading (no timestamps, or naive forward).
+fn why_not(r: &Row) -> Option<String> {
+    match r.false_negatives {
+        Some(0) => {}
+        Some(n) => return Some(format!("{n} false negatives")),
+        None => return Some("no exact oracle (exact_stride 0)".into()),
+    }
+    if r.dropped_lights > 0 {
+        return Some(format!("{} dropped lights", r.dropped_lights));
+    }
+    if r.gpu_ms_cull_shade.is_none() {
+        return Some("no culling-and-shading time (no timestamp queries?)".into());
+    }
+    None
+}

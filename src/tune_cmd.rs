@@ -1,0 +1,143 @@
+//! `tune`: every strategy and its parameters on this device for one scene, light set and
+//! resolution, ranked by culling and shading together (`manylights_lab::tune`).
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use anyhow::{Context, Result};
+use clap::ValueEnum;
+use manylights_cull::layout::DEFAULT_SLACK;
+use manylights_lab::experiment::{CameraSpec, Config, SceneSpec};
+use manylights_lab::tune::{TuneOptions, tune};
+use manylights_shade::Backend;
+
+use crate::options::SceneArgs;
+use crate::show_progress;
+
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub(crate) struct TuneArgs {
+    #[command(flatten)]
+    pub(crate) scene: SceneArgs,
+    /// The shading backend the lists are for.
+    #[arg(long, value_enum, default_value_t = TuneBackend::Deferred)]
+    pub(crate) backend: TuneBackend,
+    /// Start no candidate after this many seconds (those left are listed as untried); a rerun
+    /// with the same options and --out resumes where it stopped.
+    #[arg(long, default_value_t = 600)]
+    pub(crate) budget_s: u64,
+    /// Measured frames of each candidate (times are medians over them, and over as many
+    /// back-to-back runs).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub(crate) frames: u32,
+    /// Frames rendered before measuring.
+    #[arg(long, default_value_t = 2)]
+    pub(crate) warmup: u32,
+    /// Pixel stride of the exact oracle that rejects candidates with false negatives (1: every
+    /// pixel; larger samples a grid, for light counts where every pixel would take long).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) exact_stride: u32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum TuneBackend {
+    /// Forward+: depth prepass, culling, forward shading over the lists.
+    Forward,
+    /// Deferred: G-buffer, culling, compute lighting over the lists.
+    Deferred,
+}
+
+pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
+    let a = &args.scene;
+    // The scene and its lights, checked before any GPU work.
+    let scene = a.build()?;
+    let ctx = a.gpu()?;
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from("out/tune"));
+    let base = Config {
+        scene: SceneSpec::from_name(&a.scene),
+        lights: a.light_spec(),
+        camera: CameraSpec::Default,
+        resolution: (a.width, a.height),
+        strategy: manylights_cull::Strategy::tiled_gather(16),
+        backend: match args.backend {
+            TuneBackend::Forward => Backend::Forward,
+            TuneBackend::Deferred => Backend::Deferred,
+        },
+        capacity: None,
+        mask_budget: None,
+        slack: DEFAULT_SLACK,
+        frames: args.frames,
+        warmup: args.warmup,
+        accuracy: false,
+        exact_stride: args.exact_stride,
+        device_limit: None,
+    };
+    eprintln!(
+        "tuning {} ({} lights) at {}x{} for {}: {} candidates, budget {} s",
+        scene.name,
+        scene.lights.len(),
+        a.width,
+        a.height,
+        base.backend.name(),
+        manylights_lab::tune::candidates().len(),
+        args.budget_s
+    );
+    let report = tune(
+        &ctx,
+        &base,
+        &out,
+        &TuneOptions {
+            budget: Duration::from_secs(args.budget_s),
+            progress: show_progress(),
+            commit: env!("MANYLIGHTS_COMMIT").into(),
+        },
+    )?;
+    let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3}"));
+    println!(
+        "{:>4}  {:<64} {:>11} {:>11} {:>9} {:>9} {:>9}",
+        "rank", "strategy", "cull+shade", "cull", "lights/px", "needed", "per need"
+    );
+    for (i, r) in report.ranked.iter().enumerate() {
+        println!(
+            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>9} {:>9} {:>9}",
+            i + 1,
+            format!("{} ({})", r.strategy, r.params),
+            ms(r.gpu_ms_cull_shade),
+            ms(r.gpu_ms_cull_steady),
+            r.lights_per_pixel_mean
+                .map_or("-".into(), |v| format!("{v:.1}")),
+            r.lights_needed_per_pixel_mean
+                .map_or("-".into(), |v| format!("{v:.1}")),
+            r.false_positive_ratio
+                .map_or("-".into(), |v| format!("{v:.2}")),
+        );
+    }
+    for (r, why) in &report.rejected {
+        println!("rejected: {} ({}): {why}", r.strategy, r.params);
+    }
+    if !report.untried.is_empty() {
+        println!(
+            "untried within {} s: {} candidates ({})",
+            args.budget_s,
+            report.untried.len(),
+            report.untried.join("; ")
+        );
+    }
+    let best = &report.ranked[0];
+    println!(
+        "best: {} + {} ({}): {} ms of culling and shading",
+        best.backend,
+        best.strategy,
+        best.params,
+        ms(best.gpu_ms_cull_shade)
+    );
+    println!(
+        "wrote {} (reproduce it with `manylights run {}`)",
+        report.best_file.display(),
+        report.best_file.display()
+    );
+    let html = manylights_lab::report::write_report(&out)
+        .with_context(|| format!("report of {}", out.display()))?;
+    eprintln!("report: {}", html.display());
+    Ok(())
+}
