@@ -7,6 +7,9 @@
 //! A single run (a frame of an experiment, `gpu_ms_cull`) also times what sizes its lists: the
 //! count pass and the read-back between its two submissions. Back to back, the lists are
 //! already sized and gather's lines path runs two passes, not three.
+//!
+//! The runs are repeated untimed for [`WARM_UP`] first, so that they are timed at the clock the
+//! GPU runs at under load, not the lower one it falls to while the host works between cells.
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES, PassKind};
@@ -27,6 +30,10 @@ pub struct SteadyCull {
     /// cannot write timestamps between passes.
     pub span_ms: Option<f64>,
 }
+
+/// How long the runs are repeated, untimed, before the timed ones: long enough for the GPU's
+/// clock to rise from idle (DVFS), short next to a cell's other work.
+pub const WARM_UP: std::time::Duration = std::time::Duration::from_millis(200);
 
 /// The most runs one timer holds for a strategy whose single run took `passes` passes.
 pub fn max_runs(passes: u32) -> u32 {
@@ -122,6 +129,13 @@ fn steady(
         }
         None => culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, timer),
     };
+    // Raise the clock first: the GPU idles while the host works between measurements, and an
+    // idle GPU clocks down (an H100 sampled at 465-1,455 MHz between a tuner's cells, 1,980 MHz
+    // under load), so that the first passes after the host's work measure slow.
+    let warm = std::time::Instant::now();
+    while warm.elapsed() < WARM_UP {
+        repeat(&mut GpuTimer::new(ctx, n * passes.max(1)))?;
+    }
     let mut timer = GpuTimer::new(ctx, n * passes.max(1));
     repeat(&mut timer)?;
     let Some(t) = timer.read(ctx)? else {
