@@ -325,12 +325,8 @@ impl Plan for PairsPlan<'_> {
     }
 
     fn outputs(self) -> Outputs {
-        let s = self.sized.expect("sized before the output");
         Outputs {
-            indices: match s.sorted {
-                SortedIn::Input => s.vals,
-                SortedIn::Scratch => s.vals_tmp,
-            },
+            indices: self.indices().clone(),
             tile_masks: None,
             tile_lines: None,
         }
