@@ -86,7 +86,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     } else {
         String::new()
     };
-    let lists = out.read(&ctx)?;
+    let lengths = out.bin_lengths(&ctx)?;
     let frame =
         manylights_gpu::layout::GpuFrame::new(&scene.camera, w, h, scene.lights.len() as u32);
     let counts = culler.exact_counts(
@@ -97,9 +97,9 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         frame.clip_from_world.inverse(),
         1,
     )?;
-    let m = metrics::from_gpu_counts(&counts, &lists);
+    let m = metrics::from_gpu_counts(&counts, &lengths);
     let per_pixel: Vec<u32> = counts.iter().map(|c| c[0]).collect();
-    let tiles = heatmap::tile_counts(&out.params, &lists, args.slice);
+    let tiles = heatmap::tile_counts(&out.params, &lengths, args.slice);
     let max = args
         .heat_max
         .unwrap_or_else(|| tiles.iter().copied().max().unwrap_or(0).max(1));

@@ -69,7 +69,10 @@ pub(crate) struct StrategyArgs {
     /// Depth slices of the cluster grid (clustered only).
     #[arg(long, default_value_t = 24)]
     pub(crate) slices: u32,
-    /// Slicing of the cluster grid (clustered only).
+    /// Depth bins of z-binning (zbin only; 1..=1024).
+    #[arg(long, default_value_t = manylights_cull::DEFAULT_ZBINS)]
+    pub(crate) bins: u32,
+    /// Slicing of the cluster grid (clustered), or of z-binning's depth bins (zbin).
     #[arg(long, value_enum, default_value_t = SlicingName::Exponential)]
     pub(crate) slicing: SlicingName,
     /// Emit lights only into clusters that hold geometry (clustered only).
@@ -114,12 +117,14 @@ impl StrategyArgs {
             StrategyName::Clustered => Strategy::Clustered {
                 tile_size,
                 slices: self.slices,
-                slicing: match self.slicing {
-                    SlicingName::Linear => Slicing::Linear,
-                    SlicingName::Exponential => Slicing::Exponential,
-                },
+                slicing: self.slicing.into(),
                 skip_empty: self.skip_empty,
                 ordered: !self.unordered,
+            },
+            StrategyName::Zbin => Strategy::ZBin {
+                tile_size,
+                bins: self.bins,
+                slicing: self.slicing.into(),
             },
         };
         strategy.validate()?;
@@ -173,6 +178,9 @@ pub(crate) enum StrategyName {
     DepthMask,
     /// 3D clusters (Olsson et al. 2012).
     Clustered,
+    /// Z-binning with tile bitmasks (Drobot 2017; Unity URP's Forward+).
+    #[value(name = "zbin")]
+    Zbin,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -181,6 +189,15 @@ pub(crate) enum SlicingName {
     Linear,
     /// Equal depth ratio per slice.
     Exponential,
+}
+
+impl From<SlicingName> for Slicing {
+    fn from(s: SlicingName) -> Self {
+        match s {
+            SlicingName::Linear => Slicing::Linear,
+            SlicingName::Exponential => Slicing::Exponential,
+        }
+    }
 }
 
 pub(crate) fn load_scene(name: &str) -> Result<Scene> {

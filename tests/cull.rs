@@ -892,7 +892,7 @@ fn gpu_exact_oracle_matches_cpu() {
                 )
                 .unwrap();
             let (g, c) = (
-                manylights_cull::metrics::from_gpu_counts(&counts, &lists),
+                manylights_cull::metrics::from_gpu_counts(&counts, &out.bin_lengths(&ctx).unwrap()),
                 metrics(&r, &out.params, &lists),
             );
             let what = format!("{} {}", case.label, s.name());

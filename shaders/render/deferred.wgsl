@@ -45,6 +45,6 @@ fn shade_pixel(pixel: vec2<u32>, stored: bool) {
         p = textureLoad(gb_position, id.xy, 0).xyz;
     }
     let v = view_dir(p);
-    let c = shade_list(light_list(id.xy, z), p, g.xyz, v, m);
+    let c = shade_pixel_lights(id.xy, z, p, g.xyz, v, m);
     textureStore(out_color, id.xy, vec4<f32>(c, 1.0));
 }

@@ -9,8 +9,7 @@ fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
-    let list = light_list(vec2<u32>(in.clip.xy), in.clip.z);
-    return vec4<f32>(shade_list(list, in.world, n, v, m), 1.0);
+    return vec4<f32>(shade_pixel_lights(vec2<u32>(in.clip.xy), in.clip.z, in.world, n, v, m), 1.0);
 }
 
 @fragment

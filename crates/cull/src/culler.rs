@@ -17,8 +17,10 @@ use crate::program::Program;
 use crate::radix_sort::RadixSort;
 use crate::record::{ListPass, Recorder};
 use crate::scan::Scan;
-use crate::shaders::{CLUSTERED, DEPTH_BOUNDS, TILED_GATHER, TILED_GATHER_SUBGROUP, TILED_SCATTER};
-use crate::strategies::{Plan, clustered, depth_mask, tiled_gather, tiled_scatter};
+use crate::shaders::{
+    CLUSTERED, DEPTH_BOUNDS, TILED_GATHER, TILED_GATHER_SUBGROUP, TILED_SCATTER, ZBIN,
+};
+use crate::strategies::{Plan, clustered, depth_mask, tiled_gather, tiled_scatter, zbin};
 use crate::{CullError, CullOutput, CullSettings, Strategy};
 
 /// Pipelines of every culling pass, and the knobs of the runs.
@@ -54,6 +56,7 @@ pub struct Culler {
     pub(crate) gather: tiled_gather::Pipelines,
     pub(crate) scatter: tiled_scatter::Pipelines,
     pub(crate) clustered: clustered::Pipelines,
+    pub(crate) zbin: zbin::Pipelines,
     pub(crate) per_pixel: PerPixel,
     scan: Scan,
     pub(crate) sort: RadixSort,
@@ -114,6 +117,7 @@ impl Culler {
             gather: tiled_gather::Pipelines::new(d, &gather),
             scatter: tiled_scatter::Pipelines::new(d, &program(&TILED_SCATTER)),
             clustered: clustered::Pipelines::new(d, &program(&CLUSTERED)),
+            zbin: zbin::Pipelines::new(d, &program(&ZBIN)),
             per_pixel: PerPixel::new(d, &scene.layout, &lists_layout),
             layout,
             lists_layout,
@@ -234,6 +238,7 @@ impl Culler {
             Strategy::DepthMask { .. } => depth_mask::run(&inputs, params, t),
             Strategy::TiledScatter { .. } => tiled_scatter::run(&inputs, params, t),
             Strategy::Clustered { .. } => clustered::run(&inputs, params, t),
+            Strategy::ZBin { .. } => zbin::run(&inputs, params, t),
         }
     }
 }

@@ -130,6 +130,11 @@ impl<'a> Frame<'a> {
         ]
     }
 
+    /// Clears `bin_ranges` (z-binning widens its bins' ranges atomically from zero).
+    pub fn clear_ranges(&self) -> Step<'_> {
+        Step::clear(Buf::Ranges, &self.ranges)
+    }
+
     /// The exclusive scan of the first `n` counts into the offsets.
     pub fn scan(&self, n: u32) -> Step<'_> {
         Step::Scan {

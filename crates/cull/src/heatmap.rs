@@ -4,7 +4,6 @@
 
 use image::{Rgb, RgbImage};
 
-use crate::BinLists;
 use crate::layout::GpuCullParams;
 
 /// Width of the colour bar drawn at the right edge of every heatmap, in pixels.
@@ -59,15 +58,16 @@ pub fn pixels(counts: &[u32], w: u32, h: u32, max: u32) -> RgbImage {
     with_bar(img, w, h)
 }
 
-/// Per-tile list lengths: for tiled strategies the tile's list; for clusters the list of
-/// `slice`, or with `None` the longest list over the tile's slices.
-pub fn tile_counts(p: &GpuCullParams, lists: &BinLists, slice: Option<u32>) -> Vec<u32> {
+/// Per-tile list lengths from every bin's (`CullOutput::bin_lengths`): for tiled strategies
+/// the tile's list; for clusters (and z-binning's cells) the list of `slice`, or with `None`
+/// the longest list over the tile's slices.
+pub fn tile_counts(p: &GpuCullParams, lengths: &[u32], slice: Option<u32>) -> Vec<u32> {
     let tiles = (p.tiles_x * p.tiles_y) as usize;
     (0..tiles)
         .map(|t| match slice {
-            Some(s) if p.slices > 1 => lists.ranges[s.min(p.slices - 1) as usize * tiles + t][1],
+            Some(s) if p.slices > 1 => lengths[s.min(p.slices - 1) as usize * tiles + t],
             _ => (0..p.slices as usize)
-                .map(|s| lists.ranges[s * tiles + t][1])
+                .map(|s| lengths[s * tiles + t])
                 .max()
                 .unwrap_or(0),
         })

@@ -7,6 +7,10 @@ use manylights_gpu::shaders::WgslConst;
 pub const CULL_FLAG_DEPTH_MASK: u32 = 1;
 /// `CullParams.flags`: emit lights only into clusters that hold geometry.
 pub const CULL_FLAG_SKIP_EMPTY: u32 = 2;
+/// `CullParams.flags`: z-binning's lists (`cull.zbin`): `bin_ranges` holds each depth bin's
+/// range of depth-sorted lights, `light_indices` the sorted lights and after them each tile's
+/// bitmask (see `shaders/cull/common/lookup.wgsl`).
+pub const CULL_FLAG_ZBIN: u32 = 4;
 /// `CullParams.slicing`: slices of equal depth.
 pub const SLICING_LINEAR: u32 = 0;
 /// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
@@ -134,6 +138,7 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),
     WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),
     WgslConst::U32("CULL_FLAG_SKIP_EMPTY", CULL_FLAG_SKIP_EMPTY),
+    WgslConst::U32("CULL_FLAG_ZBIN", CULL_FLAG_ZBIN),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
     WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),
     WgslConst::F32("CONE_MIN_COS", CONE_MIN_COS),

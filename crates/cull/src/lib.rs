@@ -46,13 +46,14 @@ pub mod shaders;
 pub mod strategies;
 
 pub use culler::Culler;
-pub use output::{BinLists, CullOutput};
+pub use output::{BinLists, CullOutput, zbin_cells, zbin_lengths, zbin_range};
 pub use record::ListPass;
 
 use serde::{Deserialize, Serialize};
 
 use layout::{
-    CULL_FLAG_DEPTH_MASK, CULL_FLAG_SKIP_EMPTY, GpuCullParams, SLICING_EXPONENTIAL, SLICING_LINEAR,
+    CULL_FLAG_DEPTH_MASK, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_ZBIN, GpuCullParams, SLICING_EXPONENTIAL,
+    SLICING_LINEAR,
 };
 
 /// How the depth range of the cluster grid is sliced.
@@ -62,6 +63,16 @@ pub enum Slicing {
     Linear,
     /// Equal depth ratio per slice: `d_k = near * (far / near)^(k / S)`.
     Exponential,
+}
+
+impl Slicing {
+    /// `CullParams.slicing`.
+    fn code(self) -> u32 {
+        match self {
+            Self::Linear => SLICING_LINEAR,
+            Self::Exponential => SLICING_EXPONENTIAL,
+        }
+    }
 }
 
 /// A culling strategy and its parameters. In RON, omitted parameters take their defaults:
@@ -118,6 +129,31 @@ pub enum Strategy {
         #[serde(default = "default_ordered")]
         ordered: bool,
     },
+    /// Z-binning with tile bitmasks (Drobot, SIGGRAPH 2017; Unity URP's Forward+): the lights
+    /// sorted by view depth, each depth bin holding the index range of the sorted lights that
+    /// reach it, each tile a bit per sorted light; a pixel's lights are its tile's bits within
+    /// its depth bin's range.
+    ZBin {
+        /// Tile side in pixels.
+        #[serde(default = "default_tile")]
+        tile_size: u32,
+        /// Depth bins over [near, far].
+        #[serde(default = "default_zbins")]
+        bins: u32,
+        /// Slicing of [near, far] into the bins.
+        #[serde(default = "default_slicing")]
+        slicing: Slicing,
+    },
+}
+
+/// The default depth bins of z-binning.
+pub const DEFAULT_ZBINS: u32 = 256;
+
+/// The most depth bins of z-binning: its sort keys are a bin's 64 sub-bins in 16 bits.
+pub const MAX_ZBINS: u32 = 1024;
+
+fn default_zbins() -> u32 {
+    DEFAULT_ZBINS
 }
 
 fn default_ordered() -> bool {
@@ -234,11 +270,12 @@ impl Strategy {
             Self::TiledScatter { .. } => "tiled_scatter",
             Self::DepthMask { .. } => "depth_mask",
             Self::Clustered { .. } => "clustered",
+            Self::ZBin { .. } => "zbin",
         }
     }
 
     /// The default parameters of each strategy, in a fixed order.
-    pub fn defaults() -> [Strategy; 4] {
+    pub fn defaults() -> [Strategy; 5] {
         [
             Self::tiled_gather(16),
             Self::TiledScatter { tile_size: 16 },
@@ -249,6 +286,11 @@ impl Strategy {
                 slicing: Slicing::Exponential,
                 skip_empty: false,
                 ordered: true,
+            },
+            Self::ZBin {
+                tile_size: 16,
+                bins: DEFAULT_ZBINS,
+                slicing: Slicing::Exponential,
             },
         ]
     }
@@ -275,7 +317,8 @@ impl Strategy {
             Self::TiledGather { tile_size, .. }
             | Self::TiledScatter { tile_size }
             | Self::DepthMask { tile_size, .. }
-            | Self::Clustered { tile_size, .. } => tile_size,
+            | Self::Clustered { tile_size, .. }
+            | Self::ZBin { tile_size, .. } => tile_size,
         }
     }
 
@@ -313,6 +356,15 @@ impl Strategy {
                 });
             }
         }
+        if let Self::ZBin { bins, .. } = *self {
+            if !(1..=MAX_ZBINS).contains(&bins) {
+                return Err(CullError::InvalidParameter {
+                    field: "bins",
+                    value: bins.to_string(),
+                    accepted: "an integer in 1..=1024 (depth bins of z-binning)",
+                });
+            }
+        }
         Ok(())
     }
 
@@ -335,6 +387,7 @@ impl Strategy {
         let (tiles_x, tiles_y) = (width.div_ceil(ts), height.div_ceil(ts));
         let (slices, slicing, flags) = match *self {
             Self::TiledGather { .. } | Self::TiledScatter { .. } => (1, SLICING_LINEAR, 0),
+            Self::ZBin { bins, slicing, .. } => (bins, slicing.code(), CULL_FLAG_ZBIN),
             Self::DepthMask { .. } => (1, SLICING_LINEAR, CULL_FLAG_DEPTH_MASK),
             Self::Clustered {
                 slices,
@@ -343,10 +396,7 @@ impl Strategy {
                 ..
             } => (
                 slices,
-                match slicing {
-                    Slicing::Linear => SLICING_LINEAR,
-                    Slicing::Exponential => SLICING_EXPONENTIAL,
-                },
+                slicing.code(),
                 if skip_empty { CULL_FLAG_SKIP_EMPTY } else { 0 },
             ),
         };
@@ -370,7 +420,13 @@ impl Strategy {
             slices,
             slicing,
             flags,
-            bins: tiles_x * tiles_y * slices,
+            // Z-binning's bin_ranges hold a range a depth bin; every other strategy's a list a
+            // tile or cluster.
+            bins: if flags & CULL_FLAG_ZBIN != 0 {
+                slices
+            } else {
+                tiles_x * tiles_y * slices
+            },
             near: near_s,
             far,
             slack,

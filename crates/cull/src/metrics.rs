@@ -102,8 +102,8 @@ pub fn evaluate(
 }
 
 /// The same metrics from the GPU exact oracle's per-pixel `[evaluated, needed, found, covered]`
-/// (`Culler::exact_counts`).
-pub fn from_gpu_counts(counts: &[[u32; 4]], lists: &BinLists) -> ListMetrics {
+/// (`Culler::exact_counts`) and every bin's list length (`CullOutput::bin_lengths`).
+pub fn from_gpu_counts(counts: &[[u32; 4]], bin_lengths: &[u32]) -> ListMetrics {
     let pixels = counts.iter().filter(|c| c[3] != 0).map(|c| {
         (
             u64::from(c[0]),
@@ -111,7 +111,7 @@ pub fn from_gpu_counts(counts: &[[u32; 4]], lists: &BinLists) -> ListMetrics {
             u64::from(c[1] - c[2].min(c[1])),
         )
     });
-    ListMetrics::from_pixels(pixels, lists.ranges.iter().map(|r| r[1]))
+    ListMetrics::from_pixels(pixels, bin_lengths.iter().copied())
 }
 
 impl ListMetrics {

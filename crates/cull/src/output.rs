@@ -4,7 +4,7 @@
 use manylights_gpu::{GpuContext, GpuError, readback};
 
 use crate::blocks::{tile_lines, tile_masks};
-use crate::layout::{GpuCullParams, GpuTileDepth};
+use crate::layout::{CULL_FLAG_ZBIN, GpuCullParams, GpuTileDepth};
 use crate::record::StepInfo;
 
 /// Light lists read back to the host.
@@ -90,23 +90,56 @@ impl CullOutput {
         ]
     }
 
-    /// Bytes of the lists: ranges plus indices.
+    /// Bytes of the lists: ranges plus indices (z-binning: its bins' ranges, the sorted lights
+    /// and the tiles' masks).
     pub fn list_bytes(&self) -> u64 {
         u64::from(self.params.bins) * 8 + u64::from(self.total) * 4
     }
 
-    /// Reads the lists back.
+    /// Whether the lists are z-binning's (see `shaders/cull/common/lookup.wgsl`).
+    pub fn is_zbin(&self) -> bool {
+        self.params.flags & CULL_FLAG_ZBIN != 0
+    }
+
+    /// Reads the lists back: a list a bin, and for z-binning a list a (tile, depth bin) cell,
+    /// cell `bin * tiles + tile` (as clusters number theirs; [`crate::geometry::bin_of`]),
+    /// expanded from the masks and ranges ([`zbin_cells`]).
     pub fn read(&self, ctx: &GpuContext) -> Result<BinLists, GpuError> {
+        let (ranges, indices) = self.read_raw(ctx)?;
+        if self.is_zbin() {
+            return Ok(zbin_cells(&self.params, &ranges, &indices));
+        }
+        Ok(BinLists { ranges, indices })
+    }
+
+    /// The length of every bin's list (z-binning: every cell's, as [`CullOutput::read`]
+    /// numbers them), without expanding z-binning's lists.
+    pub fn bin_lengths(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        if self.is_zbin() {
+            let (ranges, indices) = self.read_raw(ctx)?;
+            return Ok(zbin_lengths(&self.params, &ranges, &indices));
+        }
+        let ranges: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&readback::read_buffer(
+            ctx,
+            &self.ranges,
+            0,
+            u64::from(self.params.bins) * 8,
+        )?);
+        Ok(ranges.iter().map(|r| r[1]).collect())
+    }
+
+    /// `bin_ranges` and `light_indices` as they are on the GPU.
+    fn read_raw(&self, ctx: &GpuContext) -> Result<(Vec<[u32; 2]>, Vec<u32>), GpuError> {
         let ranges = readback::read_buffer(ctx, &self.ranges, 0, u64::from(self.params.bins) * 8)?;
         let indices = if self.total > 0 {
             readback::read_buffer(ctx, &self.indices, 0, u64::from(self.total) * 4)?
         } else {
             Vec::new()
         };
-        Ok(BinLists {
-            ranges: bytemuck::pod_collect_to_vec(&ranges),
-            indices: bytemuck::pod_collect_to_vec(&indices),
-        })
+        Ok((
+            bytemuck::pod_collect_to_vec(&ranges),
+            bytemuck::pod_collect_to_vec(&indices),
+        ))
     }
 
     /// Reads the per-tile depth data back (meaningful for tiled strategies).
@@ -138,6 +171,66 @@ impl CullOutput {
             u64::from(self.params.bins) * 4,
         )?))
     }
+}
+
+/// Z-binning's range of depth bin `b` as stored, `(~first, end)`, as `first..end` (empty for an
+/// untouched bin).
+pub fn zbin_range(stored: [u32; 2]) -> std::ops::Range<u32> {
+    !stored[0]..stored[1]
+}
+
+/// Z-binning's lists as a list a cell (cell `bin * tiles + tile`): the sorted lights of the
+/// bin's range whose bit the tile's mask sets, in depth order. `ranges` and `indices` as the
+/// GPU holds them (`shaders/cull/common/lookup.wgsl`).
+pub fn zbin_cells(p: &GpuCullParams, ranges: &[[u32; 2]], indices: &[u32]) -> BinLists {
+    let n = p.light_count as usize;
+    let words = n.div_ceil(32);
+    let tiles = (p.tiles_x * p.tiles_y) as usize;
+    let mut out = BinLists {
+        ranges: Vec::with_capacity(ranges.len() * tiles),
+        indices: Vec::new(),
+    };
+    for &r in ranges {
+        for t in 0..tiles {
+            let mask = &indices[n + t * words..n + (t + 1) * words];
+            let start = out.indices.len() as u32;
+            for k in zbin_range(r) {
+                if mask[k as usize / 32] & (1 << (k % 32)) != 0 {
+                    out.indices.push(indices[k as usize]);
+                }
+            }
+            out.ranges.push([start, out.indices.len() as u32 - start]);
+        }
+    }
+    out
+}
+
+/// The lengths of [`zbin_cells`]' lists, from prefix counts of each tile's bits.
+pub fn zbin_lengths(p: &GpuCullParams, ranges: &[[u32; 2]], indices: &[u32]) -> Vec<u32> {
+    let n = p.light_count as usize;
+    let words = n.div_ceil(32);
+    let tiles = (p.tiles_x * p.tiles_y) as usize;
+    let mut lengths = vec![0u32; ranges.len() * tiles];
+    // Bits of the tile's mask below sorted light k.
+    let mut below = vec![0u32; words + 1];
+    for t in 0..tiles {
+        let mask = &indices[n + t * words..n + (t + 1) * words];
+        for (w, &m) in mask.iter().enumerate() {
+            below[w + 1] = below[w] + m.count_ones();
+        }
+        let before = |k: u32| {
+            let (w, b) = (k as usize / 32, k % 32);
+            let partial = if b == 0 { 0 } else { (mask[w] << (32 - b)).count_ones() };
+            below[w] + partial
+        };
+        for (b, &r) in ranges.iter().enumerate() {
+            let k = zbin_range(r);
+            if k.start < k.end {
+                lengths[b * tiles + t] = before(k.end) - before(k.start);
+            }
+        }
+    }
+    lengths
 }
 
 /// The first `bytes` of `buf` as words, where there is a buffer.

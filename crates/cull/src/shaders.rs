@@ -105,6 +105,18 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
         shader_file!("cull/clustered/clustered.wgsl"),
     ],
 };
+/// `cull.zbin`: its keys, bins and masks.
+pub const ZBIN: ShaderDef = ShaderDef {
+    name: "cull.zbin",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        shader_file!("cull/zbin/zbin.wgsl"),
+    ],
+};
 /// `cull.lights_per_pixel`: the shared lookup, per pixel.
 pub const LIGHTS_PER_PIXEL: ShaderDef = ShaderDef {
     name: "cull.lights_per_pixel",
@@ -139,6 +151,7 @@ pub const SHADERS: &[ShaderDef] = &[
     TILED_GATHER_SUBGROUP,
     TILED_SCATTER,
     CLUSTERED,
+    ZBIN,
     LIGHTS_PER_PIXEL,
     EXACT,
     crate::scan::SHADER,

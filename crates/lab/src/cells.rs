@@ -66,13 +66,22 @@ fn strategy_label(s: &Strategy) -> String {
             ordered,
         } => format!(
             "clustered{tile_size}x{slices}{}{}{}",
-            match slicing {
-                manylights_cull::Slicing::Linear => "lin",
-                manylights_cull::Slicing::Exponential => "exp",
-            },
+            slicing_label(slicing),
             if skip_empty { "skip" } else { "" },
             if ordered { "" } else { "unordered" }
         ),
+        Strategy::ZBin {
+            tile_size,
+            bins,
+            slicing,
+        } => format!("zbin{tile_size}x{bins}{}", slicing_label(slicing)),
+    }
+}
+
+fn slicing_label(s: manylights_cull::Slicing) -> &'static str {
+    match s {
+        manylights_cull::Slicing::Linear => "lin",
+        manylights_cull::Slicing::Exponential => "exp",
     }
 }
 
@@ -101,6 +110,11 @@ pub fn params_label(c: &Config) -> String {
             )
             .to_lowercase()
         }
+        Strategy::ZBin {
+            tile_size,
+            bins,
+            slicing,
+        } => format!("tile_size={tile_size};bins={bins};slicing={slicing:?}").to_lowercase(),
     };
     if c.backend == Backend::NaiveForward {
         p = "none".into();

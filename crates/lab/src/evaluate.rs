@@ -76,8 +76,8 @@ pub(crate) fn evaluate(
             tile_masks = Some(lists.used_tile_masks());
             dropped = u64::from(lists.dropped);
             if c.exact_stride > 0 {
-                let bins =
-                    stage(pose, "lists read back", || lists.read(ctx)).map_err(|e| other(&e))?;
+                let bins = stage(pose, "list lengths read back", || lists.bin_lengths(ctx))
+                    .map_err(|e| other(&e))?;
                 let counts = stage(pose, "exact oracle", || {
                     renderer.culler.exact_counts(
                         ctx,

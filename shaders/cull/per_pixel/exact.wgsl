@@ -52,12 +52,31 @@ fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
             needed += 1u;
         }
     }
-    let list = light_list(id.xy, z);
+    var evaluated = 0u;
     var found = 0u;
-    for (var k = 0u; k < list.y; k++) {
-        if reaches(lights[light_indices[list.x + k]], p) {
-            found += 1u;
+    if zbin_lists() {
+        let c = zbin_cell(id.xy, z);
+        if c.first < c.end {
+            for (var w = c.first / 32u; w <= (c.end - 1u) / 32u; w++) {
+                var bits = zbin_bits(c, w);
+                while bits != 0u {
+                    let k = w * 32u + firstTrailingBit(bits);
+                    bits &= bits - 1u;
+                    evaluated += 1u;
+                    if reaches(lights[light_indices[k]], p) {
+                        found += 1u;
+                    }
+                }
+            }
+        }
+    } else {
+        let list = light_list(id.xy, z);
+        evaluated = list.y;
+        for (var k = 0u; k < list.y; k++) {
+            if reaches(lights[light_indices[list.x + k]], p) {
+                found += 1u;
+            }
         }
     }
-    counts[i] = vec4<u32>(list.y, needed, found, 1u);
+    counts[i] = vec4<u32>(evaluated, needed, found, 1u);
 }

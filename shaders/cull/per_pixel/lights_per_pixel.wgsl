@@ -12,7 +12,7 @@ fn lights_per_pixel(@builtin(global_invocation_id) id: vec3<u32>) {
     let z = textureLoad(depth_tex, id.xy, 0);
     var n = 0u;
     if z < 1.0 {
-        n = light_list(id.xy, z).y;
+        n = list_length(id.xy, z);
     }
     per_pixel[id.y * size.x + id.x] = n;
 }

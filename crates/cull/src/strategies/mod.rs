@@ -17,6 +17,7 @@ pub mod clustered;
 pub mod depth_mask;
 pub mod tiled_gather;
 pub mod tiled_scatter;
+pub mod zbin;
 
 /// The steps of one culling run, in two phases: the count phase, up to an exact list total,
 /// and the fill phase, whose buffers are sized from that total.

@@ -1,0 +1,211 @@
+// cull.zbin: z-binning with tile bitmasks (Drobot, "Improved Culling for Tiled and Clustered
+// Rendering", SIGGRAPH 2017 Advances, as Call of Duty: Infinite Warfare ships it; Unity URP's
+// Forward+). The lists are not per bin: the lights are sorted by view depth, each depth bin
+// holds the range of sorted lights that reach it, and each tile a bit per sorted light; a pixel
+// reads its tile's bits within its depth bin's range (lookup.wgsl, zbin_cell). The passes:
+//
+// 1. cull.depth_bounds (the tiles' depth) with the lights' tile rectangles.
+// 2. cull.zbin.keys: a thread a light, its sort key (the depth bin of its centre, in 64 sub-bins
+//    a bin) and its index.
+// 3. The radix sort: light_indices[0 .. light_count) holds the lights in depth order.
+// 4. cull.zbin.bins: a thread a sorted light widens the range (first, end) of every bin its
+//    depth extent touches; a workgroup's lights, neighbours in depth, first reduce theirs in
+//    workgroup memory.
+// 5. cull.zbin.masks: a workgroup a tile writes its whole mask: the bit of each sorted light
+//    within the ranges of the bins of the tile's depth bounds (one bin of margin either side)
+//    whose rectangle holds the tile and which passes gather's tile test (tile_keeps). Every
+//    word is written (zero outside those ranges), so the masks need no clear.
+//
+// Group 1 here: 2 the tiles' depth, 6 bin_ranges as (~first, end) words widened atomically
+// (cleared before each run; an untouched bin reads (0, 0), empty), 7 light_indices (the sorted
+// lights, then the masks), 9 the sort keys (cull.zbin.keys) or the lights' tile rectangles
+// (cull.zbin.masks, as cull.depth_bounds stores them).
+@group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
+@group(1) @binding(6) var<storage, read_write> zbin_ranges: array<atomic<u32>>;
+@group(1) @binding(7) var<storage, read_write> zbin_lists: array<u32>;
+@group(1) @binding(9) var<storage, read_write> zbin_aux: array<u32>;
+
+// Sub-bins of a depth bin in the sort keys.
+const ZBIN_KEY_SUB: u32 = 64u;
+// Bins a workgroup of cull.zbin.ranges reduces in workgroup memory.
+const ZBIN_LOCAL: u32 = 256u;
+
+// Words of a tile's mask.
+fn zbin_mask_words() -> u32 {
+    return (cull.light_count + 31u) / 32u;
+}
+
+// A thread a light: its key (the sub-bin of its centre's depth, depth_slice's coordinate times
+// ZBIN_KEY_SUB) and itself as the value.
+@compute @workgroup_size(64)
+fn zbin_keys(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.y * GROUPS_X * 64u + id.x;
+    if i >= cull.light_count {
+        return;
+    }
+    let d = -cull_light(lights[i]).center.z;
+    var s: f32;
+    if cull.slicing == SLICING_EXPONENTIAL {
+        s = log(max(d, cull.near) / cull.near) * cull.slice_scale;
+    } else {
+        s = (d - cull.near) * cull.slice_scale;
+    }
+    zbin_aux[i] = u32(clamp(floor(s * f32(ZBIN_KEY_SUB)), 0.0, f32(cull.slices * ZBIN_KEY_SUB - 1u)));
+    zbin_lists[i] = i;
+}
+
+var<workgroup> wg_span: array<atomic<u32>, 2>;
+var<workgroup> wg_span_plain: vec2<u32>;
+var<workgroup> wg_first: array<atomic<u32>, ZBIN_LOCAL>;
+var<workgroup> wg_end: array<atomic<u32>, ZBIN_LOCAL>;
+
+// Widens bin b's range by sorted light k: (~first, end), both by atomicMax.
+fn widen(b: u32, k: u32) {
+    atomicMax(&zbin_ranges[2u * b], ~k);
+    atomicMax(&zbin_ranges[2u * b + 1u], k + 1u);
+}
+
+// A thread a sorted light: the bins of its depth extent (light_depth_extent, as gather's lines
+// path has it; a cone's narrowed extent may be empty, lo > hi, and then the bins between count)
+// take it into their ranges. Lights wholly beyond the far plane reach no bin.
+@compute @workgroup_size(64)
+fn zbin_bins(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let k = (wg.y * GROUPS_X + wg.x) * 64u + li;
+    if li == 0u {
+        atomicStore(&wg_span[0], 0xffffffffu);
+        atomicStore(&wg_span[1], 0u);
+    }
+    for (var j = li; j < ZBIN_LOCAL; j += 64u) {
+        atomicStore(&wg_first[j], 0u);
+        atomicStore(&wg_end[j], 0u);
+    }
+    workgroupBarrier();
+    var b0 = 1u;
+    var b1 = 0u;
+    if k < cull.light_count {
+        let e = light_depth_extent(cull_light(lights[zbin_lists[k]]));
+        let lo = min(e.x, e.y);
+        if lo <= cull.far {
+            b0 = depth_slice(lo);
+            b1 = depth_slice(max(e.x, e.y));
+            atomicMin(&wg_span[0], b0);
+            atomicMax(&wg_span[1], b1);
+        }
+    }
+    workgroupBarrier();
+    if li == 0u {
+        wg_span_plain = vec2<u32>(atomicLoad(&wg_span[0]), atomicLoad(&wg_span[1]));
+    }
+    let span = workgroupUniformLoad(&wg_span_plain);
+    // Neighbours in depth share bins: where the workgroup's bins fit workgroup memory, one
+    // global widening a bin, not one a light and bin.
+    let local = span.x <= span.y && span.y - span.x < ZBIN_LOCAL;
+    for (var b = b0; b <= b1; b++) {
+        if local {
+            atomicMax(&wg_first[b - span.x], ~k);
+            atomicMax(&wg_end[b - span.x], k + 1u);
+        } else {
+            widen(b, k);
+        }
+    }
+    if !local {
+        return;
+    }
+    workgroupBarrier();
+    for (var j = li; j <= span.y - span.x; j += 64u) {
+        let end = atomicLoad(&wg_end[j]);
+        if end != 0u {
+            atomicMax(&zbin_ranges[2u * (span.x + j)], atomicLoad(&wg_first[j]));
+            atomicMax(&zbin_ranges[2u * (span.x + j) + 1u], end);
+        }
+    }
+}
+
+var<workgroup> wg_planes: array<vec4<f32>, 4>;
+var<workgroup> wg_keys: array<atomic<u32>, 2>;
+var<workgroup> wg_keys_plain: vec2<u32>;
+var<workgroup> wg_words: array<atomic<u32>, 64>;
+
+// The sorted lights a tile's pixels may read: the union of the ranges of the bins of its depth
+// bounds, a bin of margin either side (a pixel's bin comes from its own depth, which rounding
+// may put a bin past the tile's bounds). (first, end); empty for an uncovered tile.
+fn tile_keys(td: TileDepth, li: u32) -> vec2<u32> {
+    if li == 0u {
+        atomicStore(&wg_keys[0], 0u);
+        atomicStore(&wg_keys[1], 0u);
+    }
+    workgroupBarrier();
+    if td.covered != 0u {
+        let b0 = max(depth_slice(td.dmin), 1u) - 1u;
+        let b1 = min(depth_slice(td.dmax) + 1u, cull.slices - 1u);
+        for (var b = b0 + li; b <= b1; b += 64u) {
+            let end = atomicLoad(&zbin_ranges[2u * b + 1u]);
+            if end != 0u {
+                atomicMax(&wg_keys[0], atomicLoad(&zbin_ranges[2u * b]));
+                atomicMax(&wg_keys[1], end);
+            }
+        }
+    }
+    workgroupBarrier();
+    if li == 0u {
+        wg_keys_plain = vec2<u32>(~atomicLoad(&wg_keys[0]), atomicLoad(&wg_keys[1]));
+    }
+    return workgroupUniformLoad(&wg_keys_plain);
+}
+
+// Whether sorted light k may reach tile `tile`: its rectangle holds the tile and gather's tile
+// test keeps it.
+fn zbin_keeps(k: u32, tile: vec2<u32>, td: TileDepth) -> bool {
+    let i = zbin_lists[k];
+    let r0 = zbin_aux[2u * i];
+    let r1 = zbin_aux[2u * i + 1u];
+    if tile.x < (r0 & 0xffffu) || tile.x > (r1 & 0xffffu) || tile.y < (r0 >> 16u) || tile.y > (r1 >> 16u) {
+        return false;
+    }
+    let planes = array<vec4<f32>, 4>(wg_planes[0], wg_planes[1], wg_planes[2], wg_planes[3]);
+    return tile_keeps(cull_light(lights[i]), planes, td);
+}
+
+// A workgroup a tile: its mask, 64 words (2,048 sorted lights) a round, the kept lights' bits
+// set in workgroup memory and each word stored once.
+@compute @workgroup_size(64)
+fn zbin_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let t = wg.y * GROUPS_X + wg.x;
+    if t >= cull.tiles_x * cull.tiles_y {
+        return;
+    }
+    let tile = vec2<u32>(t % cull.tiles_x, t / cull.tiles_x);
+    let td = tile_depth[t];
+    if li == 0u {
+        let p = tile_side_planes(tile);
+        wg_planes[0] = p[0];
+        wg_planes[1] = p[1];
+        wg_planes[2] = p[2];
+        wg_planes[3] = p[3];
+    }
+    let keys = tile_keys(td, li);
+    let words = zbin_mask_words();
+    let base = cull.light_count + t * words;
+    for (var c = 0u; c < words; c += 64u) {
+        let k0 = max(c * 32u, keys.x);
+        let k1 = min(c * 32u + 2048u, keys.y);
+        if k0 >= k1 {
+            // No light of this round within the tile's ranges.
+            if c + li < words {
+                zbin_lists[base + c + li] = 0u;
+            }
+            continue;
+        }
+        atomicStore(&wg_words[li], 0u);
+        workgroupBarrier();
+        for (var k = k0 + li; k < k1; k += 64u) {
+            if zbin_keeps(k, tile, td) {
+                atomicOr(&wg_words[k / 32u - c], 1u << (k % 32u));
+            }
+        }
+        workgroupBarrier();
+        if c + li < words {
+            zbin_lists[base + c + li] = atomicLoad(&wg_words[li]);
+        }
+    }
+}
