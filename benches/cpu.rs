@@ -118,6 +118,13 @@ fn oracles(c: &mut Criterion) {
                     &lights,
                     &cpu::depth_bounds(&frame, &p, &depth, w, h).0,
                 ),
+                Strategy::ZBin { .. } => cpu::zbin_lists(
+                    &frame,
+                    &p,
+                    &lights,
+                    &cpu::depth_bounds(&frame, &p, &depth, w, h).0,
+                    &cpu::zbin_order(&frame, &p, &lights),
+                ),
                 _ => cpu::gather(
                     &frame,
                     &p,

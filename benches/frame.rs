@@ -10,7 +10,9 @@
 //! radius 2.5 m in the atrium, 1280 x 720) with gather's 8-pixel tiles and with clusters of 64
 //! pixels x 24 slices; the CIS 5650 hall (`cis5650`) with 5,000 and 50,000 lights of radius 2 m
 //! at 1920 x 1080, gather's 16-pixel tiles, and at 50,000 clusters too; 1M lights of radius
-//! 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass.
+//! 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass. Z-binning (256
+//! exponential bins) at the Forward+ configuration in 8-pixel tiles and in the hall in 16-pixel
+//! tiles (not at 1M lights: its masks would take 1 GB).
 //!
 //! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
 //! lighting instead (clears and gaps between passes included). `MANYLIGHTS_BENCH_QUICK=1`
@@ -67,6 +69,11 @@ fn settings() -> Vec<Setting> {
         skip_empty: false,
         ordered,
     };
+    let zbin = |tile_size| Strategy::ZBin {
+        tile_size,
+        bins: manylights_cull::DEFAULT_ZBINS,
+        slicing: Slicing::Exponential,
+    };
     let paper_size = if q { (160, 90) } else { (1280, 720) };
     let full = if q { (160, 90) } else { (1920, 1080) };
     // The CIS 5650 course's setting: lights of radius 2 uniform in the hall's light box.
@@ -101,10 +108,22 @@ fn settings() -> Vec<Setting> {
             strategy: clusters(true),
         },
         Setting {
+            name: "harada2012_zbin8",
+            scene: paper(),
+            size: paper_size,
+            strategy: zbin(8),
+        },
+        Setting {
             name: "cis5650_5k_gather",
             scene: cis5650(if q { 500 } else { 5000 }),
             size: full,
             strategy: Strategy::tiled_gather(16),
+        },
+        Setting {
+            name: "cis5650_5k_zbin16",
+            scene: cis5650(if q { 500 } else { 5000 }),
+            size: full,
+            strategy: zbin(16),
         },
         Setting {
             name: "cis5650_50k_gather",
@@ -117,6 +136,12 @@ fn settings() -> Vec<Setting> {
             scene: cis5650(if q { 2000 } else { 50_000 }),
             size: full,
             strategy: clusters(true),
+        },
+        Setting {
+            name: "cis5650_50k_zbin16",
+            scene: cis5650(if q { 2000 } else { 50_000 }),
+            size: full,
+            strategy: zbin(16),
         },
         Setting {
             name: "atrium_1m_clustered_unordered",

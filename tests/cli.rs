@@ -162,7 +162,13 @@ fn unknown_adapter_lists_the_adapters_found() {
 fn cull_reports_metrics_and_writes_heatmaps() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("cull");
-    for strategy in ["tiled-gather", "tiled-scatter", "depth-mask", "clustered"] {
+    for strategy in [
+        "tiled-gather",
+        "tiled-scatter",
+        "depth-mask",
+        "clustered",
+        "zbin",
+    ] {
         let o = manylights(&[
             "cull",
             "--scene",
@@ -344,6 +350,18 @@ fn cull_rejects_bad_parameters() {
         &["--strategy", "clustered", "--slices", "0"],
         1,
         &["slices = 0"],
+    );
+    rejects_cmd(
+        "cull",
+        &["--strategy", "zbin", "--bins", "0"],
+        1,
+        &["bins = 0", "1..=1024"],
+    );
+    rejects_cmd(
+        "cull",
+        &["--strategy", "zbin", "--capacity", "4"],
+        1,
+        &["capacity = 4", "zbin"],
     );
     rejects_cmd(
         "cull",

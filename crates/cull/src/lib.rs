@@ -1,16 +1,16 @@
 //! Light-culling strategies of manylights.
 //!
 //! A strategy takes the depth buffer (where it uses one), the camera and the lights, and writes
-//! light lists in one format for every strategy: `bin_ranges[bin] = (offset, count)` into
-//! `light_indices`, where a bin is a screen tile or a cluster (tile x depth slice). Every
-//! shading backend reads them through `shaders/cull/common/lookup.wgsl`
-//! (`light_list(pixel, depth)`).
+//! light lists in the same bindings for every strategy: `bin_ranges[bin] = (offset, count)` into
+//! `light_indices`, where a bin is a screen tile or a cluster (tile x depth slice); z-binning
+//! writes its own form there (depth bins' ranges of depth-sorted lights, tile bitmasks). Every
+//! shading backend reads them through `shaders/cull/common/lookup.wgsl`.
 //!
 //! The crate, by concept:
 //! - [`strategies`]: a module a strategy (`tiled_gather`, Harada, McKee, Yang 2012, section
 //!   4.1; `tiled_scatter`, section 4.2; `depth_mask`, 2.5D culling, Harada 2012; `clustered`,
-//!   Olsson, Billeter, Assarsson 2012), each owning its pipelines and declaring the passes of a
-//!   run as data;
+//!   Olsson, Billeter, Assarsson 2012; `zbin`, z-binning, Drobot 2017), each owning its
+//!   pipelines and declaring the passes of a run as data;
 //! - [`blocks`], [`scan`], [`radix_sort`]: the building blocks strategies compose (tile depth,
 //!   tile masks, tile lines, list finalisation; the exclusive scan; the radix sort);
 //! - [`record`]: passes as data and the one recorder that encodes, labels and times them;
@@ -77,7 +77,7 @@ impl Slicing {
 
 /// A culling strategy and its parameters. In RON, omitted parameters take their defaults:
 /// tiles of 16 pixels (64 for clusters), 24 exponential slices, `skip_empty: false`,
-/// `ordered: true`.
+/// `ordered: true`; for z-binning 256 exponential depth bins.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum Strategy {
     /// Forward+ tiled gather: one workgroup per tile tests every light against the tile frustum

@@ -105,7 +105,7 @@ impl CullOutput {
     /// cell `bin * tiles + tile` (as clusters number theirs; [`crate::geometry::bin_of`]),
     /// expanded from the masks and ranges ([`zbin_cells`]).
     pub fn read(&self, ctx: &GpuContext) -> Result<BinLists, GpuError> {
-        let (ranges, indices) = self.read_raw(ctx)?;
+        let (ranges, indices) = self.read_stored(ctx)?;
         if self.is_zbin() {
             return Ok(zbin_cells(&self.params, &ranges, &indices));
         }
@@ -116,7 +116,7 @@ impl CullOutput {
     /// numbers them), without expanding z-binning's lists.
     pub fn bin_lengths(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         if self.is_zbin() {
-            let (ranges, indices) = self.read_raw(ctx)?;
+            let (ranges, indices) = self.read_stored(ctx)?;
             return Ok(zbin_lengths(&self.params, &ranges, &indices));
         }
         let ranges: Vec<[u32; 2]> = bytemuck::pod_collect_to_vec(&readback::read_buffer(
@@ -128,8 +128,8 @@ impl CullOutput {
         Ok(ranges.iter().map(|r| r[1]).collect())
     }
 
-    /// `bin_ranges` and `light_indices` as they are on the GPU.
-    fn read_raw(&self, ctx: &GpuContext) -> Result<(Vec<[u32; 2]>, Vec<u32>), GpuError> {
+    /// `bin_ranges` and `light_indices` as they are on the GPU (z-binning: in its own form).
+    pub fn read_stored(&self, ctx: &GpuContext) -> Result<(Vec<[u32; 2]>, Vec<u32>), GpuError> {
         let ranges = readback::read_buffer(ctx, &self.ranges, 0, u64::from(self.params.bins) * 8)?;
         let indices = if self.total > 0 {
             readback::read_buffer(ctx, &self.indices, 0, u64::from(self.total) * 4)?
@@ -220,7 +220,11 @@ pub fn zbin_lengths(p: &GpuCullParams, ranges: &[[u32; 2]], indices: &[u32]) -> 
         }
         let before = |k: u32| {
             let (w, b) = (k as usize / 32, k % 32);
-            let partial = if b == 0 { 0 } else { (mask[w] << (32 - b)).count_ones() };
+            let partial = if b == 0 {
+                0
+            } else {
+                (mask[w] << (32 - b)).count_ones()
+            };
             below[w] + partial
         };
         for (b, &r) in ranges.iter().enumerate() {

@@ -43,15 +43,20 @@ pub struct TuneReport {
     pub best_file: PathBuf,
 }
 
-/// The strategies and parameters tried: tiles of 8, 16 and 32 pixels for gather, 2.5D and
-/// tiled scatter; clusters of 16, 32 and 64 pixels with 16 and 32 exponential slices, their
-/// lists in light order (bit-identical frames).
+/// The strategies and parameters tried: tiles of 8, 16 and 32 pixels for gather, 2.5D, tiled
+/// scatter and z-binning (its default 256 exponential bins); clusters of 16, 32 and 64 pixels
+/// with 16 and 32 exponential slices, their lists in light order (bit-identical frames).
 pub fn candidates() -> Vec<Strategy> {
     let mut v = Vec::new();
     for tile in [8, 16, 32] {
         v.push(Strategy::tiled_gather(tile));
         v.push(Strategy::depth_mask(tile));
         v.push(Strategy::TiledScatter { tile_size: tile });
+        v.push(Strategy::ZBin {
+            tile_size: tile,
+            bins: manylights_cull::DEFAULT_ZBINS,
+            slicing: Slicing::Exponential,
+        });
     }
     for tile in [16, 32, 64] {
         for slices in [16, 32] {

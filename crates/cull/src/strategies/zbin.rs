@@ -1,9 +1,9 @@
 //! Z-binning with tile bitmasks (Drobot, "Improved Culling for Tiled and Clustered Rendering",
 //! SIGGRAPH 2017 Advances, as Call of Duty: Infinite Warfare ships it; Unity URP's Forward+):
-//! `shaders/cull/zbin/`; oracle [`crate::cpu::zbin`]. No list a bin: the lights sorted by view
-//! depth, each depth bin the range of sorted lights that reach it, each tile a bit a sorted
-//! light; a pixel's lights are its tile's bits within its depth bin's range
-//! (`shaders/cull/common/lookup.wgsl`). Memory is `bins` ranges, the sorted lights and
+//! `shaders/cull/zbin/`; oracles [`crate::cpu::zbin_order`] and [`crate::cpu::zbin_lists`].
+//! No list a bin: the lights sorted by view depth, each depth bin the range of sorted lights
+//! that reach it, each tile a bit a sorted light; a pixel's lights are its tile's bits within
+//! its depth bin's range (`shaders/cull/common/lookup.wgsl`). Memory is `bins` ranges, the sorted lights and
 //! `tiles x lights / 8` bytes of masks, known before the run: nothing is counted, nothing can
 //! overflow. The passes of a run:
 //!
