@@ -7,10 +7,13 @@
 # usage: bench-ab.sh A_DIR B_DIR ROUNDS FILTER OUT_DIR [MORE_ENV]
 #   FILTER: criterion's regex over bench ids, such as 'cull\.harada2012/tiled_gather8/'
 #   MORE_ENV: variables for both builds, such as MANYLIGHTS_BENCH_SPANS=1
+#   BENCH_EXE (environment): which bench executable of each build runs (gpu by default; frame
+#   for frame.cull_shade)
 # Leaves criterion's JSON in OUT_DIR/<A|B>-<round>/ and the table of medians in OUT_DIR/ab.md
 # (scripts/bench_ab.py).
 set -uo pipefail
 a="$1"; b="$2"; rounds="$3"; filter="$4"; out="$5"; more="${6:-}"
+exe="${BENCH_EXE:-gpu}"
 mkdir -p "$out"
 for f in .device/gl/*.deb; do dpkg -x "$f" /; done; ldconfig
 export XDG_RUNTIME_DIR=/tmp
@@ -20,7 +23,7 @@ for r in $(seq 1 "$rounds"); do
   for side in A B; do
     dir="$a"; [ "$side" = B ] && dir="$b"
     echo "== $side ($(cat "$dir/commit.txt" 2>/dev/null)) round $r $more" | tee -a "$out/ab.log"
-    env $more CRITERION_HOME="$out/$side-$r" "$dir/gpu" --bench "$filter" >> "$out/ab.log" 2>&1
+    env $more CRITERION_HOME="$out/$side-$r" "$dir/$exe" --bench "$filter" >> "$out/ab.log" 2>&1
   done
 done
 python3 "$(dirname "$0")/bench_ab.py" "$out" "$(cat "$a/commit.txt" 2>/dev/null)" "$(cat "$b/commit.txt" 2>/dev/null)" > "$out/ab.md"
