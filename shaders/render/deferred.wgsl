@@ -16,17 +16,28 @@ fn view_point(ndc: vec2<f32>, z: f32) -> vec3<f32> {
     return vec3<f32>((ndc.x * w - m[2][0] * z - m[3][0]) / m[0][0], (ndc.y * w - m[2][1] * z - m[3][1]) / m[1][1], z);
 }
 
+// An entry point for each form of lists (list_shading.wgsl): `zbin` is a constant of each.
 @compute @workgroup_size(8, 8)
 fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
-    shade_pixel(id.xy, false);
+    shade_pixel(id.xy, false, false);
 }
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade_stored(@builtin(global_invocation_id) id: vec3<u32>) {
-    shade_pixel(id.xy, true);
+    shade_pixel(id.xy, true, false);
 }
 
-fn shade_pixel(pixel: vec2<u32>, stored: bool) {
+@compute @workgroup_size(8, 8)
+fn deferred_shade_zbin(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade_pixel(id.xy, false, true);
+}
+
+@compute @workgroup_size(8, 8)
+fn deferred_shade_stored_zbin(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade_pixel(id.xy, true, true);
+}
+
+fn shade_pixel(pixel: vec2<u32>, stored: bool, zbin: bool) {
     let id = vec3<u32>(pixel, 0u);
     let size = vec2<u32>(frame.viewport.xy);
     if any(id.xy >= size) {
@@ -45,6 +56,11 @@ fn shade_pixel(pixel: vec2<u32>, stored: bool) {
         p = textureLoad(gb_position, id.xy, 0).xyz;
     }
     let v = view_dir(p);
-    let c = shade_pixel_lights(id.xy, z, p, g.xyz, v, m);
+    var c: vec3<f32>;
+    if zbin {
+        c = shade_zbin(zbin_cell(id.xy, z), p, g.xyz, v, m);
+    } else {
+        c = shade_list(light_list(id.xy, z), p, g.xyz, v, m);
+    }
     textureStore(out_color, id.xy, vec4<f32>(c, 1.0));
 }

@@ -9,7 +9,18 @@ fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
-    return vec4<f32>(shade_pixel_lights(vec2<u32>(in.clip.xy), in.clip.z, in.world, n, v, m), 1.0);
+    let list = light_list(vec2<u32>(in.clip.xy), in.clip.z);
+    return vec4<f32>(shade_list(list, in.world, n, v, m), 1.0);
+}
+
+// shade.forward over z-binning's lists.
+@fragment
+fn fs_forward_zbin(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = view_dir(in.world);
+    let n = facing_normal(normalize(in.normal), v);
+    let m = materials[in.material];
+    let cell = zbin_cell(vec2<u32>(in.clip.xy), in.clip.z);
+    return vec4<f32>(shade_zbin(cell, in.world, n, v, m), 1.0);
 }
 
 @fragment

@@ -1,6 +1,9 @@
 // Shading a pixel's list (shade.forward and shade.deferred): the one loop both backends run over
-// the lights their culling kept, after lookup.wgsl's lookup (shade_pixel_lights; either form of
-// lists: a bin's list, or z-binning's tile bits within a depth bin's range).
+// the lights their culling kept, after lookup.wgsl's lookup: shade_list over a bin's list, or
+// shade_zbin over z-binning's tile bits within a depth bin's range. Each backend has an entry
+// point for each form of lists (the pipeline is chosen by the lists' form), so that neither
+// pays for the other's loop in its registers: one shader with a uniform branch between the
+// two was 6-7% slower on the bin lists (H100, docs/bench/HISTORY.md).
 //
 // The per-pixel reject: each light's position and radius are read first (its first 16 bytes),
 // and a light at d >= r is skipped before the rest of its 64 bytes are loaded. It adds exactly
@@ -9,24 +12,21 @@
 // deferred lighting together (docs/STRATEGIES.md, "What shading pays for a list"). Lists do
 // not change: lights_per_pixel_mean still counts every light a list hands a pixel. The
 // infinite-range falloff (FRAME_FLAG_INFINITE_RANGE) skips nothing.
-fn shade_listed(i: u32, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material, infinite: bool) -> vec3<f32> {
-    if !infinite && length(lights[i].position - p) >= lights[i].radius {
-        return vec3<f32>(0.0);
-    }
-    return shade_light(lights[i], p, n, v, m);
-}
-
 fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
     var c = vec3<f32>(0.0);
     for (var k = 0u; k < list.y; k++) {
-        c += shade_listed(light_indices[list.x + k], p, n, v, m, infinite);
+        let i = light_indices[list.x + k];
+        if !infinite && length(lights[i].position - p) >= lights[i].radius {
+            continue;
+        }
+        c += shade_light(lights[i], p, n, v, m);
     }
     return c;
 }
 
-// Z-binning's cell: its set bits in order, so lights are summed in depth order, the same order
-// on every run.
+// Z-binning's cell: its set bits in order, so lights are summed in depth order, the same order on
+// every run; the same reject as shade_list.
 fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
     var c = vec3<f32>(0.0);
@@ -38,16 +38,12 @@ fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mater
         while bits != 0u {
             let k = w * 32u + firstTrailingBit(bits);
             bits &= bits - 1u;
-            c += shade_listed(light_indices[k], p, n, v, m, infinite);
+            let i = light_indices[k];
+            if !infinite && length(lights[i].position - p) >= lights[i].radius {
+                continue;
+            }
+            c += shade_light(lights[i], p, n, v, m);
         }
     }
     return c;
-}
-
-// The lights of pixel `pixel` (depth buffer value z) shaded at p.
-fn shade_pixel_lights(pixel: vec2<u32>, z: f32, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
-    if zbin_lists() {
-        return shade_zbin(zbin_cell(pixel, z), p, n, v, m);
-    }
-    return shade_list(light_list(pixel, z), p, n, v, m);
 }

@@ -286,6 +286,7 @@ pub(crate) fn execute<P: Plan>(
                         f.ranges.as_entire_binding(),
                         plan.indices().as_entire_binding(),
                     ],
+                    crate::ListForm::of(&f.params),
                 );
             }
             let steps: Vec<Step<'_>> = plan

@@ -46,7 +46,7 @@ pub mod shaders;
 pub mod strategies;
 
 pub use culler::Culler;
-pub use output::{BinLists, CullOutput, zbin_cells, zbin_lengths, zbin_range};
+pub use output::{BinLists, CullOutput, ListForm, zbin_cells, zbin_lengths, zbin_range};
 pub use record::ListPass;
 
 use serde::{Deserialize, Serialize};

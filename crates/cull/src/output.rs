@@ -7,6 +7,27 @@ use crate::blocks::{tile_lines, tile_masks};
 use crate::layout::{CULL_FLAG_ZBIN, GpuCullParams, GpuTileDepth};
 use crate::record::StepInfo;
 
+/// The form of a run's lists on the GPU (`shaders/cull/common/lookup.wgsl`): a consumer picks
+/// its entry point by it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ListForm {
+    /// `bin_ranges[bin] = (offset, count)` into `light_indices` (every strategy but z-binning).
+    Bins,
+    /// Z-binning's depth bins' ranges of depth-sorted lights and tile masks.
+    ZBin,
+}
+
+impl ListForm {
+    /// The form of lists built with `p`.
+    pub fn of(p: &GpuCullParams) -> Self {
+        if p.flags & CULL_FLAG_ZBIN != 0 {
+            Self::ZBin
+        } else {
+            Self::Bins
+        }
+    }
+}
+
 /// Light lists read back to the host.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct BinLists {
@@ -98,7 +119,12 @@ impl CullOutput {
 
     /// Whether the lists are z-binning's (see `shaders/cull/common/lookup.wgsl`).
     pub fn is_zbin(&self) -> bool {
-        self.params.flags & CULL_FLAG_ZBIN != 0
+        self.form() == ListForm::ZBin
+    }
+
+    /// The form of the lists.
+    pub fn form(&self) -> ListForm {
+        ListForm::of(&self.params)
     }
 
     /// Reads the lists back: a list a bin, and for z-binning a list a (tile, depth bin) cell,

@@ -313,8 +313,13 @@ impl Recorder<'_> {
 pub trait ListPass {
     /// Binds the lists once they are sized, before any run is recorded: `lists` are the
     /// bindings 0, 1, 2 of every list consumer (`CullParams`, `bin_ranges`, `light_indices`;
-    /// [`crate::CullOutput::list_bindings`]).
-    fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3]);
+    /// [`crate::CullOutput::list_bindings`]), in the form `form`.
+    fn bind(
+        &mut self,
+        ctx: &GpuContext,
+        lists: [wgpu::BindingResource<'_>; 3],
+        form: crate::ListForm,
+    );
     /// Records the pass, timed as its name.
     fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer);
 }

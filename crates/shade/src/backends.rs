@@ -148,11 +148,15 @@ pub struct Renderer {
     pub culler: Culler,
     pub(crate) prepass: DepthPrepass,
     pub(crate) forward: wgpu::RenderPipeline,
+    /// `shade.forward` over z-binning's lists.
+    pub(crate) forward_zbin: wgpu::RenderPipeline,
     pub(crate) naive: wgpu::RenderPipeline,
     pub(crate) gbuffer: wgpu::RenderPipeline,
     pub(crate) gbuffer_stored: wgpu::RenderPipeline,
     pub(crate) deferred: wgpu::ComputePipeline,
     pub(crate) deferred_stored: wgpu::ComputePipeline,
+    /// `shade.deferred` over z-binning's lists (rebuilt and stored position).
+    pub(crate) deferred_zbin: [wgpu::ComputePipeline; 2],
     pub(crate) forward_lists: wgpu::BindGroupLayout,
     pub(crate) deferred_lists: wgpu::BindGroupLayout,
     pub(crate) deferred_gbuffer: wgpu::BindGroupLayout,
@@ -214,14 +218,18 @@ impl Renderer {
         let fwd = FORWARD.create(d);
         let gb = GBUFFER.create(d);
         let g0 = &scene.layout;
-        let forward = raster(
-            d,
-            "shade.forward",
-            &fwd,
-            &[g0, &forward_lists],
-            Some(("fs_forward", &[target(HDR)])),
-            DepthTest::Equal,
-        );
+        let forward_with = |entry| {
+            raster(
+                d,
+                "shade.forward",
+                &fwd,
+                &[g0, &forward_lists],
+                Some((entry, &[target(HDR)])),
+                DepthTest::Equal,
+            )
+        };
+        let forward = forward_with("fs_forward");
+        let forward_zbin = forward_with("fs_forward_zbin");
         let naive = raster(
             d,
             "shade.naive",
@@ -264,15 +272,19 @@ impl Renderer {
         );
         let deferred = pipeline::compute(d, &def, &def_layout, "deferred_shade");
         let deferred_stored = pipeline::compute(d, &def, &def_layout, "deferred_shade_stored");
+        let deferred_zbin = ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
+            .map(|entry| pipeline::compute(d, &def, &def_layout, entry));
         Self {
             culler: Culler::new(ctx, scene),
             prepass: DepthPrepass::new(ctx, scene),
             forward,
+            forward_zbin,
             naive,
             gbuffer,
             gbuffer_stored,
             deferred,
             deferred_stored,
+            deferred_zbin,
             forward_lists,
             deferred_lists,
             deferred_gbuffer,
@@ -348,7 +360,7 @@ impl Renderer {
                 self.culler
                     .run(ctx, scene, &targets.depth, strategy, settings, &mut timer)?;
             let mut pass = ShadePass::new(ctx, self, scene, backend, &targets);
-            pass.bind(ctx, lists.list_bindings());
+            pass.bind(ctx, lists.list_bindings(), lists.form());
             let mut enc = ctx.encoder("shade");
             pass.record(&mut enc, &mut timer);
             timer.resolve(&mut enc);

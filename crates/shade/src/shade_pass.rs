@@ -5,7 +5,7 @@
 //! timed with their culling ([`manylights_cull::Culler::run_repeated_with`], through
 //! [`crate::Renderer::shade_pass`]), so that a frame's culling and shading are measured as one.
 
-use manylights_cull::ListPass;
+use manylights_cull::{ListForm, ListPass};
 use manylights_gpu::prepass::depth_target;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
@@ -90,6 +90,8 @@ pub struct ShadePass<'a> {
     targets: &'a Targets,
     /// The lists (and for deferred the depth), once bound.
     lists: Option<wgpu::BindGroup>,
+    /// Their form, once bound: the entry point that reads them.
+    form: ListForm,
     /// Deferred: the G-buffer and the colour target.
     gbuffer: Option<wgpu::BindGroup>,
 }
@@ -122,13 +124,15 @@ impl<'a> ShadePass<'a> {
             backend,
             targets,
             lists: None,
+            form: ListForm::Bins,
             gbuffer,
         }
     }
 }
 
 impl ListPass for ShadePass<'_> {
-    fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3]) {
+    fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3], form: ListForm) {
+        self.form = form;
         let mut resources = lists.to_vec();
         let depth_only;
         let layout = if self.gbuffer.is_some() {
@@ -160,7 +164,10 @@ impl ListPass for ShadePass<'_> {
                 enc,
                 timer,
                 "shade.forward",
-                &r.forward,
+                match self.form {
+                    ListForm::Bins => &r.forward,
+                    ListForm::ZBin => &r.forward_zbin,
+                },
                 self.scene,
                 &[&self.targets.color_view],
                 &self.targets.depth_view,
@@ -173,10 +180,10 @@ impl ListPass for ShadePass<'_> {
                     enc,
                     timer,
                     "shade.deferred",
-                    if self.backend == Backend::DeferredStoredPosition {
-                        &r.deferred_stored
-                    } else {
-                        &r.deferred
+                    match (self.form, self.backend == Backend::DeferredStoredPosition) {
+                        (ListForm::Bins, false) => &r.deferred,
+                        (ListForm::Bins, true) => &r.deferred_stored,
+                        (ListForm::ZBin, stored) => &r.deferred_zbin[usize::from(stored)],
                     },
                     &[&self.scene.bind_group, lists, gbuffer],
                     (w.div_ceil(8), h.div_ceil(8)),
