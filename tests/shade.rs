@@ -48,7 +48,7 @@ fn scene(name: &str) -> Scene {
     s
 }
 
-fn strategies() -> [Strategy; 5] {
+fn strategies() -> [Strategy; 6] {
     [
         Strategy::tiled_gather(16),
         Strategy::TiledScatter { tile_size: 8 },
@@ -60,10 +60,17 @@ fn strategies() -> [Strategy; 5] {
             skip_empty: true,
             ordered: true,
         },
+        // Deferred lighting walks z-binning's masks a workgroup at a time where its 8 x 8 pixels
+        // lie in one tile, and a pixel at a time otherwise: both.
         Strategy::ZBin {
             tile_size: 8,
             bins: 64,
             slicing: Slicing::Exponential,
+        },
+        Strategy::ZBin {
+            tile_size: 12,
+            bins: 64,
+            slicing: Slicing::Linear,
         },
     ]
 }
