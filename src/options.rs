@@ -94,6 +94,10 @@ pub(crate) struct StrategyArgs {
     /// default, none, sizes lists exactly and drops nothing).
     #[arg(long)]
     pub(crate) capacity: Option<u32>,
+    /// Tile tests without the box test (each light's sphere against the view-space box of the
+    /// tile's frustum, on by default): the side planes alone, for ablations.
+    #[arg(long)]
+    pub(crate) no_tile_boxes: bool,
 }
 
 impl StrategyArgs {
@@ -135,6 +139,7 @@ impl StrategyArgs {
         let s = CullSettings {
             slack: self.slack,
             capacity: self.capacity,
+            tile_boxes: !self.no_tile_boxes,
             ..CullSettings::for_camera(camera)
         };
         s.validate().context("invalid --slack or --capacity")?;

@@ -1201,3 +1201,97 @@ fn zbin_keeps_a_subset_of_gathers_lists() {
         "zbin evaluated {zbin_evaluated} lights, gather {gather_evaluated}"
     );
 }
+
+/// The box test (`CullSettings::tile_boxes`, on by default) against the side planes alone: with
+/// it off, every tiled strategy's GPU lists (gather's lines path, its stored masks, its chunks
+/// and its single level; 2.5D; scatter's masks and pairs; z-binning) equal their oracles
+/// too, and with it on every list is a subset of the list without it, over 6 seeds; over them
+/// all it evaluates fewer lights per pixel, with no false negative.
+#[test]
+fn tile_boxes_keep_a_subset_of_the_planes_lists() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let mut totals = [0u64; 2];
+    let mut cullers = None;
+    for seed in [21u64, 22, 23, 24, 25, 26] {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        let cullers = cullers.get_or_insert_with(|| {
+            let mut stored = Culler::new(&ctx, &r.gpu_scene);
+            stored.gather_lines = false;
+            let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
+            unmasked.mask_budget = 0;
+            [Culler::new(&ctx, &r.gpu_scene), stored, unmasked]
+        });
+        let strategies = [
+            Strategy::tiled_gather(8),
+            Strategy::TiledGather {
+                tile_size: 16,
+                coarse: 0,
+            },
+            Strategy::depth_mask(8),
+            Strategy::TiledScatter { tile_size: 8 },
+            Strategy::ZBin {
+                tile_size: 8,
+                bins: 32,
+                slicing: Slicing::Exponential,
+            },
+        ];
+        for (culler, s) in cullers
+            .iter()
+            .flat_map(|c| strategies.iter().map(move |s| (c, s)))
+        {
+            let what = format!(
+                "{} {} (lines: {}, masks: {})",
+                case.label,
+                s.name(),
+                culler.gather_lines,
+                culler.mask_budget > 0
+            );
+            let lists = [true, false].map(|tile_boxes| {
+                let settings = CullSettings {
+                    tile_boxes,
+                    ..CullSettings::for_camera(&case.camera)
+                };
+                let mut timer = GpuTimer::new(&ctx, 16);
+                let out = culler
+                    .run(&ctx, &r.gpu_scene, &r.depth_tex, s, &settings, &mut timer)
+                    .unwrap();
+                let p = out.params;
+                let td = out.read_tile_depth(&ctx).unwrap();
+                let gpu = out.read(&ctx).unwrap();
+                let oracle = match s {
+                    Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &p, &r.lights, &td),
+                    Strategy::ZBin { .. } => {
+                        let order = out.read_stored(&ctx).unwrap().1[..r.lights.len()].to_vec();
+                        cpu::zbin_lists(&r.frame, &p, &r.lights, &td, &order)
+                    }
+                    _ => cpu::gather(&r.frame, &p, &r.lights, &td),
+                };
+                oracle
+                    .compare(&gpu)
+                    .unwrap_or_else(|e| panic!("{what}, tile_boxes {tile_boxes}: {e}"));
+                let m = metrics(&r, &p, &gpu);
+                assert_eq!(m.false_negatives, 0, "{what}, tile_boxes {tile_boxes}");
+                totals[usize::from(!tile_boxes)] += m.evaluated;
+                (gpu, oracle)
+            });
+            let [(with, _), (without, oracle)] = &lists;
+            for b in 0..with.ranges.len() {
+                let planes = without.sorted(b);
+                for l in with.sorted(b) {
+                    assert!(
+                        planes.binary_search(&l).is_ok()
+                            || oracle.borderline[b].binary_search(&l).is_ok(),
+                        "{what}: the box test keeps light {l} in bin {b}, the planes alone do not"
+                    );
+                }
+            }
+        }
+    }
+    println!(
+        "lights evaluated: with the box test {}, without {}",
+        totals[0], totals[1]
+    );
+    assert!(totals[0] < totals[1], "{totals:?}");
+}

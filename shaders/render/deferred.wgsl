@@ -7,15 +7,6 @@
 // The stored world position (deferred_stored_position; a 1 x 1 placeholder otherwise).
 @group(2) @binding(3) var gb_position: texture_2d<f32>;
 
-// The view-space point on the ray through NDC (x, y) at view-space z: with rows of
-// clip_from_view, x_c = P00 x + P02 z + P03 and w_c = P32 z + P33, so x = (ndc_x w_c - P02 z -
-// P03) / P00 (and y alike). Exact for perspective and orthographic cameras.
-fn view_point(ndc: vec2<f32>, z: f32) -> vec3<f32> {
-    let m = frame.clip_from_view;
-    let w = m[2][3] * z + m[3][3];
-    return vec3<f32>((ndc.x * w - m[2][0] * z - m[3][0]) / m[0][0], (ndc.y * w - m[2][1] * z - m[3][1]) / m[1][1], z);
-}
-
 // An entry point for each form of lists (list_shading.wgsl): `zbin` is a constant of each.
 @compute @workgroup_size(8, 8)
 fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {

@@ -10,7 +10,7 @@ use manylights_gpu::layout::{GpuFrame, GpuLight};
 
 use crate::geometry::{
     self, CullLight, bin_of, depth_cell, depth_cell_scale, light_depth_extent, light_tiles,
-    line_planes, linear_depth, outside_plane, tile_keeps, tile_side_planes, zbin,
+    line_planes, linear_depth, outside_plane, tile_box, tile_keeps, tile_side_planes, zbin,
 };
 use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth, ZBINS};
 
@@ -177,9 +177,14 @@ pub fn gather(
             let bin = (ty * p.tiles_x + tx) as usize;
             let t = &tile_depth[bin];
             let planes = tile_side_planes(frame, p, [tx, ty]);
+            let bx = tile_box(frame, p, [tx, ty], t);
             let (x, y) = (tx as i32, ty as i32);
             let keeps = |(l, r): &(CullLight, [i32; 4])| {
-                x >= r[0] && x <= r[2] && y >= r[1] && y <= r[3] && tile_keeps(p, l, &planes, t)
+                x >= r[0]
+                    && x <= r[2]
+                    && y >= r[1]
+                    && y <= r[3]
+                    && tile_keeps(p, l, &planes, &bx, t)
             };
             for (i, [lo, hi]) in tested.iter().enumerate() {
                 out.push(bin, i as u32, keeps(lo), keeps(hi));
@@ -330,8 +335,10 @@ pub fn scatter(
                 let tile = [tx as u32, ty as u32];
                 let bin = (tile[1] * p.tiles_x + tile[0]) as usize;
                 let planes = tile_side_planes(frame, p, tile);
-                let keep_lo = inside(&rl) && tile_keeps(p, &lo, &planes, &tile_depth[bin]);
-                let keep_hi = inside(&rh) && tile_keeps(p, &hi, &planes, &tile_depth[bin]);
+                let td = &tile_depth[bin];
+                let bx = tile_box(frame, p, tile, td);
+                let keep_lo = inside(&rl) && tile_keeps(p, &lo, &planes, &bx, td);
+                let keep_hi = inside(&rh) && tile_keeps(p, &hi, &planes, &bx, td);
                 out.push(bin, i as u32, keep_lo, keep_hi);
             }
         }
@@ -450,6 +457,7 @@ pub fn zbin_lists(
                 continue;
             }
             let planes = tile_side_planes(frame, p, [tx, ty]);
+            let bx = tile_box(frame, p, [tx, ty], td);
             let last = p.slices - 1;
             let (e0, e1) = (1.0 - 1e-5, 1.0 + 1e-5);
             // Narrow: the fewest bins the GPU may take; wide: the most.
@@ -470,7 +478,7 @@ pub fn zbin_lists(
                     && x <= r[2]
                     && y >= r[1]
                     && y <= r[3]
-                    && tile_keeps(p, c, &planes, td)
+                    && tile_keeps(p, c, &planes, &bx, td)
             };
             for b in 0..p.slices as usize {
                 let cell = b * tiles + t;

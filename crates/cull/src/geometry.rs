@@ -8,7 +8,8 @@ use glam::{Mat4, Vec2, Vec3, Vec4, Vec4Swizzles};
 use manylights_gpu::layout::{GpuFrame, GpuLight, LIGHT_KIND_SPOT};
 
 use crate::layout::{
-    CONE_MIN_COS, CULL_FLAG_DEPTH_MASK, GpuCullParams, GpuTileDepth, SLICING_EXPONENTIAL,
+    CONE_MIN_COS, CULL_FLAG_DEPTH_MASK, CULL_FLAG_TILE_BOX, GpuCullParams, GpuTileDepth,
+    SLICING_EXPONENTIAL,
 };
 
 fn row(m: &Mat4, i: usize) -> Vec4 {
@@ -20,6 +21,44 @@ pub fn linear_depth(frame: &GpuFrame, z: f32) -> f32 {
     let m = &frame.clip_from_view;
     let (a, b, c, d) = (m.z_axis.z, m.w_axis.z, m.z_axis.w, m.w_axis.w);
     -(b - d * z) / (c * z - a)
+}
+
+/// WGSL `view_point`: the view-space point at NDC `ndc` and view-space z `z`.
+pub fn view_point(frame: &GpuFrame, ndc: Vec2, z: f32) -> Vec3 {
+    let m = &frame.clip_from_view;
+    let w = m.z_axis.w * z + m.w_axis.w;
+    Vec3::new(
+        (ndc.x * w - m.z_axis.x * z - m.w_axis.x) / m.x_axis.x,
+        (ndc.y * w - m.z_axis.y * z - m.w_axis.y) / m.y_axis.y,
+        z,
+    )
+}
+
+/// WGSL `tile_box`: the view-space box (lo, hi) of tile `tile`'s frustum between its depth
+/// bounds.
+pub fn tile_box(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    tile: [u32; 2],
+    t: &GpuTileDepth,
+) -> [Vec3; 2] {
+    let r = tile_ndc(frame, p, tile);
+    let (mut lo, mut hi) = (Vec3::splat(3.4e38), Vec3::splat(-3.4e38));
+    for k in 0..8u32 {
+        let x = if k & 1 != 0 { r.z } else { r.x };
+        let y = if k & 2 != 0 { r.w } else { r.y };
+        let d = if k & 4 != 0 { t.dmax } else { t.dmin };
+        let q = view_point(frame, Vec2::new(x, y), -d);
+        lo = lo.min(q);
+        hi = hi.max(q);
+    }
+    [lo, hi]
+}
+
+/// WGSL `sphere_meets_box`.
+pub fn sphere_meets_box(c: Vec3, r: f32, b: &[Vec3; 2]) -> bool {
+    let d = c.clamp(b[0], b[1]) - c;
+    d.dot(d) <= r * r
 }
 
 /// WGSL `tile_ndc`: the NDC rectangle of tile `tile`.
@@ -165,12 +204,21 @@ pub fn light_depth_mask(l: &CullLight, t: &GpuTileDepth) -> u32 {
     bit_range(lo, hi)
 }
 
-/// WGSL `tile_keeps`.
-pub fn tile_keeps(p: &GpuCullParams, l: &CullLight, planes: &[Vec4; 4], t: &GpuTileDepth) -> bool {
+/// WGSL `tile_keeps`, with the tile's box ([`tile_box`]) computed by the caller.
+pub fn tile_keeps(
+    p: &GpuCullParams,
+    l: &CullLight,
+    planes: &[Vec4; 4],
+    bx: &[Vec3; 2],
+    t: &GpuTileDepth,
+) -> bool {
     if t.covered == 0 || planes.iter().any(|&pl| outside_plane(pl, l)) {
         return false;
     }
-    depth_keeps(p, l, t)
+    if !depth_keeps(p, l, t) {
+        return false;
+    }
+    p.flags & CULL_FLAG_TILE_BOX == 0 || sphere_meets_box(l.center, l.radius + l.slack, bx)
 }
 
 /// WGSL `depth_keeps`: the depth part of [`tile_keeps`].

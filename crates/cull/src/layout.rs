@@ -11,6 +11,9 @@ pub const CULL_FLAG_SKIP_EMPTY: u32 = 2;
 /// range of depth-sorted lights, `light_indices` the sorted lights and after them each tile's
 /// bitmask (see `shaders/cull/common/lookup.wgsl`).
 pub const CULL_FLAG_ZBIN: u32 = 4;
+/// `CullParams.flags`: tile tests also test each light's sphere against the view-space box of
+/// the tile's frustum between its depth bounds (`CullSettings::tile_boxes`).
+pub const CULL_FLAG_TILE_BOX: u32 = 8;
 /// `CullParams.slicing`: slices of equal depth.
 pub const SLICING_LINEAR: u32 = 0;
 /// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
@@ -139,6 +142,7 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),
     WgslConst::U32("CULL_FLAG_SKIP_EMPTY", CULL_FLAG_SKIP_EMPTY),
     WgslConst::U32("CULL_FLAG_ZBIN", CULL_FLAG_ZBIN),
+    WgslConst::U32("CULL_FLAG_TILE_BOX", CULL_FLAG_TILE_BOX),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
     WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),
     WgslConst::F32("CONE_MIN_COS", CONE_MIN_COS),

@@ -52,8 +52,8 @@ pub use record::ListPass;
 use serde::{Deserialize, Serialize};
 
 use layout::{
-    CULL_FLAG_DEPTH_MASK, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_ZBIN, GpuCullParams, SLICING_EXPONENTIAL,
-    SLICING_LINEAR,
+    CULL_FLAG_DEPTH_MASK, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, CULL_FLAG_ZBIN, GpuCullParams,
+    SLICING_EXPONENTIAL, SLICING_LINEAR,
 };
 
 /// How the depth range of the cluster grid is sliced.
@@ -381,11 +381,12 @@ impl Strategy {
             far,
             slack,
             capacity,
+            tile_boxes,
             ..
         } = *settings;
         let ts = self.tile_size();
         let (tiles_x, tiles_y) = (width.div_ceil(ts), height.div_ceil(ts));
-        let (slices, slicing, flags) = match *self {
+        let (slices, slicing, strategy_flags) = match *self {
             Self::TiledGather { .. } | Self::TiledScatter { .. } => (1, SLICING_LINEAR, 0),
             Self::ZBin { bins, slicing, .. } => (bins, slicing.code(), CULL_FLAG_ZBIN),
             Self::DepthMask { .. } => (1, SLICING_LINEAR, CULL_FLAG_DEPTH_MASK),
@@ -400,6 +401,7 @@ impl Strategy {
                 if skip_empty { CULL_FLAG_SKIP_EMPTY } else { 0 },
             ),
         };
+        let flags = strategy_flags | if tile_boxes { CULL_FLAG_TILE_BOX } else { 0 };
         // An orthographic camera's near plane may be <= 0; exponential slicing then starts at a
         // small positive depth (depths below it fall in slice 0).
         let near_s = if slicing == SLICING_EXPONENTIAL {
@@ -475,6 +477,16 @@ pub struct CullSettings {
     /// scatter use them where they fit (docs/STRATEGIES.md); `Some(0)` never. `None` (the
     /// default): the culler's own budget ([`Culler::mask_budget`], [`MASK_BUDGET`]).
     pub mask_budget: Option<u64>,
+    /// Whether tile tests (gather, 2.5D, tiled scatter, z-binning's masks) also test each
+    /// light's sphere against the view-space box of the tile's frustum between its depth
+    /// bounds (true, the default; docs/STRATEGIES.md, "The box test"). The side planes test a
+    /// sphere as if it were a cube: false keeps the planes alone, for ablations.
+    #[serde(default = "default_tile_boxes")]
+    pub tile_boxes: bool,
+}
+
+fn default_tile_boxes() -> bool {
+    true
 }
 
 impl CullSettings {
@@ -487,6 +499,7 @@ impl CullSettings {
             slack: layout::DEFAULT_SLACK,
             capacity: None,
             mask_budget: None,
+            tile_boxes: true,
         }
     }
 

@@ -125,6 +125,9 @@ pub fn params_label(c: &Config) -> String {
     if let Some(b) = c.mask_budget {
         p.push_str(&format!(";mask_budget={b}"));
     }
+    if !c.tile_boxes {
+        p.push_str(";tile_boxes=false");
+    }
     p
 }
 
@@ -194,6 +197,7 @@ impl Experiment {
             ("backend", s.backend.as_ref().map(Vec::len)),
             ("capacity", s.capacity.as_ref().map(Vec::len)),
             ("mask_budget", s.mask_budget.as_ref().map(Vec::len)),
+            ("tile_boxes", s.tile_boxes.as_ref().map(Vec::len)),
             ("variants", s.variants.as_ref().map(Vec::len)),
         ];
         for (field, len) in lens {
@@ -289,6 +293,10 @@ impl Experiment {
                 v.map_or("default".into(), |x| x.to_string())
             )
         });
+        axis!(s.tile_boxes, |c: &mut Config, v: bool| {
+            c.tile_boxes = v;
+            format!("tile_boxes={v}")
+        });
         axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
             c.device_limit = v;
             format!(
@@ -308,6 +316,9 @@ impl Experiment {
             }
             if v.mask_budget.is_some() {
                 c.mask_budget = v.mask_budget;
+            }
+            if let Some(b) = v.tile_boxes {
+                c.tile_boxes = b;
             }
             let auto = format!(
                 "{}+{}",

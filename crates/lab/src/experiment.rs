@@ -171,6 +171,9 @@ pub struct Variant {
     /// Tile-mask budget override, bytes.
     #[serde(default)]
     pub mask_budget: Option<u64>,
+    /// Box test override.
+    #[serde(default)]
+    pub tile_boxes: Option<bool>,
 }
 
 /// Lists of values for the fields of [`Config`]; the cells are their cartesian product.
@@ -210,6 +213,9 @@ pub struct Sweep {
     /// Tile-mask budgets, bytes (`None` entries mean the default).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mask_budget: Option<Vec<Option<u64>>>,
+    /// The box test on and off.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tile_boxes: Option<Vec<bool>>,
     /// Device limits (`None` entries mean none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub device_limit: Option<Vec<Option<DeviceLimit>>>,
@@ -247,6 +253,11 @@ pub struct Config {
     /// Whether a cell used them is the `tile_masks` result column.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mask_budget: Option<u64>,
+    /// Whether tile tests also test each light's sphere against the view-space box of the
+    /// tile's frustum (true, the default; `CullSettings::tile_boxes`). Off only for ablations.
+    /// (Left out of a cell's identity when on, so that earlier results keep their cells.)
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub tile_boxes: bool,
     /// Conservative culling slack.
     #[serde(default = "slack")]
     pub slack: f32,
@@ -314,6 +325,10 @@ fn frames() -> u32 {
 fn warmup() -> u32 {
     3
 }
+fn is_true(b: &bool) -> bool {
+    *b
+}
+
 fn yes() -> bool {
     true
 }
@@ -362,6 +377,7 @@ impl Config {
             slack: self.slack,
             capacity: self.capacity,
             mask_budget: self.mask_budget,
+            tile_boxes: self.tile_boxes,
         };
         settings.validate().map_err(|e| ("slack", e.to_string()))?;
         match &self.camera {

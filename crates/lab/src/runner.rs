@@ -261,6 +261,7 @@ fn run_cell(
         slack: c.slack,
         capacity: c.capacity,
         mask_budget: c.mask_budget,
+        tile_boxes: c.tile_boxes,
         ..CullSettings::for_camera(cam)
     };
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();

@@ -24,7 +24,7 @@
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
 // The tile lines (tile_lines.wgsl): word w of line `line` at line * mask_words() + w; then
-// each light's depth extent, four words (f32 bits) a light.
+// each light's depth extent and its view-space sphere, eight words (f32 bits) a light.
 @group(1) @binding(11) var<storage, read_write> tile_lines: array<u32>;
 
 // A workgroup's blocks and their place in the queue.
@@ -113,11 +113,16 @@ fn store_light_lines(group: u32, index: u32) {
         // that every tile whose depth bounds extent_keeps passes shares a bin with it.)
         bins = vec2<i32>(i32(zbin(min(e.x, e.y))), i32(zbin(max(e.x, e.y))));
         if chunk == 0u {
-            let at = lines * words + 4u * i;
+            let at = lines * words + 8u * i;
             tile_lines[at] = bitcast<u32>(e.x);
             tile_lines[at + 1u] = bitcast<u32>(e.y);
             tile_lines[at + 2u] = bitcast<u32>(e.z);
             tile_lines[at + 3u] = bitcast<u32>(e.w);
+            // And its sphere in view space, slack included, for the box test.
+            tile_lines[at + 4u] = bitcast<u32>(l.center.x);
+            tile_lines[at + 5u] = bitcast<u32>(l.center.y);
+            tile_lines[at + 6u] = bitcast<u32>(l.center.z);
+            tile_lines[at + 7u] = bitcast<u32>(l.radius + l.slack);
         }
     }
     wg_line_rect[index] = rect;

@@ -80,6 +80,16 @@ fn linear_depth(z: f32) -> f32 {
     return -(b - d * z) / (c * z - a);
 }
 
+// The view-space point on the ray through NDC (x, y) at view-space z: with rows of
+// clip_from_view, x_c = P00 x + P02 z + P03 and w_c = P32 z + P33, so x = (ndc_x w_c - P02 z -
+// P03) / P00 (and y alike). Exact for perspective and orthographic cameras. (Also the deferred
+// lighting pass's position rebuild.)
+fn view_point(ndc: vec2<f32>, z: f32) -> vec3<f32> {
+    let m = frame.clip_from_view;
+    let w = m[2][3] * z + m[3][3];
+    return vec3<f32>((ndc.x * w - m[2][0] * z - m[3][0]) / m[0][0], (ndc.y * w - m[2][1] * z - m[3][1]) / m[1][1], z);
+}
+
 // NDC rectangle (x0, y0, x1, y1) of tile `tile`, clamped to the image (the last row and
 // column may be partial when the resolution is not a multiple of the tile size).
 fn tile_ndc(tile: vec2<u32>) -> vec4<f32> {
@@ -168,9 +178,40 @@ fn light_depth_mask(l: CullLight, t: TileDepth) -> u32 {
     return bit_range(lo, hi);
 }
 
+// The view-space box of tile `tile`'s frustum between its depth bounds: the bounds of its 8
+// corners (each coordinate of a point of the frustum is bilinear in its NDC coordinate and its
+// depth, so the corners bound it). (lo, hi).
+fn tile_box(tile: vec2<u32>, t: TileDepth) -> array<vec3<f32>, 2> {
+    let r = tile_ndc(tile);
+    var lo = vec3<f32>(3.4e38);
+    var hi = vec3<f32>(-3.4e38);
+    for (var k = 0u; k < 8u; k++) {
+        let ndc = vec2<f32>(select(r.x, r.z, (k & 1u) != 0u), select(r.y, r.w, (k & 2u) != 0u));
+        let q = view_point(ndc, -select(t.dmin, t.dmax, (k & 4u) != 0u));
+        lo = min(lo, q);
+        hi = max(hi, q);
+    }
+    return array<vec3<f32>, 2>(lo, hi);
+}
+
+// Whether the sphere of centre c and radius r (slack included) meets the box: the distance from
+// its centre to the box's nearest point.
+fn sphere_meets_box(c: vec3<f32>, r: f32, b: array<vec3<f32>, 2>) -> bool {
+    let d = clamp(c, b[0], b[1]) - c;
+    return dot(d, d) <= r * r;
+}
+
+// Whether tile tests take the box test (CULL_FLAG_TILE_BOX).
+fn tile_boxes() -> bool {
+    return (cull.flags & CULL_FLAG_TILE_BOX) != 0u;
+}
+
 // Whether a light may reach any covered pixel of a tile: the tile frustum between the tile's
-// depth bounds, and with CULL_FLAG_DEPTH_MASK the 2.5D masks.
-fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
+// depth bounds, with CULL_FLAG_DEPTH_MASK the 2.5D masks, and with CULL_FLAG_TILE_BOX the light's
+// sphere against the frustum's view-space box (tile_box): the planes test a sphere as if it were
+// a cube, and a tile's frustum is narrow beside a light, so the box test cuts the lights that
+// reach only the cube's corners (decided last: only for the lights the planes keep).
+fn tile_keeps(l: CullLight, tile: vec2<u32>, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
     if t.covered == 0u {
         return false;
     }
@@ -178,7 +219,10 @@ fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
     if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
         return false;
     }
-    return depth_keeps(l, t);
+    if !depth_keeps(l, t) {
+        return false;
+    }
+    return !tile_boxes() || sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t));
 }
 
 // The depth part of tile_keeps: the tile's depth bounds as planes (-z >= dmin and -z <= dmax),

@@ -43,8 +43,27 @@ fn line_word(line: u32, w: u32) -> u32 {
 
 // Light i's depth extent (light_depth_extent), stored after the lines.
 fn light_extent(i: u32) -> vec4<f32> {
-    let at = (cull.tiles_x + cull.tiles_y + ZBINS) * mask_words() + 4u * i;
+    let at = (cull.tiles_x + cull.tiles_y + ZBINS) * mask_words() + 8u * i;
     return bitcast<vec4<f32>>(vec4<u32>(tile_masks[at], tile_masks[at + 1u], tile_masks[at + 2u], tile_masks[at + 3u]));
+}
+
+// Whether light i's sphere (view-space centre, radius + slack, stored after its extent) meets
+// the box `b` (tile_box): tile_keeps' box test, where CULL_FLAG_TILE_BOX asks for it.
+fn light_box_keeps(i: u32, b: array<vec3<f32>, 2>) -> bool {
+    if !tile_boxes() {
+        return true;
+    }
+    let at = (cull.tiles_x + cull.tiles_y + ZBINS) * mask_words() + 8u * i + 4u;
+    let s = bitcast<vec4<f32>>(vec4<u32>(tile_masks[at], tile_masks[at + 1u], tile_masks[at + 2u], tile_masks[at + 3u]));
+    return sphere_meets_box(s.xyz, s.w, b);
+}
+
+// The tile's box where the box test applies (a placeholder otherwise).
+fn lines_box(tile: vec2<u32>, t: TileDepth) -> array<vec3<f32>, 2> {
+    if tile_boxes() && t.covered != 0u {
+        return tile_box(tile, t);
+    }
+    return array<vec3<f32>, 2>(vec3<f32>(0.0), vec3<f32>(0.0));
 }
 
 // Word w of tile `tile`'s kept lights; `bins`: the tile's depth bins (first, last).
@@ -60,10 +79,12 @@ fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
         m &= z;
     }
     var keep = 0u;
+    let b = lines_box(tile, t);
     while m != 0u {
         let bit = firstTrailingBit(m);
         m &= m - 1u;
-        if extent_keeps(light_extent(w * 32u + bit), t) {
+        let i = w * 32u + bit;
+        if extent_keeps(light_extent(i), t) && light_box_keeps(i, b) {
             keep |= 1u << bit;
         }
     }
@@ -92,6 +113,7 @@ fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec
         m &= z;
     }
     var keep = vec2<u32>(0u);
+    let b = lines_box(tile, t);
     while any(m != vec2<u32>(0u)) {
         // Up to two candidates: the lowest bits of the first word, then of the second.
         let a0 = m.x != 0u;
@@ -115,14 +137,14 @@ fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec
         let i1 = select(i0, (w + select(1u, 0u, a1)) * 32u + bit1, second != 0u);
         let e0 = light_extent(i0);
         let e1 = light_extent(i1);
-        if extent_keeps(e0, t) {
+        if extent_keeps(e0, t) && light_box_keeps(i0, b) {
             if a0 {
                 keep.x |= 1u << bit0;
             } else {
                 keep.y |= 1u << bit0;
             }
         }
-        if second != 0u && extent_keeps(e1, t) {
+        if second != 0u && extent_keeps(e1, t) && light_box_keeps(i1, b) {
             if a1 {
                 keep.x |= 1u << bit1;
             } else {

@@ -65,7 +65,7 @@ const CHUNK_MASK: u32 = 2u;
 fn gather_batch(bin: u32, slot: u32, i: u32, valid: bool, planes: array<vec4<f32>, 4>, t: TileDepth, fill: bool, acc: vec2<u32>) -> vec2<u32> {
     var keep = false;
     if valid {
-        keep = tile_keeps(cull_light(lights[i]), planes, t);
+        keep = tile_keeps(cull_light(lights[i]), vec2<u32>(bin % cull.tiles_x, bin / cull.tiles_x), planes, t);
     }
     if !fill {
         return vec2<u32>(acc.x, acc.y + u32(keep));
@@ -212,7 +212,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                     let bit = firstTrailingBit(m);
                     let k = w * 32u + bit;
                     m &= m - 1u;
-                    if tile_keeps(wg_light[k], planes, t) {
+                    if tile_keeps(wg_light[k], tile, planes, t) {
                         if fill {
                             out_indices[at + kept] = b + k;
                         }

@@ -163,7 +163,7 @@ fn zbin_keeps(k: u32, tile: vec2<u32>, td: TileDepth) -> bool {
         return false;
     }
     let planes = array<vec4<f32>, 4>(wg_planes[0], wg_planes[1], wg_planes[2], wg_planes[3]);
-    return tile_keeps(cull_light(lights[i]), planes, td);
+    return tile_keeps(cull_light(lights[i]), tile, planes, td);
 }
 
 // A workgroup a tile: its mask, 64 words (2,048 sorted lights) a round, the kept lights' bits

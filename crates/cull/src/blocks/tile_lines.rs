@@ -109,9 +109,10 @@ pub(crate) fn bytes(p: &GpuCullParams) -> u64 {
     u64::from(p.tiles_x + p.tiles_y + ZBINS) * u64::from(p.light_count.div_ceil(64)) * 8
 }
 
-/// Bytes of the tile lines and, after them, each light's depth extent (four f32).
+/// Bytes of the tile lines and, after them, each light's depth extent and view-space sphere
+/// (eight f32).
 fn buffer_bytes(p: &GpuCullParams) -> u64 {
-    bytes(p) + u64::from(p.light_count) * 16
+    bytes(p) + u64::from(p.light_count) * 32
 }
 
 /// A run of the lines path.
