@@ -206,12 +206,17 @@ fn tile_boxes() -> bool {
     return (cull.flags & CULL_FLAG_TILE_BOX) != 0u;
 }
 
-// Whether a light may reach any covered pixel of a tile: the tile frustum between the tile's
-// depth bounds, with CULL_FLAG_DEPTH_MASK the 2.5D masks, and with CULL_FLAG_TILE_BOX the light's
-// sphere against the frustum's view-space box (tile_box): the planes test a sphere as if it were
-// a cube, and a tile's frustum is narrow beside a light, so the box test cuts the lights that
-// reach only the cube's corners (decided last: only for the lights the planes keep).
-fn tile_keeps(l: CullLight, tile: vec2<u32>, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
+// The tile's box for the box test (tile_box) where it applies, a placeholder otherwise: computed
+// once a tile, before its lights are tested.
+fn tile_test_box(tile: vec2<u32>, t: TileDepth) -> array<vec3<f32>, 2> {
+    if tile_boxes() && t.covered != 0u {
+        return tile_box(tile, t);
+    }
+    return array<vec3<f32>, 2>(vec3<f32>(0.0), vec3<f32>(0.0));
+}
+
+// tile_keeps without its box test.
+fn tile_keeps_planes(l: CullLight, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
     if t.covered == 0u {
         return false;
     }
@@ -219,10 +224,22 @@ fn tile_keeps(l: CullLight, tile: vec2<u32>, planes: array<vec4<f32>, 4>, t: Til
     if outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l) {
         return false;
     }
-    if !depth_keeps(l, t) {
-        return false;
-    }
-    return !tile_boxes() || sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t));
+    return depth_keeps(l, t);
+}
+
+// Whether a light may reach any covered pixel of a tile: the tile frustum between the tile's
+// depth bounds, with CULL_FLAG_DEPTH_MASK the 2.5D masks, and with CULL_FLAG_TILE_BOX the light's
+// sphere against the frustum's view-space box `b` (tile_test_box): the planes test a sphere as
+// if it were a cube, and a tile's frustum is narrow beside a light, so the box test cuts the
+// lights that reach only the cube's corners (decided last: only for the lights the planes keep).
+fn tile_keeps(l: CullLight, planes: array<vec4<f32>, 4>, b: array<vec3<f32>, 2>, t: TileDepth) -> bool {
+    return tile_keeps_planes(l, planes, t) && (!tile_boxes() || sphere_meets_box(l.center, l.radius + l.slack, b));
+}
+
+// tile_keeps with the box computed only where the planes keep the light (a thread testing one
+// light against many tiles: tiled scatter).
+fn tile_keeps_at(l: CullLight, tile: vec2<u32>, planes: array<vec4<f32>, 4>, t: TileDepth) -> bool {
+    return tile_keeps_planes(l, planes, t) && (!tile_boxes() || sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t)));
 }
 
 // The depth part of tile_keeps: the tile's depth bounds as planes (-z >= dmin and -z <= dmax),

@@ -58,16 +58,9 @@ fn light_box_keeps(i: u32, b: array<vec3<f32>, 2>) -> bool {
     return sphere_meets_box(s.xyz, s.w, b);
 }
 
-// The tile's box where the box test applies (a placeholder otherwise).
-fn lines_box(tile: vec2<u32>, t: TileDepth) -> array<vec3<f32>, 2> {
-    if tile_boxes() && t.covered != 0u {
-        return tile_box(tile, t);
-    }
-    return array<vec3<f32>, 2>(vec3<f32>(0.0), vec3<f32>(0.0));
-}
 
 // Word w of tile `tile`'s kept lights; `bins`: the tile's depth bins (first, last).
-fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
+fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>, b: array<vec3<f32>, 2>) -> u32 {
     var m = line_word(tile.x, w) & line_word(cull.tiles_x + tile.y, w);
     if m != 0u && bins.y - bins.x < ZBIN_MAX_SPAN {
         // The depth bins' prefilter: only lights sharing a bin with the tile can pass its depth
@@ -79,7 +72,6 @@ fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
         m &= z;
     }
     var keep = 0u;
-    let b = lines_box(tile, t);
     while m != 0u {
         let bit = firstTrailingBit(m);
         m &= m - 1u;
@@ -94,7 +86,7 @@ fn lines_decide(tile: vec2<u32>, w: u32, t: TileDepth, bins: vec2<u32>) -> u32 {
 // Words w and (with `two`) w + 1 of tile `tile`'s kept lights, as lines_decide, with their
 // loads side by side: both words' side words, then both words' bin words, then candidates two
 // at a time, so that each step's loads of the two words are in flight together.
-fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec2<u32>) -> vec2<u32> {
+fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec2<u32>, b: array<vec3<f32>, 2>) -> vec2<u32> {
     let column = tile.x;
     let row = cull.tiles_x + tile.y;
     var m = vec2<u32>(line_word(column, w) & line_word(row, w), 0u);
@@ -113,7 +105,6 @@ fn lines_decide_pair(tile: vec2<u32>, w: u32, two: bool, t: TileDepth, bins: vec
         m &= z;
     }
     var keep = vec2<u32>(0u);
-    let b = lines_box(tile, t);
     while any(m != vec2<u32>(0u)) {
         // Up to two candidates: the lowest bits of the first word, then of the second.
         let a0 = m.x != 0u;
@@ -179,6 +170,8 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         words = mask_words();
         bins = vec2<u32>(zbin(t.dmin), zbin(t.dmax));
     }
+    // The tile's box for the box test, once a thread.
+    let b = tile_test_box(tile, t);
     let k = (mask_words() + threads - 1u) / threads;
     let first = min(lane * k, words);
     let end = min(lane * k + k, words);
@@ -186,13 +179,13 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
     var w1 = 0u;
     var c = 0u;
     if first < end {
-        let d = lines_decide_pair(tile, first, first + 1u < end, t, bins);
+        let d = lines_decide_pair(tile, first, first + 1u < end, t, bins, b);
         w0 = d.x;
         w1 = d.y;
         c = countOneBits(d.x) + countOneBits(d.y);
     }
     for (var w = first + 2u; w < end; w++) {
-        c += countOneBits(lines_decide(tile, w, t, bins));
+        c += countOneBits(lines_decide(tile, w, t, bins, b));
     }
     let scan = scan_keep_n(slot, c, threads);
     if !fill {
@@ -214,7 +207,7 @@ fn lines_tile(wg: vec2<u32>, slot: u32, fill: bool) {
         } else if w == first + 1u {
             m = w1;
         } else {
-            m = lines_decide(tile, w, t, bins);
+            m = lines_decide(tile, w, t, bins, b);
         }
         let light = w * 32u;
         while m != 0u {

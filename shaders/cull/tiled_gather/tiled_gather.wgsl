@@ -62,10 +62,10 @@ const CHUNK_MASK: u32 = 2u;
 // add per thread at the end, not one per light); the fill pass places them in light order.
 // Returns (lights placed in the tile's list after the batch, counted). Called in uniform
 // control flow.
-fn gather_batch(bin: u32, slot: u32, i: u32, valid: bool, planes: array<vec4<f32>, 4>, t: TileDepth, fill: bool, acc: vec2<u32>) -> vec2<u32> {
+fn gather_batch(bin: u32, slot: u32, i: u32, valid: bool, planes: array<vec4<f32>, 4>, b: array<vec3<f32>, 2>, t: TileDepth, fill: bool, acc: vec2<u32>) -> vec2<u32> {
     var keep = false;
     if valid {
-        keep = tile_keeps(cull_light(lights[i]), vec2<u32>(bin % cull.tiles_x, bin / cull.tiles_x), planes, t);
+        keep = tile_keeps(cull_light(lights[i]), planes, b, t);
     }
     if !fill {
         return vec2<u32>(acc.x, acc.y + u32(keep));
@@ -103,10 +103,11 @@ fn gather_flat(tile: vec2<u32>, slot: u32, fill: bool) {
     let bin = tile.y * cull.tiles_x + tile.x;
     let t = tile_depth[bin];
     let planes = wg_planes;
+    let b = tile_test_box(tile, t);
     var acc = vec2<u32>(0u);
     for (var first = 0u; first < cull.light_count; first += 64u) {
         let i = first + slot;
-        acc = gather_batch(bin, slot, i, i < cull.light_count, planes, t, fill, acc);
+        acc = gather_batch(bin, slot, i, i < cull.light_count, planes, b, t, fill, acc);
     }
     count_done(bin, fill, acc);
 }
@@ -140,6 +141,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
     let bin = tile.y * cull.tiles_x + tile.x;
     var t: TileDepth;
     var planes: array<vec4<f32>, 4>;
+    var bx: array<vec3<f32>, 2>;
     if inside {
         t = tile_depth[bin];
         if t.covered != 0u {
@@ -147,6 +149,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
             atomicMax(&wg_cmax, ordered_bits(t.dmax));
             atomicAdd(&wg_ccov, t.covered);
             planes = tile_side_planes(tile);
+            bx = tile_test_box(tile, t);
         }
     }
     workgroupBarrier();
@@ -212,7 +215,7 @@ fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {
                     let bit = firstTrailingBit(m);
                     let k = w * 32u + bit;
                     m &= m - 1u;
-                    if tile_keeps(wg_light[k], tile, planes, t) {
+                    if tile_keeps(wg_light[k], planes, bx, t) {
                         if fill {
                             out_indices[at + kept] = b + k;
                         }

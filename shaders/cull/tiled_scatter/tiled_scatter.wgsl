@@ -37,7 +37,7 @@ fn scatter_light(t: u32, write: bool) {
     for (var k = lane; k < count; k += SCATTER_LANES) {
         let tile = vec2<u32>(u32(rect.x) + k % width, u32(rect.y) + k / width);
         let bin = tile.y * cull.tiles_x + tile.x;
-        if tile_keeps(l, tile, tile_side_planes(tile), tile_depth[bin]) {
+        if tile_keeps_at(l, tile, tile_side_planes(tile), tile_depth[bin]) {
             if write {
                 pair_keys[base + n] = bin;
                 out_indices[base + n] = i;
@@ -133,7 +133,7 @@ fn scatter_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) 
         if k < width * (rect.w - rect.y + 1u) {
             let tile = vec2<u32>(rect.x + k % width, rect.y + k / width);
             let bin = tile.y * cull.tiles_x + tile.x;
-            if tile_keeps(l, tile, tile_side_planes(tile), tile_depth[bin]) {
+            if tile_keeps_at(l, tile, tile_side_planes(tile), tile_depth[bin]) {
                 atomicOr(&tile_masks[bin * words + i / 32u], 1u << (i % 32u));
                 kept += 1u;
             }

@@ -122,6 +122,7 @@ fn zbin_bins(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_ind
 }
 
 var<workgroup> wg_planes: array<vec4<f32>, 4>;
+var<workgroup> wg_box: array<vec3<f32>, 2>;
 var<workgroup> wg_keys: array<atomic<u32>, 2>;
 var<workgroup> wg_keys_plain: vec2<u32>;
 var<workgroup> wg_words: array<atomic<u32>, 64>;
@@ -163,7 +164,7 @@ fn zbin_keeps(k: u32, tile: vec2<u32>, td: TileDepth) -> bool {
         return false;
     }
     let planes = array<vec4<f32>, 4>(wg_planes[0], wg_planes[1], wg_planes[2], wg_planes[3]);
-    return tile_keeps(cull_light(lights[i]), tile, planes, td);
+    return tile_keeps(cull_light(lights[i]), planes, array<vec3<f32>, 2>(wg_box[0], wg_box[1]), td);
 }
 
 // A workgroup a tile: its mask, 64 words (2,048 sorted lights) a round, the kept lights' bits
@@ -182,6 +183,9 @@ fn zbin_masks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_in
         wg_planes[1] = p[1];
         wg_planes[2] = p[2];
         wg_planes[3] = p[3];
+        let b = tile_test_box(tile, td);
+        wg_box[0] = b[0];
+        wg_box[1] = b[1];
     }
     let keys = tile_keys(td, li);
     let words = zbin_mask_words();
