@@ -546,12 +546,28 @@ fn gpu_lists_equal_cpu_oracle_and_have_no_false_negatives() {
             let oracle = match s {
                 Strategy::Clustered { .. } => {
                     let occ = out.read_occupancy(&ctx).unwrap();
-                    if p.flags & manylights_cull::layout::CULL_FLAG_SKIP_EMPTY != 0 {
-                        assert_eq!(
-                            occ,
-                            cpu::occupancy(&r.frame, &p, &r.depth, w, h),
-                            "{what}: occupancy"
-                        );
+                    use manylights_cull::layout::{CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX};
+                    if p.flags & (CULL_FLAG_SKIP_EMPTY | CULL_FLAG_TILE_BOX) != 0 {
+                        let bins = p.bins as usize;
+                        let cpu_occ = cpu::occupancy(&r.frame, &p, &r.depth, w, h);
+                        assert_eq!(occ[..bins], cpu_occ[..bins], "{what}: occupancy");
+                        // The clusters' depth bounds, to the last bits of a GPU's linear depth.
+                        for (k, (&g, &c)) in occ[bins..].iter().zip(&cpu_occ[bins..]).enumerate() {
+                            let near = if k % 2 == 0 { (!g, !c) } else { (g, c) };
+                            let (a, b) = (
+                                geometry::from_ordered_bits(near.0),
+                                geometry::from_ordered_bits(near.1),
+                            );
+                            assert!(
+                                (g == 0) == (c == 0)
+                                    && (g == 0
+                                        || (a - b).abs()
+                                            <= 4.0 * f32::EPSILON * a.abs().max(b.abs())),
+                                "{what}: cluster {} depth bound {} {a} against {b}",
+                                k / 2,
+                                k % 2
+                            );
+                        }
                     }
                     cpu::clustered(&r.frame, &p, &r.lights, &occ)
                 }
@@ -1203,9 +1219,9 @@ fn zbin_keeps_a_subset_of_gathers_lists() {
 }
 
 /// The box test (`CullSettings::tile_boxes`, on by default) against the side planes alone: with
-/// it off, every tiled strategy's GPU lists (gather's lines path, its stored masks, its chunks
-/// and its single level; 2.5D; scatter's masks and pairs; z-binning) equal their oracles
-/// too, and with it on every list is a subset of the list without it, over 6 seeds; over them
+/// it off, every strategy's GPU lists (gather's lines path, its stored masks, its chunks and
+/// its single level; 2.5D; scatter's masks and pairs; z-binning; clusters, tested by their
+/// pixels' boxes) equal their oracles too, and with it on every list is a subset of the list without it, over 6 seeds; over them
 /// all it evaluates fewer lights per pixel, with no false negative.
 #[test]
 fn tile_boxes_keep_a_subset_of_the_planes_lists() {
@@ -1236,6 +1252,13 @@ fn tile_boxes_keep_a_subset_of_the_planes_lists() {
                 bins: 32,
                 slicing: Slicing::Exponential,
             },
+            Strategy::Clustered {
+                tile_size: 16,
+                slices: 16,
+                slicing: Slicing::Exponential,
+                skip_empty: false,
+                ordered: true,
+            },
         ];
         for (culler, s) in cullers
             .iter()
@@ -1265,6 +1288,10 @@ fn tile_boxes_keep_a_subset_of_the_planes_lists() {
                     Strategy::ZBin { .. } => {
                         let order = out.read_stored(&ctx).unwrap().1[..r.lights.len()].to_vec();
                         cpu::zbin_lists(&r.frame, &p, &r.lights, &td, &order)
+                    }
+                    Strategy::Clustered { .. } => {
+                        let occ = out.read_occupancy(&ctx).unwrap();
+                        cpu::clustered(&r.frame, &p, &r.lights, &occ)
                     }
                     _ => cpu::gather(&r.frame, &p, &r.lights, &td),
                 };

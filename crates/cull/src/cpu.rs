@@ -12,7 +12,7 @@ use crate::geometry::{
     self, CullLight, bin_of, depth_cell, depth_cell_scale, light_depth_extent, light_tiles,
     line_planes, linear_depth, outside_plane, tile_box, tile_keeps, tile_side_planes, zbin,
 };
-use crate::layout::{CULL_FLAG_SKIP_EMPTY, GpuCullParams, GpuTileDepth, ZBINS};
+use crate::layout::{CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, GpuCullParams, GpuTileDepth, ZBINS};
 
 /// Relative band around the slack inside which a decision is borderline.
 pub const BORDER: f32 = 0.1;
@@ -231,22 +231,64 @@ pub fn tile_lines(frame: &GpuFrame, p: &GpuCullParams, lights: &[GpuLight]) -> [
     })
 }
 
-/// Oracle of `cull.occupancy`: 1 for each cluster holding a covered pixel.
+/// Oracle of `cull.occupancy`: 1 for each cluster holding a covered pixel, and after the bins'
+/// flags, with the box test, two words a bin: its pixels' depth bounds as
+/// (`!ordered_bits(dmin)`, `ordered_bits(dmax)`), zero where none (a GPU's `linear_depth` may
+/// differ from this one in the last bit).
 pub fn occupancy(frame: &GpuFrame, p: &GpuCullParams, depth: &[f32], w: u32, h: u32) -> Vec<u32> {
-    let mut occ = vec![0u32; p.bins as usize];
+    let bins = p.bins as usize;
+    let mut occ = vec![0u32; bins * 3];
     for y in 0..h {
         for x in 0..w {
             let z = depth[(y * w + x) as usize];
             if z < 1.0 {
-                occ[bin_of(frame, p, [x, y], z) as usize] = 1;
+                let b = bin_of(frame, p, [x, y], z) as usize;
+                occ[b] = 1;
+                if p.flags & CULL_FLAG_TILE_BOX != 0 {
+                    let d = linear_depth(frame, z);
+                    occ[bins + 2 * b] = occ[bins + 2 * b].max(!geometry::ordered_bits(d));
+                    occ[bins + 2 * b + 1] = occ[bins + 2 * b + 1].max(geometry::ordered_bits(d));
+                }
             }
         }
     }
     occ
 }
 
-/// The clusters light `l` is emitted to, at one slack: (tile, first slice, last slice) triples.
-fn clustered_light(frame: &GpuFrame, p: &GpuCullParams, l: &CullLight, mut emit: impl FnMut(u32)) {
+/// With the box test, whether light `l` may reach a pixel of cluster `bin` of tile `tile`
+/// (WGSL `cluster_box_keeps`), from the occupancy's depth bounds.
+fn cluster_box_keeps(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    l: &CullLight,
+    tile: [u32; 2],
+    bin: u32,
+    occupancy: &[u32],
+) -> bool {
+    let at = (p.bins + 2 * bin) as usize;
+    let far = occupancy[at + 1];
+    if far == 0 {
+        return false;
+    }
+    let t = GpuTileDepth {
+        dmin: geometry::from_ordered_bits(!occupancy[at]),
+        dmax: geometry::from_ordered_bits(far),
+        mask: 0,
+        covered: 1,
+    };
+    geometry::depth_keeps(p, l, &t)
+        && geometry::sphere_meets_box(l.center, l.radius + l.slack, &tile_box(frame, p, tile, &t))
+}
+
+/// The clusters light `l` is emitted to, at one slack (with the box test, those whose pixels'
+/// box it meets).
+fn clustered_light(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    l: &CullLight,
+    occupancy: &[u32],
+    mut emit: impl FnMut(u32),
+) {
     let dlo = -l.center.z - l.radius - l.slack;
     let dhi = -l.center.z + l.radius + l.slack;
     if dlo > p.far {
@@ -261,7 +303,13 @@ fn clustered_light(frame: &GpuFrame, p: &GpuCullParams, l: &CullLight, mut emit:
                 continue;
             }
             for s in s0..=s1 {
-                emit(s * p.tiles_x * p.tiles_y + ty as u32 * p.tiles_x + tx as u32);
+                let bin = s * p.tiles_x * p.tiles_y + ty as u32 * p.tiles_x + tx as u32;
+                let tile = [tx as u32, ty as u32];
+                if p.flags & CULL_FLAG_TILE_BOX == 0
+                    || cluster_box_keeps(frame, p, l, tile, bin, occupancy)
+                {
+                    emit(bin);
+                }
             }
         }
     }
@@ -285,6 +333,7 @@ pub fn clustered(
             frame,
             p,
             &CullLight::new(frame, l, p.slack * (1.0 - BORDER)),
+            occupancy,
             |b| {
                 lo_set[b as usize] = true;
                 touched.push(b);
@@ -295,6 +344,7 @@ pub fn clustered(
             frame,
             p,
             &CullLight::new(frame, l, p.slack * (1.0 + BORDER)),
+            occupancy,
             |b| hi_bins.push(b),
         );
         hi_bins.extend(touched.iter().copied());

@@ -59,7 +59,8 @@ impl<'a> Frame<'a> {
             offsets: storage_buf(ctx, Buf::Offsets.name(), (items + 1) * 4),
             cursors: storage_buf(ctx, Buf::Cursors.name(), bins * 4),
             ranges: storage_buf(ctx, Buf::Ranges.name(), bins * 8),
-            occupancy: storage_buf(ctx, Buf::Occupancy.name(), bins * 4),
+            // A flag a bin, then (clusters with the box test) its pixels' depth bounds.
+            occupancy: storage_buf(ctx, Buf::Occupancy.name(), bins * 12),
             stats: storage_buf(ctx, Buf::Stats.name(), 32),
             span: format!("cull.{}", strategy.name()),
         }

@@ -16,6 +16,25 @@ fn row(m: &Mat4, i: usize) -> Vec4 {
     m.row(i)
 }
 
+/// WGSL `ordered_bits`: a float's bits mapped so that unsigned order is the float order.
+pub fn ordered_bits(x: f32) -> u32 {
+    let b = x.to_bits();
+    if b & 0x8000_0000 != 0 {
+        !b
+    } else {
+        b | 0x8000_0000
+    }
+}
+
+/// WGSL `from_ordered_bits`.
+pub fn from_ordered_bits(u: u32) -> f32 {
+    f32::from_bits(if u & 0x8000_0000 != 0 {
+        u & 0x7fff_ffff
+    } else {
+        !u
+    })
+}
+
 /// WGSL `linear_depth`.
 pub fn linear_depth(frame: &GpuFrame, z: f32) -> f32 {
     let m = &frame.clip_from_view;

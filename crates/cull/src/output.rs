@@ -188,13 +188,15 @@ impl CullOutput {
         )
     }
 
-    /// Reads the cluster occupancy back (meaningful with `skip_empty`).
+    /// Reads the cluster occupancy back (meaningful for clusters with `skip_empty` or the box
+    /// test): a flag a bin, then two words a bin, the depth bounds of its pixels as
+    /// (`!ordered(dmin)`, `ordered(dmax)`), zero where none ([`crate::cpu::occupancy`]).
     pub fn read_occupancy(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
         Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
             ctx,
             &self.occupancy,
             0,
-            u64::from(self.params.bins) * 4,
+            u64::from(self.params.bins) * 12,
         )?))
     }
 }

@@ -60,11 +60,32 @@ fn tile_holds(tile: vec2<u32>, l: CullLight) -> bool {
     return !(outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l));
 }
 
-fn emit_slices(i: u32, tile: vec2<u32>, s0: u32, s1: u32, fill: bool) {
+// With the box test (CULL_FLAG_TILE_BOX), whether the light may reach a pixel of cluster `bin`
+// of tile `tile`: the depths of its pixels (none: no), then the box of the tile's frustum
+// between them (tile_box), so a cluster is tested as its pixels bound it, not as its slice.
+fn cluster_box_keeps(l: CullLight, tile: vec2<u32>, bin: u32) -> bool {
+    let at = cull.bins + 2u * bin;
+    let far = atomicLoad(&occupancy[at + 1u]);
+    if far == 0u {
+        return false;
+    }
+    var t: TileDepth;
+    t.dmin = from_ordered_bits(~atomicLoad(&occupancy[at]));
+    t.dmax = from_ordered_bits(far);
+    t.mask = 0u;
+    t.covered = 1u;
+    return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t));
+}
+
+fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, fill: bool) {
     let tiles = cull.tiles_x * cull.tiles_y;
     for (var s = s0; s <= s1; s++) {
         let bin = s * tiles + tile.y * cull.tiles_x + tile.x;
-        if (cull.flags & CULL_FLAG_SKIP_EMPTY) == 0u || occupancy[bin] != 0u {
+        if tile_boxes() {
+            if cluster_box_keeps(l, tile, bin) {
+                emit(bin, i, fill);
+            }
+        } else if (cull.flags & CULL_FLAG_SKIP_EMPTY) == 0u || atomicLoad(&occupancy[bin]) != 0u {
             emit(bin, i, fill);
         }
     }
@@ -79,7 +100,7 @@ fn assign_narrow(i: u32, r: LightRect, fill: bool) {
     for (var k = 0u; k < r.count; k++) {
         let tile = vec2<u32>(u32(r.rect.x) + k % width, u32(r.rect.y) + k / width);
         if tile_holds(tile, r.l) {
-            emit_slices(i, tile, r.s0, r.s1, fill);
+            emit_slices(i, r.l, tile, r.s0, r.s1, fill);
         }
     }
 }
@@ -109,7 +130,7 @@ fn assign_wide(id: vec3<u32>, fill: bool) {
         for (var k = lane; k < tiles; k += CLUSTER_LANES) {
             let tile = vec2<u32>(x0 + k % width, y0 + k / width);
             if tile_holds(tile, l) {
-                emit_slices(i, tile, s0, s0 + slices - 1u, fill);
+                emit_slices(i, l, tile, s0, s0 + slices - 1u, fill);
             }
         }
         return;
@@ -122,7 +143,7 @@ fn assign_wide(id: vec3<u32>, fill: bool) {
         let tile = vec2<u32>(x0 + tk % width, y0 + tk / width);
         if tile_holds(tile, l) {
             let s = s0 + k % slices;
-            emit_slices(i, tile, s, s, fill);
+            emit_slices(i, l, tile, s, s, fill);
         }
     }
 }
@@ -210,7 +231,13 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let z = textureLoad(depth_tex, p, 0);
     if z < 1.0 {
-        occupancy[bin_of(p, z)] = 1u;
+        let bin = bin_of(p, z);
+        atomicStore(&occupancy[bin], 1u);
+        if tile_boxes() {
+            let d = linear_depth(z);
+            atomicMax(&occupancy[cull.bins + 2u * bin], ~ordered_bits(d));
+            atomicMax(&occupancy[cull.bins + 2u * bin + 1u], ordered_bits(d));
+        }
     }
 }
 

@@ -67,6 +67,17 @@ fn clip_row(i: u32) -> vec4<f32> {
     return vec4<f32>(m[0][i], m[1][i], m[2][i], m[3][i]);
 }
 
+// A float's bits mapped so that unsigned order is the float order (negative depths of an
+// orthographic camera included), and back.
+fn ordered_bits(x: f32) -> u32 {
+    let b = bitcast<u32>(x);
+    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
+}
+
+fn from_ordered_bits(u: u32) -> f32 {
+    return bitcast<f32>(select(~u, u & 0x7fffffffu, (u & 0x80000000u) != 0u));
+}
+
 // Linear view depth (distance along -Z, > 0 in front) of NDC depth z. With row 2 = (0, 0, A, B)
 // and row 3 = (0, 0, C, D) of clip_from_view, z = (A vz + B) / (C vz + D). For a perspective
 // camera the denominator (C z - A) subtracts nearly equal numbers, which is exact in floating

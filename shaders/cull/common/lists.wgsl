@@ -70,5 +70,9 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
     }
 }
 
-// Clusters that hold covered pixels (CULL_FLAG_SKIP_EMPTY), written by cluster_occupancy.
-@group(1) @binding(8) var<storage, read_write> occupancy: array<u32>;
+// Clusters that hold covered pixels (CULL_FLAG_SKIP_EMPTY or CULL_FLAG_TILE_BOX), written by
+// cluster_occupancy: occupancy[bin] is 1 for a cluster holding a covered pixel, and after the
+// bins' flags, at bins + 2 bin, the nearest and farthest linear depth of its pixels as
+// (~ordered_bits(dmin), ordered_bits(dmax)), both widened with atomicMax from zero (zero: no
+// pixel).
+@group(1) @binding(8) var<storage, read_write> occupancy: array<atomic<u32>>;

@@ -112,17 +112,6 @@ fn gather_flat(tile: vec2<u32>, slot: u32, fill: bool) {
     count_done(bin, fill, acc);
 }
 
-// A float's bits mapped so that unsigned order is the float order (negative depths of an
-// orthographic camera included), and back.
-fn ordered_bits(x: f32) -> u32 {
-    let b = bitcast<u32>(x);
-    return select(b | 0x80000000u, ~b, (b & 0x80000000u) != 0u);
-}
-
-fn from_ordered_bits(u: u32) -> f32 {
-    return bitcast<f32>(select(~u, u & 0x7fffffffu, (u & 0x80000000u) != 0u));
-}
-
 // Coarse-to-fine over coarse tile wg.xy and light chunk wg.z (see the top of this file); this
 // thread's tile is the slot-th of the coarse tile, row by row.
 fn gather_chunk(wg: vec3<u32>, slot: u32, mode: u32) {

@@ -2,7 +2,8 @@
 //! depth slices, lights assigned per light (`shaders/cull/clustered/`; oracle
 //! [`crate::cpu::clustered`]). The passes of a run:
 //!
-//! 1. `cull.occupancy` (with `skip_empty`): the clusters that hold covered pixels.
+//! 1. `cull.occupancy` (with `skip_empty` or the box test): the clusters that hold covered
+//!    pixels, and with the box test the depth bounds of each cluster's pixels.
 //! 2. `cull.clustered.count`: a thread a light counts the clusters of its tiles and slices;
 //!    a light over [`crate::layout::CLUSTER_LANES`]-worth of tiles is queued instead, and
 //!    `cull.clustered.wide_args` turns the queue's length into the indirect dispatch of
@@ -18,7 +19,7 @@ use manylights_gpu::GpuError;
 
 use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
-use crate::layout::{CULL_FLAG_SKIP_EMPTY, GROUPS_X, GpuCullParams};
+use crate::layout::{CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams};
 use crate::program::Program;
 use crate::record::{Buf, Dispatch, Step};
 use crate::scan::groups_2d;
@@ -147,7 +148,7 @@ impl Plan for ClusterPlan<'_> {
             offset: 0,
             size: Some(4),
         });
-        if f.params.flags & CULL_FLAG_SKIP_EMPTY != 0 {
+        if f.params.flags & (CULL_FLAG_SKIP_EMPTY | CULL_FLAG_TILE_BOX) != 0 {
             let (w, h) = f.size;
             steps.push(Step::pass(
                 "cull.occupancy",
