@@ -538,6 +538,7 @@ mod tests {
                 slack: layout::DEFAULT_SLACK,
                 capacity: None,
                 mask_budget: None,
+                tile_boxes: true,
             },
         )
     }
