@@ -88,10 +88,14 @@ fn the_documented_example_parses() {
     let e = Experiment::parse(&doc[start..start + len], &path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(e.config.capacity, Some(64));
     assert_eq!(e.config.mask_budget, Some(0));
+    assert!(e.config.tile_boxes);
     let variants = e.sweep.variants.as_ref().unwrap();
-    assert_eq!(variants.last().unwrap().mask_budget, Some(0));
+    assert_eq!(variants[2].mask_budget, Some(0));
+    assert_eq!(variants.last().unwrap().tile_boxes, Some(false));
     // Light counts x strategies x variants.
-    assert_eq!(e.cells().len(), 2 * 2 * 3);
+    let cells = e.cells();
+    assert_eq!(cells.len(), 2 * 2 * 4);
+    assert!(cells.iter().any(|c| !c.config.tile_boxes && c.name.contains("planes")));
 }
 
 /// A tiny variant of every shipped experiment (48 x 27 at most, one frame, at most 256 lights)
