@@ -95,7 +95,11 @@ fn the_documented_example_parses() {
     // Light counts x strategies x variants.
     let cells = e.cells();
     assert_eq!(cells.len(), 2 * 2 * 4);
-    assert!(cells.iter().any(|c| !c.config.tile_boxes && c.name.contains("planes")));
+    assert!(
+        cells
+            .iter()
+            .any(|c| !c.config.tile_boxes && c.name.contains("planes"))
+    );
 }
 
 /// A tiny variant of every shipped experiment (48 x 27 at most, one frame, at most 256 lights)

@@ -19,6 +19,16 @@ fn deferred_shade_stored(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 
 @compute @workgroup_size(8, 8)
+fn deferred_shade_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shade_tile_group(id.xy, wg.xy, li, false);
+}
+
+@compute @workgroup_size(8, 8)
+fn deferred_shade_stored_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shade_tile_group(id.xy, wg.xy, li, true);
+}
+
+@compute @workgroup_size(8, 8)
 fn deferred_shade_zbin(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     shade_zbin_group(id.xy, wg.xy, li, false);
 }
@@ -130,6 +140,52 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
                 c += shade_light(lights[i], s.p, s.n, s.v, s.m);
             }
         }
+    }
+    if inside {
+        textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(c, 1.0), covered));
+    }
+}
+
+var<workgroup> wg_list: vec2<u32>;
+var<workgroup> wg_lights: array<Light, 64>;
+
+// A list a tile, in tiles of a multiple of 8 pixels (ListForm::Tiles: the tiled strategies, and
+// clusters of one slice): a workgroup's 8 x 8 pixels lie in one tile and read one list, so its
+// lights go through workgroup memory 64 at a time, each loaded once by one thread for all 64
+// pixels, in the list's order (the same sums as shade_list).
+fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
+    let inside = all(pixel < vec2<u32>(frame.viewport.xy));
+    var z = 1.0;
+    if inside {
+        z = textureLoad(depth_tex, pixel, 0);
+    }
+    let covered = inside && z < 1.0;
+    if li == 0u {
+        let tile = group * 8u / cull.tile_size;
+        wg_list = bin_ranges[tile.y * cull.tiles_x + tile.x];
+    }
+    let list = workgroupUniformLoad(&wg_list);
+    var s: Surface;
+    if covered {
+        s = surface(pixel, stored);
+    }
+    let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
+    var c = vec3<f32>(0.0);
+    for (var base = 0u; base < list.y; base += 64u) {
+        let n = min(64u, list.y - base);
+        if li < n {
+            wg_lights[li] = lights[light_indices[list.x + base + li]];
+        }
+        workgroupBarrier();
+        if covered {
+            for (var k = 0u; k < n; k++) {
+                if !infinite && length(wg_lights[k].position - s.p) >= wg_lights[k].radius {
+                    continue;
+                }
+                c += shade_light(wg_lights[k], s.p, s.n, s.v, s.m);
+            }
+        }
+        workgroupBarrier();
     }
     if inside {
         textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(c, 1.0), covered));

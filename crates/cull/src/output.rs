@@ -13,6 +13,9 @@ use crate::record::StepInfo;
 pub enum ListForm {
     /// `bin_ranges[bin] = (offset, count)` into `light_indices` (every strategy but z-binning).
     Bins,
+    /// The same, a list a tile, in tiles of a multiple of 8 pixels (the tiled strategies, and
+    /// clusters of one slice): an 8 x 8 block of pixels reads one list.
+    Tiles,
     /// Z-binning's depth bins' ranges of depth-sorted lights and tile masks.
     ZBin,
 }
@@ -22,6 +25,8 @@ impl ListForm {
     pub fn of(p: &GpuCullParams) -> Self {
         if p.flags & CULL_FLAG_ZBIN != 0 {
             Self::ZBin
+        } else if p.slices <= 1 && p.tile_size.is_multiple_of(8) {
+            Self::Tiles
         } else {
             Self::Bins
         }

@@ -157,6 +157,8 @@ pub struct Renderer {
     pub(crate) deferred_stored: wgpu::ComputePipeline,
     /// `shade.deferred` over z-binning's lists (rebuilt and stored position).
     pub(crate) deferred_zbin: [wgpu::ComputePipeline; 2],
+    /// `shade.deferred` over a list a tile of a multiple of 8 pixels (rebuilt and stored).
+    pub(crate) deferred_tiles: [wgpu::ComputePipeline; 2],
     pub(crate) forward_lists: wgpu::BindGroupLayout,
     pub(crate) deferred_lists: wgpu::BindGroupLayout,
     pub(crate) deferred_gbuffer: wgpu::BindGroupLayout,
@@ -274,6 +276,8 @@ impl Renderer {
         let deferred_stored = pipeline::compute(d, &def, &def_layout, "deferred_shade_stored");
         let deferred_zbin = ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
             .map(|entry| pipeline::compute(d, &def, &def_layout, entry));
+        let deferred_tiles = ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
+            .map(|entry| pipeline::compute(d, &def, &def_layout, entry));
         Self {
             culler: Culler::new(ctx, scene),
             prepass: DepthPrepass::new(ctx, scene),
@@ -285,6 +289,7 @@ impl Renderer {
             deferred,
             deferred_stored,
             deferred_zbin,
+            deferred_tiles,
             forward_lists,
             deferred_lists,
             deferred_gbuffer,

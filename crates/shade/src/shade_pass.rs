@@ -165,7 +165,7 @@ impl ListPass for ShadePass<'_> {
                 timer,
                 "shade.forward",
                 match self.form {
-                    ListForm::Bins => &r.forward,
+                    ListForm::Bins | ListForm::Tiles => &r.forward,
                     ListForm::ZBin => &r.forward_zbin,
                 },
                 self.scene,
@@ -184,6 +184,7 @@ impl ListPass for ShadePass<'_> {
                         (ListForm::Bins, false) => &r.deferred,
                         (ListForm::Bins, true) => &r.deferred_stored,
                         (ListForm::ZBin, stored) => &r.deferred_zbin[usize::from(stored)],
+                        (ListForm::Tiles, stored) => &r.deferred_tiles[usize::from(stored)],
                     },
                     &[&self.scene.bind_group, lists, gbuffer],
                     (w.div_ceil(8), h.div_ceil(8)),
