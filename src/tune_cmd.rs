@@ -116,6 +116,9 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     for (r, why) in &report.rejected {
         println!("rejected: {} ({}): {why}", r.strategy, r.params);
     }
+    for (s, why) in &report.left_out {
+        println!("left out: {s:?}: {why}");
+    }
     if !report.untried.is_empty() {
         println!(
             "untried within {} s: {} candidates ({})",

@@ -546,3 +546,30 @@ fn stability_suite_has_no_failures() {
         "a case that did not run must fail"
     );
 }
+
+/// The tuner leaves out the candidates the device cannot hold, with why, instead of failing on
+/// them: z-binning's masks at 1080p and 4M lights (1 bit a tile and light, 4 GB), not at 256.
+#[test]
+fn tune_leaves_out_what_the_device_cannot_hold() {
+    let ctx = common::gpu();
+    let (e, _, _) = shipped("quickstart");
+    let mut base = e.config.clone();
+    base.resolution = (1920, 1080);
+    base.lights.count = 256;
+    let (fit, left_out) = manylights_lab::tune::fitting(&ctx, &base);
+    assert!(left_out.is_empty(), "{left_out:?}");
+    assert_eq!(fit.len(), manylights_lab::tune::candidates().len());
+    base.lights.count = 4 << 20;
+    let (fit, left_out) = manylights_lab::tune::fitting(&ctx, &base);
+    assert_eq!(
+        left_out.len(),
+        3,
+        "z-binning at 8, 16 and 32 pixels: {left_out:?}"
+    );
+    assert!(left_out.iter().all(
+        |(s, why)| matches!(s, manylights_cull::Strategy::ZBin { .. })
+            && why.contains("zbin masks")
+            && why.contains("max_storage_buffer_binding_size")
+    ));
+    assert_eq!(fit.len() + 3, manylights_lab::tune::candidates().len());
+}

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use manylights_cull::{Slicing, Strategy};
+use manylights_cull::{CullSettings, Slicing, Strategy};
 use manylights_gpu::GpuContext;
 
 use crate::experiment::{Config, Experiment, Sweep, Variant};
@@ -39,6 +39,9 @@ pub struct TuneReport {
     pub rejected: Vec<(Row, String)>,
     /// Candidates the budget left untried (their cell names).
     pub untried: Vec<String>,
+    /// Candidates left out before running, as the device cannot hold them (z-binning's masks,
+    /// tiles x lights / 8 bytes, past a storage binding), with why.
+    pub left_out: Vec<(Strategy, String)>,
     /// The best candidate's experiment file, `best.ron` in the output directory.
     pub best_file: PathBuf,
 }
@@ -72,6 +75,35 @@ pub fn candidates() -> Vec<Strategy> {
     v
 }
 
+/// The candidates the device holds for `base`, and those it does not with why: z-binning's
+/// masks and sorted lights must fit one storage binding (1 GB at 1M lights and 1080p).
+pub fn fitting(ctx: &GpuContext, base: &Config) -> (Vec<Strategy>, Vec<(Strategy, String)>) {
+    let (w, h) = base.resolution;
+    // (Only the tiles and the light count size them.)
+    let settings = CullSettings {
+        near: 0.1,
+        far: 1.0,
+        slack: base.slack,
+        capacity: None,
+        mask_budget: None,
+        tile_boxes: true,
+    };
+    let mut fit = Vec::new();
+    let mut left_out = Vec::new();
+    for s in candidates() {
+        if let Strategy::ZBin { .. } = s {
+            let p = s.params(w, h, base.lights.count, &settings);
+            let bytes = manylights_cull::strategies::zbin::index_words(&p) * 4;
+            if let Err(e) = ctx.check_storage("zbin masks and sorted lights", bytes) {
+                left_out.push((s, e.to_string()));
+                continue;
+            }
+        }
+        fit.push(s);
+    }
+    (fit, left_out)
+}
+
 /// An experiment's RON text, in the form the parser reads (newtype variants unwrapped,
 /// options implicit).
 fn to_ron(e: &Experiment) -> Result<String, LabError> {
@@ -91,7 +123,8 @@ pub fn tune(
     out: &Path,
     opts: &TuneOptions,
 ) -> Result<TuneReport, LabError> {
-    let variants: Vec<Variant> = candidates()
+    let (fit, left_out) = fitting(ctx, base);
+    let variants: Vec<Variant> = fit
         .into_iter()
         .map(|s| Variant {
             strategy: Some(s),
@@ -174,6 +207,7 @@ pub fn tune(
         ranked,
         rejected,
         untried,
+        left_out,
         best_file,
     })
 }
