@@ -223,18 +223,54 @@ fn clustered_wide_args() {
 // Marks the clusters that hold covered pixels, one thread per pixel.
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 
+// A workgroup's pixels: the least and greatest bin, and (with the box test) the nearest and
+// farthest depth as the occupancy stores them.
+var<workgroup> wg_occ: array<atomic<u32>, 4>;
+
+// Where a workgroup's 8 x 8 pixels fall in one cluster (most of them: a cluster is a tile of
+// several such blocks, and neighbouring pixels mostly share a slice), its first thread writes
+// the cluster's flag and bounds once; elsewhere each pixel writes its own. (Every pixel of a
+// cluster widening the same two words serialises on them.)
 @compute @workgroup_size(8, 8)
-fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = id.xy;
-    if any(p >= vec2<u32>(frame.viewport.xy)) {
-        return;
+fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if li == 0u {
+        atomicStore(&wg_occ[0], 0xffffffffu);
+        atomicStore(&wg_occ[1], 0u);
+        atomicStore(&wg_occ[2], 0u);
+        atomicStore(&wg_occ[3], 0u);
     }
-    let z = textureLoad(depth_tex, p, 0);
-    if z < 1.0 {
-        let bin = bin_of(p, z);
+    workgroupBarrier();
+    let p = id.xy;
+    let inside = all(p < vec2<u32>(frame.viewport.xy));
+    var z = 1.0;
+    if inside {
+        z = textureLoad(depth_tex, p, 0);
+    }
+    let covered = inside && z < 1.0;
+    var bin = 0u;
+    var d = 0.0;
+    if covered {
+        bin = bin_of(p, z);
+        d = linear_depth(z);
+        atomicMin(&wg_occ[0], bin);
+        atomicMax(&wg_occ[1], bin);
+        atomicMax(&wg_occ[2], ~ordered_bits(d));
+        atomicMax(&wg_occ[3], ordered_bits(d));
+    }
+    workgroupBarrier();
+    let first = atomicLoad(&wg_occ[0]);
+    if first == atomicLoad(&wg_occ[1]) {
+        // One cluster (or, first past the last bin, no covered pixel).
+        if li == 0u && first < cull.bins {
+            atomicStore(&occupancy[first], 1u);
+            if tile_boxes() {
+                atomicMax(&occupancy[cull.bins + 2u * first], atomicLoad(&wg_occ[2]));
+                atomicMax(&occupancy[cull.bins + 2u * first + 1u], atomicLoad(&wg_occ[3]));
+            }
+        }
+    } else if covered {
         atomicStore(&occupancy[bin], 1u);
         if tile_boxes() {
-            let d = linear_depth(z);
             atomicMax(&occupancy[cull.bins + 2u * bin], ~ordered_bits(d));
             atomicMax(&occupancy[cull.bins + 2u * bin + 1u], ordered_bits(d));
         }
