@@ -12,7 +12,8 @@
 //! at 1920 x 1080, gather's 16-pixel tiles, and at 50,000 clusters too; 1M lights of radius
 //! 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass. Z-binning (256
 //! exponential bins) at the Forward+ configuration in 8-pixel tiles and in the hall in 16-pixel
-//! tiles (not at 1M lights: its masks would take 1 GB).
+//! tiles (not at 1M lights: its masks would take 1 GB). At 1M lights also the clusters `tune`
+//! picks there (32 px x 32 slices), ordered and not.
 //!
 //! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
 //! lighting instead (clears and gaps between passes included). `MANYLIGHTS_BENCH_QUICK=1`
@@ -68,6 +69,23 @@ fn settings() -> Vec<Setting> {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
+    };
+    let clusters32 = |ordered| Strategy::Clustered {
+        tile_size: 32,
+        slices: 32,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered,
+    };
+    let million = || {
+        atrium(LightSpec {
+            generator: LightGenerator::Uniform,
+            count: if q { 4096 } else { 1 << 20 },
+            seed: 1,
+            radius: RadiusRule::Fixed(0.5),
+            intensity: 0.5,
+            ..LightSpec::default()
+        })
     };
     let zbin = |tile_size| Strategy::ZBin {
         tile_size,
@@ -145,16 +163,22 @@ fn settings() -> Vec<Setting> {
         },
         Setting {
             name: "atrium_1m_clustered_unordered",
-            scene: atrium(LightSpec {
-                generator: LightGenerator::Uniform,
-                count: if q { 4096 } else { 1 << 20 },
-                seed: 1,
-                radius: RadiusRule::Fixed(0.5),
-                intensity: 0.5,
-                ..LightSpec::default()
-            }),
+            scene: million(),
             size: full,
             strategy: clusters(false),
+        },
+        // What `manylights tune` picks there: clusters of 32 px x 32 slices, ordered and not.
+        Setting {
+            name: "atrium_1m_clustered32x32",
+            scene: million(),
+            size: full,
+            strategy: clusters32(true),
+        },
+        Setting {
+            name: "atrium_1m_clustered32x32_unordered",
+            scene: million(),
+            size: full,
+            strategy: clusters32(false),
         },
     ]
 }
