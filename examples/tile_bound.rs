@@ -34,7 +34,7 @@ fn main() -> anyhow::Result<()> {
         ..LightSpec::default()
     }
     .generate(&scene)?;
-    let cam = scene.camera.clone();
+    let cam = scene.camera;
     let gs = GpuScene::upload(&ctx, &scene, &cam, w, h)?;
     let depth_tex = depth_target(&ctx, w, h);
     let view = depth_tex.create_view(&Default::default());
