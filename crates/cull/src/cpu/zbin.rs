@@ -42,9 +42,6 @@ pub fn zbin_order(frame: &GpuFrame, p: &GpuCullParams, lights: &[GpuLight]) -> V
 )]
 const NO_LIGHTS: std::ops::Range<u32> = u32::MAX..0;
 
-/// Z-binning's oracle at one slack: the bins' ranges, and each sorted light with its rectangle.
-type AtSlack = (Vec<std::ops::Range<u32>>, Vec<(CullLight, [i32; 4])>);
-
 /// Oracle of `cull.zbin.bins` at slack `p.slack * k`, given the sorted lights `order`: each
 /// depth bin's range `first..end` of sorted lights whose depth extent (as
 /// [`light_depth_extent`], the bins between for a cone's empty one) touches it; lights wholly
@@ -130,25 +127,38 @@ pub fn zbin_lists(
                 (bin(td.dmax * e1) + 1).min(last),
             );
             let (x, y) = (tx as i32, ty as i32);
-            let decide = |(ranges, sorted): &AtSlack, (b0, b1): (u32, u32), b: usize, k: u32| {
-                let (c, r) = &sorted[k as usize];
-                ranges[b].contains(&k)
-                    && union(ranges, b0, b1).contains(&k)
-                    && x >= r[0]
-                    && x <= r[2]
-                    && y >= r[1]
-                    && y <= r[3]
-                    && tile_keeps(p, c, &planes, &bx, td)
-            };
+            // Once a tile, at each slack: the sorted lights its mask covers, and for each of
+            // them whether its rectangle holds the tile and the tile test keeps it.
+            let covers = [
+                union(&lo.0, narrow.0, narrow.1),
+                union(&hi.0, wide.0, wide.1),
+            ];
+            let span = covers[0].start.min(covers[1].start)..covers[0].end.max(covers[1].end);
+            let keeps: Vec<[bool; 2]> = span
+                .clone()
+                .map(|k| {
+                    [(&lo, &covers[0]), (&hi, &covers[1])].map(|((_, sorted), cover)| {
+                        let (c, r) = &sorted[k as usize];
+                        cover.contains(&k)
+                            && x >= r[0]
+                            && x <= r[2]
+                            && y >= r[1]
+                            && y <= r[3]
+                            && tile_keeps(p, c, &planes, &bx, td)
+                    })
+                })
+                .collect();
             for b in 0..p.slices as usize {
                 let cell = b * tiles + t;
-                let candidates = lo.0[b].start.min(hi.0[b].start)..lo.0[b].end.max(hi.0[b].end);
-                for k in candidates {
+                let first = lo.0[b].start.min(hi.0[b].start).max(span.start);
+                let end = lo.0[b].end.max(hi.0[b].end).min(span.end);
+                for k in first..end {
+                    let [keep_lo, keep_hi] = keeps[(k - span.start) as usize];
                     out.push(
                         cell,
                         order[k as usize],
-                        decide(&lo, narrow, b, k),
-                        decide(&hi, wide, b, k),
+                        lo.0[b].contains(&k) && keep_lo,
+                        hi.0[b].contains(&k) && keep_hi,
                     );
                 }
             }
