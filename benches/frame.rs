@@ -131,6 +131,13 @@ fn settings() -> Vec<Setting> {
             size: paper_size,
             strategy: zbin(8),
         },
+        // Issue 21's clusters at 500 lights (the clusters' tile path).
+        Setting {
+            name: "cis5650_500_clustered64x24",
+            scene: cis5650(500),
+            size: full,
+            strategy: clusters(true),
+        },
         Setting {
             name: "cis5650_5k_gather",
             scene: cis5650(if q { 500 } else { 5000 }),

@@ -49,6 +49,11 @@ pub struct Culler {
     /// writes its list ([`crate::blocks::tile_lines`]); false: the count pass stores tile masks
     /// and the fill expands them.
     pub gather_lines: bool,
+    /// The most lights for which the clusters take their tile path (a workgroup a tile, at
+    /// most [`crate::layout::CLUSTER_TILE_SLICES`] slices and [`crate::CLUSTER_TILES_MAX_PAIRS`]
+    /// (tile, light) pairs; [`crate::CLUSTER_TILES_MAX_LIGHTS`] by default; 0: never): the same
+    /// lists as the per-light passes.
+    pub cluster_tiles_max_lights: u32,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
     pub(crate) tile_masks: TileMasks,
@@ -126,6 +131,7 @@ impl Culler {
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
             mask_budget: crate::MASK_BUDGET,
             gather_lines: true,
+            cluster_tiles_max_lights: crate::CLUSTER_TILES_MAX_LIGHTS,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),

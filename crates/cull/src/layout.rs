@@ -44,6 +44,9 @@ pub const GROUPS_X: u32 = 32768;
 /// Threads sharing one light's tiles in `cull.clustered` (one NVIDIA warp): balances lights that
 /// cover the whole screen against the many small ones.
 pub const CLUSTER_LANES: u32 = 32;
+/// The most depth slices of the clusters' tile path (`cull.clustered.tiles_count` and
+/// `tiles_fill`): a thread of a tile's workgroup of 64 owns each slice.
+pub const CLUSTER_TILE_SLICES: u32 = 64;
 /// Threads sharing one light's tiles in `cull.tiled_scatter`; each (light, lane) has a count, so
 /// the scan runs over lights x SCATTER_LANES entries.
 pub const SCATTER_LANES: u32 = 16;
@@ -137,6 +140,7 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("ZBIN_SHIFT", ZBIN_SHIFT),
     WgslConst::U32("ZBIN_MAX_SPAN", ZBIN_MAX_SPAN),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
+    WgslConst::U32("CLUSTER_TILE_SLICES", CLUSTER_TILE_SLICES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),
     WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),

@@ -190,6 +190,17 @@ pub const MIN_CHUNK_MASKED: u32 = 128;
 /// testing again (16,384 lights at 4K: 412 against 336 µs), those of 16.6 MB faster.
 pub const MASK_BUDGET: u64 = 16 << 20;
 
+/// The default most lights of the clusters' tile path ([`crate::Culler::cluster_tiles_max_lights`]).
+/// Its cost grows with tiles x lights, the per-light passes' with the (light, cluster) pairs: on
+/// the H100, in the CIS 5650 hall at 1080p, the tile path was faster at 500 and 2,000 lights in
+/// 64- and 32-pixel tiles (140 against 268 µs at 500 lights, 64 px x 24 slices) and slower at
+/// 5,000 and at the Forward+ configuration's 3,072 dense lights (docs/BENCHMARKS.md).
+pub const CLUSTER_TILES_MAX_LIGHTS: u32 = 2048;
+
+/// The most (tile, light) pairs of the clusters' tile path: past it (such as 2,000 lights in
+/// 16-pixel tiles at 1080p, 16 million pairs, 1.7 against about 1.4 ms) the per-light passes run.
+pub const CLUSTER_TILES_MAX_PAIRS: u64 = 1 << 23;
+
 /// The step of chunk sizes: a batch of the shader, 64 lights, one a thread.
 pub const CHUNK_STEP: u32 = 64;
 

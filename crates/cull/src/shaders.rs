@@ -103,6 +103,7 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
         GEOMETRY,
         LISTS,
         shader_file!("cull/clustered/clustered.wgsl"),
+        shader_file!("cull/clustered/cluster_tiles.wgsl"),
     ],
 };
 /// `cull.zbin`: its keys, bins and masks.

@@ -14,12 +14,22 @@
 //! 5. With `ordered` (the default), `cull.clustered.order_short` and `cull.clustered.order`
 //!    sort each cluster's list into light order, so that images are bit-identical run to run.
 //! 6. `cull.finalize`.
+//!
+//! With few lights (at most [`crate::Culler::cluster_tiles_max_lights`], and at most
+//! [`crate::CLUSTER_TILES_MAX_PAIRS`] (tile, light) pairs) and at most
+//! [`crate::layout::CLUSTER_TILE_SLICES`] slices, the tile path runs instead: a workgroup a tile
+//! (`cull.clustered.tiles_count`, the scan, `cull.clustered.tiles_fill`, `cull.finalize`;
+//! `shaders/cull/clustered/cluster_tiles.wgsl`) reduces its pixels to each slice's depth
+//! bounds, takes the lights 64 at a time, and gives each slice's thread the lights that reach
+//! the tile. The same lists, in light order, without occupancy, queue, atomics or order passes.
 
 use manylights_gpu::GpuError;
 
 use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
-use crate::layout::{CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams};
+use crate::layout::{
+    CLUSTER_TILE_SLICES, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
+};
 use crate::program::Program;
 use crate::record::{Buf, Dispatch, Step};
 use crate::scan::groups_2d;
@@ -36,6 +46,8 @@ pub(crate) struct Pipelines {
     order: wgpu::ComputePipeline,
     order_short: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
+    tiles_count: wgpu::ComputePipeline,
+    tiles_fill: wgpu::ComputePipeline,
 }
 
 impl Pipelines {
@@ -50,6 +62,8 @@ impl Pipelines {
             order,
             order_short,
             occupancy,
+            tiles_count,
+            tiles_fill,
         ] = program.pipelines(
             d,
             [
@@ -61,6 +75,8 @@ impl Pipelines {
                 "cluster_order",
                 "cluster_order_short",
                 "cluster_occupancy",
+                "cluster_tiles_count",
+                "cluster_tiles_fill",
             ],
         );
         Self {
@@ -72,6 +88,8 @@ impl Pipelines {
             order,
             order_short,
             occupancy,
+            tiles_count,
+            tiles_fill,
         }
     }
 }
@@ -89,7 +107,11 @@ pub(crate) fn run(
     )?;
     let f = r.frame(params, u64::from(params.bins));
     let ordered = matches!(r.strategy, Strategy::Clustered { ordered: true, .. });
-    let done = r.execute(&f, ClusterPlan::new(r, &f, ordered), t)?;
+    let by_tiles = params.slices <= CLUSTER_TILE_SLICES
+        && params.light_count <= r.culler.cluster_tiles_max_lights
+        && u64::from(params.tiles_x * params.tiles_y) * u64::from(params.light_count)
+            <= crate::CLUSTER_TILES_MAX_PAIRS;
+    let done = r.execute(&f, ClusterPlan::new(r, &f, ordered, by_tiles), t)?;
     f.finish(done)
 }
 
@@ -98,6 +120,8 @@ struct ClusterPlan<'a> {
     r: &'a RunInputs<'a>,
     f: &'a Frame<'a>,
     ordered: bool,
+    /// The tile path (a workgroup a tile; see the module's top).
+    by_tiles: bool,
     /// The wide lights' queue (binding 9; its first word is its length).
     wide: wgpu::Buffer,
     /// Their indirect dispatch arguments (binding 11 of the pass that writes them; an indirect
@@ -109,7 +133,7 @@ struct ClusterPlan<'a> {
 }
 
 impl<'a> ClusterPlan<'a> {
-    fn new(r: &'a RunInputs<'a>, f: &'a Frame<'a>, ordered: bool) -> Self {
+    fn new(r: &'a RunInputs<'a>, f: &'a Frame<'a>, ordered: bool, by_tiles: bool) -> Self {
         let p = &f.params;
         let placeholder = &r.culler.placeholder;
         let wide = f.buf(Buf::WideLights.name(), (u64::from(p.light_count) + 1) * 16);
@@ -123,6 +147,7 @@ impl<'a> ClusterPlan<'a> {
             r,
             f,
             ordered,
+            by_tiles,
             group_a: f.group(placeholder, &wide, placeholder),
             group_args: f.group(placeholder, &wide, &wide_args),
             wide,
@@ -135,12 +160,32 @@ impl<'a> ClusterPlan<'a> {
     fn light_groups(&self) -> (u32, u32) {
         groups_2d(self.f.params.light_count.div_ceil(64), GROUPS_X)
     }
+
+    /// A workgroup a tile (the tile path).
+    fn tile_groups(&self) -> (u32, u32) {
+        (self.f.params.tiles_x, self.f.params.tiles_y)
+    }
 }
 
 impl Plan for ClusterPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
         let (f, c) = (self.f, self.r.culler);
         let g = &c.clustered;
+        if self.by_tiles {
+            // Every cluster's count is stored and every range finalized: only the stats need
+            // clearing.
+            let mut steps = f.clears(true);
+            steps.push(Step::pass(
+                "cull.clustered.tiles_count",
+                &g.tiles_count,
+                &self.group_a,
+                self.tile_groups(),
+                &[Buf::Lights, Buf::Depth],
+                &[Buf::Counts, Buf::Occupancy],
+            ));
+            steps.extend(c.lists.count_tail(f, &self.group_a, f.params.bins));
+            return steps;
+        }
         let mut steps = f.clears(false);
         steps.push(Step::Clear {
             what: Buf::WideLights,
@@ -205,6 +250,19 @@ impl Plan for ClusterPlan<'_> {
         let (_, group) = self.sized.as_ref().expect("sized before the fill");
         let (f, c) = (self.f, self.r.culler);
         let g = &c.clustered;
+        if self.by_tiles {
+            return vec![
+                Step::pass(
+                    "cull.clustered.tiles_fill",
+                    &g.tiles_fill,
+                    group,
+                    self.tile_groups(),
+                    &[Buf::Lights, Buf::Depth, Buf::Offsets],
+                    &[Buf::Indices],
+                ),
+                c.lists.finalize(f, group),
+            ];
+        }
         let mut steps = vec![
             Step::pass(
                 "cull.clustered.fill",

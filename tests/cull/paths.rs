@@ -1,0 +1,344 @@
+//! Paths and options of a strategy against each other: tile masks, z-binning's narrowing of
+//! gather's lists, the box test, and the clusters' tile path.
+
+use super::*;
+
+/// Runs `s` where tile masks must be used, checks they are left zero and that the lists equal
+/// the CPU oracle's (over the GPU's tile depth data); returns the masks' words a tile and the
+/// lists.
+fn masked_lists_match_oracle(
+    ctx: &GpuContext,
+    culler: &Culler,
+    r: &Rendered,
+    case: &Case,
+    s: &Strategy,
+    what: &str,
+) -> (usize, manylights_cull::BinLists) {
+    let out = run_gpu(ctx, culler, r, case, s);
+    let p = out.params;
+    // Gather and 2.5D take their lines path, scatter stores tile masks.
+    let words = match (
+        out.read_tile_masks(ctx).unwrap(),
+        out.read_tile_lines(ctx).unwrap(),
+    ) {
+        (Some(masks), None) => {
+            assert!(masks.iter().all(|&m| m == 0), "{what}: tile masks left set");
+            masks.len() / p.bins as usize
+        }
+        (None, Some(lines)) => lines.len() / (p.tiles_x + p.tiles_y) as usize,
+        _ => panic!("{what}: tile masks or tile lines must fit"),
+    };
+    let td = out.read_tile_depth(ctx).unwrap();
+    let gpu = out.read(ctx).unwrap();
+    let oracle = match s {
+        Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &out.params, &r.lights, &td),
+        _ => cpu::gather(&r.frame, &out.params, &r.lights, &td),
+    };
+    oracle
+        .compare(&gpu)
+        .unwrap_or_else(|e| panic!("{what}: {e}"));
+    (words, gpu)
+}
+
+/// Tile masks of over 64 words a tile (over 4,096 lights, so each fill thread takes several
+/// words, and the last threads none; with the lines path 32, 64 and 128 threads a tile): gather's, 2.5D's and scatter's lists equal their CPU oracles, each in
+/// light order, and the masks are left zero.
+#[test]
+fn tile_masks_of_many_words_equal_the_oracle() {
+    let ctx = common::gpu();
+    let (w, h) = (72, 40);
+    for (count, threads) in [(4100, 32), (9000, 64), (17000, 128)] {
+        assert_eq!(line_threads(count), threads, "{count} lights");
+        let mut case = random_case(21);
+        let lights = case.scene.lights.clone();
+        case.scene.lights = lights
+            .iter()
+            .cycle()
+            .take(count as usize)
+            .cloned()
+            .collect();
+        let r = render(&ctx, &case, w, h);
+        let culler = Culler::new(&ctx, &r.gpu_scene);
+        for s in [
+            Strategy::tiled_gather(8),
+            Strategy::depth_mask(8),
+            Strategy::TiledScatter { tile_size: 8 },
+        ] {
+            let what = format!("{} {} {count} lights", case.label, s.name());
+            let (words, gpu) = masked_lists_match_oracle(&ctx, &culler, &r, &case, &s, &what);
+            assert!(words > 64, "{what}: over 64 words a tile");
+            let mut kept = 0;
+            for b in 0..gpu.ranges.len() {
+                let list = gpu.list(b);
+                assert!(
+                    list.windows(2).all(|p| p[0] < p[1]),
+                    "{what}: bin {b} in light order"
+                );
+                kept += list.len();
+            }
+            assert!(kept > 0, "{what}: some tile keeps a light");
+        }
+    }
+}
+
+/// Lights covering the whole screen of 32 x 24 tiles (768 tiles, three blocks of tiled
+/// scatter's masks count pass each, shared among its workgroups): scatter's and gather's lists
+/// equal their CPU oracles, with tile masks, and the masks are left zero.
+#[test]
+fn tile_masks_with_lights_over_many_blocks_equal_the_oracle() {
+    let ctx = common::gpu();
+    let (w, h) = (128, 96);
+    let mut case = random_case(31);
+    let reach = case.scene.light_bounds.extent().length() * 2.0;
+    for l in &mut case.scene.lights {
+        l.radius = reach;
+    }
+    let r = render(&ctx, &case, w, h);
+    let culler = Culler::new(&ctx, &r.gpu_scene);
+    for s in [
+        Strategy::TiledScatter { tile_size: 4 },
+        Strategy::tiled_gather(4),
+    ] {
+        let what = format!("{} {} ({} lights)", case.label, s.name(), r.lights.len());
+        let (_, gpu) = masked_lists_match_oracle(&ctx, &culler, &r, &case, &s, &what);
+        assert_eq!(gpu.ranges.len(), 32 * 24, "{what}");
+        let longest = (0..gpu.ranges.len())
+            .map(|b| gpu.list(b).len())
+            .max()
+            .unwrap_or(0);
+        assert!(
+            longest * 2 > r.lights.len(),
+            "{what}: most lights reach some tile ({longest} at most)"
+        );
+    }
+}
+
+/// Z-binning's tile test is gather's (with the light's rectangle), narrowed by its depth bins:
+/// every cell's list is a subset of gather's list for its tile at the same tile size, over 50
+/// seeds (CPU oracles), and over them all it evaluates fewer lights per pixel.
+#[test]
+fn zbin_keeps_a_subset_of_gathers_lists() {
+    let ctx = common::gpu();
+    let (w, h) = (37, 23);
+    let (mut zbin_evaluated, mut gather_evaluated) = (0, 0);
+    for seed in 3000..3050u64 {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        for tile_size in [8, 16] {
+            let zb = Strategy::ZBin {
+                tile_size,
+                bins: 64,
+                slicing: Slicing::Exponential,
+            };
+            let gather = Strategy::TiledGather {
+                tile_size,
+                coarse: 0,
+            };
+            let pz = params(&r, &case, &zb);
+            let pg = params(&r, &case, &gather);
+            let td = cpu::depth_bounds(&r.frame, &pg, &r.depth, r.w, r.h).0;
+            let g = cpu::gather(&r.frame, &pg, &r.lights, &td);
+            let order = cpu::zbin_order(&r.frame, &pz, &r.lights);
+            let z = cpu::zbin_lists(&r.frame, &pz, &r.lights, &td, &order);
+            let tiles = (pz.tiles_x * pz.tiles_y) as usize;
+            for (cell, kept) in z.kept.iter().enumerate() {
+                let t = cell % tiles;
+                for l in kept {
+                    assert!(
+                        g.kept[t].binary_search(l).is_ok()
+                            || g.borderline[t].binary_search(l).is_ok(),
+                        "{} tile {tile_size}: zbin keeps light {l} in cell {cell}, gather culls it from tile {t}",
+                        case.label
+                    );
+                }
+            }
+            zbin_evaluated += metrics(&r, &pz, &z.to_bin_lists()).evaluated;
+            gather_evaluated += metrics(&r, &pg, &g.to_bin_lists()).evaluated;
+        }
+    }
+    println!("lights evaluated over 50 seeds: zbin {zbin_evaluated}, gather {gather_evaluated}");
+    assert!(
+        zbin_evaluated < gather_evaluated,
+        "zbin evaluated {zbin_evaluated} lights, gather {gather_evaluated}"
+    );
+}
+
+/// The box test (`CullSettings::tile_boxes`, on by default) against the side planes alone: with
+/// it off, every strategy's GPU lists (gather's lines path, its stored masks, its chunks and
+/// its single level; 2.5D; scatter's masks and pairs; z-binning; clusters, tested by their
+/// pixels' boxes) equal their oracles too, and with it on every list is a subset of the list without it, over 6 seeds; over them
+/// all it evaluates fewer lights per pixel, with no false negative.
+#[test]
+fn tile_boxes_keep_a_subset_of_the_planes_lists() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let mut totals = [0u64; 2];
+    let mut cullers = None;
+    for seed in [21u64, 22, 23, 24, 25, 26] {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        let cullers = cullers.get_or_insert_with(|| {
+            let mut stored = Culler::new(&ctx, &r.gpu_scene);
+            stored.gather_lines = false;
+            let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
+            unmasked.mask_budget = 0;
+            [Culler::new(&ctx, &r.gpu_scene), stored, unmasked]
+        });
+        let strategies = [
+            Strategy::tiled_gather(8),
+            Strategy::TiledGather {
+                tile_size: 16,
+                coarse: 0,
+            },
+            Strategy::depth_mask(8),
+            Strategy::TiledScatter { tile_size: 8 },
+            Strategy::ZBin {
+                tile_size: 8,
+                bins: 32,
+                slicing: Slicing::Exponential,
+            },
+            Strategy::Clustered {
+                tile_size: 16,
+                slices: 16,
+                slicing: Slicing::Exponential,
+                skip_empty: false,
+                ordered: true,
+            },
+        ];
+        for (culler, s) in cullers
+            .iter()
+            .flat_map(|c| strategies.iter().map(move |s| (c, s)))
+        {
+            let what = format!(
+                "{} {} (lines: {}, masks: {})",
+                case.label,
+                s.name(),
+                culler.gather_lines,
+                culler.mask_budget > 0
+            );
+            let lists = [true, false].map(|tile_boxes| {
+                let settings = CullSettings {
+                    tile_boxes,
+                    ..CullSettings::for_camera(&case.camera)
+                };
+                let mut timer = GpuTimer::new(&ctx, 16);
+                let out = culler
+                    .run(&ctx, &r.gpu_scene, &r.depth_tex, s, &settings, &mut timer)
+                    .unwrap();
+                let p = out.params;
+                let td = out.read_tile_depth(&ctx).unwrap();
+                let gpu = out.read(&ctx).unwrap();
+                let oracle = match s {
+                    Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &p, &r.lights, &td),
+                    Strategy::ZBin { .. } => {
+                        let order = out.read_stored(&ctx).unwrap().1[..r.lights.len()].to_vec();
+                        cpu::zbin_lists(&r.frame, &p, &r.lights, &td, &order)
+                    }
+                    Strategy::Clustered { .. } => {
+                        let occ = out.read_occupancy(&ctx).unwrap();
+                        cpu::clustered(&r.frame, &p, &r.lights, &occ)
+                    }
+                    _ => cpu::gather(&r.frame, &p, &r.lights, &td),
+                };
+                oracle
+                    .compare(&gpu)
+                    .unwrap_or_else(|e| panic!("{what}, tile_boxes {tile_boxes}: {e}"));
+                let m = metrics(&r, &p, &gpu);
+                assert_eq!(m.false_negatives, 0, "{what}, tile_boxes {tile_boxes}");
+                totals[usize::from(!tile_boxes)] += m.evaluated;
+                (gpu, oracle)
+            });
+            let [(with, _), (without, oracle)] = &lists;
+            for b in 0..with.ranges.len() {
+                let planes = without.sorted(b);
+                for l in with.sorted(b) {
+                    assert!(
+                        planes.binary_search(&l).is_ok()
+                            || oracle.borderline[b].binary_search(&l).is_ok(),
+                        "{what}: the box test keeps light {l} in bin {b}, the planes alone do not"
+                    );
+                }
+            }
+        }
+    }
+    println!(
+        "lights evaluated: with the box test {}, without {}",
+        totals[0], totals[1]
+    );
+    assert!(totals[0] < totals[1], "{totals:?}");
+}
+
+/// The clusters' tile path (a workgroup a tile, [`Culler::cluster_tiles_max_lights`]) gives the
+/// per-light passes' lists, bin for bin and in light order, and leaves the same occupancy words,
+/// with and without the box test and `skip_empty`, over several seeds; past
+/// `CLUSTER_TILE_SLICES` slices the per-light passes run.
+#[test]
+fn cluster_tile_path_equals_the_per_light_passes() {
+    use manylights_cull::layout::CLUSTER_TILE_SLICES;
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let mut cullers = None;
+    for seed in [31u64, 32, 33, 34, 35, 36] {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        let [by_tiles, per_light] = cullers.get_or_insert_with(|| {
+            let mut per_light = Culler::new(&ctx, &r.gpu_scene);
+            per_light.cluster_tiles_max_lights = 0;
+            [Culler::new(&ctx, &r.gpu_scene), per_light]
+        });
+        for (tile_size, slices, skip_empty, tile_boxes) in [
+            (8, 24, false, true),
+            (16, 8, true, false),
+            (8, CLUSTER_TILE_SLICES, false, false),
+            (16, CLUSTER_TILE_SLICES, true, true),
+            (8, CLUSTER_TILE_SLICES + 1, true, true),
+        ] {
+            let s = Strategy::Clustered {
+                tile_size,
+                slices,
+                slicing: Slicing::Exponential,
+                skip_empty,
+                ordered: true,
+            };
+            let what = format!(
+                "{}: {tile_size} px, {slices} slices, skip_empty {skip_empty}, tile_boxes {tile_boxes}",
+                case.label
+            );
+            let settings = CullSettings {
+                tile_boxes,
+                ..CullSettings::for_camera(&case.camera)
+            };
+            let [a, b] = [&*by_tiles, &*per_light].map(|c| {
+                let mut timer = GpuTimer::new(&ctx, 16);
+                let out = c
+                    .run(&ctx, &r.gpu_scene, &r.depth_tex, &s, &settings, &mut timer)
+                    .unwrap();
+                check_plan(&what, &out.passes, timer.read(&ctx).unwrap(), 1);
+                out
+            });
+            let tiled = |o: &manylights_cull::CullOutput| {
+                o.passes
+                    .iter()
+                    .any(|p| p.name == "cull.clustered.tiles_count")
+            };
+            assert_eq!(
+                tiled(&a),
+                slices <= CLUSTER_TILE_SLICES,
+                "{what}: the tile path"
+            );
+            assert!(!tiled(&b), "{what}: the per-light passes");
+            let (la, lb) = (a.read(&ctx).unwrap(), b.read(&ctx).unwrap());
+            assert_eq!(la.ranges.len(), lb.ranges.len(), "{what}: bins");
+            for bin in 0..la.ranges.len() {
+                assert_eq!(la.list(bin), lb.list(bin), "{what}: bin {bin}");
+            }
+            if skip_empty || tile_boxes {
+                assert_eq!(
+                    a.read_occupancy(&ctx).unwrap(),
+                    b.read_occupancy(&ctx).unwrap(),
+                    "{what}: occupancy"
+                );
+            }
+        }
+    }
+}
