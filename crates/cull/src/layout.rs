@@ -44,8 +44,8 @@ pub const GROUPS_X: u32 = 32768;
 /// Threads sharing one light's tiles in `cull.clustered` (one NVIDIA warp): balances lights that
 /// cover the whole screen against the many small ones.
 pub const CLUSTER_LANES: u32 = 32;
-/// The most depth slices of the clusters' tile path (`cull.clustered.tiles_count` and
-/// `tiles_fill`): a thread of a tile's workgroup of 64 owns each slice.
+/// The most depth slices of the clusters' tile path (`cull.clustered.tiles_count`: each of the
+/// first 64 threads of a tile's workgroup owns a slice).
 pub const CLUSTER_TILE_SLICES: u32 = 64;
 /// Threads sharing one light's tiles in `cull.tiled_scatter`; each (light, lane) has a count, so
 /// the scan runs over lights x SCATTER_LANES entries.

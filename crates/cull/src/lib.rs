@@ -191,15 +191,17 @@ pub const MIN_CHUNK_MASKED: u32 = 128;
 pub const MASK_BUDGET: u64 = 16 << 20;
 
 /// The default most lights of the clusters' tile path ([`crate::Culler::cluster_tiles_max_lights`]).
-/// Its cost grows with tiles x lights, the per-light passes' with the (light, cluster) pairs: on
-/// the H100, in the CIS 5650 hall at 1080p, the tile path was faster at 500 and 2,000 lights in
-/// 64- and 32-pixel tiles (140 against 268 µs at 500 lights, 64 px x 24 slices) and slower at
-/// 5,000 and at the Forward+ configuration's 3,072 dense lights (docs/BENCHMARKS.md).
-pub const CLUSTER_TILES_MAX_LIGHTS: u32 = 2048;
+/// Its count pass walks every light at every tile, 256 at a time, so its cost grows with the
+/// lights; the per-light passes' with the (light, cluster) pairs. On the H100, culling spans at
+/// 1080p in the CIS 5650 hall (docs/BENCHMARKS.md): the tile path 101 against 269 µs at 500
+/// lights (64 px x 24 slices), 280 against 291 µs at 5,000, 731 against 400 µs at 16,384; at the
+/// Forward+ configuration (3,072 dense lights, 720p) 165 against 250 µs.
+pub const CLUSTER_TILES_MAX_LIGHTS: u32 = 4096;
 
-/// The most (tile, light) pairs of the clusters' tile path: past it (such as 2,000 lights in
-/// 16-pixel tiles at 1080p, 16 million pairs, 1.7 against about 1.4 ms) the per-light passes run.
-pub const CLUSTER_TILES_MAX_PAIRS: u64 = 1 << 23;
+/// The most (tile, light) pairs of the clusters' tile path: 2,000 lights in 16-pixel tiles at
+/// 1080p (16 million pairs) still gain (0.87 against 1.39 ms); at 5,000 lights there (41
+/// million) the per-light passes are faster.
+pub const CLUSTER_TILES_MAX_PAIRS: u64 = 1 << 24;
 
 /// The step of chunk sizes: a batch of the shader, 64 lights, one a thread.
 pub const CHUNK_STEP: u32 = 64;

@@ -54,6 +54,8 @@ pub enum Buf {
     BlockQueue,
     /// The clusters' queue of wide lights.
     WideLights,
+    /// The clusters' masks on their tile path (a bit per (cluster, light)).
+    ClusterMasks,
     /// The indirect dispatch arguments of the wide lights' passes.
     WideArgs,
     /// Tiled scatter's pair keys (tiles).
@@ -82,6 +84,7 @@ impl Buf {
             Self::TileLines => "cull.tile_lines",
             Self::BlockQueue => "cull.tiled_scatter.blocks",
             Self::WideLights => "cull.clustered.wide_lights",
+            Self::ClusterMasks => "cull.clustered.masks",
             Self::WideArgs => "cull.clustered.wide_args",
             Self::PairKeys => "cull.pair_keys",
         }

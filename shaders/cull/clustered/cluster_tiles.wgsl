@@ -1,9 +1,10 @@
-// cull.clustered.tiles_count / tiles_fill: the clusters' lists a workgroup a tile, for runs of
-// few lights (at most Culler::cluster_tiles_max_lights) and at most CLUSTER_TILE_SLICES slices.
-// With few lights, the per-light passes (clustered.wgsl) leave most of the GPU idle and pay for
-// what surrounds them: an occupancy pass, a queue of wide lights and its indirect dispatches,
-// global atomics on the clusters' counters (every light of a cluster adds to the same word), and
-// order passes. Here a workgroup takes one tile:
+// cull.clustered.tiles_count / masks_fill: the clusters' lists a workgroup a tile, for runs of
+// few lights (Culler::cluster_tiles_max_lights, CLUSTER_TILES_MAX_PAIRS and the mask budget) and
+// at most CLUSTER_TILE_SLICES slices. With few lights, the per-light passes (clustered.wgsl)
+// leave most of the GPU idle and pay for what surrounds them: an occupancy pass, a queue of
+// wide lights and its indirect dispatches, global atomics on the clusters' counters (every
+// light of a cluster adds to the same word), and order passes. Here a workgroup of the count
+// pass takes one tile:
 //
 // 1. Each thread reduces some of the tile's pixels to the depth bounds of each slice they fall
 //    in (nothing for slices without pixels), as cull.occupancy does for the whole screen.
@@ -11,15 +12,22 @@
 //    (with the box test) the box of the tile's frustum between that cluster's pixel depths,
 //    computed once into workgroup memory; the slices that may hold lights are listed.
 // 3. The lights, CLUSTER_TILE_THREADS at a time: each thread takes one and, when its tile
-//    rectangle holds the tile and it passes the tile's side planes (light_rect and tile_holds,
-//    as the per-light passes), appends it to the batch's candidates. The threads then share the
-//    (candidate, listed slice) pairs: a pair within the light's slices whose cluster keeps it
-//    sets the light's bit in the slice's mask. Last, each slice's thread counts its mask (count
-//    pass) or writes its lights in light order, bit by bit (fill pass), and clears it.
+//    rectangle holds the tile and it passes the tile's side planes (light_rect's rectangle and
+//    the planes of tile_holds, built once), appends it to the batch's candidates. The threads
+//    then share the (candidate, listed slice) pairs: a pair within the light's slices whose
+//    cluster keeps it sets the light's bit in the slice's mask. Last, each listed slice's
+//    thread stores its mask's words, counts them and clears them.
 //
-// The lists are exactly the per-light passes' (the same tests on the same floats) and already
-// in light order, so neither cull.occupancy nor the order passes run, and each cluster's count
-// is stored, not added. The count pass also stores the occupancy words cull.occupancy would.
+// Then the scan, and masks_fill: a thread a cluster writes its range and, from its mask, its
+// lights in light order (up to its count, which a capacity caps). The lists are exactly the
+// per-light passes' (the same tests on the same floats), so neither cull.occupancy nor the
+// order passes nor cull.finalize run, and each cluster's count is stored, not added. The count
+// pass also stores the occupancy words cull.occupancy would.
+//
+// The masks: word w (lights 32 w .. 32 w + 31) of cluster `bin` at w * bins + bin, in the
+// buffer at binding 9 (the per-light passes' wide-light queue, which this path does not use).
+// Only the listed clusters' words are stored; the others' counts are zero, and the fill reads
+// no word of theirs.
 
 // CLUSTER_TILE_SLICES (from the host) of the workgroup's CLUSTER_TILE_THREADS threads own a
 // slice each.
@@ -81,11 +89,11 @@ fn slice_bounds(tile: vec2<u32>, li: u32) {
     widen_slice(cur, near, far);
 }
 
-// Step 2, by thread s < CLUSTER_TILE_SLICES: slice s's cluster, listed if it may hold lights;
-// with `fill`, the cluster's offset, returned; otherwise the occupancy words stored.
-fn slice_setup(tile: vec2<u32>, s: u32, pixels: bool, fill: bool) -> u32 {
+// Step 2, by thread s < CLUSTER_TILE_SLICES: slice s's cluster, listed if it may hold lights,
+// and its occupancy words. Returns whether it is listed.
+fn slice_setup(tile: vec2<u32>, s: u32, pixels: bool) -> bool {
     if s >= cull.slices {
-        return 0u;
+        return false;
     }
     let bin = s * cull.tiles_x * cull.tiles_y + tile.y * cull.tiles_x + tile.x;
     var listed = true;
@@ -100,14 +108,12 @@ fn slice_setup(tile: vec2<u32>, s: u32, pixels: bool, fill: bool) -> u32 {
         if listed && tile_boxes() {
             wg_slice_box[s] = tile_box(tile, t);
         }
-        if !fill {
-            // The occupancy buffer as cull.occupancy leaves it, for those who read it back
-            // (every word stored: it is not cleared on this path).
-            let bounds = select(vec2<u32>(0u), vec2<u32>(near, far), tile_boxes());
-            atomicStore(&occupancy[bin], u32(listed));
-            atomicStore(&occupancy[cull.bins + 2u * bin], bounds.x);
-            atomicStore(&occupancy[cull.bins + 2u * bin + 1u], bounds.y);
-        }
+        // The occupancy buffer as cull.occupancy leaves it, for those who read it back (every
+        // word stored: it is not cleared on this path).
+        let bounds = select(vec2<u32>(0u), vec2<u32>(near, far), tile_boxes());
+        atomicStore(&occupancy[bin], u32(listed));
+        atomicStore(&occupancy[cull.bins + 2u * bin], bounds.x);
+        atomicStore(&occupancy[cull.bins + 2u * bin + 1u], bounds.y);
     }
     if listed {
         wg_slices[atomicAdd(&wg_slice_count, 1u)] = s;
@@ -115,10 +121,7 @@ fn slice_setup(tile: vec2<u32>, s: u32, pixels: bool, fill: bool) -> u32 {
     for (var w = 0u; w < CLUSTER_TILE_WORDS; w++) {
         atomicStore(&wg_slice_mask[s * CLUSTER_TILE_WORDS + w], 0u);
     }
-    if fill && listed {
-        return bin_offsets[bin];
-    }
-    return 0u;
+    return listed;
 }
 
 // Whether listed slice s's cluster keeps candidate c (with slices `info`).
@@ -139,8 +142,9 @@ fn cluster_keeps(c: u32, info: u32, s: u32) -> bool {
     return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, wg_slice_box[s]);
 }
 
-// The whole of a workgroup's tile (see the top of this file). Called in uniform control flow.
-fn cluster_tile(tile: vec2<u32>, li: u32, fill: bool) {
+// The count pass over a workgroup's tile (see the top of this file). Called in uniform control
+// flow.
+fn cluster_tile(tile: vec2<u32>, li: u32) {
     if li < CLUSTER_TILE_SLICES {
         atomicStore(&wg_slice_near[li], 0u);
         atomicStore(&wg_slice_far[li], 0u);
@@ -156,21 +160,22 @@ fn cluster_tile(tile: vec2<u32>, li: u32, fill: bool) {
     }
     workgroupBarrier();
     // Step 2.
-    var at = 0u;
+    var listed = false;
     if li < CLUSTER_TILE_SLICES {
-        at = slice_setup(tile, li, pixels, fill);
+        listed = slice_setup(tile, li, pixels);
     }
     workgroupBarrier();
     let slices = atomicLoad(&wg_slice_count);
-    let own = li < cull.slices && li < CLUSTER_TILE_SLICES;
+    let bin = li * cull.tiles_x * cull.tiles_y + tile.y * cull.tiles_x + tile.x;
     // Step 3: the lights.
     let here = vec2<i32>(tile);
+    let planes = tile_side_planes(tile);
     var kept = 0u;
     for (var first = 0u; first < cull.light_count; first += CLUSTER_TILE_THREADS) {
         let i = first + li;
         if i < cull.light_count {
             let r = light_rect(i);
-            if r.count != 0u && all(here >= r.rect.xy) && all(here <= r.rect.zw) && tile_holds(tile, r.l) {
+            if r.count != 0u && all(here >= r.rect.xy) && all(here <= r.rect.zw) && !(outside_plane(planes[0], r.l) || outside_plane(planes[1], r.l) || outside_plane(planes[2], r.l) || outside_plane(planes[3], r.l)) {
                 let c = atomicAdd(&wg_cand_count, 1u);
                 wg_cand[c] = r.l;
                 wg_cand_info[c] = li | (r.s0 << 8u) | (r.s1 << 16u);
@@ -188,24 +193,11 @@ fn cluster_tile(tile: vec2<u32>, li: u32, fill: bool) {
             }
         }
         workgroupBarrier();
-        if own {
+        if listed {
             for (var w = 0u; w < CLUSTER_TILE_WORDS; w++) {
-                var m = atomicLoad(&wg_slice_mask[li * CLUSTER_TILE_WORDS + w]);
-                if m == 0u {
-                    continue;
-                }
-                atomicStore(&wg_slice_mask[li * CLUSTER_TILE_WORDS + w], 0u);
-                if !fill {
-                    kept += countOneBits(m);
-                    continue;
-                }
-                while m != 0u {
-                    if cull.capacity == 0u || kept < cull.capacity {
-                        out_indices[at + kept] = first + 32u * w + firstTrailingBit(m);
-                    }
-                    m &= m - 1u;
-                    kept += 1u;
-                }
+                let m = atomicExchange(&wg_slice_mask[li * CLUSTER_TILE_WORDS + w], 0u);
+                atomicStore(&wide_lights[(first / 32u + w) * cull.bins + bin], m);
+                kept += countOneBits(m);
             }
         }
         if li == 0u {
@@ -213,18 +205,35 @@ fn cluster_tile(tile: vec2<u32>, li: u32, fill: bool) {
         }
         workgroupBarrier();
     }
-    if !fill && own {
-        let bin = li * cull.tiles_x * cull.tiles_y + tile.y * cull.tiles_x + tile.x;
+    if li < cull.slices && li < CLUSTER_TILE_SLICES {
         atomicStore(&bin_counts[bin], kept);
     }
 }
 
 @compute @workgroup_size(256)
 fn cluster_tiles_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    cluster_tile(wg.xy, li, false);
+    cluster_tile(wg.xy, li);
 }
 
-@compute @workgroup_size(256)
-fn cluster_tiles_fill(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    cluster_tile(wg.xy, li, true);
+// A thread a cluster: its range, and its lights from its mask in light order, up to its count
+// (capped by a capacity: the first lights are kept).
+@compute @workgroup_size(64)
+fn cluster_masks_fill(@builtin(global_invocation_id) id: vec3<u32>) {
+    let bin = id.y * GROUPS_X * 64u + id.x;
+    if bin >= cull.bins {
+        return;
+    }
+    let n = atomicLoad(&bin_counts[bin]);
+    let at = bin_offsets[bin];
+    out_ranges[bin] = vec2<u32>(at, n);
+    var kept = 0u;
+    let words = (cull.light_count + 31u) / 32u;
+    for (var w = 0u; w < words && kept < n; w++) {
+        var m = atomicLoad(&wide_lights[w * cull.bins + bin]);
+        while m != 0u && kept < n {
+            out_indices[at + kept] = 32u * w + firstTrailingBit(m);
+            m &= m - 1u;
+            kept += 1u;
+        }
+    }
 }
