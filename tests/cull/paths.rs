@@ -268,8 +268,9 @@ fn tile_boxes_keep_a_subset_of_the_planes_lists() {
     assert!(totals[0] < totals[1], "{totals:?}");
 }
 
-/// The clusters' tile path (a workgroup a tile, [`Culler::cluster_tiles_max_lights`]) gives the
-/// per-light passes' lists, bin for bin and in light order, and leaves the same occupancy words,
+/// The clusters' tile path (a workgroup a tile, [`Culler::cluster_tiles_max_lights`]), with the
+/// lights' rectangles computed at every tile or in a pass of their own, gives the per-light
+/// passes' lists, bin for bin and in light order, and leaves the same occupancy words,
 /// with and without the box test and `skip_empty`, over several seeds; past
 /// `CLUSTER_TILE_SLICES` slices the per-light passes run.
 #[test]
@@ -281,10 +282,14 @@ fn cluster_tile_path_equals_the_per_light_passes() {
     for seed in [31u64, 32, 33, 34, 35, 36] {
         let case = random_case(seed);
         let r = render(&ctx, &case, w, h);
-        let [by_tiles, per_light] = cullers.get_or_insert_with(|| {
+        let [by_tiles, with_rects, per_light] = cullers.get_or_insert_with(|| {
+            // With the lights' rectangles in a pass of their own (these scenes are too small
+            // to reach its default bound).
+            let mut with_rects = Culler::new(&ctx, &r.gpu_scene);
+            with_rects.cluster_tile_rect_pairs = 0;
             let mut per_light = Culler::new(&ctx, &r.gpu_scene);
             per_light.cluster_tiles_max_lights = 0;
-            [Culler::new(&ctx, &r.gpu_scene), per_light]
+            [Culler::new(&ctx, &r.gpu_scene), with_rects, per_light]
         });
         for (tile_size, slices, skip_empty, tile_boxes) in [
             (8, 24, false, true),
@@ -308,7 +313,7 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 tile_boxes,
                 ..CullSettings::for_camera(&case.camera)
             };
-            let [a, b] = [&*by_tiles, &*per_light].map(|c| {
+            let [a, r2, b] = [&*by_tiles, &*with_rects, &*per_light].map(|c| {
                 let mut timer = GpuTimer::new(&ctx, 16);
                 let out = c
                     .run(&ctx, &r.gpu_scene, &r.depth_tex, &s, &settings, &mut timer)
@@ -316,28 +321,43 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 check_plan(&what, &out.passes, timer.read(&ctx).unwrap(), 1);
                 out
             });
-            let tiled = |o: &manylights_cull::CullOutput| {
-                o.passes
-                    .iter()
-                    .any(|p| p.name == "cull.clustered.tiles_count")
+            let ran = |o: &manylights_cull::CullOutput, pass: &str| {
+                o.passes.iter().any(|p| p.name == pass)
             };
+            let tiles = slices <= CLUSTER_TILE_SLICES;
             assert_eq!(
-                tiled(&a),
-                slices <= CLUSTER_TILE_SLICES,
+                ran(&a, "cull.clustered.tiles_count"),
+                tiles,
                 "{what}: the tile path"
             );
-            assert!(!tiled(&b), "{what}: the per-light passes");
-            let (la, lb) = (a.read(&ctx).unwrap(), b.read(&ctx).unwrap());
-            assert_eq!(la.ranges.len(), lb.ranges.len(), "{what}: bins");
-            for bin in 0..la.ranges.len() {
-                assert_eq!(la.list(bin), lb.list(bin), "{what}: bin {bin}");
-            }
-            if skip_empty || tile_boxes {
-                assert_eq!(
-                    a.read_occupancy(&ctx).unwrap(),
-                    b.read_occupancy(&ctx).unwrap(),
-                    "{what}: occupancy"
-                );
+            assert!(
+                !ran(&a, "cull.clustered.rects"),
+                "{what}: rectangles inline"
+            );
+            assert_eq!(
+                ran(&r2, "cull.clustered.rects"),
+                tiles,
+                "{what}: the rectangles' pass"
+            );
+            assert!(
+                !ran(&b, "cull.clustered.tiles_count"),
+                "{what}: the per-light passes"
+            );
+            let lb = b.read(&ctx).unwrap();
+            let occupancy = b.read_occupancy(&ctx).unwrap();
+            for (o, path) in [(&a, "tile path"), (&r2, "tile path with rectangles")] {
+                let la = o.read(&ctx).unwrap();
+                assert_eq!(la.ranges.len(), lb.ranges.len(), "{what}, {path}: bins");
+                for bin in 0..la.ranges.len() {
+                    assert_eq!(la.list(bin), lb.list(bin), "{what}, {path}: bin {bin}");
+                }
+                if skip_empty || tile_boxes {
+                    assert_eq!(
+                        o.read_occupancy(&ctx).unwrap(),
+                        occupancy,
+                        "{what}, {path}: occupancy"
+                    );
+                }
             }
         }
     }

@@ -54,6 +54,9 @@ pub struct Culler {
     /// (tile, light) pairs; [`crate::CLUSTER_TILES_MAX_LIGHTS`] by default; 0: never): the same
     /// lists as the per-light passes.
     pub cluster_tiles_max_lights: u32,
+    /// The fewest (tile, light) pairs at which that path computes the lights' rectangles in a
+    /// pass of their own ([`crate::CLUSTER_TILE_RECT_PAIRS`] by default; 0: always).
+    pub cluster_tile_rect_pairs: u64,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
     pub(crate) tile_masks: TileMasks,
@@ -132,6 +135,7 @@ impl Culler {
             mask_budget: crate::MASK_BUDGET,
             gather_lines: true,
             cluster_tiles_max_lights: crate::CLUSTER_TILES_MAX_LIGHTS,
+            cluster_tile_rect_pairs: crate::CLUSTER_TILE_RECT_PAIRS,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),

@@ -12,8 +12,9 @@
 //    (with the box test) the box of the tile's frustum between that cluster's pixel depths,
 //    computed once into workgroup memory; the slices that may hold lights are listed.
 // 3. The lights, CLUSTER_TILE_THREADS at a time: each thread takes one and, when its tile
-//    rectangle holds the tile and it passes the tile's side planes (light_rect's rectangle and
-//    the planes of tile_holds, built once), appends it to the batch's candidates. The threads
+//    rectangle holds the tile and it passes the tile's side planes (light_rect's rectangle, or
+//    cull.clustered.rects' where it ran, and the planes of tile_holds, built once), appends it
+//    to the batch's candidates. The threads
 //    then share the (candidate, listed slice) pairs: a pair within the light's slices whose
 //    cluster keeps it sets the light's bit in the slice's mask. Last, each listed slice's
 //    thread stores its mask's words, counts them and clears them.
@@ -168,17 +169,31 @@ fn cluster_tile(tile: vec2<u32>, li: u32) {
     let slices = atomicLoad(&wg_slice_count);
     let bin = li * cull.tiles_x * cull.tiles_y + tile.y * cull.tiles_x + tile.x;
     // Step 3: the lights.
-    let here = vec2<i32>(tile);
     let planes = tile_side_planes(tile);
     var kept = 0u;
     for (var first = 0u; first < cull.light_count; first += CLUSTER_TILE_THREADS) {
         let i = first + li;
-        if i < cull.light_count {
+        if i < cull.light_count && !CLUSTER_TILE_RECTS {
             let r = light_rect(i);
-            if r.count != 0u && all(here >= r.rect.xy) && all(here <= r.rect.zw) && !(outside_plane(planes[0], r.l) || outside_plane(planes[1], r.l) || outside_plane(planes[2], r.l) || outside_plane(planes[3], r.l)) {
+            if r.count != 0u && all(vec2<i32>(tile) >= r.rect.xy) && all(vec2<i32>(tile) <= r.rect.zw) && !(outside_plane(planes[0], r.l) || outside_plane(planes[1], r.l) || outside_plane(planes[2], r.l) || outside_plane(planes[3], r.l)) {
                 let c = atomicAdd(&wg_cand_count, 1u);
                 wg_cand[c] = r.l;
                 wg_cand_info[c] = li | (r.s0 << 8u) | (r.s1 << 16u);
+            }
+        }
+        if i < cull.light_count && CLUSTER_TILE_RECTS {
+            // The light's rectangle and slices from cull.clustered.rects.
+            let lo = wide_args[4u * i];
+            let hi = wide_args[4u * i + 1u];
+            let t = tile;
+            if wide_args[4u * i + 3u] != 0u && t.x >= (lo & 0xffffu) && t.y >= (lo >> 16u) && t.x <= (hi & 0xffffu) && t.y <= (hi >> 16u) {
+                let l = cull_light(lights[i]);
+                if !(outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l)) {
+                    let sl = wide_args[4u * i + 2u];
+                    let c = atomicAdd(&wg_cand_count, 1u);
+                    wg_cand[c] = l;
+                    wg_cand_info[c] = li | ((sl & 0xffu) << 8u) | ((sl >> 16u) << 16u);
+                }
             }
         }
         workgroupBarrier();
@@ -208,6 +223,32 @@ fn cluster_tile(tile: vec2<u32>, li: u32) {
     if li < cull.slices && li < CLUSTER_TILE_SLICES {
         atomicStore(&bin_counts[bin], kept);
     }
+}
+
+// With CLUSTER_TILE_RECTS (where tiles x lights make it pay, CLUSTER_TILE_RECT_PAIRS), the count
+// pass reads each light's rectangle and slices from cull.clustered.rects instead of computing
+// them at every tile.
+override CLUSTER_TILE_RECTS: bool = false;
+
+// cull.clustered.rects: a thread a light, its tile rectangle and slices (light_rect), computed
+// once for every tile of the count pass, at binding 11 (the wide lights' dispatch arguments on
+// the other path): words 4 i .. 4 i + 3 are x0 | y0 << 16, x1 | y1 << 16, s0 | s1 << 16, and 1
+// where the light reaches a tile (0: none).
+@compute @workgroup_size(64)
+fn cluster_light_rects(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = id.y * GROUPS_X * 64u + id.x;
+    if i >= cull.light_count {
+        return;
+    }
+    let r = light_rect(i);
+    if r.count == 0u {
+        wide_args[4u * i + 3u] = 0u;
+        return;
+    }
+    wide_args[4u * i] = u32(r.rect.x) | (u32(r.rect.y) << 16u);
+    wide_args[4u * i + 1u] = u32(r.rect.z) | (u32(r.rect.w) << 16u);
+    wide_args[4u * i + 2u] = r.s0 | (r.s1 << 16u);
+    wide_args[4u * i + 3u] = 1u;
 }
 
 @compute @workgroup_size(256)

@@ -50,7 +50,10 @@ pub(crate) struct Pipelines {
     order: wgpu::ComputePipeline,
     order_short: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
+    light_rects: wgpu::ComputePipeline,
     tiles_count: wgpu::ComputePipeline,
+    /// The same, reading `cull.clustered.rects`' rectangles (`CLUSTER_TILE_RECTS`).
+    tiles_count_rects: wgpu::ComputePipeline,
     masks_fill: wgpu::ComputePipeline,
 }
 
@@ -66,6 +69,7 @@ impl Pipelines {
             order,
             order_short,
             occupancy,
+            light_rects,
             tiles_count,
             masks_fill,
         ] = program.pipelines(
@@ -79,6 +83,7 @@ impl Pipelines {
                 "cluster_order",
                 "cluster_order_short",
                 "cluster_occupancy",
+                "cluster_light_rects",
                 "cluster_tiles_count",
                 "cluster_masks_fill",
             ],
@@ -92,7 +97,16 @@ impl Pipelines {
             order,
             order_short,
             occupancy,
+            light_rects,
             tiles_count,
+            tiles_count_rects: program.pipeline_with(
+                d,
+                "cluster_tiles_count",
+                &wgpu::PipelineCompilationOptions {
+                    constants: &[("CLUSTER_TILE_RECTS", 1.0)],
+                    ..Default::default()
+                },
+            ),
             masks_fill,
         }
     }
@@ -114,14 +128,18 @@ pub(crate) fn run(
     let limits = &r.ctx.limits;
     let by_tiles = params.slices <= CLUSTER_TILE_SLICES
         && params.light_count <= r.culler.cluster_tiles_max_lights
-        && u64::from(params.tiles_x * params.tiles_y) * u64::from(params.light_count)
-            <= crate::CLUSTER_TILES_MAX_PAIRS
+        && pairs(&params) <= crate::CLUSTER_TILES_MAX_PAIRS
         && mask_bytes(&params)
             <= limits
                 .max_storage_buffer_binding_size
                 .min(limits.max_buffer_size);
     let done = r.execute(&f, ClusterPlan::new(r, &f, ordered, by_tiles), t)?;
     f.finish(done)
+}
+
+/// The (tile, light) pairs of a run.
+fn pairs(p: &GpuCullParams) -> u64 {
+    u64::from(p.tiles_x * p.tiles_y) * u64::from(p.light_count)
 }
 
 /// The bytes of the tile path's masks: a bit per (cluster, light), in whole batches of
@@ -137,6 +155,8 @@ struct ClusterPlan<'a> {
     ordered: bool,
     /// The tile path (a workgroup a tile; see the module's top).
     by_tiles: bool,
+    /// On it, with `cull.clustered.rects`.
+    rects: bool,
     /// The wide lights' queue (binding 9; its first word is its length).
     wide: wgpu::Buffer,
     /// Their indirect dispatch arguments (binding 11 of the pass that writes them; an indirect
@@ -157,9 +177,19 @@ impl<'a> ClusterPlan<'a> {
         } else {
             f.buf(Buf::WideLights.name(), (u64::from(p.light_count) + 1) * 16)
         };
+        // On the tile path, the lights' rectangles at the same binding.
+        let rects = by_tiles && pairs(p) >= r.culler.cluster_tile_rect_pairs;
         let wide_args = f.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(Buf::WideArgs.name()),
-            size: 16,
+            label: Some(if rects {
+                Buf::LightRects.name()
+            } else {
+                Buf::WideArgs.name()
+            }),
+            size: if rects {
+                u64::from(p.light_count).max(1) * 16
+            } else {
+                16
+            },
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
             mapped_at_creation: false,
         });
@@ -168,7 +198,12 @@ impl<'a> ClusterPlan<'a> {
             f,
             ordered,
             by_tiles,
-            group_a: f.group(placeholder, &wide, placeholder),
+            rects,
+            group_a: f.group(
+                placeholder,
+                &wide,
+                if by_tiles { &wide_args } else { placeholder },
+            ),
             group_args: f.group(placeholder, &wide, &wide_args),
             wide,
             wide_args,
@@ -195,14 +230,34 @@ impl Plan for ClusterPlan<'_> {
             // Every cluster's count is stored and every range finalized: only the stats need
             // clearing.
             let mut steps = f.clears(true);
-            steps.push(Step::pass(
-                "cull.clustered.tiles_count",
-                &g.tiles_count,
-                &self.group_a,
-                self.tile_groups(),
-                &[Buf::Lights, Buf::Depth],
-                &[Buf::Counts, Buf::Occupancy, Buf::ClusterMasks],
-            ));
+            let writes = &[Buf::Counts, Buf::Occupancy, Buf::ClusterMasks];
+            if self.rects {
+                steps.push(Step::pass(
+                    "cull.clustered.rects",
+                    &g.light_rects,
+                    &self.group_a,
+                    self.light_groups(),
+                    &[Buf::Lights],
+                    &[Buf::LightRects],
+                ));
+                steps.push(Step::pass(
+                    "cull.clustered.tiles_count",
+                    &g.tiles_count_rects,
+                    &self.group_a,
+                    self.tile_groups(),
+                    &[Buf::Lights, Buf::Depth, Buf::LightRects],
+                    writes,
+                ));
+            } else {
+                steps.push(Step::pass(
+                    "cull.clustered.tiles_count",
+                    &g.tiles_count,
+                    &self.group_a,
+                    self.tile_groups(),
+                    &[Buf::Lights, Buf::Depth],
+                    writes,
+                ));
+            }
             steps.extend(c.lists.count_tail(f, &self.group_a, f.params.bins));
             return steps;
         }
