@@ -95,7 +95,28 @@ enum Command {
     Tune(TuneArgs),
 }
 
+/// Mesa's implicit Vulkan layer `VK_LAYER_MESA_device_select` connects to a Wayland display while
+/// the adapters are enumerated, and without a usable `XDG_RUNTIME_DIR` libwayland prints
+/// "error: XDG_RUNTIME_DIR is invalid or not set in the environment." (twice) before any work:
+/// not our error, and alarming. Where that directory is missing, the layer is turned off through
+/// its own switch, `NODEVICE_SELECT=1` (it only reorders adapters; `--adapter` picks ours).
+fn quiet_device_select() {
+    let usable = std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| Path::new(&d).is_dir());
+    if !usable && std::env::var_os("NODEVICE_SELECT").is_none() {
+        #[allow(
+            unsafe_code,
+            reason = "set_var is unsafe only where other threads may read the environment; \
+                      this runs first in main, before any thread is started"
+        )]
+        // SAFETY: called at the start of `main`, while the process has a single thread.
+        unsafe {
+            std::env::set_var("NODEVICE_SELECT", "1");
+        }
+    }
+}
+
 fn main() -> std::process::ExitCode {
+    quiet_device_select();
     let cli = Cli::parse();
     init_logging(cli.verbose);
     if let Err(e) = manylights_gpu::shaders::check_override_dir() {

@@ -639,3 +639,70 @@ fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
         "{stderr}"
     );
 }
+
+/// Every file under `dir`, recursively.
+fn files_under(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut out = Vec::new();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            out.extend(files_under(&p));
+        } else {
+            out.push(p);
+        }
+    }
+    out
+}
+
+/// Output files (images, results, reports, figures) get the mode any new file gets, 0666 less
+/// the umask, not a temporary file's private 0600; and a run that succeeds prints no error
+/// line, even without `XDG_RUNTIME_DIR` (with which Mesa's device-select layer made libwayland
+/// print two).
+#[cfg(unix)]
+#[test]
+fn outputs_follow_the_umask_and_a_clean_run_prints_no_error() {
+    use std::os::unix::fs::PermissionsExt;
+    let tmp = tempfile::tempdir().unwrap();
+    let exp = tmp.path().join("modes.ron");
+    std::fs::write(
+        &exp,
+        "Experiment(name: \"modes\", config: Config(scene: Pillars(), lights: (count: 8), \
+         resolution: (32, 16), frames: 1, warmup: 0))",
+    )
+    .unwrap();
+    for (umask, mode) in [("022", 0o644), ("027", 0o640)] {
+        let dir = tmp.path().join(umask);
+        let render = dir.join("render");
+        let run = dir.join("run");
+        for args in [
+            vec![
+                "render", "--width", "32", "--height", "16", "--lights", "4", "--out",
+            ],
+            vec!["run", exp.to_str().unwrap(), "--out"],
+        ] {
+            let out = if args[0] == "render" { &render } else { &run };
+            let o = Command::new("sh")
+                .arg("-c")
+                .arg(format!("umask {umask}; exec \"$0\" \"$@\""))
+                .arg(env!("CARGO_BIN_EXE_manylights"))
+                .args(&args)
+                .arg(out)
+                .env_remove("XDG_RUNTIME_DIR")
+                .env_remove("NODEVICE_SELECT")
+                .output()
+                .expect("run manylights through sh");
+            let stderr = String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "{args:?}: {stderr}");
+            assert!(
+                !stderr.lines().any(|l| l.to_lowercase().contains("error")),
+                "{args:?}: an error line in a run that succeeded:\n{stderr}"
+            );
+        }
+        let files = [files_under(&render), files_under(&run)].concat();
+        assert!(files.len() > 5, "{files:?}");
+        for f in files {
+            let m = std::fs::metadata(&f).unwrap().permissions().mode() & 0o777;
+            assert_eq!(m, mode, "umask {umask}: {} has mode {m:o}", f.display());
+        }
+    }
+}

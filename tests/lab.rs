@@ -102,6 +102,54 @@ fn the_documented_example_parses() {
     );
 }
 
+/// Every RON block of the docs and the README parses: a block fenced as `ron` as a whole
+/// experiment; one fenced as `ron field=NAME` as the value of config field NAME, in an
+/// experiment of its own. (The docs once showed a camera as `Pose((position: ...))`, which the
+/// parser rejects.)
+#[test]
+fn every_documented_ron_example_parses() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("README.md")];
+    for e in std::fs::read_dir(root.join("docs")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "md") {
+            files.push(p);
+        }
+    }
+    let mut parsed = 0;
+    for path in files {
+        let doc = std::fs::read_to_string(&path).unwrap();
+        let mut lines = doc.lines().enumerate();
+        while let Some((at, line)) = lines.next() {
+            let Some(info) = line.trim_start().strip_prefix("```ron") else {
+                continue;
+            };
+            let block: Vec<&str> = lines
+                .by_ref()
+                .map(|(_, l)| l)
+                .take_while(|l| !l.trim_start().starts_with("```"))
+                .collect();
+            let body = block.join("\n");
+            let what = format!("{}:{}", path.display(), at + 1);
+            let src = match info.trim().strip_prefix("field=") {
+                Some("scene") => {
+                    format!("Experiment(name: \"doc\", config: Config(scene: {body}))")
+                }
+                Some(field) => format!(
+                    "Experiment(name: \"doc\", config: Config(scene: Pillars(), {field}: {body}))"
+                ),
+                None => {
+                    assert!(info.trim().is_empty(), "{what}: unknown fence `ron{info}`");
+                    body
+                }
+            };
+            Experiment::parse(&src, &path).unwrap_or_else(|e| panic!("{what}: {e}\n{src}"));
+            parsed += 1;
+        }
+    }
+    assert!(parsed >= 19, "only {parsed} RON blocks found");
+}
+
 /// A tiny variant of every shipped experiment (48 x 27 at most, one frame, at most 256 lights)
 /// runs end to end: every cell has a row, no false negatives anywhere, and a report.
 #[test]

@@ -101,7 +101,8 @@ impl HdrImage {
 }
 
 /// Writes `path` through a temporary file in the same directory and renames it into place, so
-/// a failure never leaves a half-written file. Creates the parent directory if needed.
+/// a failure never leaves a half-written file. Creates the parent directory if needed. The file
+/// gets the mode any new file gets (0666 less the umask).
 pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut std::io::BufWriter<&mut std::fs::File>) -> Result<(), String>,
@@ -115,7 +116,15 @@ pub fn write_atomic(
         _ => Path::new("."),
     };
     std::fs::create_dir_all(dir).map_err(|e| err(e.to_string()))?;
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| err(e.to_string()))?;
+    // A temporary file is private (0600) by default; what is written here is the program's
+    // output, so it follows the umask as any other program's files do.
+    let mut builder = tempfile::Builder::new();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let mut tmp = builder.tempfile_in(dir).map_err(|e| err(e.to_string()))?;
     {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());
         write(&mut w).map_err(err)?;
