@@ -2,8 +2,9 @@
 # Checks what manylights needs on this machine and installs it where it can (Debian/Ubuntu, as
 # root): a Rust toolchain (checked only), the Vulkan loader (libvulkan1) and a Vulkan driver
 # (Mesa's lavapipe, mesa-vulkan-drivers, where there is no GPU driver). With --tests it also
-# needs Debian's assimp-testmodels (real glTF files, good and malformed, used by the tests) and
-# Chromium (the HTML report is checked in a headless browser).
+# needs Debian's assimp-testmodels (real glTF files, good and malformed, used by the tests),
+# Chromium (the HTML report is checked in a headless browser) and NumPy for the system Python
+# (python3-numpy: the documented export script is run against the program's exports).
 # Exits non-zero with the command to run when something is missing and cannot be installed.
 set -euo pipefail
 
@@ -20,6 +21,7 @@ icds=$(ls /usr/share/vulkan/icd.d/*.json /etc/vulkan/icd.d/*.json /usr/local/sha
 [ -n "$icds" ] || [ -n "${VK_DRIVER_FILES:-}${VK_ICD_FILENAMES:-}" ] || pkgs+=(mesa-vulkan-drivers)
 if [ "$want_tests" = 1 ] && [ ! -d /usr/share/assimp/models/glTF2 ]; then pkgs+=(assimp-testmodels); fi
 if [ "$want_tests" = 1 ] && ! command -v chromium >/dev/null 2>&1 && ! command -v chromium-browser >/dev/null 2>&1; then pkgs+=(chromium); fi
+if [ "$want_tests" = 1 ] && ! /usr/bin/python3 -c 'import numpy' >/dev/null 2>&1 && ! python3 -c 'import numpy' >/dev/null 2>&1; then pkgs+=(python3-numpy); fi
 
 if [ "${#pkgs[@]}" -gt 0 ]; then
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
@@ -31,5 +33,4 @@ if [ "${#pkgs[@]}" -gt 0 ]; then
     fail "missing ${pkgs[*]}: run \`sudo apt-get install ${pkgs[*]}\` (or your distribution's Vulkan loader and Mesa Vulkan drivers), then run this again."
   fi
 fi
-# lavapipe warns when XDG_RUNTIME_DIR is unset; harmless, but keep logs clean.
 echo "ensure-vulkan: ok (Vulkan drivers: $(ls /usr/share/vulkan/icd.d/ /etc/vulkan/icd.d/ 2>/dev/null | grep -c json || true) found)" >&2

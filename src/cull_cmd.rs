@@ -43,6 +43,11 @@ pub(crate) struct CullArgs {
     /// experiment's `mask_budget`. The output says whether the run used them.
     #[arg(long, value_name = "BYTES")]
     pub(crate) mask_budget: Option<u64>,
+    /// Also write the run's data as NumPy arrays into DIR: the depth buffer, each pixel's
+    /// lights needed and evaluated, the lists, the lights and the camera, with a manifest.json
+    /// (docs/EXPERIMENTS.md, "Exports").
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export: Option<PathBuf>,
 }
 
 pub(crate) fn cull(args: &CullArgs) -> Result<()> {
@@ -150,6 +155,19 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         tile_png.display(),
         pixel_png.display()
     );
+    if let Some(export) = &args.export {
+        let files = manylights_lab::export::export_run(
+            &ctx,
+            &culler,
+            &gpu_scene,
+            &depth,
+            &out,
+            &frame,
+            strategy.name(),
+            export,
+        )?;
+        println!("exported {} files to {}", files.len(), export.display());
+    }
     if m.false_negatives > 0 {
         bail!(
             "{} false negatives: a conservative strategy must have none (a bug, or --slack too small)",

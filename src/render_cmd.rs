@@ -32,11 +32,28 @@ pub(crate) struct RenderArgs {
     /// Exposure applied before tonemapping the PNG (and for FLIP).
     #[arg(long, default_value_t = 1.0)]
     pub(crate) exposure: f32,
+    /// Also write the frame's data as NumPy arrays into DIR, as `cull --export` does (a backend
+    /// over a strategy: forward, deferred or deferred-stored-position).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export: Option<PathBuf>,
 }
 
 pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("invalid --exposure {}: a finite value > 0", args.exposure);
+    }
+    if args.export.is_some()
+        && matches!(
+            args.backend,
+            BackendName::Reference | BackendName::NaiveForward
+        )
+    {
+        bail!(
+            "--export needs lists: use --backend forward, deferred or deferred-stored-position \
+             (--backend {} culls nothing)",
+            clap::ValueEnum::to_possible_value(&args.backend)
+                .map_or_else(String::new, |v| v.get_name().to_owned())
+        );
     }
     let a = &args.scene;
     let scene = a.build()?;
@@ -103,6 +120,25 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         let max = per_pixel.iter().copied().max().unwrap_or(0).max(1);
         let mean = per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>() / covered as f64;
         println!("  lights per pixel        {mean:.2} (mean over covered pixels), {max} at most");
+        if let (Some(export), Some(lists)) = (&args.export, &out.lists) {
+            let frame = manylights_gpu::layout::GpuFrame::new(
+                &scene.camera,
+                w,
+                h,
+                scene.lights.len() as u32,
+            );
+            let files = manylights_lab::export::export_run(
+                &ctx,
+                &renderer.culler,
+                &gpu_scene,
+                &out.depth,
+                lists,
+                &frame,
+                strategy.name(),
+                export,
+            )?;
+            println!("exported {} files to {}", files.len(), export.display());
+        }
         let heat = dir.join(format!("heatmap_lights_per_pixel_{}.png", backend.name()));
         outputs.push((heat, heatmap::pixels(&per_pixel, w, h, max)));
         (backend.name(), out.color)

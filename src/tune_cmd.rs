@@ -72,6 +72,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         accuracy: false,
         exact_stride: args.exact_stride,
         device_limit: None,
+        export: false,
     };
     eprintln!(
         "tuning {} ({} lights) at {}x{} for {}: {} candidates, budget {} s",

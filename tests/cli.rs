@@ -706,3 +706,161 @@ fn outputs_follow_the_umask_and_a_clean_run_prints_no_error() {
         }
     }
 }
+
+/// A Python with NumPy, or None (then the caller skips, except in CI, which installs
+/// `python3-numpy` and must run what needs it).
+fn python_with_numpy() -> Option<&'static str> {
+    let found = ["python3", "/usr/bin/python3"].into_iter().find(|p| {
+        Command::new(p)
+            .args(["-c", "import numpy"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    });
+    if found.is_none() {
+        assert!(
+            std::env::var_os("CI").is_none(),
+            "CI must have Python with NumPy (`apt-get install python3-numpy`)"
+        );
+        eprintln!("skipped: no Python with NumPy here (`apt-get install python3-numpy`)");
+    }
+    found
+}
+
+/// The number after `label` in `text`.
+fn number_after(text: &str, label: &str) -> u64 {
+    let at = text
+        .find(label)
+        .unwrap_or_else(|| panic!("`{label}` not in:\n{text}"));
+    text[at + label.len()..]
+        .split_whitespace()
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no number after `{label}` in:\n{text}"))
+}
+
+/// `--export` on `cull` and `render` and `export: true` in experiments write the documented
+/// arrays, and the ten-odd lines of NumPy in docs/EXPERIMENTS.md recompute from them the false
+/// negatives the program counts: none for exact lists, and every light a deliberate capacity
+/// drops. `render --export` without lists is a clear error.
+#[test]
+fn exports_let_numpy_recompute_the_false_negatives() {
+    let doc =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/EXPERIMENTS.md"))
+            .unwrap();
+    let start = doc.find("```python\n").expect("a ```python block") + "```python\n".len();
+    let script = &doc[start..start + doc[start..].find("```").unwrap()];
+    let tmp = tempfile::tempdir().unwrap();
+    let py = tmp.path().join("false_negatives.py");
+    std::fs::write(&py, script).unwrap();
+    rejects(
+        &[
+            "--backend",
+            "reference",
+            "--export",
+            tmp.path().join("x").to_str().unwrap(),
+        ],
+        1,
+        &["--export needs lists", "--backend reference"],
+    );
+    let size = ["--width", "64", "--height", "40", "--lights", "64"];
+    let mut dirs = Vec::new();
+    for (k, extra) in [
+        vec![],
+        vec!["--capacity", "2"],
+        vec!["--strategy", "clustered"],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let dir = tmp.path().join(format!("cull{k}"));
+        let out = tmp.path().join(format!("out{k}"));
+        let mut args = vec!["cull", "--out", out.to_str().unwrap()];
+        args.extend(size);
+        args.extend(&extra);
+        args.extend(["--export", dir.to_str().unwrap()]);
+        let o = manylights(&args);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        let fneg = number_after(&stdout, "false negatives");
+        assert_eq!(
+            fneg > 0,
+            !extra.is_empty() && extra[0] == "--capacity",
+            "{args:?}: {stdout}"
+        );
+        assert!(stdout.contains("exported 19 files"), "{stdout}");
+        dirs.push((dir, Some(fneg)));
+    }
+    let render = tmp.path().join("render");
+    let o = manylights(&[
+        "render",
+        "--backend",
+        "deferred",
+        "--width",
+        "64",
+        "--height",
+        "40",
+        "--lights",
+        "64",
+        "--out",
+        tmp.path().join("r").to_str().unwrap(),
+        "--export",
+        render.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    dirs.push((render, Some(0)));
+    let exp = tmp.path().join("export.ron");
+    std::fs::write(
+        &exp,
+        "Experiment(name: \"export\", config: Config(scene: Pillars(), lights: (count: 16), \
+         resolution: (48, 32), frames: 1, warmup: 0, accuracy: false, export: true))",
+    )
+    .unwrap();
+    let run = tmp.path().join("run");
+    let o = manylights(&["run", exp.to_str().unwrap(), "--out", run.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cells: Vec<_> = std::fs::read_dir(run.join("cells"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    assert_eq!(cells.len(), 1, "{cells:?}");
+    dirs.push((cells[0].clone(), Some(0)));
+    for (dir, _) in &dirs {
+        let manifest: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("manifest.json")).unwrap())
+                .unwrap();
+        for (name, a) in manifest["arrays"].as_object().unwrap() {
+            assert!(
+                dir.join(name).is_file(),
+                "{}: {name} missing",
+                dir.display()
+            );
+            assert!(
+                a["shape"].is_array() && a["dtype"].is_string(),
+                "{name}: {a}"
+            );
+        }
+    }
+    let Some(python) = python_with_numpy() else {
+        return;
+    };
+    for (dir, expected) in dirs {
+        let o = Command::new(python)
+            .arg(&py)
+            .arg(&dir)
+            .output()
+            .expect("run the documented script");
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{}: {stdout}{}",
+            dir.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(
+            Some(number_after(&stdout, "false negatives:")),
+            expected,
+            "{}: NumPy against the program",
+            dir.display()
+        );
+    }
+}

@@ -39,7 +39,7 @@ pub(crate) struct PoseEval {
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
 /// and (with `accuracy`) the error against the reference and the infinite-range reference.
-/// `pose` names the pose in the log.
+/// `pose` names the pose in the log; with `export`, the pose's data is exported there.
 #[allow(
     clippy::too_many_arguments,
     reason = "one call site; the arguments are what one pose needs"
@@ -54,6 +54,7 @@ pub(crate) fn evaluate(
     settings: &CullSettings,
     pose: &str,
     steady_runs: Option<u32>,
+    export: Option<&std::path::Path>,
 ) -> Result<PoseEval, LabError> {
     let light_count = u64::from(gpu_scene.light_count);
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
@@ -128,6 +129,20 @@ pub(crate) fn evaluate(
                     .map_err(|e| other(&e))?;
                     steady_frame = timed.map(|s| (s.total_ms, s.span_ms));
                 }
+            }
+            if let Some(dir) = export {
+                stage(pose, "exported", || {
+                    crate::export::export_run(
+                        ctx,
+                        &renderer.culler,
+                        gpu_scene,
+                        &o.depth,
+                        lists,
+                        &frame,
+                        c.strategy.name(),
+                        dir,
+                    )
+                })?;
             }
             stage(pose, "lights per pixel", || {
                 renderer

@@ -277,6 +277,10 @@ pub struct Config {
     /// Set one dimension to the device's limit when the cell runs (stability case 14).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub device_limit: Option<DeviceLimit>,
+    /// Also write each cell's data at its first pose as NumPy arrays under `cells/<id>/`
+    /// (`manylights_lab::export`; cells without lists, naive forward, export nothing).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub export: bool,
 }
 
 /// A value the runner takes from the device's limits when the cell runs, so that one
@@ -325,6 +329,10 @@ fn frames() -> u32 {
 fn warmup() -> u32 {
     3
 }
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
 fn is_true(b: &bool) -> bool {
     *b
 }

@@ -2,13 +2,15 @@
 //! (`cells`), the durable, resumable, shardable runner ([`runner`]) and what it measures at each
 //! camera pose (`evaluate`), results as CSV and JSON ([`results`]), culling timed in steady
 //! state ([`steady`]), the tuner ([`tune`]), paper-style reports in Markdown and HTML ([`report`]) with their figures
-//! (`figures`), and the stability suite's verdicts ([`stability`]).
+//! (`figures`), the stability suite's verdicts ([`stability`]), and a run's data exported as
+//! NumPy arrays ([`export`]).
 //!
 //! Depends on every other crate; nothing depends on it but the CLI.
 
 mod cells;
 mod evaluate;
 pub mod experiment;
+pub mod export;
 mod figures;
 pub mod report;
 pub mod results;

@@ -308,6 +308,9 @@ fn run_cell(
             &pose,
             // Steady-state culling at the first pose, over as many runs as measured frames.
             (k == 0 && timed).then_some(c.frames),
+            (k == 0 && c.export)
+                .then(|| out.join("cells").join(&id))
+                .as_deref(),
         )?);
     }
     let first = &evals[0];

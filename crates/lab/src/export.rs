@@ -1,0 +1,252 @@
+//! A run's data for the researcher's own analysis (`--export DIR` on `cull` and `render`,
+//! `export: true` in experiments): NumPy `.npy` files written by the program (no Python
+//! needed) and a `manifest.json` naming their shapes and conventions. docs/EXPERIMENTS.md
+//! ("Exports") shows how to load them and recompute the false negatives with NumPy alone.
+
+use std::path::{Path, PathBuf};
+
+use manylights_cull::layout::GpuCullParams;
+use manylights_cull::{BinLists, CullOutput, Culler, geometry};
+use manylights_gpu::layout::{GpuFrame, GpuLight, LIGHT_KIND_SPOT};
+use manylights_gpu::{GpuContext, GpuScene, readback};
+use npyz::WriterBuilder;
+use serde_json::json;
+
+use crate::{LabError, write_atomic};
+
+/// Exports the run of `strategy` whose lists are `lists`, over the depth buffer `depth` of
+/// `scene` seen as `frame` says, into `dir`: the depth read back, the exact oracle at every
+/// pixel, the lists read back, and the lights as the GPU holds them. Returns the files.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "the parts of a run, as cull, render and the runner hold them"
+)]
+pub fn export_run(
+    ctx: &GpuContext,
+    culler: &Culler,
+    scene: &GpuScene,
+    depth: &wgpu::Texture,
+    lists: &CullOutput,
+    frame: &GpuFrame,
+    strategy: &str,
+    dir: &Path,
+) -> Result<Vec<PathBuf>, LabError> {
+    let gpu = |e: manylights_gpu::GpuError| LabError::Other(format!("export: {e}"));
+    let (w, h) = (depth.width(), depth.height());
+    let depth_values: Vec<f32> = bytemuck::pod_collect_to_vec(
+        &readback::read_texture(ctx, depth, wgpu::TextureAspect::DepthOnly).map_err(gpu)?,
+    );
+    // Per pixel [evaluated, needed, found, covered], every pixel.
+    let counts = culler
+        .exact_counts(ctx, scene, depth, lists, frame.clip_from_world.inverse(), 1)
+        .map_err(|e| LabError::Other(format!("export: {e}")))?;
+    let evaluated: Vec<u32> = counts.iter().map(|c| c[0]).collect();
+    let needed: Vec<u32> = counts.iter().map(|c| c[1]).collect();
+    let bins = lists
+        .read(ctx)
+        .map_err(|e| LabError::Other(format!("export: {e}")))?;
+    let n = u64::from(scene.light_count);
+    let lights: Vec<GpuLight> = bytemuck::pod_collect_to_vec(
+        &readback::read_buffer(ctx, &scene.lights, 0, n * size_of::<GpuLight>() as u64)
+            .map_err(gpu)?,
+    );
+    write(
+        dir,
+        &ExportData {
+            frame,
+            params: &lists.params,
+            strategy,
+            depth: &depth_values,
+            size: (w, h),
+            needed: &needed,
+            evaluated: &evaluated,
+            lists: &bins,
+            lights: &lights,
+        },
+    )
+}
+
+/// What one run exports.
+pub struct ExportData<'a> {
+    /// The frame constants (camera matrices, viewport).
+    pub frame: &'a GpuFrame,
+    /// The culling run's parameters (bins, tiles, slices).
+    pub params: &'a GpuCullParams,
+    /// The strategy's name.
+    pub strategy: &'a str,
+    /// The depth buffer, `width * height` values, rows from the top.
+    pub depth: &'a [f32],
+    /// Its width and height.
+    pub size: (u32, u32),
+    /// Per pixel, the lights it needs (its exact set's size; 0 for background).
+    pub needed: &'a [u32],
+    /// Per pixel, the lights its list hands it (0 for background).
+    pub evaluated: &'a [u32],
+    /// The lists, a bin each (z-binning's expanded a (tile, depth bin) cell).
+    pub lists: &'a BinLists,
+    /// The lights as the GPU holds them.
+    pub lights: &'a [GpuLight],
+}
+
+/// One exported array: its file name, shape, NumPy dtype and `.npy` bytes.
+struct Array {
+    name: &'static str,
+    shape: Vec<u64>,
+    dtype: &'static str,
+    bytes: Vec<u8>,
+}
+
+/// The NumPy dtype of an exported element type.
+trait Dtype: npyz::AutoSerialize + Copy {
+    const NAME: &'static str;
+}
+impl Dtype for f32 {
+    const NAME: &'static str = "float32";
+}
+impl Dtype for u32 {
+    const NAME: &'static str = "uint32";
+}
+impl Dtype for i32 {
+    const NAME: &'static str = "int32";
+}
+
+/// `data` as array `name` of `shape` (C order, little-endian).
+fn npy<T: Dtype>(name: &'static str, shape: &[u64], data: &[T]) -> Result<Array, LabError> {
+    let io = |e: std::io::Error| LabError::Other(format!("encoding {name}: {e}"));
+    let mut bytes = Vec::new();
+    let mut w = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(shape)
+        .writer(&mut bytes)
+        .begin_nd()
+        .map_err(io)?;
+    w.extend(data.iter().copied()).map_err(io)?;
+    w.finish().map_err(io)?;
+    Ok(Array {
+        name,
+        shape: shape.to_vec(),
+        dtype: T::NAME,
+        bytes,
+    })
+}
+
+/// A matrix as 16 values in row-major order (NumPy's `M` with `p' = M @ p`).
+fn rows(m: &glam::Mat4) -> [f32; 16] {
+    m.transpose().to_cols_array()
+}
+
+/// Writes the export of one run into `dir` (each file whole or not at all); returns the files.
+pub fn write(dir: &Path, d: &ExportData<'_>) -> Result<Vec<PathBuf>, LabError> {
+    let (w, h) = d.size;
+    let pixels = (w * h) as usize;
+    for (name, len) in [
+        ("depth", d.depth.len()),
+        ("needed", d.needed.len()),
+        ("evaluated", d.evaluated.len()),
+    ] {
+        if len != pixels {
+            return Err(LabError::Other(format!(
+                "export: {name} holds {len} values for {w} x {h} pixels"
+            )));
+        }
+    }
+    let hw = [u64::from(h), u64::from(w)];
+    // The bin each covered pixel reads (-1: background), as the shading lookup finds it.
+    let pixel_bin: Vec<i32> = (0..pixels)
+        .map(|i| {
+            let z = d.depth[i];
+            if z < 1.0 {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                geometry::bin_of(d.frame, d.params, [x, y], z) as i32
+            } else {
+                -1
+            }
+        })
+        .collect();
+    let n = d.lights.len() as u64;
+    let bins = d.lists.ranges.len() as u64;
+    let vec3 = |f: fn(&GpuLight) -> glam::Vec3| -> Vec<f32> {
+        d.lights.iter().flat_map(|l| f(l).to_array()).collect()
+    };
+    let scalar = |f: fn(&GpuLight) -> f32| -> Vec<f32> { d.lights.iter().map(f).collect() };
+    let offsets: Vec<u32> = d.lists.ranges.iter().map(|r| r[0]).collect();
+    let counts: Vec<u32> = d.lists.ranges.iter().map(|r| r[1]).collect();
+    let kinds: Vec<u32> = d.lights.iter().map(|l| l.kind).collect();
+    let m = |m: &glam::Mat4| rows(m);
+    let files = vec![
+        npy("depth.npy", &hw, d.depth)?,
+        npy("needed.npy", &hw, d.needed)?,
+        npy("evaluated.npy", &hw, d.evaluated)?,
+        npy("pixel_bin.npy", &hw, &pixel_bin)?,
+        npy("bin_offsets.npy", &[bins], &offsets)?,
+        npy("bin_counts.npy", &[bins], &counts)?,
+        npy(
+            "light_indices.npy",
+            &[d.lists.indices.len() as u64],
+            &d.lists.indices,
+        )?,
+        npy("light_position.npy", &[n, 3], &vec3(|l| l.position))?,
+        npy("light_radius.npy", &[n], &scalar(|l| l.radius))?,
+        npy("light_color.npy", &[n, 3], &vec3(|l| l.color))?,
+        npy("light_intensity.npy", &[n], &scalar(|l| l.intensity))?,
+        npy("light_kind.npy", &[n], &kinds)?,
+        npy("light_direction.npy", &[n, 3], &vec3(|l| l.direction))?,
+        npy("light_cos_inner.npy", &[n], &scalar(|l| l.cos_inner))?,
+        npy("light_cos_outer.npy", &[n], &scalar(|l| l.cos_outer))?,
+        npy("clip_from_world.npy", &[4, 4], &m(&d.frame.clip_from_world))?,
+        npy("view_from_world.npy", &[4, 4], &m(&d.frame.view_from_world))?,
+        npy("clip_from_view.npy", &[4, 4], &m(&d.frame.clip_from_view))?,
+    ];
+    let manifest = manifest(d, &files);
+    let mut written = Vec::with_capacity(files.len() + 1);
+    for a in files {
+        let path = dir.join(a.name);
+        write_atomic(&path, &a.bytes)?;
+        written.push(path);
+    }
+    let path = dir.join("manifest.json");
+    let text = serde_json::to_string_pretty(&manifest)
+        .map_err(|e| LabError::Other(format!("export manifest: {e}")))?;
+    write_atomic(&path, text.as_bytes())?;
+    written.push(path);
+    Ok(written)
+}
+
+/// The manifest: every array's shape and dtype, and the conventions that read them.
+fn manifest(d: &ExportData<'_>, files: &[Array]) -> serde_json::Value {
+    let (w, h) = d.size;
+    let p = d.params;
+    let arrays: serde_json::Map<String, serde_json::Value> = files
+        .iter()
+        .map(|a| {
+            (
+                a.name.to_owned(),
+                json!({ "shape": a.shape, "dtype": a.dtype }),
+            )
+        })
+        .collect();
+    json!({
+        "format": "manylights export 1",
+        "width": w,
+        "height": h,
+        "lights": d.lights.len(),
+        "strategy": d.strategy,
+        "bins": d.lists.ranges.len(),
+        "tile_size": p.tile_size,
+        "tiles": [p.tiles_x, p.tiles_y],
+        "slices": p.slices,
+        "arrays": arrays,
+        "conventions": {
+            "pixels": "row y from the top, column x from the left; arrays are [y, x]",
+            "depth": "the depth buffer's value, NDC z in [0, 1]; 1.0 is background (no surface)",
+            "ndc": "pixel (x, y) is at NDC ((x + 0.5) / width * 2 - 1, 1 - (y + 0.5) / height * 2, depth)",
+            "world_position": "p = inv(clip_from_world) @ (ndc_x, ndc_y, depth, 1); world = p[:3] / p[3]",
+            "matrices": "row-major, acting on column vectors: clip = clip_from_world @ (x, y, z, 1)",
+            "lists": "the lights of bin b are light_indices[bin_offsets[b] : bin_offsets[b] + bin_counts[b]]; a pixel reads bin pixel_bin[y, x] (-1: background)",
+            "light_kind": format!("0: point; {LIGHT_KIND_SPOT}: spot"),
+            "exact_set": "light i reaches world point q when |q - position_i| < radius_i and, for a spot, dot(q - position_i, direction_i) / |q - position_i| > cos_outer_i",
+            "needed": "the size of each pixel's exact set",
+            "evaluated": "the length of the list each pixel reads",
+        },
+    })
+}
