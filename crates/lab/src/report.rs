@@ -166,10 +166,10 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     // Each figure is drawn to a temporary name and renamed, so no half-written SVG remains.
     let mut draw = |name: &'static str,
                     caption: &'static str,
-                    f: &dyn Fn(&Path) -> Result<bool, LabError>|
+                    f: &dyn Fn(&Path) -> Result<Option<crate::figures::Layout>, LabError>|
      -> Result<(), LabError> {
         let tmp = figures.join(format!(".{name}.tmp.svg"));
-        if f(&tmp)? {
+        if f(&tmp)?.is_some() {
             std::fs::rename(&tmp, figures.join(name)).map_err(|e| LabError::Io {
                 path: name.into(),
                 message: e.to_string(),
@@ -348,7 +348,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let mut html = String::new();
     let _ = write!(
         html,
-        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title>\n<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right}}td:first-child{{text-align:left}}pre{{background:#f6f6f6;padding:1em;overflow:auto}}img{{max-width:100%}}</style></head><body>\n<h1>{0}</h1>\n<p>{1}</p>\n",
+        "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title>\n<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}.table{{overflow-x:auto;max-width:100%;border:1px solid #ddd}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}}th{{position:sticky;top:0;background:#f6f6f6;white-space:normal}}td:nth-child(5){{white-space:normal;min-width:16em;text-align:left}}td:first-child,th:first-child{{text-align:left;position:sticky;left:0;background:#fff;z-index:1}}pre{{background:#f6f6f6;padding:1em;overflow:auto;white-space:pre-wrap}}img{{max-width:100%}}</style></head><body>\n<h1>{0}</h1>\n<p>{1}</p>\n",
         esc(&name),
         esc(&description)
     );
@@ -371,7 +371,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     }
     let _ = write!(
         html,
-        "</ul>\n<h2>Results</h2><table><tr>{}</tr>\n",
+        "</ul>\n<h2>Results</h2><div class=\"table\"><table><tr>{}</tr>\n",
         head.iter()
             .map(|h| format!("<th>{h}</th>"))
             .collect::<String>()
@@ -385,7 +385,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
                 .collect::<String>()
         );
     }
-    let _ = write!(html, "</table>\n<h2>Figures</h2>\n");
+    let _ = write!(html, "</table></div>\n<h2>Figures</h2>\n");
     for (f, caption) in &figs {
         let _ = writeln!(
             html,

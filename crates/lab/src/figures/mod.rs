@@ -1,0 +1,385 @@
+//! The report's figures, drawn with plotters into SVG with the embedded DejaVu Sans (no system
+//! fonts needed): GPU time against light count per configuration, per-pass stacked bars (raster
+//! and compute labelled, every bar named), and speed against accuracy with the Pareto front
+//! marked. As a paper's figures: legends beside the data, never over it; axes fitted to the
+//! points, logarithmic where the values span decades.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::LabError;
+use crate::results::Row;
+
+mod axes;
+mod legend;
+
+use axes::Scale;
+pub(crate) use legend::Layout;
+use legend::{Mark, clip_label, legend, legend_width};
+
+const FONT: &str = "sans-serif";
+
+pub(crate) fn register_font() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+        // Registered under the family every figure asks for; failure only means plotters'
+        // own font path is used.
+        let _ = plotters::style::register_font(FONT, FontStyle::Normal, bytes);
+    });
+}
+
+fn err(e: impl std::fmt::Display) -> LabError {
+    LabError::Other(format!("report figure: {e}"))
+}
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+];
+
+/// The configuration of a row without its light count: one series of the scaling figure.
+pub(crate) fn series_key(r: &Row) -> String {
+    let parts: Vec<&str> = r
+        .cell
+        .split(',')
+        .filter(|p| !p.starts_with("lights=") && !p.starts_with("seed="))
+        .collect();
+    if parts.is_empty() || parts == ["base"] {
+        format!("{}+{}", r.backend, r.strategy)
+    } else {
+        parts.join(",")
+    }
+}
+
+pub(crate) fn time_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabError> {
+    let mut series: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
+    for r in rows {
+        if let Some(t) = r.gpu_ms_total {
+            series
+                .entry(series_key(r))
+                .or_default()
+                .push((r.lights as f64, t));
+        }
+    }
+    let counts: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.lights).collect();
+    if counts.len() < 2 || series.is_empty() {
+        return Ok(None);
+    }
+    let x = Scale::fit(counts.iter().map(|c| *c as f64));
+    let y = Scale::fit(series.values().flatten().map(|p| p.1));
+    let labels: Vec<String> = series.keys().cloned().collect();
+    let lw = legend_width(&labels);
+    let height = 460.max(60 + 16 * labels.len() as u32);
+    let root = SVGBackend::new(path, (700 + lw, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (plot, side) = root.split_horizontally(700);
+    let mut chart = axes::chart(
+        &plot,
+        "GPU time per frame against light count",
+        (x, "lights"),
+        (y, "GPU ms, median"),
+    )?;
+    let mut layout = Layout::default();
+    let mut entries = Vec::new();
+    for (i, (name, mut pts)) in series.into_iter().enumerate() {
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let pts: Vec<(f64, f64)> = pts.iter().map(|p| (x.map(p.0), y.map(p.1))).collect();
+        let c = PALETTE[i % PALETTE.len()];
+        chart
+            .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+            .map_err(err)?;
+        layout
+            .points
+            .extend(pts.iter().map(|p| chart.backend_coord(p)));
+        chart
+            .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+            .map_err(err)?;
+        entries.push((name, Mark::Line(c)));
+    }
+    layout.legend = Some(legend(&side, &entries)?);
+    root.present().map_err(err)?;
+    Ok(Some(layout))
+}
+
+/// The cells' per-pass GPU times as stacked bars, each bar named beside it.
+pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabError> {
+    let shown: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.gpu_ms_total.is_some())
+        .take(40)
+        .collect();
+    if shown.is_empty() {
+        return Ok(None);
+    }
+    let parts = |r: &Row| {
+        [
+            r.gpu_ms_prepass.unwrap_or(0.0),
+            r.gpu_ms_cull.unwrap_or(0.0),
+            r.gpu_ms_shade.unwrap_or(0.0),
+        ]
+    };
+    let xmax = shown
+        .iter()
+        .map(|r| parts(r).iter().sum::<f64>())
+        .fold(0.0, f64::max)
+        .max(1e-6)
+        * 1.05;
+    let n = shown.len();
+    let labels: Vec<String> = shown.iter().map(|r| clip_label(&r.cell)).collect();
+    let names = [
+        "geometry pass (prepass / G-buffer, raster)",
+        "culling (compute)",
+        "shading",
+    ];
+    let label_w = legend_width(&labels) - 30;
+    let lw = legend_width(&names.map(str::to_owned));
+    let height = 110 + 24 * n as u32;
+    let root = SVGBackend::new(path, (label_w + 520 + lw, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (plot, side) = root.split_horizontally(label_w + 520);
+    let mut chart = ChartBuilder::on(&plot)
+        .caption(
+            "Per-pass GPU time (median): geometry pass (raster) | culling (compute) | shading",
+            (FONT, 15),
+        )
+        .margin(12)
+        .x_label_area_size(36)
+        .y_label_area_size(label_w)
+        .build_cartesian_2d(0.0..xmax, 0.0..n as f64)
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .disable_y_mesh()
+        .y_labels(0)
+        .bold_line_style(BLACK.mix(0.15))
+        .light_line_style(TRANSPARENT)
+        .x_label_formatter(&axes::linear_label)
+        .x_desc("GPU ms")
+        .label_style((FONT, 11))
+        .draw()
+        .map_err(err)?;
+    let mut layout = Layout::default();
+    for (k, _) in names.iter().enumerate() {
+        let c = PALETTE[k];
+        chart
+            .draw_series(shown.iter().enumerate().map(|(i, r)| {
+                let p = parts(r);
+                let x0: f64 = p[..k].iter().sum();
+                Rectangle::new(
+                    [(x0, i as f64 + 0.15), (x0 + p[k], i as f64 + 0.85)],
+                    c.filled(),
+                )
+            }))
+            .map_err(err)?;
+    }
+    // Every bar named, beside it.
+    let style = TextStyle::from((FONT, 11).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
+    for (i, (label, r)) in labels.iter().zip(&shown).enumerate() {
+        let (x, y) = chart.backend_coord(&(0.0, i as f64 + 0.5));
+        root.draw(&Text::new(label.clone(), (x - 6, y), style.clone()))
+            .map_err(err)?;
+        let total: f64 = parts(r).iter().sum();
+        layout
+            .points
+            .push(chart.backend_coord(&(total, i as f64 + 0.5)));
+    }
+    let entries: Vec<(String, Mark)> = names
+        .iter()
+        .enumerate()
+        .map(|(k, n)| ((*n).to_owned(), Mark::Block(PALETTE[k])))
+        .collect();
+    layout.legend = Some(legend(&side, &entries)?);
+    root.present().map_err(err)?;
+    Ok(Some(layout))
+}
+
+/// Points on the Pareto front (smaller is better on both axes), sorted by x.
+fn pareto(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let mut front: Vec<(f64, f64)> = Vec::new();
+    for q in p {
+        if front.last().is_none_or(|l| q.1 < l.1) {
+            front.push(q);
+        }
+    }
+    front
+}
+
+/// One axis of a scatter: its name and its value in a row.
+pub(crate) type Axis<'a> = (&'a str, &'a dyn Fn(&Row) -> Option<f64>);
+
+/// Speed against accuracy: `time` against `accuracy`, one point per cell, the configurations
+/// apart, the Pareto front in black.
+pub(crate) fn speed_accuracy(
+    rows: &[Row],
+    path: &Path,
+    time: Axis<'_>,
+    accuracy: Axis<'_>,
+) -> Result<Option<Layout>, LabError> {
+    let caption = format!(
+        "Speed against accuracy: {} and {} (Pareto front in black)",
+        time.0, accuracy.0
+    );
+    scatter(rows, path, &caption, time, accuracy, &series_key, true)
+}
+
+/// A scatter of `x` against `y`, one point per row that has both, coloured by `series`, with
+/// the Pareto front (smaller is better on both axes) where `front`; the axes fitted to the
+/// points, logarithmic where they span decades; the legend beside the plot.
+fn scatter(
+    rows: &[Row],
+    path: &Path,
+    caption: &str,
+    (x_name, x): Axis<'_>,
+    (y_name, y): Axis<'_>,
+    series: &dyn Fn(&Row) -> String,
+    front: bool,
+) -> Result<Option<Layout>, LabError> {
+    let pts: Vec<(f64, f64, String)> = rows
+        .iter()
+        .filter_map(|r| Some((x(r)?, y(r)?, series(r))))
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect();
+    if pts.len() < 2 {
+        return Ok(None);
+    }
+    let keys: Vec<String> = {
+        let mut k: Vec<String> = pts.iter().map(|p| p.2.clone()).collect();
+        k.sort();
+        k.dedup();
+        k
+    };
+    let xs = Scale::fit(pts.iter().map(|p| p.0));
+    let ys = Scale::fit(pts.iter().map(|p| p.1));
+    let lw = legend_width(&keys);
+    let height = 460.max(60 + 16 * keys.len() as u32);
+    let root = SVGBackend::new(path, (700 + lw, height)).into_drawing_area();
+    root.fill(&WHITE).map_err(err)?;
+    let (plot, side) = root.split_horizontally(700);
+    let mut chart = axes::chart(&plot, caption, (xs, x_name), (ys, y_name))?;
+    let at = |p: &(f64, f64, String)| (xs.map(p.0), ys.map(p.1));
+    for (i, key) in keys.iter().enumerate() {
+        let c = PALETTE[i % PALETTE.len()];
+        chart
+            .draw_series(
+                pts.iter()
+                    .filter(|p| &p.2 == key)
+                    .map(|p| Circle::new(at(p), 4, c.filled())),
+            )
+            .map_err(err)?;
+    }
+    if front {
+        let front: Vec<(f64, f64)> = pareto(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>())
+            .into_iter()
+            .map(|p| (xs.map(p.0), ys.map(p.1)))
+            .collect();
+        chart
+            .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(2)))
+            .map_err(err)?;
+        chart
+            .draw_series(
+                front
+                    .into_iter()
+                    .map(|p| Circle::new(p, 6, BLACK.stroke_width(2))),
+            )
+            .map_err(err)?;
+    }
+    let points = pts.iter().map(|p| chart.backend_coord(&at(p))).collect();
+    let entries: Vec<(String, Mark)> = keys
+        .iter()
+        .enumerate()
+        .map(|(i, k)| (k.clone(), Mark::Dot(PALETTE[i % PALETTE.len()])))
+        .collect();
+    let legend = legend(&side, &entries)?;
+    root.present().map_err(err)?;
+    Ok(Some(Layout {
+        points,
+        legend: Some(legend),
+    }))
+}
+
+/// What a loose list costs: the shading pass's time against the lights it evaluates per pixel,
+/// one point per cell, coloured by strategy (and backend, whose shading passes differ).
+pub(crate) fn shade_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabError> {
+    scatter(
+        rows,
+        path,
+        "Shading time against lights evaluated per pixel",
+        ("lights evaluated per pixel (mean)", &|r| {
+            r.lights_per_pixel_mean
+        }),
+        ("shading pass, GPU ms (median)", &|r| r.gpu_ms_shade),
+        &|r| format!("{}+{}", r.backend, r.strategy),
+        false,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every figure of every committed report (docs/reports/*), drawn again: no data point
+    /// (a marker's centre, a bar's end, with a marker's radius) lies inside its legend's box,
+    /// and every figure has its legend.
+    #[test]
+    fn no_legend_covers_a_data_point_in_any_committed_report() {
+        register_font();
+        let reports = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/reports");
+        let tmp = tempfile::tempdir().unwrap();
+        let svg = tmp.path().join("figure.svg");
+        let mut checked = 0;
+        for e in std::fs::read_dir(&reports).unwrap() {
+            let dir = e.unwrap().path();
+            if !dir.is_dir() {
+                continue;
+            }
+            let rows = crate::results::load_rows(&dir).unwrap();
+            if rows.is_empty() {
+                continue;
+            }
+            let gpu: Axis<'_> = ("GPU ms", &|r| r.gpu_ms_total);
+            let fp: Axis<'_> = ("false-positive ratio", &|r| r.false_positive_ratio);
+            let figures = [
+                ("time_vs_lights", time_vs_lights(&rows, &svg).unwrap()),
+                ("passes", passes(&rows, &svg).unwrap()),
+                ("speed_accuracy", speed_accuracy(&rows, &svg, gpu, fp).unwrap()),
+                ("shade_vs_lights", shade_vs_lights(&rows, &svg).unwrap()),
+            ];
+            for (name, layout) in figures {
+                let Some(layout) = layout else { continue };
+                let (x0, y0, x1, y1) = layout.legend.expect("a legend");
+                assert!(!layout.points.is_empty(), "{}: {name}", dir.display());
+                for &(x, y) in &layout.points {
+                    let r = 6;
+                    assert!(
+                        x + r < x0 || x - r > x1 || y + r < y0 || y - r > y1,
+                        "{}: {name}: the legend ({x0}, {y0})-({x1}, {y1}) covers the point ({x}, {y})",
+                        dir.display()
+                    );
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked >= 20, "only {checked} figures checked");
+    }
+
+    #[test]
+    fn pareto_front_keeps_only_undominated_points() {
+        let pts = [(3.0, 1.0), (1.0, 5.0), (2.0, 2.0), (2.5, 3.0), (4.0, 0.5)];
+        assert_eq!(
+            pareto(&pts),
+            vec![(1.0, 5.0), (2.0, 2.0), (3.0, 1.0), (4.0, 0.5)]
+        );
+    }
+}
