@@ -66,6 +66,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         capacity: None,
         mask_budget: None,
         tile_boxes: true,
+        light_update: Default::default(),
         slack: DEFAULT_SLACK,
         frames: args.frames,
         warmup: args.warmup,

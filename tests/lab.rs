@@ -10,7 +10,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 9] = [
+const SHIPPED: [&str; 10] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -20,6 +20,7 @@ const SHIPPED: [&str; 9] = [
     "depth-mask",
     "cutoff-accuracy",
     "scaling-1m",
+    "dynamic-lights",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -91,10 +92,19 @@ fn the_documented_example_parses() {
     assert!(e.config.tile_boxes);
     let variants = e.sweep.variants.as_ref().unwrap();
     assert_eq!(variants[2].mask_budget, Some(0));
-    assert_eq!(variants.last().unwrap().tile_boxes, Some(false));
+    assert_eq!(variants[3].tile_boxes, Some(false));
+    let moving = variants.last().unwrap();
+    assert_eq!(moving.motion, Some(manylights_scene::Motion::Orbit(2.0)));
+    assert_eq!(
+        moving.light_update,
+        Some(manylights_lab::experiment::LightUpdate::Upload)
+    );
+    assert_eq!(e.config.lights.motion, manylights_scene::Motion::Static);
     // Light counts x strategies x variants.
     let cells = e.cells();
-    assert_eq!(cells.len(), 2 * 2 * 4);
+    assert_eq!(cells.len(), 2 * 2 * 5);
+    assert!(cells.iter().any(|c| c.name.contains("orbit+upload")
+        && c.config.lights.motion == manylights_scene::Motion::Orbit(2.0)));
     assert!(
         cells
             .iter()
@@ -286,7 +296,7 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
     let csv = std::fs::read_to_string(tmp.path().join("out/results.csv")).unwrap();
     assert!(csv.lines().next().unwrap().ends_with(
         ",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span,gpu_ms_cull_shade,\
-                 gpu_ms_cull_shade_span,lights_needed_per_pixel_mean"
+                 gpu_ms_cull_shade_span,lights_needed_per_pixel_mean,gpu_ms_light_update,cpu_ms_upload"
     ));
 }
 

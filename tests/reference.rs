@@ -229,6 +229,7 @@ fn lit_scene(name: &str) -> Scene {
         intensity: radius * radius,
         spot_fraction: 0.25,
         spot_outer_deg: 40.0,
+        ..LightSpec::default()
     };
     scene.lights = spec.generate(&scene).unwrap();
     scene

@@ -42,6 +42,7 @@ fn scene(name: &str) -> Scene {
         intensity: r * r * 0.5,
         spot_fraction: 0.25,
         spot_outer_deg: 40.0,
+        ..LightSpec::default()
     }
     .generate(&s)
     .unwrap();
@@ -302,6 +303,7 @@ fn ordered_strategies_render_bit_identical_frames() {
             intensity: 0.05,
             spot_fraction: 0.0,
             spot_outer_deg: 40.0,
+            ..LightSpec::default()
         }
         .generate(&s)
         .unwrap();

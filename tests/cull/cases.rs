@@ -102,6 +102,7 @@ pub(crate) fn random_case(seed: u64) -> Case {
         intensity: 1.0,
         spot_fraction: 0.3,
         spot_outer_deg: [1.0, 10.0, 45.0, 89.95, 90.0, 120.0][rng.random_range(0..6)],
+        ..LightSpec::default()
     };
     scene.lights = spec.generate(&scene).unwrap();
     let pick = |rng: &mut rand_pcg::Pcg64| {

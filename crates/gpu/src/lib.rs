@@ -3,13 +3,14 @@
 //! Owns: the headless wgpu device ([`GpuContext`]: adapter choice, feature negotiation, limits),
 //! per-pass GPU timing with timestamp queries ([`timing`]), buffer and texture readback
 //! ([`readback`]), the composition of WGSL from the files under `shaders/` ([`shaders`]), the
-//! host-side mirrors of the shader structs ([`layout`]), the scene on the GPU ([`GpuScene`]) and
-//! the depth prepass ([`prepass`]) that culling strategies and shading backends share.
+//! host-side mirrors of the shader structs ([`layout`]), the scene on the GPU ([`GpuScene`]),
+//! moving its lights each frame ([`motion`]) and the depth prepass ([`prepass`]) that culling strategies and shading backends share.
 //!
 //! Depends on the scene crate and wgpu; knows nothing of culling strategies or backends.
 
 pub mod context;
 pub mod layout;
+pub mod motion;
 pub mod pipeline;
 pub mod prepass;
 pub mod readback;

@@ -187,7 +187,7 @@ pub const PREPASS: ShaderDef = ShaderDef {
 };
 
 /// Every shader this crate defines.
-pub const SHADERS: &[ShaderDef] = &[PREPASS];
+pub const SHADERS: &[ShaderDef] = &[PREPASS, crate::motion::MOTION];
 
 #[cfg(test)]
 mod tests {

@@ -6,12 +6,14 @@
 use std::path::Path;
 
 use manylights_cull::Strategy;
-use manylights_scene::{LightGenerator, RadiusRule};
+use manylights_scene::{LightGenerator, LightSpec, Motion, RadiusRule};
 use manylights_shade::Backend;
 use serde::Serialize;
 
 use crate::LabError;
-use crate::experiment::{CameraSpec, Config, DeviceLimit, Experiment, SceneSpec, Variant};
+use crate::experiment::{
+    CameraSpec, Config, DeviceLimit, Experiment, LightUpdate, SceneSpec, Variant,
+};
 
 /// One cell: a name and a configuration.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -128,6 +130,13 @@ pub fn params_label(c: &Config) -> String {
     if !c.tile_boxes {
         p.push_str(";tile_boxes=false");
     }
+    if !c.lights.motion.is_static() {
+        p.push_str(&format!(
+            ";motion={};light_update={}",
+            c.lights.motion.label(),
+            c.light_update.name()
+        ));
+    }
     p
 }
 
@@ -187,6 +196,7 @@ impl Experiment {
         let s = &self.sweep;
         let lens = [
             ("scene", s.scene.as_ref().map(Vec::len)),
+            ("lights", s.lights.as_ref().map(Vec::len)),
             ("light_count", s.light_count.as_ref().map(Vec::len)),
             ("light_seed", s.light_seed.as_ref().map(Vec::len)),
             ("generator", s.generator.as_ref().map(Vec::len)),
@@ -198,6 +208,8 @@ impl Experiment {
             ("capacity", s.capacity.as_ref().map(Vec::len)),
             ("mask_budget", s.mask_budget.as_ref().map(Vec::len)),
             ("tile_boxes", s.tile_boxes.as_ref().map(Vec::len)),
+            ("motion", s.motion.as_ref().map(Vec::len)),
+            ("light_update", s.light_update.as_ref().map(Vec::len)),
             ("variants", s.variants.as_ref().map(Vec::len)),
         ];
         for (field, len) in lens {
@@ -239,6 +251,15 @@ impl Experiment {
         axis!(s.scene, |c: &mut Config, v: SceneSpec| {
             c.scene = v;
             format!("scene={}", c.scene.name())
+        });
+        axis!(s.lights, |c: &mut Config, v: LightSpec| {
+            c.lights = v;
+            // One name part (no comma), so that a figure's series drops it with the count.
+            let r = match v.radius {
+                RadiusRule::Fixed(r) => format!("radius={r}"),
+                RadiusRule::Threshold(t) => format!("threshold={t}"),
+            };
+            format!("lights={}({r})", v.count)
         });
         axis!(s.light_count, |c: &mut Config, v: u32| {
             c.lights.count = v;
@@ -297,6 +318,14 @@ impl Experiment {
             c.tile_boxes = v;
             format!("tile_boxes={v}")
         });
+        axis!(s.motion, |c: &mut Config, v: Motion| {
+            c.lights.motion = v;
+            format!("motion={}", v.label())
+        });
+        axis!(s.light_update, |c: &mut Config, v: LightUpdate| {
+            c.light_update = v;
+            format!("light_update={}", v.name())
+        });
         axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
             c.device_limit = v;
             format!(
@@ -319,6 +348,12 @@ impl Experiment {
             }
             if let Some(b) = v.tile_boxes {
                 c.tile_boxes = b;
+            }
+            if let Some(m) = v.motion {
+                c.lights.motion = m;
+            }
+            if let Some(u) = v.light_update {
+                c.light_update = u;
             }
             let auto = format!(
                 "{}+{}",
@@ -380,6 +415,11 @@ impl Experiment {
                 *v = shrink(*v);
             }
             r.dedup();
+        }
+        if let Some(l) = &mut e.sweep.lights {
+            for v in l.iter_mut() {
+                v.count = v.count.min(256);
+            }
         }
         if let Some(l) = &mut e.sweep.light_count {
             for v in l.iter_mut() {

@@ -12,7 +12,7 @@ use manylights_cull::{CullSettings, Strategy};
 use manylights_scene::procedural::{
     AtriumParams, Cis5650Params, CityParams, PillarsParams, ProceduralScene, TopdownParams,
 };
-use manylights_scene::{Camera, LightGenerator, LightSpec, Projection, RadiusRule};
+use manylights_scene::{Camera, LightGenerator, LightSpec, Motion, Projection, RadiusRule};
 use manylights_shade::Backend;
 use serde::{Deserialize, Serialize};
 
@@ -174,6 +174,12 @@ pub struct Variant {
     /// Box test override.
     #[serde(default)]
     pub tile_boxes: Option<bool>,
+    /// Light motion override.
+    #[serde(default)]
+    pub motion: Option<Motion>,
+    /// Light update override.
+    #[serde(default)]
+    pub light_update: Option<LightUpdate>,
 }
 
 /// Lists of values for the fields of [`Config`]; the cells are their cartesian product.
@@ -183,6 +189,10 @@ pub struct Sweep {
     /// Scenes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub scene: Option<Vec<SceneSpec>>,
+    /// Whole light sets (each a `lights` value), for light sets that differ in more than one
+    /// field; the axes after it (count, seed, generator, radius, motion) override their parts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lights: Option<Vec<LightSpec>>,
     /// Light counts.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub light_count: Option<Vec<u32>>,
@@ -216,6 +226,12 @@ pub struct Sweep {
     /// The box test on and off.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tile_boxes: Option<Vec<bool>>,
+    /// Light motions (`lights.motion`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<Vec<Motion>>,
+    /// Ways moving lights reach the GPU.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_update: Option<Vec<LightUpdate>>,
     /// Device limits (`None` entries mean none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub device_limit: Option<Vec<Option<DeviceLimit>>>,
@@ -258,6 +274,11 @@ pub struct Config {
     /// (Left out of a cell's identity when on, so that earlier results keep their cells.)
     #[serde(default = "yes", skip_serializing_if = "is_true")]
     pub tile_boxes: bool,
+    /// How moving lights (`lights.motion` other than `Static`) reach the GPU each frame: `Gpu`
+    /// (the default), an animation pass; `Upload`, computed on the host and uploaded. Static
+    /// lights are never updated. (Left out of a cell's identity when `Gpu`.)
+    #[serde(default, skip_serializing_if = "LightUpdate::is_gpu")]
+    pub light_update: LightUpdate,
     /// Conservative culling slack.
     #[serde(default = "slack")]
     pub slack: f32,
@@ -281,6 +302,31 @@ pub struct Config {
     /// (`manylights_lab::export`; cells without lists, naive forward, export nothing).
     #[serde(default, skip_serializing_if = "is_false")]
     pub export: bool,
+}
+
+/// How moving lights reach the GPU each frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LightUpdate {
+    /// A compute pass moves them on the GPU (`lights.animate`; `gpu_ms_light_update`).
+    #[default]
+    Gpu,
+    /// The host computes every moving light and uploads all of them (`cpu_ms_upload`, and the
+    /// copy `lights.upload` in `gpu_ms_light_update`).
+    Upload,
+}
+
+impl LightUpdate {
+    fn is_gpu(&self) -> bool {
+        *self == Self::Gpu
+    }
+
+    /// `gpu` or `upload`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Gpu => "gpu",
+            Self::Upload => "upload",
+        }
+    }
 }
 
 /// A value the runner takes from the device's limits when the cell runs, so that one

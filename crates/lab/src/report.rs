@@ -223,7 +223,11 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let commit = distinct(rows.iter().map(|r| r.commit.as_str()));
     let date = rows.iter().map(|r| r.finished_unix).max().unwrap_or(0);
     let findings = summary(&rows);
-    let head = [
+    // Moving lights' update columns, in reports of runs that have them.
+    let moving = rows
+        .iter()
+        .any(|r| r.gpu_ms_light_update.is_some() || r.cpu_ms_upload.is_some());
+    let mut head = vec![
         "cell",
         "lights",
         "res",
@@ -246,10 +250,13 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         "PSNR dB",
         "FLIP",
     ];
+    if moving {
+        head.extend(["light update ms", "upload host ms"]);
+    }
     let table: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
-            vec![
+            let mut row = vec![
                 r.cell.clone(),
                 r.lights.to_string(),
                 format!("{}x{}", r.width, r.height),
@@ -276,7 +283,14 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
                     fmt_opt(r.psnr_db, 1)
                 },
                 fmt_opt(r.flip_mean, 5),
-            ]
+            ];
+            if moving {
+                row.extend([
+                    fmt_opt(r.gpu_ms_light_update, 3),
+                    fmt_opt(r.cpu_ms_upload, 3),
+                ]);
+            }
+            row
         })
         .collect();
     let images: Vec<&Row> = rows

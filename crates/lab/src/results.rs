@@ -107,8 +107,9 @@ pub struct Row {
     /// Pixels of the backend's image with a NaN or infinite channel (the worst pose).
     #[serde(default)]
     pub nonfinite_pixels: u64,
-    /// Camera poses measured (a path's length; 1 otherwise). Every list and accuracy column
-    /// is the worst over the poses (false negatives: their sum).
+    /// Camera poses measured (a path's length; 1 otherwise); with moving lights, the measured
+    /// frames, each checked with its lights where that frame had them. Every list and accuracy
+    /// column is the worst over them (false negatives: their sum).
     #[serde(default = "one")]
     pub poses: u32,
     /// Mean absolute frame-to-frame change of the image over the path (per RGB channel).
@@ -150,6 +151,17 @@ pub struct Row {
     /// evaluated per light needed is `lights_per_pixel_mean / lights_needed_per_pixel_mean`.
     #[serde(default)]
     pub lights_needed_per_pixel_mean: Option<f64>,
+    /// Moving lights: the median GPU time of a frame's light update, ms: the animation pass
+    /// (`lights.animate`, `light_update: Gpu`) or the copy of the uploaded lights
+    /// (`lights.upload`, `light_update: Upload`; empty where the device cannot time it). It is
+    /// part of `gpu_ms_total`. Empty for static lights.
+    #[serde(default)]
+    pub gpu_ms_light_update: Option<f64>,
+    /// Moving lights uploaded from the host (`light_update: Upload`): the median host time of
+    /// a frame's upload, ms (waiting for the staging buffer, computing every moving light on
+    /// every core, writing them into it). Empty otherwise.
+    #[serde(default)]
+    pub cpu_ms_upload: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -249,6 +261,8 @@ pub const COLUMNS: &[&str] = &[
     "gpu_ms_cull_shade",
     "gpu_ms_cull_shade_span",
     "lights_needed_per_pixel_mean",
+    "gpu_ms_light_update",
+    "cpu_ms_upload",
 ];
 
 fn one() -> u32 {

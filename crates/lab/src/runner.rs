@@ -6,7 +6,9 @@
 //! culling timed in steady state (`frames` runs back to back, [`crate::steady`]), the list
 //! metrics from the exact per-pixel oracle (on the GPU, on every `exact_stride`-th pixel) and,
 //! with `accuracy`, the image error against the reference and the infinite-range
-//! reference; a small render and lights-per-pixel heatmap for the report.
+//! reference; a small render and lights-per-pixel heatmap for the report. Moving lights
+//! (`lights.motion`) move before each frame ([`crate::dynamic`]), their update timed with it,
+//! and the list metrics and accuracy are taken at every measured frame instead of every pose.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -19,6 +21,7 @@ use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::{Camera, Scene};
 use manylights_shade::{Backend, ReferenceRenderer, Renderer};
 
+use crate::dynamic::Movers;
 use crate::evaluate::{PoseEval, evaluate, temporal_stability};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
 use crate::results::{Row, load_cells, percentiles, save_cell, write_results};
@@ -191,7 +194,9 @@ fn now() -> u64 {
         .map_or(0, |d| d.as_secs())
 }
 
-fn build_scene(c: &Config, base: &Path) -> Result<Scene, LabError> {
+/// The cell's scene with its generated lights after its own, and how many lights it has of
+/// its own.
+fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
     let mut scene = match c.scene.procedural() {
         Some(p) => p.build().map_err(|e| LabError::Other(e.to_string()))?,
         None => {
@@ -212,11 +217,12 @@ fn build_scene(c: &Config, base: &Path) -> Result<Scene, LabError> {
         .lights
         .generate(&scene)
         .map_err(|e| LabError::Other(e.to_string()))?;
+    let own = scene.lights.len();
     scene.lights.extend(lights);
     scene
         .validate()
         .map_err(|e| LabError::Other(e.to_string()))?;
-    Ok(scene)
+    Ok((scene, own))
 }
 
 /// Pass category for the result columns.
@@ -226,6 +232,8 @@ pub(crate) fn category(label: &str) -> &'static str {
     } else if label.starts_with("cull.") || label.starts_with("scan.") || label.starts_with("sort.")
     {
         "cull"
+    } else if label.starts_with("lights.") {
+        "light_update"
     } else {
         "shade"
     }
@@ -244,7 +252,7 @@ fn run_cell(
     let id = cell.id();
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let name = cell.name.as_str();
-    let scene = stage(name, "scene built", || build_scene(c, base))?;
+    let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
     let poses: Vec<Camera> = match &c.camera {
         CameraSpec::Default => vec![scene.camera],
         CameraSpec::Pose(p) => vec![p.camera()],
@@ -264,11 +272,20 @@ fn run_cell(
         tile_boxes: c.tile_boxes,
         ..CullSettings::for_camera(cam)
     };
+    let mut movers = Movers::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
     let mut encode = Vec::new();
+    let mut uploads = Vec::new();
     let mut timed = true;
     for f in 0..(c.warmup + c.frames) as usize {
         let cam = &poses[f % poses.len()];
+        // Moving lights move first, as a frame of an application would move them.
+        let update = match &mut movers {
+            Some(m) => Some(stage(name, &format!("frame {f} lights moved"), || {
+                m.update(ctx, f as u32)
+            })?),
+            None => None,
+        };
         gpu_scene.set_view(ctx, cam, w, h, 0);
         ctx.take_encode_ms();
         let o = stage(name, &format!("frame {f} rendered"), || {
@@ -285,18 +302,39 @@ fn run_cell(
         let enc = ctx.take_encode_ms();
         if f >= c.warmup as usize {
             match o.timings {
-                Some(t) => frames.push(t),
+                Some(mut t) => {
+                    if let Some(g) = update.as_ref().and_then(|u| u.gpu.clone()) {
+                        t.splice(0..0, g);
+                    }
+                    frames.push(t);
+                }
                 None => timed = false,
             }
             encode.push(enc);
+            uploads.extend(update.and_then(|u| u.host_ms));
         }
     }
-    // Metrics and accuracy at every pose (a path's poses are all checked), images at the first.
+    // Metrics and accuracy at every pose (a path's poses are all checked), images at the first;
+    // with moving lights, at every measured frame, the lights where that frame had them.
     let light_count = scene.lights.len() as u64;
     let reference = c.accuracy.then(|| ReferenceRenderer::new(ctx, &gpu_scene));
-    let mut evals = Vec::with_capacity(poses.len());
-    for (k, cam) in poses.iter().enumerate() {
-        let pose = format!("{name} pose {k}");
+    let checks: Vec<(usize, Option<u32>)> = if movers.is_some() {
+        (c.warmup..c.warmup + c.frames)
+            .map(|f| (f as usize % poses.len(), Some(f)))
+            .collect()
+    } else {
+        (0..poses.len()).map(|k| (k, None)).collect()
+    };
+    let mut evals = Vec::with_capacity(checks.len());
+    for (k, &(p, frame)) in checks.iter().enumerate() {
+        let cam = &poses[p];
+        let pose = match (frame, &mut movers) {
+            (Some(f), Some(m)) => {
+                m.update(ctx, f)?;
+                format!("{name} frame {f} (pose {p})")
+            }
+            _ => format!("{name} pose {p}"),
+        };
         evals.push(evaluate(
             ctx,
             &renderer,
@@ -354,6 +392,11 @@ fn run_cell(
     let cull = stats(series(&|p| category(&p.label) == "cull"));
     let shade = stats(series(&|p| category(&p.label) == "shade"));
     let prepass = stats(series(&|p| category(&p.label) == "prepass"));
+    let light_update = if movers.is_some() {
+        stats(series(&|p| category(&p.label) == "light_update"))
+    } else {
+        None
+    };
     let raster = stats(series(&|p| p.kind == PassKind::Raster));
     let compute = stats(series(&|p| p.kind == PassKind::Compute));
     let mut passes = std::collections::BTreeMap::new();
@@ -421,7 +464,7 @@ fn run_cell(
         exact_stride: c.exact_stride,
         frames: c.frames,
         nonfinite_pixels: nonfinite,
-        poses: poses.len() as u32,
+        poses: checks.len() as u32,
         temporal_change: temporal.map(|t| t.0),
         temporal_change_reference: temporal.map(|t| t.1),
         temporal_flicker: temporal.map(|t| t.2),
@@ -433,6 +476,8 @@ fn run_cell(
         lights_needed_per_pixel_mean: max_f64(&|e| {
             e.metrics.as_ref().map(|m| m.lights_needed_per_pixel_mean)
         }),
+        gpu_ms_light_update: med(light_update),
+        cpu_ms_upload: percentiles(&uploads).map(|x| x.0),
         passes,
         index: cell.index,
         id,

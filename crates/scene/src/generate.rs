@@ -6,7 +6,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
-use crate::{Light, LightKind, Scene, SceneError};
+use crate::{Light, LightKind, Motion, Scene, SceneError};
 
 /// How light positions are chosen.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -59,6 +59,14 @@ pub struct LightSpec {
     pub spot_fraction: f32,
     /// Outer half-angle of generated spots in degrees, in (0, 180]; the inner one is 80% of it.
     pub spot_outer_deg: f32,
+    /// How the generated lights move from frame to frame (`Static`, the default, left out of
+    /// the serialised form so that earlier experiments keep their cell identifiers).
+    #[serde(skip_serializing_if = "is_static")]
+    pub motion: Motion,
+}
+
+fn is_static(m: &Motion) -> bool {
+    *m == Motion::Static
 }
 
 impl Default for LightSpec {
@@ -71,6 +79,7 @@ impl Default for LightSpec {
             intensity: 4.0,
             spot_fraction: 0.0,
             spot_outer_deg: 35.0,
+            motion: Motion::Static,
         }
     }
 }
@@ -78,6 +87,7 @@ impl Default for LightSpec {
 impl LightSpec {
     /// Checks every field; the error names the field, the value and what is accepted.
     pub fn validate(&self) -> Result<(), SceneError> {
+        self.motion.validate()?;
         if !(self.intensity.is_finite() && self.intensity >= 0.0) {
             return Err(SceneError::invalid(
                 "lights.intensity",

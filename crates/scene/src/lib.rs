@@ -2,7 +2,7 @@
 //!
 //! This crate owns the camera (with its matrix conventions), triangle meshes with one material
 //! index per primitive, minimal materials, point and spot lights with the one falloff function of
-//! the project, deterministic light generators, the procedural scenes (`atrium`, `pillars`,
+//! the project, deterministic light generators, moving lights ([`motion`]), the procedural scenes (`atrium`, `pillars`,
 //! `topdown`, `city`, `cis5650`) and glTF import. It must not depend on wgpu or any GPU crate: the CPU
 //! oracles of every GPU pass are written against these types alone.
 
@@ -13,6 +13,7 @@ pub mod generate;
 pub mod gltf_import;
 pub mod light;
 pub mod mesh;
+pub mod motion;
 pub mod procedural;
 
 pub use camera::{Camera, Projection};
@@ -20,3 +21,4 @@ pub use error::SceneError;
 pub use generate::{LightGenerator, LightSpec, RadiusRule};
 pub use light::{Light, LightKind};
 pub use mesh::{Aabb, Material, Primitive, Scene};
+pub use motion::Motion;

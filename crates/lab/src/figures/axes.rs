@@ -37,7 +37,9 @@ impl Scale {
                 log: true,
             };
         }
-        let pad = ((hi - lo) * 0.1).max(hi.abs().max(lo.abs()) * 0.05).max(1e-9);
+        let pad = ((hi - lo) * 0.1)
+            .max(hi.abs().max(lo.abs()) * 0.05)
+            .max(1e-9);
         Scale {
             lo: lo - pad,
             hi: hi + pad,
@@ -82,7 +84,11 @@ pub(super) fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
         return decades.into_iter().step_by(step).collect();
     }
     let mut best = decades;
-    for set in [&[1.0, 3.0][..], &[1.0, 2.0, 5.0], &[1.0, 2.0, 3.0, 5.0, 7.0]] {
+    for set in [
+        &[1.0, 3.0][..],
+        &[1.0, 2.0, 5.0],
+        &[1.0, 2.0, 3.0, 5.0, 7.0],
+    ] {
         if best.len() >= 4 {
             break;
         }
@@ -109,7 +115,11 @@ pub(super) fn tick_label(v: f64) -> String {
 pub(super) fn linear_label(v: &f64) -> String {
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
-    if s == "-0" { "0".to_owned() } else { s.to_owned() }
+    if s == "-0" {
+        "0".to_owned()
+    } else {
+        s.to_owned()
+    }
 }
 
 pub(super) type Chart<'a, 'b> =
@@ -187,7 +197,10 @@ mod tests {
     #[test]
     fn log_ticks_are_round_numbers_inside_the_range_and_few() {
         assert_eq!(log_ticks(0.5, 5000.0), vec![1.0, 10.0, 100.0, 1000.0]);
-        assert_eq!(log_ticks(400.0, 6000.0), vec![500.0, 1000.0, 2000.0, 5000.0]);
+        assert_eq!(
+            log_ticks(400.0, 6000.0),
+            vec![500.0, 1000.0, 2000.0, 5000.0]
+        );
         assert_eq!(log_ticks(1.2, 30.0), vec![2.0, 5.0, 10.0, 20.0]);
         let wide = log_ticks(1e-3, 1e12);
         assert!(wide.len() <= 10 && wide.len() >= 4, "{wide:?}");

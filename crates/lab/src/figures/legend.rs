@@ -60,9 +60,14 @@ pub(super) fn legend(
                     c.stroke_width(2),
                 ))
                 .map_err(err)?,
-            Mark::Dot(c) => area.draw(&Circle::new((x0 + 9, y), 4, c.filled())).map_err(err)?,
+            Mark::Dot(c) => area
+                .draw(&Circle::new((x0 + 9, y), 4, c.filled()))
+                .map_err(err)?,
             Mark::Block(c) => area
-                .draw(&Rectangle::new([(x0 + 3, y - 5), (x0 + 15, y + 5)], c.filled()))
+                .draw(&Rectangle::new(
+                    [(x0 + 3, y - 5), (x0 + 15, y + 5)],
+                    c.filled(),
+                ))
                 .map_err(err)?,
         }
         area.draw(&Text::new(clip_label(label), (x0 + 26, y), style.clone()))
@@ -77,4 +82,3 @@ pub(super) fn legend(
         by + y0 + row * entries.len() as i32,
     ))
 }
-

@@ -123,11 +123,14 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
     }
     let parts = |r: &Row| {
         [
+            r.gpu_ms_light_update.unwrap_or(0.0),
             r.gpu_ms_prepass.unwrap_or(0.0),
             r.gpu_ms_cull.unwrap_or(0.0),
             r.gpu_ms_shade.unwrap_or(0.0),
         ]
     };
+    // Moving lights' update, where a row has one, as a fourth part before the others.
+    let moving = shown.iter().any(|r| r.gpu_ms_light_update.is_some());
     let xmax = shown
         .iter()
         .map(|r| parts(r).iter().sum::<f64>())
@@ -137,19 +140,32 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
     let n = shown.len();
     let labels: Vec<String> = shown.iter().map(|r| clip_label(&r.cell)).collect();
     let names = [
+        "moving the lights (lights.animate / lights.upload)",
         "geometry pass (prepass / G-buffer, raster)",
         "culling (compute)",
         "shading",
     ];
+    // The parts' colours: the geometry pass, culling and shading as before moving lights.
+    let colours = [PALETTE[3], PALETTE[0], PALETTE[1], PALETTE[2]];
+    let shown_parts: Vec<usize> = (usize::from(!moving)..names.len()).collect();
     let label_w = legend_width(&labels) - 30;
-    let lw = legend_width(&names.map(str::to_owned));
+    let lw = legend_width(
+        &shown_parts
+            .iter()
+            .map(|&k| names[k].to_owned())
+            .collect::<Vec<_>>(),
+    );
     let height = 110 + 24 * n as u32;
     let root = SVGBackend::new(path, (label_w + 520 + lw, height)).into_drawing_area();
     root.fill(&WHITE).map_err(err)?;
     let (plot, side) = root.split_horizontally(label_w + 520);
     let mut chart = ChartBuilder::on(&plot)
         .caption(
-            "Per-pass GPU time (median): geometry pass (raster) | culling (compute) | shading",
+            if moving {
+                "Per-pass GPU time (median): moving the lights | geometry pass (raster) | culling | shading"
+            } else {
+                "Per-pass GPU time (median): geometry pass (raster) | culling (compute) | shading"
+            },
             (FONT, 15),
         )
         .margin(12)
@@ -169,8 +185,8 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
         .draw()
         .map_err(err)?;
     let mut layout = Layout::default();
-    for (k, _) in names.iter().enumerate() {
-        let c = PALETTE[k];
+    for &k in &shown_parts {
+        let c = colours[k];
         chart
             .draw_series(shown.iter().enumerate().map(|(i, r)| {
                 let p = parts(r);
@@ -193,10 +209,9 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
             .points
             .push(chart.backend_coord(&(total, i as f64 + 0.5)));
     }
-    let entries: Vec<(String, Mark)> = names
+    let entries: Vec<(String, Mark)> = shown_parts
         .iter()
-        .enumerate()
-        .map(|(k, n)| ((*n).to_owned(), Mark::Block(PALETTE[k])))
+        .map(|&k| (names[k].to_owned(), Mark::Block(colours[k])))
         .collect();
     layout.legend = Some(legend(&side, &entries)?);
     root.present().map_err(err)?;
@@ -353,7 +368,10 @@ mod tests {
             let figures = [
                 ("time_vs_lights", time_vs_lights(&rows, &svg).unwrap()),
                 ("passes", passes(&rows, &svg).unwrap()),
-                ("speed_accuracy", speed_accuracy(&rows, &svg, gpu, fp).unwrap()),
+                (
+                    "speed_accuracy",
+                    speed_accuracy(&rows, &svg, gpu, fp).unwrap(),
+                ),
                 ("shade_vs_lights", shade_vs_lights(&rows, &svg).unwrap()),
             ];
             for (name, layout) in figures {

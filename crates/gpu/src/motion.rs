@@ -1,0 +1,284 @@
+//! Moving lights each frame, two ways: a compute pass that moves them on the GPU
+//! ([`LightMotion::animate`], `shaders/lights/motion.wgsl`, timed as `lights.animate`), or the
+//! host computing every moving light and uploading all of them ([`LightMotion::upload`]:
+//! written into a mapped staging buffer, then copied into the scene's light buffer, the copy
+//! timed as `lights.upload` where the device writes timestamps between passes). Both put each
+//! light where [`manylights_scene::motion`], their oracle, says.
+
+use bytemuck::{Pod, Zeroable};
+use manylights_scene::motion::{MOTION_NOISE, MOTION_ORBIT, MOTION_STATIC, frame_time};
+use manylights_scene::{Light, Motion};
+use wgpu::util::DeviceExt;
+
+use crate::layout::GpuLight;
+use crate::pipeline::{self, UNIFORM, entry, storage};
+use crate::shaders::{LIGHT, ShaderDef, WgslConst};
+use crate::timing::{GpuTimer, PassTiming};
+use crate::{GpuContext, GpuError, GpuScene};
+
+/// The animation pass.
+pub const MOTION: ShaderDef = ShaderDef {
+    name: "lights.animate",
+    consts: &[
+        WgslConst::U32("MOTION_STATIC", MOTION_STATIC),
+        WgslConst::U32("MOTION_ORBIT", MOTION_ORBIT),
+        WgslConst::U32("MOTION_NOISE", MOTION_NOISE),
+    ],
+    files: &[LIGHT, crate::shader_file!("lights/motion.wgsl")],
+};
+
+/// Threads per workgroup of the animation pass.
+const WORKGROUP: u32 = 256;
+
+/// Host mirror of `MotionParams` in `shaders/lights/motion.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct MotionParams {
+    kind: u32,
+    first: u32,
+    count: u32,
+    row: u32,
+    speed: f32,
+    time: f32,
+    _pad: [u32; 2],
+}
+
+/// What one light update cost.
+#[derive(Clone, Debug, Default)]
+pub struct UpdateCost {
+    /// The GPU's part (`lights.animate`, or the copy `lights.upload`), where it was timed.
+    pub gpu: Option<Vec<PassTiming>>,
+    /// Host milliseconds: computing the lights and writing them into the staging buffer
+    /// (uploads only).
+    pub host_ms: Option<f64>,
+}
+
+/// The moving lights of a scene: lights `first..first + home.len()` of its light buffer.
+pub struct LightMotion {
+    motion: Motion,
+    first: u32,
+    /// The moving lights at home, as the GPU holds them.
+    home: Vec<GpuLight>,
+    params: wgpu::Buffer,
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    groups: (u32, u32),
+    /// The scene's light buffer.
+    lights: wgpu::Buffer,
+    /// The staging buffer of uploads, mapped for writing while it waits for the next one.
+    staging: Option<wgpu::Buffer>,
+}
+
+impl LightMotion {
+    /// `lights` are the scene's lights from index `first` on, at home (as uploaded), that move
+    /// with `motion`.
+    pub fn new(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        lights: &[Light],
+        first: u32,
+        motion: Motion,
+    ) -> Result<Self, GpuError> {
+        let count = lights.len() as u32;
+        if u64::from(first) + u64::from(count) > u64::from(scene.light_count) {
+            return Err(GpuError::OverLimit {
+                what: "moving lights".into(),
+                value: u64::from(first) + u64::from(count),
+                limit: u64::from(scene.light_count),
+                limit_name: "the scene's light count",
+            });
+        }
+        let d = &ctx.device;
+        let home_xyzr: Vec<[f32; 4]> = lights
+            .iter()
+            .map(|l| [l.position.x, l.position.y, l.position.z, l.radius])
+            .collect();
+        let home_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lights.home"),
+            contents: if home_xyzr.is_empty() {
+                &[0u8; 16]
+            } else {
+                bytemuck::cast_slice(&home_xyzr)
+            },
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let groups_needed = count.div_ceil(WORKGROUP).max(1);
+        let max = ctx.limits.max_compute_workgroups_per_dimension;
+        let groups = (groups_needed.min(max), groups_needed.div_ceil(max));
+        let params = MotionParams {
+            kind: motion.kind(),
+            first,
+            count,
+            row: groups.0 * WORKGROUP,
+            speed: motion.speed(),
+            time: 0.0,
+            _pad: [0; 2],
+        };
+        let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lights.motion"),
+            contents: bytemuck::bytes_of(&params),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        });
+        let c = wgpu::ShaderStages::COMPUTE;
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("lights.animate"),
+            entries: &[
+                entry(0, c, UNIFORM),
+                entry(1, c, storage(true)),
+                entry(2, c, storage(false)),
+            ],
+        });
+        let module = MOTION.create(d);
+        let pipeline = pipeline::compute(
+            d,
+            &module,
+            &pipeline::layout(d, "lights.animate", &[&layout]),
+            "animate",
+        );
+        let group = pipeline::buffers_group(
+            d,
+            "lights.animate",
+            &layout,
+            &[&params_buf, &home_buf, &scene.lights],
+        );
+        Ok(Self {
+            motion,
+            first,
+            home: lights.iter().map(GpuLight::from).collect(),
+            params: params_buf,
+            pipeline,
+            group,
+            groups,
+            lights: scene.lights.clone(),
+            staging: None,
+        })
+    }
+
+    /// How the lights move.
+    pub fn motion(&self) -> Motion {
+        self.motion
+    }
+
+    /// Moves the lights to where they are at frame `frame` with the animation pass.
+    pub fn animate(&self, ctx: &GpuContext, frame: u32) -> Result<UpdateCost, GpuError> {
+        let time = frame_time(frame);
+        // `time` is the sixth word of MotionParams.
+        ctx.queue
+            .write_buffer(&self.params, 20, bytemuck::bytes_of(&time));
+        let mut timer = GpuTimer::new(ctx, 1);
+        let mut encoder = encoder(ctx, "lights.animate");
+        pipeline::dispatch(
+            &mut encoder,
+            &mut timer,
+            "lights.animate",
+            &self.pipeline,
+            &[&self.group],
+            self.groups,
+        );
+        timer.resolve(&mut encoder);
+        ctx.submit_and_wait(encoder, "lights.animate")?;
+        Ok(UpdateCost {
+            gpu: timer.read(ctx)?,
+            host_ms: None,
+        })
+    }
+
+    /// The moving lights as the GPU holds them at frame `frame`, computed on the host (on
+    /// every core): what [`LightMotion::upload`] writes.
+    pub fn at_frame(&self, frame: u32) -> Vec<GpuLight> {
+        let mut out = self.home.clone();
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let chunk = out.len().div_ceil(threads).max(4096);
+        let (motion, first) = (self.motion, self.first);
+        std::thread::scope(|s| {
+            for (c, (lights, home)) in out
+                .chunks_mut(chunk)
+                .zip(self.home.chunks(chunk))
+                .enumerate()
+            {
+                s.spawn(move || {
+                    for (j, (l, h)) in lights.iter_mut().zip(home).enumerate() {
+                        let index = first + (c * chunk + j) as u32;
+                        l.position = motion.position(index, h.position, h.radius, frame);
+                    }
+                });
+            }
+        });
+        out
+    }
+
+    /// Moves the lights to where they are at frame `frame` by computing them on the host and
+    /// uploading all of them: the host's time (waiting for the staging buffer, computing,
+    /// writing it) and the GPU copy's, where timed.
+    pub fn upload(&mut self, ctx: &GpuContext, frame: u32) -> Result<UpdateCost, GpuError> {
+        let bytes = (self.home.len() * size_of::<GpuLight>()) as u64;
+        if bytes == 0 {
+            return Ok(UpdateCost::default());
+        }
+        let start = std::time::Instant::now();
+        let staging = match self.staging.take() {
+            Some(b) => {
+                map_write(ctx, &b)?;
+                b
+            }
+            None => ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("lights.upload"),
+                size: bytes,
+                usage: wgpu::BufferUsages::MAP_WRITE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: true,
+            }),
+        };
+        let lights = self.at_frame(frame);
+        staging
+            .get_mapped_range_mut(..)
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .copy_from_slice(bytemuck::cast_slice(&lights));
+        staging.unmap();
+        let host_ms = start.elapsed().as_secs_f64() * 1e3;
+        let mut timer = GpuTimer::spans(ctx, 1);
+        let mut encoder = encoder(ctx, "lights.upload");
+        if let Some(t) = &mut timer {
+            t.span_begin(&mut encoder, "lights.upload");
+        }
+        encoder.copy_buffer_to_buffer(
+            &staging,
+            0,
+            &self.lights,
+            u64::from(self.first) * size_of::<GpuLight>() as u64,
+            bytes,
+        );
+        if let Some(t) = &mut timer {
+            t.span_end(&mut encoder);
+            t.resolve(&mut encoder);
+        }
+        ctx.submit_and_wait(encoder, "lights.upload")?;
+        self.staging = Some(staging);
+        Ok(UpdateCost {
+            gpu: match &timer {
+                Some(t) => t.read(ctx)?,
+                None => None,
+            },
+            host_ms: Some(host_ms),
+        })
+    }
+}
+
+/// An encoder outside the frame's (whose recording time is the frame's `cpu_ms_encode`).
+fn encoder(ctx: &GpuContext, label: &str) -> wgpu::CommandEncoder {
+    ctx.device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+}
+
+/// Maps `buffer` for writing and waits for it.
+fn map_write(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<(), GpuError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.map_async(wgpu::MapMode::Write, .., move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| GpuError::Readback(e.to_string()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))
+}
