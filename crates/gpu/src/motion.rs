@@ -228,13 +228,22 @@ impl LightMotion {
                 mapped_at_creation: true,
             }),
         };
+        let mapped = start.elapsed();
         let lights = self.at_frame(frame);
+        let computed = start.elapsed();
         staging
             .get_mapped_range_mut(..)
             .map_err(|e| GpuError::Readback(e.to_string()))?
             .copy_from_slice(bytemuck::cast_slice(&lights));
         staging.unmap();
         let host_ms = start.elapsed().as_secs_f64() * 1e3;
+        tracing::debug!(
+            lights = lights.len(),
+            map_ms = mapped.as_secs_f64() * 1e3,
+            compute_ms = (computed - mapped).as_secs_f64() * 1e3,
+            write_ms = host_ms - computed.as_secs_f64() * 1e3,
+            "lights uploaded"
+        );
         let mut timer = GpuTimer::spans(ctx, 1);
         let mut encoder = encoder(ctx, "lights.upload");
         if let Some(t) = &mut timer {
