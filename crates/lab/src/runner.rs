@@ -279,9 +279,6 @@ fn run_cell(
     let mut timed = true;
     for f in 0..(c.warmup + c.frames) as usize {
         let cam = &poses[f % poses.len()];
-        if f == c.warmup as usize {
-            warm_up(ctx, &renderer, &gpu_scene, c, &settings(cam), name)?;
-        }
         // Moving lights move first, as a frame of an application would move them.
         let update = match &mut movers {
             Some(m) => Some(stage(name, &format!("frame {f} lights moved"), || {
@@ -485,32 +482,6 @@ fn run_cell(
         index: cell.index,
         id,
         finished_unix: now(),
-    })
-}
-
-/// Renders the cell's frame untimed for [`crate::steady::WARM_UP`] before the measured frames
-/// on a hardware GPU: an idle GPU clocks down while the host works between cells (the oracle,
-/// the references, the report), and frames timed right after measured up to 2.7 times slow on
-/// an H100 (the same frame 3.6 and 9.8 ms in one run). A CPU adapter's clock does not move.
-fn warm_up(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    gpu_scene: &GpuScene,
-    c: &Config,
-    settings: &CullSettings,
-    name: &str,
-) -> Result<(), LabError> {
-    if ctx.info.device_type == wgpu::DeviceType::Cpu {
-        return Ok(());
-    }
-    stage(name, "GPU clock raised", || {
-        let start = Instant::now();
-        while start.elapsed() < crate::steady::WARM_UP {
-            renderer
-                .render(ctx, gpu_scene, c.backend, &c.strategy, settings, c.resolution)
-                .map_err(|e| LabError::Other(e.to_string()))?;
-        }
-        Ok(())
     })
 }
 
