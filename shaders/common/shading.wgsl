@@ -20,7 +20,26 @@ fn shade_all(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32>
 // Radiance towards `v` from surface point `p` (unit normal `n`) lit by one light.
 fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let to_light = light.position - p;
-    let d = length(to_light);
+    return shade_light_at(light, to_light, length(to_light), n, v, m);
+}
+
+// x^SHININESS: five squarings where SHININESS is 32 (a few ulp from exact, where pow's
+// exp2(log2(x) * 32) is further, and no special-function unit's two operations a light).
+fn shininess_pow(x: f32) -> f32 {
+    if SHININESS == 32.0 {
+        let x2 = x * x;
+        let x4 = x2 * x2;
+        let x8 = x4 * x4;
+        let x16 = x8 * x8;
+        return x16 * x16;
+    }
+    return pow(x, SHININESS);
+}
+
+// shade_light for a caller that already has `to_light = light.position - p` and
+// `d = length(to_light)` (the per-pixel reject of list_shading.wgsl computes them first): the
+// same arithmetic, so a light the reject keeps adds exactly what shade_light adds.
+fn shade_light_at(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     var atten = light_falloff(d, light.radius);
     if (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u {
         atten = light_falloff_infinite(d);
@@ -41,6 +60,6 @@ fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Materi
     let lv = l + v;
     let h = select(vec3<f32>(0.0), normalize(lv), dot(lv, lv) > 0.0);
     let spec_norm = (SHININESS + 8.0) / (8.0 * PI);
-    let brdf = m.base_color / PI + vec3<f32>(m.specular * spec_norm * pow(max(dot(n, h), 0.0), SHININESS));
+    let brdf = m.base_color / PI + vec3<f32>(m.specular * spec_norm * shininess_pow(max(dot(n, h), 0.0)));
     return light.color * (light.intensity * atten * cone * ndotl) * brdf;
 }

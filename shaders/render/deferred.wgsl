@@ -134,10 +134,12 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
                 if k < cell.first || k >= cell.end {
                     continue;
                 }
-                if !infinite && length(lights[i].position - s.p) >= lights[i].radius {
+                let to_light = lights[i].position - s.p;
+                let d = length(to_light);
+                if !infinite && d >= lights[i].radius {
                     continue;
                 }
-                c += shade_light(lights[i], s.p, s.n, s.v, s.m);
+                c += shade_light_at(lights[i], to_light, d, s.n, s.v, s.m);
             }
         }
     }
@@ -179,10 +181,12 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
         workgroupBarrier();
         if covered {
             for (var k = 0u; k < n; k++) {
-                if !infinite && length(wg_lights[k].position - s.p) >= wg_lights[k].radius {
+                let to_light = wg_lights[k].position - s.p;
+                let d = length(to_light);
+                if !infinite && d >= wg_lights[k].radius {
                     continue;
                 }
-                c += shade_light(wg_lights[k], s.p, s.n, s.v, s.m);
+                c += shade_light_at(wg_lights[k], to_light, d, s.n, s.v, s.m);
             }
         }
         workgroupBarrier();

@@ -17,10 +17,12 @@ fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mate
     var c = vec3<f32>(0.0);
     for (var k = 0u; k < list.y; k++) {
         let i = light_indices[list.x + k];
-        if !infinite && length(lights[i].position - p) >= lights[i].radius {
+        let to_light = lights[i].position - p;
+        let d = length(to_light);
+        if !infinite && d >= lights[i].radius {
             continue;
         }
-        c += shade_light(lights[i], p, n, v, m);
+        c += shade_light_at(lights[i], to_light, d, n, v, m);
     }
     return c;
 }
@@ -39,10 +41,12 @@ fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mater
             let k = w * 32u + firstTrailingBit(bits);
             bits &= bits - 1u;
             let i = light_indices[k];
-            if !infinite && length(lights[i].position - p) >= lights[i].radius {
+            let to_light = lights[i].position - p;
+            let d = length(to_light);
+            if !infinite && d >= lights[i].radius {
                 continue;
             }
-            c += shade_light(lights[i], p, n, v, m);
+            c += shade_light_at(lights[i], to_light, d, n, v, m);
         }
     }
     return c;
