@@ -64,6 +64,39 @@ fn fmt_opt(v: Option<f64>, digits: usize) -> String {
 }
 
 /// The generated summary of findings.
+/// What moving the lights cost, per light count, where cells moved them: the GPU animation
+/// pass against an upload's copy and host time (medians over the cells).
+fn moving_lights_summary(by_lights: &BTreeMap<u64, Vec<&Row>>) -> Vec<String> {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        (!v.is_empty()).then(|| v[v.len() / 2])
+    };
+    let mut out = Vec::new();
+    for (n, rs) in by_lights {
+        let of = |update: &str, f: &dyn Fn(&Row) -> Option<f64>| {
+            median(
+                rs.iter()
+                    .filter(|r| r.params.ends_with(&format!(";light_update={update}")))
+                    .filter_map(|r| f(r))
+                    .collect(),
+            )
+        };
+        let animate = of("gpu", &|r| r.gpu_ms_light_update);
+        let copy = of("upload", &|r| r.gpu_ms_light_update);
+        let host = of("upload", &|r| r.cpu_ms_upload);
+        let ms = |v: Option<f64>| v.map_or("-".to_owned(), |v| format!("{v:.3} ms"));
+        if animate.is_some() || host.is_some() {
+            out.push(format!(
+                "At {n} lights, moving the lights took {} on the GPU (`lights.animate`), against {} of host work and {} of copy (`lights.upload`) to upload them (medians over the cells).",
+                ms(animate),
+                ms(host),
+                ms(copy)
+            ));
+        }
+    }
+    out
+}
+
 fn summary(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     let mut by_lights: BTreeMap<u64, Vec<&Row>> = BTreeMap::new();
@@ -91,6 +124,7 @@ fn summary(rows: &[Row]) -> Vec<String> {
             out.push(line);
         }
     }
+    out.extend(moving_lights_summary(&by_lights));
     let fns: Vec<&Row> = rows
         .iter()
         .filter(|r| r.false_negatives.unwrap_or(0) > 0)
