@@ -218,7 +218,7 @@ impl LightMotion {
         let start = std::time::Instant::now();
         let staging = match self.staging.take() {
             Some(b) => {
-                map_write(ctx, &b)?;
+                crate::readback::map(ctx, &b, wgpu::MapMode::Write)?;
                 b
             }
             None => ctx.device.create_buffer(&wgpu::BufferDescriptor {
@@ -276,18 +276,4 @@ impl LightMotion {
 fn encoder(ctx: &GpuContext, label: &str) -> wgpu::CommandEncoder {
     ctx.device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
-}
-
-/// Maps `buffer` for writing and waits for it.
-fn map_write(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<(), GpuError> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    buffer.map_async(wgpu::MapMode::Write, .., move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
-    rx.recv()
-        .map_err(|e| GpuError::Readback(e.to_string()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))
 }

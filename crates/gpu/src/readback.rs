@@ -28,9 +28,14 @@ pub fn read_buffer(
     map_read(ctx, &staging)
 }
 
-fn map_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+/// Maps the whole of `buffer` in `mode` and waits for it.
+pub(crate) fn map(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    mode: wgpu::MapMode,
+) -> Result<(), GpuError> {
     let (tx, rx) = std::sync::mpsc::channel();
-    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+    buffer.map_async(mode, .., move |r| {
         let _ = tx.send(r);
     });
     ctx.device
@@ -38,7 +43,11 @@ fn map_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuErro
         .map_err(|e| GpuError::Readback(e.to_string()))?;
     rx.recv()
         .map_err(|e| GpuError::Readback(e.to_string()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
+        .map_err(|e| GpuError::Readback(e.to_string()))
+}
+
+fn map_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    map(ctx, staging, wgpu::MapMode::Read)?;
     let data = staging
         .get_mapped_range(..)
         .map_err(|e| GpuError::Readback(e.to_string()))?

@@ -120,7 +120,10 @@ fn summary(rows: &[Row]) -> Vec<String> {
                 "culling and shading in steady state, `gpu_ms_cull_shade`",
             )
         } else {
-            ((|r: &Row| r.gpu_ms_total) as fn(&Row) -> Option<f64>, "a frame's GPU time")
+            (
+                (|r: &Row| r.gpu_ms_total) as fn(&Row) -> Option<f64>,
+                "a frame's GPU time",
+            )
         };
         let best = exact
             .iter()
