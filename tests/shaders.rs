@@ -21,7 +21,12 @@ fn all_shaders() -> Vec<ShaderDef> {
 }
 
 fn validate(def: &ShaderDef) -> naga::Module {
-    let src = def.compose();
+    validate_samples(def, 1)
+}
+
+/// `def` composed over a depth buffer of `samples` samples a pixel.
+fn validate_samples(def: &ShaderDef, samples: u32) -> naga::Module {
+    let src = manylights_gpu::shaders::with_samples(def.compose(), samples, def.name);
     let module = naga::front::wgsl::parse_str(&src)
         .unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
     naga::valid::Validator::new(
@@ -42,6 +47,27 @@ fn every_shader_validates_with_naga() {
             "{} has no entry point",
             def.name
         );
+    }
+}
+
+/// Every culling shader also over multisampled depth (MSAA 2, 4, 8: `DEPTH_SAMPLES` and a
+/// `texture_depth_multisampled_2d`), as `Culler::with_samples` builds it.
+#[test]
+fn every_culling_shader_validates_over_multisampled_depth() {
+    for def in manylights_cull::shaders::SHADERS {
+        if !def.compose().contains("const DEPTH_SAMPLES: u32 = 1u;") {
+            continue;
+        }
+        for samples in [2, 4, 8] {
+            let src = manylights_gpu::shaders::with_samples(def.compose(), samples, def.name);
+            if src.contains("var depth_tex: texture_depth_2d;") {
+                panic!(
+                    "{}: a single-sample depth_tex left at {samples} samples",
+                    def.name
+                );
+            }
+            validate_samples(def, samples);
+        }
     }
 }
 

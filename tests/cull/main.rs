@@ -7,6 +7,7 @@ mod common;
 mod cases;
 mod exactness;
 mod lists;
+mod msaa;
 mod paths;
 
 use cases::*;

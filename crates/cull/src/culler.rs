@@ -2,7 +2,7 @@
 //! a run checks its inputs, computes the parameters and hands them to the strategy's module
 //! ([`crate::strategies`]), which records its plan through [`crate::frame::execute`].
 
-use manylights_gpu::pipeline::{self, DEPTH_TEXTURE as DEPTH, UNIFORM, storage};
+use manylights_gpu::pipeline::{self, UNIFORM, depth_texture, storage};
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene};
 
@@ -26,6 +26,10 @@ use crate::{CullError, CullOutput, CullSettings, Strategy};
 /// Pipelines of every culling pass, and the knobs of the runs.
 pub struct Culler {
     layout: wgpu::BindGroupLayout,
+    /// Samples a pixel of the depth buffers it culls (MSAA where more than one): tile and
+    /// cluster depth bounds are taken over every sample, and the exact oracle checks every
+    /// sample.
+    pub samples: u32,
     /// Layout of group 1 for list consumers (shading, `cull.lights_per_pixel`): 0 params,
     /// 1 ranges, 2 indices, 3 depth, 4 a per-pixel output, 5 a pass-specific uniform.
     pub lists_layout: wgpu::BindGroupLayout,
@@ -90,8 +94,21 @@ impl Culler {
     /// As [`Culler::new`]; with `subgroups` false, gather keeps its portable scans even where
     /// the device has subgroup operations (both paths give the same lists; the tests run both).
     pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
+        Self::build(ctx, scene, subgroups, 1)
+    }
+
+    /// As [`Culler::new`], for depth buffers of `samples` samples a pixel (MSAA; see
+    /// `GpuContext::check_msaa`): every sample's depth counts in the tiles' and clusters'
+    /// bounds, so lists stay conservative for every sample. Its lists are for culling and the
+    /// exact oracle; the shading backends read lists of single-sample depth buffers.
+    pub fn with_samples(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
+        Self::build(ctx, scene, true, samples)
+    }
+
+    fn build(ctx: &GpuContext, scene: &GpuScene, subgroups: bool, samples: u32) -> Self {
         let d = &ctx.device;
-        let mut entries = vec![entry(0, UNIFORM), entry(1, DEPTH)];
+        let depth = depth_texture(samples);
+        let mut entries = vec![entry(0, UNIFORM), entry(1, depth)];
         entries.extend((2..=11).map(|b| entry(b, storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.group1"),
@@ -103,12 +120,12 @@ impl Culler {
                 entry(0, UNIFORM),
                 entry(1, storage(true)),
                 entry(2, storage(true)),
-                entry(3, DEPTH),
+                entry(3, depth),
                 entry(4, storage(false)),
                 entry(5, UNIFORM),
             ],
         });
-        let program = |def| Program::new(d, def, &scene.layout, &layout);
+        let program = |def| Program::new(d, def, samples, &scene.layout, &layout);
         let depth = program(&DEPTH_BOUNDS);
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         // One module for all of gather's pipelines, and the blocks' whose passes it holds.
@@ -126,8 +143,9 @@ impl Culler {
             scatter: tiled_scatter::Pipelines::new(d, &program(&TILED_SCATTER)),
             clustered: clustered::Pipelines::new(d, &program(&CLUSTERED)),
             zbin: zbin::Pipelines::new(d, &program(&ZBIN)),
-            per_pixel: PerPixel::new(d, &scene.layout, &lists_layout),
+            per_pixel: PerPixel::new(d, samples, &scene.layout, &lists_layout),
             layout,
+            samples,
             lists_layout,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,

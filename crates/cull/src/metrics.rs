@@ -19,7 +19,8 @@ use crate::layout::GpuCullParams;
 /// The metrics of one set of lists against the exact per-pixel sets.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ListMetrics {
-    /// Covered pixels.
+    /// Covered pixels (with MSAA, from the GPU oracle: covered samples; the means are per
+    /// covered sample then, and false negatives are (sample, light) pairs).
     pub covered_pixels: u64,
     /// (pixel, light) pairs in a pixel's exact set but missing from its list. A conservative
     /// method must have 0.
@@ -111,7 +112,16 @@ pub fn from_gpu_counts(counts: &[[u32; 4]], bin_lengths: &[u32]) -> ListMetrics 
             u64::from(c[1] - c[2].min(c[1])),
         )
     });
-    ListMetrics::from_pixels(pixels, bin_lengths.iter().copied())
+    let mut m = ListMetrics::from_pixels(pixels, bin_lengths.iter().copied());
+    // With MSAA a pixel's counts are sums over its covered samples (the fourth word says how
+    // many): the means are per covered sample.
+    let samples: u64 = counts.iter().map(|c| u64::from(c[3])).sum();
+    if samples != m.covered_pixels && samples > 0 {
+        m.covered_pixels = samples;
+        m.lights_per_pixel_mean = m.evaluated as f64 / samples as f64;
+        m.lights_needed_per_pixel_mean = m.needed as f64 / samples as f64;
+    }
+    m
 }
 
 impl ListMetrics {

@@ -13,18 +13,21 @@ use crate::{CullOutput, Culler};
 pub(crate) struct PerPixel {
     lights_per_pixel: wgpu::ComputePipeline,
     exact: wgpu::ComputePipeline,
+    depth_samples: wgpu::ComputePipeline,
 }
 
 impl PerPixel {
     /// Their pipelines over the scene's group and the lists' group.
     pub fn new(
         d: &wgpu::Device,
+        samples: u32,
         scene_layout: &wgpu::BindGroupLayout,
         lists_layout: &wgpu::BindGroupLayout,
     ) -> Self {
-        let program = |def| Program::new(d, def, scene_layout, lists_layout);
+        let program = |def| Program::new(d, def, samples, scene_layout, lists_layout);
         Self {
             lights_per_pixel: program(&LIGHTS_PER_PIXEL).pipeline(d, "lights_per_pixel"),
+            depth_samples: program(&LIGHTS_PER_PIXEL).pipeline(d, "depth_samples"),
             exact: program(&EXACT).pipeline(d, "exact_counts"),
         }
     }
@@ -48,6 +51,28 @@ impl Culler {
             1,
             bytemuck::bytes_of(&[0u32; 4]),
         )
+    }
+
+    /// Every sample's depth of each pixel (row by row, [`Culler::samples`] a pixel): how the
+    /// host reads a multisampled depth buffer, which cannot be copied. `lists` are any run's
+    /// over `depth` (the pass binds them and reads none).
+    pub fn depth_samples(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        lists: &CullOutput,
+    ) -> Result<Vec<f32>, GpuError> {
+        let words = self.per_pixel(
+            ctx,
+            scene,
+            depth,
+            lists,
+            &self.per_pixel.depth_samples,
+            u64::from(self.samples),
+            bytemuck::bytes_of(&[0u32; 4]),
+        )?;
+        Ok(words.into_iter().map(f32::from_bits).collect())
     }
 
     /// The exact per-pixel oracle on the GPU: per pixel `[evaluated, needed, found, covered]`

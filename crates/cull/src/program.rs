@@ -11,15 +11,17 @@ pub(crate) struct Program {
 }
 
 impl Program {
-    /// `def` compiled, over `scene_layout` and `group1`.
+    /// `def` compiled over a depth buffer of `samples` samples a pixel, over `scene_layout`
+    /// and `group1`.
     pub fn new(
         d: &wgpu::Device,
         def: &ShaderDef,
+        samples: u32,
         scene_layout: &wgpu::BindGroupLayout,
         group1: &wgpu::BindGroupLayout,
     ) -> Self {
         Self {
-            module: def.create(d),
+            module: def.create_samples(d, samples),
             layout: pipeline::layout(d, def.name, &[scene_layout, group1]),
         }
     }

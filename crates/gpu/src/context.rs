@@ -55,6 +55,9 @@ pub enum GpuError {
     /// Mapping a buffer for readback failed.
     #[error("buffer readback failed: {0}")]
     Readback(String),
+    /// A setting this device does not support; the message names what it supports.
+    #[error("{0}")]
+    Unsupported(String),
 }
 
 /// How to choose the adapter.
@@ -194,6 +197,8 @@ impl GpuContext {
             wgpu::Features::TIMESTAMP_QUERY,
             wgpu::Features::TIMESTAMP_QUERY_INSIDE_ENCODERS,
             wgpu::Features::SUBGROUP,
+            // Sample counts other than 1 and 4 (MSAA 2 and 8) where the adapter has them.
+            wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES,
         ] {
             if offered.contains(f) {
                 required |= f;
@@ -333,6 +338,44 @@ impl GpuContext {
             .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(std::time::Instant::now());
         self.device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some(label) })
+    }
+
+    /// The MSAA sample counts the depth buffer can have on this device (1 and 4 everywhere,
+    /// WebGPU's guarantee; 2, 8 and 16 where the adapter has them).
+    pub fn msaa_counts(&self) -> Vec<u32> {
+        let format = crate::prepass::DEPTH_FORMAT;
+        if self
+            .device
+            .features()
+            .contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+        {
+            let flags = self.adapter.get_texture_format_features(format).flags;
+            [1, 2, 4, 8, 16]
+                .into_iter()
+                .filter(|&n| flags.sample_count_supported(n))
+                .collect()
+        } else {
+            vec![1, 4]
+        }
+    }
+
+    /// Checks an MSAA sample count against [`GpuContext::msaa_counts`]: an error naming the
+    /// counts this device supports.
+    pub fn check_msaa(&self, samples: u32) -> Result<(), GpuError> {
+        let counts = self.msaa_counts();
+        if counts.contains(&samples) {
+            return Ok(());
+        }
+        Err(GpuError::Unsupported(format!(
+            "MSAA with {samples} samples: {} supports {} (for its depth buffer, {:?})",
+            self.info.name,
+            counts
+                .iter()
+                .map(u32::to_string)
+                .collect::<Vec<_>>()
+                .join(", "),
+            crate::prepass::DEPTH_FORMAT
+        )))
     }
 
     /// CPU milliseconds spent recording frame encoders since the last call.

@@ -48,6 +48,19 @@ pub fn raster(
     fragment: Option<(&str, &[Option<wgpu::ColorTargetState>])>,
     depth: DepthTest,
 ) -> wgpu::RenderPipeline {
+    raster_msaa(device, label, module, groups, fragment, depth, 1)
+}
+
+/// [`raster`] into targets of `samples` samples a pixel (MSAA).
+pub fn raster_msaa(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    groups: &[&wgpu::BindGroupLayout],
+    fragment: Option<(&str, &[Option<wgpu::ColorTargetState>])>,
+    depth: DepthTest,
+    samples: u32,
+) -> wgpu::RenderPipeline {
     let layout = layout(device, label, groups);
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
@@ -69,7 +82,10 @@ pub fn raster(
             stencil: Default::default(),
             bias: Default::default(),
         }),
-        multisample: Default::default(),
+        multisample: wgpu::MultisampleState {
+            count: samples,
+            ..Default::default()
+        },
         fragment: fragment.map(|(entry, targets)| wgpu::FragmentState {
             module,
             entry_point: Some(entry),
@@ -156,11 +172,17 @@ pub const fn storage(read_only: bool) -> wgpu::BindingType {
 }
 
 /// A 2D depth texture binding.
-pub const DEPTH_TEXTURE: wgpu::BindingType = wgpu::BindingType::Texture {
-    sample_type: wgpu::TextureSampleType::Depth,
-    view_dimension: wgpu::TextureViewDimension::D2,
-    multisampled: false,
-};
+pub const DEPTH_TEXTURE: wgpu::BindingType = depth_texture(1);
+
+/// A 2D depth texture binding of `samples` samples a pixel (`texture_depth_multisampled_2d`
+/// in WGSL where more than one).
+pub const fn depth_texture(samples: u32) -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type: wgpu::TextureSampleType::Depth,
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: samples > 1,
+    }
+}
 
 /// A 2D texture of one mip level and one sample.
 pub fn texture_2d(

@@ -20,15 +20,32 @@ pub const PRIMITIVE: wgpu::PrimitiveState = wgpu::PrimitiveState {
 
 /// A depth texture that can be rendered, sampled by compute passes, and read back.
 pub fn depth_target(ctx: &GpuContext, width: u32, height: u32) -> wgpu::Texture {
-    pipeline::texture_2d(
-        &ctx.device,
-        "depth",
-        (width, height),
-        DEPTH_FORMAT,
-        wgpu::TextureUsages::RENDER_ATTACHMENT
-            | wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-    )
+    depth_target_msaa(ctx, width, height, 1)
+}
+
+/// A depth texture of `samples` samples a pixel (MSAA where more than one) that can be
+/// rendered and read by compute passes; one of a single sample can also be copied back (a
+/// multisampled texture cannot be copied: `cull::per_pixel` reads its samples in a pass).
+pub fn depth_target_msaa(ctx: &GpuContext, width: u32, height: u32, samples: u32) -> wgpu::Texture {
+    let copy = if samples == 1 {
+        wgpu::TextureUsages::COPY_SRC
+    } else {
+        wgpu::TextureUsages::empty()
+    };
+    ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some("depth"),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: samples,
+        dimension: wgpu::TextureDimension::D2,
+        format: DEPTH_FORMAT,
+        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | copy,
+        view_formats: &[],
+    })
 }
 
 /// The depth prepass pipeline.
@@ -39,14 +56,21 @@ pub struct DepthPrepass {
 impl DepthPrepass {
     /// Builds the pipeline for scenes laid out as [`GpuScene`].
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        Self::with_samples(ctx, scene, 1)
+    }
+
+    /// The pipeline into a depth buffer of `samples` samples a pixel (MSAA where more than
+    /// one; `GpuContext::check_msaa` says which counts the device has).
+    pub fn with_samples(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
         let module = shaders::PREPASS.create(&ctx.device);
-        let pipeline = pipeline::raster(
+        let pipeline = pipeline::raster_msaa(
             &ctx.device,
             "prepass.depth",
             &module,
             &[&scene.layout],
             None,
             pipeline::DepthTest::WriteLess,
+            samples,
         );
         Self { pipeline }
     }

@@ -151,7 +151,29 @@ impl ShaderDef {
     /// When `MANYLIGHTS_SHADER_DIR` is set but is not a directory, or a file there cannot be
     /// read: a measurement must not silently run other shaders than asked for.
     pub fn create(&self, device: &wgpu::Device) -> wgpu::ShaderModule {
-        let source = match override_dir() {
+        self.create_samples(device, 1)
+    }
+
+    /// [`ShaderDef::create`] over a depth buffer of `samples` samples a pixel (MSAA): the
+    /// constant `DEPTH_SAMPLES` (which the definition must have among its constants, as 1)
+    /// becomes `samples`, and where that is more than one, `depth_tex` is declared a
+    /// `texture_depth_multisampled_2d`. Its `textureLoad` takes a sample index where a
+    /// single-sample texture's takes a level, so one loop over `DEPTH_SAMPLES` reads both.
+    ///
+    /// # Panics
+    /// As [`ShaderDef::create`]; and for `samples` > 1 when the definition has no
+    /// `DEPTH_SAMPLES`.
+    pub fn create_samples(&self, device: &wgpu::Device, samples: u32) -> wgpu::ShaderModule {
+        let source = with_samples(self.source(), samples, self.name);
+        device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(self.name),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        })
+    }
+
+    /// The WGSL text, with the files of `MANYLIGHTS_SHADER_DIR` where it is set.
+    fn source(&self) -> String {
+        match override_dir() {
             Ok(None) => self.compose(),
             Ok(Some(dir)) => {
                 static WARNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
@@ -171,12 +193,27 @@ impl ShaderDef {
                     .unwrap_or_else(|e| panic!("{SHADER_DIR_ENV}: {e}"))
             }
             Err(e) => panic!("{e}"),
-        };
-        device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(self.name),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        })
+        }
     }
+}
+
+/// `source` (a composed shader named `name`) over a depth buffer of `samples` samples a pixel
+/// (see [`ShaderDef::create_samples`]).
+pub fn with_samples(source: String, samples: u32, name: &str) -> String {
+    if samples == 1 {
+        return source;
+    }
+    let one = "const DEPTH_SAMPLES: u32 = 1u;";
+    assert!(
+        source.contains(one),
+        "shader {name} has no DEPTH_SAMPLES: it cannot read a multisampled depth buffer"
+    );
+    source
+        .replace(one, &format!("const DEPTH_SAMPLES: u32 = {samples}u;"))
+        .replace(
+            "var depth_tex: texture_depth_2d;",
+            "var depth_tex: texture_depth_multisampled_2d;",
+        )
 }
 
 /// The depth prepass: the shared vertex stage alone.

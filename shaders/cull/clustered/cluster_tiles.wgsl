@@ -72,18 +72,21 @@ fn slice_bounds(tile: vec2<u32>, li: u32) {
     for (var i = li; i < cull.tile_size * cull.tile_size; i += CLUSTER_TILE_THREADS) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
-            let z = textureLoad(depth_tex, p, 0);
-            if z < 1.0 {
-                let s = bin_of(p, z) / tiles;
-                let d = ordered_bits(linear_depth(z));
-                if s != cur {
-                    widen_slice(cur, near, far);
-                    cur = s;
-                    near = 0u;
-                    far = 0u;
+            // Every sample of the pixel (MSAA: DEPTH_SAMPLES; one otherwise).
+            for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+                let z = textureLoad(depth_tex, p, k);
+                if z < 1.0 {
+                    let s = bin_of(p, z) / tiles;
+                    let d = ordered_bits(linear_depth(z));
+                    if s != cur {
+                        widen_slice(cur, near, far);
+                        cur = s;
+                        near = 0u;
+                        far = 0u;
+                    }
+                    near = max(near, ~d);
+                    far = max(far, d);
                 }
-                near = max(near, ~d);
-                far = max(far, d);
             }
         }
     }

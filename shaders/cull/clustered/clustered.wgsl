@@ -242,20 +242,21 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
     workgroupBarrier();
     let p = id.xy;
     let inside = all(p < vec2<u32>(frame.viewport.xy));
-    var z = 1.0;
+    // Every sample of the pixel (MSAA: DEPTH_SAMPLES; one otherwise).
+    var covered = false;
     if inside {
-        z = textureLoad(depth_tex, p, 0);
-    }
-    let covered = inside && z < 1.0;
-    var bin = 0u;
-    var d = 0.0;
-    if covered {
-        bin = bin_of(p, z);
-        d = linear_depth(z);
-        atomicMin(&wg_occ[0], bin);
-        atomicMax(&wg_occ[1], bin);
-        atomicMax(&wg_occ[2], ~ordered_bits(d));
-        atomicMax(&wg_occ[3], ordered_bits(d));
+        for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+            let z = textureLoad(depth_tex, p, k);
+            if z < 1.0 {
+                covered = true;
+                let bin = bin_of(p, z);
+                let d = linear_depth(z);
+                atomicMin(&wg_occ[0], bin);
+                atomicMax(&wg_occ[1], bin);
+                atomicMax(&wg_occ[2], ~ordered_bits(d));
+                atomicMax(&wg_occ[3], ordered_bits(d));
+            }
+        }
     }
     workgroupBarrier();
     let first = atomicLoad(&wg_occ[0]);
@@ -269,10 +270,17 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
             }
         }
     } else if covered {
-        atomicStore(&occupancy[bin], 1u);
-        if tile_boxes() {
-            atomicMax(&occupancy[cull.bins + 2u * bin], ~ordered_bits(d));
-            atomicMax(&occupancy[cull.bins + 2u * bin + 1u], ordered_bits(d));
+        for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+            let z = textureLoad(depth_tex, p, k);
+            if z < 1.0 {
+                let bin = bin_of(p, z);
+                let d = linear_depth(z);
+                atomicStore(&occupancy[bin], 1u);
+                if tile_boxes() {
+                    atomicMax(&occupancy[cull.bins + 2u * bin], ~ordered_bits(d));
+                    atomicMax(&occupancy[cull.bins + 2u * bin + 1u], ordered_bits(d));
+                }
+            }
         }
     }
 }

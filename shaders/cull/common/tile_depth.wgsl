@@ -3,6 +3,7 @@
 // (tile_lines.wgsl): the nearest and farthest covered pixel (linear view depth), the covered
 // pixels, and the 2.5D geometry mask (32 cells over [dmin, dmax]). Background pixels (depth
 // 1.0, the clear value) are not covered and need no lights, so they do not widen the bounds.
+// With MSAA every sample counts (DEPTH_SAMPLES a pixel; `covered` then counts samples).
 // The module declares depth_tex (binding 1) and tile_depth (binding 2).
 
 var<workgroup> wg_tile_zmin: array<atomic<u32>, TILE_SLOTS>;
@@ -32,10 +33,12 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
     for (var i = li; i < n; i += threads) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
-            let z = textureLoad(depth_tex, p, 0);
-            if z < 1.0 {
-                let bits = bitcast<u32>(z);
-                own = vec3<u32>(min(own.x, bits), max(own.y, bits), own.z + 1u);
+            for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+                let z = textureLoad(depth_tex, p, k);
+                if z < 1.0 {
+                    let bits = bitcast<u32>(z);
+                    own = vec3<u32>(min(own.x, bits), max(own.y, bits), own.z + 1u);
+                }
             }
         }
     }
@@ -53,9 +56,11 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
             for (var i = li; i < n; i += threads) {
                 let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
                 if all(p < size) {
-                    let z = textureLoad(depth_tex, p, 0);
-                    if z < 1.0 {
-                        cells |= 1u << depth_cell(linear_depth(z), t.dmin, scale);
+                    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+                        let z = textureLoad(depth_tex, p, k);
+                        if z < 1.0 {
+                            cells |= 1u << depth_cell(linear_depth(z), t.dmin, scale);
+                        }
                     }
                 }
             }

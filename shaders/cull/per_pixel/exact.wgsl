@@ -1,5 +1,5 @@
 // cull.exact: the exact per-pixel oracle on the GPU, for images too large for the CPU's
-// O(pixels x lights). Per covered pixel: the surface point reconstructed from the depth buffer
+// O(pixels x lights). With MSAA, every covered sample of a pixel, at its standard position. Per covered pixel: the surface point reconstructed from the depth buffer
 // (as the CPU oracle does, but in f32), the number of lights reaching it (needed), the length of
 // its list (evaluated) and how many list entries reach it (found). Lists hold no duplicates
 // (tested), so false negatives = needed - found. Decisions within f32 rounding of a light's
@@ -31,19 +31,30 @@ fn reaches(l: Light, p: vec3<f32>) -> bool {
     return true;
 }
 
-@compute @workgroup_size(8, 8)
-fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
-    let size = vec2<u32>(frame.viewport.xy);
-    if any(id.xy >= size) {
-        return;
+// Where sample k of a pixel lies within it: the standard sample positions of Vulkan
+// (standardSampleLocations) and Direct3D for 2, 4 and 8 samples; the centre for one.
+fn sample_position(k: u32) -> vec2<f32> {
+    if DEPTH_SAMPLES == 2u {
+        var p2 = array<vec2<f32>, 2>(vec2<f32>(0.75, 0.75), vec2<f32>(0.25, 0.25));
+        return p2[k];
     }
-    let i = id.y * size.x + id.x;
-    let z = textureLoad(depth_tex, id.xy, 0);
-    if z >= 1.0 || id.x % exact.stride != 0u || id.y % exact.stride != 0u {
-        counts[i] = vec4<u32>(0u);
-        return;
+    if DEPTH_SAMPLES == 4u {
+        var p4 = array<vec2<f32>, 4>(vec2<f32>(0.375, 0.125), vec2<f32>(0.875, 0.375), vec2<f32>(0.125, 0.625), vec2<f32>(0.625, 0.875));
+        return p4[k];
     }
-    let ndc = vec4<f32>((f32(id.x) + 0.5) * frame.viewport.z * 2.0 - 1.0, 1.0 - (f32(id.y) + 0.5) * frame.viewport.w * 2.0, z, 1.0);
+    if DEPTH_SAMPLES == 8u {
+        var p8 = array<vec2<f32>, 8>(
+            vec2<f32>(0.5625, 0.3125), vec2<f32>(0.4375, 0.6875), vec2<f32>(0.8125, 0.5625), vec2<f32>(0.3125, 0.1875),
+            vec2<f32>(0.1875, 0.8125), vec2<f32>(0.0625, 0.4375), vec2<f32>(0.6875, 0.9375), vec2<f32>(0.9375, 0.0625));
+        return p8[k];
+    }
+    return vec2<f32>(0.5, 0.5);
+}
+
+// One sample of a pixel: (evaluated, needed, found) at its surface point (depth z, at the
+// sample's position in the pixel).
+fn sample_counts(pixel: vec2<u32>, z: f32, at: vec2<f32>) -> vec3<u32> {
+    let ndc = vec4<f32>((f32(pixel.x) + at.x) * frame.viewport.z * 2.0 - 1.0, 1.0 - (f32(pixel.y) + at.y) * frame.viewport.w * 2.0, z, 1.0);
     let q = exact.world_from_clip * ndc;
     let p = q.xyz / q.w;
     var needed = 0u;
@@ -55,7 +66,7 @@ fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
     var evaluated = 0u;
     var found = 0u;
     if zbin_lists() {
-        let c = zbin_cell(id.xy, z);
+        let c = zbin_cell(pixel, z);
         if c.first < c.end {
             for (var w = c.first / 32u; w <= (c.end - 1u) / 32u; w++) {
                 var bits = zbin_bits(c, w);
@@ -70,7 +81,7 @@ fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     } else {
-        let list = light_list(id.xy, z);
+        let list = light_list(pixel, z);
         evaluated = list.y;
         for (var k = 0u; k < list.y; k++) {
             if reaches(lights[light_indices[list.x + k]], p) {
@@ -78,5 +89,26 @@ fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    counts[i] = vec4<u32>(evaluated, needed, found, 1u);
+    return vec3<u32>(evaluated, needed, found);
+}
+
+// Per pixel: (evaluated, needed, found, covered), summed over its covered samples with MSAA
+// (covered: how many), each sample checked against the list its own depth selects.
+@compute @workgroup_size(8, 8)
+fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = vec2<u32>(frame.viewport.xy);
+    if any(id.xy >= size) {
+        return;
+    }
+    let i = id.y * size.x + id.x;
+    var total = vec4<u32>(0u);
+    if id.x % exact.stride == 0u && id.y % exact.stride == 0u {
+        for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+            let z = textureLoad(depth_tex, id.xy, k);
+            if z < 1.0 {
+                total += vec4<u32>(sample_counts(id.xy, z, sample_position(k)), 1u);
+            }
+        }
+    }
+    counts[i] = total;
 }
