@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use manylights_cull::{CullOutput, CullSettings, Culler, Strategy, heatmap, metrics};
-use manylights_gpu::prepass::{DepthPrepass, depth_target};
+use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_shade::image_out::write_atomic;
@@ -48,6 +48,12 @@ pub(crate) struct CullArgs {
     /// (docs/EXPERIMENTS.md, "Exports").
     #[arg(long, value_name = "DIR")]
     pub(crate) export: Option<PathBuf>,
+    /// Samples a pixel of the depth buffer (MSAA: 1, 2, 4, 8 where the device has them; an
+    /// unsupported count is an error naming the supported ones). The tiles' and clusters'
+    /// depth bounds cover every sample, and the exact oracle checks every covered sample: the
+    /// counts printed are then per sample.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub(crate) msaa: u32,
 }
 
 pub(crate) fn cull(args: &CullArgs) -> Result<()> {
@@ -55,19 +61,27 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let strategy = args.cull.strategy()?;
     let scene = a.build()?;
     let ctx = a.gpu()?;
+    let samples = args.msaa;
+    ctx.check_msaa(samples)
+        .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
+    if samples > 1 && args.export.is_some() {
+        bail!(
+            "--export with --msaa {samples}: exports hold one depth a pixel; export without --msaa"
+        );
+    }
     let (w, h) = (a.width, a.height);
     let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
-    let depth = depth_target(&ctx, w, h);
+    let depth = depth_target_msaa(&ctx, w, h, samples);
     let mut timer = GpuTimer::new(&ctx, 64);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
-    DepthPrepass::new(&ctx, &gpu_scene).encode(
+    DepthPrepass::with_samples(&ctx, &gpu_scene, samples).encode(
         &mut enc,
         &gpu_scene,
         &depth.create_view(&Default::default()),
         &mut timer,
     );
     ctx.submit_and_wait(enc, "depth prepass")?;
-    let culler = Culler::new(&ctx, &gpu_scene);
+    let culler = Culler::with_samples(&ctx, &gpu_scene, samples);
     let settings = CullSettings {
         mask_budget: if args.no_tile_masks {
             Some(0)
@@ -103,7 +117,8 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         1,
     )?;
     let m = metrics::from_gpu_counts(&counts, &lengths);
-    let per_pixel: Vec<u32> = counts.iter().map(|c| c[0]).collect();
+    // Lights evaluated a pixel (with MSAA, the mean over its covered samples).
+    let per_pixel: Vec<u32> = counts.iter().map(|c| c[0] / c[3].max(1)).collect();
     let tiles = heatmap::tile_counts(&out.params, &lengths, args.slice);
     let max = args
         .heat_max
@@ -121,12 +136,21 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         })?;
     }
     println!(
-        "{}: {} triangles, {} lights, {w}x{h}, {strategy:?}",
+        "{}: {} triangles, {} lights, {w}x{h}{}, {strategy:?}",
         scene.name,
         scene.triangle_count(),
-        scene.lights.len()
+        scene.lights.len(),
+        if samples > 1 {
+            format!(", MSAA {samples} (counts per covered sample)")
+        } else {
+            String::new()
+        }
     );
-    println!("  covered pixels          {}", m.covered_pixels);
+    if samples > 1 {
+        println!("  covered samples         {}", m.covered_pixels);
+    } else {
+        println!("  covered pixels          {}", m.covered_pixels);
+    }
     println!("  false negatives         {}", m.false_negatives);
     match m.false_positive_ratio {
         Some(r) => println!("  false-positive ratio    {r:.3} (lights evaluated / lights needed)"),
