@@ -58,6 +58,12 @@ fn every_culling_shader_validates_over_multisampled_depth() {
         if !def.compose().contains("const DEPTH_SAMPLES: u32 = 1u;") {
             continue;
         }
+        let one = manylights_gpu::shaders::with_samples(def.compose(), 1, def.name);
+        assert!(
+            !one.contains(manylights_gpu::shaders::SAMPLE_LOOP),
+            "{}: a loop over one sample left in",
+            def.name
+        );
         for samples in [2, 4, 8] {
             let src = manylights_gpu::shaders::with_samples(def.compose(), samples, def.name);
             if src.contains("var depth_tex: texture_depth_2d;") {

@@ -73,8 +73,8 @@ fn slice_bounds(tile: vec2<u32>, li: u32) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
             // Every sample of the pixel (MSAA: DEPTH_SAMPLES; one otherwise).
-            for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-                let z = textureLoad(depth_tex, p, k);
+            for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+                let z = textureLoad(depth_tex, p, sample_k);
                 if z < 1.0 {
                     let s = bin_of(p, z) / tiles;
                     let d = ordered_bits(linear_depth(z));

@@ -245,8 +245,8 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
     // Every sample of the pixel (MSAA: DEPTH_SAMPLES; one otherwise).
     var covered = false;
     if inside {
-        for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-            let z = textureLoad(depth_tex, p, k);
+        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+            let z = textureLoad(depth_tex, p, sample_k);
             if z < 1.0 {
                 covered = true;
                 let bin = bin_of(p, z);
@@ -270,8 +270,8 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
             }
         }
     } else if covered {
-        for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-            let z = textureLoad(depth_tex, p, k);
+        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+            let z = textureLoad(depth_tex, p, sample_k);
             if z < 1.0 {
                 let bin = bin_of(p, z);
                 let d = linear_depth(z);

@@ -33,8 +33,8 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
     for (var i = li; i < n; i += threads) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
-            for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-                let z = textureLoad(depth_tex, p, k);
+            for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+                let z = textureLoad(depth_tex, p, sample_k);
                 if z < 1.0 {
                     let bits = bitcast<u32>(z);
                     own = vec3<u32>(min(own.x, bits), max(own.y, bits), own.z + 1u);
@@ -56,8 +56,8 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
             for (var i = li; i < n; i += threads) {
                 let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
                 if all(p < size) {
-                    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-                        let z = textureLoad(depth_tex, p, k);
+                    for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+                        let z = textureLoad(depth_tex, p, sample_k);
                         if z < 1.0 {
                             cells |= 1u << depth_cell(linear_depth(z), t.dmin, scale);
                         }

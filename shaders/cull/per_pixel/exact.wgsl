@@ -103,10 +103,10 @@ fn exact_counts(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = id.y * size.x + id.x;
     var total = vec4<u32>(0u);
     if id.x % exact.stride == 0u && id.y % exact.stride == 0u {
-        for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-            let z = textureLoad(depth_tex, id.xy, k);
+        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+            let z = textureLoad(depth_tex, id.xy, sample_k);
             if z < 1.0 {
-                total += vec4<u32>(sample_counts(id.xy, z, sample_position(k)), 1u);
+                total += vec4<u32>(sample_counts(id.xy, z, sample_position(sample_k)), 1u);
             }
         }
     }

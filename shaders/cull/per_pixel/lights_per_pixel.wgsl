@@ -10,8 +10,8 @@ fn lights_per_pixel(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     var n = 0u;
-    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-        let z = textureLoad(depth_tex, id.xy, k);
+    for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+        let z = textureLoad(depth_tex, id.xy, sample_k);
         if z < 1.0 {
             n = max(n, list_length(id.xy, z));
         }
@@ -27,7 +27,7 @@ fn depth_samples(@builtin(global_invocation_id) id: vec3<u32>) {
     if any(id.xy >= size) {
         return;
     }
-    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-        per_pixel[(id.y * size.x + id.x) * DEPTH_SAMPLES + k] = bitcast<u32>(textureLoad(depth_tex, id.xy, k));
+    for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+        per_pixel[(id.y * size.x + id.x) * DEPTH_SAMPLES + sample_k] = bitcast<u32>(textureLoad(depth_tex, id.xy, sample_k));
     }
 }
