@@ -34,7 +34,8 @@ impl PerPixel {
 }
 
 impl Culler {
-    /// The length of the list each pixel reads through the shared lookup (0 for background).
+    /// The length of the list each pixel reads through the shared lookup (0 for background;
+    /// with MSAA, the longest of its covered samples' lists).
     pub fn lights_per_pixel(
         &self,
         ctx: &GpuContext,
@@ -76,7 +77,8 @@ impl Culler {
     }
 
     /// The exact per-pixel oracle on the GPU: per pixel `[evaluated, needed, found, covered]`
-    /// (see `shaders/cull/per_pixel/exact.wgsl`); `world_from_clip` is the inverse of the frame's
+    /// (see `shaders/cull/per_pixel/exact.wgsl`; with MSAA, sums over the pixel's covered
+    /// samples, `covered` counting them); `world_from_clip` is the inverse of the frame's
     /// `clip_from_world`; only pixels on a grid of `stride` are evaluated (1: all).
     pub fn exact_counts(
         &self,
