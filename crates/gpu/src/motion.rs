@@ -67,6 +67,8 @@ pub struct LightMotion {
     lights: wgpu::Buffer,
     /// The staging buffer of uploads, mapped for writing while it waits for the next one.
     staging: Option<wgpu::Buffer>,
+    /// The host's copy of the moving lights that uploads write (empty until the first).
+    host: Vec<GpuLight>,
 }
 
 impl LightMotion {
@@ -151,6 +153,7 @@ impl LightMotion {
             groups,
             lights: scene.lights.clone(),
             staging: None,
+            host: Vec::new(),
         })
     }
 
@@ -187,6 +190,13 @@ impl LightMotion {
     /// every core): what [`LightMotion::upload`] writes.
     pub fn at_frame(&self, frame: u32) -> Vec<GpuLight> {
         let mut out = self.home.clone();
+        self.fill(&mut out, frame);
+        out
+    }
+
+    /// Writes the moving lights at frame `frame` into `out` (as long as the moving lights),
+    /// a chunk a core.
+    fn fill(&self, out: &mut [GpuLight], frame: u32) {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         let chunk = out.len().div_ceil(threads).max(4096);
         let (motion, first) = (self.motion, self.first);
@@ -199,12 +209,14 @@ impl LightMotion {
                 s.spawn(move || {
                     for (j, (l, h)) in lights.iter_mut().zip(home).enumerate() {
                         let index = first + (c * chunk + j) as u32;
-                        l.position = motion.position(index, h.position, h.radius, frame);
+                        *l = GpuLight {
+                            position: motion.position(index, h.position, h.radius, frame),
+                            ..*h
+                        };
                     }
                 });
             }
         });
-        out
     }
 
     /// Moves the lights to where they are at frame `frame` by computing them on the host and
@@ -229,7 +241,13 @@ impl LightMotion {
             }),
         };
         let mapped = start.elapsed();
-        let lights = self.at_frame(frame);
+        // The host's copy of the lights, kept from frame to frame: a fresh allocation each
+        // frame spent most of an upload faulting its pages in (a million lights: 64 MB).
+        let mut lights = std::mem::take(&mut self.host);
+        if lights.len() != self.home.len() {
+            lights = self.home.clone();
+        }
+        self.fill(&mut lights, frame);
         let computed = start.elapsed();
         staging
             .get_mapped_range_mut(..)
@@ -237,8 +255,10 @@ impl LightMotion {
             .copy_from_slice(bytemuck::cast_slice(&lights));
         staging.unmap();
         let host_ms = start.elapsed().as_secs_f64() * 1e3;
+        let count = lights.len();
+        self.host = lights;
         tracing::debug!(
-            lights = lights.len(),
+            lights = count,
             map_ms = mapped.as_secs_f64() * 1e3,
             compute_ms = (computed - mapped).as_secs_f64() * 1e3,
             write_ms = host_ms - computed.as_secs_f64() * 1e3,
