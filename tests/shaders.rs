@@ -9,6 +9,7 @@ use std::mem::offset_of;
 
 use manylights_cull::layout::{GpuCullParams, GpuTileDepth};
 use manylights_gpu::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex};
+use manylights_gpu::motion::MotionParams;
 use manylights_gpu::shaders::ShaderDef;
 
 fn all_shaders() -> Vec<ShaderDef> {
@@ -181,6 +182,24 @@ fn host_structs_match_wgsl_layout() {
             members.iter().find(|m| m.0 == name).map(|m| m.1 as usize),
             Some(off),
             "TileDepth.{name}"
+        );
+    }
+    let motion = validate(&manylights_gpu::motion::MOTION);
+    let (size, members) = wgsl_layout(&motion, "MotionParams");
+    assert_eq!(size as usize, size_of::<MotionParams>());
+    let expect = [
+        ("kind", offset_of!(MotionParams, kind)),
+        ("first", offset_of!(MotionParams, first)),
+        ("count", offset_of!(MotionParams, count)),
+        ("row", offset_of!(MotionParams, row)),
+        ("speed", offset_of!(MotionParams, speed)),
+        ("time", offset_of!(MotionParams, time)),
+    ];
+    for (name, off) in expect {
+        assert_eq!(
+            members.iter().find(|m| m.0 == name).map(|m| m.1 as usize),
+            Some(off),
+            "MotionParams.{name}"
         );
     }
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute

@@ -30,17 +30,25 @@ pub const MOTION: ShaderDef = ShaderDef {
 /// Threads per workgroup of the animation pass.
 const WORKGROUP: u32 = 256;
 
-/// Host mirror of `MotionParams` in `shaders/lights/motion.wgsl`.
+/// Host mirror of `MotionParams` in `shaders/lights/motion.wgsl` (its layout is tested
+/// against naga's in tests/shaders.rs).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-struct MotionParams {
-    kind: u32,
-    first: u32,
-    count: u32,
-    row: u32,
-    speed: f32,
-    time: f32,
-    _pad: [u32; 2],
+pub struct MotionParams {
+    /// `MOTION_STATIC`, `MOTION_ORBIT` or `MOTION_NOISE`.
+    pub kind: u32,
+    /// The first moving light.
+    pub first: u32,
+    /// How many move.
+    pub count: u32,
+    /// Threads in a row of the dispatch grid.
+    pub row: u32,
+    /// World units per second.
+    pub speed: f32,
+    /// Seconds (`frame_time`).
+    pub time: f32,
+    /// Padding to 16 bytes.
+    pub _pad: [u32; 2],
 }
 
 /// What one light update cost.
@@ -165,9 +173,11 @@ impl LightMotion {
     /// Moves the lights to where they are at frame `frame` with the animation pass.
     pub fn animate(&self, ctx: &GpuContext, frame: u32) -> Result<UpdateCost, GpuError> {
         let time = frame_time(frame);
-        // `time` is the sixth word of MotionParams.
-        ctx.queue
-            .write_buffer(&self.params, 20, bytemuck::bytes_of(&time));
+        ctx.queue.write_buffer(
+            &self.params,
+            std::mem::offset_of!(MotionParams, time) as u64,
+            bytemuck::bytes_of(&time),
+        );
         let mut timer = GpuTimer::new(ctx, 1);
         let mut encoder = encoder(ctx, "lights.animate");
         pipeline::dispatch(
