@@ -1,7 +1,7 @@
 //! Moving lights each frame, two ways: a compute pass that moves them on the GPU
 //! ([`LightMotion::animate`], `shaders/lights/motion.wgsl`, timed as `lights.animate`), or the
 //! host computing every moving light and uploading all of them ([`LightMotion::upload`]:
-//! written into a mapped staging buffer, then copied into the scene's light buffer, the copy
+//! computed into a host copy kept from frame to frame, written into a mapped staging buffer, then copied into the scene's light buffer, the copy
 //! timed as `lights.upload` where the device writes timestamps between passes). Both put each
 //! light where [`manylights_scene::motion`], their oracle, says.
 
