@@ -1,9 +1,10 @@
 //! Moving lights each frame, two ways: a compute pass that moves them on the GPU
 //! ([`LightMotion::animate`], `shaders/lights/motion.wgsl`, timed as `lights.animate`), or the
 //! host computing every moving light and uploading all of them ([`LightMotion::upload`]:
-//! computed into a host copy kept from frame to frame, written into a mapped staging buffer, then copied into the scene's light buffer, the copy
-//! timed as `lights.upload` where the device writes timestamps between passes). Both put each
-//! light where [`manylights_scene::motion`], their oracle, says.
+//! computed into a host copy kept from frame to frame, written into a mapped staging buffer,
+//! then copied into the scene's light buffer, the copy timed as `lights.upload` where the
+//! device writes timestamps between passes). Both put each light where
+//! [`manylights_scene::motion`], their oracle, says.
 
 use bytemuck::{Pod, Zeroable};
 use manylights_scene::motion::{MOTION_NOISE, MOTION_ORBIT, MOTION_STATIC, frame_time};
