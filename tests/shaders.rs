@@ -135,8 +135,11 @@ fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32)>) {
 fn host_structs_match_wgsl_layout() {
     let reference = validate(&manylights_shade::reference::SHADER);
     macro_rules! check {
-        ($ty:ty, $wgsl:literal, [$($field:ident => $member:literal),* $(,)?]) => {{
-            let (size, members) = wgsl_layout(&reference, $wgsl);
+        ($ty:ty, $wgsl:literal, [$($field:ident => $member:literal),* $(,)?]) => {
+            check!(&reference, $ty, $wgsl, [$($field => $member),*])
+        };
+        ($module:expr, $ty:ty, $wgsl:literal, [$($field:ident => $member:literal),* $(,)?]) => {{
+            let (size, members) = wgsl_layout($module, $wgsl);
             assert_eq!(size as usize, size_of::<$ty>(), "size of {} vs {}", $wgsl, stringify!($ty));
             $(
                 let off = members.iter().find(|(n, _)| n == $member).unwrap_or_else(|| panic!("{}.{} missing", $wgsl, $member)).1;
@@ -185,23 +188,8 @@ fn host_structs_match_wgsl_layout() {
         );
     }
     let motion = validate(&manylights_gpu::motion::MOTION);
-    let (size, members) = wgsl_layout(&motion, "MotionParams");
-    assert_eq!(size as usize, size_of::<MotionParams>());
-    let expect = [
-        ("kind", offset_of!(MotionParams, kind)),
-        ("first", offset_of!(MotionParams, first)),
-        ("count", offset_of!(MotionParams, count)),
-        ("row", offset_of!(MotionParams, row)),
-        ("speed", offset_of!(MotionParams, speed)),
-        ("time", offset_of!(MotionParams, time)),
-    ];
-    for (name, off) in expect {
-        assert_eq!(
-            members.iter().find(|m| m.0 == name).map(|m| m.1 as usize),
-            Some(off),
-            "MotionParams.{name}"
-        );
-    }
+    check!(&motion, MotionParams, "MotionParams", [kind => "kind", first => "first", count => "count",
+        row => "row", speed => "speed", time => "time"]);
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.
     let (_, members) = wgsl_layout(&reference, "VertexIn");

@@ -166,11 +166,6 @@ impl LightMotion {
         })
     }
 
-    /// How the lights move.
-    pub fn motion(&self) -> Motion {
-        self.motion
-    }
-
     /// Moves the lights to where they are at frame `frame` with the animation pass.
     pub fn animate(&self, ctx: &GpuContext, frame: u32) -> Result<UpdateCost, GpuError> {
         let time = frame_time(frame);

@@ -67,10 +67,7 @@ fn fmt_opt(v: Option<f64>, digits: usize) -> String {
 /// What moving the lights cost, per light count, where cells moved them: the GPU animation
 /// pass against an upload's copy and host time (medians over the cells).
 fn moving_lights_summary(by_lights: &BTreeMap<u64, Vec<&Row>>) -> Vec<String> {
-    let median = |mut v: Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        (!v.is_empty()).then(|| v[v.len() / 2])
-    };
+    let median = |v: Vec<f64>| crate::results::percentiles(&v).map(|p| p.0);
     let mut out = Vec::new();
     for (n, rs) in by_lights {
         let of = |update: &str, f: &dyn Fn(&Row) -> Option<f64>| {
