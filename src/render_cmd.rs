@@ -36,6 +36,13 @@ pub(crate) struct RenderArgs {
     /// over a strategy: forward, deferred or deferred-stored-position).
     #[arg(long, value_name = "DIR")]
     pub(crate) export: Option<PathBuf>,
+    /// Samples a pixel (MSAA: 1, 2, 4, 8 where the device has them for the depth buffer and
+    /// the HDR target; an unsupported count is an error naming the supported ones). Forward
+    /// and naive forward shade each fragment once and resolve; the tiles' and clusters' depth
+    /// bounds cover every sample; the reference renders at the same count. Deferred backends
+    /// do not take MSAA yet.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub(crate) msaa: u32,
 }
 
 pub(crate) fn render(args: &RenderArgs) -> Result<()> {
@@ -55,21 +62,46 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 .map_or_else(String::new, |v| v.get_name().to_owned())
         );
     }
+    let samples = args.msaa;
+    if samples > 1 && args.export.is_some() {
+        bail!(
+            "--export with --msaa {samples}: exports hold one depth a pixel; export without --msaa"
+        );
+    }
+    if samples > 1
+        && matches!(
+            args.backend,
+            BackendName::Deferred | BackendName::DeferredStoredPosition
+        )
+    {
+        bail!(
+            "invalid --msaa {samples} with --backend {}: deferred backends do not take MSAA yet \
+             (use --backend forward, naive-forward or reference, or --msaa 1)",
+            clap::ValueEnum::to_possible_value(&args.backend)
+                .map_or_else(String::new, |v| v.get_name().to_owned())
+        );
+    }
     let a = &args.scene;
     let scene = a.build()?;
     let strategy = args.cull.strategy()?;
     let settings = args.cull.settings(&scene.camera)?;
     let ctx = a.gpu()?;
+    let bad_msaa = |e| anyhow::anyhow!("invalid --msaa {samples}: {e}");
     let (w, h) = (a.width, a.height);
     let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
     let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/render"));
     println!(
-        "{}: {} triangles, {} lights, {w}x{h}",
+        "{}: {} triangles, {} lights, {w}x{h}{}",
         scene.name,
         scene.triangle_count(),
-        scene.lights.len()
+        scene.lights.len(),
+        if samples > 1 {
+            format!(", MSAA {samples} (lights per pixel: the longest list of its samples)")
+        } else {
+            String::new()
+        }
     );
-    let reference = ReferenceRenderer::new(&ctx, &gpu_scene);
+    let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, samples).map_err(bad_msaa)?;
     let mut outputs: Vec<(PathBuf, image::RgbImage)> = Vec::new();
     let (name, image) = if args.backend == BackendName::Reference {
         let frame = reference.render(&ctx, &gpu_scene, w, h)?;
@@ -82,7 +114,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             BackendName::DeferredStoredPosition => Backend::DeferredStoredPosition,
             BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
-        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let renderer = Renderer::with_samples(&ctx, &gpu_scene, samples).map_err(bad_msaa)?;
         let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;
         if backend != Backend::NaiveForward {
             println!("  strategy {strategy:?}");

@@ -67,6 +67,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         mask_budget: None,
         tile_boxes: true,
         light_update: Default::default(),
+        msaa: 1,
         slack: DEFAULT_SLACK,
         frames: args.frames,
         warmup: args.warmup,

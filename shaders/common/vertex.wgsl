@@ -8,10 +8,13 @@ struct VertexIn {
     @location(2) material: u32,
 }
 
+// The surface point and normal are interpolated at the centroid: with one sample a pixel that
+// is the pixel centre; with MSAA, a point of the pixel the primitive covers (the centre where
+// it covers every sample), never a point off the primitive, whose depth no sample has.
 struct VertexOut {
     @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) world: vec3<f32>,
-    @location(1) normal: vec3<f32>,
+    @location(0) @interpolate(perspective, centroid) world: vec3<f32>,
+    @location(1) @interpolate(perspective, centroid) normal: vec3<f32>,
     @location(2) @interpolate(flat) material: u32,
 }
 

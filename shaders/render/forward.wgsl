@@ -2,14 +2,26 @@
 // drawn again with depth test `Equal` (the shared invariant vertex stage makes the depths
 // bit-identical, so each pixel is shaded once), and each fragment loops over the list its pixel
 // reads through lookup.wgsl. shade.naive: the same pass over every light, no culling (the
-// baseline).
+// baseline). With MSAA each fragment is shaded once, at its centroid, and resolved.
+
+// The NDC depth a fragment's list is looked up at: with one sample a pixel the depth buffer's
+// own (the pixel centre's, bit-identical to the prepass's); with MSAA that of the shaded point,
+// the centroid (a covered sample's or, where every sample is covered, the centre's, between
+// the samples' depths), which the lists' bounds over every sample hold.
+fn lookup_depth(in: VertexOut) -> f32 {
+    if DEPTH_SAMPLES == 1u {
+        return in.clip.z;
+    }
+    let c = frame.clip_from_world * vec4<f32>(in.world, 1.0);
+    return c.z / c.w;
+}
 
 @fragment
 fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
-    let list = light_list(vec2<u32>(in.clip.xy), in.clip.z);
+    let list = light_list(vec2<u32>(in.clip.xy), lookup_depth(in));
     return vec4<f32>(shade_list(list, in.world, n, v, m), 1.0);
 }
 
@@ -19,7 +31,7 @@ fn fs_forward_zbin(in: VertexOut) -> @location(0) vec4<f32> {
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
-    let cell = zbin_cell(vec2<u32>(in.clip.xy), in.clip.z);
+    let cell = zbin_cell(vec2<u32>(in.clip.xy), lookup_depth(in));
     return vec4<f32>(shade_zbin(cell, in.world, n, v, m), 1.0);
 }
 

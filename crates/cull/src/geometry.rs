@@ -267,6 +267,33 @@ pub fn slice_coord(p: &GpuCullParams, d: f32) -> f32 {
     }
 }
 
+/// WGSL `slice_edge`: the near boundary of slice `s` >= 1.
+pub fn slice_edge(p: &GpuCullParams, s: u32) -> f32 {
+    if p.slicing == SLICING_EXPONENTIAL {
+        p.near * (s as f32 / p.slice_scale).exp()
+    } else {
+        p.near + s as f32 / p.slice_scale
+    }
+}
+
+/// WGSL `pixel_slice_range`: the part of slice `s` (`s0 <= s <= s1`) a pixel holds whose
+/// covered samples lie between linear depths `d0 <= d1`, in slices `s0` to `s1`.
+pub fn pixel_slice_range(
+    p: &GpuCullParams,
+    s: u32,
+    [s0, s1]: [u32; 2],
+    [d0, d1]: [f32; 2],
+) -> [f32; 2] {
+    let mut r = [d0, d1];
+    if s > s0 {
+        r[0] = d0.max(slice_edge(p, s) * (1.0 - 1e-4));
+    }
+    if s < s1 {
+        r[1] = d1.min(slice_edge(p, s + 1) * (1.0 + 1e-4));
+    }
+    r
+}
+
 /// WGSL `bin_of`.
 pub fn bin_of(frame: &GpuFrame, p: &GpuCullParams, pixel: [u32; 2], z: f32) -> u32 {
     let t = (pixel[1] / p.tile_size) * p.tiles_x + pixel[0] / p.tile_size;

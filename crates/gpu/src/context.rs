@@ -343,38 +343,64 @@ impl GpuContext {
     /// The MSAA sample counts the depth buffer can have on this device (1 and 4 everywhere,
     /// WebGPU's guarantee; 2, 8 and 16 where the adapter has them).
     pub fn msaa_counts(&self) -> Vec<u32> {
-        let format = crate::prepass::DEPTH_FORMAT;
-        if self
+        self.msaa_counts_of(&[crate::prepass::DEPTH_FORMAT])
+    }
+
+    /// The MSAA sample counts every one of `formats` can have on this device (a colour format
+    /// must also resolve at that count). Without adapter-specific format features, WebGPU's
+    /// guarantee: 1, and 4 for formats that are multisampled there.
+    pub fn msaa_counts_of(&self, formats: &[wgpu::TextureFormat]) -> Vec<u32> {
+        let specific = self
             .device
             .features()
-            .contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
-        {
-            let flags = self.adapter.get_texture_format_features(format).flags;
-            [1, 2, 4, 8, 16]
-                .into_iter()
-                .filter(|&n| flags.sample_count_supported(n))
-                .collect()
-        } else {
-            vec![1, 4]
-        }
+            .contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES);
+        [1, 2, 4, 8, 16]
+            .into_iter()
+            .filter(|&n| {
+                formats.iter().all(|&format| {
+                    let flags = if specific {
+                        self.adapter.get_texture_format_features(format).flags
+                    } else {
+                        format
+                            .guaranteed_format_features(self.device.features())
+                            .flags
+                    };
+                    let resolves = format.is_depth_stencil_format()
+                        || n == 1
+                        || flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE);
+                    n == 1 || (flags.sample_count_supported(n) && resolves)
+                })
+            })
+            .collect()
     }
 
     /// Checks an MSAA sample count against [`GpuContext::msaa_counts`]: an error naming the
     /// counts this device supports.
     pub fn check_msaa(&self, samples: u32) -> Result<(), GpuError> {
-        let counts = self.msaa_counts();
+        self.check_msaa_of(samples, &[crate::prepass::DEPTH_FORMAT])
+    }
+
+    /// Checks an MSAA sample count against [`GpuContext::msaa_counts_of`] `formats` (the depth
+    /// buffer and the colour targets of a pass): an error naming the counts this device
+    /// supports for them.
+    pub fn check_msaa_of(
+        &self,
+        samples: u32,
+        formats: &[wgpu::TextureFormat],
+    ) -> Result<(), GpuError> {
+        let counts = self.msaa_counts_of(formats);
         if counts.contains(&samples) {
             return Ok(());
         }
         Err(GpuError::Unsupported(format!(
-            "MSAA with {samples} samples: {} supports {} (for its depth buffer, {:?})",
+            "MSAA with {samples} samples: {} supports {} (for {:?})",
             self.info.name,
             counts
                 .iter()
                 .map(u32::to_string)
                 .collect::<Vec<_>>()
                 .join(", "),
-            crate::prepass::DEPTH_FORMAT
+            formats
         )))
     }
 

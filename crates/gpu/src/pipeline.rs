@@ -188,9 +188,21 @@ pub const fn depth_texture(samples: u32) -> wgpu::BindingType {
 pub fn texture_2d(
     device: &wgpu::Device,
     label: &str,
+    size: (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    texture_2d_msaa(device, label, size, format, usage, 1)
+}
+
+/// [`texture_2d`] of `samples` samples a pixel (MSAA where more than one).
+pub fn texture_2d_msaa(
+    device: &wgpu::Device,
+    label: &str,
     (width, height): (u32, u32),
     format: wgpu::TextureFormat,
     usage: wgpu::TextureUsages,
+    samples: u32,
 ) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
@@ -200,7 +212,7 @@ pub fn texture_2d(
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
-        sample_count: 1,
+        sample_count: samples,
         dimension: wgpu::TextureDimension::D2,
         format,
         usage,

@@ -130,6 +130,9 @@ pub fn params_label(c: &Config) -> String {
     if !c.tile_boxes {
         p.push_str(";tile_boxes=false");
     }
+    if c.msaa > 1 {
+        p.push_str(&format!(";msaa={}", c.msaa));
+    }
     if !c.lights.motion.is_static() {
         p.push_str(&format!(
             ";motion={};light_update={}",
@@ -210,6 +213,7 @@ impl Experiment {
             ("tile_boxes", s.tile_boxes.as_ref().map(Vec::len)),
             ("motion", s.motion.as_ref().map(Vec::len)),
             ("light_update", s.light_update.as_ref().map(Vec::len)),
+            ("msaa", s.msaa.as_ref().map(Vec::len)),
             ("variants", s.variants.as_ref().map(Vec::len)),
         ];
         for (field, len) in lens {
@@ -326,6 +330,10 @@ impl Experiment {
             c.light_update = v;
             format!("light_update={}", v.name())
         });
+        axis!(s.msaa, |c: &mut Config, v: u32| {
+            c.msaa = v;
+            format!("msaa={v}")
+        });
         axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
             c.device_limit = v;
             format!(
@@ -354,6 +362,9 @@ impl Experiment {
             }
             if let Some(u) = v.light_update {
                 c.light_update = u;
+            }
+            if let Some(n) = v.msaa {
+                c.msaa = n;
             }
             let auto = format!(
                 "{}+{}",

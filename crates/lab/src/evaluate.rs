@@ -28,6 +28,7 @@ pub(crate) struct PoseEval {
     pub(crate) acc_inf: Option<ImageError>,
     pub(crate) list_bytes: u64,
     pub(crate) gbuffer_bytes: u64,
+    pub(crate) msaa_target_bytes: u64,
     pub(crate) dropped: u64,
     pub(crate) nonfinite: u64,
     pub(crate) tile_masks: Option<bool>,
@@ -199,6 +200,7 @@ pub(crate) fn evaluate(
         acc_inf,
         list_bytes,
         gbuffer_bytes: o.gbuffer_bytes,
+        msaa_target_bytes: o.msaa_target_bytes,
         dropped,
         tile_masks,
         steady,
@@ -240,7 +242,8 @@ pub(crate) fn naive_metrics(
             exact_stride,
         )
         .map_err(|e| other(&e))?;
-    let sampled = counts.iter().filter(|k| k[3] != 0).count() as u64;
+    // Covered samples (with MSAA a pixel's fourth word counts its covered samples).
+    let sampled: u64 = counts.iter().map(|k| u64::from(k[3])).sum();
     let needed: u64 = counts.iter().map(|k| u64::from(k[1])).sum();
     Ok(ListMetrics {
         covered_pixels: sampled,

@@ -180,6 +180,9 @@ pub struct Variant {
     /// Light update override.
     #[serde(default)]
     pub light_update: Option<LightUpdate>,
+    /// MSAA sample count override.
+    #[serde(default)]
+    pub msaa: Option<u32>,
 }
 
 /// Lists of values for the fields of [`Config`]; the cells are their cartesian product.
@@ -232,6 +235,9 @@ pub struct Sweep {
     /// Ways moving lights reach the GPU.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub light_update: Option<Vec<LightUpdate>>,
+    /// MSAA sample counts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub msaa: Option<Vec<u32>>,
     /// Device limits (`None` entries mean none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub device_limit: Option<Vec<Option<DeviceLimit>>>,
@@ -279,6 +285,14 @@ pub struct Config {
     /// lights are never updated. (Left out of a cell's identity when `Gpu`.)
     #[serde(default, skip_serializing_if = "LightUpdate::is_gpu")]
     pub light_update: LightUpdate,
+    /// Samples a pixel: 1 (the default), or 2, 4, 8, 16 for MSAA where the device has the count
+    /// for the depth buffer and the HDR target (a cell that asks for one it lacks fails with
+    /// the counts it has). Forward and naive forward shade each fragment once and resolve;
+    /// the culling bounds and the exact oracle cover every sample (list metrics are per
+    /// covered sample); the references render at the same count. Deferred backends do not
+    /// take MSAA yet. (Left out of a cell's identity when 1.)
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub msaa: u32,
     /// Conservative culling slack.
     #[serde(default = "slack")]
     pub slack: f32,
@@ -386,6 +400,10 @@ fn is_true(b: &bool) -> bool {
 fn yes() -> bool {
     true
 }
+fn is_one(n: &u32) -> bool {
+    *n == 1
+}
+
 fn one() -> u32 {
     1
 }
@@ -418,6 +436,40 @@ impl Config {
         }
         if self.frames == 0 {
             return Err(("frames", "frames = 0: at least one measured frame".into()));
+        }
+        if ![1, 2, 4, 8, 16].contains(&self.msaa) {
+            return Err((
+                "msaa",
+                format!(
+                    "msaa = {}: 1, 2, 4, 8 or 16 samples a pixel (where the device has them)",
+                    self.msaa
+                ),
+            ));
+        }
+        if self.msaa > 1 && self.export {
+            return Err((
+                "msaa",
+                format!(
+                    "msaa = {} with export: exports hold one depth a pixel (msaa: 1 to export)",
+                    self.msaa
+                ),
+            ));
+        }
+        if self.msaa > 1
+            && matches!(
+                self.backend,
+                Backend::Deferred | Backend::DeferredStoredPosition
+            )
+        {
+            return Err((
+                "msaa",
+                format!(
+                    "msaa = {} with backend {}: deferred backends do not take MSAA yet (Forward or \
+                     NaiveForward, or msaa: 1)",
+                    self.msaa,
+                    self.backend.name()
+                ),
+            ));
         }
         self.lights
             .validate()

@@ -162,6 +162,15 @@ pub struct Row {
     /// every core, writing them into it). Empty otherwise.
     #[serde(default)]
     pub cpu_ms_upload: Option<f64>,
+    /// Samples a pixel (MSAA where more than one; the config's `msaa`). With MSAA, the list
+    /// metrics (`false_negatives`, `false_positive_ratio`, the lights needed) count every
+    /// covered sample; `lights_per_pixel_mean` is a pixel's longest list of its samples.
+    #[serde(default = "one")]
+    pub msaa: u32,
+    /// Bytes of the frame's multisampled targets (depth, and the HDR colour it resolves from),
+    /// 0 without MSAA.
+    #[serde(default)]
+    pub msaa_target_bytes: u64,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -263,6 +272,8 @@ pub const COLUMNS: &[&str] = &[
     "lights_needed_per_pixel_mean",
     "gpu_ms_light_update",
     "cpu_ms_upload",
+    "msaa",
+    "msaa_target_bytes",
 ];
 
 fn one() -> u32 {

@@ -264,7 +264,10 @@ fn run_cell(
         GpuScene::upload(ctx, &scene, &poses[0], w, h)
     })
     .map_err(|e| other(&e))?;
-    let renderer = stage(name, "pipelines built", || Renderer::new(ctx, &gpu_scene));
+    let renderer = stage(name, "pipelines built", || {
+        Renderer::with_samples(ctx, &gpu_scene, c.msaa)
+    })
+    .map_err(|e| other(&format!("msaa = {}: {e}", c.msaa)))?;
     let settings = |cam: &Camera| CullSettings {
         slack: c.slack,
         capacity: c.capacity,
@@ -317,7 +320,11 @@ fn run_cell(
     // Metrics and accuracy at every pose (a path's poses are all checked), images at the first;
     // with moving lights, at every measured frame, the lights where that frame had them.
     let light_count = scene.lights.len() as u64;
-    let reference = c.accuracy.then(|| ReferenceRenderer::new(ctx, &gpu_scene));
+    let reference = c
+        .accuracy
+        .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
+        .transpose()
+        .map_err(|e| other(&e))?;
     let checks: Vec<(usize, Option<u32>)> = if movers.is_some() {
         (c.warmup..c.warmup + c.frames)
             .map(|f| (f as usize % poses.len(), Some(f)))
@@ -445,6 +452,8 @@ fn run_cell(
         dropped_lights: dropped,
         list_bytes,
         gbuffer_bytes,
+        msaa: c.msaa,
+        msaa_target_bytes: first.msaa_target_bytes,
         psnr_db: psnr,
         flip_mean: flip,
         max_abs_error: max_abs,

@@ -127,6 +127,8 @@ pub struct ShadeOutput {
     pub depth: wgpu::Texture,
     /// G-buffer bytes (deferred only; 0 otherwise).
     pub gbuffer_bytes: u64,
+    /// Bytes of the multisampled targets (depth and HDR colour; 0 without MSAA).
+    pub msaa_target_bytes: u64,
     /// The backend that rendered it.
     pub backend: Backend,
     /// Its textures, for [`Renderer::shade_pass`].
@@ -146,6 +148,9 @@ impl ShadeOutput {
 pub struct Renderer {
     /// The culling strategies.
     pub culler: Culler,
+    /// Samples a pixel of the depth buffer and the forward passes' colour target (MSAA where
+    /// more than one).
+    pub(crate) samples: u32,
     pub(crate) prepass: DepthPrepass,
     pub(crate) forward: wgpu::RenderPipeline,
     /// `shade.forward` over z-binning's lists.
@@ -183,6 +188,28 @@ fn texture(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
 impl Renderer {
     /// Builds every pipeline for scenes laid out as [`GpuScene`].
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        Self::build(ctx, scene, 1)
+    }
+
+    /// Every pipeline for frames of `samples` samples a pixel: MSAA where more than one
+    /// (forward and naive forward: a multisampled depth prepass and shading pass, resolved
+    /// into the colour target; culling bounds over every sample). An error names the counts
+    /// the device supports for the depth buffer and the HDR target.
+    pub fn with_samples(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        samples: u32,
+    ) -> Result<Self, manylights_gpu::GpuError> {
+        ctx.check_msaa_of(samples, &[manylights_gpu::prepass::DEPTH_FORMAT, HDR])?;
+        Ok(Self::build(ctx, scene, samples))
+    }
+
+    /// Samples a pixel of its frames.
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
         let d = &ctx.device;
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -216,29 +243,31 @@ impl Renderer {
                 pipeline::entry(3, compute, unfiltered),
             ],
         );
-        use pipeline::{DepthTest, raster, target};
-        let fwd = FORWARD.create(d);
+        use pipeline::{DepthTest, raster, raster_msaa, target};
+        let fwd = FORWARD.create_samples(d, samples);
         let gb = GBUFFER.create(d);
         let g0 = &scene.layout;
         let forward_with = |entry| {
-            raster(
+            raster_msaa(
                 d,
                 "shade.forward",
                 &fwd,
                 &[g0, &forward_lists],
                 Some((entry, &[target(HDR)])),
                 DepthTest::Equal,
+                samples,
             )
         };
         let forward = forward_with("fs_forward");
         let forward_zbin = forward_with("fs_forward_zbin");
-        let naive = raster(
+        let naive = raster_msaa(
             d,
             "shade.naive",
             &fwd,
             &[g0],
             Some(("fs_naive", &[target(HDR)])),
             DepthTest::Equal,
+            samples,
         );
         let gbuffer = raster(
             d,
@@ -279,8 +308,9 @@ impl Renderer {
         let deferred_tiles = ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
             .map(|entry| pipeline::compute(d, &def, &def_layout, entry));
         Self {
-            culler: Culler::new(ctx, scene),
-            prepass: DepthPrepass::new(ctx, scene),
+            culler: Culler::with_samples(ctx, scene, samples),
+            samples,
+            prepass: DepthPrepass::with_samples(ctx, scene, samples),
             forward,
             forward_zbin,
             naive,
@@ -308,7 +338,16 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
-        let targets = Targets::new(ctx, backend, (width, height));
+        if self.samples > 1 && !matches!(backend, Backend::Forward | Backend::NaiveForward) {
+            return Err(manylights_gpu::GpuError::Unsupported(format!(
+                "backend {} with MSAA ({} samples): not built yet; MSAA renders with forward \
+                 and naive_forward",
+                backend.name(),
+                self.samples
+            ))
+            .into());
+        }
+        let targets = Targets::new(ctx, backend, (width, height), self.samples);
         let mut timer = GpuTimer::new(ctx, 64);
         // The geometry: the depth prepass, or the G-buffer pass.
         let mut enc = ctx.encoder("shade");
@@ -329,7 +368,11 @@ impl Renderer {
                         &self.gbuffer
                     },
                     scene,
-                    &targets.gbuffer_targets(stored),
+                    &targets
+                        .gbuffer_targets(stored)
+                        .into_iter()
+                        .map(|v| (v, None))
+                        .collect::<Vec<_>>(),
                     &targets.depth_view,
                     false,
                     None,
@@ -343,7 +386,7 @@ impl Renderer {
                 "shade.naive",
                 &self.naive,
                 scene,
-                &[&targets.color_view],
+                &[targets.color_attachment()],
                 &targets.depth_view,
                 true,
                 None,
@@ -384,6 +427,7 @@ impl Renderer {
             lists,
             depth: targets.depth.clone(),
             gbuffer_bytes: targets.gbuffer_bytes,
+            msaa_target_bytes: targets.msaa_bytes,
             backend,
             targets,
         })
@@ -403,8 +447,9 @@ impl Renderer {
             .then(|| ShadePass::new(ctx, self, scene, out.backend, &out.targets))
     }
 
-    /// A raster pass drawing the scene into `targets` (cleared), testing depth with `Equal`
-    /// against the prepass (`equal`) or clearing and writing it.
+    /// A raster pass drawing the scene into `targets` (cleared; each with the single-sample
+    /// texture it resolves into, where it is multisampled, and then discarded), testing depth
+    /// with `Equal` against the prepass (`equal`) or clearing and writing it.
     #[expect(
         clippy::too_many_arguments,
         reason = "a pass: where, what, into which targets, with which lists"
@@ -416,21 +461,25 @@ impl Renderer {
         label: &str,
         pipeline: &wgpu::RenderPipeline,
         scene: &GpuScene,
-        targets: &[&wgpu::TextureView],
+        targets: &[(&wgpu::TextureView, Option<&wgpu::TextureView>)],
         depth: &wgpu::TextureView,
         equal: bool,
         lists: Option<&wgpu::BindGroup>,
     ) {
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = targets
             .iter()
-            .map(|view| {
+            .map(|&(view, resolve_target)| {
                 Some(wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
-                    resolve_target: None,
+                    resolve_target,
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
+                        store: if resolve_target.is_some() {
+                            wgpu::StoreOp::Discard
+                        } else {
+                            wgpu::StoreOp::Store
+                        },
                     },
                 })
             })

@@ -1,9 +1,11 @@
 //! The brute-force reference renderer (`shade.reference`): `prepass.depth`, then forward
 //! shading of every light at every covered pixel, into an `Rgba32Float` HDR target, with the
-//! surface position and shading normal of every pixel for the CPU oracles.
+//! surface position and shading normal of every pixel for the CPU oracles. With MSAA
+//! ([`ReferenceRenderer::with_samples`]) it shades each fragment once, at its centroid, as the
+//! forward backends do, and resolves: the reference of forward frames at the same sample count.
 
 use manylights_gpu::pipeline;
-use manylights_gpu::prepass::{DepthPrepass, depth_target};
+use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
@@ -35,7 +37,9 @@ pub struct ReferenceFrame {
     pub position: HdrImage,
     /// Shading normal (xyz), turned towards the viewer.
     pub normal: HdrImage,
-    /// Depth buffer of the prepass, one f32 per pixel (1.0 = far plane / background).
+    /// Depth buffer of the prepass, one f32 per pixel (1.0 = far plane / background); empty
+    /// with MSAA (a multisampled texture cannot be copied: `Culler::depth_samples` reads its
+    /// samples). With MSAA, `position` and `normal` are resolved: averages at edges.
     pub depth: Vec<f32>,
     /// GPU time per pass; `None` when the adapter has no timestamp queries.
     pub timings: Option<Vec<PassTiming>>,
@@ -45,24 +49,42 @@ pub struct ReferenceFrame {
 pub struct ReferenceRenderer {
     prepass: DepthPrepass,
     pipeline: wgpu::RenderPipeline,
+    samples: u32,
 }
 
 impl ReferenceRenderer {
     /// Builds the pipelines.
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        Self::build(ctx, scene, 1)
+    }
+
+    /// The pipelines for frames of `samples` samples a pixel (MSAA where more than one); an
+    /// error names the counts the device supports.
+    pub fn with_samples(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        samples: u32,
+    ) -> Result<Self, GpuError> {
+        ctx.check_msaa_of(samples, &[manylights_gpu::prepass::DEPTH_FORMAT, HDR])?;
+        Ok(Self::build(ctx, scene, samples))
+    }
+
+    fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
         let module = SHADER.create(&ctx.device);
         let t = pipeline::target(HDR);
-        let pipeline = pipeline::raster(
+        let pipeline = pipeline::raster_msaa(
             &ctx.device,
             "shade.reference",
             &module,
             &[&scene.layout],
             Some(("fs_reference", &[t.clone(), t.clone(), t])),
             pipeline::DepthTest::Equal,
+            samples,
         );
         Self {
-            prepass: DepthPrepass::new(ctx, scene),
+            prepass: DepthPrepass::with_samples(ctx, scene, samples),
             pipeline,
+            samples,
         }
     }
 
@@ -106,8 +128,27 @@ impl ReferenceRenderer {
             target("reference.position"),
             target("reference.normal"),
         );
-        let depth = depth_target(ctx, width, height);
+        let samples = self.samples;
+        let depth = depth_target_msaa(ctx, width, height, samples);
         let views = [&color, &position, &normal].map(|t| t.create_view(&Default::default()));
+        let msaa = (samples > 1).then(|| {
+            [
+                "reference.color_msaa",
+                "reference.position_msaa",
+                "reference.normal_msaa",
+            ]
+            .map(|label| {
+                pipeline::texture_2d_msaa(
+                    &ctx.device,
+                    label,
+                    (width, height),
+                    HDR,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT,
+                    samples,
+                )
+                .create_view(&Default::default())
+            })
+        });
         let depth_view = depth.create_view(&Default::default());
         let mut timer = GpuTimer::new(ctx, 2);
         let mut encoder = ctx
@@ -118,24 +159,29 @@ impl ReferenceRenderer {
         self.prepass
             .encode(&mut encoder, scene, &depth_view, &mut timer);
         {
-            let attachment = |view| {
+            // With MSAA, each target drawn multisampled, resolved into the single-sample one.
+            let attachment = |k: usize| {
+                let (view, resolve_target) = match &msaa {
+                    Some(ms) => (&ms[k], Some(&views[k])),
+                    None => (&views[k], None),
+                };
                 Some(wgpu::RenderPassColorAttachment {
                     view,
                     depth_slice: None,
-                    resolve_target: None,
+                    resolve_target,
                     ops: wgpu::Operations {
                         load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
+                        store: if msaa.is_some() {
+                            wgpu::StoreOp::Discard
+                        } else {
+                            wgpu::StoreOp::Store
+                        },
                     },
                 })
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shade.reference"),
-                color_attachments: &[
-                    attachment(&views[0]),
-                    attachment(&views[1]),
-                    attachment(&views[2]),
-                ],
+                color_attachments: &[attachment(0), attachment(1), attachment(2)],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &depth_view,
                     depth_ops: Some(wgpu::Operations {
@@ -157,7 +203,11 @@ impl ReferenceRenderer {
             readback::read_texture(ctx, t, wgpu::TextureAspect::All)
                 .map(|b| HdrImage::from_bytes(width, height, &b))
         };
-        let depth_bytes = readback::read_texture(ctx, &depth, wgpu::TextureAspect::DepthOnly)?;
+        let depth_bytes = if samples == 1 {
+            readback::read_texture(ctx, &depth, wgpu::TextureAspect::DepthOnly)?
+        } else {
+            Vec::new()
+        };
         Ok(ReferenceFrame {
             color: read(&color)?,
             position: read(&position)?,

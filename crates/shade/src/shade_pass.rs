@@ -6,7 +6,7 @@
 //! [`crate::Renderer::shade_pass`]), so that a frame's culling and shading are measured as one.
 
 use manylights_cull::{ListForm, ListPass};
-use manylights_gpu::prepass::depth_target;
+use manylights_gpu::prepass::depth_target_msaa;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
 
@@ -18,9 +18,11 @@ use crate::backends::{
 pub struct Targets {
     /// Width and height.
     pub(crate) size: (u32, u32),
-    /// HDR radiance.
+    /// HDR radiance (MSAA: resolved).
     pub(crate) color: wgpu::Texture,
     pub(crate) color_view: wgpu::TextureView,
+    /// MSAA: the multisampled HDR target the forward passes draw into and resolve from.
+    pub(crate) color_msaa: Option<wgpu::TextureView>,
     /// The depth buffer (prepass or G-buffer pass).
     pub(crate) depth: wgpu::Texture,
     pub(crate) depth_view: wgpu::TextureView,
@@ -29,11 +31,18 @@ pub struct Targets {
     pub(crate) gbuffer: Option<[wgpu::TextureView; 3]>,
     /// G-buffer bytes (0 without one).
     pub(crate) gbuffer_bytes: u64,
+    /// Bytes of the multisampled depth and colour targets (0 without MSAA).
+    pub(crate) msaa_bytes: u64,
 }
 
 impl Targets {
     /// The targets of a `width` x `height` frame of `backend`.
-    pub(crate) fn new(ctx: &GpuContext, backend: Backend, (width, height): (u32, u32)) -> Self {
+    pub(crate) fn new(
+        ctx: &GpuContext,
+        backend: Backend,
+        (width, height): (u32, u32),
+        samples: u32,
+    ) -> Self {
         let d = &ctx.device;
         let tex =
             |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
@@ -44,7 +53,18 @@ impl Targets {
                 | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
         );
-        let depth = depth_target(ctx, width, height);
+        let color_msaa = (samples > 1).then(|| {
+            pipeline::texture_2d_msaa(
+                d,
+                "shade.color_msaa",
+                (width, height),
+                HDR,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+                samples,
+            )
+            .create_view(&Default::default())
+        });
+        let depth = depth_target_msaa(ctx, width, height, samples);
         let stored = backend == Backend::DeferredStoredPosition;
         let deferred = stored || backend == Backend::Deferred;
         let gbuffer = deferred.then(|| {
@@ -63,6 +83,7 @@ impl Targets {
             size: (width, height),
             color_view: color.create_view(&Default::default()),
             color,
+            color_msaa,
             depth_view: depth.create_view(&Default::default()),
             depth,
             gbuffer_bytes: if deferred {
@@ -71,6 +92,21 @@ impl Targets {
                 0
             },
             gbuffer,
+            msaa_bytes: if samples > 1 {
+                // Depth32Float and Rgba32Float, `samples` each a pixel.
+                u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16)
+            } else {
+                0
+            },
+        }
+    }
+
+    /// The forward passes' colour target: the HDR target, or with MSAA the multisampled one
+    /// resolved into it.
+    pub(crate) fn color_attachment(&self) -> (&wgpu::TextureView, Option<&wgpu::TextureView>) {
+        match &self.color_msaa {
+            Some(msaa) => (msaa, Some(&self.color_view)),
+            None => (&self.color_view, None),
         }
     }
 
@@ -169,7 +205,7 @@ impl ListPass for ShadePass<'_> {
                     ListForm::ZBin => &r.forward_zbin,
                 },
                 self.scene,
-                &[&self.targets.color_view],
+                &[self.targets.color_attachment()],
                 &self.targets.depth_view,
                 true,
                 Some(lists),

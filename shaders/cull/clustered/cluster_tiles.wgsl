@@ -72,20 +72,33 @@ fn slice_bounds(tile: vec2<u32>, li: u32) {
     for (var i = li; i < cull.tile_size * cull.tile_size; i += CLUSTER_TILE_THREADS) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
-            // Every sample of the pixel (MSAA: DEPTH_SAMPLES; one otherwise).
+            // The pixel's nearest and farthest covered sample (MSAA: of DEPTH_SAMPLES; one
+            // otherwise), and every slice from the nearest's to the farthest's, as
+            // cull.occupancy marks them.
+            var z0 = 1.0;
+            var z1 = 0.0;
             for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
                 let z = textureLoad(depth_tex, p, sample_k);
                 if z < 1.0 {
-                    let s = bin_of(p, z) / tiles;
-                    let d = ordered_bits(linear_depth(z));
+                    z0 = min(z0, z);
+                    z1 = max(z1, z);
+                }
+            }
+            if z0 < 1.0 {
+                let s0 = bin_of(p, z0) / tiles;
+                let s1 = bin_of(p, z1) / tiles;
+                let d0 = linear_depth(z0);
+                let d1 = linear_depth(z1);
+                for (var s = s0; s <= s1; s++) {
+                    let r = pixel_slice_range(s, s0, s1, d0, d1);
                     if s != cur {
                         widen_slice(cur, near, far);
                         cur = s;
                         near = 0u;
                         far = 0u;
                     }
-                    near = max(near, ~d);
-                    far = max(far, d);
+                    near = max(near, ~ordered_bits(r.x));
+                    far = max(far, ordered_bits(r.y));
                 }
             }
         }

@@ -242,21 +242,30 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
     workgroupBarrier();
     let p = id.xy;
     let inside = all(p < vec2<u32>(frame.viewport.xy));
-    // Every sample of the pixel (MSAA: DEPTH_SAMPLES; one otherwise).
-    var covered = false;
+    // The pixel's nearest and farthest covered sample (MSAA: of DEPTH_SAMPLES; one otherwise),
+    // and its clusters: every one from the nearest sample's to the farthest's
+    // (pixel_slice_range says why).
+    var z0 = 1.0;
+    var z1 = 0.0;
     if inside {
         for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
             let z = textureLoad(depth_tex, p, sample_k);
             if z < 1.0 {
-                covered = true;
-                let bin = bin_of(p, z);
-                let d = linear_depth(z);
-                atomicMin(&wg_occ[0], bin);
-                atomicMax(&wg_occ[1], bin);
-                atomicMax(&wg_occ[2], ~ordered_bits(d));
-                atomicMax(&wg_occ[3], ordered_bits(d));
+                z0 = min(z0, z);
+                z1 = max(z1, z);
             }
         }
+    }
+    let covered = z0 < 1.0;
+    let b0 = bin_of(p, z0);
+    let b1 = bin_of(p, z1);
+    let d0 = linear_depth(z0);
+    let d1 = linear_depth(z1);
+    if covered {
+        atomicMin(&wg_occ[0], b0);
+        atomicMax(&wg_occ[1], b1);
+        atomicMax(&wg_occ[2], ~ordered_bits(d0));
+        atomicMax(&wg_occ[3], ordered_bits(d1));
     }
     workgroupBarrier();
     let first = atomicLoad(&wg_occ[0]);
@@ -270,16 +279,13 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
             }
         }
     } else if covered {
-        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-            let z = textureLoad(depth_tex, p, sample_k);
-            if z < 1.0 {
-                let bin = bin_of(p, z);
-                let d = linear_depth(z);
-                atomicStore(&occupancy[bin], 1u);
-                if tile_boxes() {
-                    atomicMax(&occupancy[cull.bins + 2u * bin], ~ordered_bits(d));
-                    atomicMax(&occupancy[cull.bins + 2u * bin + 1u], ordered_bits(d));
-                }
+        let tiles = cull.tiles_x * cull.tiles_y;
+        for (var bin = b0; bin <= b1; bin += tiles) {
+            atomicStore(&occupancy[bin], 1u);
+            if tile_boxes() {
+                let r = pixel_slice_range(bin / tiles, b0 / tiles, b1 / tiles, d0, d1);
+                atomicMax(&occupancy[cull.bins + 2u * bin], ~ordered_bits(r.x));
+                atomicMax(&occupancy[cull.bins + 2u * bin + 1u], ordered_bits(r.y));
             }
         }
     }

@@ -335,6 +335,31 @@ fn depth_slice(d: f32) -> u32 {
     return u32(clamp(s, 0.0, f32(cull.slices - 1u)));
 }
 
+// The near boundary (view depth) of slice s >= 1: where depth_slice starts placing depths in s.
+fn slice_edge(s: u32) -> f32 {
+    if cull.slicing == SLICING_EXPONENTIAL {
+        return cull.near * exp(f32(s) / cull.slice_scale);
+    }
+    return cull.near + f32(s) / cull.slice_scale;
+}
+
+// The part of slice s (s0 <= s <= s1) a pixel holds whose covered samples lie between linear
+// depths d0 <= d1, in slices s0 = depth_slice(d0) to s1 = depth_slice(d1): [d0, d1] within the
+// slice. With MSAA a fragment is looked up at its centroid, whose depth lies between its covered
+// samples' depths, so every slice from the nearest sample's to the farthest's may be looked up,
+// over that part of the pixel's depths (the slice's boundaries widened by 1e-4 of their depth:
+// depth_slice may place a depth a few ulps past one). With one sample, [d0, d1] is one depth.
+fn pixel_slice_range(s: u32, s0: u32, s1: u32, d0: f32, d1: f32) -> vec2<f32> {
+    var r = vec2<f32>(d0, d1);
+    if s > s0 {
+        r.x = max(d0, slice_edge(s) * (1.0 - 1e-4));
+    }
+    if s < s1 {
+        r.y = min(d1, slice_edge(s + 1u) * (1.0 + 1e-4));
+    }
+    return r;
+}
+
 // The bin of pixel `pixel` whose depth buffer value is `z` (NDC): its tile, and for clusters
 // the depth slice of its linear depth.
 fn bin_of(pixel: vec2<u32>, z: f32) -> u32 {

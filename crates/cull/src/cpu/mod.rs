@@ -239,18 +239,44 @@ pub fn tile_lines(frame: &GpuFrame, p: &GpuCullParams, lights: &[GpuLight]) -> [
 /// (`!ordered_bits(dmin)`, `ordered_bits(dmax)`), zero where none (a GPU's `linear_depth` may
 /// differ from this one in the last bit).
 pub fn occupancy(frame: &GpuFrame, p: &GpuCullParams, depth: &[f32], w: u32, h: u32) -> Vec<u32> {
+    occupancy_samples(frame, p, depth, w, h, 1)
+}
+
+/// [`occupancy`] over a depth buffer of `samples` samples a pixel (`depth` holds a pixel's
+/// samples one after another, as `Culler::depth_samples` reads them): a pixel holds every
+/// cluster of its tile from its nearest covered sample's slice to its farthest's, each over
+/// its part of the pixel's depths (`geometry::pixel_slice_range`).
+pub fn occupancy_samples(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    depth: &[f32],
+    w: u32,
+    h: u32,
+    samples: u32,
+) -> Vec<u32> {
     let bins = p.bins as usize;
+    let tiles = p.tiles_x * p.tiles_y;
     let mut occ = vec![0u32; bins * 3];
     for y in 0..h {
         for x in 0..w {
-            let z = depth[(y * w + x) as usize];
-            if z < 1.0 {
-                let b = bin_of(frame, p, [x, y], z) as usize;
-                occ[b] = 1;
+            let at = ((y * w + x) * samples) as usize;
+            let covered = depth[at..at + samples as usize]
+                .iter()
+                .filter(|&&z| z < 1.0);
+            let (z0, z1) = covered.fold((1.0f32, 0.0f32), |(a, b), &z| (a.min(z), b.max(z)));
+            if z0 >= 1.0 {
+                continue;
+            }
+            let (b0, b1) = (bin_of(frame, p, [x, y], z0), bin_of(frame, p, [x, y], z1));
+            let d = [linear_depth(frame, z0), linear_depth(frame, z1)];
+            for b in (b0..=b1).step_by(tiles as usize) {
+                let k = b as usize;
+                occ[k] = 1;
                 if p.flags & CULL_FLAG_TILE_BOX != 0 {
-                    let d = linear_depth(frame, z);
-                    occ[bins + 2 * b] = occ[bins + 2 * b].max(!geometry::ordered_bits(d));
-                    occ[bins + 2 * b + 1] = occ[bins + 2 * b + 1].max(geometry::ordered_bits(d));
+                    let [lo, hi] =
+                        geometry::pixel_slice_range(p, b / tiles, [b0 / tiles, b1 / tiles], d);
+                    occ[bins + 2 * k] = occ[bins + 2 * k].max(!geometry::ordered_bits(lo));
+                    occ[bins + 2 * k + 1] = occ[bins + 2 * k + 1].max(geometry::ordered_bits(hi));
                 }
             }
         }

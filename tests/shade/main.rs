@@ -15,7 +15,9 @@
 //!   position differences, so this is the real cost of rebuilding positions; the stored-position
 //!   variant shows it is nothing else. The measured maxima are printed.
 
+#[path = "../common/mod.rs"]
 mod common;
+mod msaa;
 
 use manylights_cull::{CullSettings, Slicing, Strategy};
 use manylights_gpu::GpuScene;

@@ -1,0 +1,130 @@
+//! MSAA in the forward backends and the reference: a multisampled depth prepass, culling bounds
+//! over every sample, each fragment shaded once at its centroid and resolved. Forward over every
+//! strategy, and naive forward, match the reference at the same sample count within forward's
+//! tolerance: a light missing from the list of any shaded point would show there.
+
+use manylights_cull::CullSettings;
+use manylights_gpu::GpuScene;
+use manylights_gpu::prepass::DEPTH_FORMAT;
+use manylights_shade::accuracy::compare;
+use manylights_shade::{Backend, ReferenceRenderer, Renderer};
+
+use super::{check_timings, common, scene, strategies, within_tolerance};
+
+const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+
+#[test]
+fn forward_msaa_matches_the_reference_at_its_sample_count() {
+    let ctx = common::gpu();
+    let counts = ctx.msaa_counts_of(&[DEPTH_FORMAT, HDR]);
+    assert!(
+        counts.contains(&4),
+        "MSAA 4 on the depth buffer and the HDR target (lavapipe and NVIDIA have it): {counts:?}"
+    );
+    let mut silhouettes = 0;
+    for name in ["atrium", "pillars"] {
+        let s = scene(name);
+        let (w, h) = (70, 45);
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let single = ReferenceRenderer::new(&ctx, &gpu_scene)
+            .render(&ctx, &gpu_scene, w, h)
+            .unwrap()
+            .color;
+        let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, 4)
+            .unwrap()
+            .render(&ctx, &gpu_scene, w, h)
+            .unwrap()
+            .color;
+        // Resolved: where a pixel's samples are partly background, its alpha (1 where
+        // covered, 0 elsewhere) is the covered fraction; one sample a pixel has no such pixel.
+        let partial = |img: &manylights_shade::HdrImage| {
+            img.data.iter().filter(|c| c[3] > 0.0 && c[3] < 1.0).count()
+        };
+        assert_eq!(partial(&single), 0, "{name}: one sample a pixel");
+        println!("{name}: {} pixels partly covered", partial(&reference));
+        silhouettes += partial(&reference);
+        let renderer = Renderer::with_samples(&ctx, &gpu_scene, 4).unwrap();
+        assert_eq!(renderer.samples(), 4);
+        let settings = CullSettings::for_camera(&s.camera);
+        let naive = renderer
+            .render(
+                &ctx,
+                &gpu_scene,
+                Backend::NaiveForward,
+                &strategies()[0],
+                &settings,
+                (w, h),
+            )
+            .unwrap();
+        let e = compare(&naive.color, &reference, 1.0);
+        assert!(
+            within_tolerance(&e, Backend::Forward),
+            "{name} naive MSAA 4: {e:?}"
+        );
+        for strategy in strategies() {
+            let what = format!("{name} {} forward MSAA 4", strategy.name());
+            let out = renderer
+                .render(
+                    &ctx,
+                    &gpu_scene,
+                    Backend::Forward,
+                    &strategy,
+                    &settings,
+                    (w, h),
+                )
+                .unwrap();
+            let e = compare(&out.color, &reference, 1.0);
+            assert!(within_tolerance(&e, Backend::Forward), "{what}: {e:?}");
+            assert_eq!(out.lists.as_ref().unwrap().dropped, 0, "{what}");
+            assert_eq!(out.depth.sample_count(), 4, "{what}: the depth buffer");
+            check_timings(&out, &what, Backend::Forward);
+        }
+    }
+    assert!(silhouettes > 0, "no pixel against the background resolved");
+}
+
+#[test]
+fn sample_counts_the_device_lacks_are_errors() {
+    let ctx = common::gpu();
+    let s = scene("pillars");
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, 32, 16).unwrap();
+    let counts = ctx.msaa_counts_of(&[DEPTH_FORMAT, HDR]);
+    let supported = counts
+        .iter()
+        .map(u32::to_string)
+        .collect::<Vec<_>>()
+        .join(", ");
+    for bad in [0, 3, 32] {
+        let e = Renderer::with_samples(&ctx, &gpu_scene, bad)
+            .err()
+            .unwrap_or_else(|| panic!("{bad} samples accepted"))
+            .to_string();
+        assert!(
+            e.contains(&format!("{bad} samples")) && e.contains(&supported),
+            "{e}"
+        );
+        let e = ReferenceRenderer::with_samples(&ctx, &gpu_scene, bad)
+            .err()
+            .unwrap_or_else(|| panic!("{bad} samples accepted by the reference"))
+            .to_string();
+        assert!(e.contains(&supported), "{e}");
+    }
+    // Deferred backends do not take MSAA yet: an error, not a single-sample frame.
+    let renderer = Renderer::with_samples(&ctx, &gpu_scene, 4).unwrap();
+    let settings = CullSettings::for_camera(&s.camera);
+    for backend in [Backend::Deferred, Backend::DeferredStoredPosition] {
+        let e = renderer
+            .render(
+                &ctx,
+                &gpu_scene,
+                backend,
+                &strategies()[0],
+                &settings,
+                (32, 16),
+            )
+            .err()
+            .unwrap_or_else(|| panic!("{} rendered with MSAA", backend.name()))
+            .to_string();
+        assert!(e.contains("MSAA") && e.contains(backend.name()), "{e}");
+    }
+}
