@@ -154,6 +154,83 @@ fn msaa_lists_are_conservative_for_every_sample() {
     assert!(needed > 0, "no light reaches any sample of any case");
 }
 
+/// Clusters over a 4x multisampled depth buffer, on both paths (a workgroup a tile, and the
+/// per-light passes' cull.occupancy): a pixel holds every cluster of its tile from its nearest
+/// sample's slice to its farthest's, each over its part of the pixel's depths, as the host
+/// oracle (`cpu::occupancy_samples`) marks them from every sample's depth; and, over the seeds,
+/// pixels whose samples span slices between which no sample lies (so that a fragment looked up
+/// at its centroid, between its samples' depths, finds a cluster that holds its lights).
+#[test]
+fn msaa_clusters_hold_every_slice_between_a_pixels_samples() {
+    let ctx = common::gpu();
+    let samples = 4;
+    let (w, h) = (61, 37);
+    let mut between = 0;
+    for seed in 0..4u64 {
+        let case = random_case(930 + seed);
+        let (gs, depth) = render_msaa(&ctx, &case, w, h, samples);
+        let tiles_path = Culler::with_samples(&ctx, &gs, samples);
+        let mut per_light = Culler::with_samples(&ctx, &gs, samples);
+        per_light.cluster_tiles_max_lights = 0;
+        let frame = GpuFrame::new(&case.camera, w, h, case.scene.lights.len() as u32);
+        for culler in [&tiles_path, &per_light] {
+            let s = Strategy::Clustered {
+                tile_size: 16,
+                slices: 32,
+                slicing: Slicing::Exponential,
+                skip_empty: true,
+                ordered: true,
+            };
+            let mut timer = GpuTimer::new(&ctx, 16);
+            let out = culler
+                .run(&ctx, &gs, &depth, &s, &settings(&case), &mut timer)
+                .unwrap();
+            let what = format!(
+                "{} per-light {}",
+                case.label,
+                culler.cluster_tiles_max_lights == 0
+            );
+            let p = out.params;
+            let z = culler.depth_samples(&ctx, &gs, &depth, &out).unwrap();
+            let occ = out.read_occupancy(&ctx).unwrap();
+            let cpu_occ = cpu::occupancy_samples(&frame, &p, &z, w, h, samples);
+            let bins = p.bins as usize;
+            assert_eq!(occ[..bins], cpu_occ[..bins], "{what}: occupancy");
+            for (k, (&g, &c)) in occ[bins..].iter().zip(&cpu_occ[bins..]).enumerate() {
+                let (a, b) = if k % 2 == 0 { (!g, !c) } else { (g, c) };
+                let (a, b) = (
+                    geometry::from_ordered_bits(a),
+                    geometry::from_ordered_bits(b),
+                );
+                assert!(
+                    (g == 0) == (c == 0)
+                        && (g == 0 || (a - b).abs() <= 1e-5 * a.abs().max(b.abs())),
+                    "{what}: cluster {} depth bound {} {a} against {b}",
+                    k / 2,
+                    k % 2
+                );
+            }
+            // Clusters held only by pixels whose samples lie on both sides of them.
+            let tiles = (p.tiles_x * p.tiles_y) as usize;
+            let mut by_samples = vec![false; bins];
+            for y in 0..h {
+                for x in 0..w {
+                    for k in 0..samples {
+                        let zk = z[((y * w + x) * samples + k) as usize];
+                        if zk < 1.0 {
+                            by_samples[geometry::bin_of(&frame, &p, [x, y], zk) as usize] = true;
+                        }
+                    }
+                }
+            }
+            between += (0..bins)
+                .filter(|&b| occ[b] != 0 && !by_samples[b] && b >= tiles)
+                .count();
+        }
+    }
+    assert!(between > 0, "no pixel's samples spanned an empty slice");
+}
+
 /// A sample count the device does not have is an error naming the ones it has.
 #[test]
 fn unsupported_sample_counts_are_rejected_naming_the_supported_ones() {

@@ -22,9 +22,14 @@ fn forward_msaa_matches_the_reference_at_its_sample_count() {
         "MSAA 4 on the depth buffer and the HDR target (lavapipe and NVIDIA have it): {counts:?}"
     );
     let mut silhouettes = 0;
-    for name in ["atrium", "pillars"] {
+    // Pillars at 160 x 90: thin columns, many edge pixels whose fragments' centroids lie where
+    // a column hides their samples (without the lookup bounds, clusters missed lights there).
+    for (name, (w, h)) in [
+        ("atrium", (70, 45)),
+        ("pillars", (70, 45)),
+        ("pillars", (160, 90)),
+    ] {
         let s = scene(name);
-        let (w, h) = (70, 45);
         let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
         let single = ReferenceRenderer::new(&ctx, &gpu_scene)
             .render(&ctx, &gpu_scene, w, h)
@@ -81,6 +86,69 @@ fn forward_msaa_matches_the_reference_at_its_sample_count() {
         }
     }
     assert!(silhouettes > 0, "no pixel against the background resolved");
+}
+
+/// `prepass.depth_bounds` against the depth buffer's samples, read back on both sides: an
+/// uncovered pixel keeps the far plane at every sample; a covered pixel's first sample is at
+/// or before each of its depth samples and its others at or after every one, none at the far
+/// plane; and the bounds are no wider than the pixel's depths need where its samples agree
+/// (a pixel inside one flat primitive: a few pixels' worth of its slope).
+#[test]
+fn msaa_lookup_bounds_hold_every_sample_of_the_pixel() {
+    let ctx = common::gpu();
+    let s = scene("pillars");
+    let (w, h) = (96, 54);
+    let samples = 4;
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    let renderer = Renderer::with_samples(&ctx, &gpu_scene, samples).unwrap();
+    let settings = CullSettings::for_camera(&s.camera);
+    let out = renderer
+        .render(
+            &ctx,
+            &gpu_scene,
+            Backend::Forward,
+            &strategies()[0],
+            &settings,
+            (w, h),
+        )
+        .unwrap();
+    let t = out.timings.as_ref().unwrap();
+    assert!(t.iter().any(|p| p.label == "prepass.depth_bounds"), "{t:?}");
+    let lists = out.lists.as_ref().unwrap();
+    let read = |tex| {
+        renderer
+            .culler
+            .depth_samples(&ctx, &gpu_scene, tex, lists)
+            .unwrap()
+    };
+    let (depth, bounds) = (read(&out.depth), read(&out.cull_depth));
+    let n = samples as usize;
+    let (mut covered, mut flat) = (0, 0);
+    for (px, (z, b)) in depth.chunks(n).zip(bounds.chunks(n)).enumerate() {
+        let (lo, hi) = (b[0], b[1..].iter().copied().fold(1.0f32, f32::min));
+        let near = z.iter().copied().fold(1.0f32, f32::min);
+        if near >= 1.0 {
+            assert!(b.iter().all(|&x| x == 1.0), "pixel {px}: {b:?} over {z:?}");
+            continue;
+        }
+        covered += 1;
+        assert!(b[1..].iter().all(|&x| x == b[1]), "pixel {px}: {b:?}");
+        for &zk in z.iter().filter(|&&zk| zk < 1.0) {
+            assert!(
+                lo <= zk && zk <= hi && hi < 1.0,
+                "pixel {px}: {b:?} over {z:?}"
+            );
+        }
+        let far = z.iter().copied().fold(0.0f32, f32::max);
+        if far < 1.0 && far - near < 1e-6 {
+            flat += 1;
+            assert!(hi - lo < 1e-3, "pixel {px}: {b:?} over {z:?}");
+        }
+    }
+    assert!(
+        covered > 0 && flat > 0,
+        "{covered} covered, {flat} flat pixels"
+    );
 }
 
 #[test]

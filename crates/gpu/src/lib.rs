@@ -4,13 +4,14 @@
 //! per-pass GPU timing with timestamp queries ([`timing`]), buffer and texture readback
 //! ([`readback`]), the composition of WGSL from the files under `shaders/` ([`shaders`]), the
 //! host-side mirrors of the shader structs ([`layout`]), the scene on the GPU ([`GpuScene`]),
-//! moving its lights each frame ([`motion`]) and the depth prepass ([`prepass`]) that culling strategies and shading backends share.
+//! moving its lights each frame ([`motion`]), the depth prepass ([`prepass`]) that culling strategies and shading backends share, and under MSAA the depth culling takes its bounds from ([`msaa_bounds`]).
 //!
 //! Depends on the scene crate and wgpu; knows nothing of culling strategies or backends.
 
 pub mod context;
 pub mod layout;
 pub mod motion;
+pub mod msaa_bounds;
 pub mod pipeline;
 pub mod prepass;
 pub mod readback;

@@ -232,7 +232,12 @@ pub const PREPASS: ShaderDef = ShaderDef {
 };
 
 /// Every shader this crate defines.
-pub const SHADERS: &[ShaderDef] = &[PREPASS, crate::motion::MOTION];
+pub const SHADERS: &[ShaderDef] = &[
+    PREPASS,
+    crate::msaa_bounds::PREPASS_RANGES,
+    crate::msaa_bounds::BOUNDS,
+    crate::motion::MOTION,
+];
 
 #[cfg(test)]
 mod tests {

@@ -227,7 +227,7 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
 
 /// Pass category for the result columns.
 pub(crate) fn category(label: &str) -> &'static str {
-    if label == "prepass.depth" || label == "shade.gbuffer" {
+    if label.starts_with("prepass.") || label == "shade.gbuffer" {
         "prepass"
     } else if label.starts_with("cull.") || label.starts_with("scan.") || label.starts_with("sort.")
     {

@@ -15,6 +15,7 @@ use manylights_cull::ListPass;
 use manylights_cull::layout::CULL_CONSTS;
 use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
+use manylights_gpu::msaa_bounds::MsaaBounds;
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
@@ -123,8 +124,12 @@ pub struct ShadeOutput {
     pub timings: Option<Vec<PassTiming>>,
     /// The light lists (not for naive forward).
     pub lists: Option<CullOutput>,
-    /// The depth buffer the lists were built from.
+    /// The depth buffer (its samples are what the exact oracle checks).
     pub depth: wgpu::Texture,
+    /// The depth the lists were built from: the depth buffer, or with MSAA forward the bounds
+    /// of every depth a fragment looks its list up at (`manylights_gpu::msaa_bounds`). Culling
+    /// timed again for this frame runs on it.
+    pub cull_depth: wgpu::Texture,
     /// G-buffer bytes (deferred only; 0 otherwise).
     pub gbuffer_bytes: u64,
     /// Bytes of the multisampled targets (depth and HDR colour; 0 without MSAA).
@@ -152,6 +157,8 @@ pub struct Renderer {
     /// more than one).
     pub(crate) samples: u32,
     pub(crate) prepass: DepthPrepass,
+    /// MSAA: the prepass keeping depth ranges and the depth culling reads.
+    pub(crate) msaa_bounds: Option<MsaaBounds>,
     pub(crate) forward: wgpu::RenderPipeline,
     /// `shade.forward` over z-binning's lists.
     pub(crate) forward_zbin: wgpu::RenderPipeline,
@@ -200,7 +207,14 @@ impl Renderer {
         scene: &GpuScene,
         samples: u32,
     ) -> Result<Self, manylights_gpu::GpuError> {
-        ctx.check_msaa_of(samples, &[manylights_gpu::prepass::DEPTH_FORMAT, HDR])?;
+        ctx.check_msaa_of(
+            samples,
+            &[
+                manylights_gpu::prepass::DEPTH_FORMAT,
+                HDR,
+                manylights_gpu::msaa_bounds::RANGE_FORMAT,
+            ],
+        )?;
         Ok(Self::build(ctx, scene, samples))
     }
 
@@ -311,6 +325,7 @@ impl Renderer {
             culler: Culler::with_samples(ctx, scene, samples),
             samples,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
+            msaa_bounds: (samples > 1).then(|| MsaaBounds::new(ctx, scene, samples)),
             forward,
             forward_zbin,
             naive,
@@ -347,14 +362,20 @@ impl Renderer {
             ))
             .into());
         }
-        let targets = Targets::new(ctx, backend, (width, height), self.samples);
+        let targets = Targets::new(ctx, self, backend, (width, height));
         let mut timer = GpuTimer::new(ctx, 64);
         // The geometry: the depth prepass, or the G-buffer pass.
         let mut enc = ctx.encoder("shade");
         match backend {
             Backend::Forward | Backend::NaiveForward => {
-                self.prepass
-                    .encode(&mut enc, scene, &targets.depth_view, &mut timer)
+                match (&self.msaa_bounds, &targets.bounds) {
+                    (Some(b), Some(t)) => {
+                        b.encode(&mut enc, scene, &targets.depth_view, t, &mut timer)
+                    }
+                    _ => self
+                        .prepass
+                        .encode(&mut enc, scene, &targets.depth_view, &mut timer),
+                }
             }
             Backend::Deferred | Backend::DeferredStoredPosition => {
                 let stored = backend == Backend::DeferredStoredPosition;
@@ -404,9 +425,14 @@ impl Renderer {
                     "depth prepass"
                 },
             )?;
-            let lists =
-                self.culler
-                    .run(ctx, scene, &targets.depth, strategy, settings, &mut timer)?;
+            let lists = self.culler.run(
+                ctx,
+                scene,
+                targets.cull_depth(),
+                strategy,
+                settings,
+                &mut timer,
+            )?;
             let mut pass = ShadePass::new(ctx, self, scene, backend, &targets);
             pass.bind(ctx, lists.list_bindings(), lists.form());
             let mut enc = ctx.encoder("shade");
@@ -426,6 +452,7 @@ impl Renderer {
             timings: timer.read(ctx)?,
             lists,
             depth: targets.depth.clone(),
+            cull_depth: targets.cull_depth().clone(),
             gbuffer_bytes: targets.gbuffer_bytes,
             msaa_target_bytes: targets.msaa_bytes,
             backend,

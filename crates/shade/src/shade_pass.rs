@@ -6,6 +6,7 @@
 //! [`crate::Renderer::shade_pass`]), so that a frame's culling and shading are measured as one.
 
 use manylights_cull::{ListForm, ListPass};
+use manylights_gpu::msaa_bounds::BoundsTargets;
 use manylights_gpu::prepass::depth_target_msaa;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
@@ -33,16 +34,19 @@ pub struct Targets {
     pub(crate) gbuffer_bytes: u64,
     /// Bytes of the multisampled depth and colour targets (0 without MSAA).
     pub(crate) msaa_bytes: u64,
+    /// MSAA forward: the depth ranges and the depth culling reads.
+    pub(crate) bounds: Option<BoundsTargets>,
 }
 
 impl Targets {
     /// The targets of a `width` x `height` frame of `backend`.
     pub(crate) fn new(
         ctx: &GpuContext,
+        renderer: &Renderer,
         backend: Backend,
         (width, height): (u32, u32),
-        samples: u32,
     ) -> Self {
+        let samples = renderer.samples;
         let d = &ctx.device;
         let tex =
             |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
@@ -65,6 +69,10 @@ impl Targets {
             .create_view(&Default::default())
         });
         let depth = depth_target_msaa(ctx, width, height, samples);
+        let bounds = match (&renderer.msaa_bounds, backend) {
+            (Some(b), Backend::Forward) => Some(b.targets(ctx, (width, height), &depth)),
+            _ => None,
+        };
         let stored = backend == Backend::DeferredStoredPosition;
         let deferred = stored || backend == Backend::Deferred;
         let gbuffer = deferred.then(|| {
@@ -93,12 +101,23 @@ impl Targets {
             },
             gbuffer,
             msaa_bytes: if samples > 1 {
-                // Depth32Float and Rgba32Float, `samples` each a pixel.
-                u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16)
+                // Depth32Float and Rgba32Float, `samples` each a pixel, and forward's bounds.
+                let bounds = if bounds.is_some() {
+                    manylights_gpu::msaa_bounds::BYTES_PER_SAMPLE
+                } else {
+                    0
+                };
+                u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16 + bounds)
             } else {
                 0
             },
+            bounds,
         }
+    }
+
+    /// The depth culling reads: the depth buffer, or with MSAA forward its bounds.
+    pub(crate) fn cull_depth(&self) -> &wgpu::Texture {
+        self.bounds.as_ref().map_or(&self.depth, |b| &b.bounds)
     }
 
     /// The forward passes' colour target: the HDR target, or with MSAA the multisampled one

@@ -1,7 +1,9 @@
 //! Experiments: the shipped files, tiny runs of each, durable and sharded runs, bad input, and
 //! the HTML report in a headless browser.
 
+#[path = "../common/mod.rs"]
 mod common;
+mod msaa;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -93,7 +95,9 @@ fn the_documented_example_parses() {
     let variants = e.sweep.variants.as_ref().unwrap();
     assert_eq!(variants[2].mask_budget, Some(0));
     assert_eq!(variants[3].tile_boxes, Some(false));
-    let moving = variants.last().unwrap();
+    let moving = &variants[4];
+    assert_eq!(variants[5].msaa, Some(4));
+    assert_eq!(e.config.msaa, 1);
     assert_eq!(moving.motion, Some(manylights_scene::Motion::Orbit(2.0)));
     assert_eq!(
         moving.light_update,
@@ -102,7 +106,7 @@ fn the_documented_example_parses() {
     assert_eq!(e.config.lights.motion, manylights_scene::Motion::Static);
     // Light counts x strategies x variants.
     let cells = e.cells();
-    assert_eq!(cells.len(), 2 * 2 * 5);
+    assert_eq!(cells.len(), 2 * 2 * 6);
     assert!(cells.iter().any(|c| c.name.contains("orbit+upload")
         && c.config.lights.motion == manylights_scene::Motion::Orbit(2.0)));
     assert!(
@@ -296,7 +300,8 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
     let csv = std::fs::read_to_string(tmp.path().join("out/results.csv")).unwrap();
     assert!(csv.lines().next().unwrap().ends_with(
         ",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span,gpu_ms_cull_shade,\
-                 gpu_ms_cull_shade_span,lights_needed_per_pixel_mean,gpu_ms_light_update,cpu_ms_upload"
+                 gpu_ms_cull_shade_span,lights_needed_per_pixel_mean,gpu_ms_light_update,cpu_ms_upload,\
+                 msaa,msaa_target_bytes"
     ));
 }
 

@@ -1,0 +1,136 @@
+//! MSAA on the command line: `cull --msaa` and `render --msaa`.
+
+use super::*;
+
+/// `cull --repeat N`: N runs back to back, a median per pass and per run.
+/// `cull --msaa 4`: every strategy over a 4x multisampled depth buffer, zero false negatives
+/// counted per covered sample; a count the device lacks, and `--export` with MSAA, are errors
+/// that say what is accepted.
+#[test]
+fn cull_msaa_counts_every_sample() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cull");
+    for strategy in [
+        "tiled-gather",
+        "depth-mask",
+        "clustered",
+        "zbin",
+        "tiled-scatter",
+    ] {
+        let o = manylights(&[
+            "cull",
+            "--scene",
+            "pillars",
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--lights",
+            "64",
+            "--strategy",
+            strategy,
+            "--msaa",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{strategy}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(stdout.contains("MSAA 4"), "{strategy}: {stdout}");
+        let line = stdout
+            .lines()
+            .find(|l| l.contains("covered samples"))
+            .expect(&stdout);
+        let n: u64 = line.split_whitespace().last().unwrap().parse().unwrap();
+        assert!(n > 64 * 36, "{strategy}: {line}");
+        assert!(
+            stdout.contains("false negatives         0"),
+            "{strategy}: {stdout}"
+        );
+    }
+    rejects_cmd(
+        "cull",
+        &["--msaa", "3"],
+        1,
+        &["invalid --msaa 3", "supports 1, ", "4"],
+    );
+    let export = tmp.path().join("export");
+    rejects_cmd(
+        "cull",
+        &["--msaa", "4", "--export", export.to_str().unwrap()],
+        1,
+        &["--export with --msaa 4"],
+    );
+}
+
+/// `render --msaa 4`: forward over a strategy, naive forward and the reference, resolved, each
+/// within rounding of the reference at the same count (`--compare`), with `prepass.depth_bounds`
+/// timed for forward; bad counts, deferred backends and `--export` with MSAA are errors that
+/// say what is accepted.
+#[test]
+fn render_msaa_matches_the_reference_at_its_count() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("render");
+    for backend in [
+        &["--backend", "forward", "--strategy", "clustered"][..],
+        &["--backend", "naive-forward"],
+        &["--backend", "reference"],
+    ] {
+        let mut args = vec![
+            "render",
+            "--scene",
+            "pillars",
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--lights",
+            "64",
+            "--msaa",
+            "4",
+            "--compare",
+            "--out",
+        ];
+        args.push(out.to_str().unwrap());
+        args.extend_from_slice(backend);
+        let o = manylights(&args);
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{backend:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(stdout.contains("MSAA 4"), "{backend:?}: {stdout}");
+        let line = stdout
+            .lines()
+            .find(|l| l.contains("vs reference "))
+            .expect(&stdout);
+        let psnr: f64 = line
+            .split("PSNR ")
+            .nth(1)
+            .and_then(|s| s.split_whitespace().next())
+            .and_then(|s| s.parse().ok())
+            .expect(line);
+        assert!(psnr > 80.0, "{backend:?}: {line}");
+        assert_eq!(
+            stdout.contains("prepass.depth_bounds"),
+            backend[1] == "forward",
+            "{backend:?}: {stdout}"
+        );
+    }
+    rejects(&["--msaa", "3"], 1, &["invalid --msaa 3", "supports 1,"]);
+    rejects(
+        &["--msaa", "4", "--backend", "deferred"],
+        1,
+        &["--msaa 4", "deferred backends do not take MSAA yet"],
+    );
+    rejects(
+        &["--msaa", "4", "--backend", "forward", "--export", "x"],
+        1,
+        &["--export with --msaa 4"],
+    );
+}
