@@ -39,8 +39,9 @@ pub(crate) struct RenderArgs {
     /// Samples a pixel (MSAA: 1, 2, 4, 8 where the device has them for the depth buffer and
     /// the HDR target; an unsupported count is an error naming the supported ones). Forward
     /// and naive forward shade each fragment once and resolve; the tiles' and clusters' depth
-    /// bounds cover every sample; the reference renders at the same count. Deferred backends
-    /// do not take MSAA yet.
+    /// bounds cover every sample; the reference renders at the same count. Deferred lights a
+    /// multisampled G-buffer once a pixel, and each sample apart at edges (the stored position
+    /// takes no MSAA).
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub(crate) msaa: u32,
 }
@@ -68,17 +69,11 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             "--export with --msaa {samples}: exports hold one depth a pixel; export without --msaa"
         );
     }
-    if samples > 1
-        && matches!(
-            args.backend,
-            BackendName::Deferred | BackendName::DeferredStoredPosition
-        )
-    {
+    if samples > 1 && args.backend == BackendName::DeferredStoredPosition {
         bail!(
-            "invalid --msaa {samples} with --backend {}: deferred backends do not take MSAA yet \
-             (use --backend forward, naive-forward or reference, or --msaa 1)",
-            clap::ValueEnum::to_possible_value(&args.backend)
-                .map_or_else(String::new, |v| v.get_name().to_owned())
+            "invalid --msaa {samples} with --backend deferred-stored-position: the stored \
+             position takes no MSAA (use --backend deferred, forward, naive-forward or \
+             reference, or --msaa 1)"
         );
     }
     let a = &args.scene;

@@ -12,7 +12,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 10] = [
+const SHIPPED: [&str; 11] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -23,6 +23,7 @@ const SHIPPED: [&str; 10] = [
     "cutoff-accuracy",
     "scaling-1m",
     "dynamic-lights",
+    "msaa-transparency",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {

@@ -25,6 +25,7 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
             msaa: [1, 4],
             variants: [
                 (label: "clusters", backend: Forward, strategy: Clustered(tile_size: 16, slices: 16)),
+                (label: "deferred", backend: Deferred, strategy: ZBin(tile_size: 16)),
                 (label: "gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
                 (label: "naive", backend: NaiveForward),
             ],
@@ -33,7 +34,7 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
     let e = Experiment::parse(src, Path::new("msaa.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
-    assert_eq!(s.rows.len(), 6);
+    assert_eq!(s.rows.len(), 8);
     let pixels = 64 * 36;
     let mut needed = Vec::new();
     for r in &s.rows {
@@ -41,17 +42,27 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
         assert_eq!(r.false_negatives, Some(0), "{what}");
         assert_eq!(r.dropped_lights, 0, "{what}");
         // Forward and naive forward against the reference at the same sample count: forward's
-        // tolerance (tests/shade), as PSNR over this scene's peak.
-        assert!(
-            r.psnr_db.is_some_and(|p| p > 80.0),
-            "{what}: {:?}",
-            r.psnr_db
-        );
+        // tolerance (tests/shade), as PSNR over this scene's peak. Deferred lights an edge's
+        // samples apart (tests/shade/msaa.rs): a looser bound there.
         let forward = r.backend == "forward";
-        let bytes = match (r.msaa, forward) {
+        if r.backend == "deferred" && r.msaa > 1 {
+            assert!(
+                r.flip_mean.is_some_and(|f| f < 0.05),
+                "{what}: {:?}",
+                r.flip_mean
+            );
+        } else {
+            assert!(
+                r.psnr_db.is_some_and(|p| p > 80.0),
+                "{what}: {:?}",
+                r.psnr_db
+            );
+        }
+        let bytes = match (r.msaa, r.backend.as_str()) {
             (1, _) => 0,
-            (4, true) => pixels * 4 * (4 + 16 + 12),
-            (4, false) => pixels * 4 * (4 + 16),
+            (4, "forward") => pixels * 4 * (4 + 16 + 12),
+            (4, "deferred") => pixels * 4 * 24,
+            (4, _) => pixels * 4 * (4 + 16),
             (n, _) => panic!("{what}: msaa {n}"),
         };
         assert_eq!(r.msaa_target_bytes, bytes, "{what}");
@@ -93,12 +104,8 @@ fn msaa_values_an_experiment_cannot_have_are_errors() {
         ("msaa: 3", "msaa = 3: 1, 2, 4, 8 or 16"),
         ("msaa: 0", "msaa = 0"),
         (
-            "backend: Deferred, msaa: 4",
-            "deferred backends do not take MSAA",
-        ),
-        (
             "backend: DeferredStoredPosition, msaa: 2",
-            "deferred_stored_position",
+            "deferred_stored_position: the stored position takes no MSAA",
         ),
         ("export: true, msaa: 4", "exports hold one depth a pixel"),
     ] {

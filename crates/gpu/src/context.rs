@@ -346,8 +346,8 @@ impl GpuContext {
         self.msaa_counts_of(&[crate::prepass::DEPTH_FORMAT])
     }
 
-    /// The MSAA sample counts every one of `formats` can have on this device (a colour format
-    /// must also resolve at that count). Without adapter-specific format features, WebGPU's
+    /// The MSAA sample counts every one of `formats` can have on this device (a float colour
+    /// format must also resolve at that count). Without adapter-specific format features, WebGPU's
     /// guarantee: 1, and 4 for formats that are multisampled there.
     pub fn msaa_counts_of(&self, formats: &[wgpu::TextureFormat]) -> Vec<u32> {
         let specific = self
@@ -365,7 +365,13 @@ impl GpuContext {
                             .guaranteed_format_features(self.device.features())
                             .flags
                     };
+                    // Integer formats never resolve (a G-buffer's material index is not).
+                    let integer = matches!(
+                        format.sample_type(None, None),
+                        Some(wgpu::TextureSampleType::Uint | wgpu::TextureSampleType::Sint)
+                    );
                     let resolves = format.is_depth_stencil_format()
+                        || integer
                         || n == 1
                         || flags.contains(wgpu::TextureFormatFeatureFlags::MULTISAMPLE_RESOLVE);
                     n == 1 || (flags.sample_count_supported(n) && resolves)

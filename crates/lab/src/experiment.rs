@@ -289,8 +289,9 @@ pub struct Config {
     /// for the depth buffer and the HDR target (a cell that asks for one it lacks fails with
     /// the counts it has). Forward and naive forward shade each fragment once and resolve;
     /// the culling bounds and the exact oracle cover every sample (list metrics are per
-    /// covered sample); the references render at the same count. Deferred backends do not
-    /// take MSAA yet. (Left out of a cell's identity when 1.)
+    /// covered sample); the references render at the same count. Deferred lights a
+    /// multisampled G-buffer once a pixel, and each sample apart at edges;
+    /// `DeferredStoredPosition` takes no MSAA. (Left out of a cell's identity when 1.)
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub msaa: u32,
     /// Conservative culling slack.
@@ -455,19 +456,13 @@ impl Config {
                 ),
             ));
         }
-        if self.msaa > 1
-            && matches!(
-                self.backend,
-                Backend::Deferred | Backend::DeferredStoredPosition
-            )
-        {
+        if self.msaa > 1 && self.backend == Backend::DeferredStoredPosition {
             return Err((
                 "msaa",
                 format!(
-                    "msaa = {} with backend {}: deferred backends do not take MSAA yet (Forward or \
-                     NaiveForward, or msaa: 1)",
-                    self.msaa,
-                    self.backend.name()
+                    "msaa = {} with backend deferred_stored_position: the stored position takes \
+                     no MSAA (Forward, Deferred or NaiveForward, or msaa: 1)",
+                    self.msaa
                 ),
             ));
         }

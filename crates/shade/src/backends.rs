@@ -73,6 +73,23 @@ pub const DEFERRED: ShaderDef = ShaderDef {
     ],
 };
 
+/// `shade.deferred` over a multisampled G-buffer (MSAA): a pixel at once, or its samples apart
+/// at edges.
+pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
+    name: "shade.deferred",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        GEOMETRY,
+        LOOKUP,
+        LIST_SHADING,
+        shader_file!("render/deferred_msaa.wgsl"),
+    ],
+};
+
 pub(crate) const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub(crate) const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub(crate) const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
@@ -184,11 +201,11 @@ fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEnt
     ]
 }
 
-fn texture(sample_type: wgpu::TextureSampleType) -> wgpu::BindingType {
+fn texture(sample_type: wgpu::TextureSampleType, samples: u32) -> wgpu::BindingType {
     wgpu::BindingType::Texture {
         sample_type,
         view_dimension: wgpu::TextureViewDimension::D2,
-        multisampled: false,
+        multisampled: samples > 1,
     }
 }
 
@@ -213,6 +230,8 @@ impl Renderer {
                 manylights_gpu::prepass::DEPTH_FORMAT,
                 HDR,
                 manylights_gpu::msaa_bounds::RANGE_FORMAT,
+                GB_NORMAL_DEPTH,
+                GB_MATERIAL,
             ],
         )?;
         Ok(Self::build(ctx, scene, samples))
@@ -237,14 +256,25 @@ impl Renderer {
             &lists_entries(wgpu::ShaderStages::FRAGMENT),
         );
         let mut entries = lists_entries(compute);
-        entries.push(pipeline::entry(3, compute, pipeline::DEPTH_TEXTURE));
+        entries.push(pipeline::entry(
+            3,
+            compute,
+            pipeline::depth_texture(samples),
+        ));
         let deferred_lists = layout("shade.deferred.lists", &entries);
-        let unfiltered = texture(wgpu::TextureSampleType::Float { filterable: false });
+        let unfiltered = texture(wgpu::TextureSampleType::Float { filterable: false }, 1);
         let deferred_gbuffer = layout(
             "shade.deferred.gbuffer",
             &[
-                pipeline::entry(0, compute, unfiltered),
-                pipeline::entry(1, compute, texture(wgpu::TextureSampleType::Uint)),
+                pipeline::entry(
+                    0,
+                    compute,
+                    texture(
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        samples,
+                    ),
+                ),
+                pipeline::entry(1, compute, texture(wgpu::TextureSampleType::Uint, samples)),
                 pipeline::entry(
                     2,
                     compute,
@@ -283,7 +313,7 @@ impl Renderer {
             DepthTest::Equal,
             samples,
         );
-        let gbuffer = raster(
+        let gbuffer = raster_msaa(
             d,
             "shade.gbuffer",
             &gb,
@@ -293,6 +323,7 @@ impl Renderer {
                 &[target(GB_NORMAL_DEPTH), target(GB_MATERIAL)],
             )),
             DepthTest::WriteLess,
+            samples,
         );
         let gbuffer_stored = raster(
             d,
@@ -309,18 +340,34 @@ impl Renderer {
             )),
             DepthTest::WriteLess,
         );
-        let def = DEFERRED.create(d);
         let def_layout = pipeline::layout(
             d,
             "shade.deferred",
             &[g0, &deferred_lists, &deferred_gbuffer],
         );
-        let deferred = pipeline::compute(d, &def, &def_layout, "deferred_shade");
-        let deferred_stored = pipeline::compute(d, &def, &def_layout, "deferred_shade_stored");
-        let deferred_zbin = ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
-            .map(|entry| pipeline::compute(d, &def, &def_layout, entry));
-        let deferred_tiles = ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
-            .map(|entry| pipeline::compute(d, &def, &def_layout, entry));
+        // With MSAA, one pass a form of lists (a list a bin or a tile, and z-binning's), the
+        // position rebuilt; the stored position takes no MSAA (`render` says so).
+        let (deferred, deferred_stored, deferred_zbin, deferred_tiles) = if samples > 1 {
+            let def = DEFERRED_MSAA.create_samples(d, samples);
+            let bins = pipeline::compute(d, &def, &def_layout, "deferred_shade_msaa");
+            let zbin = pipeline::compute(d, &def, &def_layout, "deferred_shade_msaa_zbin");
+            (
+                bins.clone(),
+                bins.clone(),
+                [zbin.clone(), zbin],
+                [bins.clone(), bins],
+            )
+        } else {
+            let def = DEFERRED.create(d);
+            (
+                pipeline::compute(d, &def, &def_layout, "deferred_shade"),
+                pipeline::compute(d, &def, &def_layout, "deferred_shade_stored"),
+                ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
+                    .map(|entry| pipeline::compute(d, &def, &def_layout, entry)),
+                ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
+                    .map(|entry| pipeline::compute(d, &def, &def_layout, entry)),
+            )
+        };
         Self {
             culler: Culler::with_samples(ctx, scene, samples),
             samples,
@@ -353,10 +400,10 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
-        if self.samples > 1 && !matches!(backend, Backend::Forward | Backend::NaiveForward) {
+        if self.samples > 1 && backend == Backend::DeferredStoredPosition {
             return Err(manylights_gpu::GpuError::Unsupported(format!(
-                "backend {} with MSAA ({} samples): not built yet; MSAA renders with forward \
-                 and naive_forward",
+                "backend {} with MSAA ({} samples): not built; MSAA renders with forward, \
+                 deferred and naive_forward",
                 backend.name(),
                 self.samples
             ))

@@ -23,4 +23,5 @@ pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     backends::FORWARD,
     backends::GBUFFER,
     backends::DEFERRED,
+    backends::DEFERRED_MSAA,
 ];

@@ -57,7 +57,10 @@ impl Targets {
                 | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
         );
-        let color_msaa = (samples > 1).then(|| {
+        let stored = backend == Backend::DeferredStoredPosition;
+        let deferred = stored || backend == Backend::Deferred;
+        // Deferred lighting writes the image itself: no multisampled colour target.
+        let color_msaa = (samples > 1 && !deferred).then(|| {
             pipeline::texture_2d_msaa(
                 d,
                 "shade.color_msaa",
@@ -73,20 +76,26 @@ impl Targets {
             (Some(b), Backend::Forward) => Some(b.targets(ctx, (width, height), &depth)),
             _ => None,
         };
-        let stored = backend == Backend::DeferredStoredPosition;
-        let deferred = stored || backend == Backend::Deferred;
         let gbuffer = deferred.then(|| {
             let usage =
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
             let (pw, ph) = if stored { (width, height) } else { (1, 1) };
+            let ms = |label, format| {
+                pipeline::texture_2d_msaa(d, label, (width, height), format, usage, samples)
+            };
             [
-                tex("gbuffer.normal_depth", GB_NORMAL_DEPTH, usage),
-                tex("gbuffer.material", GB_MATERIAL, usage),
+                ms("gbuffer.normal_depth", GB_NORMAL_DEPTH),
+                ms("gbuffer.material", GB_MATERIAL),
                 pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage),
             ]
             .map(|t| t.create_view(&Default::default()))
         });
         let per_pixel = GBUFFER_BYTES_PER_PIXEL + if stored { 16 } else { 0 };
+        let gbuffer_bytes = if deferred {
+            u64::from(width) * u64::from(height) * per_pixel * u64::from(samples)
+        } else {
+            0
+        };
         Self {
             size: (width, height),
             color_view: color.create_view(&Default::default()),
@@ -94,22 +103,21 @@ impl Targets {
             color_msaa,
             depth_view: depth.create_view(&Default::default()),
             depth,
-            gbuffer_bytes: if deferred {
-                u64::from(width) * u64::from(height) * per_pixel
-            } else {
-                0
-            },
+            gbuffer_bytes,
             gbuffer,
-            msaa_bytes: if samples > 1 {
+            msaa_bytes: match (samples > 1, deferred) {
+                (false, _) => 0,
+                // The G-buffer, depth included.
+                (true, true) => gbuffer_bytes,
                 // Depth32Float and Rgba32Float, `samples` each a pixel, and forward's bounds.
-                let bounds = if bounds.is_some() {
-                    manylights_gpu::msaa_bounds::BYTES_PER_SAMPLE
-                } else {
-                    0
-                };
-                u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16 + bounds)
-            } else {
-                0
+                (true, false) => {
+                    let bounds = if bounds.is_some() {
+                        manylights_gpu::msaa_bounds::BYTES_PER_SAMPLE
+                    } else {
+                        0
+                    };
+                    u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16 + bounds)
+                }
             },
             bounds,
         }

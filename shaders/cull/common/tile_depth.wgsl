@@ -3,7 +3,8 @@
 // (tile_lines.wgsl): the nearest and farthest covered pixel (linear view depth), the covered
 // pixels, and the 2.5D geometry mask (32 cells over [dmin, dmax]). Background pixels (depth
 // 1.0, the clear value) are not covered and need no lights, so they do not widen the bounds.
-// With MSAA every sample counts (DEPTH_SAMPLES a pixel; `covered` then counts samples).
+// With MSAA every sample counts (DEPTH_SAMPLES a pixel; `covered` then counts samples), and
+// the mask holds every cell between a pixel's samples.
 // The module declares depth_tex (binding 1) and tile_depth (binding 2).
 
 var<workgroup> wg_tile_zmin: array<atomic<u32>, TILE_SLOTS>;
@@ -56,11 +57,22 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
             for (var i = li; i < n; i += threads) {
                 let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
                 if all(p < size) {
+                    // Every cell from the pixel's nearest covered sample to its farthest: with
+                    // MSAA a fragment is looked up at its centroid, whose depth lies between
+                    // its samples' (one sample: the cell of its depth).
+                    var z0 = 1.0;
+                    var z1 = 0.0;
                     for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
                         let z = textureLoad(depth_tex, p, sample_k);
                         if z < 1.0 {
-                            cells |= 1u << depth_cell(linear_depth(z), t.dmin, scale);
+                            z0 = min(z0, z);
+                            z1 = max(z1, z);
                         }
+                    }
+                    if z0 < 1.0 {
+                        let c0 = depth_cell(linear_depth(z0), t.dmin, scale);
+                        let c1 = depth_cell(linear_depth(z1), t.dmin, scale);
+                        cells |= bit_range(c0, c1);
                     }
                 }
             }

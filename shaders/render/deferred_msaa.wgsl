@@ -1,0 +1,82 @@
+// shade.deferred with MSAA (Lauritzen 2010, "Deferred rendering for current and future rendering
+// pipelines"): over a multisampled G-buffer, one thread a pixel lights the pixel once where one
+// fragment covers all its samples (their G-buffer samples are equal: the G-buffer pass writes a
+// fragment's values to every sample it covers), and each covered sample apart where they differ
+// (an edge), averaging the samples into the pixel (alpha: the covered fraction, as the resolve
+// of the references gives). Once a pixel: at the pixel centre, at the view depth the G-buffer
+// holds (a fully covered fragment's centroid is the centre), looked up at that depth, which lies
+// between its samples' (the culling bounds cover every sample, and clusters every slice between
+// a pixel's samples). At an edge: each sample at its own depth and standard position, looked up
+// at its depth, exactly the points the exact oracle checks.
+@group(2) @binding(0) var gb_normal_depth: texture_multisampled_2d<f32>;
+@group(2) @binding(1) var gb_material: texture_multisampled_2d<u32>;
+@group(2) @binding(2) var out_color: texture_storage_2d<rgba32float, write>;
+
+// An entry point for each form of lists, as deferred.wgsl has.
+@compute @workgroup_size(8, 8)
+fn deferred_shade_msaa(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade_pixel_msaa(id.xy, false);
+}
+
+@compute @workgroup_size(8, 8)
+fn deferred_shade_msaa_zbin(@builtin(global_invocation_id) id: vec3<u32>) {
+    shade_pixel_msaa(id.xy, true);
+}
+
+// NDC of a point of the screen in pixels (x right, y down).
+fn screen_ndc(q: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(q.x * frame.viewport.z * 2.0 - 1.0, 1.0 - q.y * frame.viewport.w * 2.0);
+}
+
+// The NDC depth of view-space z (rows of clip_from_view; exact for both projections).
+fn ndc_depth(view_z: f32) -> f32 {
+    let m = frame.clip_from_view;
+    return (m[2][2] * view_z + m[3][2]) / (m[2][3] * view_z + m[3][3]);
+}
+
+// The lights of the pixel's list at NDC depth z, shaded at p.
+fn shade_point(pixel: vec2<u32>, z: f32, p: vec3<f32>, n: vec3<f32>, material: u32, zbin: bool) -> vec3<f32> {
+    let v = view_dir(p);
+    let m = materials[material];
+    if zbin {
+        return shade_zbin(zbin_cell(pixel, z), p, n, v, m);
+    }
+    return shade_list(light_list(pixel, z), p, n, v, m);
+}
+
+fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
+    if any(pixel >= vec2<u32>(frame.viewport.xy)) {
+        return;
+    }
+    let g0 = textureLoad(gb_normal_depth, pixel, 0);
+    let m0 = textureLoad(gb_material, pixel, 0).x;
+    var covered = 0u;
+    var edge = false;
+    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+        covered += u32(textureLoad(depth_tex, pixel, k) < 1.0);
+        edge = edge || any(textureLoad(gb_normal_depth, pixel, k) != g0) || textureLoad(gb_material, pixel, k).x != m0;
+    }
+    if covered == 0u {
+        textureStore(out_color, pixel, vec4<f32>(0.0));
+        return;
+    }
+    if !edge && covered == DEPTH_SAMPLES {
+        let q = view_point(screen_ndc(vec2<f32>(pixel) + 0.5), g0.w);
+        let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
+        let c = shade_point(pixel, ndc_depth(g0.w), p, g0.xyz, m0, zbin);
+        textureStore(out_color, pixel, vec4<f32>(c, 1.0));
+        return;
+    }
+    var c = vec3<f32>(0.0);
+    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+        let z = textureLoad(depth_tex, pixel, k);
+        if z < 1.0 {
+            let q = view_point(screen_ndc(vec2<f32>(pixel) + sample_position(k)), -linear_depth(z));
+            let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
+            let g = textureLoad(gb_normal_depth, pixel, k);
+            c += shade_point(pixel, z, p, g.xyz, textureLoad(gb_material, pixel, k).x, zbin);
+        }
+    }
+    let n = f32(DEPTH_SAMPLES);
+    textureStore(out_color, pixel, vec4<f32>(c / n, f32(covered) / n));
+}
