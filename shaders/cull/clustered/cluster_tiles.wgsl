@@ -86,9 +86,25 @@ fn slice_bounds(tile: vec2<u32>, li: u32) {
             }
             if z0 < 1.0 {
                 let s0 = bin_of(p, z0) / tiles;
-                let s1 = bin_of(p, z1) / tiles;
                 let d0 = linear_depth(z0);
-                let d1 = linear_depth(z1);
+                // With one sample a pixel (DEPTH_SAMPLES is a constant) z1 is z0.
+                var s1 = s0;
+                var d1 = d0;
+                if DEPTH_SAMPLES > 1u {
+                    s1 = bin_of(p, z1) / tiles;
+                    d1 = linear_depth(z1);
+                }
+                if DEPTH_SAMPLES == 1u || s0 == s1 {
+                    if s0 != cur {
+                        widen_slice(cur, near, far);
+                        cur = s0;
+                        near = 0u;
+                        far = 0u;
+                    }
+                    near = max(near, ~ordered_bits(d0));
+                    far = max(far, ordered_bits(d1));
+                    continue;
+                }
                 for (var s = s0; s <= s1; s++) {
                     let r = pixel_slice_range(s, s0, s1, d0, d1);
                     if s != cur {

@@ -258,9 +258,14 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
     }
     let covered = z0 < 1.0;
     let b0 = bin_of(p, z0);
-    let b1 = bin_of(p, z1);
     let d0 = linear_depth(z0);
-    let d1 = linear_depth(z1);
+    // With one sample a pixel (DEPTH_SAMPLES is a constant) z1 is z0: not computed again.
+    var b1 = b0;
+    var d1 = d0;
+    if DEPTH_SAMPLES > 1u {
+        b1 = bin_of(p, z1);
+        d1 = linear_depth(z1);
+    }
     if covered {
         atomicMin(&wg_occ[0], b0);
         atomicMax(&wg_occ[1], b1);
@@ -277,6 +282,12 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
                 atomicMax(&occupancy[cull.bins + 2u * first], atomicLoad(&wg_occ[2]));
                 atomicMax(&occupancy[cull.bins + 2u * first + 1u], atomicLoad(&wg_occ[3]));
             }
+        }
+    } else if covered && (DEPTH_SAMPLES == 1u || b0 == b1) {
+        atomicStore(&occupancy[b0], 1u);
+        if tile_boxes() {
+            atomicMax(&occupancy[cull.bins + 2u * b0], ~ordered_bits(d0));
+            atomicMax(&occupancy[cull.bins + 2u * b0 + 1u], ordered_bits(d1));
         }
     } else if covered {
         let tiles = cull.tiles_x * cull.tiles_y;

@@ -71,8 +71,11 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
                     }
                     if z0 < 1.0 {
                         let c0 = depth_cell(linear_depth(z0), t.dmin, scale);
-                        let c1 = depth_cell(linear_depth(z1), t.dmin, scale);
-                        cells |= bit_range(c0, c1);
+                        if DEPTH_SAMPLES == 1u {
+                            cells |= 1u << c0;
+                        } else {
+                            cells |= bit_range(c0, depth_cell(linear_depth(z1), t.dmin, scale));
+                        }
                     }
                 }
             }
