@@ -27,6 +27,7 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
                 (label: "clusters", backend: Forward, strategy: Clustered(tile_size: 16, slices: 16)),
                 (label: "deferred", backend: Deferred, strategy: ZBin(tile_size: 16)),
                 (label: "gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
+                (label: "deferred-gather", backend: Deferred, strategy: TiledGather(tile_size: 8)),
                 (label: "naive", backend: NaiveForward),
             ],
         ),
@@ -34,7 +35,7 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
     let e = Experiment::parse(src, Path::new("msaa.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
-    assert_eq!(s.rows.len(), 8);
+    assert_eq!(s.rows.len(), 10);
     let pixels = 64 * 36;
     let mut needed = Vec::new();
     for r in &s.rows {
@@ -83,6 +84,13 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
         }
         needed.push((r.msaa, r.lights_needed_per_pixel_mean.unwrap()));
     }
+    // The report compares forward with deferred at 4 samples over the strategy they share.
+    manylights_lab::report::write_report(tmp.path()).unwrap();
+    let report = std::fs::read_to_string(tmp.path().join("report.md")).unwrap();
+    assert!(
+        report.contains("MSAA 4 over tiled_gather:") && report.contains("Multisampled targets"),
+        "{report}"
+    );
     // The exact sets are the samples', whatever the strategy: one mean a sample count.
     for &(n, m) in &needed {
         let first = needed.iter().find(|x| x.0 == n).unwrap().1;

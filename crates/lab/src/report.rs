@@ -94,6 +94,64 @@ fn moving_lights_summary(by_lights: &BTreeMap<u64, Vec<&Row>>) -> Vec<String> {
     out
 }
 
+/// MSAA, where cells ran at several sample counts: for each strategy and sample count, forward
+/// against deferred (the frame, what it is spent on, the memory of the G-buffer and the
+/// multisampled targets, the error against the reference at that count), and what going from
+/// one sample to several cost each.
+fn msaa_summary(rows: &[Row]) -> Vec<String> {
+    let mut out = Vec::new();
+    if !rows.iter().any(|r| r.msaa > 1) {
+        return out;
+    }
+    let find = |backend: &str, strategy: &str, n: u32| {
+        rows.iter()
+            .find(|r| r.backend == backend && r.strategy == strategy && r.msaa == n)
+    };
+    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
+    let mut strategies: Vec<&str> = rows.iter().map(|r| r.strategy.as_str()).collect();
+    strategies.sort_unstable();
+    strategies.dedup();
+    let mut counts: Vec<u32> = rows.iter().map(|r| r.msaa).filter(|&n| n > 1).collect();
+    counts.sort_unstable();
+    counts.dedup();
+    for s in strategies {
+        for &n in &counts {
+            let (Some(f), Some(d)) = (find("forward", s, n), find("deferred", s, n)) else {
+                continue;
+            };
+            let (Some(ft), Some(dt)) = (f.gpu_ms_total, d.gpu_ms_total) else {
+                continue;
+            };
+            let scale = |b: &str, t: f64| {
+                find(b, s, 1)
+                    .and_then(|r| r.gpu_ms_total)
+                    .map_or(String::new(), |t1| {
+                        format!(", {:.1}x its time at one sample", t / t1)
+                    })
+            };
+            out.push(format!(
+                "MSAA {n} over {s}: {} is faster, {:.2} ms a frame for forward (geometry, with the lookup bounds, {} ms; shading {} ms{}) against {:.2} ms for deferred (G-buffer {} ms, lighting {} ms{}). Multisampled targets: forward {:.0} MiB (depth, colour, lookup bounds), deferred {:.0} MiB (the G-buffer); lists {:.0} and {:.0} KiB. Against the reference at {n} samples: forward PSNR {} dB, deferred mean FLIP {} (deferred lights an edge's samples apart, the reference each fragment once).",
+                if ft <= dt { "forward" } else { "deferred" },
+                ft,
+                fmt_opt(f.gpu_ms_prepass, 2),
+                fmt_opt(f.gpu_ms_shade, 2),
+                scale("forward", ft),
+                dt,
+                fmt_opt(d.gpu_ms_prepass, 2),
+                fmt_opt(d.gpu_ms_shade, 2),
+                scale("deferred", dt),
+                mib(f.msaa_target_bytes),
+                mib(d.gbuffer_bytes),
+                f.list_bytes as f64 / 1024.0,
+                d.list_bytes as f64 / 1024.0,
+                fmt_opt(f.psnr_db, 1),
+                fmt_opt(d.flip_mean, 4),
+            ));
+        }
+    }
+    out
+}
+
 fn summary(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     let mut by_lights: BTreeMap<u64, Vec<&Row>> = BTreeMap::new();
@@ -141,6 +199,7 @@ fn summary(rows: &[Row]) -> Vec<String> {
         }
     }
     out.extend(moving_lights_summary(&by_lights));
+    out.extend(msaa_summary(rows));
     let fns: Vec<&Row> = rows
         .iter()
         .filter(|r| r.false_negatives.unwrap_or(0) > 0)
