@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use manylights_cull::layout::DEFAULT_SLACK;
 use manylights_cull::{CullSettings, Slicing, Strategy};
@@ -19,6 +19,11 @@ pub(crate) struct SceneArgs {
     /// A procedural scene (atrium, pillars, topdown, city) or a path to a .gltf/.glb file.
     #[arg(long, default_value = "atrium")]
     pub(crate) scene: String,
+    /// Add the procedural scene's glass panes (transparent surfaces): the atrium's gallery
+    /// railings, a pane in front of the pillars' far wall. The reference and naive forward
+    /// render them; culling for transparent surfaces is not built yet.
+    #[arg(long)]
+    pub(crate) glass: bool,
     /// Number of lights to generate (0 renders only the scene's own lights).
     #[arg(long, default_value_t = 1024)]
     pub(crate) lights: u32,
@@ -232,7 +237,25 @@ pub(crate) fn load_scene(name: &str) -> Result<Scene> {
 impl SceneArgs {
     /// The scene with its generated lights, validated.
     pub(crate) fn build(&self) -> Result<Scene> {
-        let mut scene = load_scene(&self.scene)?;
+        let mut scene = if self.glass {
+            let mut spec = ProceduralScene::from_name(&self.scene).with_context(|| {
+                format!(
+                    "--glass: --scene {} is not a procedural scene with glass (atrium, pillars)",
+                    self.scene
+                )
+            })?;
+            match &mut spec {
+                ProceduralScene::Atrium(p) => p.glass = true,
+                ProceduralScene::Pillars(p) => p.glass = true,
+                _ => bail!(
+                    "--glass: scene {} has no glass panes (atrium and pillars have)",
+                    self.scene
+                ),
+            }
+            spec.build()?
+        } else {
+            load_scene(&self.scene)?
+        };
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
             "invalid light options (--radius, --threshold, --intensity, --spot-fraction)",

@@ -324,3 +324,129 @@ fn reference_passes_are_timed() {
         assert!(p.ms > 0.0 && p.ms.is_finite(), "{}: {} ms", p.label, p.ms);
     }
 }
+
+/// Where the ray through the centre of pixel (x, y) meets the plane y = `level` within
+/// |x|, |z| < `half`, in f64.
+fn level_hit(
+    camera: &Camera,
+    (w, h): (u32, u32),
+    (x, y): (u32, u32),
+    level: f64,
+    half: f64,
+) -> Option<DVec3> {
+    let world_from_clip = camera
+        .clip_from_world(w as f32 / h as f32)
+        .as_dmat4()
+        .inverse();
+    let ndc_x = (f64::from(x) + 0.5) / f64::from(w) * 2.0 - 1.0;
+    let ndc_y = 1.0 - (f64::from(y) + 0.5) / f64::from(h) * 2.0;
+    let unproject = |z: f64| {
+        let p = world_from_clip * DVec4::new(ndc_x, ndc_y, z, 1.0);
+        p.truncate() / p.w
+    };
+    let (a, b) = (unproject(0.0), unproject(1.0));
+    let t = (a.y - level) / (a.y - b.y);
+    (t > 0.0 && t < 1.0)
+        .then(|| a + (b - a) * t)
+        .filter(|p| p.x.abs() < half && p.z.abs() < half)
+}
+
+/// Two transparent panes over an opaque plane, a light between them and the plane and one
+/// above: each pixel the panes cover is the panes' radiance blended back to front over the
+/// plane's, `c2 a2 + (1 - a2)(c1 a1 + (1 - a1) c0)`, evaluated in f64 at the exact ray hits;
+/// the same whichever order the scene lists the panes in (they are sorted for the camera).
+/// Tolerance as in `point_light_above_plane_matches_closed_form`.
+#[test]
+fn transparent_panes_blend_back_to_front_over_the_closed_form() {
+    let pane = |level: f32, material: u32| Primitive {
+        positions: vec![
+            Vec3::new(-3.0, level, -3.0),
+            Vec3::new(3.0, level, -3.0),
+            Vec3::new(3.0, level, 3.0),
+            Vec3::new(-3.0, level, 3.0),
+        ],
+        normals: vec![Vec3::Y; 4],
+        indices: vec![0, 2, 1, 0, 3, 2],
+        material,
+    };
+    let lights = vec![
+        Light::point(
+            Vec3::new(0.3, 0.6, -0.2),
+            4.0,
+            Vec3::new(1.0, 0.9, 0.8),
+            3.0,
+        ),
+        Light::point(
+            Vec3::new(-0.5, 3.0, 0.4),
+            5.0,
+            Vec3::new(0.6, 0.8, 1.0),
+            4.0,
+        ),
+    ];
+    let camera = Camera::perspective(Vec3::new(0.0, 6.0, 6.0), Vec3::ZERO, 60.0, 0.1, 50.0);
+    let (w, h) = (80, 56);
+    let eye = camera.position.as_dvec3();
+    let mut images = Vec::new();
+    for reversed in [false, true] {
+        let mut scene = plane_scene(lights.clone(), camera);
+        scene
+            .materials
+            .push(Material::transparent(Vec3::new(0.9, 0.3, 0.2), 0.5, 0.5));
+        scene
+            .materials
+            .push(Material::transparent(Vec3::new(0.2, 0.4, 0.9), 0.8, 0.3));
+        let mut panes = vec![pane(1.0, 1), pane(2.0, 2)];
+        if reversed {
+            panes.reverse();
+        }
+        scene.primitives.extend(panes);
+        let frame = render(&scene, w, h);
+        let at = |p: DVec3, m: usize| {
+            shade(
+                p,
+                DVec3::Y,
+                (eye - p).normalize(),
+                &scene.materials[m],
+                &scene.lights,
+                Range::Windowed,
+            )
+        };
+        let mut checked = Vec::new();
+        let mut peak = 0.0f64;
+        for y in 0..h {
+            for x in 0..w {
+                let (Some(p0), Some(p1), Some(p2)) = (
+                    level_hit(&camera, (w, h), (x, y), 0.0, 9.9),
+                    level_hit(&camera, (w, h), (x, y), 1.0, 2.99),
+                    level_hit(&camera, (w, h), (x, y), 2.0, 2.99),
+                ) else {
+                    continue;
+                };
+                let (a1, a2) = (0.5, 0.3);
+                let c = at(p2, 2) * a2 + (at(p1, 1) * a1 + at(p0, 0) * (1.0 - a1)) * (1.0 - a2);
+                peak = peak.max(c.max_element());
+                checked.push((x, y, c));
+            }
+        }
+        assert!(
+            checked.len() > 500,
+            "the panes cover {} pixels",
+            checked.len()
+        );
+        for (x, y, expected) in checked {
+            let got = frame.color.at(x, y);
+            let g = DVec3::new(got[0].into(), got[1].into(), got[2].into());
+            let err = (g - expected).abs().max_element();
+            assert!(
+                err <= 1e-3 * peak,
+                "reversed {reversed}: pixel ({x}, {y}) gpu {g:?} vs f64 {expected:?} (peak {peak:.3e})"
+            );
+            assert!((got[3] - 1.0).abs() < 1e-6, "covered: alpha {}", got[3]);
+        }
+        images.push(frame.color);
+    }
+    assert_eq!(
+        images[0].data, images[1].data,
+        "the panes' order in the scene changed the image"
+    );
+}

@@ -5,6 +5,8 @@
 struct Material {
     base_color: vec3<f32>,
     specular: f32,
+    // 1: opaque; below 1 a transparent surface's blend weight.
+    opacity: f32,
 }
 
 @group(0) @binding(1) var<storage, read> lights: array<Light>;

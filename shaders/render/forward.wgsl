@@ -41,3 +41,13 @@ fn fs_naive(in: VertexOut) -> @location(0) vec4<f32> {
     let n = facing_normal(normalize(in.normal), v);
     return vec4<f32>(shade_all(in.world, n, v, materials[in.material]), 1.0);
 }
+
+// shade.naive over transparent surfaces: after the opaque ones, back to front, tested against
+// the opaque depth without writing it, blended with the surface's opacity.
+@fragment
+fn fs_naive_transparent(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = view_dir(in.world);
+    let n = facing_normal(normalize(in.normal), v);
+    let m = materials[in.material];
+    return vec4<f32>(shade_all(in.world, n, v, m), m.opacity);
+}

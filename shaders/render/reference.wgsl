@@ -18,3 +18,15 @@ fn fs_reference(in: VertexOut) -> ReferenceOut {
     let c = shade_all(in.world, n, v, materials[in.material]);
     return ReferenceOut(vec4<f32>(c, 1.0), vec4<f32>(in.world, 1.0), vec4<f32>(n, 0.0));
 }
+
+// shade.reference over transparent surfaces: after the opaque ones, back to front, tested
+// against the opaque depth without writing it; the surface's radiance with its opacity as the
+// blend weight, into the colour target only (the position and normal stay the opaque
+// surface's).
+@fragment
+fn fs_reference_transparent(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = view_dir(in.world);
+    let n = facing_normal(normalize(in.normal), v);
+    let m = materials[in.material];
+    return vec4<f32>(shade_all(in.world, n, v, m), m.opacity);
+}

@@ -67,11 +67,13 @@ pub(crate) fn random_case(seed: u64) -> Case {
             bays: rng.random_range(2..6),
             storeys: rng.random_range(1..3),
             cloth: rng.random_bool(0.5),
+            glass: false,
         }),
         1 => ProceduralScene::Pillars(PillarsParams {
             count: rng.random_range(4..40),
             width: rng.random_range(0.05..0.5),
             gap: rng.random_range(2.0..30.0),
+            glass: false,
         }),
         2 => ProceduralScene::Topdown(TopdownParams {
             size: rng.random_range(5.0..60.0),

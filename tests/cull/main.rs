@@ -9,6 +9,7 @@ mod exactness;
 mod lists;
 mod msaa;
 mod paths;
+mod transparent;
 
 use cases::*;
 

@@ -1,12 +1,13 @@
 //! Per-pixel consumers of the lists (`shaders/cull/per_pixel/`), a thread a pixel through the
 //! shared lookup: `cull.lights_per_pixel` (the lengths behind the heatmaps, checked against the
 //! CPU's lookup) and `cull.exact` (the exact per-pixel oracle on the GPU, for images too large
-//! for the CPU's O(pixels x lights); [`crate::metrics`]).
+//! for the CPU's O(pixels x lights); [`crate::metrics`]), and over transparent surfaces
+//! `cull.exact_transparent`, a raster pass adding each visible transparent fragment's counts.
 
 use manylights_gpu::{GpuContext, GpuError, GpuScene, pipeline, readback};
 
 use crate::program::Program;
-use crate::shaders::{EXACT, LIGHTS_PER_PIXEL};
+use crate::shaders::{EXACT, EXACT_TRANSPARENT, LIGHTS_PER_PIXEL};
 use crate::{CullOutput, Culler};
 
 /// The consumers' pipelines, over group 1 of [`Culler::lists_layout`].
@@ -14,6 +15,8 @@ pub(crate) struct PerPixel {
     lights_per_pixel: wgpu::ComputePipeline,
     exact: wgpu::ComputePipeline,
     depth_samples: wgpu::ComputePipeline,
+    /// `cull.exact_transparent`, over the transparent geometry.
+    exact_transparent: wgpu::RenderPipeline,
 }
 
 impl PerPixel {
@@ -29,6 +32,15 @@ impl PerPixel {
             lights_per_pixel: program(&LIGHTS_PER_PIXEL).pipeline(d, "lights_per_pixel"),
             depth_samples: program(&LIGHTS_PER_PIXEL).pipeline(d, "depth_samples"),
             exact: program(&EXACT).pipeline(d, "exact_counts"),
+            exact_transparent: pipeline::raster_msaa(
+                d,
+                "cull.exact_transparent",
+                &EXACT_TRANSPARENT.create_samples(d, samples),
+                &[scene_layout, lists_layout],
+                Some(("fs_exact_transparent", &[])),
+                pipeline::DepthTest::Less,
+                samples,
+            ),
         }
     }
 }
@@ -51,6 +63,7 @@ impl Culler {
             &self.per_pixel.lights_per_pixel,
             1,
             bytemuck::bytes_of(&[0u32; 4]),
+            None,
         )
     }
 
@@ -72,14 +85,16 @@ impl Culler {
             &self.per_pixel.depth_samples,
             u64::from(self.samples),
             bytemuck::bytes_of(&[0u32; 4]),
+            None,
         )?;
         Ok(words.into_iter().map(f32::from_bits).collect())
     }
 
-    /// The exact per-pixel oracle on the GPU: per pixel `[evaluated, needed, found, covered]`
-    /// (see `shaders/cull/per_pixel/exact.wgsl`; with MSAA, sums over the pixel's covered
-    /// samples, `covered` counting them); `world_from_clip` is the inverse of the frame's
-    /// `clip_from_world`; only pixels on a grid of `stride` are evaluated (1: all).
+    /// The exact per-pixel oracle on the GPU: per pixel `[evaluated, needed, found, points]`
+    /// (see `shaders/cull/per_pixel/exact_point.wgsl`), summed over the points shaded there:
+    /// its covered samples (one without MSAA) and its visible transparent fragments, `points`
+    /// counting them; `world_from_clip` is the inverse of the frame's `clip_from_world`; only
+    /// pixels on a grid of `stride` are evaluated (1: all).
     pub fn exact_counts(
         &self,
         ctx: &GpuContext,
@@ -102,6 +117,7 @@ impl Culler {
             &self.per_pixel.exact,
             4,
             bytemuck::bytes_of(&params),
+            Some(&self.per_pixel.exact_transparent),
         )?;
         Ok(flat
             .chunks_exact(4)
@@ -110,7 +126,8 @@ impl Culler {
     }
 
     /// Runs a one-thread-per-pixel consumer of the lists with `uniform` at binding 5 and reads
-    /// back its `stride` u32 per pixel.
+    /// back its `stride` u32 per pixel; then, where the scene has transparent surfaces,
+    /// `transparent` over them into the same output, the depth buffer read only.
     #[expect(
         clippy::too_many_arguments,
         reason = "the lists, their consumer and its one parameter"
@@ -124,6 +141,7 @@ impl Culler {
         pipeline: &wgpu::ComputePipeline,
         stride: u64,
         uniform: &[u8],
+        transparent: Option<&wgpu::RenderPipeline>,
     ) -> Result<Vec<u32>, GpuError> {
         let (w, h) = (depth.width(), depth.height());
         let d = &ctx.device;
@@ -166,6 +184,24 @@ impl Culler {
             pass.set_bind_group(0, &scene.bind_group, &[]);
             pass.set_bind_group(1, &group, &[]);
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);
+        }
+        if let Some(raster) = transparent.filter(|_| scene.has_transparent()) {
+            let attachment = depth.create_view(&Default::default());
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("cull.exact_transparent"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &attachment,
+                    depth_ops: None,
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_pipeline(raster);
+            pass.set_bind_group(1, &group, &[]);
+            scene.draw_transparent(&mut pass);
         }
         ctx.submit_and_wait(enc, "per-pixel list consumer")?;
         Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(

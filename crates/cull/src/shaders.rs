@@ -7,7 +7,7 @@
 //! entry points call a building block's functions composes that block's file.
 
 use manylights_gpu::shader_file;
-use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, ShaderDef, ShaderFile};
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, ShaderDef, ShaderFile, VERTEX};
 
 use crate::layout::CULL_CONSTS;
 
@@ -141,7 +141,26 @@ pub const EXACT: ShaderDef = ShaderDef {
         SCENE,
         GEOMETRY,
         LOOKUP,
+        EXACT_POINT,
         shader_file!("cull/per_pixel/exact.wgsl"),
+    ],
+};
+/// The exact oracle at a surface point, shared by `cull.exact` and `cull.exact_transparent`.
+const EXACT_POINT: ShaderFile = shader_file!("cull/per_pixel/exact_point.wgsl");
+/// `cull.exact_transparent`: the exact oracle at every visible transparent fragment (a raster
+/// pass over the transparent geometry).
+pub const EXACT_TRANSPARENT: ShaderDef = ShaderDef {
+    name: "cull.exact_transparent",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        VERTEX,
+        GEOMETRY,
+        LOOKUP,
+        EXACT_POINT,
+        shader_file!("cull/per_pixel/exact_transparent.wgsl"),
     ],
 };
 
@@ -155,6 +174,7 @@ pub const SHADERS: &[ShaderDef] = &[
     ZBIN,
     LIGHTS_PER_PIXEL,
     EXACT,
+    EXACT_TRANSPARENT,
     crate::scan::SHADER,
     crate::scan::SUBGROUP_SHADER,
     crate::radix_sort::SHADER,

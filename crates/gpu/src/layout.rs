@@ -141,14 +141,20 @@ pub struct GpuMaterial {
     pub base_color: Vec3,
     /// Specular weight.
     pub specular: f32,
+    /// Opacity (1: opaque).
+    pub opacity: f32,
+    /// Padding to WGSL's 16-byte struct alignment.
+    pub _pad: [f32; 3],
 }
-const _: () = assert!(size_of::<GpuMaterial>() == 16);
+const _: () = assert!(size_of::<GpuMaterial>() == 32);
 
 impl From<&Material> for GpuMaterial {
     fn from(m: &Material) -> Self {
         Self {
             base_color: m.base_color,
             specular: m.specular,
+            opacity: m.opacity,
+            _pad: [0.0; 3],
         }
     }
 }

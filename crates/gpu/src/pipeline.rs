@@ -11,6 +11,9 @@ pub enum DepthTest {
     WriteLess,
     /// Reads the prepass depth and shades only where it is equal: each pixel shaded once.
     Equal,
+    /// Reads the opaque depth without writing it and shades what lies nearer (`Less`):
+    /// transparent surfaces, blended over what is behind them.
+    Less,
 }
 
 /// A uniform buffer holding `contents`.
@@ -76,7 +79,7 @@ pub fn raster_msaa(
             format: DEPTH_FORMAT,
             depth_write_enabled: Some(depth == DepthTest::WriteLess),
             depth_compare: Some(match depth {
-                DepthTest::WriteLess => wgpu::CompareFunction::Less,
+                DepthTest::WriteLess | DepthTest::Less => wgpu::CompareFunction::Less,
                 DepthTest::Equal => wgpu::CompareFunction::Equal,
             }),
             stencil: Default::default(),
@@ -94,6 +97,17 @@ pub fn raster_msaa(
         }),
         multiview_mask: None,
         cache: None,
+    })
+}
+
+/// A colour target of `format` blending what a transparent surface draws over what is there:
+/// colour `src * a + dst * (1 - a)`, alpha (coverage) `a + dst * (1 - a)`, `a` the fragment's
+/// alpha (its opacity).
+pub fn blended_target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+        write_mask: wgpu::ColorWrites::ALL,
     })
 }
 

@@ -3,6 +3,7 @@
 //! Group 0 of every pass binds: 0 = frame, 1 = lights, 2 = materials.
 
 use bytemuck::cast_slice;
+use glam::Vec3;
 use manylights_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
@@ -15,8 +16,14 @@ pub struct GpuScene {
     pub vertices: wgpu::Buffer,
     /// All triangle indices.
     pub indices: wgpu::Buffer,
-    /// Number of indices.
+    /// Number of indices: the opaque triangles', then the transparent ones'.
     pub index_count: u32,
+    /// Indices of the opaque triangles (the first ones).
+    pub opaque_index_count: u32,
+    /// The transparent triangles (materials with opacity below 1), as uploaded, and their
+    /// centroids, for sorting them for each view.
+    transparent: Vec<[u32; 3]>,
+    centroids: Vec<Vec3>,
     /// Lights (at least one element is allocated; `light_count` says how many are real).
     pub lights: wgpu::Buffer,
     /// Number of lights.
@@ -42,8 +49,15 @@ impl GpuScene {
     ) -> Result<Self, GpuError> {
         let mut vertices = Vec::with_capacity(scene.vertex_count());
         let mut indices = Vec::with_capacity(scene.triangle_count() * 3);
+        let mut transparent: Vec<u32> = Vec::new();
         for p in &scene.primitives {
             let base = vertices.len() as u32;
+            let out = if scene.materials[p.material as usize].is_transparent() {
+                &mut transparent
+            } else {
+                &mut indices
+            };
+            out.extend(p.indices.iter().map(|i| base + i));
             vertices.extend(
                 p.positions
                     .iter()
@@ -54,8 +68,24 @@ impl GpuScene {
                         material: p.material,
                     }),
             );
-            indices.extend(p.indices.iter().map(|i| base + i));
         }
+        // Opaque triangles first, then the transparent ones, sorted for the camera.
+        let opaque_index_count = indices.len() as u32;
+        let centroids: Vec<Vec3> = transparent
+            .chunks(3)
+            .map(|t| {
+                t.iter()
+                    .map(|&i| vertices[i as usize].position)
+                    .sum::<Vec3>()
+                    / 3.0
+            })
+            .collect();
+        let triangles: Vec<[u32; 3]> = transparent.chunks(3).map(|t| [t[0], t[1], t[2]]).collect();
+        indices.extend(
+            back_to_front(&triangles, &centroids, camera)
+                .into_iter()
+                .flatten(),
+        );
         let light_count = u32::try_from(scene.lights.len()).map_err(|_| GpuError::OverLimit {
             what: "light count".into(),
             value: scene.lights.len() as u64,
@@ -150,6 +180,9 @@ impl GpuScene {
             vertices: vertices_buf,
             indices: indices_buf,
             index_count: indices.len() as u32,
+            opaque_index_count,
+            transparent: triangles,
+            centroids,
             lights: lights_buf,
             light_count,
             materials: materials_buf,
@@ -159,7 +192,8 @@ impl GpuScene {
         })
     }
 
-    /// Rewrites the frame uniform for another camera, resolution or flags.
+    /// Rewrites the frame uniform for another camera, resolution or flags, and sorts the
+    /// transparent triangles back to front for the camera.
     pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
         let frame = GpuFrame {
             flags,
@@ -167,13 +201,53 @@ impl GpuScene {
         };
         ctx.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
+        if !self.transparent.is_empty() {
+            let sorted = back_to_front(&self.transparent, &self.centroids, camera);
+            ctx.queue.write_buffer(
+                &self.indices,
+                u64::from(self.opaque_index_count) * 4,
+                cast_slice(&sorted),
+            );
+        }
     }
 
-    /// Binds group 0 and the geometry, and draws every triangle.
+    /// Whether the scene has transparent triangles.
+    pub fn has_transparent(&self) -> bool {
+        !self.transparent.is_empty()
+    }
+
+    /// Binds group 0 and the geometry, and draws every opaque triangle.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        self.bind_geometry(pass);
+        pass.draw_indexed(0..self.opaque_index_count, 0, 0..1);
+    }
+
+    /// Binds group 0 and the geometry, and draws the transparent triangles, back to front for
+    /// the camera of the last [`GpuScene::set_view`] (or of the upload).
+    pub fn draw_transparent(&self, pass: &mut wgpu::RenderPass<'_>) {
+        self.bind_geometry(pass);
+        pass.draw_indexed(self.opaque_index_count..self.index_count, 0, 0..1);
+    }
+
+    fn bind_geometry(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_bind_group(0, &self.bind_group, &[]);
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.set_index_buffer(self.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..self.index_count, 0, 0..1);
     }
+}
+
+/// The triangles ordered farthest first from the camera, by their centroids' distance along
+/// the view direction (a painter's order: exact for panes that do not overlap in depth
+/// within a pixel's view; intersecting transparent triangles are not split). Ties keep the
+/// scene's order.
+fn back_to_front(triangles: &[[u32; 3]], centroids: &[Vec3], camera: &Camera) -> Vec<[u32; 3]> {
+    let view = camera.view_from_world();
+    let mut order: Vec<(f32, usize)> = centroids
+        .iter()
+        .enumerate()
+        .map(|(k, &c)| (view.transform_point3(c).z, k))
+        .collect();
+    // View space looks down -Z: the most negative z is the farthest.
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    order.into_iter().map(|(_, k)| triangles[k]).collect()
 }

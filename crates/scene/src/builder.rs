@@ -155,6 +155,8 @@ impl MeshBuilder {
 
 pub(crate) const STONE: u32 = 0;
 pub(crate) const FLOOR: u32 = 1;
+/// Glass panes (transparent: opacity 0.3, a faint blue-green tint).
+pub(crate) const GLASS: u32 = 5;
 
 pub(crate) fn base_materials() -> Vec<Material> {
     vec![
@@ -163,5 +165,6 @@ pub(crate) fn base_materials() -> Vec<Material> {
         Material::new(Vec3::new(0.70, 0.12, 0.10), 0.0), // red cloth
         Material::new(Vec3::new(0.12, 0.45, 0.16), 0.0), // green cloth
         Material::new(Vec3::new(0.14, 0.20, 0.60), 0.0), // blue cloth
+        Material::transparent(Vec3::new(0.80, 0.90, 0.88), 0.8, 0.3), // glass
     ]
 }

@@ -100,7 +100,22 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
             } else {
                 Vec3::splat(0.8)
             };
-            Material::new(base, (0.5 * (1.0 - pbr.roughness_factor())).clamp(0.0, 1.0))
+            // `alphaMode: BLEND` makes the surface transparent with the base colour's alpha;
+            // OPAQUE and MASK (an alpha test without textures: every fragment passes) are opaque.
+            let opacity = if m.alpha_mode() == gltf::material::AlphaMode::Blend {
+                if c[3].is_finite() {
+                    c[3].clamp(0.0, 1.0)
+                } else {
+                    1.0
+                }
+            } else {
+                1.0
+            };
+            Material::transparent(
+                base,
+                (0.5 * (1.0 - pbr.roughness_factor())).clamp(0.0, 1.0),
+                opacity,
+            )
         })
         .collect();
     // Primitives without a material use the glTF default material, appended last.
@@ -515,4 +530,43 @@ fn face_normals(pos: &[Vec3], indices: &[u32]) -> Vec<Vec3> {
         }
     }
     n.into_iter().map(|v| v.normalize_or(Vec3::Y)).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A material with `alphaMode: BLEND` is transparent with its base colour's alpha; without
+    /// it (OPAQUE by default) the same material is opaque. (The glTF sample of
+    /// `assimp-testmodels`, which .ci/run installs, with its material edited.)
+    #[test]
+    fn alpha_mode_blend_gives_the_base_colour_alpha_as_opacity() {
+        let src = std::fs::read_to_string(
+            "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf",
+        )
+        .expect("install assimp-testmodels (as .ci/run does)");
+        let dir = std::env::temp_dir().join(format!("manylights-alpha-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let blend = src
+            .replace(
+                "\"metallicFactor\": 0.0",
+                "\"metallicFactor\": 0.0, \"baseColorFactor\": [1.0, 1.0, 1.0, 0.4]",
+            )
+            .replace(
+                "\"name\": \"Texture\"",
+                "\"name\": \"Texture\", \"alphaMode\": \"BLEND\"",
+            );
+        assert_ne!(blend, src);
+        let opacity = |text: &str, name: &str| {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            let (scene, _) = load(&path, &GltfOptions::default()).unwrap();
+            scene.validate().unwrap();
+            scene.materials[scene.primitives[0].material as usize].opacity
+        };
+        let (blended, opaque) = (opacity(&blend, "blend.gltf"), opacity(&src, "opaque.gltf"));
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!((blended - 0.4).abs() < 1e-6, "{blended}");
+        assert_eq!(opaque, 1.0);
+    }
 }

@@ -5,22 +5,46 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Camera, Light, SceneError};
 
-/// A material: only what the shading model reads (see [`crate::light`]).
+/// A material: only what the shading model reads (see [`crate::light`]), and its opacity.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     /// Linear RGB diffuse albedo, each channel in [0, 1].
     pub base_color: Vec3,
     /// Weight of the Blinn-Phong lobe, in [0, 1].
     pub specular: f32,
+    /// Opacity in [0, 1]: 1 is opaque; below 1 the surface is transparent, drawn after the
+    /// opaque ones, sorted back to front and blended over them with this weight (glTF's
+    /// `alphaMode: BLEND` and base colour alpha).
+    #[serde(default = "opaque")]
+    pub opacity: f32,
+}
+
+fn opaque() -> f32 {
+    1.0
 }
 
 impl Material {
-    /// A material with the given albedo and specular weight.
+    /// An opaque material with the given albedo and specular weight.
     pub const fn new(base_color: Vec3, specular: f32) -> Self {
         Self {
             base_color,
             specular,
+            opacity: 1.0,
         }
+    }
+
+    /// A transparent material (`opacity` below 1; 1 is opaque).
+    pub const fn transparent(base_color: Vec3, specular: f32, opacity: f32) -> Self {
+        Self {
+            base_color,
+            specular,
+            opacity,
+        }
+    }
+
+    /// Whether surfaces of this material are transparent (opacity below 1).
+    pub fn is_transparent(&self) -> bool {
+        self.opacity < 1.0
     }
 }
 
@@ -139,6 +163,13 @@ impl Scene {
                     "base_color channels and specular in [0, 1]",
                 ));
             }
+            if !(0.0..=1.0).contains(&m.opacity) {
+                return Err(SceneError::invalid(
+                    format!("materials[{i}].opacity"),
+                    m.opacity,
+                    "an opacity in [0, 1] (1: opaque)",
+                ));
+            }
         }
         for (i, p) in self.primitives.iter().enumerate() {
             if p.normals.len() != p.positions.len() {
@@ -196,5 +227,31 @@ impl Scene {
             l.validate(i)?;
         }
         self.camera.validate()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An opacity outside [0, 1] is an error naming the material, the value and the range;
+    /// a material written without one is opaque.
+    #[test]
+    fn opacity_outside_zero_to_one_is_rejected() {
+        let mut scene = crate::procedural::ProceduralScene::from_name("pillars")
+            .unwrap()
+            .build()
+            .unwrap();
+        for bad in [1.5, -0.1, f32::NAN] {
+            scene.materials[1].opacity = bad;
+            let e = scene.validate().unwrap_err().to_string();
+            assert!(
+                e.contains("materials[1].opacity") && e.contains("[0, 1]"),
+                "{bad}: {e}"
+            );
+        }
+        let m: Material = ron::from_str("(base_color: (0.5, 0.5, 0.5), specular: 0.1)").unwrap();
+        assert_eq!(m.opacity, 1.0);
+        assert!(!m.is_transparent());
     }
 }

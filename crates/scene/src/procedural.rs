@@ -22,7 +22,7 @@ use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use serde::{Deserialize, Serialize};
 
-use crate::builder::{FLOOR, MeshBuilder, STONE, base_materials, check_pos, check_u32};
+use crate::builder::{FLOOR, GLASS, MeshBuilder, STONE, base_materials, check_pos, check_u32};
 use crate::{Aabb, Camera, Scene, SceneError};
 
 /// The procedural scene names, as accepted by [`ProceduralScene::from_name`].
@@ -38,6 +38,8 @@ pub struct AtriumParams {
     pub storeys: u32,
     /// Whether cloth hangs from the upper galleries.
     pub cloth: bool,
+    /// Whether the upper galleries have glass railings (transparent surfaces).
+    pub glass: bool,
 }
 
 impl Default for AtriumParams {
@@ -46,6 +48,7 @@ impl Default for AtriumParams {
             bays: 7,
             storeys: 2,
             cloth: true,
+            glass: false,
         }
     }
 }
@@ -58,6 +61,9 @@ pub struct PillarsParams {
     pub count: u32,
     /// Width of each (square) pillar in metres, > 0.
     pub width: f32,
+    /// Whether a glass pane stands 1 m in front of the far wall (a transparent surface with
+    /// lights between it and the wall).
+    pub glass: bool,
     /// Distance from the pillar row to the far wall in metres, > 0.
     pub gap: f32,
 }
@@ -68,6 +74,7 @@ impl Default for PillarsParams {
             count: 64,
             width: 0.12,
             gap: 20.0,
+            glass: false,
         }
     }
 }
@@ -253,6 +260,17 @@ pub fn atrium(params: &AtriumParams) -> Result<Scene, SceneError> {
                 Vec3::new(half_len, y0 + STOREY, s0.max(s1)),
             );
         }
+        if params.glass {
+            // A glass railing 1.1 m high along each upper gallery, on the court side.
+            for storey in 1..params.storeys {
+                mb.quad(
+                    GLASS,
+                    Vec3::new(-half_len, storey as f32 * STOREY, side * (COURT - 0.35)),
+                    Vec3::X * 2.0 * half_len,
+                    Vec3::Y * 1.1,
+                );
+            }
+        }
         if params.cloth && params.storeys >= 2 {
             // Drapes hang in front of the first-floor gallery, every other bay.
             for i in (0..params.bays).step_by(2) {
@@ -327,6 +345,14 @@ pub fn pillars(params: &PillarsParams) -> Result<Scene, SceneError> {
             STONE,
             Vec3::new(x - hw, 0.0, ROW_Z - hw),
             Vec3::new(x + hw, HEIGHT, ROW_Z + hw),
+        );
+    }
+    if params.glass {
+        mb.quad(
+            GLASS,
+            Vec3::new(-10.0, 0.5, wall_z + 1.0),
+            Vec3::X * 20.0,
+            Vec3::Y * 7.5,
         );
     }
     let camera = Camera::perspective(

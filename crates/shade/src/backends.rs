@@ -166,6 +166,17 @@ impl ShadeOutput {
     }
 }
 
+/// What a raster pass keeps of its targets, and what it draws.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Loads {
+    /// Clears colour and depth, draws the opaque surfaces (the G-buffer pass).
+    Clear,
+    /// Clears colour, keeps the prepass depth, draws the opaque surfaces (tested `Equal`).
+    Depth,
+    /// Keeps colour and depth, draws the transparent surfaces (blended over the opaque ones).
+    Transparent,
+}
+
 /// Pipelines of every backend for one scene layout, and the culler.
 pub struct Renderer {
     /// The culling strategies.
@@ -180,6 +191,8 @@ pub struct Renderer {
     /// `shade.forward` over z-binning's lists.
     pub(crate) forward_zbin: wgpu::RenderPipeline,
     pub(crate) naive: wgpu::RenderPipeline,
+    /// `shade.naive` over transparent surfaces, blended.
+    pub(crate) naive_transparent: wgpu::RenderPipeline,
     pub(crate) gbuffer: wgpu::RenderPipeline,
     pub(crate) gbuffer_stored: wgpu::RenderPipeline,
     pub(crate) deferred: wgpu::ComputePipeline,
@@ -313,6 +326,15 @@ impl Renderer {
             DepthTest::Equal,
             samples,
         );
+        let naive_transparent = raster_msaa(
+            d,
+            "shade.naive_transparent",
+            &fwd,
+            &[g0],
+            Some(("fs_naive_transparent", &[pipeline::blended_target(HDR)])),
+            DepthTest::Less,
+            samples,
+        );
         let gbuffer = raster_msaa(
             d,
             "shade.gbuffer",
@@ -376,6 +398,7 @@ impl Renderer {
             forward,
             forward_zbin,
             naive,
+            naive_transparent,
             gbuffer,
             gbuffer_stored,
             deferred,
@@ -400,6 +423,15 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
+        if scene.has_transparent() && backend != Backend::NaiveForward {
+            return Err(manylights_gpu::GpuError::Unsupported(format!(
+                "backend {} over transparent surfaces: culling for transparent surfaces is not \
+                 built yet (the reference and naive_forward render them; or leave the scene's \
+                 glass out)",
+                backend.name()
+            ))
+            .into());
+        }
         if self.samples > 1 && backend == Backend::DeferredStoredPosition {
             return Err(manylights_gpu::GpuError::Unsupported(format!(
                 "backend {} with MSAA ({} samples): not built; MSAA renders with forward, \
@@ -442,23 +474,37 @@ impl Renderer {
                         .map(|v| (v, None))
                         .collect::<Vec<_>>(),
                     &targets.depth_view,
-                    false,
+                    Loads::Clear,
                     None,
                 );
             }
         }
         let lists = if backend == Backend::NaiveForward {
+            let transparent = scene.has_transparent();
             self.raster_pass(
                 &mut enc,
                 &mut timer,
                 "shade.naive",
                 &self.naive,
                 scene,
-                &[targets.color_attachment()],
+                &[targets.color_attachment(!transparent)],
                 &targets.depth_view,
-                true,
+                Loads::Depth,
                 None,
             );
+            if transparent {
+                self.raster_pass(
+                    &mut enc,
+                    &mut timer,
+                    "shade.naive_transparent",
+                    &self.naive_transparent,
+                    scene,
+                    &[targets.color_attachment(true)],
+                    &targets.depth_view,
+                    Loads::Transparent,
+                    None,
+                );
+            }
             timer.resolve(&mut enc);
             ctx.submit_and_wait(enc, "naive forward")?;
             None
@@ -521,9 +567,9 @@ impl Renderer {
             .then(|| ShadePass::new(ctx, self, scene, out.backend, &out.targets))
     }
 
-    /// A raster pass drawing the scene into `targets` (cleared; each with the single-sample
-    /// texture it resolves into, where it is multisampled, and then discarded), testing depth
-    /// with `Equal` against the prepass (`equal`) or clearing and writing it.
+    /// A raster pass drawing the scene into `targets` (each with the single-sample texture it
+    /// resolves into where it is multisampled and this pass is the frame's last, then
+    /// discarded): what it keeps of them and what it draws as `loads` says.
     #[expect(
         clippy::too_many_arguments,
         reason = "a pass: where, what, into which targets, with which lists"
@@ -537,7 +583,7 @@ impl Renderer {
         scene: &GpuScene,
         targets: &[(&wgpu::TextureView, Option<&wgpu::TextureView>)],
         depth: &wgpu::TextureView,
-        equal: bool,
+        loads: Loads,
         lists: Option<&wgpu::BindGroup>,
     ) {
         let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = targets
@@ -548,7 +594,11 @@ impl Renderer {
                     depth_slice: None,
                     resolve_target,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        load: if loads == Loads::Transparent {
+                            wgpu::LoadOp::Load
+                        } else {
+                            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+                        },
                         store: if resolve_target.is_some() {
                             wgpu::StoreOp::Discard
                         } else {
@@ -564,10 +614,10 @@ impl Renderer {
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: depth,
                 depth_ops: Some(wgpu::Operations {
-                    load: if equal {
-                        wgpu::LoadOp::Load
-                    } else {
+                    load: if loads == Loads::Clear {
                         wgpu::LoadOp::Clear(1.0)
+                    } else {
+                        wgpu::LoadOp::Load
                     },
                     store: wgpu::StoreOp::Store,
                 }),
@@ -581,6 +631,10 @@ impl Renderer {
         if let Some(group) = lists {
             pass.set_bind_group(1, group, &[]);
         }
-        scene.draw(&mut pass);
+        if loads == Loads::Transparent {
+            scene.draw_transparent(&mut pass);
+        } else {
+            scene.draw(&mut pass);
+        }
     }
 }

@@ -49,6 +49,8 @@ pub struct ReferenceFrame {
 pub struct ReferenceRenderer {
     prepass: DepthPrepass,
     pipeline: wgpu::RenderPipeline,
+    /// Transparent surfaces, blended into the colour target.
+    transparent: wgpu::RenderPipeline,
     samples: u32,
 }
 
@@ -81,9 +83,28 @@ impl ReferenceRenderer {
             pipeline::DepthTest::Equal,
             samples,
         );
+        // The position and normal targets keep the opaque surface's (nothing written).
+        let masked = Some(wgpu::ColorTargetState {
+            format: HDR,
+            blend: None,
+            write_mask: wgpu::ColorWrites::empty(),
+        });
+        let transparent = pipeline::raster_msaa(
+            &ctx.device,
+            "shade.reference_transparent",
+            &module,
+            &[&scene.layout],
+            Some((
+                "fs_reference_transparent",
+                &[pipeline::blended_target(HDR), masked.clone(), masked],
+            )),
+            pipeline::DepthTest::Less,
+            samples,
+        );
         Self {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             pipeline,
+            transparent,
             samples,
         }
     }
@@ -150,7 +171,7 @@ impl ReferenceRenderer {
             })
         });
         let depth_view = depth.create_view(&Default::default());
-        let mut timer = GpuTimer::new(ctx, 2);
+        let mut timer = GpuTimer::new(ctx, 3);
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -159,10 +180,12 @@ impl ReferenceRenderer {
         self.prepass
             .encode(&mut encoder, scene, &depth_view, &mut timer);
         {
-            // With MSAA, each target drawn multisampled, resolved into the single-sample one.
-            let attachment = |k: usize| {
+            // With MSAA, each target drawn multisampled and resolved into the single-sample one
+            // by the last pass (the transparent surfaces' where the scene has them).
+            let transparent = scene.has_transparent();
+            let attachment = |k: usize, last: bool, clear: bool| {
                 let (view, resolve_target) = match &msaa {
-                    Some(ms) => (&ms[k], Some(&views[k])),
+                    Some(ms) => (&ms[k], last.then_some(&views[k])),
                     None => (&views[k], None),
                 };
                 Some(wgpu::RenderPassColorAttachment {
@@ -170,8 +193,12 @@ impl ReferenceRenderer {
                     depth_slice: None,
                     resolve_target,
                     ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: if msaa.is_some() {
+                        load: if clear {
+                            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+                        } else {
+                            wgpu::LoadOp::Load
+                        },
+                        store: if resolve_target.is_some() {
                             wgpu::StoreOp::Discard
                         } else {
                             wgpu::StoreOp::Store
@@ -179,23 +206,43 @@ impl ReferenceRenderer {
                     },
                 })
             };
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("shade.reference"),
-                color_attachments: &[attachment(0), attachment(1), attachment(2)],
-                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &depth_view,
-                    depth_ops: Some(wgpu::Operations {
-                        load: wgpu::LoadOp::Load,
-                        store: wgpu::StoreOp::Store,
+            let passes: &[(&str, &wgpu::RenderPipeline, bool)] = if transparent {
+                &[
+                    ("shade.reference", &self.pipeline, false),
+                    ("shade.reference_transparent", &self.transparent, true),
+                ]
+            } else {
+                &[("shade.reference", &self.pipeline, false)]
+            };
+            for (k, &(label, pipeline, transparent_pass)) in passes.iter().enumerate() {
+                let last = k + 1 == passes.len();
+                let first = k == 0;
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some(label),
+                    color_attachments: &[
+                        attachment(0, last, first),
+                        attachment(1, last, first),
+                        attachment(2, last, first),
+                    ],
+                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                        view: &depth_view,
+                        depth_ops: Some(wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        }),
+                        stencil_ops: None,
                     }),
-                    stencil_ops: None,
-                }),
-                timestamp_writes: timer.render_pass("shade.reference"),
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            scene.draw(&mut pass);
+                    timestamp_writes: timer.render_pass(label),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(pipeline);
+                if transparent_pass {
+                    scene.draw_transparent(&mut pass);
+                } else {
+                    scene.draw(&mut pass);
+                }
+            }
         }
         timer.resolve(&mut encoder);
         ctx.submit_and_wait(encoder, "reference render")?;

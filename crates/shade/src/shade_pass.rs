@@ -12,7 +12,8 @@ use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
 
 use crate::backends::{
-    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, GBUFFER_BYTES_PER_PIXEL, HDR, Renderer,
+    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, GBUFFER_BYTES_PER_PIXEL, HDR, Loads,
+    Renderer,
 };
 
 /// The textures of one frame of a backend.
@@ -128,11 +129,14 @@ impl Targets {
         self.bounds.as_ref().map_or(&self.depth, |b| &b.bounds)
     }
 
-    /// The forward passes' colour target: the HDR target, or with MSAA the multisampled one
-    /// resolved into it.
-    pub(crate) fn color_attachment(&self) -> (&wgpu::TextureView, Option<&wgpu::TextureView>) {
+    /// The forward passes' colour target: the HDR target, or with MSAA the multisampled one,
+    /// resolved into it by the frame's `last` pass.
+    pub(crate) fn color_attachment(
+        &self,
+        last: bool,
+    ) -> (&wgpu::TextureView, Option<&wgpu::TextureView>) {
         match &self.color_msaa {
-            Some(msaa) => (msaa, Some(&self.color_view)),
+            Some(msaa) => (msaa, last.then_some(&self.color_view)),
             None => (&self.color_view, None),
         }
     }
@@ -232,9 +236,9 @@ impl ListPass for ShadePass<'_> {
                     ListForm::ZBin => &r.forward_zbin,
                 },
                 self.scene,
-                &[self.targets.color_attachment()],
+                &[self.targets.color_attachment(true)],
                 &self.targets.depth_view,
-                true,
+                Loads::Depth,
                 Some(lists),
             ),
             Some(gbuffer) => {

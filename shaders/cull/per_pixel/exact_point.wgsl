@@ -1,0 +1,72 @@
+// The exact oracle on the GPU, for images too large for the CPU's O(pixels x lights):
+// cull.exact (exact.wgsl) at every covered sample of the depth buffer (with MSAA each at its
+// standard position), cull.exact_transparent (exact_transparent.wgsl) at every visible
+// transparent fragment. At each surface point (reconstructed from the depth buffer as the CPU
+// oracle does, but in f32; a transparent fragment's interpolated point): the number of lights
+// reaching it (needed), the length of its list (evaluated) and how many list entries reach it
+// (found). Lists hold no duplicates (tested), so false negatives = needed - found. Decisions
+// within f32 rounding of a light's radius or cone may differ from the f64 CPU oracle; a test
+// bounds that difference.
+// Host mirror: manylights_cull::layout::GpuExactParams.
+struct ExactParams {
+    world_from_clip: mat4x4<f32>,
+    // Only pixels whose x and y are multiples of stride are evaluated (1: every pixel); the
+    // others report as not covered. Lets large experiments sample the O(pixels x lights) oracle.
+    stride: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+}
+
+@group(1) @binding(5) var<uniform> exact: ExactParams;
+
+// manylights_scene::Light::reaches, in f32.
+fn reaches(l: Light, p: vec3<f32>) -> bool {
+    let to_p = p - l.position;
+    let d = length(to_p);
+    if d >= l.radius {
+        return false;
+    }
+    if l.kind == LIGHT_KIND_SPOT {
+        return d > 0.0 && dot(to_p, l.direction) / d > l.cos_outer;
+    }
+    return true;
+}
+
+// A surface point p of a pixel, whose list is looked up at NDC depth z: (evaluated, needed,
+// found).
+fn point_counts(pixel: vec2<u32>, z: f32, p: vec3<f32>) -> vec3<u32> {
+    var needed = 0u;
+    for (var k = 0u; k < frame.light_count; k++) {
+        if reaches(lights[k], p) {
+            needed += 1u;
+        }
+    }
+    var evaluated = 0u;
+    var found = 0u;
+    if zbin_lists() {
+        let c = zbin_cell(pixel, z);
+        if c.first < c.end {
+            for (var w = c.first / 32u; w <= (c.end - 1u) / 32u; w++) {
+                var bits = zbin_bits(c, w);
+                while bits != 0u {
+                    let k = w * 32u + firstTrailingBit(bits);
+                    bits &= bits - 1u;
+                    evaluated += 1u;
+                    if reaches(lights[light_indices[k]], p) {
+                        found += 1u;
+                    }
+                }
+            }
+        }
+    } else {
+        let list = light_list(pixel, z);
+        evaluated = list.y;
+        for (var k = 0u; k < list.y; k++) {
+            if reaches(lights[light_indices[list.x + k]], p) {
+                found += 1u;
+            }
+        }
+    }
+    return vec3<u32>(evaluated, needed, found);
+}
