@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use manylights_cull::{CullOutput, CullSettings, Culler, Strategy, heatmap, metrics};
+use manylights_gpu::lookup_bounds::{LookupBounds, bound_samples};
 use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
 use manylights_gpu::{GpuContext, GpuScene};
@@ -74,14 +75,37 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let depth = depth_target_msaa(&ctx, w, h, samples);
     let mut timer = GpuTimer::new(&ctx, 64);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
-    DepthPrepass::with_samples(&ctx, &gpu_scene, samples).encode(
-        &mut enc,
-        &gpu_scene,
-        &depth.create_view(&Default::default()),
-        &mut timer,
-    );
+    let depth_view = depth.create_view(&Default::default());
+    // Over transparent surfaces, culling covers them as the forward backend does: over the
+    // lookup bounds (from the nearest glass to the opaque surface), where the exact oracle
+    // also checks every visible glass fragment.
+    let bounds = gpu_scene.has_transparent().then(|| {
+        let b = LookupBounds::new(&ctx, &gpu_scene, samples);
+        let t = b.targets(&ctx, (w, h), &depth);
+        (b, t)
+    });
+    match &bounds {
+        Some((b, t)) if b.has_prepass() => {
+            b.encode_prepass(&mut enc, &gpu_scene, &depth_view, t, &mut timer)
+        }
+        _ => DepthPrepass::with_samples(&ctx, &gpu_scene, samples).encode(
+            &mut enc,
+            &gpu_scene,
+            &depth_view,
+            &mut timer,
+        ),
+    }
+    if let Some((b, t)) = &bounds {
+        b.encode_bounds(&mut enc, &gpu_scene, t, &mut timer);
+    }
     ctx.submit_and_wait(enc, "depth prepass")?;
-    let culler = Culler::with_samples(&ctx, &gpu_scene, samples);
+    let (culler, cull_depth) = match &bounds {
+        Some((_, t)) => (
+            Culler::with_bounds(&ctx, &gpu_scene, samples, bound_samples(samples)),
+            &t.bounds,
+        ),
+        None => (Culler::with_samples(&ctx, &gpu_scene, samples), &depth),
+    };
     let settings = CullSettings {
         mask_budget: if args.no_tile_masks {
             Some(0)
@@ -90,17 +114,19 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         },
         ..args.cull.settings(&scene.camera)?
     };
-    let out = culler.run(&ctx, &gpu_scene, &depth, &strategy, &settings, &mut timer)?;
+    let out = culler.run(
+        &ctx, &gpu_scene, cull_depth, &strategy, &settings, &mut timer,
+    )?;
     let timings = timer.read(&ctx)?;
     let repeated = if args.repeat > 0 {
-        // The culling passes of the run above (the prepass is its one raster pass).
+        // The culling passes of the run above (the raster passes are the prepass and bounds).
         let passes = timings.as_ref().map(|t| {
             t.iter()
                 .filter(|p| p.kind == manylights_gpu::timing::PassKind::Compute)
                 .count() as u32
         });
         repeated_timings(
-            &ctx, &culler, &gpu_scene, &depth, &strategy, &settings, &out, passes, args,
+            &ctx, &culler, &gpu_scene, cull_depth, &strategy, &settings, &out, passes, args,
         )?
     } else {
         String::new()
@@ -146,7 +172,10 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
             String::new()
         }
     );
-    if samples > 1 {
+    if bounds.is_some() {
+        // The exact oracle's points: covered samples and visible transparent fragments.
+        println!("  shaded points           {}", m.covered_pixels);
+    } else if samples > 1 {
         println!("  covered samples         {}", m.covered_pixels);
     } else {
         println!("  covered pixels          {}", m.covered_pixels);

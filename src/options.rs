@@ -19,9 +19,8 @@ pub(crate) struct SceneArgs {
     /// A procedural scene (atrium, pillars, topdown, city) or a path to a .gltf/.glb file.
     #[arg(long, default_value = "atrium")]
     pub(crate) scene: String,
-    /// Add the procedural scene's glass panes (transparent surfaces): the atrium's gallery
-    /// railings, a pane in front of the pillars' far wall. The reference and naive forward
-    /// render them; culling for transparent surfaces is not built yet.
+    /// Add the procedural scene's glass (transparent surfaces): the atrium's gallery railings,
+    /// a pane in front of the pillars' far wall, sheets before the CIS 5650 hall's pillars.
     #[arg(long)]
     pub(crate) glass: bool,
     /// Number of lights to generate (0 renders only the scene's own lights).
@@ -240,15 +239,16 @@ impl SceneArgs {
         let mut scene = if self.glass {
             let mut spec = ProceduralScene::from_name(&self.scene).with_context(|| {
                 format!(
-                    "--glass: --scene {} is not a procedural scene with glass (atrium, pillars)",
+                    "--glass: --scene {} is not a procedural scene with glass (atrium, pillars, cis5650)",
                     self.scene
                 )
             })?;
             match &mut spec {
                 ProceduralScene::Atrium(p) => p.glass = true,
                 ProceduralScene::Pillars(p) => p.glass = true,
+                ProceduralScene::Cis5650(p) => p.glass = true,
                 _ => bail!(
-                    "--glass: scene {} has no glass panes (atrium and pillars have)",
+                    "--glass: scene {} has no glass panes (atrium, pillars and cis5650 have)",
                     self.scene
                 ),
             }

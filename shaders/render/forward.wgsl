@@ -51,3 +51,26 @@ fn fs_naive_transparent(in: VertexOut) -> @location(0) vec4<f32> {
     let m = materials[in.material];
     return vec4<f32>(shade_all(in.world, n, v, m), m.opacity);
 }
+
+// shade.forward_transparent: transparent surfaces over the lists (forward's, and deferred's after
+// its lighting), after the opaque ones, back to front, tested against the opaque depth without
+// writing it, blended with the surface's opacity. Each fragment is looked up where the lookup
+// bounds hold it (manylights_gpu::lookup_bounds): culling for it covers the transparent
+// surfaces' depths as well as the opaque ones'.
+@fragment
+fn fs_forward_transparent(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = view_dir(in.world);
+    let n = facing_normal(normalize(in.normal), v);
+    let m = materials[in.material];
+    let list = light_list(vec2<u32>(in.clip.xy), lookup_depth(in));
+    return vec4<f32>(shade_list(list, in.world, n, v, m), m.opacity);
+}
+
+@fragment
+fn fs_forward_transparent_zbin(in: VertexOut) -> @location(0) vec4<f32> {
+    let v = view_dir(in.world);
+    let n = facing_normal(normalize(in.normal), v);
+    let m = materials[in.material];
+    let cell = zbin_cell(vec2<u32>(in.clip.xy), lookup_depth(in));
+    return vec4<f32>(shade_zbin(cell, in.world, n, v, m), m.opacity);
+}

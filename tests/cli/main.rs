@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 
 mod msaa;
 mod outputs;
+mod transparent;
 mod tune;
 
 pub(crate) fn manylights(args: &[&str]) -> Output {

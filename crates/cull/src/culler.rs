@@ -26,10 +26,13 @@ use crate::{CullError, CullOutput, CullSettings, Strategy};
 /// Pipelines of every culling pass, and the knobs of the runs.
 pub struct Culler {
     layout: wgpu::BindGroupLayout,
-    /// Samples a pixel of the depth buffers it culls (MSAA where more than one): tile and
-    /// cluster depth bounds are taken over every sample, and the exact oracle checks every
-    /// sample.
+    /// Samples a pixel of the depth buffers its oracle checks (MSAA where more than one): the
+    /// exact oracle checks every sample.
     pub samples: u32,
+    /// Samples a pixel of the depth textures it culls over: `samples`, or more where it culls
+    /// over lookup bounds (`Culler::with_bounds`). Tile and cluster depth bounds are taken over
+    /// every sample.
+    pub bound_samples: u32,
     /// Layout of group 1 for list consumers (shading, `cull.lights_per_pixel`): 0 params,
     /// 1 ranges, 2 indices, 3 depth, 4 a per-pixel output, 5 a pass-specific uniform.
     pub lists_layout: wgpu::BindGroupLayout,
@@ -94,7 +97,7 @@ impl Culler {
     /// As [`Culler::new`]; with `subgroups` false, gather keeps its portable scans even where
     /// the device has subgroup operations (both paths give the same lists; the tests run both).
     pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
-        Self::build(ctx, scene, subgroups, 1)
+        Self::build(ctx, scene, subgroups, 1, 1)
     }
 
     /// As [`Culler::new`], for depth buffers of `samples` samples a pixel (MSAA; see
@@ -102,13 +105,31 @@ impl Culler {
     /// bounds, so lists stay conservative for every sample. Its lists are for culling and the
     /// exact oracle; the shading backends read lists of single-sample depth buffers.
     pub fn with_samples(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
-        Self::build(ctx, scene, true, samples)
+        Self::build(ctx, scene, true, samples, samples)
     }
 
-    fn build(ctx: &GpuContext, scene: &GpuScene, subgroups: bool, samples: u32) -> Self {
+    /// As [`Culler::with_samples`], culling over depth textures of `bound_samples` samples a
+    /// pixel (lookup bounds: `manylights_gpu::lookup_bounds`, a pixel's nearest and farthest
+    /// lookup depths in its samples) while its oracle and per-pixel consumers read depth
+    /// buffers of `samples`.
+    pub fn with_bounds(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        samples: u32,
+        bound_samples: u32,
+    ) -> Self {
+        Self::build(ctx, scene, true, samples, bound_samples)
+    }
+
+    fn build(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        subgroups: bool,
+        samples: u32,
+        bound_samples: u32,
+    ) -> Self {
         let d = &ctx.device;
-        let depth = depth_texture(samples);
-        let mut entries = vec![entry(0, UNIFORM), entry(1, depth)];
+        let mut entries = vec![entry(0, UNIFORM), entry(1, depth_texture(bound_samples))];
         entries.extend((2..=11).map(|b| entry(b, storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.group1"),
@@ -120,12 +141,12 @@ impl Culler {
                 entry(0, UNIFORM),
                 entry(1, storage(true)),
                 entry(2, storage(true)),
-                entry(3, depth),
+                entry(3, depth_texture(samples)),
                 entry(4, storage(false)),
                 entry(5, UNIFORM),
             ],
         });
-        let program = |def| Program::new(d, def, samples, &scene.layout, &layout);
+        let program = |def| Program::new(d, def, bound_samples, &scene.layout, &layout);
         let depth = program(&DEPTH_BOUNDS);
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         // One module for all of gather's pipelines, and the blocks' whose passes it holds.
@@ -146,6 +167,7 @@ impl Culler {
             per_pixel: PerPixel::new(d, samples, &scene.layout, &lists_layout),
             layout,
             samples,
+            bound_samples,
             lists_layout,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,

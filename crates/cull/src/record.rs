@@ -325,4 +325,9 @@ pub trait ListPass {
     );
     /// Records the pass, timed as its name.
     fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer);
+    /// The timed passes [`ListPass::record`] records (one, or more where it shades in
+    /// several, as forward shading over transparent surfaces does).
+    fn passes(&self) -> u32 {
+        1
+    }
 }

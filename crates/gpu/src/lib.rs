@@ -4,14 +4,14 @@
 //! per-pass GPU timing with timestamp queries ([`timing`]), buffer and texture readback
 //! ([`readback`]), the composition of WGSL from the files under `shaders/` ([`shaders`]), the
 //! host-side mirrors of the shader structs ([`layout`]), the scene on the GPU ([`GpuScene`]),
-//! moving its lights each frame ([`motion`]), the depth prepass ([`prepass`]) that culling strategies and shading backends share, and under MSAA the depth culling takes its bounds from ([`msaa_bounds`]).
+//! moving its lights each frame ([`motion`]), the depth prepass ([`prepass`]) that culling strategies and shading backends share, and the depth culling takes its bounds from where lists are looked up off the depth buffer's samples ([`lookup_bounds`]: MSAA, transparent surfaces).
 //!
 //! Depends on the scene crate and wgpu; knows nothing of culling strategies or backends.
 
 pub mod context;
 pub mod layout;
+pub mod lookup_bounds;
 pub mod motion;
-pub mod msaa_bounds;
 pub mod pipeline;
 pub mod prepass;
 pub mod readback;

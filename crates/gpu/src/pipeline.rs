@@ -14,6 +14,8 @@ pub enum DepthTest {
     /// Reads the opaque depth without writing it and shades what lies nearer (`Less`):
     /// transparent surfaces, blended over what is behind them.
     Less,
+    /// Writes depth, keeping the farthest (`Greater`, over a target cleared to 0).
+    WriteGreater,
 }
 
 /// A uniform buffer holding `contents`.
@@ -77,10 +79,14 @@ pub fn raster_msaa(
         primitive: PRIMITIVE,
         depth_stencil: Some(wgpu::DepthStencilState {
             format: DEPTH_FORMAT,
-            depth_write_enabled: Some(depth == DepthTest::WriteLess),
+            depth_write_enabled: Some(matches!(
+                depth,
+                DepthTest::WriteLess | DepthTest::WriteGreater
+            )),
             depth_compare: Some(match depth {
                 DepthTest::WriteLess | DepthTest::Less => wgpu::CompareFunction::Less,
                 DepthTest::Equal => wgpu::CompareFunction::Equal,
+                DepthTest::WriteGreater => wgpu::CompareFunction::Greater,
             }),
             stencil: Default::default(),
             bias: Default::default(),

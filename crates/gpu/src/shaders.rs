@@ -172,7 +172,7 @@ impl ShaderDef {
     }
 
     /// The WGSL text, with the files of `MANYLIGHTS_SHADER_DIR` where it is set.
-    fn source(&self) -> String {
+    pub(crate) fn source(&self) -> String {
         match override_dir() {
             Ok(None) => self.compose(),
             Ok(Some(dir)) => {
@@ -234,8 +234,8 @@ pub const PREPASS: ShaderDef = ShaderDef {
 /// Every shader this crate defines.
 pub const SHADERS: &[ShaderDef] = &[
     PREPASS,
-    crate::msaa_bounds::PREPASS_RANGES,
-    crate::msaa_bounds::BOUNDS,
+    crate::lookup_bounds::PREPASS_RANGES,
+    crate::lookup_bounds::BOUNDS,
     crate::motion::MOTION,
 ];
 

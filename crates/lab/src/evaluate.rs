@@ -4,6 +4,7 @@
 //! image error against the reference and the infinite-range reference; naive forward's metrics
 //! (every light at every pixel); and the temporal stability of a camera path's poses.
 
+use manylights_cull::ListPass as _;
 use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
 use manylights_cull::{CullSettings, Strategy};
 use manylights_gpu::layout::GpuFrame;
@@ -122,7 +123,7 @@ pub(crate) fn evaluate(
                             &c.strategy,
                             settings,
                             lists,
-                            passes + 1,
+                            passes + pass.passes(),
                             runs,
                             &mut pass,
                         )
@@ -159,7 +160,7 @@ pub(crate) fn evaluate(
                         ctx,
                         renderer,
                         gpu_scene,
-                        &o.depth,
+                        (&o.depth, &o.cull_depth),
                         &frame,
                         c.exact_stride,
                         light_count,
@@ -218,7 +219,7 @@ pub(crate) fn naive_metrics(
     ctx: &GpuContext,
     renderer: &Renderer,
     gpu_scene: &GpuScene,
-    depth: &wgpu::Texture,
+    (depth, cull_depth): (&wgpu::Texture, &wgpu::Texture),
     frame: &GpuFrame,
     exact_stride: u32,
     light_count: u64,
@@ -229,7 +230,7 @@ pub(crate) fn naive_metrics(
     let probe = Strategy::tiled_gather(16);
     let lists = renderer
         .culler
-        .run(ctx, gpu_scene, depth, &probe, settings, &mut timer)
+        .run(ctx, gpu_scene, cull_depth, &probe, settings, &mut timer)
         .map_err(|e| other(&e))?;
     let counts = renderer
         .culler

@@ -15,7 +15,7 @@ use manylights_cull::ListPass;
 use manylights_cull::layout::CULL_CONSTS;
 use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
-use manylights_gpu::msaa_bounds::MsaaBounds;
+use manylights_gpu::lookup_bounds::{LookupBounds, bound_samples};
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
@@ -144,7 +144,7 @@ pub struct ShadeOutput {
     /// The depth buffer (its samples are what the exact oracle checks).
     pub depth: wgpu::Texture,
     /// The depth the lists were built from: the depth buffer, or with MSAA forward the bounds
-    /// of every depth a fragment looks its list up at (`manylights_gpu::msaa_bounds`). Culling
+    /// of every depth a fragment looks its list up at (`manylights_gpu::lookup_bounds`). Culling
     /// timed again for this frame runs on it.
     pub cull_depth: wgpu::Texture,
     /// G-buffer bytes (deferred only; 0 otherwise).
@@ -185,11 +185,17 @@ pub struct Renderer {
     /// more than one).
     pub(crate) samples: u32,
     pub(crate) prepass: DepthPrepass,
-    /// MSAA: the prepass keeping depth ranges and the depth culling reads.
-    pub(crate) msaa_bounds: Option<MsaaBounds>,
+    /// Whether the scene has transparent surfaces.
+    pub(crate) transparent: bool,
+    /// MSAA or transparent surfaces: the depth culling reads, where lists are looked up off
+    /// the depth buffer's samples.
+    pub(crate) lookup_bounds: Option<LookupBounds>,
     pub(crate) forward: wgpu::RenderPipeline,
     /// `shade.forward` over z-binning's lists.
     pub(crate) forward_zbin: wgpu::RenderPipeline,
+    /// `shade.forward_transparent` over transparent surfaces, blended (a list a bin, and
+    /// z-binning's); forward's, and deferred's after its lighting.
+    pub(crate) forward_transparent: [wgpu::RenderPipeline; 2],
     pub(crate) naive: wgpu::RenderPipeline,
     /// `shade.naive` over transparent surfaces, blended.
     pub(crate) naive_transparent: wgpu::RenderPipeline,
@@ -242,7 +248,7 @@ impl Renderer {
             &[
                 manylights_gpu::prepass::DEPTH_FORMAT,
                 HDR,
-                manylights_gpu::msaa_bounds::RANGE_FORMAT,
+                manylights_gpu::lookup_bounds::RANGE_FORMAT,
                 GB_NORMAL_DEPTH,
                 GB_MATERIAL,
             ],
@@ -317,6 +323,18 @@ impl Renderer {
         };
         let forward = forward_with("fs_forward");
         let forward_zbin = forward_with("fs_forward_zbin");
+        let forward_transparent =
+            ["fs_forward_transparent", "fs_forward_transparent_zbin"].map(|entry| {
+                raster_msaa(
+                    d,
+                    "shade.forward_transparent",
+                    &fwd,
+                    &[g0, &forward_lists],
+                    Some((entry, &[pipeline::blended_target(HDR)])),
+                    DepthTest::Less,
+                    samples,
+                )
+            });
         let naive = raster_msaa(
             d,
             "shade.naive",
@@ -390,13 +408,22 @@ impl Renderer {
                     .map(|entry| pipeline::compute(d, &def, &def_layout, entry)),
             )
         };
+        let transparent = scene.has_transparent();
+        let lookup_bounds =
+            (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
         Self {
-            culler: Culler::with_samples(ctx, scene, samples),
+            culler: if lookup_bounds.is_some() {
+                Culler::with_bounds(ctx, scene, samples, bound_samples(samples))
+            } else {
+                Culler::with_samples(ctx, scene, samples)
+            },
             samples,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
-            msaa_bounds: (samples > 1).then(|| MsaaBounds::new(ctx, scene, samples)),
+            transparent,
+            lookup_bounds,
             forward,
             forward_zbin,
+            forward_transparent,
             naive,
             naive_transparent,
             gbuffer,
@@ -423,12 +450,17 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
-        if scene.has_transparent() && backend != Backend::NaiveForward {
+        if self.transparent
+            && self.samples > 1
+            && backend != Backend::Forward
+            && backend != Backend::NaiveForward
+        {
             return Err(manylights_gpu::GpuError::Unsupported(format!(
-                "backend {} over transparent surfaces: culling for transparent surfaces is not \
-                 built yet (the reference and naive_forward render them; or leave the scene's \
-                 glass out)",
-                backend.name()
+                "backend {} over transparent surfaces with MSAA ({} samples): not built (its \
+                 forward pass over them would need a multisampled colour target); forward and \
+                 naive_forward render them with MSAA, deferred without",
+                backend.name(),
+                self.samples
             ))
             .into());
         }
@@ -447,9 +479,9 @@ impl Renderer {
         let mut enc = ctx.encoder("shade");
         match backend {
             Backend::Forward | Backend::NaiveForward => {
-                match (&self.msaa_bounds, &targets.bounds) {
-                    (Some(b), Some(t)) => {
-                        b.encode(&mut enc, scene, &targets.depth_view, t, &mut timer)
+                match (&self.lookup_bounds, &targets.bounds) {
+                    (Some(b), Some(t)) if b.has_prepass() && backend == Backend::Forward => {
+                        b.encode_prepass(&mut enc, scene, &targets.depth_view, t, &mut timer)
                     }
                     _ => self
                         .prepass
@@ -478,6 +510,10 @@ impl Renderer {
                     None,
                 );
             }
+        }
+        // The lookup bounds, after the geometry: what culling reads.
+        if let (Some(b), Some(t)) = (&self.lookup_bounds, &targets.bounds) {
+            b.encode_bounds(&mut enc, scene, t, &mut timer);
         }
         let lists = if backend == Backend::NaiveForward {
             let transparent = scene.has_transparent();

@@ -6,7 +6,7 @@
 //! [`crate::Renderer::shade_pass`]), so that a frame's culling and shading are measured as one.
 
 use manylights_cull::{ListForm, ListPass};
-use manylights_gpu::msaa_bounds::BoundsTargets;
+use manylights_gpu::lookup_bounds::BoundsTargets;
 use manylights_gpu::prepass::depth_target_msaa;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
@@ -73,8 +73,17 @@ impl Targets {
             .create_view(&Default::default())
         });
         let depth = depth_target_msaa(ctx, width, height, samples);
-        let bounds = match (&renderer.msaa_bounds, backend) {
-            (Some(b), Backend::Forward) => Some(b.targets(ctx, (width, height), &depth)),
+        // Culling over the lookup bounds: forward with MSAA or transparent surfaces; deferred
+        // with transparent surfaces (its lighting looks up at samples and pixel centres, between
+        // the samples' depths); naive forward only where its culler cannot read the depth
+        // buffer (one sample a pixel, culling over 4: the exact oracle's lists).
+        let uses_bounds = match backend {
+            Backend::Forward => true,
+            Backend::NaiveForward => samples == 1 && renderer.transparent,
+            Backend::Deferred | Backend::DeferredStoredPosition => renderer.transparent,
+        };
+        let bounds = match &renderer.lookup_bounds {
+            Some(b) if uses_bounds => Some(b.targets(ctx, (width, height), &depth)),
             _ => None,
         };
         let gbuffer = deferred.then(|| {
@@ -106,20 +115,16 @@ impl Targets {
             depth,
             gbuffer_bytes,
             gbuffer,
-            msaa_bytes: match (samples > 1, deferred) {
-                (false, _) => 0,
-                // The G-buffer, depth included.
-                (true, true) => gbuffer_bytes,
-                // Depth32Float and Rgba32Float, `samples` each a pixel, and forward's bounds.
-                (true, false) => {
-                    let bounds = if bounds.is_some() {
-                        manylights_gpu::msaa_bounds::BYTES_PER_SAMPLE
-                    } else {
-                        0
-                    };
-                    u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16 + bounds)
-                }
-            },
+            msaa_bytes: bounds.as_ref().map_or(0, |b| b.bytes)
+                + match (samples > 1, deferred) {
+                    (false, _) => 0,
+                    // The G-buffer, depth included.
+                    (true, true) => gbuffer_bytes,
+                    // Depth32Float and Rgba32Float, `samples` each a pixel.
+                    (true, false) => {
+                        u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16)
+                    }
+                },
             bounds,
         }
     }
@@ -161,6 +166,8 @@ pub struct ShadePass<'a> {
     form: ListForm,
     /// Deferred: the G-buffer and the colour target.
     gbuffer: Option<wgpu::BindGroup>,
+    /// Deferred over transparent surfaces: the lists for their forward pass.
+    forward_lists: Option<wgpu::BindGroup>,
 }
 
 impl<'a> ShadePass<'a> {
@@ -193,14 +200,28 @@ impl<'a> ShadePass<'a> {
             lists: None,
             form: ListForm::Bins,
             gbuffer,
+            forward_lists: None,
         }
     }
 }
 
 impl ListPass for ShadePass<'_> {
+    fn passes(&self) -> u32 {
+        // The transparent surfaces' forward pass after the opaque shading.
+        1 + u32::from(self.renderer.transparent)
+    }
+
     fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3], form: ListForm) {
         self.form = form;
         let mut resources = lists.to_vec();
+        if self.gbuffer.is_some() && self.renderer.transparent {
+            self.forward_lists = Some(pipeline::group(
+                &ctx.device,
+                "shade.forward_transparent.lists",
+                &self.renderer.forward_lists,
+                &resources,
+            ));
+        }
         let depth_only;
         let layout = if self.gbuffer.is_some() {
             depth_only = self
@@ -226,21 +247,39 @@ impl ListPass for ShadePass<'_> {
     fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
         let lists = self.lists.as_ref().expect("bound before it is recorded");
         let r = self.renderer;
+        let transparent = r.transparent;
+        debug_assert_eq!(self.passes(), 1 + u32::from(transparent));
+        let zbin = usize::from(self.form == ListForm::ZBin);
         match &self.gbuffer {
-            None => r.raster_pass(
-                enc,
-                timer,
-                "shade.forward",
-                match self.form {
-                    ListForm::Bins | ListForm::Tiles => &r.forward,
-                    ListForm::ZBin => &r.forward_zbin,
-                },
-                self.scene,
-                &[self.targets.color_attachment(true)],
-                &self.targets.depth_view,
-                Loads::Depth,
-                Some(lists),
-            ),
+            None => {
+                r.raster_pass(
+                    enc,
+                    timer,
+                    "shade.forward",
+                    match self.form {
+                        ListForm::Bins | ListForm::Tiles => &r.forward,
+                        ListForm::ZBin => &r.forward_zbin,
+                    },
+                    self.scene,
+                    &[self.targets.color_attachment(!transparent)],
+                    &self.targets.depth_view,
+                    Loads::Depth,
+                    Some(lists),
+                );
+                if transparent {
+                    r.raster_pass(
+                        enc,
+                        timer,
+                        "shade.forward_transparent",
+                        &r.forward_transparent[zbin],
+                        self.scene,
+                        &[self.targets.color_attachment(true)],
+                        &self.targets.depth_view,
+                        Loads::Transparent,
+                        Some(lists),
+                    );
+                }
+            }
             Some(gbuffer) => {
                 let (w, h) = self.targets.size;
                 pipeline::dispatch(
@@ -256,6 +295,21 @@ impl ListPass for ShadePass<'_> {
                     &[&self.scene.bind_group, lists, gbuffer],
                     (w.div_ceil(8), h.div_ceil(8)),
                 );
+                // Deferred cannot shade transparent surfaces: a forward pass over the same
+                // lists does, over the lit image (as engines do).
+                if let Some(forward_lists) = &self.forward_lists {
+                    r.raster_pass(
+                        enc,
+                        timer,
+                        "shade.forward_transparent",
+                        &r.forward_transparent[zbin],
+                        self.scene,
+                        &[(&self.targets.color_view, None)],
+                        &self.targets.depth_view,
+                        Loads::Transparent,
+                        Some(forward_lists),
+                    );
+                }
             }
         }
     }
