@@ -81,7 +81,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     // also checks every visible glass fragment.
     let bounds = gpu_scene.has_transparent().then(|| {
         let b = LookupBounds::new(&ctx, &gpu_scene, samples);
-        let t = b.targets(&ctx, (w, h), &depth);
+        let t = b.targets(&ctx, (w, h), &depth, true);
         (b, t)
     });
     match &bounds {
@@ -96,7 +96,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         ),
     }
     if let Some((b, t)) = &bounds {
-        b.encode_bounds(&mut enc, &gpu_scene, t, &mut timer);
+        b.encode_bounds(&mut enc, &gpu_scene, t, b.has_prepass(), &mut timer);
     }
     ctx.submit_and_wait(enc, "depth prepass")?;
     let (culler, cull_depth) = match &bounds {

@@ -4,15 +4,18 @@
 // which a fragment drawn there is looked up, its other samples the farthest (kept short of the
 // far plane, which means no surface); an uncovered pixel's samples stay at 1.0. Bounds over
 // every sample of a tile or a cluster then hold every depth a forward pass looks a list up at:
-// - the opaque surface's: with MSAA the depth ranges its visible fragments keep
-//   (depth_range.wgsl: a fragment is looked up at its centroid); otherwise its depth;
+// - the opaque surface's: with MSAA forward the depth ranges its visible fragments keep
+//   (depth_range.wgsl, RANGES: a fragment is looked up at its centroid); otherwise its depth
+//   (deferred lighting looks up at its samples and, where one fragment covers them all, at
+//   the pixel centre, between their depths);
 // - with TRANSPARENT surfaces, the nearest and the farthest transparent fragment's (their
 //   depth ranges over their pixels, as depth_range.wgsl's passes keep them): a pixel behind
 //   glass needs lights from the glass to the opaque surface (AMD's TiledLighting11), and a
 //   pixel of glass over the background is covered.
-// DEPTH_SAMPLES and TRANSPARENT are set by the host, and the textures declared multisampled
-// where DEPTH_SAMPLES is more than one.
+// DEPTH_SAMPLES, RANGES and TRANSPARENT are set by the host, and the textures declared
+// multisampled where DEPTH_SAMPLES is more than one.
 const DEPTH_SAMPLES: u32 = 1u;
+const RANGES: bool = false;
 const TRANSPARENT: bool = false;
 
 @group(0) @binding(0) var ranges: texture_2d<f32>;
@@ -36,7 +39,7 @@ fn fs_bounds(@builtin(position) pos: vec4<f32>, @builtin(sample_index) k: u32) -
         let z = textureLoad(depth, p, s);
         if z < 1.0 {
             var r = vec2<f32>(z, z);
-            if DEPTH_SAMPLES > 1u {
+            if RANGES {
                 r = textureLoad(ranges, p, s).xy;
             }
             lo = min(lo, r.x);

@@ -302,7 +302,7 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
     assert!(csv.lines().next().unwrap().ends_with(
         ",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span,gpu_ms_cull_shade,\
                  gpu_ms_cull_shade_span,lights_needed_per_pixel_mean,gpu_ms_light_update,cpu_ms_upload,\
-                 msaa,msaa_target_bytes"
+                 msaa,msaa_target_bytes,transparent"
     ));
 }
 

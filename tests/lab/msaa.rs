@@ -88,7 +88,9 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
     manylights_lab::report::write_report(tmp.path()).unwrap();
     let report = std::fs::read_to_string(tmp.path().join("report.md")).unwrap();
     assert!(
-        report.contains("MSAA 4 over tiled_gather:") && report.contains("Multisampled targets"),
+        report.contains("MSAA 4 without glass, tiled_gather:")
+            && report.contains("One sample without glass, tiled_gather:")
+            && report.contains("Multisampled targets"),
         "{report}"
     );
     // The exact sets are the samples', whatever the strategy: one mean a sample count.

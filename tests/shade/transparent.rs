@@ -1,7 +1,7 @@
 //! Transparent surfaces (glass panes: the atrium's gallery railings, a pane before the pillars'
 //! far wall), blended back to front over the opaque surfaces as the reference does: by forward
-//! (without and with MSAA) and deferred (without) over lists culled over the lookup bounds, with
-//! no false negative at any glass fragment, and by naive forward.
+//! and deferred (without and with MSAA) over lists culled over the lookup bounds, with no false
+//! negative at any glass fragment, and by naive forward.
 
 use manylights_cull::CullSettings;
 use manylights_cull::metrics::from_gpu_counts;
@@ -32,11 +32,11 @@ fn glass_scene(name: &str) -> manylights_scene::Scene {
     s
 }
 
-/// Every strategy, forward (also with 4 samples a pixel) and deferred (one sample), over
-/// glass: the image within forward's (deferred's) tolerance of the reference, and the exact
-/// oracle, which checks every visible transparent fragment as well as the opaque samples,
-/// finds no false negative: culling over the lookup bounds reaches to the nearest glass.
-/// Deferred with MSAA refuses glass, naming why.
+/// Every strategy, forward and deferred, with one and 4 samples a pixel, over glass: the image
+/// within forward's (deferred's) tolerance of the reference, and the exact oracle, which checks
+/// every visible transparent fragment as well as the opaque samples, finds no false negative:
+/// culling over the lookup bounds reaches to the nearest glass. (Deferred with MSAA expands its
+/// lit image into every sample, `shade.deferred_expand`, and blends the glass over it.)
 #[test]
 fn forward_and_deferred_shade_glass_over_exact_lists() {
     let ctx = common::gpu();
@@ -53,19 +53,19 @@ fn forward_and_deferred_shade_glass_over_exact_lists() {
                 .color;
             let renderer = Renderer::with_samples(&ctx, &gpu_scene, samples).unwrap();
             let settings = CullSettings::for_camera(&s.camera);
-            let backends: &[Backend] = if samples == 1 {
-                &[Backend::Forward, Backend::Deferred]
-            } else {
-                &[Backend::Forward]
-            };
-            for &backend in backends {
+            for backend in [Backend::Forward, Backend::Deferred] {
                 for strategy in strategies() {
                     let what = format!("{name} {samples}x {} {}", backend.name(), strategy.name());
                     let out = renderer
                         .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
                         .unwrap_or_else(|e| panic!("{what}: {e}"));
                     let e = compare(&out.color, &reference, 1.0);
-                    assert!(within_tolerance(&e, backend), "{what}: {e:?}");
+                    if backend == Backend::Deferred && samples > 1 {
+                        // Edges lit a sample at a time (tests/shade/msaa.rs).
+                        assert!(e.flip_mean < 0.05, "{what}: {e:?}");
+                    } else {
+                        assert!(within_tolerance(&e, backend), "{what}: {e:?}");
+                    }
                     let t = out.timings.as_ref().unwrap();
                     for pass in [
                         "prepass.transparent_near",
@@ -98,21 +98,6 @@ fn forward_and_deferred_shade_glass_over_exact_lists() {
                         "{what}: {samples_covered} points over {pixels} pixels: no glass fragment counted"
                     );
                 }
-            }
-            if samples > 1 {
-                let e = renderer
-                    .render(
-                        &ctx,
-                        &gpu_scene,
-                        Backend::Deferred,
-                        &strategies()[0],
-                        &settings,
-                        (w, h),
-                    )
-                    .err()
-                    .unwrap_or_else(|| panic!("{name}: deferred rendered glass with MSAA"))
-                    .to_string();
-                assert!(e.contains("transparent surfaces with MSAA"), "{e}");
             }
         }
     }

@@ -54,7 +54,8 @@ pub struct LookupBounds {
     prepass: Option<wgpu::RenderPipeline>,
     /// Transparent surfaces: their nearest and farthest depth.
     transparent: Option<[wgpu::RenderPipeline; 2]>,
-    bounds: wgpu::RenderPipeline,
+    /// `prepass.depth_bounds` over the depth alone, and over the prepass's depth ranges.
+    bounds: [wgpu::RenderPipeline; 2],
     layout: wgpu::BindGroupLayout,
     samples: u32,
 }
@@ -132,56 +133,66 @@ impl LookupBounds {
                 pipeline::entry(3, fragment, pipeline::depth_texture(samples)),
             ],
         });
-        let mut source = BOUNDS.source();
-        if multisampled {
-            source = source
-                .replace("texture_2d<f32>", "texture_multisampled_2d<f32>")
-                .replace("texture_depth_2d", "texture_depth_multisampled_2d")
-                .replace(
-                    "const DEPTH_SAMPLES: u32 = 1u;",
-                    &format!("const DEPTH_SAMPLES: u32 = {samples}u;"),
+        let pipeline_layout = pipeline::layout(d, "prepass.depth_bounds", &[&layout]);
+        // With MSAA, one pass over the forward prepass's depth ranges and one over the depth
+        // alone (deferred's G-buffer keeps no ranges); without, over the depth.
+        let bounds_with = |ranges: bool| {
+            let mut source = BOUNDS.source();
+            if multisampled {
+                source = source
+                    .replace("texture_2d<f32>", "texture_multisampled_2d<f32>")
+                    .replace("texture_depth_2d", "texture_depth_multisampled_2d")
+                    .replace(
+                        "const DEPTH_SAMPLES: u32 = 1u;",
+                        &format!("const DEPTH_SAMPLES: u32 = {samples}u;"),
+                    );
+            }
+            if ranges {
+                source =
+                    source.replace("const RANGES: bool = false;", "const RANGES: bool = true;");
+            }
+            if scene.has_transparent() {
+                source = source.replace(
+                    "const TRANSPARENT: bool = false;",
+                    "const TRANSPARENT: bool = true;",
                 );
-        }
-        if transparent.is_some() {
-            source = source.replace(
-                "const TRANSPARENT: bool = false;",
-                "const TRANSPARENT: bool = true;",
-            );
-        }
-        let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(BOUNDS.name),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-        let bounds = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("prepass.depth_bounds"),
-            layout: Some(&pipeline::layout(d, "prepass.depth_bounds", &[&layout])),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_screen"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: PRIMITIVE,
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Always),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: wgpu::MultisampleState {
-                count: bound_samples(samples),
-                ..Default::default()
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_bounds"),
-                compilation_options: Default::default(),
-                targets: &[],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+            }
+            let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(BOUNDS.name),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("prepass.depth_bounds"),
+                layout: Some(&pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_screen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: PRIMITIVE,
+                depth_stencil: Some(wgpu::DepthStencilState {
+                    format: DEPTH_FORMAT,
+                    depth_write_enabled: Some(true),
+                    depth_compare: Some(wgpu::CompareFunction::Always),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: wgpu::MultisampleState {
+                    count: bound_samples(samples),
+                    ..Default::default()
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_bounds"),
+                    compilation_options: Default::default(),
+                    targets: &[],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let bounds = [bounds_with(false), bounds_with(multisampled)];
         Self {
             prepass,
             transparent,
@@ -196,12 +207,14 @@ impl LookupBounds {
         self.prepass.is_some()
     }
 
-    /// The targets of a `width` x `height` frame whose depth buffer is `depth`.
+    /// The targets of a `width` x `height` frame whose depth buffer is `depth`; with `ranges`
+    /// (forward with MSAA) the prepass's depth ranges.
     pub fn targets(
         &self,
         ctx: &GpuContext,
         (width, height): (u32, u32),
         depth: &wgpu::Texture,
+        ranges: bool,
     ) -> BoundsTargets {
         let d = &ctx.device;
         let samples = self.samples;
@@ -214,7 +227,8 @@ impl LookupBounds {
         };
         // Where a target is not drawn (no MSAA: no ranges; no transparent surfaces: no
         // near and far), a 1 x 1 one (or the depth buffer) stands in for its binding.
-        let (rw, rh) = if samples > 1 { (width, height) } else { (1, 1) };
+        let with_ranges = ranges && self.prepass.is_some();
+        let (rw, rh) = if with_ranges { (width, height) } else { (1, 1) };
         let ranges = view(&pipeline::texture_2d_msaa(
             d,
             "prepass.depth_ranges",
@@ -248,7 +262,7 @@ impl LookupBounds {
         let pixels = u64::from(width) * u64::from(height);
         let bytes = pixels
             * (u64::from(bound_samples) * 4
-                + if samples > 1 {
+                + if with_ranges {
                     u64::from(samples) * 8
                 } else {
                     0
@@ -303,12 +317,14 @@ impl LookupBounds {
     }
 
     /// After the geometry pass: the transparent surfaces' nearest and farthest depth, where the
-    /// scene has some, then `prepass.depth_bounds`.
+    /// scene has some, then `prepass.depth_bounds`, over the depth ranges of
+    /// [`LookupBounds::encode_prepass`] where it ran (`ranges`).
     pub fn encode_bounds(
         &self,
         enc: &mut wgpu::CommandEncoder,
         scene: &GpuScene,
         targets: &BoundsTargets,
+        ranges: bool,
         timer: &mut GpuTimer,
     ) {
         if let Some([near, far]) = &self.transparent {
@@ -336,7 +352,7 @@ impl LookupBounds {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.bounds);
+        pass.set_pipeline(&self.bounds[usize::from(ranges && self.prepass.is_some())]);
         pass.set_bind_group(0, &targets.group, &[]);
         pass.draw(0..3, 0..1);
     }

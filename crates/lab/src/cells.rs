@@ -254,7 +254,7 @@ impl Experiment {
         }
         axis!(s.scene, |c: &mut Config, v: SceneSpec| {
             c.scene = v;
-            format!("scene={}", c.scene.name())
+            format!("scene={}", c.scene.label())
         });
         axis!(s.lights, |c: &mut Config, v: LightSpec| {
             c.lights = v;

@@ -50,6 +50,22 @@ impl SceneSpec {
         }
     }
 
+    /// Its name in cell names: the short name, and `+glass` where a procedural scene has its
+    /// glass on.
+    pub fn label(&self) -> String {
+        let glass = match self {
+            Self::Atrium(p) => p.glass,
+            Self::Pillars(p) => p.glass,
+            Self::Cis5650(p) => p.glass,
+            _ => false,
+        };
+        if glass {
+            format!("{}+glass", self.name())
+        } else {
+            self.name()
+        }
+    }
+
     /// The scene a command line names: a procedural scene's name (its default parameters) or
     /// a glTF file's path.
     pub fn from_name(name: &str) -> Self {

@@ -94,60 +94,81 @@ fn moving_lights_summary(by_lights: &BTreeMap<u64, Vec<&Row>>) -> Vec<String> {
     out
 }
 
-/// MSAA, where cells ran at several sample counts: for each strategy and sample count, forward
-/// against deferred (the frame, what it is spent on, the memory of the G-buffer and the
-/// multisampled targets, the error against the reference at that count), and what going from
-/// one sample to several cost each.
+/// MSAA and glass, where cells ran at several sample counts or with transparent surfaces: for
+/// each (glass, strategy, sample count), forward against deferred (the frame, what it is spent
+/// on, the memory of the multisampled targets, the error against the reference at that count),
+/// and what going from one sample to several cost each.
 fn msaa_summary(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
-    if !rows.iter().any(|r| r.msaa > 1) {
+    if !rows.iter().any(|r| r.msaa > 1 || r.transparent) {
         return out;
     }
-    let find = |backend: &str, strategy: &str, n: u32| {
-        rows.iter()
-            .find(|r| r.backend == backend && r.strategy == strategy && r.msaa == n)
+    let find = |backend: &str, strategy: &str, n: u32, glass: bool| {
+        rows.iter().find(|r| {
+            r.backend == backend && r.strategy == strategy && r.msaa == n && r.transparent == glass
+        })
     };
     let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
     let mut strategies: Vec<&str> = rows.iter().map(|r| r.strategy.as_str()).collect();
     strategies.sort_unstable();
     strategies.dedup();
-    let mut counts: Vec<u32> = rows.iter().map(|r| r.msaa).filter(|&n| n > 1).collect();
+    let mut counts: Vec<u32> = rows.iter().map(|r| r.msaa).collect();
     counts.sort_unstable();
     counts.dedup();
-    for s in strategies {
-        for &n in &counts {
-            let (Some(f), Some(d)) = (find("forward", s, n), find("deferred", s, n)) else {
-                continue;
-            };
-            let (Some(ft), Some(dt)) = (f.gpu_ms_total, d.gpu_ms_total) else {
-                continue;
-            };
-            let scale = |b: &str, t: f64| {
-                find(b, s, 1)
-                    .and_then(|r| r.gpu_ms_total)
-                    .map_or(String::new(), |t1| {
-                        format!(", {:.1}x its time at one sample", t / t1)
-                    })
-            };
-            out.push(format!(
-                "MSAA {n} over {s}: {} is faster, {:.2} ms a frame for forward (geometry, with the lookup bounds, {} ms; shading {} ms{}) against {:.2} ms for deferred (G-buffer {} ms, lighting {} ms{}). Multisampled targets: forward {:.0} MiB (depth, colour, lookup bounds), deferred {:.0} MiB (the G-buffer); lists {:.0} and {:.0} KiB. Against the reference at {n} samples: forward PSNR {} dB, deferred mean FLIP {} (deferred lights an edge's samples apart, the reference each fragment once).",
-                if ft <= dt { "forward" } else { "deferred" },
-                ft,
-                fmt_opt(f.gpu_ms_prepass, 2),
-                fmt_opt(f.gpu_ms_shade, 2),
-                scale("forward", ft),
-                dt,
-                fmt_opt(d.gpu_ms_prepass, 2),
-                fmt_opt(d.gpu_ms_shade, 2),
-                scale("deferred", dt),
-                mib(f.msaa_target_bytes),
-                mib(d.gbuffer_bytes),
-                f.list_bytes as f64 / 1024.0,
-                d.list_bytes as f64 / 1024.0,
-                fmt_opt(f.psnr_db, 1),
-                fmt_opt(d.flip_mean, 4),
-            ));
+    for glass in [false, true] {
+        for s in &strategies {
+            for &n in &counts {
+                let (Some(f), Some(d)) =
+                    (find("forward", s, n, glass), find("deferred", s, n, glass))
+                else {
+                    continue;
+                };
+                let (Some(ft), Some(dt)) = (f.gpu_ms_total, d.gpu_ms_total) else {
+                    continue;
+                };
+                let scale = |b: &str, t: f64| {
+                    (n > 1)
+                        .then(|| find(b, s, 1, glass).and_then(|r| r.gpu_ms_total))
+                        .flatten()
+                        .map_or(String::new(), |t1| {
+                            format!(", {:.1}x its time at one sample", t / t1)
+                        })
+                };
+                out.push(format!(
+                    "{} {}, {s}: {} is faster, {:.2} ms a frame for forward (geometry and bounds {} ms, shading {} ms{}) against {:.2} ms for deferred (G-buffer and bounds {} ms, lighting{} {} ms{}). Multisampled targets: forward {:.0} MiB, deferred {:.0} MiB (its G-buffer {:.0} MiB); lists {:.0} and {:.0} KiB. Against the reference: forward PSNR {} dB, deferred mean FLIP {}{}.",
+                    if n > 1 { format!("MSAA {n}") } else { "One sample".to_owned() },
+                    if glass { "with glass" } else { "without glass" },
+                    if ft <= dt { "forward" } else { "deferred" },
+                    ft,
+                    fmt_opt(f.gpu_ms_prepass, 2),
+                    fmt_opt(f.gpu_ms_shade, 2),
+                    scale("forward", ft),
+                    dt,
+                    fmt_opt(d.gpu_ms_prepass, 2),
+                    if glass { " and its forward pass over the glass" } else { "" },
+                    fmt_opt(d.gpu_ms_shade, 2),
+                    scale("deferred", dt),
+                    mib(f.msaa_target_bytes),
+                    mib(d.msaa_target_bytes.max(d.gbuffer_bytes)),
+                    mib(d.gbuffer_bytes),
+                    f.list_bytes as f64 / 1024.0,
+                    d.list_bytes as f64 / 1024.0,
+                    fmt_opt(f.psnr_db, 1),
+                    fmt_opt(d.flip_mean, 4),
+                    if n > 1 {
+                        " (deferred lights an edge's samples apart, the reference each fragment once)"
+                    } else {
+                        ""
+                    },
+                ));
+            }
         }
+    }
+    if rows
+        .iter()
+        .any(|r| r.transparent && r.backend == "deferred")
+    {
+        out.push("Deferred cannot shade transparent surfaces: it shades them with a forward pass over the same lists after its lighting (`shade.forward_transparent`), as engines do.".into());
     }
     out
 }

@@ -171,6 +171,10 @@ pub struct Row {
     /// 0 without MSAA.
     #[serde(default)]
     pub msaa_target_bytes: u64,
+    /// Whether the scene has transparent surfaces (glass): its list metrics then also count
+    /// every visible transparent fragment, and culling reaches to the nearest glass.
+    #[serde(default)]
+    pub transparent: bool,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -274,6 +278,7 @@ pub const COLUMNS: &[&str] = &[
     "cpu_ms_upload",
     "msaa",
     "msaa_target_bytes",
+    "transparent",
 ];
 
 fn one() -> u32 {

@@ -453,6 +453,7 @@ fn run_cell(
         list_bytes,
         gbuffer_bytes,
         msaa: c.msaa,
+        transparent: gpu_scene.has_transparent(),
         msaa_target_bytes: first.msaa_target_bytes,
         psnr_db: psnr,
         flip_mean: flip,

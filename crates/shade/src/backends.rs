@@ -90,6 +90,14 @@ pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
     ],
 };
 
+/// `shade.deferred_expand`: deferred's lit image into every sample of a multisampled target,
+/// before the glass over it is blended with MSAA.
+pub const EXPAND: ShaderDef = ShaderDef {
+    name: "shade.deferred_expand",
+    consts: &[],
+    files: &[shader_file!("render/expand.wgsl")],
+};
+
 pub(crate) const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub(crate) const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub(crate) const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
@@ -197,6 +205,9 @@ pub struct Renderer {
     /// z-binning's); forward's, and deferred's after its lighting.
     pub(crate) forward_transparent: [wgpu::RenderPipeline; 2],
     pub(crate) naive: wgpu::RenderPipeline,
+    /// Deferred with MSAA over transparent surfaces: its lit image into every sample, and the
+    /// layout of that pass's one texture.
+    pub(crate) expand: Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>,
     /// `shade.naive` over transparent surfaces, blended.
     pub(crate) naive_transparent: wgpu::RenderPipeline,
     pub(crate) gbuffer: wgpu::RenderPipeline,
@@ -409,6 +420,42 @@ impl Renderer {
             )
         };
         let transparent = scene.has_transparent();
+        let expand = (samples > 1 && transparent).then(|| {
+            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("shade.deferred_expand"),
+                entries: &[pipeline::entry(
+                    0,
+                    wgpu::ShaderStages::FRAGMENT,
+                    texture(wgpu::TextureSampleType::Float { filterable: false }, 1),
+                )],
+            });
+            let module = EXPAND.create(d);
+            let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("shade.deferred_expand"),
+                layout: Some(&pipeline::layout(d, "shade.deferred_expand", &[&layout])),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_screen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: manylights_gpu::prepass::PRIMITIVE,
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState {
+                    count: samples,
+                    ..Default::default()
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_expand"),
+                    compilation_options: Default::default(),
+                    targets: &[target(HDR)],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            (pipeline, layout)
+        });
         let lookup_bounds =
             (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
         Self {
@@ -421,6 +468,7 @@ impl Renderer {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
             lookup_bounds,
+            expand,
             forward,
             forward_zbin,
             forward_transparent,
@@ -450,20 +498,6 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
-        if self.transparent
-            && self.samples > 1
-            && backend != Backend::Forward
-            && backend != Backend::NaiveForward
-        {
-            return Err(manylights_gpu::GpuError::Unsupported(format!(
-                "backend {} over transparent surfaces with MSAA ({} samples): not built (its \
-                 forward pass over them would need a multisampled colour target); forward and \
-                 naive_forward render them with MSAA, deferred without",
-                backend.name(),
-                self.samples
-            ))
-            .into());
-        }
         if self.samples > 1 && backend == Backend::DeferredStoredPosition {
             return Err(manylights_gpu::GpuError::Unsupported(format!(
                 "backend {} with MSAA ({} samples): not built; MSAA renders with forward, \
@@ -513,7 +547,9 @@ impl Renderer {
         }
         // The lookup bounds, after the geometry: what culling reads.
         if let (Some(b), Some(t)) = (&self.lookup_bounds, &targets.bounds) {
-            b.encode_bounds(&mut enc, scene, t, &mut timer);
+            // Forward's prepass kept the depth ranges (with MSAA); deferred's G-buffer did not.
+            let ranges = backend == Backend::Forward && b.has_prepass();
+            b.encode_bounds(&mut enc, scene, t, ranges, &mut timer);
         }
         let lists = if backend == Backend::NaiveForward {
             let transparent = scene.has_transparent();

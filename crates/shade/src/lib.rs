@@ -24,4 +24,5 @@ pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     backends::GBUFFER,
     backends::DEFERRED,
     backends::DEFERRED_MSAA,
+    backends::EXPAND,
 ];

@@ -56,12 +56,14 @@ impl Targets {
             HDR,
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
         );
         let stored = backend == Backend::DeferredStoredPosition;
         let deferred = stored || backend == Backend::Deferred;
-        // Deferred lighting writes the image itself: no multisampled colour target.
-        let color_msaa = (samples > 1 && !deferred).then(|| {
+        // Deferred lighting writes the image itself: a multisampled colour target only for the
+        // glass blended over it with MSAA.
+        let color_msaa = (samples > 1 && (!deferred || renderer.transparent)).then(|| {
             pipeline::texture_2d_msaa(
                 d,
                 "shade.color_msaa",
@@ -83,7 +85,9 @@ impl Targets {
             Backend::Deferred | Backend::DeferredStoredPosition => renderer.transparent,
         };
         let bounds = match &renderer.lookup_bounds {
-            Some(b) if uses_bounds => Some(b.targets(ctx, (width, height), &depth)),
+            Some(b) if uses_bounds => {
+                Some(b.targets(ctx, (width, height), &depth, backend == Backend::Forward))
+            }
             _ => None,
         };
         let gbuffer = deferred.then(|| {
@@ -118,8 +122,15 @@ impl Targets {
             msaa_bytes: bounds.as_ref().map_or(0, |b| b.bytes)
                 + match (samples > 1, deferred) {
                     (false, _) => 0,
-                    // The G-buffer, depth included.
-                    (true, true) => gbuffer_bytes,
+                    // The G-buffer, depth included, and for glass the colour it is blended in.
+                    (true, true) => {
+                        gbuffer_bytes
+                            + if renderer.transparent {
+                                u64::from(width) * u64::from(height) * u64::from(samples) * 16
+                            } else {
+                                0
+                            }
+                    }
                     // Depth32Float and Rgba32Float, `samples` each a pixel.
                     (true, false) => {
                         u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16)
@@ -168,6 +179,8 @@ pub struct ShadePass<'a> {
     gbuffer: Option<wgpu::BindGroup>,
     /// Deferred over transparent surfaces: the lists for their forward pass.
     forward_lists: Option<wgpu::BindGroup>,
+    /// Deferred with MSAA over transparent surfaces: the lit image for `shade.deferred_expand`.
+    expand: Option<wgpu::BindGroup>,
 }
 
 impl<'a> ShadePass<'a> {
@@ -199,6 +212,15 @@ impl<'a> ShadePass<'a> {
             targets,
             lists: None,
             form: ListForm::Bins,
+            expand: match (&renderer.expand, &targets.gbuffer) {
+                (Some((_, layout)), Some(_)) => Some(pipeline::group(
+                    &ctx.device,
+                    "shade.deferred_expand",
+                    layout,
+                    &[wgpu::BindingResource::TextureView(&targets.color_view)],
+                )),
+                _ => None,
+            },
             gbuffer,
             forward_lists: None,
         }
@@ -207,8 +229,9 @@ impl<'a> ShadePass<'a> {
 
 impl ListPass for ShadePass<'_> {
     fn passes(&self) -> u32 {
-        // The transparent surfaces' forward pass after the opaque shading.
-        1 + u32::from(self.renderer.transparent)
+        // The transparent surfaces' forward pass after the opaque shading (and, for deferred
+        // with MSAA, the lit image expanded into every sample before it).
+        1 + u32::from(self.renderer.transparent) + u32::from(self.expand.is_some())
     }
 
     fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3], form: ListForm) {
@@ -248,7 +271,7 @@ impl ListPass for ShadePass<'_> {
         let lists = self.lists.as_ref().expect("bound before it is recorded");
         let r = self.renderer;
         let transparent = r.transparent;
-        debug_assert_eq!(self.passes(), 1 + u32::from(transparent));
+
         let zbin = usize::from(self.form == ListForm::ZBin);
         match &self.gbuffer {
             None => {
@@ -298,13 +321,38 @@ impl ListPass for ShadePass<'_> {
                 // Deferred cannot shade transparent surfaces: a forward pass over the same
                 // lists does, over the lit image (as engines do).
                 if let Some(forward_lists) = &self.forward_lists {
+                    // With MSAA, the lit image into every sample first, the glass blended
+                    // sample by sample and resolved back into it.
+                    if let (Some(group), Some((expand, _)), Some(msaa)) =
+                        (&self.expand, &r.expand, &self.targets.color_msaa)
+                    {
+                        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                            label: Some("shade.deferred_expand"),
+                            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                                view: msaa,
+                                depth_slice: None,
+                                resolve_target: None,
+                                ops: wgpu::Operations {
+                                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                                    store: wgpu::StoreOp::Store,
+                                },
+                            })],
+                            depth_stencil_attachment: None,
+                            timestamp_writes: timer.render_pass("shade.deferred_expand"),
+                            occlusion_query_set: None,
+                            multiview_mask: None,
+                        });
+                        pass.set_pipeline(expand);
+                        pass.set_bind_group(0, group, &[]);
+                        pass.draw(0..3, 0..1);
+                    }
                     r.raster_pass(
                         enc,
                         timer,
                         "shade.forward_transparent",
                         &r.forward_transparent[zbin],
                         self.scene,
-                        &[(&self.targets.color_view, None)],
+                        &[self.targets.color_attachment(true)],
                         &self.targets.depth_view,
                         Loads::Transparent,
                         Some(forward_lists),
