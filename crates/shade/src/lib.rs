@@ -8,6 +8,7 @@
 
 pub mod accuracy;
 pub mod backends;
+pub mod pipelines;
 pub mod image_out;
 pub mod reference;
 pub mod shade_pass;
@@ -20,9 +21,9 @@ pub use shade_pass::ShadePass;
 /// Every shader this crate defines (validated by naga in `tests/shaders.rs`).
 pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     reference::SHADER,
-    backends::FORWARD,
-    backends::GBUFFER,
-    backends::DEFERRED,
-    backends::DEFERRED_MSAA,
-    backends::EXPAND,
+    pipelines::FORWARD,
+    pipelines::GBUFFER,
+    pipelines::DEFERRED,
+    pipelines::DEFERRED_MSAA,
+    pipelines::EXPAND,
 ];

@@ -227,6 +227,30 @@ impl<'a> ShadePass<'a> {
     }
 }
 
+impl ShadePass<'_> {
+    /// `shade.forward_transparent`: the glass over `lists`, blended into the colour target
+    /// (resolved from its samples with MSAA).
+    fn transparent_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        lists: &wgpu::BindGroup,
+    ) {
+        let r = self.renderer;
+        r.raster_pass(
+            enc,
+            timer,
+            "shade.forward_transparent",
+            &r.forward_transparent[usize::from(self.form == ListForm::ZBin)],
+            self.scene,
+            &[self.targets.color_attachment(true)],
+            &self.targets.depth_view,
+            Loads::Transparent,
+            Some(lists),
+        );
+    }
+}
+
 impl ListPass for ShadePass<'_> {
     fn passes(&self) -> u32 {
         // The transparent surfaces' forward pass after the opaque shading (and, for deferred
@@ -272,7 +296,6 @@ impl ListPass for ShadePass<'_> {
         let r = self.renderer;
         let transparent = r.transparent;
 
-        let zbin = usize::from(self.form == ListForm::ZBin);
         match &self.gbuffer {
             None => {
                 r.raster_pass(
@@ -290,17 +313,7 @@ impl ListPass for ShadePass<'_> {
                     Some(lists),
                 );
                 if transparent {
-                    r.raster_pass(
-                        enc,
-                        timer,
-                        "shade.forward_transparent",
-                        &r.forward_transparent[zbin],
-                        self.scene,
-                        &[self.targets.color_attachment(true)],
-                        &self.targets.depth_view,
-                        Loads::Transparent,
-                        Some(lists),
-                    );
+                    self.transparent_pass(enc, timer, lists);
                 }
             }
             Some(gbuffer) => {
@@ -346,17 +359,7 @@ impl ListPass for ShadePass<'_> {
                         pass.set_bind_group(0, group, &[]);
                         pass.draw(0..3, 0..1);
                     }
-                    r.raster_pass(
-                        enc,
-                        timer,
-                        "shade.forward_transparent",
-                        &r.forward_transparent[zbin],
-                        self.scene,
-                        &[self.targets.color_attachment(true)],
-                        &self.targets.depth_view,
-                        Loads::Transparent,
-                        Some(forward_lists),
-                    );
+                    self.transparent_pass(enc, timer, forward_lists);
                 }
             }
         }

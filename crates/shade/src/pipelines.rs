@@ -1,0 +1,316 @@
+//! The pipelines of every backend (`Renderer::build`) and the shaders they are made from.
+
+use manylights_cull::Culler;
+use manylights_cull::layout::CULL_CONSTS;
+use manylights_cull::shaders::{GEOMETRY, LOOKUP};
+use manylights_gpu::lookup_bounds::{LookupBounds, bound_samples};
+use manylights_gpu::pipeline;
+use manylights_gpu::prepass::DepthPrepass;
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
+use manylights_gpu::{GpuContext, GpuScene, shader_file};
+
+use crate::backends::{GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HDR, Renderer};
+
+/// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
+pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
+/// `shade.forward` and `shade.naive`.
+pub const FORWARD: ShaderDef = ShaderDef {
+    name: "shade.forward",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        VERTEX,
+        GEOMETRY,
+        LOOKUP,
+        LIST_SHADING,
+        shader_file!("render/forward.wgsl"),
+    ],
+};
+/// `shade.gbuffer`.
+pub const GBUFFER: ShaderDef = ShaderDef {
+    name: "shade.gbuffer",
+    consts: &[],
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        VERTEX,
+        shader_file!("render/gbuffer.wgsl"),
+    ],
+};
+/// `shade.deferred`.
+pub const DEFERRED: ShaderDef = ShaderDef {
+    name: "shade.deferred",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        GEOMETRY,
+        LOOKUP,
+        LIST_SHADING,
+        shader_file!("render/deferred.wgsl"),
+    ],
+};
+
+/// `shade.deferred` over a multisampled G-buffer (MSAA): a pixel at once, or its samples apart
+/// at edges.
+pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
+    name: "shade.deferred",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        GEOMETRY,
+        LOOKUP,
+        LIST_SHADING,
+        shader_file!("render/deferred_msaa.wgsl"),
+    ],
+};
+
+/// `shade.deferred_expand`: deferred's lit image into every sample of a multisampled target,
+/// before the glass over it is blended with MSAA.
+pub const EXPAND: ShaderDef = ShaderDef {
+    name: "shade.deferred_expand",
+    consts: &[],
+    files: &[shader_file!("render/expand.wgsl")],
+};
+
+fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
+    vec![
+        pipeline::entry(0, visibility, pipeline::UNIFORM),
+        pipeline::entry(1, visibility, pipeline::storage(true)),
+        pipeline::entry(2, visibility, pipeline::storage(true)),
+    ]
+}
+
+fn texture(sample_type: wgpu::TextureSampleType, samples: u32) -> wgpu::BindingType {
+    wgpu::BindingType::Texture {
+        sample_type,
+        view_dimension: wgpu::TextureViewDimension::D2,
+        multisampled: samples > 1,
+    }
+}
+
+impl Renderer {
+    pub(crate) fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
+        let d = &ctx.device;
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let compute = wgpu::ShaderStages::COMPUTE;
+        let forward_lists = layout(
+            "shade.forward.lists",
+            &lists_entries(wgpu::ShaderStages::FRAGMENT),
+        );
+        let mut entries = lists_entries(compute);
+        entries.push(pipeline::entry(
+            3,
+            compute,
+            pipeline::depth_texture(samples),
+        ));
+        let deferred_lists = layout("shade.deferred.lists", &entries);
+        let unfiltered = texture(wgpu::TextureSampleType::Float { filterable: false }, 1);
+        let deferred_gbuffer = layout(
+            "shade.deferred.gbuffer",
+            &[
+                pipeline::entry(
+                    0,
+                    compute,
+                    texture(
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        samples,
+                    ),
+                ),
+                pipeline::entry(1, compute, texture(wgpu::TextureSampleType::Uint, samples)),
+                pipeline::entry(
+                    2,
+                    compute,
+                    wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: HDR,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                ),
+                pipeline::entry(3, compute, unfiltered),
+            ],
+        );
+        use pipeline::{DepthTest, raster, raster_msaa, target};
+        let fwd = FORWARD.create_samples(d, samples);
+        let gb = GBUFFER.create(d);
+        let g0 = &scene.layout;
+        let forward_with = |entry| {
+            raster_msaa(
+                d,
+                "shade.forward",
+                &fwd,
+                &[g0, &forward_lists],
+                Some((entry, &[target(HDR)])),
+                DepthTest::Equal,
+                samples,
+            )
+        };
+        let forward = forward_with("fs_forward");
+        let forward_zbin = forward_with("fs_forward_zbin");
+        let forward_transparent =
+            ["fs_forward_transparent", "fs_forward_transparent_zbin"].map(|entry| {
+                raster_msaa(
+                    d,
+                    "shade.forward_transparent",
+                    &fwd,
+                    &[g0, &forward_lists],
+                    Some((entry, &[pipeline::blended_target(HDR)])),
+                    DepthTest::Less,
+                    samples,
+                )
+            });
+        let naive = raster_msaa(
+            d,
+            "shade.naive",
+            &fwd,
+            &[g0],
+            Some(("fs_naive", &[target(HDR)])),
+            DepthTest::Equal,
+            samples,
+        );
+        let naive_transparent = raster_msaa(
+            d,
+            "shade.naive_transparent",
+            &fwd,
+            &[g0],
+            Some(("fs_naive_transparent", &[pipeline::blended_target(HDR)])),
+            DepthTest::Less,
+            samples,
+        );
+        let gbuffer = raster_msaa(
+            d,
+            "shade.gbuffer",
+            &gb,
+            &[g0],
+            Some((
+                "fs_gbuffer",
+                &[target(GB_NORMAL_DEPTH), target(GB_MATERIAL)],
+            )),
+            DepthTest::WriteLess,
+            samples,
+        );
+        let gbuffer_stored = raster(
+            d,
+            "shade.gbuffer",
+            &gb,
+            &[g0],
+            Some((
+                "fs_gbuffer_stored",
+                &[
+                    target(GB_NORMAL_DEPTH),
+                    target(GB_MATERIAL),
+                    target(GB_POSITION),
+                ],
+            )),
+            DepthTest::WriteLess,
+        );
+        let def_layout = pipeline::layout(
+            d,
+            "shade.deferred",
+            &[g0, &deferred_lists, &deferred_gbuffer],
+        );
+        // With MSAA, one pass a form of lists (a list a bin or a tile, and z-binning's), the
+        // position rebuilt; the stored position takes no MSAA (`render` says so).
+        let (deferred, deferred_stored, deferred_zbin, deferred_tiles) = if samples > 1 {
+            let def = DEFERRED_MSAA.create_samples(d, samples);
+            let bins = pipeline::compute(d, &def, &def_layout, "deferred_shade_msaa");
+            let zbin = pipeline::compute(d, &def, &def_layout, "deferred_shade_msaa_zbin");
+            (
+                bins.clone(),
+                bins.clone(),
+                [zbin.clone(), zbin],
+                [bins.clone(), bins],
+            )
+        } else {
+            let def = DEFERRED.create(d);
+            (
+                pipeline::compute(d, &def, &def_layout, "deferred_shade"),
+                pipeline::compute(d, &def, &def_layout, "deferred_shade_stored"),
+                ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
+                    .map(|entry| pipeline::compute(d, &def, &def_layout, entry)),
+                ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
+                    .map(|entry| pipeline::compute(d, &def, &def_layout, entry)),
+            )
+        };
+        let transparent = scene.has_transparent();
+        let expand = (samples > 1 && transparent).then(|| {
+            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("shade.deferred_expand"),
+                entries: &[pipeline::entry(
+                    0,
+                    wgpu::ShaderStages::FRAGMENT,
+                    texture(wgpu::TextureSampleType::Float { filterable: false }, 1),
+                )],
+            });
+            let module = EXPAND.create(d);
+            let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some("shade.deferred_expand"),
+                layout: Some(&pipeline::layout(d, "shade.deferred_expand", &[&layout])),
+                vertex: wgpu::VertexState {
+                    module: &module,
+                    entry_point: Some("vs_screen"),
+                    compilation_options: Default::default(),
+                    buffers: &[],
+                },
+                primitive: manylights_gpu::prepass::PRIMITIVE,
+                depth_stencil: None,
+                multisample: wgpu::MultisampleState {
+                    count: samples,
+                    ..Default::default()
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module: &module,
+                    entry_point: Some("fs_expand"),
+                    compilation_options: Default::default(),
+                    targets: &[target(HDR)],
+                }),
+                multiview_mask: None,
+                cache: None,
+            });
+            (pipeline, layout)
+        });
+        let lookup_bounds =
+            (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
+        Self {
+            culler: if lookup_bounds.is_some() {
+                Culler::with_bounds(ctx, scene, samples, bound_samples(samples))
+            } else {
+                Culler::with_samples(ctx, scene, samples)
+            },
+            samples,
+            prepass: DepthPrepass::with_samples(ctx, scene, samples),
+            transparent,
+            lookup_bounds,
+            expand,
+            forward,
+            forward_zbin,
+            forward_transparent,
+            naive,
+            naive_transparent,
+            gbuffer,
+            gbuffer_stored,
+            deferred,
+            deferred_stored,
+            deferred_zbin,
+            deferred_tiles,
+            forward_lists,
+            deferred_lists,
+            deferred_gbuffer,
+        }
+    }
+}
