@@ -63,6 +63,11 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let scene = a.build()?;
     let ctx = a.gpu()?;
     let samples = args.msaa;
+    if a.glass && args.export.is_some() {
+        bail!(
+            "--export with --glass: exports hold one depth a pixel, not glass; export without --glass"
+        );
+    }
     ctx.check_msaa(samples)
         .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
     if samples > 1 && args.export.is_some() {

@@ -64,6 +64,11 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         );
     }
     let samples = args.msaa;
+    if args.scene.glass && args.export.is_some() {
+        bail!(
+            "--export with --glass: exports hold one depth a pixel, not glass; export without --glass"
+        );
+    }
     if samples > 1 && args.export.is_some() {
         bail!(
             "--export with --msaa {samples}: exports hold one depth a pixel; export without --msaa"

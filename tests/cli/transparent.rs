@@ -56,6 +56,19 @@ fn glass_is_culled_exactly_and_rendered_as_the_reference_does() {
         assert!(psnr > 80.0, "{backend}: {line}");
     }
     rejects(
+        &[
+            "--scene",
+            "pillars",
+            "--glass",
+            "--backend",
+            "forward",
+            "--export",
+            "x",
+        ],
+        1,
+        &["--export with --glass"],
+    );
+    rejects(
         &["--scene", "city", "--glass"],
         1,
         &["--glass", "city", "atrium, pillars and cis5650"],

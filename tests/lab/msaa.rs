@@ -129,6 +129,13 @@ fn msaa_values_an_experiment_cannot_have_are_errors() {
             "{extra}: {e}"
         );
     }
+    // Exports hold one depth a pixel: not glass.
+    let src =
+        "Experiment(name: \"bad\", config: Config(scene: Pillars(glass: true), export: true))";
+    let e = Experiment::parse(src, Path::new("bad.ron"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("pillars+glass") && e.contains("export"), "{e}");
     // A swept count is checked too.
     let src = "Experiment(name: \"bad\", config: Config(scene: Pillars()), sweep: (msaa: [1, 5]))";
     let e = Experiment::parse(src, Path::new("bad.ron"))

@@ -463,6 +463,16 @@ impl Config {
                 ),
             ));
         }
+        if self.export && self.scene.label().ends_with("+glass") {
+            return Err((
+                "export",
+                format!(
+                    "export: true with scene {}: exports hold one depth a pixel, not glass \
+                     (leave glass: false to export)",
+                    self.scene.label()
+                ),
+            ));
+        }
         if self.msaa > 1 && self.export {
             return Err((
                 "msaa",

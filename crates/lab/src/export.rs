@@ -32,6 +32,14 @@ pub fn export_run(
     dir: &Path,
 ) -> Result<Vec<PathBuf>, LabError> {
     let gpu = |e: manylights_gpu::GpuError| LabError::Other(format!("export: {e}"));
+    if scene.has_transparent() {
+        // The arrays are a pixel's opaque surface; glass fragments lie elsewhere.
+        return Err(LabError::Other(
+            "export: the scene has transparent surfaces (glass), which the arrays (one depth \
+             a pixel) cannot hold: export a scene without glass"
+                .into(),
+        ));
+    }
     let (w, h) = (depth.width(), depth.height());
     let depth_values: Vec<f32> = bytemuck::pod_collect_to_vec(
         &readback::read_texture(ctx, depth, wgpu::TextureAspect::DepthOnly).map_err(gpu)?,

@@ -8,8 +8,8 @@
 
 pub mod accuracy;
 pub mod backends;
-pub mod pipelines;
 pub mod image_out;
+pub mod pipelines;
 pub mod reference;
 pub mod shade_pass;
 
