@@ -23,12 +23,6 @@ const TRANSPARENT: bool = false;
 @group(0) @binding(2) var near: texture_depth_2d;
 @group(0) @binding(3) var far: texture_depth_2d;
 
-@vertex
-fn vs_screen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 @fragment
 fn fs_bounds(@builtin(position) pos: vec4<f32>, @builtin(sample_index) k: u32) -> @builtin(frag_depth) f32 {
     let p = vec2<u32>(pos.xy);

@@ -5,12 +5,6 @@
 // edge, its opaque samples are blended as their average (the reference blends each its own).
 @group(0) @binding(0) var lit: texture_2d<f32>;
 
-@vertex
-fn vs_screen(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {
-    let uv = vec2<f32>(f32((i << 1u) & 2u), f32(i & 2u));
-    return vec4<f32>(uv * 2.0 - 1.0, 0.0, 1.0);
-}
-
 @fragment
 fn fs_expand(@builtin(position) pos: vec4<f32>) -> @location(0) vec4<f32> {
     return textureLoad(lit, vec2<u32>(pos.xy), 0);

@@ -17,6 +17,19 @@ pub(crate) fn manylights(args: &[&str]) -> Output {
         .expect("run manylights")
 }
 
+/// The PSNR of `render --compare`'s line against the reference, from its output.
+pub(crate) fn psnr_vs_reference(stdout: &str) -> f64 {
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("vs reference "))
+        .unwrap_or_else(|| panic!("no comparison with the reference in:\n{stdout}"));
+    line.split("PSNR ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no PSNR in {line}"))
+}
+
 /// Runs `render` with `extra` options into a fresh directory and expects failure with `code`
 /// and every string of `expect` in stderr, and no output directory.
 pub(crate) fn rejects(extra: &[&str], code: i32, expect: &[&str]) {

@@ -106,19 +106,10 @@ fn render_msaa_matches_the_reference_at_its_count() {
             String::from_utf8_lossy(&o.stderr)
         );
         assert!(stdout.contains("MSAA 4"), "{backend:?}: {stdout}");
-        let line = stdout
-            .lines()
-            .find(|l| l.contains("vs reference "))
-            .expect(&stdout);
-        let psnr: f64 = line
-            .split("PSNR ")
-            .nth(1)
-            .and_then(|s| s.split_whitespace().next())
-            .and_then(|s| s.parse().ok())
-            .expect(line);
+        let psnr = psnr_vs_reference(&stdout);
         // Deferred lights an edge's samples apart, the reference each fragment once.
         let bound = if backend[1] == "deferred" { 30.0 } else { 80.0 };
-        assert!(psnr > bound, "{backend:?}: {line}");
+        assert!(psnr > bound, "{backend:?}: PSNR {psnr}");
         assert_eq!(
             stdout.contains("prepass.depth_bounds"),
             backend[1] == "forward",

@@ -43,17 +43,8 @@ fn glass_is_culled_exactly_and_rendered_as_the_reference_does() {
     }
     for backend in ["forward", "deferred", "naive-forward"] {
         let stdout = run("render", &["--backend", backend, "--compare"]);
-        let line = stdout
-            .lines()
-            .find(|l| l.contains("vs reference "))
-            .expect(&stdout);
-        let psnr: f64 = line
-            .split("PSNR ")
-            .nth(1)
-            .and_then(|s| s.split_whitespace().next())
-            .and_then(|s| s.parse().ok())
-            .expect(line);
-        assert!(psnr > 80.0, "{backend}: {line}");
+        let psnr = psnr_vs_reference(&stdout);
+        assert!(psnr > 80.0, "{backend}: PSNR {psnr}");
     }
     rejects(
         &[

@@ -19,8 +19,8 @@
 //! shading passes test against the depth buffer, and the exact oracle checks the depth buffer's
 //! samples and the transparent fragments.
 
-use crate::prepass::{DEPTH_FORMAT, PRIMITIVE, depth_target_msaa};
-use crate::shaders::{FRAME, ShaderDef, VERTEX};
+use crate::prepass::depth_target_msaa;
+use crate::shaders::{FRAME, SCREEN, ShaderDef, VERTEX};
 use crate::timing::GpuTimer;
 use crate::{GpuContext, GpuScene, pipeline, shader_file};
 
@@ -39,7 +39,7 @@ pub const PREPASS_RANGES: ShaderDef = ShaderDef {
 pub const BOUNDS: ShaderDef = ShaderDef {
     name: "prepass.depth_bounds",
     consts: &[],
-    files: &[shader_file!("common/depth_bounds.wgsl")],
+    files: &[SCREEN, shader_file!("common/depth_bounds.wgsl")],
 };
 
 /// The samples a pixel of the bounds texture for frames of `samples`: two values a pixel need
@@ -133,7 +133,6 @@ impl LookupBounds {
                 pipeline::entry(3, fragment, pipeline::depth_texture(samples)),
             ],
         });
-        let pipeline_layout = pipeline::layout(d, "prepass.depth_bounds", &[&layout]);
         // With MSAA, one pass over the forward prepass's depth ranges and one over the depth
         // alone (deferred's G-buffer keeps no ranges); without, over the depth.
         let bounds_with = |ranges: bool| {
@@ -161,36 +160,16 @@ impl LookupBounds {
                 label: Some(BOUNDS.name),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-            d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("prepass.depth_bounds"),
-                layout: Some(&pipeline_layout),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_screen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: PRIMITIVE,
-                depth_stencil: Some(wgpu::DepthStencilState {
-                    format: DEPTH_FORMAT,
-                    depth_write_enabled: Some(true),
-                    depth_compare: Some(wgpu::CompareFunction::Always),
-                    stencil: Default::default(),
-                    bias: Default::default(),
-                }),
-                multisample: wgpu::MultisampleState {
-                    count: bound_samples(samples),
-                    ..Default::default()
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_bounds"),
-                    compilation_options: Default::default(),
-                    targets: &[],
-                }),
-                multiview_mask: None,
-                cache: None,
-            })
+            pipeline::screen(
+                d,
+                "prepass.depth_bounds",
+                &module,
+                &[&layout],
+                "fs_bounds",
+                &[],
+                true,
+                bound_samples(samples),
+            )
         };
         let bounds = [bounds_with(false), bounds_with(multisampled)];
         Self {

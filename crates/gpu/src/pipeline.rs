@@ -106,6 +106,56 @@ pub fn raster_msaa(
     })
 }
 
+/// A pipeline drawing one triangle over the screen (`vs_screen` of [`crate::shaders::SCREEN`],
+/// which `module` must compose, then `draw(0..3, 0..1)`) at `samples` samples a pixel: its
+/// fragment entry `entry` into `targets`, and where `depth` the depth it returns written over
+/// the depth target whatever was there.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a pipeline: its shader, groups, targets and sample count"
+)]
+pub fn screen(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    groups: &[&wgpu::BindGroupLayout],
+    entry: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth: bool,
+    samples: u32,
+) -> wgpu::RenderPipeline {
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(label),
+        layout: Some(&layout(device, label, groups)),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_screen"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: PRIMITIVE,
+        depth_stencil: depth.then(|| wgpu::DepthStencilState {
+            format: DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: wgpu::MultisampleState {
+            count: samples,
+            ..Default::default()
+        },
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some(entry),
+            compilation_options: Default::default(),
+            targets,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
 /// A colour target of `format` blending what a transparent surface draws over what is there:
 /// colour `src * a + dst * (1 - a)`, alpha (coverage) `a + dst * (1 - a)`, `a` the fragment's
 /// alpha (its opacity).

@@ -6,7 +6,9 @@ use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_gpu::lookup_bounds::{LookupBounds, bound_samples};
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
-use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
+use manylights_gpu::shaders::{
+    FRAME, LIGHT, SCENE, SCREEN, SHADING, ShaderDef, ShaderFile, VERTEX,
+};
 use manylights_gpu::{GpuContext, GpuScene, shader_file};
 
 use crate::backends::{GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HDR, Renderer};
@@ -80,7 +82,7 @@ pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
 pub const EXPAND: ShaderDef = ShaderDef {
     name: "shade.deferred_expand",
     consts: &[],
-    files: &[shader_file!("render/expand.wgsl")],
+    files: &[SCREEN, shader_file!("render/expand.wgsl")],
 };
 
 fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
@@ -257,31 +259,16 @@ impl Renderer {
                     texture(wgpu::TextureSampleType::Float { filterable: false }, 1),
                 )],
             });
-            let module = EXPAND.create(d);
-            let pipeline = d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-                label: Some("shade.deferred_expand"),
-                layout: Some(&pipeline::layout(d, "shade.deferred_expand", &[&layout])),
-                vertex: wgpu::VertexState {
-                    module: &module,
-                    entry_point: Some("vs_screen"),
-                    compilation_options: Default::default(),
-                    buffers: &[],
-                },
-                primitive: manylights_gpu::prepass::PRIMITIVE,
-                depth_stencil: None,
-                multisample: wgpu::MultisampleState {
-                    count: samples,
-                    ..Default::default()
-                },
-                fragment: Some(wgpu::FragmentState {
-                    module: &module,
-                    entry_point: Some("fs_expand"),
-                    compilation_options: Default::default(),
-                    targets: &[target(HDR)],
-                }),
-                multiview_mask: None,
-                cache: None,
-            });
+            let pipeline = pipeline::screen(
+                d,
+                "shade.deferred_expand",
+                &EXPAND.create(d),
+                &[&layout],
+                "fs_expand",
+                &[target(HDR)],
+                false,
+                samples,
+            );
             (pipeline, layout)
         });
         let lookup_bounds =
