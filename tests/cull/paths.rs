@@ -362,3 +362,54 @@ fn cluster_tile_path_equals_the_per_light_passes() {
         }
     }
 }
+
+/// Many lights over a narrow target: `cull.depth_bounds`'s light rows (each light's tile
+/// rectangle, and scatter's blocks of tiles) would pass the device's workgroups along a
+/// dimension if as wide as the tiles' rows (stability case 14 on an H200: 2^27 lights over 8 x
+/// 4 pixels), so they widen. With the limit lowered so that they must (8 workgroups: 4,100
+/// lights take 17 workgroups of rows over 5 rows of tiles), gather's chunked lists (rectangles),
+/// scatter's masks (blocks) and z-binning's lists (rectangles) equal their CPU oracles.
+#[test]
+fn depth_bounds_light_rows_widen_within_the_dispatch_limit() {
+    let mut ctx = common::gpu();
+    ctx.limits.max_compute_workgroups_per_dimension = 8;
+    let (w, h) = (72, 40);
+    let mut case = random_case(23);
+    let lights = case.scene.lights.clone();
+    case.scene.lights = lights.iter().cycle().take(4100).cloned().collect();
+    let r = render(&ctx, &case, w, h);
+    let mut culler = Culler::new(&ctx, &r.gpu_scene);
+    culler.gather_lines = false;
+    for s in [
+        Strategy::tiled_gather(8),
+        Strategy::TiledScatter { tile_size: 8 },
+        cases::strategies()
+            .into_iter()
+            .find(|s| matches!(s, Strategy::ZBin { .. }))
+            .unwrap(),
+    ] {
+        let what = format!("{} {} (4,100 lights, 8 workgroups)", case.label, s.name());
+        let out = run_gpu(&ctx, &culler, &r, &case, &s);
+        let td = out.read_tile_depth(&ctx).unwrap();
+        let gpu = out.read(&ctx).unwrap();
+        let p = out.params;
+        assert!(
+            p.tiles_y < 8 && p.light_count.div_ceil(256) + p.tiles_y > 8,
+            "{what}"
+        );
+        let oracle = match s {
+            Strategy::TiledScatter { .. } => cpu::scatter(&r.frame, &p, &r.lights, &td),
+            Strategy::ZBin { .. } => cpu::zbin_lists(
+                &r.frame,
+                &p,
+                &r.lights,
+                &td,
+                &cpu::zbin_order(&r.frame, &p, &r.lights),
+            ),
+            _ => cpu::gather(&r.frame, &p, &r.lights, &td),
+        };
+        oracle
+            .compare(&gpu)
+            .unwrap_or_else(|e| panic!("{what}: {e}"));
+    }
+}

@@ -598,7 +598,7 @@ fn stability_suite_has_no_failures() {
         }
         cases.push((e.name.clone(), Ok(rows)));
     }
-    cases.push(("broken".into(), Err("did not run".into())));
+    cases.push(("broken".into(), Err("cell 3 `x` failed: a reason".into())));
     let fails = write_report(tmp.path(), &cases).unwrap();
     let md = std::fs::read_to_string(tmp.path().join("stability.md")).unwrap();
     assert!(
@@ -606,7 +606,9 @@ fn stability_suite_has_no_failures() {
         "{md}"
     );
     assert!(
-        fails > 0 && md.contains("fail: did not run"),
+        fails > 0
+            && md.contains("| broken | - | - | **fail** (did not run: see below the table)")
+            && md.contains("- `broken`: cell 3 `x` failed: a reason"),
         "a case that did not run must fail"
     );
 }

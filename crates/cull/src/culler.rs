@@ -156,7 +156,7 @@ impl Culler {
             &TILED_GATHER
         });
         Self {
-            tile_depth: TileDepth::new(d, &depth),
+            tile_depth: TileDepth::new(ctx, &depth),
             tile_lines: TileLines::new(d, &depth, &gather),
             tile_masks: TileMasks::new(d, &gather),
             lists: Lists::new(d, &gather),

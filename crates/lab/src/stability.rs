@@ -90,6 +90,7 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
         "Each case of `experiments/stability/` against each configuration: **pass**; **degraded** (with the measured cost: dropped lights, false-positive ratio over {FP_DEGRADED}, mean FLIP over {FLIP_DEGRADED}, temporal flicker over {FLICKER_DEGRADED} of the peak); **fail** (false negatives without a capacity, NaN/Inf pixels, or a case that did not run). The worst verdict over a case's cells; over a camera path, the worst pose (false negatives: their sum).\n\nTwo columns describe the case rather than a method: **cut-off**, the mean FLIP against lights of infinite range, the smallest over the case's cells (the cost of the lights' radius cut-off, which every method shares, however exact its culling), and **flicker**, the largest temporal flicker of any configuration over a camera path (`-` without one).\n"
     );
     let mut fails = 0;
+    let mut not_run = Vec::new();
     let all: Vec<&Row> = cases
         .iter()
         .filter_map(|(_, r)| r.as_ref().ok())
@@ -117,11 +118,9 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
         let cells: Vec<String> = match rows {
             Err(e) => {
                 fails += configs.len().max(1);
+                not_run.push((name, e));
                 vec![
-                    format!(
-                        "fail: {}",
-                        e.replace('|', "/").chars().take(120).collect::<String>()
-                    );
+                    "**fail** (did not run: see below the table)".to_string();
                     configs.len().max(1)
                 ]
             }
@@ -178,6 +177,12 @@ pub fn write_report(dir: &Path, cases: &[Case]) -> Result<usize, LabError> {
             show(flicker),
             cells.join(" | ")
         );
+    }
+    if !not_run.is_empty() {
+        md.push_str("\nCases that did not run, and why:\n\n");
+        for (name, e) in not_run {
+            let _ = writeln!(md, "- `{name}`: {e}");
+        }
     }
     write_atomic(&dir.join("stability.md"), md.as_bytes())?;
     Ok(fails)

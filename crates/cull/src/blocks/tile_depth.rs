@@ -17,6 +17,8 @@ use crate::record::{Buf, Step};
 pub(crate) struct TileDepth {
     depth_bounds: wgpu::ComputePipeline,
     depth_bounds_blocks: wgpu::ComputePipeline,
+    /// The device's most workgroups along a dispatch dimension.
+    max_groups: u32,
 }
 
 /// What `cull.depth_bounds` writes besides the tiles' depth.
@@ -31,13 +33,14 @@ pub(crate) enum Rows {
 }
 
 impl TileDepth {
-    /// Its pipelines from `cull.depth_bounds`'s program.
-    pub fn new(d: &wgpu::Device, program: &Program) -> Self {
+    /// Its pipelines from `cull.depth_bounds`'s program, dispatched within `ctx`'s limits.
+    pub fn new(ctx: &GpuContext, program: &Program) -> Self {
         let [depth_bounds, depth_bounds_blocks] =
-            program.pipelines(d, ["depth_bounds", "depth_bounds_blocks"]);
+            program.pipelines(&ctx.device, ["depth_bounds", "depth_bounds_blocks"]);
         Self {
             depth_bounds,
             depth_bounds_blocks,
+            max_groups: ctx.limits.max_compute_workgroups_per_dimension,
         }
     }
 
@@ -65,7 +68,7 @@ impl TileDepth {
             "cull.depth_bounds",
             pipeline,
             group,
-            groups(p, rows != Rows::None),
+            groups(p, rows != Rows::None, self.max_groups),
             reads,
             writes,
         )
@@ -73,29 +76,80 @@ impl TileDepth {
 }
 
 /// Workgroups of `cull.depth_bounds`: [`DEPTH_TILES`] tiles of a row each, and with `rects`
-/// rows before the tiles' that store the lights' tile rectangles, a light a thread.
-pub(crate) fn groups(p: &GpuCullParams, rects: bool) -> (u32, u32) {
+/// rows before the tiles' that store the lights' tile rectangles, 64 [`DEPTH_TILES`] lights a
+/// workgroup. The rows are as wide as the tiles' unless the lights' rows would then pass
+/// `max_groups` (millions of lights over a narrow target): then wider, the tile rows' extra
+/// workgroups holding no tile.
+pub(crate) fn groups(p: &GpuCullParams, rects: bool, max_groups: u32) -> (u32, u32) {
     let x = p.tiles_x.div_ceil(DEPTH_TILES);
-    let rows = if rects {
-        p.light_count.div_ceil(x * 64 * DEPTH_TILES)
-    } else {
-        0
-    };
-    (x, p.tiles_y + rows)
+    if !rects {
+        return (x, p.tiles_y);
+    }
+    let lights = p.light_count.div_ceil(64 * DEPTH_TILES);
+    let x = x.max(lights.div_ceil(max_groups.saturating_sub(p.tiles_y).max(1)));
+    (x, p.tiles_y + lights.div_ceil(x))
 }
 
-/// Checks that the pass's rows of workgroups (tiles, and with `rects` light rectangles) fit
-/// the device's dispatch.
+/// Checks that the pass's workgroups (tiles, and with `rects` light rectangles) fit the
+/// device's dispatch.
 pub(crate) fn check_rows(ctx: &GpuContext, p: &GpuCullParams, rects: bool) -> Result<(), GpuError> {
-    let (_, rows) = groups(p, rects);
     let limit = ctx.limits.max_compute_workgroups_per_dimension;
-    if rows > limit {
+    let (x, rows) = groups(p, rects, limit);
+    if rows > limit || x > limit {
         return Err(GpuError::OverLimit {
-            what: "cull.depth_bounds workgroup rows (tiles and light rectangles)".into(),
-            value: rows.into(),
+            what: "cull.depth_bounds workgroups along one dimension (tiles and light rectangles)"
+                .into(),
+            value: rows.max(x).into(),
             limit: limit.into(),
             limit_name: "max_compute_workgroups_per_dimension",
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params(tiles: (u32, u32), lights: u32) -> GpuCullParams {
+        GpuCullParams {
+            tiles_x: tiles.0,
+            tiles_y: tiles.1,
+            light_count: lights,
+            ..bytemuck::Zeroable::zeroed()
+        }
+    }
+
+    /// Every tile and every light has a workgroup, within the limit, and the light rows are as
+    /// wide as the tiles' unless the limit makes them wider.
+    #[test]
+    fn groups_cover_tiles_and_lights_within_the_limit() {
+        let per = 64 * DEPTH_TILES;
+        for (tiles, lights, limit) in [
+            ((120, 68), 1 << 20, 65_535),
+            ((1, 1), 1 << 27, 65_535),
+            ((1, 1), 100_000, 32),
+            ((9, 5), 3_000, 7),
+            ((4, 2), 0, 4),
+        ] {
+            let p = params(tiles, lights);
+            let (x, rows) = groups(&p, true, limit);
+            assert!(
+                x <= limit && rows <= limit,
+                "{tiles:?} {lights} {limit}: {x} x {rows}"
+            );
+            assert!(x * DEPTH_TILES >= tiles.0);
+            assert!(
+                (rows - tiles.1) * x * per >= lights,
+                "{tiles:?} {lights}: {x} x {rows}"
+            );
+            if lights.div_ceil(per) + tiles.1 <= limit {
+                assert_eq!(x, tiles.0.div_ceil(DEPTH_TILES));
+            }
+            assert_eq!(
+                groups(&p, false, limit),
+                (tiles.0.div_ceil(DEPTH_TILES), tiles.1)
+            );
+        }
+    }
 }
