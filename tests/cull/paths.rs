@@ -365,8 +365,8 @@ fn cluster_tile_path_equals_the_per_light_passes() {
 
 /// Many lights over a narrow target: `cull.depth_bounds`'s light rows (each light's tile
 /// rectangle, and scatter's blocks of tiles) would pass the device's workgroups along a
-/// dimension if as wide as the tiles' rows (stability case 14 on an H200: 2^27 lights over 8 x
-/// 4 pixels), so they widen. With the limit lowered so that they must (8 workgroups: 4,100
+/// dimension if as wide as the tiles' rows (stability case 14 on an H200: tens of millions of
+/// lights over 8 x 4 pixels), so they widen. With the limit lowered so that they must (8 workgroups: 4,100
 /// lights take 17 workgroups of rows over 5 rows of tiles), gather's chunked lists (rectangles),
 /// scatter's masks (blocks) and z-binning's lists (rectangles) equal their CPU oracles.
 #[test]
