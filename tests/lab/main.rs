@@ -191,6 +191,19 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                 "{name} {}: no GPU time",
                 r.cell
             );
+            // The frame in steady state for every cell: its geometry back to back, and with
+            // culling and shading.
+            let geometry = r.gpu_ms_geometry_steady.unwrap_or(0.0);
+            let frame = r.gpu_ms_frame_steady.unwrap_or(0.0);
+            assert!(geometry > 0.0, "{name} {}: no steady geometry time", r.cell);
+            match r.gpu_ms_cull_shade {
+                Some(cs) => assert!(
+                    (frame - geometry - cs).abs() < 1e-9,
+                    "{name} {}: frame {frame} is not geometry {geometry} + culling and shading {cs}",
+                    r.cell
+                ),
+                None => assert_eq!(frame, geometry, "{name} {}", r.cell),
+            }
             // Steady-state culling, and culling with shading, for every culling cell; neither
             // for naive forward.
             if r.backend == "naive_forward" {
@@ -302,7 +315,7 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
     assert!(csv.lines().next().unwrap().ends_with(
         ",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span,gpu_ms_cull_shade,\
                  gpu_ms_cull_shade_span,lights_needed_per_pixel_mean,gpu_ms_light_update,cpu_ms_upload,\
-                 msaa,msaa_target_bytes,transparent"
+                 msaa,msaa_target_bytes,transparent,gpu_ms_geometry_steady,gpu_ms_frame_steady"
     ));
 }
 

@@ -90,7 +90,8 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
     assert!(
         report.contains("MSAA 4 without glass, tiled_gather:")
             && report.contains("One sample without glass, tiled_gather:")
-            && report.contains("Multisampled targets"),
+            && report.contains("Multisampled targets")
+            && report.contains("in steady state (`gpu_ms_frame_steady`)"),
         "{report}"
     );
     // The exact sets are the samples', whatever the strategy: one mean a sample count.

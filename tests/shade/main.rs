@@ -18,6 +18,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 mod msaa;
+mod steady;
 mod transparent;
 
 use manylights_cull::{CullSettings, Slicing, Strategy};

@@ -13,7 +13,7 @@ use manylights_shade::{Backend, ReferenceRenderer, Renderer};
 use super::{common, scene, strategies, within_tolerance};
 
 /// `name` with its glass panes and the tests' lights.
-fn glass_scene(name: &str) -> manylights_scene::Scene {
+pub(crate) fn glass_scene(name: &str) -> manylights_scene::Scene {
     let mut s = scene(name);
     let glass = match name {
         "atrium" => ProceduralScene::Atrium(AtriumParams {

@@ -11,12 +11,12 @@ use manylights_gpu::layout::GpuFrame;
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::Camera;
 use manylights_shade::accuracy::{ImageError, compare};
-use manylights_shade::{HdrImage, ReferenceRenderer, Renderer};
+use manylights_shade::{Backend, HdrImage, ReferenceRenderer, Renderer};
 
 use crate::LabError;
 use crate::experiment::Config;
 use crate::runner::{category, stage};
-use crate::steady::{steady_cull, steady_cull_shade};
+use crate::steady::{steady_cull, steady_cull_shade, steady_geometry};
 
 /// What one camera pose measured.
 pub(crate) struct PoseEval {
@@ -37,6 +37,8 @@ pub(crate) struct PoseEval {
     pub(crate) steady: Option<(f64, Option<f64>)>,
     /// The same with the shading pass after each run (run median, span), ms.
     pub(crate) steady_frame: Option<(f64, Option<f64>)>,
+    /// The frame's geometry back to back (run median), ms.
+    pub(crate) steady_geometry: Option<f64>,
 }
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
@@ -175,6 +177,21 @@ pub(crate) fn evaluate(
                 .collect()
         }
     };
+    // The geometry back to back: with culling and shading, the frame in steady state.
+    let steady_geometry = match (steady_runs, &o.timings) {
+        (Some(runs), Some(t)) => {
+            let passes = t
+                .iter()
+                .filter(|p| category(&p.label) == "prepass" || c.backend == Backend::NaiveForward)
+                .count() as u32;
+            stage(pose, "geometry timed back to back", || {
+                steady_geometry(ctx, renderer, gpu_scene, &o, passes, runs)
+            })
+            .map_err(|e| other(&e))?
+            .map(|s| s.total_ms)
+        }
+        _ => None,
+    };
     let (mut acc, mut acc_inf, mut reference_color) = (None, None, None);
     if let Some(rr) = reference {
         let r = stage(pose, "reference rendered", || {
@@ -206,6 +223,7 @@ pub(crate) fn evaluate(
         tile_masks,
         steady,
         steady_frame,
+        steady_geometry,
     })
 }
 

@@ -123,31 +123,48 @@ fn msaa_summary(rows: &[Row]) -> Vec<String> {
                 else {
                     continue;
                 };
-                let (Some(ft), Some(dt)) = (f.gpu_ms_total, d.gpu_ms_total) else {
+                // The frame in steady state where both have it (geometry, then culling and
+                // shading, each back to back after the clock has risen); otherwise the frames
+                // timed one at a time.
+                let steady = f.gpu_ms_frame_steady.is_some() && d.gpu_ms_frame_steady.is_some();
+                let time = |r: &Row| {
+                    if steady {
+                        (r.gpu_ms_frame_steady, r.gpu_ms_geometry_steady, r.gpu_ms_cull_shade)
+                    } else {
+                        let cull_shade = r.gpu_ms_shade.map(|t| t + r.gpu_ms_cull.unwrap_or(0.0));
+                        (r.gpu_ms_total, r.gpu_ms_prepass, cull_shade)
+                    }
+                };
+                let ((Some(ft), fg, fs), (Some(dt), dg, ds)) = (time(f), time(d)) else {
                     continue;
                 };
                 let scale = |b: &str, t: f64| {
                     (n > 1)
-                        .then(|| find(b, s, 1, glass).and_then(|r| r.gpu_ms_total))
+                        .then(|| find(b, s, 1, glass).and_then(|r| time(r).0))
                         .flatten()
                         .map_or(String::new(), |t1| {
                             format!(", {:.1}x its time at one sample", t / t1)
                         })
                 };
                 out.push(format!(
-                    "{} {}, {s}: {} is faster, {:.2} ms a frame for forward (geometry and bounds {} ms, shading {} ms{}) against {:.2} ms for deferred (G-buffer and bounds {} ms, lighting{} {} ms{}). Multisampled targets: forward {:.0} MiB, deferred {:.0} MiB (its G-buffer {:.0} MiB); lists {:.0} and {:.0} KiB. Against the reference: forward PSNR {} dB, deferred mean FLIP {}{}.",
+                    "{} {}, {s}: {} is faster, {:.2} ms a frame for forward (geometry and bounds {} ms, culling and shading {} ms{}) against {:.2} ms for deferred (G-buffer and bounds {} ms, culling and lighting{} {} ms{}){}. Multisampled targets: forward {:.0} MiB, deferred {:.0} MiB (its G-buffer {:.0} MiB); lists {:.0} and {:.0} KiB. Against the reference: forward PSNR {} dB, deferred mean FLIP {}{}.",
                     if n > 1 { format!("MSAA {n}") } else { "One sample".to_owned() },
                     if glass { "with glass" } else { "without glass" },
                     if ft <= dt { "forward" } else { "deferred" },
                     ft,
-                    fmt_opt(f.gpu_ms_prepass, 2),
-                    fmt_opt(f.gpu_ms_shade, 2),
+                    fmt_opt(fg, 2),
+                    fmt_opt(fs, 2),
                     scale("forward", ft),
                     dt,
-                    fmt_opt(d.gpu_ms_prepass, 2),
+                    fmt_opt(dg, 2),
                     if glass { " and its forward pass over the glass" } else { "" },
-                    fmt_opt(d.gpu_ms_shade, 2),
+                    fmt_opt(ds, 2),
                     scale("deferred", dt),
+                    if steady {
+                        " in steady state (`gpu_ms_frame_steady`)"
+                    } else {
+                        ""
+                    },
                     mib(f.msaa_target_bytes),
                     mib(d.msaa_target_bytes.max(d.gbuffer_bytes)),
                     mib(d.gbuffer_bytes),

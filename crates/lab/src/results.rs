@@ -175,6 +175,19 @@ pub struct Row {
     /// every visible transparent fragment, and culling reaches to the nearest glass.
     #[serde(default)]
     pub transparent: bool,
+    /// The frame's geometry in steady state: the median over back-to-back runs
+    /// (`Renderer::geometry_repeated`) of its depth prepass or G-buffer pass and lookup bounds
+    /// (naive forward: its whole frame), ms. Empty without timestamp queries.
+    #[serde(default)]
+    pub gpu_ms_geometry_steady: Option<f64>,
+    /// The frame in steady state: `gpu_ms_geometry_steady` plus `gpu_ms_cull_shade` (naive
+    /// forward: its geometry's, its whole frame), ms; each timed back to back after a warm-up,
+    /// at the clock the GPU runs at under load. `gpu_ms_total` times frames one at a time,
+    /// each rendered, read back and checked before the next, which leaves the GPU idle long
+    /// enough for its clock to fall (an H200 sampled at 345-1,400 MHz through such frames,
+    /// 1,980 MHz under load). Empty without timestamp queries.
+    #[serde(default)]
+    pub gpu_ms_frame_steady: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -279,6 +292,8 @@ pub const COLUMNS: &[&str] = &[
     "msaa",
     "msaa_target_bytes",
     "transparent",
+    "gpu_ms_geometry_steady",
+    "gpu_ms_frame_steady",
 ];
 
 fn one() -> u32 {

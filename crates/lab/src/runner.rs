@@ -454,6 +454,12 @@ fn run_cell(
         gbuffer_bytes,
         msaa: c.msaa,
         transparent: gpu_scene.has_transparent(),
+        gpu_ms_geometry_steady: first.steady_geometry,
+        gpu_ms_frame_steady: match (c.backend, first.steady_geometry, first.steady_frame) {
+            (Backend::NaiveForward, g, _) => g,
+            (_, Some(g), Some(f)) => Some(g + f.0),
+            _ => None,
+        },
         msaa_target_bytes: first.msaa_target_bytes,
         psnr_db: psnr,
         flip_mean: flip,

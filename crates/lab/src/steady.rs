@@ -8,12 +8,18 @@
 //! count pass and the read-back between its two submissions. Back to back, the lists are
 //! already sized and gather's lines path runs two passes, not three.
 //!
+//! The geometry of a frame (its depth prepass or G-buffer pass and lookup bounds) is timed the
+//! same way ([`steady_geometry`]): with culling and shading back to back, the frame at the
+//! clock the GPU runs at under load, where a frame of the experiments' loop (rendered, read
+//! back and checked one at a time) leaves the GPU idle long enough for its clock to fall.
+//!
 //! The runs are repeated untimed for [`WARM_UP`] first, so that they are timed at the clock the
 //! GPU runs at under load, not the lower one it falls to while the host works between cells.
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES, PassKind};
 use manylights_gpu::{GpuContext, GpuScene};
+use manylights_shade::{Renderer, ShadeOutput};
 
 use crate::results::percentiles;
 
@@ -123,12 +129,50 @@ fn steady(
     mut then: Option<&mut dyn ListPass>,
 ) -> Result<Option<SteadyCull>, SteadyError> {
     let n = runs.clamp(1, max_runs(passes));
-    let mut repeat = |timer: &mut GpuTimer| match then.as_deref_mut() {
-        Some(pass) => {
-            culler.run_repeated_with(ctx, scene, depth, strategy, settings, first, n, timer, pass)
+    let mut repeat = |timer: &mut GpuTimer| -> Result<(), SteadyError> {
+        match then.as_deref_mut() {
+            Some(pass) => {
+                culler.run_repeated_with(
+                    ctx, scene, depth, strategy, settings, first, n, timer, pass,
+                )?;
+            }
+            None => {
+                culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, timer)?;
+            }
         }
-        None => culler.run_repeated(ctx, scene, depth, strategy, settings, first, n, timer),
+        Ok(())
     };
+    timed_runs(ctx, passes, n, &mut repeat)
+}
+
+/// The geometry of the frame `out` rendered (the depth prepass or the G-buffer pass and the
+/// lookup bounds; naive forward: its whole frame), `runs` times back to back
+/// ([`Renderer::geometry_repeated`]), as [`steady_cull`] times culling: with
+/// `gpu_ms_cull_shade`, the frame in steady state (`gpu_ms_frame_steady`). `passes`: the
+/// geometry passes of the single frame. `None` without timestamp queries.
+pub fn steady_geometry(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    scene: &GpuScene,
+    out: &ShadeOutput,
+    passes: u32,
+    runs: u32,
+) -> Result<Option<SteadyCull>, SteadyError> {
+    let n = runs.clamp(1, max_runs(passes));
+    let mut repeat = |timer: &mut GpuTimer| -> Result<(), SteadyError> {
+        Ok(renderer.geometry_repeated(ctx, scene, out, n, timer)?)
+    };
+    timed_runs(ctx, passes, n, &mut repeat)
+}
+
+/// `repeat` (n runs of `passes` passes each, back to back into the timer it is given)
+/// repeated untimed for [`WARM_UP`], then timed per pass and as spans.
+fn timed_runs(
+    ctx: &GpuContext,
+    passes: u32,
+    n: u32,
+    repeat: &mut dyn FnMut(&mut GpuTimer) -> Result<(), SteadyError>,
+) -> Result<Option<SteadyCull>, SteadyError> {
     // Raise the clock first: the GPU idles while the host works between measurements, and an
     // idle GPU clocks down (an H100 sampled at 465-1,455 MHz between a tuner's cells, 1,980 MHz
     // under load), so that the first passes after the host's work measure slow.

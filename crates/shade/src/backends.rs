@@ -204,74 +204,10 @@ impl Renderer {
         }
         let targets = Targets::new(ctx, self, backend, (width, height));
         let mut timer = GpuTimer::new(ctx, 64);
-        // The geometry: the depth prepass, or the G-buffer pass.
         let mut enc = ctx.encoder("shade");
-        match backend {
-            Backend::Forward | Backend::NaiveForward => {
-                match (&self.lookup_bounds, &targets.bounds) {
-                    (Some(b), Some(t)) if b.has_prepass() && backend == Backend::Forward => {
-                        b.encode_prepass(&mut enc, scene, &targets.depth_view, t, &mut timer)
-                    }
-                    _ => self
-                        .prepass
-                        .encode(&mut enc, scene, &targets.depth_view, &mut timer),
-                }
-            }
-            Backend::Deferred | Backend::DeferredStoredPosition => {
-                let stored = backend == Backend::DeferredStoredPosition;
-                self.raster_pass(
-                    &mut enc,
-                    &mut timer,
-                    "shade.gbuffer",
-                    if stored {
-                        &self.gbuffer_stored
-                    } else {
-                        &self.gbuffer
-                    },
-                    scene,
-                    &targets
-                        .gbuffer_targets(stored)
-                        .into_iter()
-                        .map(|v| (v, None))
-                        .collect::<Vec<_>>(),
-                    &targets.depth_view,
-                    Loads::Clear,
-                    None,
-                );
-            }
-        }
-        // The lookup bounds, after the geometry: what culling reads.
-        if let (Some(b), Some(t)) = (&self.lookup_bounds, &targets.bounds) {
-            // Forward's prepass kept the depth ranges (with MSAA); deferred's G-buffer did not.
-            let ranges = backend == Backend::Forward && b.has_prepass();
-            b.encode_bounds(&mut enc, scene, t, ranges, &mut timer);
-        }
+        self.encode_geometry(&mut enc, &mut timer, scene, backend, &targets);
         let lists = if backend == Backend::NaiveForward {
-            let transparent = scene.has_transparent();
-            self.raster_pass(
-                &mut enc,
-                &mut timer,
-                "shade.naive",
-                &self.naive,
-                scene,
-                &[targets.color_attachment(!transparent)],
-                &targets.depth_view,
-                Loads::Depth,
-                None,
-            );
-            if transparent {
-                self.raster_pass(
-                    &mut enc,
-                    &mut timer,
-                    "shade.naive_transparent",
-                    &self.naive_transparent,
-                    scene,
-                    &[targets.color_attachment(true)],
-                    &targets.depth_view,
-                    Loads::Transparent,
-                    None,
-                );
-            }
+            self.encode_naive(&mut enc, &mut timer, scene, &targets);
             timer.resolve(&mut enc);
             ctx.submit_and_wait(enc, "naive forward")?;
             None
@@ -318,6 +254,118 @@ impl Renderer {
             backend,
             targets,
         })
+    }
+
+    /// Encodes a frame's geometry: the depth prepass or the G-buffer pass, then the lookup
+    /// bounds culling reads (where the renderer keeps them).
+    fn encode_geometry(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scene: &GpuScene,
+        backend: Backend,
+        targets: &Targets,
+    ) {
+        match backend {
+            Backend::Forward | Backend::NaiveForward => {
+                match (&self.lookup_bounds, &targets.bounds) {
+                    (Some(b), Some(t)) if b.has_prepass() && backend == Backend::Forward => {
+                        b.encode_prepass(enc, scene, &targets.depth_view, t, timer)
+                    }
+                    _ => self.prepass.encode(enc, scene, &targets.depth_view, timer),
+                }
+            }
+            Backend::Deferred | Backend::DeferredStoredPosition => {
+                let stored = backend == Backend::DeferredStoredPosition;
+                self.raster_pass(
+                    enc,
+                    timer,
+                    "shade.gbuffer",
+                    if stored {
+                        &self.gbuffer_stored
+                    } else {
+                        &self.gbuffer
+                    },
+                    scene,
+                    &targets
+                        .gbuffer_targets(stored)
+                        .into_iter()
+                        .map(|v| (v, None))
+                        .collect::<Vec<_>>(),
+                    &targets.depth_view,
+                    Loads::Clear,
+                    None,
+                );
+            }
+        }
+        // The lookup bounds, after the geometry: what culling reads.
+        if let (Some(b), Some(t)) = (&self.lookup_bounds, &targets.bounds) {
+            // Forward's prepass kept the depth ranges (with MSAA); deferred's G-buffer did not.
+            let ranges = backend == Backend::Forward && b.has_prepass();
+            b.encode_bounds(enc, scene, t, ranges, timer);
+        }
+    }
+
+    /// Encodes naive forward's shading: every light at every fragment, then any transparent
+    /// surfaces over it.
+    fn encode_naive(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scene: &GpuScene,
+        targets: &Targets,
+    ) {
+        let transparent = scene.has_transparent();
+        self.raster_pass(
+            enc,
+            timer,
+            "shade.naive",
+            &self.naive,
+            scene,
+            &[targets.color_attachment(!transparent)],
+            &targets.depth_view,
+            Loads::Depth,
+            None,
+        );
+        if transparent {
+            self.raster_pass(
+                enc,
+                timer,
+                "shade.naive_transparent",
+                &self.naive_transparent,
+                scene,
+                &[targets.color_attachment(true)],
+                &targets.depth_view,
+                Loads::Transparent,
+                None,
+            );
+        }
+    }
+
+    /// `runs` repetitions of the geometry of the frame `out` rendered (the depth prepass or the
+    /// G-buffer pass and the lookup bounds; naive forward: its whole frame) back to back in
+    /// one submission, into its targets, timed by `timer` (a timer of spans times each
+    /// repetition as one span, `geometry`): with [`Culler::run_repeated_with`] over the
+    /// shading pass, a frame timed in steady state.
+    pub fn geometry_repeated(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        out: &ShadeOutput,
+        runs: u32,
+        timer: &mut GpuTimer,
+    ) -> Result<(), manylights_gpu::GpuError> {
+        let mut enc = ctx.encoder("shade.geometry_repeated");
+        for _ in 0..runs {
+            timer.span_begin(&mut enc, "geometry");
+            self.encode_geometry(&mut enc, timer, scene, out.backend, &out.targets);
+            if out.backend == Backend::NaiveForward {
+                self.encode_naive(&mut enc, timer, scene, &out.targets);
+            }
+        }
+        timer.span_end(&mut enc);
+        timer.resolve(&mut enc);
+        ctx.submit_and_wait(enc, "geometry repeated")
     }
 
     /// The shading pass of the frame `out` rendered (forward or deferred; `None` for naive
