@@ -204,6 +204,22 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                 ),
                 None => assert_eq!(frame, geometry, "{name} {}", r.cell),
             }
+            // Its passes: the single frame's, each timed (back to back, culling may skip the
+            // pass that sized its lists), its geometry and shading passes all.
+            assert!(
+                r.passes_steady
+                    .iter()
+                    .all(|(l, &ms)| ms > 0.0 && r.passes.contains_key(l))
+                    && r.passes.keys().all(|l| l.starts_with("cull.")
+                        || l.starts_with("scan.")
+                        || l.starts_with("sort.")
+                        || l.starts_with("lights.")
+                        || r.passes_steady.contains_key(l)),
+                "{name} {}: steady passes {:?} against the frame's {:?}",
+                r.cell,
+                r.passes_steady,
+                r.passes
+            );
             // Steady-state culling, and culling with shading, for every culling cell; neither
             // for naive forward.
             if r.backend == "naive_forward" {

@@ -39,6 +39,9 @@ pub(crate) struct PoseEval {
     pub(crate) steady_frame: Option<(f64, Option<f64>)>,
     /// The frame's geometry back to back (run median), ms.
     pub(crate) steady_geometry: Option<f64>,
+    /// Each pass of the geometry's and of culling and shading's back-to-back runs: its
+    /// median, ms.
+    pub(crate) steady_passes: Vec<(String, f64)>,
 }
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
@@ -75,6 +78,7 @@ pub(crate) fn evaluate(
     let mut tile_masks = None;
     let mut steady = None;
     let mut steady_frame = None;
+    let mut steady_passes = Vec::new();
     let per_pixel: Vec<u32> = match &o.lists {
         Some(lists) => {
             list_bytes = lists.list_bytes();
@@ -131,6 +135,9 @@ pub(crate) fn evaluate(
                         )
                     })
                     .map_err(|e| other(&e))?;
+                    if let Some(s) = &timed {
+                        steady_passes.extend(s.passes.iter().map(|p| (p.0.clone(), p.2)));
+                    }
                     steady_frame = timed.map(|s| (s.total_ms, s.span_ms));
                 }
             }
@@ -188,7 +195,10 @@ pub(crate) fn evaluate(
                 steady_geometry(ctx, renderer, gpu_scene, &o, passes, runs)
             })
             .map_err(|e| other(&e))?
-            .map(|s| s.total_ms)
+            .map(|s| {
+                steady_passes.splice(0..0, s.passes.iter().map(|p| (p.0.clone(), p.2)));
+                s.total_ms
+            })
         }
         _ => None,
     };
@@ -224,6 +234,7 @@ pub(crate) fn evaluate(
         steady,
         steady_frame,
         steady_geometry,
+        steady_passes,
     })
 }
 

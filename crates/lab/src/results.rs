@@ -190,6 +190,11 @@ pub struct Row {
     pub gpu_ms_frame_steady: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
+    /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s and
+    /// `gpu_ms_cull_shade`'s back-to-back runs, each pass's median over the runs, ms (empty
+    /// where they were not timed). JSON only.
+    #[serde(default)]
+    pub passes_steady: BTreeMap<String, f64>,
     /// Cell index in sweep order.
     pub index: usize,
     /// Cell id (hash of its configuration).

@@ -454,6 +454,13 @@ fn run_cell(
         gbuffer_bytes,
         msaa: c.msaa,
         transparent: gpu_scene.has_transparent(),
+        passes_steady: first.steady_passes.iter().fold(
+            std::collections::BTreeMap::new(),
+            |mut m, (label, ms)| {
+                *m.entry(label.clone()).or_insert(0.0) += ms;
+                m
+            },
+        ),
         gpu_ms_geometry_steady: first.steady_geometry,
         gpu_ms_frame_steady: match (c.backend, first.steady_geometry, first.steady_frame) {
             (Backend::NaiveForward, g, _) => g,

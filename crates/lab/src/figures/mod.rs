@@ -121,13 +121,29 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
     if shown.is_empty() {
         return Ok(None);
     }
+    // In steady state where every bar has it (the passes of the back-to-back runs, at the
+    // clock the GPU runs at under load); else the single frame's (moving lights' update is
+    // timed only there).
+    let steady = shown.iter().all(|r| !r.passes_steady.is_empty())
+        && shown.iter().all(|r| r.gpu_ms_light_update.is_none());
     let parts = |r: &Row| {
-        [
-            r.gpu_ms_light_update.unwrap_or(0.0),
-            r.gpu_ms_prepass.unwrap_or(0.0),
-            r.gpu_ms_cull.unwrap_or(0.0),
-            r.gpu_ms_shade.unwrap_or(0.0),
-        ]
+        if steady {
+            let part = |c: &str| -> f64 {
+                r.passes_steady
+                    .iter()
+                    .filter(|(l, _)| crate::runner::category(l) == c)
+                    .map(|(_, ms)| ms)
+                    .sum()
+            };
+            [0.0, part("prepass"), part("cull"), part("shade")]
+        } else {
+            [
+                r.gpu_ms_light_update.unwrap_or(0.0),
+                r.gpu_ms_prepass.unwrap_or(0.0),
+                r.gpu_ms_cull.unwrap_or(0.0),
+                r.gpu_ms_shade.unwrap_or(0.0),
+            ]
+        }
     };
     // Moving lights' update, where a row has one, as a fourth part before the others.
     let moving = shown.iter().any(|r| r.gpu_ms_light_update.is_some());
@@ -141,7 +157,7 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
     let labels: Vec<String> = shown.iter().map(|r| clip_label(&r.cell)).collect();
     let names = [
         "moving the lights (lights.animate / lights.upload)",
-        "geometry pass (prepass / G-buffer, raster)",
+        "geometry (prepass / G-buffer, lookup bounds)",
         "culling (compute)",
         "shading",
     ];
@@ -163,6 +179,8 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
         .caption(
             if moving {
                 "Per-pass GPU time (median): moving the lights | geometry pass (raster) | culling | shading"
+            } else if steady {
+                "Per-pass GPU time in steady state (median): geometry | culling (compute) | shading"
             } else {
                 "Per-pass GPU time (median): geometry pass (raster) | culling (compute) | shading"
             },
