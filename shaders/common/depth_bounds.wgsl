@@ -1,7 +1,8 @@
 // prepass.depth_bounds (manylights_gpu::lookup_bounds): the depth texture culling takes its
-// bounds from, of BOUND_SAMPLES samples a pixel, drawn by one triangle over the screen and run
-// for every sample (sample_index). A covered pixel's first sample holds the nearest depth at
-// which a fragment drawn there is looked up, its other samples the farthest (kept short of the
+// bounds from, of BOUND_SAMPLES samples a pixel, drawn by one triangle over the screen twice,
+// each run once a pixel (fs_bounds_far into every sample, then fs_bounds_near into sample 0;
+// run once a sample, each of a pixel's samples would repeat the pixel's loads). A covered
+// pixel's first sample holds the nearest depth at which a fragment drawn there is looked up, its other samples the farthest (kept short of the
 // far plane, which means no surface); an uncovered pixel's samples stay at 1.0. Bounds over
 // every sample of a tile or a cluster then hold every depth a forward pass looks a list up at:
 // - the opaque surface's: with MSAA forward the depth ranges its visible fragments keep
@@ -23,12 +24,12 @@ const TRANSPARENT: bool = false;
 @group(0) @binding(2) var near: texture_depth_2d;
 @group(0) @binding(3) var far: texture_depth_2d;
 
-@fragment
-fn fs_bounds(@builtin(position) pos: vec4<f32>, @builtin(sample_index) k: u32) -> @builtin(frag_depth) f32 {
-    let p = vec2<u32>(pos.xy);
+// A pixel's nearest and farthest lookup depth, and whether anything covers it (z: 1.0 or
+// 0.0).
+fn pixel_bounds(p: vec2<u32>) -> vec3<f32> {
     var lo = 1.0;
     var hi = 0.0;
-    var covered = false;
+    var covered = 0.0;
     for (var s = 0u; s < DEPTH_SAMPLES; s++) {
         let z = textureLoad(depth, p, s);
         if z < 1.0 {
@@ -38,21 +39,38 @@ fn fs_bounds(@builtin(position) pos: vec4<f32>, @builtin(sample_index) k: u32) -
             }
             lo = min(lo, r.x);
             hi = max(hi, r.y);
-            covered = true;
+            covered = 1.0;
         }
         if TRANSPARENT {
             let n = textureLoad(near, p, s);
             if n < 1.0 {
                 lo = min(lo, n);
                 hi = max(hi, textureLoad(far, p, s));
-                covered = true;
+                covered = 1.0;
             }
         }
     }
-    if !covered {
-        return 1.0;
-    }
+    return vec3<f32>(lo, hi, covered);
+}
+
+// The depth written: the bound, kept short of the far plane (which means no surface); 1.0
+// where nothing covers the pixel.
+fn bound_depth(b: vec3<f32>, bound: f32) -> f32 {
     // The largest f32 below 1.0.
     let below_far = 0.99999994;
-    return clamp(select(hi, lo, k == 0u), 0.0, below_far);
+    return select(1.0, clamp(bound, 0.0, below_far), b.z > 0.0);
+}
+
+// Run once a pixel (not a sample) in two draws of one pass: the farthest into every sample,
+// then (the pipeline's sample mask 1) the nearest into sample 0.
+@fragment
+fn fs_bounds_far(@builtin(position) pos: vec4<f32>) -> @builtin(frag_depth) f32 {
+    let b = pixel_bounds(vec2<u32>(pos.xy));
+    return bound_depth(b, b.y);
+}
+
+@fragment
+fn fs_bounds_near(@builtin(position) pos: vec4<f32>) -> @builtin(frag_depth) f32 {
+    let b = pixel_bounds(vec2<u32>(pos.xy));
+    return bound_depth(b, b.x);
 }

@@ -54,8 +54,9 @@ pub struct LookupBounds {
     prepass: Option<wgpu::RenderPipeline>,
     /// Transparent surfaces: their nearest and farthest depth.
     transparent: Option<[wgpu::RenderPipeline; 2]>,
-    /// `prepass.depth_bounds` over the depth alone, and over the prepass's depth ranges.
-    bounds: [wgpu::RenderPipeline; 2],
+    /// `prepass.depth_bounds` over the depth alone, and over the prepass's depth ranges: each
+    /// its draw of the farthest depth into every sample and of the nearest into sample 0.
+    bounds: [[wgpu::RenderPipeline; 2]; 2],
     layout: wgpu::BindGroupLayout,
     samples: u32,
 }
@@ -160,16 +161,20 @@ impl LookupBounds {
                 label: Some(BOUNDS.name),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-            pipeline::screen(
-                d,
-                "prepass.depth_bounds",
-                &module,
-                &[&layout],
-                "fs_bounds",
-                &[],
-                true,
-                bound_samples(samples),
-            )
+            // The farthest into every sample, then the nearest into sample 0.
+            [("fs_bounds_far", !0), ("fs_bounds_near", 1)].map(|(entry, mask)| {
+                pipeline::screen_masked(
+                    d,
+                    "prepass.depth_bounds",
+                    &module,
+                    &[&layout],
+                    entry,
+                    &[],
+                    true,
+                    bound_samples(samples),
+                    mask,
+                )
+            })
         };
         let bounds = [bounds_with(false), bounds_with(multisampled)];
         Self {
@@ -331,9 +336,11 @@ impl LookupBounds {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&self.bounds[usize::from(ranges && self.prepass.is_some())]);
         pass.set_bind_group(0, &targets.group, &[]);
-        pass.draw(0..3, 0..1);
+        for pipeline in &self.bounds[usize::from(ranges && self.prepass.is_some())] {
+            pass.set_pipeline(pipeline);
+            pass.draw(0..3, 0..1);
+        }
     }
 }
 

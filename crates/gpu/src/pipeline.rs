@@ -124,6 +124,27 @@ pub fn screen(
     depth: bool,
     samples: u32,
 ) -> wgpu::RenderPipeline {
+    screen_masked(
+        device, label, module, groups, entry, targets, depth, samples, !0,
+    )
+}
+
+/// As [`screen`], writing only the samples of `mask` (bit k: sample k).
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a pipeline: its shader, groups, targets, sample count and mask"
+)]
+pub fn screen_masked(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    groups: &[&wgpu::BindGroupLayout],
+    entry: &str,
+    targets: &[Option<wgpu::ColorTargetState>],
+    depth: bool,
+    samples: u32,
+    mask: u64,
+) -> wgpu::RenderPipeline {
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
         layout: Some(&layout(device, label, groups)),
@@ -143,6 +164,7 @@ pub fn screen(
         }),
         multisample: wgpu::MultisampleState {
             count: samples,
+            mask,
             ..Default::default()
         },
         fragment: Some(wgpu::FragmentState {
