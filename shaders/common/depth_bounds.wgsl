@@ -1,8 +1,8 @@
 // prepass.depth_bounds (manylights_gpu::lookup_bounds): the depth texture culling takes its
-// bounds from, of BOUND_SAMPLES samples a pixel, drawn by one triangle over the screen twice,
-// each run once a pixel (fs_bounds_far into every sample, then fs_bounds_near into sample 0;
-// run once a sample, each of a pixel's samples would repeat the pixel's loads). A covered
-// pixel's first sample holds the nearest depth at which a fragment drawn there is looked up, its other samples the farthest (kept short of the
+// bounds from, of BOUND_SAMPLES samples a pixel, drawn by one triangle over the screen: with
+// MSAA twice, each run once a pixel (fs_bounds_far into every sample, then fs_bounds_near into
+// sample 0), as run once a sample each sample would repeat the pixel's loads; at one sample a
+// pixel once, run once a sample (fs_bounds). A covered pixel's first sample holds the nearest depth at which a fragment drawn there is looked up, its other samples the farthest (kept short of the
 // far plane, which means no surface); an uncovered pixel's samples stay at 1.0. Bounds over
 // every sample of a tile or a cluster then hold every depth a forward pass looks a list up at:
 // - the opaque surface's: with MSAA forward the depth ranges its visible fragments keep
@@ -61,8 +61,17 @@ fn bound_depth(b: vec3<f32>, bound: f32) -> f32 {
     return select(1.0, clamp(bound, 0.0, below_far), b.z > 0.0);
 }
 
-// Run once a pixel (not a sample) in two draws of one pass: the farthest into every sample,
-// then (the pipeline's sample mask 1) the nearest into sample 0.
+// Run once a sample: where the frame has one sample a pixel (its loads are then few, and one
+// draw writes each of the 4 samples once).
+@fragment
+fn fs_bounds(@builtin(position) pos: vec4<f32>, @builtin(sample_index) k: u32) -> @builtin(frag_depth) f32 {
+    let b = pixel_bounds(vec2<u32>(pos.xy));
+    return bound_depth(b, select(b.y, b.x, k == 0u));
+}
+
+// Run once a pixel in two draws of one pass: the farthest into every sample, then (the
+// pipeline's sample mask 1) the nearest into sample 0. Where the frame has several samples a
+// pixel, whose loads each sample would repeat.
 @fragment
 fn fs_bounds_far(@builtin(position) pos: vec4<f32>) -> @builtin(frag_depth) f32 {
     let b = pixel_bounds(vec2<u32>(pos.xy));

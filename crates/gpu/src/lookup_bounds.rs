@@ -55,8 +55,9 @@ pub struct LookupBounds {
     /// Transparent surfaces: their nearest and farthest depth.
     transparent: Option<[wgpu::RenderPipeline; 2]>,
     /// `prepass.depth_bounds` over the depth alone, and over the prepass's depth ranges: each
-    /// its draw of the farthest depth into every sample and of the nearest into sample 0.
-    bounds: [[wgpu::RenderPipeline; 2]; 2],
+    /// its draws (with MSAA the farthest depth into every sample, then the nearest into sample
+    /// 0; at one sample one draw, a sample at a time).
+    bounds: [Vec<wgpu::RenderPipeline>; 2],
     layout: wgpu::BindGroupLayout,
     samples: u32,
 }
@@ -161,20 +162,29 @@ impl LookupBounds {
                 label: Some(BOUNDS.name),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-            // The farthest into every sample, then the nearest into sample 0.
-            [("fs_bounds_far", !0), ("fs_bounds_near", 1)].map(|(entry, mask)| {
-                pipeline::screen_masked(
-                    d,
-                    "prepass.depth_bounds",
-                    &module,
-                    &[&layout],
-                    entry,
-                    &[],
-                    true,
-                    bound_samples(samples),
-                    mask,
-                )
-            })
+            // With MSAA the farthest into every sample, then the nearest into sample 0, each
+            // once a pixel; at one sample a pixel (a pixel's loads few) once a sample.
+            let draws: &[(&str, u64)] = if multisampled {
+                &[("fs_bounds_far", !0), ("fs_bounds_near", 1)]
+            } else {
+                &[("fs_bounds", !0)]
+            };
+            draws
+                .iter()
+                .map(|&(entry, mask)| {
+                    pipeline::screen_masked(
+                        d,
+                        "prepass.depth_bounds",
+                        &module,
+                        &[&layout],
+                        entry,
+                        &[],
+                        true,
+                        bound_samples(samples),
+                        mask,
+                    )
+                })
+                .collect::<Vec<_>>()
         };
         let bounds = [bounds_with(false), bounds_with(multisampled)];
         Self {
