@@ -172,7 +172,7 @@ impl LookupBounds {
             draws
                 .iter()
                 .map(|&(entry, mask)| {
-                    pipeline::screen_masked(
+                    pipeline::screen(
                         d,
                         "prepass.depth_bounds",
                         &module,

@@ -109,32 +109,13 @@ pub fn raster_msaa(
 /// A pipeline drawing one triangle over the screen (`vs_screen` of [`crate::shaders::SCREEN`],
 /// which `module` must compose, then `draw(0..3, 0..1)`) at `samples` samples a pixel: its
 /// fragment entry `entry` into `targets`, and where `depth` the depth it returns written over
-/// the depth target whatever was there.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "a pipeline: its shader, groups, targets and sample count"
-)]
-pub fn screen(
-    device: &wgpu::Device,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    groups: &[&wgpu::BindGroupLayout],
-    entry: &str,
-    targets: &[Option<wgpu::ColorTargetState>],
-    depth: bool,
-    samples: u32,
-) -> wgpu::RenderPipeline {
-    screen_masked(
-        device, label, module, groups, entry, targets, depth, samples, !0,
-    )
-}
-
-/// As [`screen`], writing only the samples of `mask` (bit k: sample k).
+/// the depth target whatever was there; only into the samples of `mask` (bit k: sample k;
+/// `!0`: all).
 #[expect(
     clippy::too_many_arguments,
     reason = "a pipeline: its shader, groups, targets, sample count and mask"
 )]
-pub fn screen_masked(
+pub fn screen(
     device: &wgpu::Device,
     label: &str,
     module: &wgpu::ShaderModule,

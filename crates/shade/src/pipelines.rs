@@ -268,6 +268,7 @@ impl Renderer {
                 &[target(HDR)],
                 false,
                 samples,
+                !0,
             );
             (pipeline, layout)
         });
