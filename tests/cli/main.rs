@@ -17,6 +17,18 @@ pub(crate) fn manylights(args: &[&str]) -> Output {
         .expect("run manylights")
 }
 
+/// Runs `manylights` with `args`, which must succeed (a failure names `what` and shows the
+/// run's stderr); its stdout.
+pub(crate) fn succeeds(args: &[&str], what: &str) -> String {
+    let o = manylights(args);
+    assert!(
+        o.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 /// The PSNR of `render --compare`'s line against the reference, from its output.
 pub(crate) fn psnr_vs_reference(stdout: &str) -> f64 {
     let line = stdout
@@ -187,30 +199,27 @@ fn cull_reports_metrics_and_writes_heatmaps() {
         "clustered",
         "zbin",
     ] {
-        let o = manylights(&[
-            "cull",
-            "--scene",
-            "pillars",
-            "--lights",
-            "64",
-            "--radius",
-            "1.5",
-            "--strategy",
+        let stdout = succeeds(
+            &[
+                "cull",
+                "--scene",
+                "pillars",
+                "--lights",
+                "64",
+                "--radius",
+                "1.5",
+                "--strategy",
+                strategy,
+                "--width",
+                "40",
+                "--height",
+                "23",
+                "--tile-size",
+                "8",
+                "--out",
+                out.to_str().unwrap(),
+            ],
             strategy,
-            "--width",
-            "40",
-            "--height",
-            "23",
-            "--tile-size",
-            "8",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let stdout = String::from_utf8_lossy(&o.stdout);
-        assert!(
-            o.status.success(),
-            "{strategy}: {}",
-            String::from_utf8_lossy(&o.stderr)
         );
         assert!(
             stdout.contains("false negatives         0"),
@@ -286,9 +295,7 @@ fn cull_repeat_times_runs_back_to_back() {
             out.to_str().unwrap(),
         ];
         args.extend_from_slice(flags);
-        let o = manylights(&args);
-        let stdout = String::from_utf8_lossy(&o.stdout);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stdout = succeeds(&args, "cull --repeat");
         let after = stdout
             .split("3 runs back to back (median per pass):")
             .nth(1)
@@ -314,25 +321,26 @@ fn cull_repeat_times_runs_back_to_back() {
 fn cull_repeat_times_gathers_lines_path_in_two_passes() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("cull");
-    let o = manylights(&[
-        "cull",
-        "--scene",
-        "pillars",
-        "--lights",
-        "64",
-        "--strategy",
-        "tiled-gather",
-        "--width",
-        "40",
-        "--height",
-        "23",
-        "--repeat",
-        "3",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let stdout = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = succeeds(
+        &[
+            "cull",
+            "--scene",
+            "pillars",
+            "--lights",
+            "64",
+            "--strategy",
+            "tiled-gather",
+            "--width",
+            "40",
+            "--height",
+            "23",
+            "--repeat",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        "cull --repeat",
+    );
     assert!(
         stdout.contains("tile masks              used as tile lines ("),
         "{stdout}"
@@ -406,30 +414,27 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("r");
     for backend in ["forward", "deferred", "naive-forward"] {
-        let o = manylights(&[
-            "render",
-            "--scene",
-            "atrium",
-            "--lights",
-            "64",
-            "--backend",
+        let stdout = succeeds(
+            &[
+                "render",
+                "--scene",
+                "atrium",
+                "--lights",
+                "64",
+                "--backend",
+                backend,
+                "--strategy",
+                "depth-mask",
+                "--width",
+                "40",
+                "--height",
+                "24",
+                "--compare",
+                "--flip-map",
+                "--out",
+                out.to_str().unwrap(),
+            ],
             backend,
-            "--strategy",
-            "depth-mask",
-            "--width",
-            "40",
-            "--height",
-            "24",
-            "--compare",
-            "--flip-map",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let stdout = String::from_utf8_lossy(&o.stdout);
-        assert!(
-            o.status.success(),
-            "{backend}: {}",
-            String::from_utf8_lossy(&o.stderr)
         );
         assert!(
             stdout.contains("vs reference")

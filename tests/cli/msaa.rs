@@ -17,28 +17,25 @@ fn cull_msaa_counts_every_sample() {
         "zbin",
         "tiled-scatter",
     ] {
-        let o = manylights(&[
-            "cull",
-            "--scene",
-            "pillars",
-            "--width",
-            "64",
-            "--height",
-            "36",
-            "--lights",
-            "64",
-            "--strategy",
+        let stdout = succeeds(
+            &[
+                "cull",
+                "--scene",
+                "pillars",
+                "--width",
+                "64",
+                "--height",
+                "36",
+                "--lights",
+                "64",
+                "--strategy",
+                strategy,
+                "--msaa",
+                "4",
+                "--out",
+                out.to_str().unwrap(),
+            ],
             strategy,
-            "--msaa",
-            "4",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
-        let stdout = String::from_utf8_lossy(&o.stdout);
-        assert!(
-            o.status.success(),
-            "{strategy}: {}",
-            String::from_utf8_lossy(&o.stderr)
         );
         assert!(stdout.contains("MSAA 4"), "{strategy}: {stdout}");
         let line = stdout
@@ -98,13 +95,7 @@ fn render_msaa_matches_the_reference_at_its_count() {
         ];
         args.push(out.to_str().unwrap());
         args.extend_from_slice(backend);
-        let o = manylights(&args);
-        let stdout = String::from_utf8_lossy(&o.stdout);
-        assert!(
-            o.status.success(),
-            "{backend:?}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
+        let stdout = succeeds(&args, &format!("{backend:?}"));
         assert!(stdout.contains("MSAA 4"), "{backend:?}: {stdout}");
         let psnr = psnr_vs_reference(&stdout);
         // Deferred lights an edge's samples apart, the reference each fragment once.

@@ -17,13 +17,7 @@ fn glass_is_culled_exactly_and_rendered_as_the_reference_does() {
         args.extend_from_slice(&common);
         args.push(out.to_str().unwrap());
         args.extend_from_slice(extra);
-        let o = manylights(&args);
-        assert!(
-            o.status.success(),
-            "{cmd} {extra:?}: {}",
-            String::from_utf8_lossy(&o.stderr)
-        );
-        String::from_utf8_lossy(&o.stdout).into_owned()
+        succeeds(&args, &format!("{cmd} {extra:?}"))
     };
     for strategy in ["tiled-gather", "depth-mask", "clustered", "zbin"] {
         let stdout = run("cull", &["--strategy", strategy]);

@@ -22,12 +22,12 @@ mod steady;
 mod transparent;
 
 use manylights_cull::{CullSettings, Slicing, Strategy};
-use manylights_gpu::GpuScene;
 use manylights_gpu::timing::{GpuTimer, PassKind};
+use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::accuracy::{ImageError, compare};
-use manylights_shade::{Backend, ReferenceRenderer, Renderer, ShadeOutput};
+use manylights_shade::{Backend, HdrImage, ReferenceRenderer, Renderer, ShadeOutput};
 
 const CULLED: [Backend; 3] = [
     Backend::Forward,
@@ -86,6 +86,30 @@ fn tolerance(backend: Backend) -> f64 {
     } else {
         1e-4
     }
+}
+
+/// Naive forward's frame of `gpu_scene` by `renderer` at `w` x `h` (the strategy unused), and
+/// its error against `reference`.
+fn naive_against(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    settings: &CullSettings,
+    (w, h): (u32, u32),
+    reference: &HdrImage,
+) -> (ShadeOutput, ImageError) {
+    let naive = renderer
+        .render(
+            ctx,
+            gpu_scene,
+            Backend::NaiveForward,
+            &strategies()[0],
+            settings,
+            (w, h),
+        )
+        .unwrap();
+    let e = compare(&naive.color, reference, 1.0);
+    (naive, e)
 }
 
 fn within_tolerance(e: &ImageError, backend: Backend) -> bool {
@@ -150,17 +174,8 @@ fn every_strategy_and_backend_matches_the_reference() {
             assert!(reference.peak() > 0.0, "{name}: the reference is black");
             let renderer = Renderer::new(&ctx, &gpu_scene);
             let settings = CullSettings::for_camera(&s.camera);
-            let naive = renderer
-                .render(
-                    &ctx,
-                    &gpu_scene,
-                    Backend::NaiveForward,
-                    &strategies()[0],
-                    &settings,
-                    (w, h),
-                )
-                .unwrap();
-            let e = compare(&naive.color, &reference, 1.0);
+            let (naive, e) =
+                naive_against(&ctx, &renderer, &gpu_scene, &settings, (w, h), &reference);
             assert!(
                 within_tolerance(&e, Backend::NaiveForward),
                 "{name} {w}x{h} naive: {e:?}"

@@ -9,7 +9,7 @@ use manylights_gpu::prepass::DEPTH_FORMAT;
 use manylights_shade::accuracy::compare;
 use manylights_shade::{Backend, ReferenceRenderer, Renderer};
 
-use super::{check_timings, common, scene, strategies, within_tolerance};
+use super::{check_timings, common, naive_against, scene, strategies, within_tolerance};
 
 const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 
@@ -51,17 +51,7 @@ fn forward_msaa_matches_the_reference_at_its_sample_count() {
         let renderer = Renderer::with_samples(&ctx, &gpu_scene, 4).unwrap();
         assert_eq!(renderer.samples(), 4);
         let settings = CullSettings::for_camera(&s.camera);
-        let naive = renderer
-            .render(
-                &ctx,
-                &gpu_scene,
-                Backend::NaiveForward,
-                &strategies()[0],
-                &settings,
-                (w, h),
-            )
-            .unwrap();
-        let e = compare(&naive.color, &reference, 1.0);
+        let (_, e) = naive_against(&ctx, &renderer, &gpu_scene, &settings, (w, h), &reference);
         assert!(
             within_tolerance(&e, Backend::Forward),
             "{name} naive MSAA 4: {e:?}"

@@ -10,7 +10,7 @@ use manylights_scene::procedural::{AtriumParams, PillarsParams, ProceduralScene}
 use manylights_shade::accuracy::compare;
 use manylights_shade::{Backend, ReferenceRenderer, Renderer};
 
-use super::{common, scene, strategies, within_tolerance};
+use super::{common, naive_against, scene, strategies, within_tolerance};
 
 /// `name` with its glass panes and the tests' lights.
 pub(crate) fn glass_scene(name: &str) -> manylights_scene::Scene {
@@ -126,17 +126,14 @@ fn naive_forward_blends_glass_as_the_reference_does() {
             );
             let renderer = Renderer::with_samples(&ctx, &gpu_scene, samples).unwrap();
             let settings = CullSettings::for_camera(&s.camera);
-            let naive = renderer
-                .render(
-                    &ctx,
-                    &gpu_scene,
-                    Backend::NaiveForward,
-                    &strategies()[0],
-                    &settings,
-                    (w, h),
-                )
-                .unwrap();
-            let e = compare(&naive.color, &reference.color, 1.0);
+            let (_, e) = naive_against(
+                &ctx,
+                &renderer,
+                &gpu_scene,
+                &settings,
+                (w, h),
+                &reference.color,
+            );
             assert!(within_tolerance(&e, Backend::Forward), "{what}: {e:?}");
             // The glass shows: pixels differ from the scene without it.
             let plain_scene = GpuScene::upload(&ctx, &plain, &plain.camera, w, h).unwrap();
