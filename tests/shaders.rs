@@ -10,6 +10,7 @@ use std::mem::offset_of;
 use manylights_cull::layout::{GpuCullParams, GpuTileDepth};
 use manylights_gpu::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex};
 use manylights_gpu::motion::MotionParams;
+use manylights_gpu::stochastic::GpuStochasticParams;
 use manylights_gpu::shaders::ShaderDef;
 
 fn all_shaders() -> Vec<ShaderDef> {
@@ -150,7 +151,7 @@ fn host_structs_match_wgsl_layout() {
     check!(GpuFrame, "Frame", [clip_from_world => "clip_from_world", view_from_world => "view_from_world",
         clip_from_view => "clip_from_view", world_from_view => "world_from_view", eye => "eye", viewport => "viewport", light_count => "light_count", flags => "flags"]);
     check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
-        direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer"]);
+        direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer", alpha => "alpha"]);
     check!(GpuMaterial, "Material", [base_color => "base_color", specular => "specular", opacity => "opacity"]);
     let cull = validate(&manylights_cull::shaders::DEPTH_BOUNDS);
     let (size, members) = wgsl_layout(&cull, "CullParams");
@@ -190,6 +191,10 @@ fn host_structs_match_wgsl_layout() {
     let motion = validate(&manylights_gpu::motion::MOTION);
     check!(&motion, MotionParams, "MotionParams", [kind => "kind", first => "first", count => "count",
         row => "row", speed => "speed", time => "time"]);
+    let stochastic = validate(&manylights_gpu::stochastic::STOCHASTIC);
+    check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
+        row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",
+        exposure => "exposure", rho_max => "rho_max"]);
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.
     let (_, members) = wgsl_layout(&reference, "VertexIn");

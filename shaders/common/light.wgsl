@@ -12,7 +12,10 @@ struct Light {
     kind: u32,
     cos_inner: f32,
     cos_outer: f32,
-    _pad0: u32,
+    // Stochastic light culling's alpha (manylights_scene::stochastic): above 0, the light is
+    // shaded with max(1 / d^2, alpha) inside its radius, the range drawn for this frame
+    // (lights.stochastic); 0, the windowed falloff.
+    alpha: f32,
     _pad1: u32,
 }
 
@@ -33,6 +36,17 @@ fn light_falloff(d: f32, r: f32) -> f32 {
 // metrics (what the radius cut-off itself costs).
 fn light_falloff_infinite(d: f32) -> f32 {
     return 1.0 / max(d * d, D_MIN * D_MIN);
+}
+
+// The falloff a light is shaded with: the windowed one or, for stochastic light culling
+// (alpha > 0), max(1 / d^2, alpha) inside the range drawn for the frame: 1 / d^2 divided by the
+// probability min(d^-2 / alpha, 1) that the light reaches d, an unbiased estimate of the
+// infinite-range falloff (manylights_scene::stochastic).
+fn light_attenuation(light: Light, d: f32) -> f32 {
+    if light.alpha > 0.0 {
+        return select(0.0, max(light_falloff_infinite(d), light.alpha), d < light.radius);
+    }
+    return light_falloff(d, light.radius);
 }
 
 // Spot cone factor; exactly zero at and outside the outer cone.

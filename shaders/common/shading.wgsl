@@ -40,10 +40,23 @@ fn shininess_pow(x: f32) -> f32 {
 // `d = length(to_light)` (the per-pixel reject of list_shading.wgsl computes them first): the
 // same arithmetic, so a light the reject keeps adds exactly what shade_light adds.
 fn shade_light_at(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
-    var atten = light_falloff(d, light.radius);
+    var atten = light_attenuation(light, d);
     if (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u {
         atten = light_falloff_infinite(d);
     }
+    return shade_light_atten(light, to_light, d, atten, n, v, m);
+}
+
+// One light at `p` with the infinite-range falloff whatever the frame's flags (the compute
+// reference, reference_infinite.wgsl).
+fn light_infinite(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
+    let to_light = light.position - p;
+    let d = length(to_light);
+    return shade_light_atten(light, to_light, d, light_falloff_infinite(d), n, v, m);
+}
+
+// The BRDF, spot cone and cosine of one light whose falloff at distance `d` is `atten`.
+fn shade_light_atten(light: Light, to_light: vec3<f32>, d: f32, atten: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     if atten == 0.0 {
         return vec3<f32>(0.0);
     }

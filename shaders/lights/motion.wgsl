@@ -22,13 +22,6 @@ struct MotionParams {
 
 const TAU: f32 = 6.283185307179586;
 
-// PCG's output hash, as manylights_scene::motion::pcg.
-fn pcg(v: u32) -> u32 {
-    let s = v * 747796405u + 2891336453u;
-    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
-    return (w >> 22u) ^ w;
-}
-
 // A number in [0, 1) from a light's index and a salt, 24 bits.
 fn hash01(index: u32, salt: u32) -> f32 {
     return f32(pcg(index * 8u + salt) >> 8u) / 16777216.0;

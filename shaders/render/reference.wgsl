@@ -16,7 +16,16 @@ fn fs_reference(in: VertexOut) -> ReferenceOut {
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let c = shade_all(in.world, n, v, materials[in.material]);
-    return ReferenceOut(vec4<f32>(c, 1.0), vec4<f32>(in.world, 1.0), vec4<f32>(n, 0.0));
+    return ReferenceOut(vec4<f32>(c, 1.0), vec4<f32>(in.world, 1.0), vec4<f32>(n, f32(in.material)));
+}
+
+// The surfaces alone (no light evaluated; colour 0 where covered): the input of the
+// infinite-range reference's compute pass where the windowed reference is not wanted.
+@fragment
+fn fs_surface(in: VertexOut) -> ReferenceOut {
+    let v = view_dir(in.world);
+    let n = facing_normal(normalize(in.normal), v);
+    return ReferenceOut(vec4<f32>(0.0, 0.0, 0.0, 1.0), vec4<f32>(in.world, 1.0), vec4<f32>(n, f32(in.material)));
 }
 
 // shade.reference over transparent surfaces: after the opaque ones, back to front, tested

@@ -105,8 +105,11 @@ pub struct GpuLight {
     pub cos_inner: f32,
     /// Cosine of the outer half-angle.
     pub cos_outer: f32,
+    /// Stochastic light culling's alpha (`manylights_scene::stochastic`), written each frame
+    /// by `lights.stochastic` with the range in `radius`; 0: the windowed falloff.
+    pub alpha: f32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 const _: () = assert!(size_of::<GpuLight>() == 64);
 
@@ -128,7 +131,8 @@ impl From<&Light> for GpuLight {
             kind,
             cos_inner,
             cos_outer,
-            _pad: [0; 2],
+            alpha: 0.0,
+            _pad: 0,
         }
     }
 }

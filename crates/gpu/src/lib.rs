@@ -4,7 +4,7 @@
 //! per-pass GPU timing with timestamp queries ([`timing`]), buffer and texture readback
 //! ([`readback`]), the composition of WGSL from the files under `shaders/` ([`shaders`]), the
 //! host-side mirrors of the shader structs ([`layout`]), the scene on the GPU ([`GpuScene`]),
-//! moving its lights each frame ([`motion`]), the depth prepass ([`prepass`]) that culling strategies and shading backends share, and the depth culling takes its bounds from where lists are looked up off the depth buffer's samples ([`lookup_bounds`]: MSAA, transparent surfaces).
+//! moving its lights each frame ([`motion`]), stochastic light culling's ranges drawn each frame ([`stochastic`]), the depth prepass ([`prepass`]) that culling strategies and shading backends share, and the depth culling takes its bounds from where lists are looked up off the depth buffer's samples ([`lookup_bounds`]: MSAA, transparent surfaces).
 //!
 //! Depends on the scene crate and wgpu; knows nothing of culling strategies or backends.
 
@@ -17,6 +17,7 @@ pub mod prepass;
 pub mod readback;
 pub mod scene;
 pub mod shaders;
+pub mod stochastic;
 pub mod timing;
 
 pub use context::{GpuContext, GpuError, GpuOptions};

@@ -239,6 +239,7 @@ pub const SHADERS: &[ShaderDef] = &[
     crate::lookup_bounds::PREPASS_RANGES,
     crate::lookup_bounds::BOUNDS,
     crate::motion::MOTION,
+    crate::stochastic::STOCHASTIC,
 ];
 
 #[cfg(test)]

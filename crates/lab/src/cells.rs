@@ -259,11 +259,7 @@ impl Experiment {
         axis!(s.lights, |c: &mut Config, v: LightSpec| {
             c.lights = v;
             // One name part (no comma), so that a figure's series drops it with the count.
-            let r = match v.radius {
-                RadiusRule::Fixed(r) => format!("radius={r}"),
-                RadiusRule::Threshold(t) => format!("threshold={t}"),
-            };
-            format!("lights={}({r})", v.count)
+            format!("lights={}({})", v.count, radius_label(&v.radius))
         });
         axis!(s.light_count, |c: &mut Config, v: u32| {
             c.lights.count = v;
@@ -279,10 +275,7 @@ impl Experiment {
         });
         axis!(s.radius, |c: &mut Config, v: RadiusRule| {
             c.lights.radius = v;
-            match v {
-                RadiusRule::Fixed(r) => format!("radius={r}"),
-                RadiusRule::Threshold(t) => format!("threshold={t}"),
-            }
+            radius_label(&v)
         });
         let mut cam_i = 0usize;
         let _ = &mut cam_i;
@@ -439,5 +432,30 @@ impl Experiment {
             l.dedup();
         }
         e
+    }
+}
+
+/// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`, or
+/// `stochastic=E` with `/accK` where K frames accumulate and `/exposureX` where the exposure
+/// is not 1.
+pub fn radius_label(rule: &RadiusRule) -> String {
+    match *rule {
+        RadiusRule::Fixed(r) => format!("radius={r}"),
+        RadiusRule::Threshold(t) => format!("threshold={t}"),
+        RadiusRule::Stochastic {
+            error,
+            exposure,
+            accumulate,
+            ..
+        } => {
+            let mut s = format!("stochastic={error}");
+            if accumulate > 1 {
+                s += &format!("/acc{accumulate}");
+            }
+            if exposure != 1.0 {
+                s += &format!("/exposure{exposure}");
+            }
+            s
+        }
     }
 }

@@ -6,6 +6,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
+use crate::stochastic::StochasticParams;
 use crate::{Light, LightKind, Motion, Scene, SceneError};
 
 /// How light positions are chosen.
@@ -38,6 +39,44 @@ pub enum RadiusRule {
     /// The distance at which the un-windowed inverse-square irradiance of the light's brightest
     /// channel falls to this threshold: `r = sqrt(intensity * max(colour) / threshold)`, > 0.
     Threshold(f32),
+    /// Stochastic light culling ([`crate::stochastic`]): every frame each light gets a random
+    /// range, drawn so that the image is an unbiased estimate of the infinite-range one. The
+    /// generated radius is the shortest range (`xi = 1`); `lights.stochastic` draws each
+    /// frame's.
+    Stochastic {
+        /// Bound on one light's standard deviation at a pixel, in exposed radiance, > 0.
+        error: f32,
+        /// The exposure `error` is measured at, > 0 (default 1).
+        #[serde(default = "unit")]
+        exposure: f32,
+        /// Frames averaged into one image with fresh ranges, as a renderer accumulates
+        /// temporally: 0 (the default) none, otherwise at least 2.
+        #[serde(default)]
+        accumulate: u32,
+        /// Independent draws measured for the noise and bias columns, >= 1 (default 4).
+        #[serde(default = "four")]
+        seeds: u32,
+    },
+}
+
+fn unit() -> f32 {
+    1.0
+}
+
+fn four() -> u32 {
+    4
+}
+
+impl RadiusRule {
+    /// The name of the rule in cell names and result columns: `fixed`, `threshold` or
+    /// `stochastic`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Fixed(_) => "fixed",
+            Self::Threshold(_) => "threshold",
+            Self::Stochastic { .. } => "stochastic",
+        }
+    }
 }
 
 /// A complete description of a generated light set. Every field has a default (see
@@ -110,6 +149,41 @@ impl LightSpec {
                     "a finite cut-off threshold > 0",
                 ));
             }
+            RadiusRule::Stochastic {
+                error,
+                exposure,
+                accumulate,
+                seeds,
+            } => {
+                if !(error.is_finite() && error > 0.0) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.error",
+                        error,
+                        "a finite error bound > 0",
+                    ));
+                }
+                if !(exposure.is_finite() && exposure > 0.0) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.exposure",
+                        exposure,
+                        "a finite exposure > 0",
+                    ));
+                }
+                if accumulate == 1 {
+                    return Err(SceneError::invalid(
+                        "lights.radius.accumulate",
+                        accumulate,
+                        "0 (no accumulation) or at least 2 frames",
+                    ));
+                }
+                if seeds == 0 {
+                    return Err(SceneError::invalid(
+                        "lights.radius.seeds",
+                        seeds,
+                        "at least 1 seed",
+                    ));
+                }
+            }
             _ => {}
         }
         if !(0.0..=1.0).contains(&self.spot_fraction) {
@@ -160,6 +234,7 @@ impl LightSpec {
             ));
         }
         let mut rng = Pcg64::seed_from_u64(self.seed);
+        let stochastic = self.stochastic(scene);
         let n = self.count as usize;
         let uniform = |rng: &mut Pcg64| {
             b.min
@@ -197,6 +272,7 @@ impl LightSpec {
                     RadiusRule::Threshold(t) => {
                         (self.intensity * color.max_element() / t).sqrt().max(1e-3)
                     }
+                    RadiusRule::Stochastic { .. } => 0.0,
                 };
                 let kind = if rng.random::<f32>() < self.spot_fraction {
                     // Mostly downward axes, tilted up to 60 degrees.
@@ -213,16 +289,40 @@ impl LightSpec {
                 } else {
                     LightKind::Point
                 };
-                Light {
+                let light = Light {
                     kind,
                     position,
                     radius,
                     color,
                     intensity: self.intensity,
+                };
+                match &stochastic {
+                    // The shortest range, at xi = 1.
+                    Some(p) => Light {
+                        radius: StochasticParams::range(p.alpha(&light), 1.0),
+                        ..light
+                    },
+                    None => light,
                 }
             })
             .collect();
         Ok(lights)
+    }
+
+    /// The parameters of the stochastic ranges in `scene`, where the radius rule is
+    /// `Stochastic` (the seed is the light set's, folded to 32 bits).
+    pub fn stochastic(&self, scene: &Scene) -> Option<StochasticParams> {
+        match self.radius {
+            RadiusRule::Stochastic {
+                error, exposure, ..
+            } => Some(StochasticParams {
+                error,
+                exposure,
+                rho_max: crate::stochastic::rho_max(&scene.materials),
+                seed: (self.seed ^ (self.seed >> 32)) as u32,
+            }),
+            _ => None,
+        }
     }
 }
 

@@ -15,6 +15,7 @@ pub mod light;
 pub mod mesh;
 pub mod motion;
 pub mod procedural;
+pub mod stochastic;
 
 pub use camera::{Camera, Projection};
 pub use error::SceneError;

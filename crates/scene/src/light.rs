@@ -222,16 +222,30 @@ pub fn shade(
     lights: &[Light],
     range: Range,
 ) -> DVec3 {
+    shade_with(p, n, v, material, lights, |_, light, d| match range {
+        Range::Windowed => falloff(d, f64::from(light.radius)),
+        Range::Infinite => falloff_infinite(d),
+    })
+}
+
+/// [`shade`] with the falloff of light `k` at distance `d` given by `atten(k, light, d)`: the
+/// shading model once, for every way a light's range is set (the stochastic ranges of
+/// [`crate::stochastic::shade`]).
+pub fn shade_with(
+    p: DVec3,
+    n: DVec3,
+    v: DVec3,
+    material: &Material,
+    lights: &[Light],
+    atten: impl Fn(usize, &Light, f64) -> f64,
+) -> DVec3 {
     let albedo = material.base_color.as_dvec3();
     let spec_norm = (SHININESS + 8.0) / (8.0 * std::f64::consts::PI);
     let mut out = DVec3::ZERO;
-    for light in lights {
+    for (k, light) in lights.iter().enumerate() {
         let to_light = light.position.as_dvec3() - p;
         let d = to_light.length();
-        let atten = match range {
-            Range::Windowed => falloff(d, f64::from(light.radius)),
-            Range::Infinite => falloff_infinite(d),
-        };
+        let atten = atten(k, light, d);
         if atten == 0.0 {
             continue;
         }

@@ -1,7 +1,7 @@
 //! Shading for manylights.
 //!
 //! Owns: the brute-force reference renderer ([`reference`]), the accuracy reference of every
-//! strategy and backend; the shading backends ([`backends`]: forward, deferred, naive forward)
+//! strategy and backend, and the infinite-range reference as a compute pass ([`infinite`]); the shading backends ([`backends`]: forward, deferred, naive forward)
 //! over any culling strategy; image error metrics ([`accuracy`]: max abs error, RMSE, PSNR,
 //! FLIP); and HDR images with their output to EXR and tonemapped PNG ([`image_out`]).
 //! Depends on the scene, GPU and culling crates.
@@ -9,18 +9,21 @@
 pub mod accuracy;
 pub mod backends;
 pub mod image_out;
+pub mod infinite;
 pub mod pipelines;
 pub mod reference;
 pub mod shade_pass;
 
 pub use backends::{Backend, Renderer, ShadeOutput};
 pub use image_out::HdrImage;
+pub use infinite::InfiniteReference;
 pub use reference::{ReferenceFrame, ReferenceRenderer};
 pub use shade_pass::ShadePass;
 
 /// Every shader this crate defines (validated by naga in `tests/shaders.rs`).
 pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     reference::SHADER,
+    infinite::SHADER,
     pipelines::FORWARD,
     pipelines::GBUFFER,
     pipelines::DEFERRED,

@@ -49,6 +49,8 @@ pub struct ReferenceFrame {
 pub struct ReferenceRenderer {
     prepass: DepthPrepass,
     pipeline: wgpu::RenderPipeline,
+    /// The surfaces alone, no light evaluated (`fs_surface`).
+    surface: wgpu::RenderPipeline,
     /// Transparent surfaces, blended into the colour target.
     transparent: wgpu::RenderPipeline,
     samples: u32,
@@ -79,7 +81,16 @@ impl ReferenceRenderer {
             "shade.reference",
             &module,
             &[&scene.layout],
-            Some(("fs_reference", &[t.clone(), t.clone(), t])),
+            Some(("fs_reference", &[t.clone(), t.clone(), t.clone()])),
+            pipeline::DepthTest::Equal,
+            samples,
+        );
+        let surface = pipeline::raster_msaa(
+            &ctx.device,
+            "shade.reference_surface",
+            &module,
+            &[&scene.layout],
+            Some(("fs_surface", &[t.clone(), t.clone(), t])),
             pipeline::DepthTest::Equal,
             samples,
         );
@@ -104,6 +115,7 @@ impl ReferenceRenderer {
         Self {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             pipeline,
+            surface,
             transparent,
             samples,
         }
@@ -141,6 +153,37 @@ impl ReferenceRenderer {
         width: u32,
         height: u32,
     ) -> Result<ReferenceFrame, GpuError> {
+        self.render_with(ctx, scene, width, height, &self.pipeline)
+    }
+
+    /// The surfaces of the frame alone (`shade.reference_surface`: position, shading normal
+    /// and material index a pixel; colour 0 where covered, no light evaluated): the input of
+    /// [`crate::InfiniteReference`] where the windowed reference is not wanted. Transparent
+    /// surfaces are not drawn.
+    pub fn surfaces(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        width: u32,
+        height: u32,
+    ) -> Result<ReferenceFrame, GpuError> {
+        self.render_with(ctx, scene, width, height, &self.surface)
+    }
+
+    /// The sample count the pipelines were built for.
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    fn render_with(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        width: u32,
+        height: u32,
+        opaque: &wgpu::RenderPipeline,
+    ) -> Result<ReferenceFrame, GpuError> {
+        let surfaces_only = std::ptr::eq(opaque, &self.surface);
         ctx.check_resolution(width, height)?;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let target = |label| pipeline::texture_2d(&ctx.device, label, (width, height), HDR, usage);
@@ -182,7 +225,12 @@ impl ReferenceRenderer {
         {
             // With MSAA, each target drawn multisampled and resolved into the single-sample one
             // by the last pass (the transparent surfaces' where the scene has them).
-            let transparent = scene.has_transparent();
+            let transparent = scene.has_transparent() && !surfaces_only;
+            let label = if surfaces_only {
+                "shade.reference_surface"
+            } else {
+                "shade.reference"
+            };
             let attachment = |k: usize, last: bool, clear: bool| {
                 let (view, resolve_target) = match &msaa {
                     Some(ms) => (&ms[k], last.then_some(&views[k])),
@@ -208,11 +256,11 @@ impl ReferenceRenderer {
             };
             let passes: &[(&str, &wgpu::RenderPipeline, bool)] = if transparent {
                 &[
-                    ("shade.reference", &self.pipeline, false),
+                    (label, opaque, false),
                     ("shade.reference_transparent", &self.transparent, true),
                 ]
             } else {
-                &[("shade.reference", &self.pipeline, false)]
+                &[(label, opaque, false)]
             };
             for (k, &(label, pipeline, transparent_pass)) in passes.iter().enumerate() {
                 let last = k + 1 == passes.len();

@@ -1,0 +1,209 @@
+//! Stochastic light culling (Tokuyoshi and Harada, "Stochastic Light Culling", JCGT 5(1),
+//! 2016): each light gets a random range each frame, drawn by Russian roulette on its falloff,
+//! so that culling by range stays conservative while the image is an unbiased estimate of the
+//! infinite-range one (no cut-off), at the price of noise.
+//!
+//! With one uniform `xi` per light and frame, shared by every pixel, and `f(d) = 1 / d^2` (with
+//! the project's `D_MIN`), the light is evaluated at distance `d` iff `d < r = 1 / sqrt(alpha *
+//! xi)`, which happens with probability `p(d) = min(f(d) / alpha, 1)`, and then contributes
+//! `f / p = max(f(d), alpha)`: the expectation is `f(d)` at every distance.
+//!
+//! `alpha` follows from an error bound. One light's falloff estimate has variance
+//! `f (alpha - f) <= alpha^2 / 4`, so its radiance at a pixel has a standard deviation of at most
+//! `exposure * intensity * max(colour) * rho_max * alpha / 2`, with `rho_max` the largest value
+//! of BRDF times cosine of the scene's materials under this project's shading model (Lambert
+//! plus the normalised Blinn-Phong lobe: `max(base_colour) / pi + specular * (s + 8) / (8 pi)`,
+//! not Lambert's `1 / pi` alone). Bounding it by `error` gives
+//! `alpha = 2 error / (exposure * intensity * max(colour) * rho_max)`, clamped to at most
+//! `1 / D_MIN^2` (the falloff's largest value: above it the estimate would not be unbiased
+//! inside `D_MIN`).
+//!
+//! `xi` is `(h + 0.5) / 2^24` for a 24-bit hash `h` of the seed, the frame and the light: never
+//! 0, so every range is finite, the longest `2^12.5 / sqrt(alpha)` (about 5,800 times the range
+//! at `xi = 1`). The draw is exact on the midpoints of 2^24 equal steps: `P(xi <= x)` differs
+//! from `x` by at most `2^-25`, a bias below `2^-25` of one light's largest term (documented,
+//! not measurable at any error bound a report uses).
+//!
+//! The same draw and ranges run on the GPU (`shaders/lights/stochastic.wgsl`, pass
+//! `lights.stochastic`); [`shade`] is the estimate in f64 that the tests hold the GPU to.
+
+use glam::DVec3;
+
+use crate::light::{D_MIN, SHININESS, spot};
+use crate::motion::pcg;
+use crate::{Light, Material};
+
+/// Bits of the uniform number drawn for each light and frame.
+pub const XI_BITS: u32 = 24;
+
+/// The uniform number of light `index` at frame `frame` under seed `seed`: in (0, 1), never 0.
+/// The GPU's `stochastic_xi` computes the same bits.
+pub fn xi(seed: u32, frame: u32, index: u32) -> f32 {
+    let h = pcg(index ^ pcg(frame ^ pcg(seed)));
+    ((h >> (32 - XI_BITS)) as f32 + 0.5) / (1u32 << XI_BITS) as f32
+}
+
+/// The largest BRDF times cosine of `materials` under the shading model
+/// (`crate::light::shade`): `max(base_colour) / pi + specular * (s + 8) / (8 pi)`, at least
+/// that of a white Lambertian surface where `materials` is empty.
+pub fn rho_max(materials: &[Material]) -> f32 {
+    let spec = (SHININESS + 8.0) / (8.0 * std::f64::consts::PI);
+    materials
+        .iter()
+        .map(|m| {
+            f64::from(m.base_color.max_element()) / std::f64::consts::PI
+                + f64::from(m.specular) * spec
+        })
+        .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.max(b))))
+        .unwrap_or(1.0 / std::f64::consts::PI) as f32
+}
+
+/// The parameters a frame's ranges are drawn with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StochasticParams {
+    /// The bound on one light's standard deviation at a pixel, in exposed radiance.
+    pub error: f32,
+    /// The exposure the error is measured at (radiance is multiplied by it before tonemapping).
+    pub exposure: f32,
+    /// [`rho_max`] of the scene's materials.
+    pub rho_max: f32,
+    /// The seed of every draw.
+    pub seed: u32,
+}
+
+impl StochasticParams {
+    /// The light's `alpha`, in f32 as the GPU computes it.
+    pub fn alpha(&self, light: &Light) -> f32 {
+        let scale = self.exposure * light.intensity * light.color.max_element() * self.rho_max;
+        let max = (1.0 / (D_MIN * D_MIN)) as f32;
+        if scale > 0.0 {
+            (2.0 * self.error / scale).min(max)
+        } else {
+            max
+        }
+    }
+
+    /// The range of a light with `alpha` for the draw `xi`: `1 / sqrt(alpha * xi)`.
+    pub fn range(alpha: f32, xi: f32) -> f32 {
+        1.0 / (alpha * xi).sqrt()
+    }
+
+    /// Light `index` (of the scene's light buffer) as shaded at frame `frame`: its range for
+    /// the frame in `radius`, and its alpha.
+    pub fn at_frame(&self, light: &Light, index: u32, frame: u32) -> (Light, f32) {
+        let alpha = self.alpha(light);
+        let radius = Self::range(alpha, xi(self.seed, frame, index));
+        (Light { radius, ..*light }, alpha)
+    }
+}
+
+/// The stochastic estimate at surface point `p` (unit normal `n`, unit direction `v` to the
+/// viewer) in f64: each light with its frame's range in `radius` and its alpha in `alphas`,
+/// shaded with `max(1 / d^2, alpha)` inside the range. The CPU twin of the GPU's
+/// `light_attenuation` for lights with alpha > 0.
+pub fn shade(
+    p: DVec3,
+    n: DVec3,
+    v: DVec3,
+    material: &Material,
+    lights: &[Light],
+    alphas: &[f32],
+) -> DVec3 {
+    crate::light::shade_with(p, n, v, material, lights, |k, light, d| {
+        if d < f64::from(light.radius) {
+            (1.0 / (d * d).max(D_MIN * D_MIN)).max(f64::from(alphas[k]))
+        } else {
+            0.0
+        }
+    })
+}
+
+/// The spot factor of `light` towards `p` (1 for a point light); used by tests that bound the
+/// estimate's variance.
+pub fn cone(light: &Light, p: DVec3) -> f64 {
+    match light.cone() {
+        None => 1.0,
+        Some((axis, ci, co)) => {
+            let l = (light.position.as_dvec3() - p).normalize_or_zero();
+            spot(-l.dot(axis.as_dvec3()), f64::from(ci), f64::from(co))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn xi_is_in_the_open_unit_interval_and_uniform() {
+        let n = 1 << 16;
+        let mut mean = 0.0f64;
+        for i in 0..n {
+            let x = xi(7, 3, i);
+            assert!(x > 0.0 && x < 1.0, "{x}");
+            mean += f64::from(x);
+        }
+        mean /= f64::from(n);
+        // The mean of n uniform draws: 0.5 within 5 standard errors (1 / sqrt(12 n)).
+        assert!((mean - 0.5).abs() < 5.0 / (12.0 * f64::from(n)).sqrt(), "{mean}");
+        assert_ne!(xi(7, 3, 0), xi(7, 4, 0), "frames draw apart");
+        assert_ne!(xi(7, 3, 0), xi(8, 3, 0), "seeds draw apart");
+    }
+
+    #[test]
+    fn the_range_passes_the_roulette_exactly_where_the_falloff_beats_alpha_xi() {
+        let light = Light::point(Vec3::ZERO, 1.0, Vec3::ONE, 4.0);
+        let params = StochasticParams {
+            error: 0.01,
+            exposure: 1.0,
+            rho_max: rho_max(&[Material::new(Vec3::ONE, 1.0)]),
+            seed: 1,
+        };
+        let alpha = params.alpha(&light);
+        // 2 * 0.01 / (4 * 1 * (1 / pi + 5 / pi)).
+        let expect = 0.02 / (4.0 * 6.0 / std::f64::consts::PI);
+        assert!((f64::from(alpha) - expect).abs() < 1e-6 * expect, "{alpha}");
+        for k in 0..100 {
+            let (l, _) = params.at_frame(&light, 0, k);
+            let x = f64::from(xi(1, k, 0));
+            let r = f64::from(l.radius);
+            // At the range, 1 / r^2 = alpha * xi.
+            assert!((1.0 / (r * r) - f64::from(alpha) * x).abs() < 1e-5 * f64::from(alpha) * x);
+        }
+    }
+
+    #[test]
+    fn the_estimate_is_unbiased_over_many_frames() {
+        // One light seen from points at several distances: the mean of the estimate over
+        // many frames against 1 / d^2 times the BRDF, within 5 standard errors.
+        let light = Light::point(DVec3::new(0.0, 1.0, 0.0).as_vec3(), 1.0, Vec3::ONE, 1.0);
+        let m = Material::new(Vec3::splat(0.5), 0.0);
+        let params = StochasticParams {
+            error: 0.05,
+            exposure: 1.0,
+            rho_max: rho_max(&[m]),
+            seed: 3,
+        };
+        let (n, v) = (DVec3::Y, DVec3::Y);
+        for x in [0.0, 0.5, 2.0, 6.0] {
+            let p = DVec3::new(x, 0.0, 0.0);
+            let exact = crate::light::shade(p, n, v, &m, &[light], crate::light::Range::Infinite).x;
+            let frames = 20_000;
+            let (mut s, mut s2) = (0.0f64, 0.0f64);
+            for f in 0..frames {
+                let (l, a) = params.at_frame(&light, 0, f);
+                let e = shade(p, n, v, &m, &[l], &[a]).x;
+                s += e;
+                s2 += e * e;
+            }
+            let mean = s / f64::from(frames);
+            let var = (s2 / f64::from(frames) - mean * mean).max(0.0);
+            let se = (var / f64::from(frames)).sqrt();
+            assert!(
+                (mean - exact).abs() <= 5.0 * se + 1e-6 * exact,
+                "x = {x}: mean {mean} vs {exact} (standard error {se})"
+            );
+        }
+    }
+}

@@ -1,0 +1,240 @@
+//! The infinite-range reference as a compute pass (`shade.reference_infinite`,
+//! `shaders/render/reference_infinite.wgsl`): every light with the un-windowed falloff at each
+//! pixel's surface point, the point and normal the reference's raster pass stored
+//! ([`crate::ReferenceRenderer::surfaces`]). The accuracy axis that a radius cut-off is measured
+//! on: a reference that made the same cut-off could not see its cost.
+//!
+//! Its cost is pixels x lights (2 x 10^12 evaluations at 1080p and a million lights), so it is
+//! chunked over lights: one dispatch adds at most [`DISPATCH_EVALUATIONS`] evaluations into each
+//! pixel's running sum, kept with Kahan's compensated summation, and a submission holds at most
+//! [`SUBMIT_EVALUATIONS`], so no command buffer runs long enough for a driver's watchdog.
+//! The raster pass with the infinite-range flag (`ReferenceRenderer::render_infinite`) stays
+//! the reference where a pixel has several surfaces: MSAA samples and transparent surfaces
+//! blended over the opaque one.
+
+use manylights_gpu::pipeline::{self, entry, storage};
+use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef};
+use manylights_gpu::{GpuContext, GpuError, GpuScene, readback};
+use wgpu::util::DeviceExt;
+
+use crate::{HdrImage, ReferenceFrame};
+
+/// The pass's shader.
+pub const SHADER: ShaderDef = ShaderDef {
+    name: "shade.reference_infinite",
+    consts: &[],
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        SHADING,
+        manylights_gpu::shader_file!("render/reference_infinite.wgsl"),
+    ],
+};
+
+/// Threads per workgroup (`WG` in the shader).
+const WORKGROUP: u32 = 64;
+
+/// Most light evaluations (pixels x lights) of one dispatch: about 2 ms on an H100.
+pub const DISPATCH_EVALUATIONS: u64 = 1 << 30;
+
+/// Most light evaluations of one submission.
+pub const SUBMIT_EVALUATIONS: u64 = 1 << 34;
+
+/// Host mirror of `InfiniteParams` in the shader.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    first: u32,
+    count: u32,
+    pixels: u32,
+    row: u32,
+}
+
+/// The compute reference's pipeline for one uploaded scene layout.
+pub struct InfiniteReference {
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    /// Lights a dispatch, where set ([`InfiniteReference::with_chunk`]); [`chunk_lights`]
+    /// otherwise.
+    chunk: Option<u32>,
+}
+
+/// The lights of one dispatch over `pixels` pixels: [`DISPATCH_EVALUATIONS`] / pixels, a
+/// multiple of the workgroup's batch, between 64 and 65,536.
+pub fn chunk_lights(pixels: u64) -> u32 {
+    let n = (DISPATCH_EVALUATIONS / pixels.max(1)).clamp(64, 65_536) as u32;
+    n / WORKGROUP * WORKGROUP
+}
+
+impl InfiniteReference {
+    /// Builds the pipeline.
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        let d = &ctx.device;
+        let c = wgpu::ShaderStages::COMPUTE;
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade.reference_infinite"),
+            entries: &[
+                entry(
+                    0,
+                    c,
+                    wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(size_of::<Params>() as u64),
+                    },
+                ),
+                entry(1, c, storage(true)),
+                entry(2, c, storage(false)),
+            ],
+        });
+        let module = SHADER.create(d);
+        let pipeline = pipeline::compute(
+            d,
+            &module,
+            &pipeline::layout(d, "shade.reference_infinite", &[&scene.layout, &layout]),
+            "reference_infinite",
+        );
+        Self {
+            pipeline,
+            layout,
+            chunk: None,
+        }
+    }
+
+    /// The same pass with `lights` lights a dispatch (a positive multiple of 64), so that a
+    /// small test image still spans many dispatches.
+    pub fn with_chunk(mut self, lights: u32) -> Self {
+        assert!(
+            lights > 0 && lights % WORKGROUP == 0,
+            "a chunk is a positive multiple of {WORKGROUP} lights"
+        );
+        self.chunk = Some(lights);
+        self
+    }
+
+    /// The infinite-range image at the surface points of `surfaces` (a single-sample
+    /// reference frame of `scene`, whose frame uniform is still set for the same camera and
+    /// resolution): alpha 1 where covered, 0 elsewhere.
+    pub fn render(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        surfaces: &ReferenceFrame,
+    ) -> Result<HdrImage, GpuError> {
+        let (w, h) = (surfaces.position.width, surfaces.position.height);
+        let pixels = u64::from(w) * u64::from(h);
+        let bytes = pixels * 32;
+        ctx.check_storage("infinite-range reference surface bytes", bytes)?;
+        let d = &ctx.device;
+        let surface: Vec<[f32; 4]> = surfaces
+            .position
+            .data
+            .iter()
+            .zip(&surfaces.normal.data)
+            .flat_map(|(p, n)| [*p, *n])
+            .collect();
+        let surface_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("reference_infinite.surface"),
+            contents: bytemuck::cast_slice(&surface),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let sums = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("reference_infinite.sums"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let lights = scene.light_count;
+        let chunk = self.chunk.unwrap_or_else(|| chunk_lights(pixels));
+        let chunks = lights.div_ceil(chunk).max(1);
+        let groups_needed = u32::try_from(pixels.div_ceil(u64::from(WORKGROUP))).map_err(|_| {
+            GpuError::OverLimit {
+                what: "infinite-range reference pixels".into(),
+                value: pixels,
+                limit: u64::from(u32::MAX) * u64::from(WORKGROUP),
+                limit_name: "u32 workgroups",
+            }
+        })?;
+        let max = ctx.limits.max_compute_workgroups_per_dimension;
+        let groups = (groups_needed.min(max), groups_needed.div_ceil(max));
+        let stride = (size_of::<Params>() as u32)
+            .next_multiple_of(ctx.limits.min_uniform_buffer_offset_alignment);
+        let mut params = vec![0u8; (stride * chunks) as usize];
+        for k in 0..chunks {
+            let p = Params {
+                first: k * chunk,
+                count: chunk.min(lights - k * chunk),
+                pixels: pixels as u32,
+                row: groups.0 * WORKGROUP,
+            };
+            let at = (k * stride) as usize;
+            params[at..at + size_of::<Params>()].copy_from_slice(bytemuck::bytes_of(&p));
+        }
+        let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("reference_infinite.params"),
+            contents: &params,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let group = pipeline::group(
+            d,
+            "shade.reference_infinite",
+            &self.layout,
+            &[
+                wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &params_buf,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<Params>() as u64),
+                }),
+                surface_buf.as_entire_binding(),
+                sums.as_entire_binding(),
+            ],
+        );
+        let per_submit =
+            (SUBMIT_EVALUATIONS / (pixels * u64::from(chunk)).max(1)).clamp(1, 4096) as u32;
+        let start = std::time::Instant::now();
+        let mut k = 0;
+        while k < chunks {
+            let end = (k + per_submit).min(chunks);
+            let mut encoder = d.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("shade.reference_infinite"),
+            });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("shade.reference_infinite"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &scene.bind_group, &[]);
+                for c in k..end {
+                    pass.set_bind_group(1, &group, &[c * stride]);
+                    pass.dispatch_workgroups(groups.0, groups.1, 1);
+                }
+            }
+            ctx.submit_and_wait(encoder, "shade.reference_infinite")?;
+            k = end;
+        }
+        let raw = readback::read_buffer(ctx, &sums, 0, bytes)?;
+        let texels: &[[f32; 4]] = bytemuck::cast_slice(&raw);
+        tracing::debug!(
+            lights,
+            pixels,
+            chunks,
+            ms = start.elapsed().as_secs_f64() * 1e3,
+            "infinite-range reference computed"
+        );
+        // The compensated sum: the running sum less what its additions lost.
+        let data = texels
+            .chunks_exact(2)
+            .map(|s| {
+                let c = |k: usize| (f64::from(s[0][k]) - f64::from(s[1][k])) as f32;
+                [c(0), c(1), c(2), s[0][3]]
+            })
+            .collect();
+        Ok(HdrImage {
+            width: w,
+            height: h,
+            data,
+        })
+    }
+}
