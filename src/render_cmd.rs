@@ -180,22 +180,39 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         bail!("the render holds {bad} NaN/Inf pixels; nothing was written");
     }
     if args.compare {
-        let windowed = reference.render(&ctx, &gpu_scene, w, h)?.color;
-        let infinite = reference
-            .render_infinite(&ctx, &gpu_scene, &scene.camera, w, h)?
-            .color;
-        for (label, r) in [
-            ("reference", &windowed),
-            ("infinite-range reference", &infinite),
+        let windowed_frame = reference.render(&ctx, &gpu_scene, w, h)?;
+        let infinite = manylights_shade::infinite::infinite_image(
+            &ctx,
+            (
+                &reference,
+                &manylights_shade::InfiniteReference::new(&ctx, &gpu_scene),
+            ),
+            &gpu_scene,
+            &scene.camera,
+            (w, h),
+            Some(&windowed_frame),
+        )?;
+        let windowed = windowed_frame.color;
+        // The same cut-off at the output's exposure; infinite range at the exposure adapted to
+        // its reference (accuracy::exposure_of).
+        for (label, r, exposure) in [
+            ("reference", &windowed, args.exposure),
+            (
+                "infinite-range reference",
+                &infinite,
+                accuracy::exposure_of(&infinite),
+            ),
         ] {
-            let e = accuracy::compare(&image, r, args.exposure);
+            let e = accuracy::compare(&image, r, exposure);
             println!(
-                "  vs {label:<25} max abs {:.3e} ({:.2e} of peak), RMSE {:.3e}, PSNR {:.2} dB, mean FLIP {:.5}",
+                "  vs {label:<25} max abs {:.3e} ({:.2e} of peak), RMSE {:.3e}, PSNR {:.2} dB, mean FLIP {:.5} (exposure {:.3}), energy {:+.4}",
                 e.max_abs_error,
                 e.max_abs_error / e.peak.max(f64::MIN_POSITIVE),
                 e.rmse,
                 e.psnr_db,
-                e.flip_mean
+                e.flip_mean,
+                e.exposure,
+                e.energy_error
             );
         }
         if args.flip_map {

@@ -72,6 +72,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         frames: args.frames,
         warmup: args.warmup,
         accuracy: false,
+        cutoff_reference: true,
         exact_stride: args.exact_stride,
         device_limit: None,
         export: false,

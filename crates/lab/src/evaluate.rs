@@ -10,8 +10,9 @@ use manylights_cull::{CullSettings, Strategy};
 use manylights_gpu::layout::GpuFrame;
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::Camera;
-use manylights_shade::accuracy::{ImageError, compare};
-use manylights_shade::{Backend, HdrImage, ReferenceRenderer, Renderer};
+use manylights_shade::accuracy::{ImageError, compare, compare_adapted};
+use manylights_shade::infinite::infinite_image;
+use manylights_shade::{Backend, HdrImage, InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::LabError;
 use crate::experiment::Config;
@@ -25,6 +26,10 @@ pub(crate) struct PoseEval {
     pub(crate) lights_per_pixel_mean: f64,
     pub(crate) color: HdrImage,
     pub(crate) reference: Option<HdrImage>,
+    /// The infinite-range reference (with accuracy).
+    pub(crate) infinite: Option<HdrImage>,
+    /// Whether it came from the run folder's cache.
+    pub(crate) infinite_cached: Option<bool>,
     pub(crate) acc: Option<ImageError>,
     pub(crate) acc_inf: Option<ImageError>,
     pub(crate) list_bytes: u64,
@@ -54,7 +59,7 @@ pub(crate) struct PoseEval {
 pub(crate) fn evaluate(
     ctx: &GpuContext,
     renderer: &Renderer,
-    reference: Option<&ReferenceRenderer>,
+    reference: Option<&References<'_>>,
     gpu_scene: &GpuScene,
     c: &Config,
     cam: &Camera,
@@ -203,18 +208,25 @@ pub(crate) fn evaluate(
         _ => None,
     };
     let (mut acc, mut acc_inf, mut reference_color) = (None, None, None);
-    if let Some(rr) = reference {
-        let r = stage(pose, "reference rendered", || {
-            rr.render(ctx, gpu_scene, w, h)
-        })
-        .map_err(|e| other(&e))?;
-        acc = Some(compare(&o.color, &r.color, 1.0));
-        let ri = stage(pose, "infinite-range reference rendered", || {
-            rr.render_infinite(ctx, gpu_scene, cam, w, h)
-        })
-        .map_err(|e| other(&e))?;
-        acc_inf = Some(compare(&o.color, &ri.color, 1.0));
-        reference_color = Some(r.color);
+    let (mut infinite, mut infinite_cached) = (None, None);
+    if let Some(refs) = reference {
+        let windowed = if c.cutoff_reference {
+            let r = stage(pose, "reference rendered", || {
+                refs.rr.render(ctx, gpu_scene, w, h)
+            })
+            .map_err(|e| other(&e))?;
+            acc = Some(compare(&o.color, &r.color, 1.0));
+            Some(r)
+        } else {
+            None
+        };
+        let (ri, cached) = stage(pose, "infinite-range reference", || {
+            refs.infinite(ctx, gpu_scene, cam, (w, h), windowed.as_ref())
+        })?;
+        acc_inf = Some(compare_adapted(&o.color, &ri));
+        infinite = Some(ri);
+        infinite_cached = Some(cached);
+        reference_color = windowed.map(|r| r.color);
     }
     Ok(PoseEval {
         metrics,
@@ -224,6 +236,8 @@ pub(crate) fn evaluate(
         nonfinite: o.color.non_finite_count() as u64,
         color: o.color,
         reference: reference_color,
+        infinite,
+        infinite_cached,
         acc,
         acc_inf,
         list_bytes,
@@ -236,6 +250,44 @@ pub(crate) fn evaluate(
         steady_geometry,
         steady_passes,
     })
+}
+
+/// The references of a cell: the brute-force raster reference, the infinite-range compute
+/// reference, and where the infinite-range image may be cached (the run folder and the scene's
+/// fingerprint; none for moving lights).
+pub(crate) struct References<'a> {
+    pub(crate) rr: &'a ReferenceRenderer,
+    pub(crate) inf: &'a InfiniteReference,
+    pub(crate) cache: Option<(&'a std::path::Path, u64)>,
+}
+
+impl References<'_> {
+    /// The infinite-range image of the view, from the cache where it holds it under the same
+    /// key, and whether it did.
+    pub(crate) fn infinite(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        cam: &Camera,
+        size: (u32, u32),
+        windowed: Option<&manylights_shade::ReferenceFrame>,
+    ) -> Result<(HdrImage, bool), LabError> {
+        use crate::reference_cache as cache;
+        let key = self.cache.map(|(dir, scene)| {
+            (dir, cache::ReferenceKey::new(scene, cam, size, self.rr.samples()))
+        });
+        if let Some((dir, key)) = &key {
+            if let Some(img) = cache::load(dir, key) {
+                return Ok((img, true));
+            }
+        }
+        let img = infinite_image(ctx, (self.rr, self.inf), gpu_scene, cam, size, windowed)
+            .map_err(|e| LabError::Other(e.to_string()))?;
+        if let Some((dir, key)) = &key {
+            cache::save(dir, key, &img)?;
+        }
+        Ok((img, false))
+    }
 }
 
 /// Naive forward evaluates every light; the exact oracle (run over any conservative lists)

@@ -322,6 +322,13 @@ pub struct Config {
     /// Whether to render the references and measure image error.
     #[serde(default = "yes")]
     pub accuracy: bool,
+    /// With `accuracy`, whether to render the reference with the same radius cut-off as the
+    /// method (true, the default): the implementation check (`psnr_db`, `flip_mean`,
+    /// `max_abs_error`, the temporal columns). Off, only the infinite-range reference is
+    /// computed, for cells with so many lights at so many pixels that the brute-force raster
+    /// pass would take minutes (its columns empty). (Left out of a cell's identity when on.)
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub cutoff_reference: bool,
     /// Pixel stride of the exact per-pixel oracle (1: every pixel; larger samples a grid, for
     /// light counts where O(pixels x lights) is too slow). 0 turns list metrics off.
     #[serde(default = "one")]

@@ -2,8 +2,9 @@
 //! (`cells`), the durable, resumable, shardable runner ([`runner`]) and what it measures at each
 //! camera pose (`evaluate`), results as CSV and JSON ([`results`]), culling timed in steady
 //! state ([`steady`]), the tuner ([`tune`]), paper-style reports in Markdown and HTML ([`report`]) with their figures
-//! (`figures`), the stability suite's verdicts ([`stability`]), and a run's data exported as
-//! NumPy arrays ([`export`]).
+//! (`figures`), the stability suite's verdicts ([`stability`]), a run's data exported as
+//! NumPy arrays ([`export`]), the infinite-range reference cached in the run folder
+//! ([`reference_cache`]), and stochastic light culling's noise measured over seeds (`noise`).
 //!
 //! Depends on every other crate; nothing depends on it but the CLI.
 
@@ -13,6 +14,8 @@ mod evaluate;
 pub mod experiment;
 pub mod export;
 mod figures;
+mod noise;
+pub mod reference_cache;
 pub mod report;
 pub mod results;
 pub mod runner;

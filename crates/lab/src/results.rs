@@ -96,7 +96,8 @@ pub struct Row {
     /// PSNR against the infinite-range reference (the cost of the cut-off), dB.
     #[serde(with = "inf_f64")]
     pub psnr_db_infinite: Option<f64>,
-    /// Mean FLIP against the infinite-range reference.
+    /// Mean FLIP against the infinite-range reference, both images tonemapped at the exposure
+    /// adapted to the reference (`exposure_infinite`); stochastic cells: the mean over seeds.
     pub flip_mean_infinite: Option<f64>,
     /// Maximum absolute error against the infinite-range reference.
     pub max_abs_error_infinite: Option<f64>,
@@ -188,6 +189,48 @@ pub struct Row {
     /// 1,980 MHz under load). Empty without timestamp queries.
     #[serde(default)]
     pub gpu_ms_frame_steady: Option<f64>,
+    /// How the lights' ranges were set: `fixed`, `threshold` or `stochastic` (stochastic light
+    /// culling, its ranges drawn each frame).
+    #[serde(default)]
+    pub radius_rule: String,
+    /// The exposure `flip_mean_infinite` tonemaps both images with: adapted to the
+    /// infinite-range reference (`manylights_shade::accuracy::exposure_of`, Reinhard's key).
+    #[serde(default)]
+    pub exposure_infinite: Option<f64>,
+    /// RMSE against the infinite-range reference (the worst pose; stochastic cells: the mean
+    /// over seeds).
+    #[serde(default)]
+    pub rmse_infinite: Option<f64>,
+    /// The signed mean relative luminance error over lit pixels against the infinite-range
+    /// reference: negative where the image is darker, as any radius cut-off makes it (the pose
+    /// farthest from zero; stochastic cells: the mean over seeds).
+    #[serde(default)]
+    pub energy_error_infinite: Option<f64>,
+    /// Stochastic cells: the seeds measured (each an independent image).
+    #[serde(default)]
+    pub seeds: Option<u32>,
+    /// Stochastic cells: frames averaged into each image (1: none).
+    #[serde(default)]
+    pub accumulate: Option<u32>,
+    /// Stochastic cells: each lit pixel's mean over the seeds less the infinite-range
+    /// reference, as the root mean square over lit pixels with the noise's share taken out,
+    /// relative to their mean reference luminance (`manylights_lab::noise`; zero within noise
+    /// for an unbiased estimate; empty with one seed).
+    #[serde(default)]
+    pub bias_infinite: Option<f64>,
+    /// Stochastic cells: the standard deviation across seeds of each lit pixel's luminance, as
+    /// the root mean square over lit pixels relative to their mean reference luminance (empty
+    /// with one seed).
+    #[serde(default)]
+    pub noise_infinite: Option<f64>,
+    /// Stochastic cells: the mean absolute change of luminance from one seed's image to the
+    /// next, relative to the mean reference luminance (empty with one seed).
+    #[serde(default)]
+    pub temporal_flicker_mean: Option<f64>,
+    /// Whether the infinite-range reference came from the run folder's cache
+    /// (`references/`): a sweep computes it once per view.
+    #[serde(default)]
+    pub reference_infinite_cached: Option<bool>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s and
@@ -299,6 +342,16 @@ pub const COLUMNS: &[&str] = &[
     "transparent",
     "gpu_ms_geometry_steady",
     "gpu_ms_frame_steady",
+    "radius_rule",
+    "exposure_infinite",
+    "rmse_infinite",
+    "energy_error_infinite",
+    "seeds",
+    "accumulate",
+    "bias_infinite",
+    "noise_infinite",
+    "temporal_flicker_mean",
+    "reference_infinite_cached",
 ];
 
 fn one() -> u32 {

@@ -19,10 +19,11 @@ use manylights_gpu::timing::{PassKind, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::{Camera, Scene};
-use manylights_shade::{Backend, ReferenceRenderer, Renderer};
+use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::dynamic::Movers;
-use crate::evaluate::{PoseEval, evaluate, temporal_stability};
+use crate::evaluate::{PoseEval, References, evaluate, temporal_stability};
+use crate::noise::{Draws, Noise, measure};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
 use crate::results::{Row, load_cells, percentiles, save_cell, write_results};
 use crate::{LabError, write_atomic};
@@ -276,6 +277,7 @@ fn run_cell(
         ..CullSettings::for_camera(cam)
     };
     let mut movers = Movers::new(ctx, c, &gpu_scene, &scene, own_lights)?;
+    let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
     let mut encode = Vec::new();
     let mut uploads = Vec::new();
@@ -287,6 +289,11 @@ fn run_cell(
             Some(m) => Some(stage(name, &format!("frame {f} lights moved"), || {
                 m.update(ctx, f as u32)
             })?),
+            None => None,
+        };
+        // Stochastic ranges are drawn afresh each frame, timed with it.
+        let drawn = match &draws {
+            Some(d) => d.draw(ctx, f as u32)?,
             None => None,
         };
         gpu_scene.set_view(ctx, cam, w, h, 0);
@@ -306,6 +313,9 @@ fn run_cell(
         if f >= c.warmup as usize {
             match o.timings {
                 Some(mut t) => {
+                    if let Some(g) = drawn {
+                        t.splice(0..0, g);
+                    }
                     if let Some(g) = update.as_ref().and_then(|u| u.gpu.clone()) {
                         t.splice(0..0, g);
                     }
@@ -325,6 +335,19 @@ fn run_cell(
         .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
         .transpose()
         .map_err(|e| other(&e))?;
+    let infinite = c
+        .accuracy
+        .then(|| InfiniteReference::new(ctx, &gpu_scene));
+    // The infinite-range reference is cached in the run folder, except for moving lights.
+    let fingerprint = crate::reference_cache::scene_fingerprint(&scene);
+    let refs = match (&reference, &infinite) {
+        (Some(rr), Some(inf)) => Some(References {
+            rr,
+            inf,
+            cache: movers.is_none().then_some((out, fingerprint)),
+        }),
+        _ => None,
+    };
     let checks: Vec<(usize, Option<u32>)> = if movers.is_some() {
         (c.warmup..c.warmup + c.frames)
             .map(|f| (f as usize % poses.len(), Some(f)))
@@ -342,10 +365,14 @@ fn run_cell(
             }
             _ => format!("{name} pose {p}"),
         };
+        if let Some(d) = &draws {
+            // Each check sees the ranges of its frame (the first frame's where none moves).
+            d.draw(ctx, frame.unwrap_or(0))?;
+        }
         evals.push(evaluate(
             ctx,
             &renderer,
-            reference.as_ref(),
+            refs.as_ref(),
             &gpu_scene,
             c,
             cam,
@@ -360,6 +387,22 @@ fn run_cell(
     }
     let first = &evals[0];
     save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
+    // Stochastic cells: each seed's image against infinite range (static lights only).
+    let noise: Option<Noise> = match (&draws, &first.infinite, &movers) {
+        (Some(d), Some(inf), None) => Some(stage(name, "seeds measured", || {
+            measure(
+                ctx,
+                &renderer,
+                &gpu_scene,
+                c,
+                &poses[0],
+                &settings(&poses[0]),
+                d,
+                inf,
+            )
+        })?),
+        _ => None,
+    };
     let temporal = temporal_stability(&evals);
     // The worst pose of each measure.
     let max_u64 = |f: &dyn Fn(&PoseEval) -> Option<u64>| evals.iter().filter_map(f).max();
@@ -381,11 +424,25 @@ fn run_cell(
         max_f64(&|e| e.acc.map(|a| a.flip_mean)),
         max_f64(&|e| e.acc.map(|a| a.max_abs_error)),
     );
-    let (psnr_inf, flip_inf, max_abs_inf) = (
+    let (psnr_inf, mut flip_inf, max_abs_inf) = (
         min_f64(&|e| e.acc_inf.map(|a| a.psnr_db)),
         max_f64(&|e| e.acc_inf.map(|a| a.flip_mean)),
         max_f64(&|e| e.acc_inf.map(|a| a.max_abs_error)),
     );
+    let mut rmse_inf = max_f64(&|e| e.acc_inf.map(|a| a.rmse));
+    // The energy error of the pose farthest from zero.
+    let mut energy_inf = evals
+        .iter()
+        .filter_map(|e| e.acc_inf.map(|a| a.energy_error))
+        .reduce(|a, b| if b.abs() > a.abs() { b } else { a });
+    let mut exposure_inf = first.acc_inf.map(|a| f64::from(a.exposure));
+    if let Some(n) = &noise {
+        // A stochastic cell's image error is its seeds' mean.
+        flip_inf = Some(n.flip_mean);
+        rmse_inf = Some(n.rmse);
+        energy_inf = Some(n.energy_error);
+        exposure_inf = Some(n.exposure);
+    }
     let (list_bytes, gbuffer_bytes) = (first.list_bytes, first.gbuffer_bytes);
 
     let series = |pick: &dyn Fn(&PassTiming) -> bool| -> Vec<f64> {
@@ -501,6 +558,16 @@ fn run_cell(
         gpu_ms_cull_span: first.steady.and_then(|s| s.1),
         gpu_ms_cull_shade: first.steady_frame.map(|s| s.0),
         gpu_ms_cull_shade_span: first.steady_frame.and_then(|s| s.1),
+        radius_rule: c.lights.radius.kind().into(),
+        exposure_infinite: exposure_inf,
+        rmse_infinite: rmse_inf,
+        energy_error_infinite: energy_inf,
+        seeds: draws.as_ref().map(|d| d.seeds),
+        accumulate: draws.as_ref().map(|d| d.accumulate),
+        bias_infinite: noise.and_then(|n| n.bias),
+        noise_infinite: noise.and_then(|n| n.noise),
+        temporal_flicker_mean: noise.and_then(|n| n.flicker_mean),
+        reference_infinite_cached: first.infinite_cached,
         lights_needed_per_pixel_mean: max_f64(&|e| {
             e.metrics.as_ref().map(|m| m.lights_needed_per_pixel_mean)
         }),

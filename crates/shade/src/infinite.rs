@@ -106,7 +106,7 @@ impl InfiniteReference {
     /// small test image still spans many dispatches.
     pub fn with_chunk(mut self, lights: u32) -> Self {
         assert!(
-            lights > 0 && lights % WORKGROUP == 0,
+            lights > 0 && lights.is_multiple_of(WORKGROUP),
             "a chunk is a positive multiple of {WORKGROUP} lights"
         );
         self.chunk = Some(lights);
@@ -236,5 +236,29 @@ impl InfiniteReference {
             height: h,
             data,
         })
+    }
+}
+
+/// The infinite-range image of the frame `scene` is set for (`camera` at `width` x `height`):
+/// the compute pass over the surfaces of `windowed` (a reference frame rendered for the same
+/// view; rendered here without lights where `None`) where a pixel has one surface, the raster
+/// pass with the infinite-range flag where it has several (MSAA samples, transparent surfaces).
+pub fn infinite_image(
+    ctx: &GpuContext,
+    (rr, inf): (&crate::ReferenceRenderer, &InfiniteReference),
+    scene: &GpuScene,
+    camera: &manylights_scene::Camera,
+    (width, height): (u32, u32),
+    windowed: Option<&ReferenceFrame>,
+) -> Result<HdrImage, GpuError> {
+    if rr.samples() > 1 || scene.has_transparent() {
+        return Ok(rr.render_infinite(ctx, scene, camera, width, height)?.color);
+    }
+    match windowed {
+        Some(frame) => inf.render(ctx, scene, frame),
+        None => {
+            let surfaces = rr.surfaces(ctx, scene, width, height)?;
+            inf.render(ctx, scene, &surfaces)
+        }
     }
 }
