@@ -8,6 +8,7 @@
 //!
 //! Depends on every other crate; nothing depends on it but the CLI.
 
+mod budgets;
 mod cells;
 mod dynamic;
 mod evaluate;

@@ -244,6 +244,7 @@ fn summary(rows: &[Row]) -> Vec<String> {
             out.push(line);
         }
     }
+    out.extend(crate::budgets::findings(rows));
     out.extend(moving_lights_summary(&by_lights));
     out.extend(msaa_summary(rows));
     let fns: Vec<&Row> = rows
@@ -369,6 +370,12 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. Black: the Pareto front.",
         &|p| speed_accuracy(&rows, p, frame, fp),
     )?;
+    let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
+    draw(
+        "frame_infinite.svg",
+        "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade) against mean FLIP against the infinite-range reference (at the reference's exposure), conservative radius cut-offs and stochastic light culling on one chart. Black: the Pareto front.",
+        &|p| speed_accuracy(&rows, p, frame, flip_inf),
+    )?;
     draw(
         "shade_vs_lights.svg",
         "What a loose list costs: the shading pass against the lights it evaluates per pixel, one point per cell.",
@@ -410,6 +417,8 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         "list KiB",
         "PSNR dB",
         "FLIP",
+        "FLIP inf",
+        "energy inf",
     ];
     if moving {
         head.extend(["light update ms", "upload host ms"]);
@@ -445,6 +454,8 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
                     fmt_opt(r.psnr_db, 1)
                 },
                 fmt_opt(r.flip_mean, 5),
+                fmt_opt(r.flip_mean_infinite, 4),
+                fmt_opt(r.energy_error_infinite, 4),
             ];
             if moving {
                 row.extend([
@@ -476,7 +487,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     );
     let _ = writeln!(
         md,
-        "GPU times are medians over each cell's measured frames (timestamp queries), with p10 and p90 in the results. Accuracy is against the brute-force reference with the same falloff; list metrics against the exact per-pixel oracle.\n"
+        "GPU times are medians over each cell's measured frames (timestamp queries), with p10 and p90 in the results. Accuracy is against the brute-force reference with the same falloff (PSNR, FLIP: the implementation check) and against the infinite-range reference, the light as it is (FLIP inf at the reference's exposure, energy inf: the signed mean relative error over lit pixels); list metrics against the exact per-pixel oracle.\n"
     );
     let _ = writeln!(md, "```ron\n{}\n```\n", exp_src.trim_end());
     let _ = writeln!(md, "## Findings\n");
