@@ -331,7 +331,9 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
     assert!(csv.lines().next().unwrap().ends_with(
         ",tile_masks,gpu_ms_cull_steady,gpu_ms_cull_span,gpu_ms_cull_shade,\
                  gpu_ms_cull_shade_span,lights_needed_per_pixel_mean,gpu_ms_light_update,cpu_ms_upload,\
-                 msaa,msaa_target_bytes,transparent,gpu_ms_geometry_steady,gpu_ms_frame_steady"
+                 msaa,msaa_target_bytes,transparent,gpu_ms_geometry_steady,gpu_ms_frame_steady,\
+                 radius_rule,exposure_infinite,rmse_infinite,energy_error_infinite,seeds,accumulate,\
+                 bias_infinite,noise_infinite,temporal_flicker_mean,reference_infinite_cached"
     ));
 }
 

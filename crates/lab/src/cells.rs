@@ -12,7 +12,7 @@ use serde::Serialize;
 
 use crate::LabError;
 use crate::experiment::{
-    CameraSpec, Config, DeviceLimit, Experiment, LightUpdate, SceneSpec, Variant,
+    CameraSpec, Config, DeviceLimit, Experiment, LightUpdate, SceneSpec, Setting, Variant,
 };
 
 /// One cell: a name and a configuration.
@@ -252,6 +252,27 @@ impl Experiment {
                 }
             };
         }
+        axis!(s.settings, |c: &mut Config, v: Setting| {
+            if let Some(scene) = v.scene {
+                c.scene = scene;
+            }
+            if let Some(lights) = v.lights {
+                c.lights = lights;
+            }
+            if let Some(camera) = v.camera {
+                c.camera = camera;
+            }
+            if let Some(r) = v.resolution {
+                c.resolution = r;
+            }
+            if let Some(s) = v.exact_stride {
+                c.exact_stride = s;
+            }
+            if let Some(b) = v.cutoff_reference {
+                c.cutoff_reference = b;
+            }
+            format!("setting={}", v.label)
+        });
         axis!(s.scene, |c: &mut Config, v: SceneSpec| {
             c.scene = v;
             format!("scene={}", c.scene.label())
@@ -423,6 +444,16 @@ impl Experiment {
         if let Some(l) = &mut e.sweep.lights {
             for v in l.iter_mut() {
                 v.count = v.count.min(256);
+            }
+        }
+        if let Some(settings) = &mut e.sweep.settings {
+            for v in settings.iter_mut() {
+                if let Some(l) = &mut v.lights {
+                    l.count = l.count.min(256);
+                }
+                if let Some(r) = &mut v.resolution {
+                    *r = shrink(*r);
+                }
             }
         }
         if let Some(l) = &mut e.sweep.light_count {

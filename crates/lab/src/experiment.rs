@@ -201,10 +201,41 @@ pub struct Variant {
     pub msaa: Option<u32>,
 }
 
+/// One value of the `settings` sweep axis: a scene, lights, camera and resolution (and how
+/// finely they can be checked) that belong together, such as a paper's configuration; the
+/// other axes apply after it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Setting {
+    /// Its name in cell names.
+    pub label: String,
+    /// Scene override.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<SceneSpec>,
+    /// Lights override (the radius, count and motion axes still apply after it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lights: Option<LightSpec>,
+    /// Camera override.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<CameraSpec>,
+    /// Resolution override.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub resolution: Option<(u32, u32)>,
+    /// Exact-oracle stride override.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exact_stride: Option<u32>,
+    /// `cutoff_reference` override.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cutoff_reference: Option<bool>,
+}
+
 /// Lists of values for the fields of [`Config`]; the cells are their cartesian product.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct Sweep {
+    /// Settings (scene, lights, camera, resolution together), applied before every other axis.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub settings: Option<Vec<Setting>>,
     /// Scenes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub scene: Option<Vec<SceneSpec>>,
