@@ -421,6 +421,33 @@ fn light_field(min: Vec3, extent: Vec3, n: usize, rng: &mut Pcg64) -> Vec<Vec3> 
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn bad_stochastic_settings_name_their_field() {
+        let rule = |error: f32, accumulate: u32, seeds: u32| LightSpec {
+            radius: RadiusRule::Stochastic {
+                error,
+                exposure: 1.0,
+                accumulate,
+                seeds,
+            },
+            ..LightSpec::default()
+        };
+        for (spec, field) in [
+            (rule(0.0, 0, 4), "lights.radius.error = 0"),
+            (rule(-1.0, 0, 4), "lights.radius.error = -1"),
+            (rule(f32::NAN, 0, 4), "lights.radius.error = NaN"),
+            (rule(f32::INFINITY, 0, 4), "lights.radius.error = inf"),
+            (rule(0.1, 1, 4), "lights.radius.accumulate = 1"),
+            (rule(0.1, 0, 0), "lights.radius.seeds = 0"),
+        ] {
+            let e = spec.validate().unwrap_err().to_string();
+            assert!(e.contains(field), "{e}");
+        }
+        assert!(rule(0.1, 4, 1).validate().is_ok());
+        assert!(rule(0.1, 0, 4).validate().is_ok());
+    }
+
     use super::*;
     use crate::procedural::ProceduralScene;
 
