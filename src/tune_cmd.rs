@@ -9,6 +9,7 @@ use clap::ValueEnum;
 use manylights_cull::layout::DEFAULT_SLACK;
 use manylights_lab::experiment::{CameraSpec, Config, SceneSpec};
 use manylights_lab::tune::{TuneOptions, tune};
+use manylights_scene::RadiusRule;
 use manylights_shade::Backend;
 
 use crate::options::SceneArgs;
@@ -37,6 +38,30 @@ pub(crate) struct TuneArgs {
     /// pixel; larger samples a grid, for light counts where every pixel would take long).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) exact_stride: u32,
+    /// Rank only configurations within this mean FLIP of the infinite-range reference (the
+    /// light with no cut-off): light ranges become candidates too (--thresholds, --errors),
+    /// each scored against that reference.
+    #[arg(long, value_parser = positive_f64)]
+    pub(crate) max_error: Option<f64>,
+    /// With --max-error: the thresholds whose radius cut-offs are tried
+    /// (radius = sqrt(intensity * max(colour) / threshold)).
+    #[arg(long, value_delimiter = ',', default_values_t = [1.0, 0.3, 0.1, 0.03], value_parser = positive_f32)]
+    pub(crate) thresholds: Vec<f32>,
+    /// With --max-error: the error bounds of stochastic light culling tried (one light's
+    /// standard deviation at a pixel, in radiance at exposure 1).
+    #[arg(long, value_delimiter = ',', default_values_t = [4.0, 1.0, 0.25], value_parser = positive_f32)]
+    pub(crate) errors: Vec<f32>,
+}
+
+fn positive_f64(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}`: a finite number above 0")),
+    }
+}
+
+fn positive_f32(s: &str) -> Result<f32, String> {
+    positive_f64(s).map(|v| v as f32)
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -77,6 +102,11 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         device_limit: None,
         export: false,
     };
+    let ranges = if args.max_error.is_some() {
+        args.thresholds.len() + args.errors.len()
+    } else {
+        1
+    };
     eprintln!(
         "tuning {} ({} lights) at {}x{} for {}: {} candidates, budget {} s",
         scene.name,
@@ -84,7 +114,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         a.width,
         a.height,
         base.backend.name(),
-        manylights_lab::tune::candidates().len(),
+        manylights_lab::tune::candidates().len() * ranges,
         args.budget_s
     );
     let report = tune(
@@ -95,18 +125,30 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
             budget: Duration::from_secs(args.budget_s),
             progress: show_progress(),
             commit: env!("MANYLIGHTS_COMMIT").into(),
+            max_error: args.max_error,
+            radii: args
+                .thresholds
+                .iter()
+                .map(|&t| RadiusRule::Threshold(t))
+                .chain(args.errors.iter().map(|&error| RadiusRule::Stochastic {
+                    error,
+                    exposure: 1.0,
+                    accumulate: 0,
+                    seeds: 4,
+                }))
+                .collect(),
         },
     )?;
     let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3}"));
     println!(
-        "{:>4}  {:<64} {:>11} {:>11} {:>9} {:>9} {:>9}",
-        "rank", "strategy", "cull+shade", "cull", "lights/px", "needed", "per need"
+        "{:>4}  {:<64} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9}",
+        "rank", "strategy", "cull+shade", "cull", "lights/px", "needed", "per need", "FLIP inf"
     );
     for (i, r) in report.ranked.iter().enumerate() {
         println!(
-            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>9} {:>9} {:>9}",
+            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9}",
             i + 1,
-            format!("{} ({})", r.strategy, r.params),
+            format!("{} ({}){}", r.strategy, r.params, range_of(r)),
             ms(r.gpu_ms_cull_shade),
             ms(r.gpu_ms_cull_steady),
             r.lights_per_pixel_mean
@@ -115,6 +157,8 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
                 .map_or("-".into(), |v| format!("{v:.1}")),
             r.false_positive_ratio
                 .map_or("-".into(), |v| format!("{v:.2}")),
+            r.flip_mean_infinite
+                .map_or("-".into(), |v| format!("{v:.4}")),
         );
     }
     for (r, why) in &report.rejected {
@@ -148,4 +192,14 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         .with_context(|| format!("report of {}", out.display()))?;
     eprintln!("report: {}", html.display());
     Ok(())
+}
+
+/// The light range a ranked candidate was tried with, where ranges were candidates: the cell
+/// name's radius part (` threshold=0.1`, ` stochastic=1`), else nothing.
+fn range_of(r: &manylights_lab::Row) -> String {
+    r.cell
+        .split(',')
+        .next()
+        .filter(|p| p.starts_with("threshold=") || p.starts_with("stochastic=") || p.starts_with("radius="))
+        .map_or(String::new(), |p| format!(" {p}"))
 }

@@ -66,3 +66,58 @@ fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
         "{stderr}"
     );
 }
+
+/// `tune --max-error F`: light ranges are candidates too, every candidate is scored against
+/// the infinite-range reference, and only those within mean FLIP F are ranked; the best is
+/// written with its radius rule. A budget none reaches is an error naming the lowest error; a
+/// budget that is not a positive number is a usage error.
+#[test]
+fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("tune");
+    let small = [
+        "--scene", "atrium", "--lights", "48", "--width", "48", "--height", "32", "--frames", "1",
+        "--warmup", "0", "--thresholds", "1", "--errors", "0.5",
+    ];
+    let mut args = vec!["tune", "--out", out.to_str().unwrap(), "--max-error", "0.6"];
+    args.extend_from_slice(&small);
+    let o = manylights(&args);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ranked: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+        .collect();
+    assert!(!ranked.is_empty(), "{stdout}");
+    for l in &ranked {
+        let flip: f64 = l.split_whitespace().last().unwrap().parse().unwrap();
+        assert!(flip <= 0.6, "{l}");
+    }
+    // The radius cut-off of threshold 1 keeps a fraction of the light: rejected for its error.
+    assert!(
+        stdout.lines().any(|l| l.starts_with("rejected:") && l.contains("above --max-error 0.6")),
+        "{stdout}"
+    );
+    let (e, _) = manylights_lab::Experiment::load(&out.join("best.ron")).unwrap();
+    let rows = manylights_lab::results::load_rows(&out).unwrap();
+    let best = rows.iter().find(|r| r.id == e.cells()[0].id()).unwrap();
+    assert!(best.flip_mean_infinite.unwrap() <= 0.6);
+    assert_eq!(best.radius_rule, "stochastic", "{stdout}");
+    // None within a budget no candidate reaches (the same cells, resumed).
+    let mut args = vec!["tune", "--out", out.to_str().unwrap(), "--max-error", "0.001"];
+    args.extend_from_slice(&small);
+    let o = manylights(&args);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("the lowest mean FLIP against infinite range was")
+            && stderr.contains("--max-error 0.001"),
+        "{stderr}"
+    );
+    for bad in ["0", "-1", "nan"] {
+        let o = manylights(&["tune", "--scene", "atrium", "--max-error", bad]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {stderr}");
+        assert!(stderr.contains("--max-error") && stderr.contains("above 0"), "{stderr}");
+    }
+}

@@ -6,6 +6,13 @@
 //! and the shading pass that reads the lists, back to back: the frame, not the culling pass).
 //! The best is written as an experiment file of its own (`best.ron`) that `manylights run`
 //! reproduces. A time budget stops starting candidates; those left are reported as untried.
+//!
+//! With an error budget ([`TuneOptions::max_error`]) the light ranges are candidates too
+//! ([`TuneOptions::radii`]: radius cut-offs from thresholds and stochastic light culling's
+//! error bounds), every candidate is scored against the infinite-range reference (computed
+//! once and cached in the output folder), and only those within the budget of mean FLIP
+//! against it (`flip_mean_infinite`) are ranked: the fastest configuration that is accurate
+//! enough against the light as it is.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -27,6 +34,10 @@ pub struct TuneOptions {
     pub progress: bool,
     /// The commit the binary was built from.
     pub commit: String,
+    /// Rank only candidates within this mean FLIP of the infinite-range reference (> 0).
+    pub max_error: Option<f64>,
+    /// With `max_error`, the radius rules tried with every strategy (none: the base's alone).
+    pub radii: Vec<manylights_scene::RadiusRule>,
 }
 
 /// What tuning found.
@@ -131,14 +142,39 @@ pub fn tune(
             ..Variant::default()
         })
         .collect();
+    let mut config = base.clone();
+    let mut radius = None;
+    if let Some(f) = opts.max_error {
+        if !(f.is_finite() && f > 0.0) {
+            return Err(LabError::Other(format!(
+                "max_error = {f}: a mean FLIP above 0 (and finite)"
+            )));
+        }
+        // Scored against infinite range only: the same cut-off's brute-force reference is not
+        // what the budget is about.
+        config.accuracy = true;
+        config.cutoff_reference = false;
+        if !opts.radii.is_empty() {
+            radius = Some(opts.radii.clone());
+        }
+    }
     let exp = Experiment {
         name: "tune".into(),
-        description: format!(
-            "manylights tune: every strategy and parameter candidate with the {} backend, ranked by culling and shading together (gpu_ms_cull_shade).",
-            base.backend.name()
-        ),
-        config: base.clone(),
+        description: match opts.max_error {
+            None => format!(
+                "manylights tune: every strategy and parameter candidate with the {} backend, ranked by culling and shading together (gpu_ms_cull_shade).",
+                base.backend.name()
+            ),
+            // The budget is left out: the same cells serve any budget, so a rerun with another
+            // one in the same folder ranks them again without running anything.
+            Some(_) => format!(
+                "manylights tune --max-error: every strategy and parameter candidate with every light range (radius cut-offs and stochastic light culling) and the {} backend, scored against the infinite-range reference; those within the error budget ranked by culling and shading together (gpu_ms_cull_shade).",
+                base.backend.name()
+            ),
+        },
+        config,
         sweep: Sweep {
+            radius,
             variants: Some(variants),
             ..Sweep::default()
         },
@@ -167,7 +203,7 @@ pub fn tune(
         .collect();
     let (mut ranked, mut rejected) = (Vec::new(), Vec::new());
     for r in run.rows {
-        match why_not(&r) {
+        match why_not(&r, opts.max_error) {
             None => ranked.push(r),
             Some(why) => rejected.push((r, why)),
         }
@@ -175,9 +211,20 @@ pub fn tune(
     let time = |r: &Row| r.gpu_ms_cull_shade.unwrap_or(f64::INFINITY);
     ranked.sort_by(|a, b| time(a).total_cmp(&time(b)));
     let best = ranked.first().ok_or_else(|| {
+        let closest = rejected
+            .iter()
+            .filter_map(|(r, _)| r.flip_mean_infinite)
+            .reduce(f64::min);
+        let error = match (opts.max_error, closest) {
+            (Some(f), Some(c)) => format!(
+                "; the lowest mean FLIP against infinite range was {c:.4}, against --max-error {f}: \
+                 raise it, or try longer ranges (--thresholds, --errors)"
+            ),
+            _ => String::new(),
+        };
         LabError::Other(format!(
             "no candidate was eligible within the budget of {} s ({} rejected, {} untried): \
-             raise --budget-s, or see {} for the rejected ones",
+             raise --budget-s, or see {} for the rejected ones{error}",
             opts.budget.as_secs(),
             rejected.len(),
             cells.len() - rejected.len(),
@@ -191,12 +238,17 @@ pub fn tune(
     let best_exp = Experiment {
         name: "tuned".into(),
         description: format!(
-            "The fastest conservative configuration manylights tune found on {} ({} + {}, {}: {:.3} ms of culling and shading).",
+            "The fastest conservative configuration manylights tune found on {} ({} + {}, {}, {}: {:.3} ms of culling and shading{}).",
             best.adapter,
             best.backend,
             best.strategy,
             best.params,
-            best.gpu_ms_cull_shade.unwrap_or(f64::NAN)
+            cell.config.lights.radius.kind(),
+            best.gpu_ms_cull_shade.unwrap_or(f64::NAN),
+            match (opts.max_error, best.flip_mean_infinite) {
+                (Some(b), Some(f)) => format!(", mean FLIP {f:.4} against infinite range within {b}"),
+                _ => String::new(),
+            }
         ),
         config: cell.config.clone(),
         sweep: Sweep::default(),
@@ -212,9 +264,10 @@ pub fn tune(
     })
 }
 
-/// Why a finished candidate cannot be the answer: a false negative, a dropped light, or no
-/// time for culling and shading (no timestamps, or naive forward).
-fn why_not(r: &Row) -> Option<String> {
+/// Why a finished candidate cannot be the answer: a false negative, a dropped light, no time
+/// for culling and shading (no timestamps, or naive forward), or with an error budget an error
+/// against infinite range above it.
+fn why_not(r: &Row, max_error: Option<f64>) -> Option<String> {
     match r.false_negatives {
         Some(0) => {}
         Some(n) => return Some(format!("{n} false negatives")),
@@ -225,6 +278,17 @@ fn why_not(r: &Row) -> Option<String> {
     }
     if r.gpu_ms_cull_shade.is_none() {
         return Some("no culling-and-shading time (no timestamp queries?)".into());
+    }
+    if let Some(budget) = max_error {
+        match r.flip_mean_infinite {
+            Some(f) if f <= budget => {}
+            Some(f) => {
+                return Some(format!(
+                    "mean FLIP {f:.4} against infinite range, above --max-error {budget}"
+                ));
+            }
+            None => return Some("no accuracy against infinite range".into()),
+        }
     }
     None
 }
