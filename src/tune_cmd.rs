@@ -200,6 +200,8 @@ fn range_of(r: &manylights_lab::Row) -> String {
     r.cell
         .split(',')
         .next()
-        .filter(|p| p.starts_with("threshold=") || p.starts_with("stochastic=") || p.starts_with("radius="))
+        .filter(|p| {
+            p.starts_with("threshold=") || p.starts_with("stochastic=") || p.starts_with("radius=")
+        })
         .map_or(String::new(), |p| format!(" {p}"))
 }

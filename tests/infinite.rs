@@ -79,7 +79,10 @@ fn compute_reference_matches_f64_over_many_chunks() {
         .unwrap();
     let want = f64_at_surfaces(&scene, &surfaces, Range::Infinite);
     let covered: Vec<DVec3> = want.iter().flatten().copied().collect();
-    assert!(covered.len() > (w * h / 2) as usize, "the atrium fills the view");
+    assert!(
+        covered.len() > (w * h / 2) as usize,
+        "the atrium fills the view"
+    );
     let mean = covered.iter().map(|c| c.element_sum()).sum::<f64>() / (3 * covered.len()) as f64;
     let (mut worst, mut worst_raster) = (0.0f64, 0.0f64);
     for (k, e) in want.iter().enumerate() {
@@ -99,11 +102,18 @@ fn compute_reference_matches_f64_over_many_chunks() {
             );
             worst = worst.max(err / e[c].max(1e-30));
             let err_r = (f64::from(r[c]) - e[c]).abs();
-            assert!(err_r <= 1e-3 * e[c] + 1e-6 * mean, "pixel {k}: raster {} vs {}", r[c], e[c]);
+            assert!(
+                err_r <= 1e-3 * e[c] + 1e-6 * mean,
+                "pixel {k}: raster {} vs {}",
+                r[c],
+                e[c]
+            );
             worst_raster = worst_raster.max(err_r / e[c].max(1e-30));
         }
     }
-    println!("largest relative error: compute {worst:.2e}, raster (plain f32 sum) {worst_raster:.2e}");
+    println!(
+        "largest relative error: compute {worst:.2e}, raster (plain f32 sum) {worst_raster:.2e}"
+    );
     // The same result in one dispatch as in 63.
     let one = InfiniteReference::new(&ctx, &gpu_scene)
         .render(&ctx, &gpu_scene, &surfaces)
@@ -177,7 +187,10 @@ fn stochastic_draws_match_their_oracle() {
             assert_eq!(g.position, l.position, "only radius and alpha change");
             longest = longest.max(g.radius / StochasticRangesExt::shortest(&s.params, l));
         }
-        assert!(longest > 10.0, "some ranges are long ({longest}x the shortest)");
+        assert!(
+            longest > 10.0,
+            "some ranges are long ({longest}x the shortest)"
+        );
     }
 }
 
@@ -255,7 +268,9 @@ fn stochastic_estimate_matches_f64() {
 /// Per-pixel z statistics of the mean of `images` against `reference` (luminance): the largest
 /// |z| and the mean z over covered pixels with noise, and how many pixels had none.
 fn z_stats(images: &[HdrImage], reference: &HdrImage) -> (f64, f64, usize) {
-    let lum = |t: [f32; 4]| 0.2126 * f64::from(t[0]) + 0.7152 * f64::from(t[1]) + 0.0722 * f64::from(t[2]);
+    let lum = |t: [f32; 4]| {
+        0.2126 * f64::from(t[0]) + 0.7152 * f64::from(t[1]) + 0.0722 * f64::from(t[2])
+    };
     let m = images.len() as f64;
     let (mut zmax, mut zsum, mut n, mut quiet) = (0.0f64, 0.0f64, 0usize, 0usize);
     for k in 0..reference.data.len() {
@@ -268,7 +283,10 @@ fn z_stats(images: &[HdrImage], reference: &HdrImage) -> (f64, f64, usize) {
         let r = lum(reference.data[k]);
         if var <= (1e-6 * r).powi(2) {
             // Every draw alike: every light always in range; the mean is the reference.
-            assert!((mean - r).abs() <= 1e-4 * r, "pixel {k}: no noise, yet {mean} vs {r}");
+            assert!(
+                (mean - r).abs() <= 1e-4 * r,
+                "pixel {k}: no noise, yet {mean} vs {r}"
+            );
             quiet += 1;
             continue;
         }
@@ -302,7 +320,10 @@ fn stochastic_estimate_is_unbiased_by_a_z_test_that_a_biased_variant_fails() {
     let images = stochastic_frames(&ctx, &s, &draw, frames, (w, h));
     let (zmax, zmean, quiet) = z_stats(&images, &reference);
     println!("unbiased: max |z| {zmax:.2}, mean z {zmean:.2}, {quiet} pixels without noise");
-    assert!(zmax <= 5.0, "the stochastic estimate is biased: max |z| = {zmax}");
+    assert!(
+        zmax <= 5.0,
+        "the stochastic estimate is biased: max |z| = {zmax}"
+    );
     let biased = draw.biased(&ctx);
     let images = stochastic_frames(&ctx, &s, &biased, frames, (w, h));
     let (zmax_b, zmean_b, _) = z_stats(&images, &reference);

@@ -10,8 +10,8 @@ use std::mem::offset_of;
 use manylights_cull::layout::{GpuCullParams, GpuTileDepth};
 use manylights_gpu::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex};
 use manylights_gpu::motion::MotionParams;
-use manylights_gpu::stochastic::GpuStochasticParams;
 use manylights_gpu::shaders::ShaderDef;
+use manylights_gpu::stochastic::GpuStochasticParams;
 
 fn all_shaders() -> Vec<ShaderDef> {
     manylights_gpu::shaders::SHADERS

@@ -76,8 +76,22 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("tune");
     let small = [
-        "--scene", "atrium", "--lights", "48", "--width", "48", "--height", "32", "--frames", "1",
-        "--warmup", "0", "--thresholds", "1", "--errors", "0.5",
+        "--scene",
+        "atrium",
+        "--lights",
+        "48",
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--thresholds",
+        "1",
+        "--errors",
+        "0.5",
     ];
     let mut args = vec!["tune", "--out", out.to_str().unwrap(), "--max-error", "0.6"];
     args.extend_from_slice(&small);
@@ -95,7 +109,9 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
     }
     // The radius cut-off of threshold 1 keeps a fraction of the light: rejected for its error.
     assert!(
-        stdout.lines().any(|l| l.starts_with("rejected:") && l.contains("above --max-error 0.6")),
+        stdout
+            .lines()
+            .any(|l| l.starts_with("rejected:") && l.contains("above --max-error 0.6")),
         "{stdout}"
     );
     let (e, _) = manylights_lab::Experiment::load(&out.join("best.ron")).unwrap();
@@ -104,7 +120,13 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
     assert!(best.flip_mean_infinite.unwrap() <= 0.6);
     assert_eq!(best.radius_rule, "stochastic", "{stdout}");
     // None within a budget no candidate reaches (the same cells, resumed).
-    let mut args = vec!["tune", "--out", out.to_str().unwrap(), "--max-error", "0.001"];
+    let mut args = vec![
+        "tune",
+        "--out",
+        out.to_str().unwrap(),
+        "--max-error",
+        "0.001",
+    ];
     args.extend_from_slice(&small);
     let o = manylights(&args);
     let stderr = String::from_utf8_lossy(&o.stderr);
@@ -118,6 +140,9 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
         let o = manylights(&["tune", "--scene", "atrium", "--max-error", bad]);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{bad}: {stderr}");
-        assert!(stderr.contains("--max-error") && stderr.contains("above 0"), "{stderr}");
+        assert!(
+            stderr.contains("--max-error") && stderr.contains("above 0"),
+            "{stderr}"
+        );
     }
 }

@@ -57,8 +57,13 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
                 None => "none".into(),
             };
             let (c, s) = (fastest_within(rs, b, false), fastest_within(rs, b, true));
-            let ratio = match (c.and_then(|r| r.gpu_ms_cull_shade), s.and_then(|r| r.gpu_ms_cull_shade)) {
-                (Some(c), Some(s)) if s > 0.0 => format!("; stochastic takes {:.2}x the conservative time", s / c),
+            let ratio = match (
+                c.and_then(|r| r.gpu_ms_cull_shade),
+                s.and_then(|r| r.gpu_ms_cull_shade),
+            ) {
+                (Some(c), Some(s)) if s > 0.0 => {
+                    format!("; stochastic takes {:.2}x the conservative time", s / c)
+                }
                 _ => String::new(),
             };
             parts.push(format!(
@@ -117,7 +122,11 @@ mod tests {
         assert!(fastest_within(&refs, 0.02, true).is_none());
         let f = findings(&rows);
         assert_eq!(f.len(), 1);
-        assert!(f[0].contains("FLIP <= 0.05: conservative `slow`"), "{}", f[0]);
+        assert!(
+            f[0].contains("FLIP <= 0.05: conservative `slow`"),
+            "{}",
+            f[0]
+        );
         assert!(f[0].contains("stochastic takes 0.50x"), "{}", f[0]);
     }
 }

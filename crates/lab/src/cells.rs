@@ -29,13 +29,11 @@ pub struct Cell {
 impl Cell {
     /// A stable identifier of the configuration (FNV-1a of its JSON), the cell's file name.
     pub fn id(&self) -> String {
+        use std::hash::Hasher as _;
         let json = serde_json::to_string(&self.config).expect("configs serialise");
-        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-        for b in json.bytes() {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x100_0000_01b3);
-        }
-        format!("{h:016x}")
+        let mut h = crate::reference_cache::Fnv::default();
+        h.write(json.as_bytes());
+        format!("{:016x}", h.finish())
     }
 }
 

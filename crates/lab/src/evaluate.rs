@@ -274,7 +274,10 @@ impl References<'_> {
     ) -> Result<(HdrImage, bool), LabError> {
         use crate::reference_cache as cache;
         let key = self.cache.map(|(dir, scene)| {
-            (dir, cache::ReferenceKey::new(scene, cam, size, self.rr.samples()))
+            (
+                dir,
+                cache::ReferenceKey::new(scene, cam, size, self.rr.samples()),
+            )
         });
         if let Some((dir, key)) = &key {
             if let Some(img) = cache::load(dir, key) {

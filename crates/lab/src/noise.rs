@@ -53,9 +53,12 @@ impl Draws {
         scene: &Scene,
         first: usize,
     ) -> Result<Option<Self>, LabError> {
-        let (Some(params), RadiusRule::Stochastic {
-            accumulate, seeds, ..
-        }) = (c.lights.stochastic(scene), c.lights.radius)
+        let (
+            Some(params),
+            RadiusRule::Stochastic {
+                accumulate, seeds, ..
+            },
+        ) = (c.lights.stochastic(scene), c.lights.radius)
         else {
             return Ok(None);
         };
@@ -166,7 +169,14 @@ fn mean_image(sum: &[[f64; 3]], n: f64, reference: &HdrImage) -> HdrImage {
         data: sum
             .iter()
             .zip(&reference.data)
-            .map(|(s, r)| [(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32, r[3]])
+            .map(|(s, r)| {
+                [
+                    (s[0] / n) as f32,
+                    (s[1] / n) as f32,
+                    (s[2] / n) as f32,
+                    r[3],
+                ]
+            })
             .collect(),
     }
 }

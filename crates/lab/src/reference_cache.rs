@@ -191,6 +191,21 @@ mod tests {
     }
 
     #[test]
+    fn fnv_is_fnv_1a_64() {
+        // The published test vectors; cell ids (cells.rs) hash with it too, so they must not
+        // change.
+        for (text, want) in [
+            ("", 0xcbf2_9ce4_8422_2325u64),
+            ("a", 0xaf63_dc4c_8601_ec8c),
+            ("foobar", 0x8594_4171_f739_67e8),
+        ] {
+            let mut h = Fnv::default();
+            h.write(text.as_bytes());
+            assert_eq!(h.finish(), want, "{text:?}");
+        }
+    }
+
+    #[test]
     fn a_file_is_used_only_under_its_own_key() {
         let dir = tempfile::tempdir().unwrap();
         let cam = Camera::perspective(

@@ -23,8 +23,8 @@ use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::dynamic::Movers;
 use crate::evaluate::{PoseEval, References, evaluate, temporal_stability};
-use crate::noise::{Draws, Noise, measure};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
+use crate::noise::{Draws, Noise, measure};
 use crate::results::{Row, load_cells, percentiles, save_cell, write_results};
 use crate::{LabError, write_atomic};
 
@@ -335,9 +335,7 @@ fn run_cell(
         .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
         .transpose()
         .map_err(|e| other(&e))?;
-    let infinite = c
-        .accuracy
-        .then(|| InfiniteReference::new(ctx, &gpu_scene));
+    let infinite = c.accuracy.then(|| InfiniteReference::new(ctx, &gpu_scene));
     // The infinite-range reference is cached in the run folder, except for moving lights.
     let fingerprint = crate::reference_cache::scene_fingerprint(&scene);
     let refs = match (&reference, &infinite) {

@@ -246,7 +246,8 @@ pub fn tune(
             cell.config.lights.radius.kind(),
             best.gpu_ms_cull_shade.unwrap_or(f64::NAN),
             match (opts.max_error, best.flip_mean_infinite) {
-                (Some(b), Some(f)) => format!(", mean FLIP {f:.4} against infinite range within {b}"),
+                (Some(b), Some(f)) =>
+                    format!(", mean FLIP {f:.4} against infinite range within {b}"),
                 _ => String::new(),
             }
         ),

@@ -146,7 +146,10 @@ mod tests {
         }
         mean /= f64::from(n);
         // The mean of n uniform draws: 0.5 within 5 standard errors (1 / sqrt(12 n)).
-        assert!((mean - 0.5).abs() < 5.0 / (12.0 * f64::from(n)).sqrt(), "{mean}");
+        assert!(
+            (mean - 0.5).abs() < 5.0 / (12.0 * f64::from(n)).sqrt(),
+            "{mean}"
+        );
         assert_ne!(xi(7, 3, 0), xi(7, 4, 0), "frames draw apart");
         assert_ne!(xi(7, 3, 0), xi(8, 3, 0), "seeds draw apart");
     }
