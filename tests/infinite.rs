@@ -34,9 +34,14 @@ fn atrium(count: u32, radius: RadiusRule, spots: f32) -> Scene {
     scene
 }
 
-/// The shading model in f64 at each covered pixel's stored surface point (position, shading
-/// normal, material index in the normal's w), the view direction from the camera in f64.
-fn f64_at_surfaces(scene: &Scene, frame: &ReferenceFrame, range: Range) -> Vec<Option<DVec3>> {
+/// `model(point, normal, view direction, material)` in f64 at each covered pixel's stored
+/// surface point (position, shading normal, material index in the normal's w), the view
+/// direction from the camera in f64.
+fn f64_at_surfaces(
+    scene: &Scene,
+    frame: &ReferenceFrame,
+    model: impl Fn(DVec3, DVec3, DVec3, &manylights_scene::Material) -> DVec3,
+) -> Vec<Option<DVec3>> {
     let eye = scene.camera.position.as_dvec3();
     frame
         .position
@@ -45,10 +50,13 @@ fn f64_at_surfaces(scene: &Scene, frame: &ReferenceFrame, range: Range) -> Vec<O
         .zip(&frame.normal.data)
         .map(|(p, n)| {
             (p[3] > 0.0).then(|| {
-                let pos = DVec3::new(p[0].into(), p[1].into(), p[2].into());
-                let nrm = DVec3::new(n[0].into(), n[1].into(), n[2].into());
-                let m = &scene.materials[n[3] as usize];
-                shade(pos, nrm, (eye - pos).normalize(), m, &scene.lights, range)
+                let (pos, nrm) = (rgb(*p), rgb(*n));
+                model(
+                    pos,
+                    nrm,
+                    (eye - pos).normalize(),
+                    &scene.materials[n[3] as usize],
+                )
             })
         })
         .collect()
@@ -77,7 +85,9 @@ fn compute_reference_matches_f64_over_many_chunks() {
     let raster = rr
         .render_infinite(&ctx, &gpu_scene, &scene.camera, w, h)
         .unwrap();
-    let want = f64_at_surfaces(&scene, &surfaces, Range::Infinite);
+    let want = f64_at_surfaces(&scene, &surfaces, |p, n, v, m| {
+        shade(p, n, v, m, &scene.lights, Range::Infinite)
+    });
     let covered: Vec<DVec3> = want.iter().flatten().copied().collect();
     assert!(
         covered.len() > (w * h / 2) as usize,
@@ -185,22 +195,13 @@ fn stochastic_draws_match_their_oracle() {
                 want.radius
             );
             assert_eq!(g.position, l.position, "only radius and alpha change");
-            longest = longest.max(g.radius / StochasticRangesExt::shortest(&s.params, l));
+            let shortest = stochastic::StochasticParams::range(s.params.alpha(l), 1.0);
+            longest = longest.max(g.radius / shortest);
         }
         assert!(
             longest > 10.0,
             "some ranges are long ({longest}x the shortest)"
         );
-    }
-}
-
-trait StochasticRangesExt {
-    fn shortest(&self, l: &manylights_scene::Light) -> f32;
-}
-
-impl StochasticRangesExt for stochastic::StochasticParams {
-    fn shortest(&self, l: &manylights_scene::Light) -> f32 {
-        stochastic::StochasticParams::range(self.alpha(l), 1.0)
     }
 }
 
@@ -241,23 +242,18 @@ fn stochastic_estimate_matches_f64() {
         .enumerate()
         .map(|(i, l)| s.params.at_frame(l, i as u32, frame))
         .unzip();
-    let eye = s.scene.camera.position.as_dvec3();
+    let want = f64_at_surfaces(&s.scene, &got, |p, n, v, m| {
+        stochastic::shade(p, n, v, m, &lights, &alphas)
+    });
+    // A light within f32 rounding of its range may be in on one side and out on the other:
+    // the tolerance admits one such light's largest term, alpha times the BRDF.
+    let one = alphas.iter().fold(0.0f32, |a, &b| a.max(b)) as f64 * 2.0 * 6.0;
     let mut checked = 0;
-    for k in 0..(w * h) as usize {
-        let (p, n) = (got.position.data[k], got.normal.data[k]);
-        if p[3] == 0.0 {
-            continue;
-        }
-        let pos = rgb(p);
-        let nrm = rgb(n);
-        let m = &s.scene.materials[n[3] as usize];
-        let want = stochastic::shade(pos, nrm, (eye - pos).normalize(), m, &lights, &alphas);
+    for (k, want) in want.iter().enumerate() {
+        let Some(want) = want else { continue };
         let g = rgb(got.color.data[k]);
-        // A light within f32 rounding of its range may be in on one side and out on the
-        // other: the tolerance admits one such light's largest term, alpha times the BRDF.
-        let one = alphas.iter().fold(0.0f32, |a, &b| a.max(b)) as f64 * 2.0 * 6.0;
         assert!(
-            (g - want).abs().max_element() <= 1e-4 * want.max_element() + one,
+            (g - *want).abs().max_element() <= 1e-4 * want.max_element() + one,
             "pixel {k}: gpu {g} vs f64 {want}"
         );
         checked += 1;
@@ -268,9 +264,7 @@ fn stochastic_estimate_matches_f64() {
 /// Per-pixel z statistics of the mean of `images` against `reference` (luminance): the largest
 /// |z| and the mean z over covered pixels with noise, and how many pixels had none.
 fn z_stats(images: &[HdrImage], reference: &HdrImage) -> (f64, f64, usize) {
-    let lum = |t: [f32; 4]| {
-        0.2126 * f64::from(t[0]) + 0.7152 * f64::from(t[1]) + 0.0722 * f64::from(t[2])
-    };
+    let lum = manylights_shade::accuracy::luminance;
     let m = images.len() as f64;
     let (mut zmax, mut zsum, mut n, mut quiet) = (0.0f64, 0.0f64, 0usize, 0usize);
     for k in 0..reference.data.len() {

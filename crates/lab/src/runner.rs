@@ -337,12 +337,13 @@ fn run_cell(
         .map_err(|e| other(&e))?;
     let infinite = c.accuracy.then(|| InfiniteReference::new(ctx, &gpu_scene));
     // The infinite-range reference is cached in the run folder, except for moving lights.
-    let fingerprint = crate::reference_cache::scene_fingerprint(&scene);
     let refs = match (&reference, &infinite) {
         (Some(rr), Some(inf)) => Some(References {
             rr,
             inf,
-            cache: movers.is_none().then_some((out, fingerprint)),
+            cache: movers
+                .is_none()
+                .then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
         }),
         _ => None,
     };

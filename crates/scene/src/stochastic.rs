@@ -29,7 +29,7 @@
 
 use glam::DVec3;
 
-use crate::light::{D_MIN, SHININESS, spot};
+use crate::light::{D_MIN, SHININESS};
 use crate::motion::pcg;
 use crate::{Light, Material};
 
@@ -116,18 +116,6 @@ pub fn shade(
             0.0
         }
     })
-}
-
-/// The spot factor of `light` towards `p` (1 for a point light); used by tests that bound the
-/// estimate's variance.
-pub fn cone(light: &Light, p: DVec3) -> f64 {
-    match light.cone() {
-        None => 1.0,
-        Some((axis, ci, co)) => {
-            let l = (light.position.as_dvec3() - p).normalize_or_zero();
-            spot(-l.dot(axis.as_dvec3()), f64::from(ci), f64::from(co))
-        }
-    }
 }
 
 #[cfg(test)]
