@@ -6,8 +6,9 @@
 //! every RGB channel of every pixel; identical images give `+inf`. The peak of a many-light
 //! image is a hot spot next to a light (the falloff reaches `1 / D_MIN^2 = 10^4` times a
 //! light's intensity there), thousands of times a typical pixel, so PSNR reads errors against
-//! that hot spot: 47-63 dB for images whose every pixel is a third darker than the
-//! infinite-range reference. Against infinite range, read FLIP, RMSE and the energy error.
+//! that hot spot: the reports shipped before read 47-63 dB against infinite range for images
+//! that hold 1% to 37% of its energy (docs/reports/infinite-range measures the energy). Against
+//! infinite range, read FLIP, RMSE and the energy error.
 //!
 //! The energy error is the signed mean of `(L_test - L_ref) / L_ref` over lit pixels (covered,
 //! with reference luminance `L_ref` at least [`LIT_FRACTION`] of the covered pixels' mean;
