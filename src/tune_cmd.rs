@@ -135,6 +135,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
                     exposure: 1.0,
                     accumulate: 0,
                     seeds: 4,
+                    interleave: 1,
                 }))
                 .collect(),
         },

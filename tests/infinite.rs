@@ -34,24 +34,27 @@ fn atrium(count: u32, radius: RadiusRule, spots: f32) -> Scene {
     scene
 }
 
-/// `model(point, normal, view direction, material)` in f64 at each covered pixel's stored
-/// surface point (position, shading normal, material index in the normal's w), the view
-/// direction from the camera in f64.
+/// `model(pixel, point, normal, view direction, material)` in f64 at each covered pixel's
+/// stored surface point (position, shading normal, material index in the normal's w), the view
+/// direction from the camera in f64; `pixel` is (x, y).
 fn f64_at_surfaces(
     scene: &Scene,
     frame: &ReferenceFrame,
-    model: impl Fn(DVec3, DVec3, DVec3, &manylights_scene::Material) -> DVec3,
+    model: impl Fn((u32, u32), DVec3, DVec3, DVec3, &manylights_scene::Material) -> DVec3,
 ) -> Vec<Option<DVec3>> {
     let eye = scene.camera.position.as_dvec3();
+    let w = frame.position.width as usize;
     frame
         .position
         .data
         .iter()
         .zip(&frame.normal.data)
-        .map(|(p, n)| {
+        .enumerate()
+        .map(|(k, (p, n))| {
             (p[3] > 0.0).then(|| {
                 let (pos, nrm) = (rgb(*p), rgb(*n));
                 model(
+                    ((k % w) as u32, (k / w) as u32),
                     pos,
                     nrm,
                     (eye - pos).normalize(),
@@ -85,7 +88,7 @@ fn compute_reference_matches_f64_over_many_chunks() {
     let raster = rr
         .render_infinite(&ctx, &gpu_scene, &scene.camera, w, h)
         .unwrap();
-    let want = f64_at_surfaces(&scene, &surfaces, |p, n, v, m| {
+    let want = f64_at_surfaces(&scene, &surfaces, |_, p, n, v, m| {
         shade(p, n, v, m, &scene.lights, Range::Infinite)
     });
     let covered: Vec<DVec3> = want.iter().flatten().copied().collect();
@@ -147,6 +150,7 @@ fn stochastic_scene(
     ctx: &manylights_gpu::GpuContext,
     count: u32,
     error: f32,
+    interleave: u32,
     (w, h): (u32, u32),
 ) -> Stochastic {
     let rule = RadiusRule::Stochastic {
@@ -154,6 +158,7 @@ fn stochastic_scene(
         exposure: 1.0,
         accumulate: 0,
         seeds: 1,
+        interleave,
     };
     let scene = atrium(count, rule, 0.25);
     let spec = LightSpec {
@@ -166,42 +171,51 @@ fn stochastic_scene(
     Stochastic { scene, gpu, params }
 }
 
-/// The GPU's draws (range and alpha of every light, at several frames) against the host's.
+/// The GPU's draws (range, alpha and interleave word of every light, at several frames) against
+/// the host's, without interleaving and over 3 x 3 classes (the range: the longest class's).
 /// Both compute `1 / sqrt(alpha * xi)` from the same 24-bit xi and alpha in f32; the GPU's
 /// square root may differ by an ulp or two.
 #[test]
 fn stochastic_draws_match_their_oracle() {
     let ctx = common::gpu();
-    let s = stochastic_scene(&ctx, 3000, 0.01, (16, 16));
-    let draw = StochasticRanges::new(&ctx, &s.gpu, 0, s.gpu.light_count, &s.params).unwrap();
-    for frame in [0, 1, 17] {
-        draw.draw(&ctx, frame).unwrap();
-        let bytes = manylights_gpu::readback::read_buffer(
-            &ctx,
-            &s.gpu.lights,
-            0,
-            u64::from(s.gpu.light_count) * 64,
-        )
-        .unwrap();
-        let gpu: &[GpuLight] = bytemuck::cast_slice(&bytes);
-        let mut longest = 0.0f32;
-        for (i, (g, l)) in gpu.iter().zip(&s.scene.lights).enumerate() {
-            let (want, alpha) = s.params.at_frame(l, i as u32, frame);
-            assert_eq!(g.alpha, alpha, "frame {frame} light {i}: alpha");
+    for interleave in [1, 3] {
+        let s = stochastic_scene(&ctx, 3000, 0.01, interleave, (16, 16));
+        let draw = StochasticRanges::new(&ctx, &s.gpu, 0, s.gpu.light_count, &s.params).unwrap();
+        for frame in [0, 1, 17] {
+            draw.draw(&ctx, frame).unwrap();
+            let bytes = manylights_gpu::readback::read_buffer(
+                &ctx,
+                &s.gpu.lights,
+                0,
+                u64::from(s.gpu.light_count) * 64,
+            )
+            .unwrap();
+            let gpu: &[GpuLight] = bytemuck::cast_slice(&bytes);
+            let mut longest = 0.0f32;
+            for (i, (g, l)) in gpu.iter().zip(&s.scene.lights).enumerate() {
+                let at = format!("interleave {interleave} frame {frame} light {i}");
+                let (want, alpha) = s.params.at_frame(l, i as u32, frame);
+                assert_eq!(g.alpha, alpha, "{at}: alpha");
+                assert_eq!(
+                    g.interleave,
+                    s.params.interleave_word(i as u32, frame),
+                    "{at}: interleave word"
+                );
+                assert!(
+                    (g.radius - want.radius).abs() <= 4.0 * f32::EPSILON * want.radius,
+                    "{at}: range {} vs {}",
+                    g.radius,
+                    want.radius
+                );
+                assert_eq!(g.position, l.position, "only radius and alpha change");
+                let shortest = stochastic::StochasticParams::range(s.params.alpha(l), 1.0);
+                longest = longest.max(g.radius / shortest);
+            }
             assert!(
-                (g.radius - want.radius).abs() <= 4.0 * f32::EPSILON * want.radius,
-                "frame {frame} light {i}: range {} vs {}",
-                g.radius,
-                want.radius
+                longest > 10.0,
+                "some ranges are long ({longest}x the shortest)"
             );
-            assert_eq!(g.position, l.position, "only radius and alpha change");
-            let shortest = stochastic::StochasticParams::range(s.params.alpha(l), 1.0);
-            longest = longest.max(g.radius / shortest);
         }
-        assert!(
-            longest > 10.0,
-            "some ranges are long ({longest}x the shortest)"
-        );
     }
 }
 
@@ -224,41 +238,62 @@ fn stochastic_frames(
 }
 
 /// The GPU's stochastic estimate at a frame against the same estimate in f64 at the stored
-/// surface points (the lights with the ranges and alphas the host draws for that frame).
+/// surface points (the lights with the ranges and alphas the host draws for that frame, for
+/// the pixel's class where 2 x 2 classes interleave).
 #[test]
 fn stochastic_estimate_matches_f64() {
     let ctx = common::gpu();
     let (w, h) = (32, 20);
-    let s = stochastic_scene(&ctx, 800, 0.02, (w, h));
-    let draw = StochasticRanges::new(&ctx, &s.gpu, 0, s.gpu.light_count, &s.params).unwrap();
-    let frame = 3;
-    draw.draw(&ctx, frame).unwrap();
-    let rr = ReferenceRenderer::new(&ctx, &s.gpu);
-    let got = rr.render(&ctx, &s.gpu, w, h).unwrap();
-    let (lights, alphas): (Vec<_>, Vec<_>) = s
-        .scene
-        .lights
-        .iter()
-        .enumerate()
-        .map(|(i, l)| s.params.at_frame(l, i as u32, frame))
-        .unzip();
-    let want = f64_at_surfaces(&s.scene, &got, |p, n, v, m| {
-        stochastic::shade(p, n, v, m, &lights, &alphas)
-    });
-    // A light within f32 rounding of its range may be in on one side and out on the other:
-    // the tolerance admits one such light's largest term, alpha times the BRDF.
-    let one = alphas.iter().fold(0.0f32, |a, &b| a.max(b)) as f64 * 2.0 * 6.0;
-    let mut checked = 0;
-    for (k, want) in want.iter().enumerate() {
-        let Some(want) = want else { continue };
-        let g = rgb(got.color.data[k]);
-        assert!(
-            (g - *want).abs().max_element() <= 1e-4 * want.max_element() + one,
-            "pixel {k}: gpu {g} vs f64 {want}"
-        );
-        checked += 1;
+    for interleave in [1, 2] {
+        let s = stochastic_scene(&ctx, 800, 0.02, interleave, (w, h));
+        let draw = StochasticRanges::new(&ctx, &s.gpu, 0, s.gpu.light_count, &s.params).unwrap();
+        let frame = 3;
+        draw.draw(&ctx, frame).unwrap();
+        let rr = ReferenceRenderer::new(&ctx, &s.gpu);
+        let got = rr.render(&ctx, &s.gpu, w, h).unwrap();
+        // The lights each class shades with.
+        let classes: Vec<(Vec<_>, Vec<_>)> = (0..interleave * interleave)
+            .map(|c| {
+                s.scene
+                    .lights
+                    .iter()
+                    .enumerate()
+                    .map(|(i, l)| s.params.at_pixel(l, i as u32, frame, c))
+                    .unzip()
+            })
+            .collect();
+        let want = f64_at_surfaces(&s.scene, &got, |(x, y), p, n, v, m| {
+            let (lights, alphas) = &classes[stochastic::pixel_class(x, y, interleave) as usize];
+            stochastic::shade(p, n, v, m, lights, alphas)
+        });
+        // A light within f32 rounding of its range may be in on one side and out on the
+        // other: the tolerance admits one such light's largest term, alpha times the BRDF.
+        let one = classes[0].1.iter().fold(0.0f32, |a, &b| a.max(b)) as f64 * 2.0 * 6.0;
+        let mut checked = 0;
+        for (k, want) in want.iter().enumerate() {
+            let Some(want) = want else { continue };
+            let g = rgb(got.color.data[k]);
+            assert!(
+                (g - *want).abs().max_element() <= 1e-4 * want.max_element() + one,
+                "interleave {interleave} pixel {k}: gpu {g} vs f64 {want}"
+            );
+            checked += 1;
+        }
+        assert!(checked > 200);
+        if interleave > 1 {
+            // The classes differ: the same pixels shaded with class 0's ranges everywhere
+            // would not match.
+            let plain = f64_at_surfaces(&s.scene, &got, |_, p, n, v, m| {
+                stochastic::shade(p, n, v, m, &classes[0].0, &classes[0].1)
+            });
+            let differ = plain
+                .iter()
+                .zip(&want)
+                .filter(|(a, b)| matches!((a, b), (Some(a), Some(b)) if (*a - *b).abs().max_element() > 1e-3 * b.max_element()))
+                .count();
+            assert!(differ > 50, "only {differ} pixels see their class's draws");
+        }
     }
-    assert!(checked > 200);
 }
 
 /// Per-pixel z statistics of the mean of `images` against `reference` (luminance): the largest
@@ -303,7 +338,7 @@ fn z_stats(images: &[HdrImage], reference: &HdrImage) -> (f64, f64, usize) {
 fn stochastic_estimate_is_unbiased_by_a_z_test_that_a_biased_variant_fails() {
     let ctx = common::gpu();
     let (w, h) = (32, 20);
-    let s = stochastic_scene(&ctx, 400, 0.05, (w, h));
+    let s = stochastic_scene(&ctx, 400, 0.05, 1, (w, h));
     let rr = ReferenceRenderer::new(&ctx, &s.gpu);
     let surfaces = rr.surfaces(&ctx, &s.gpu, w, h).unwrap();
     let reference = InfiniteReference::new(&ctx, &s.gpu)
@@ -317,6 +352,16 @@ fn stochastic_estimate_is_unbiased_by_a_z_test_that_a_biased_variant_fails() {
     assert!(
         zmax <= 5.0,
         "the stochastic estimate is biased: max |z| = {zmax}"
+    );
+    // Interleaved over 2 x 2 pixel classes: unbiased at every pixel too.
+    let il = stochastic_scene(&ctx, 400, 0.05, 2, (w, h));
+    let draw_il = StochasticRanges::new(&ctx, &il.gpu, 0, il.gpu.light_count, &il.params).unwrap();
+    let images = stochastic_frames(&ctx, &il, &draw_il, frames, (w, h));
+    let (zmax_il, zmean_il, _) = z_stats(&images, &reference);
+    println!("interleaved 2 x 2: max |z| {zmax_il:.2}, mean z {zmean_il:.2}");
+    assert!(
+        zmax_il <= 5.0,
+        "the interleaved estimate is biased: max |z| = {zmax_il}"
     );
     let biased = draw.biased(&ctx);
     let images = stochastic_frames(&ctx, &s, &biased, frames, (w, h));

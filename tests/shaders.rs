@@ -151,7 +151,7 @@ fn host_structs_match_wgsl_layout() {
     check!(GpuFrame, "Frame", [clip_from_world => "clip_from_world", view_from_world => "view_from_world",
         clip_from_view => "clip_from_view", world_from_view => "world_from_view", eye => "eye", viewport => "viewport", light_count => "light_count", flags => "flags"]);
     check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
-        direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer", alpha => "alpha"]);
+        direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer", alpha => "alpha", interleave => "interleave"]);
     check!(GpuMaterial, "Material", [base_color => "base_color", specular => "specular", opacity => "opacity"]);
     let cull = validate(&manylights_cull::shaders::DEPTH_BOUNDS);
     let (size, members) = wgsl_layout(&cull, "CullParams");
@@ -194,7 +194,7 @@ fn host_structs_match_wgsl_layout() {
     let stochastic = validate(&manylights_gpu::stochastic::STOCHASTIC);
     check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
         row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",
-        exposure => "exposure", rho_max => "rho_max"]);
+        exposure => "exposure", rho_max => "rho_max", interleave => "interleave"]);
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.
     let (_, members) = wgsl_layout(&reference, "VertexIn");

@@ -1,5 +1,6 @@
 // Lights and the falloff: the WGSL twin of manylights_scene::light (see its module docs for the
-// formulas). Constants D_MIN, SPOT_EPS and LIGHT_KIND_* come from the generated prelude.
+// formulas). Constants D_MIN, SPOT_EPS, LIGHT_KIND_* and XI_BITS come from the generated
+// prelude.
 // Host mirror: manylights_gpu::layout::GpuLight.
 struct Light {
     position: vec3<f32>,
@@ -16,7 +17,40 @@ struct Light {
     // shaded with max(1 / d^2, alpha) inside its radius, the range drawn for this frame
     // (lights.stochastic); 0, the windowed falloff.
     alpha: f32,
-    _pad1: u32,
+    // Interleaved stochastic ranges (manylights_scene::stochastic): 0 none; otherwise
+    // n << 24 | key, and a pixel of class c of n x n evaluates the light out to its class's
+    // range (light_range), within `radius`, the longest of the classes' ranges.
+    interleave: u32,
+}
+
+// The pixel being shaded: every entry point that shades lights sets it first, for the classes
+// of interleaved stochastic ranges (light_range).
+var<private> shading_pixel: vec2<u32>;
+
+// PCG's output hash, as manylights_scene::motion::pcg: the random numbers of the passes that
+// change lights each frame (motion.wgsl, stochastic.wgsl) and of the interleaved ranges.
+fn pcg(v: u32) -> u32 {
+    let s = v * 747796405u + 2891336453u;
+    let w = ((s >> ((s >> 28u) + 4u)) ^ s) * 277803737u;
+    return (w >> 22u) ^ w;
+}
+
+// manylights_scene::stochastic::unit: a hash's top XI_BITS bits as a number in (0, 1).
+fn stochastic_unit(h: u32) -> f32 {
+    return (f32(h >> (32u - XI_BITS)) + 0.5) / f32(1u << XI_BITS);
+}
+
+// The range a stochastic light (alpha > 0) is evaluated to at shading_pixel: its radius, or
+// with interleaving its pixel class's range 1 / sqrt(alpha * xi) (manylights_scene::stochastic::
+// StochasticParams::at_pixel).
+fn light_range(light: Light) -> f32 {
+    if light.interleave == 0u {
+        return light.radius;
+    }
+    let n = light.interleave >> 24u;
+    let c = shading_pixel.x % n + n * (shading_pixel.y % n);
+    let xi = stochastic_unit(pcg((light.interleave & 0xffffffu) ^ (c << 24u)));
+    return 1.0 / sqrt(light.alpha * xi);
 }
 
 // clamp(1 - (d / r)^4, 0, 1)^2: exactly zero for d >= r.
@@ -39,12 +73,12 @@ fn light_falloff_infinite(d: f32) -> f32 {
 }
 
 // The falloff a light is shaded with: the windowed one or, for stochastic light culling
-// (alpha > 0), max(1 / d^2, alpha) inside the range drawn for the frame: 1 / d^2 divided by the
-// probability min(d^-2 / alpha, 1) that the light reaches d, an unbiased estimate of the
-// infinite-range falloff (manylights_scene::stochastic).
+// (alpha > 0), max(1 / d^2, alpha) inside the range drawn for the frame (light_range): 1 / d^2
+// divided by the probability min(d^-2 / alpha, 1) that the light reaches d, an unbiased
+// estimate of the infinite-range falloff (manylights_scene::stochastic).
 fn light_attenuation(light: Light, d: f32) -> f32 {
     if light.alpha > 0.0 {
-        return select(0.0, max(light_falloff_infinite(d), light.alpha), d < light.radius);
+        return select(0.0, max(light_falloff_infinite(d), light.alpha), d < light_range(light));
     }
     return light_falloff(d, light.radius);
 }

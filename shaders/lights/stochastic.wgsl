@@ -3,8 +3,10 @@
 // manylights_gpu::stochastic. Each thread draws xi for one light of [first, first + count) from
 // the seed, the frame and the light's index, and writes the light's range 1 / sqrt(alpha * xi)
 // into its radius and alpha beside it; culling then runs unchanged over these spheres and
-// shading uses max(1 / d^2, alpha) inside them (light_attenuation, light.wgsl).
-// XI_BITS comes from the Rust constant.
+// shading uses max(1 / d^2, alpha) inside them (light_attenuation, light.wgsl). With
+// interleaving over n x n pixel classes, each class draws its own xi from the light's key, the
+// radius is the longest class's range, and the key is kept in the light's `interleave` for
+// shading (light_range, light.wgsl).
 
 struct StochasticParams {
     first: u32,
@@ -20,7 +22,8 @@ struct StochasticParams {
     error: f32,
     exposure: f32,
     rho_max: f32,
-    _pad0: u32,
+    // n of n x n pixel classes; 1: no interleaving.
+    interleave: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -28,10 +31,9 @@ struct StochasticParams {
 @group(0) @binding(0) var<uniform> stochastic: StochasticParams;
 @group(0) @binding(1) var<storage, read_write> drawn: array<Light>;
 
-// manylights_scene::stochastic::xi: in (0, 1), never 0.
-fn stochastic_xi(index: u32) -> f32 {
-    let h = pcg(index ^ pcg(stochastic.frame ^ pcg(stochastic.seed)));
-    return (f32(h >> (32u - XI_BITS)) + 0.5) / f32(1u << XI_BITS);
+// The hash of manylights_scene::stochastic::xi and ::key.
+fn stochastic_hash(index: u32) -> u32 {
+    return pcg(index ^ pcg(stochastic.frame ^ pcg(stochastic.seed)));
 }
 
 // manylights_scene::stochastic::StochasticParams::alpha.
@@ -49,6 +51,20 @@ fn draw(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let index = stochastic.first + i;
     let alpha = stochastic_alpha(drawn[index]);
-    drawn[index].radius = 1.0 / sqrt(alpha * stochastic_xi(index));
+    let h = stochastic_hash(index);
+    let n = stochastic.interleave;
+    if n <= 1u {
+        drawn[index].radius = 1.0 / sqrt(alpha * stochastic_unit(h));
+        drawn[index].interleave = 0u;
+    } else {
+        // The smallest class xi: the longest class range (StochasticParams::at_frame).
+        let key = h >> 8u;
+        var xi = 1.0;
+        for (var c = 0u; c < n * n; c++) {
+            xi = min(xi, stochastic_unit(pcg(key ^ (c << 24u))));
+        }
+        drawn[index].radius = 1.0 / sqrt(alpha * xi);
+        drawn[index].interleave = n << 24u | key;
+    }
     drawn[index].alpha = select(alpha, 0.0, stochastic.biased != 0u);
 }

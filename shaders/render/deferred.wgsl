@@ -10,31 +10,37 @@
 // An entry point for each form of lists (list_shading.wgsl): `zbin` is a constant of each.
 @compute @workgroup_size(8, 8)
 fn deferred_shade(@builtin(global_invocation_id) id: vec3<u32>) {
+    shading_pixel = id.xy;
     shade_pixel(id.xy, false, false);
 }
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade_stored(@builtin(global_invocation_id) id: vec3<u32>) {
+    shading_pixel = id.xy;
     shade_pixel(id.xy, true, false);
 }
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
     shade_tile_group(id.xy, wg.xy, li, false);
 }
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade_stored_tiles(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
     shade_tile_group(id.xy, wg.xy, li, true);
 }
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade_zbin(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
     shade_zbin_group(id.xy, wg.xy, li, false);
 }
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade_stored_zbin(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
     shade_zbin_group(id.xy, wg.xy, li, true);
 }
 

@@ -15,11 +15,13 @@
 // An entry point for each form of lists, as deferred.wgsl has.
 @compute @workgroup_size(8, 8)
 fn deferred_shade_msaa(@builtin(global_invocation_id) id: vec3<u32>) {
+    shading_pixel = id.xy;
     shade_pixel_msaa(id.xy, false);
 }
 
 @compute @workgroup_size(8, 8)
 fn deferred_shade_msaa_zbin(@builtin(global_invocation_id) id: vec3<u32>) {
+    shading_pixel = id.xy;
     shade_pixel_msaa(id.xy, true);
 }
 

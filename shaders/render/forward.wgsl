@@ -18,6 +18,7 @@ fn lookup_depth(in: VertexOut) -> f32 {
 
 @fragment
 fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
@@ -28,6 +29,7 @@ fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
 // shade.forward over z-binning's lists.
 @fragment
 fn fs_forward_zbin(in: VertexOut) -> @location(0) vec4<f32> {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
@@ -37,6 +39,7 @@ fn fs_forward_zbin(in: VertexOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_naive(in: VertexOut) -> @location(0) vec4<f32> {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     return vec4<f32>(shade_all(in.world, n, v, materials[in.material]), 1.0);
@@ -46,6 +49,7 @@ fn fs_naive(in: VertexOut) -> @location(0) vec4<f32> {
 // the opaque depth without writing it, blended with the surface's opacity.
 @fragment
 fn fs_naive_transparent(in: VertexOut) -> @location(0) vec4<f32> {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
@@ -59,6 +63,7 @@ fn fs_naive_transparent(in: VertexOut) -> @location(0) vec4<f32> {
 // surfaces' depths as well as the opaque ones'.
 @fragment
 fn fs_forward_transparent(in: VertexOut) -> @location(0) vec4<f32> {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];
@@ -68,6 +73,7 @@ fn fs_forward_transparent(in: VertexOut) -> @location(0) vec4<f32> {
 
 @fragment
 fn fs_forward_transparent_zbin(in: VertexOut) -> @location(0) vec4<f32> {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];

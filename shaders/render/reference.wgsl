@@ -13,6 +13,7 @@ struct ReferenceOut {
 
 @fragment
 fn fs_reference(in: VertexOut) -> ReferenceOut {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let c = shade_all(in.world, n, v, materials[in.material]);
@@ -34,6 +35,7 @@ fn fs_surface(in: VertexOut) -> ReferenceOut {
 // surface's).
 @fragment
 fn fs_reference_transparent(in: VertexOut) -> @location(0) vec4<f32> {
+    shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
     let n = facing_normal(normalize(in.normal), v);
     let m = materials[in.material];

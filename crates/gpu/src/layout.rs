@@ -27,11 +27,13 @@ pub fn wgsl_prelude() -> String {
          const SHININESS: f32 = {shininess:?};\n\
          const LIGHT_KIND_POINT: u32 = {LIGHT_KIND_POINT}u;\n\
          const LIGHT_KIND_SPOT: u32 = {LIGHT_KIND_SPOT}u;\n\
-         const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n",
+         const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n\
+         const XI_BITS: u32 = {xi_bits}u;\n",
         pi = std::f32::consts::PI,
         d_min = light::D_MIN as f32,
         spot_eps = light::SPOT_EPS as f32,
         shininess = light::SHININESS as f32,
+        xi_bits = manylights_scene::stochastic::XI_BITS,
     )
 }
 
@@ -108,8 +110,9 @@ pub struct GpuLight {
     /// Stochastic light culling's alpha (`manylights_scene::stochastic`), written each frame
     /// by `lights.stochastic` with the range in `radius`; 0: the windowed falloff.
     pub alpha: f32,
-    /// Padding to 16 bytes.
-    pub _pad: u32,
+    /// Interleaved stochastic ranges: 0 none, otherwise `n << 24 | key`
+    /// (`StochasticParams::interleave_word`), written by `lights.stochastic`.
+    pub interleave: u32,
 }
 const _: () = assert!(size_of::<GpuLight>() == 64);
 
@@ -132,7 +135,7 @@ impl From<&Light> for GpuLight {
             cos_inner,
             cos_outer,
             alpha: 0.0,
-            _pad: 0,
+            interleave: 0,
         }
     }
 }

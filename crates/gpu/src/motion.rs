@@ -25,11 +25,7 @@ pub const MOTION: ShaderDef = ShaderDef {
         WgslConst::U32("MOTION_ORBIT", MOTION_ORBIT),
         WgslConst::U32("MOTION_NOISE", MOTION_NOISE),
     ],
-    files: &[
-        LIGHT,
-        crate::shader_file!("lights/hash.wgsl"),
-        crate::shader_file!("lights/motion.wgsl"),
-    ],
+    files: &[LIGHT, crate::shader_file!("lights/motion.wgsl")],
 };
 
 /// Threads per workgroup of the animation pass.

@@ -5,23 +5,19 @@
 //! spheres; shading reads alpha (`light_attenuation` in `shaders/common/light.wgsl`).
 
 use bytemuck::{Pod, Zeroable};
-use manylights_scene::stochastic::{StochasticParams, XI_BITS};
+use manylights_scene::stochastic::StochasticParams;
 use wgpu::util::DeviceExt;
 
 use crate::pipeline::{self, UNIFORM, entry, storage};
-use crate::shaders::{LIGHT, ShaderDef, WgslConst};
+use crate::shaders::{LIGHT, ShaderDef};
 use crate::timing::{GpuTimer, PassTiming};
 use crate::{GpuContext, GpuError, GpuScene};
 
 /// The pass.
 pub const STOCHASTIC: ShaderDef = ShaderDef {
     name: "lights.stochastic",
-    consts: &[WgslConst::U32("XI_BITS", XI_BITS)],
-    files: &[
-        LIGHT,
-        crate::shader_file!("lights/hash.wgsl"),
-        crate::shader_file!("lights/stochastic.wgsl"),
-    ],
+    consts: &[],
+    files: &[LIGHT, crate::shader_file!("lights/stochastic.wgsl")],
 };
 
 /// Threads per workgroup.
@@ -50,8 +46,10 @@ pub struct GpuStochasticParams {
     pub exposure: f32,
     /// The largest BRDF times cosine of the scene's materials.
     pub rho_max: f32,
+    /// n of n x n interleaved pixel classes; 1: none.
+    pub interleave: u32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
 
 /// The stochastic ranges of lights `first..first + count` of a scene's light buffer.
@@ -94,7 +92,8 @@ impl StochasticRanges {
             error: params.error,
             exposure: params.exposure,
             rho_max: params.rho_max,
-            _pad: [0; 3],
+            interleave: params.interleave.max(1),
+            _pad: [0; 2],
         };
         let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lights.stochastic"),

@@ -465,8 +465,8 @@ impl Experiment {
 }
 
 /// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`, or
-/// `stochastic=E` with `/accK` where K frames accumulate and `/exposureX` where the exposure
-/// is not 1.
+/// `stochastic=E` with `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel
+/// classes and `/exposureX` where the exposure is not 1.
 pub fn radius_label(rule: &RadiusRule) -> String {
     match *rule {
         RadiusRule::Fixed(r) => format!("radius={r}"),
@@ -475,11 +475,15 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             error,
             exposure,
             accumulate,
+            interleave,
             ..
         } => {
             let mut s = format!("stochastic={error}");
             if accumulate > 1 {
                 s += &format!("/acc{accumulate}");
+            }
+            if interleave > 1 {
+                s += &format!("/il{interleave}");
             }
             if exposure != 1.0 {
                 s += &format!("/exposure{exposure}");

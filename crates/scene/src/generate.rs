@@ -56,7 +56,21 @@ pub enum RadiusRule {
         /// Independent draws measured for the noise and bias columns, >= 1 (default 4).
         #[serde(default = "four")]
         seeds: u32,
+        /// Interleaved sampling over `n x n` pixel classes, each drawing its own ranges
+        /// ([`crate::stochastic`]): 1 (the default, left out of the serialised form so that
+        /// earlier cells keep their identifiers) none, up to
+        /// [`crate::stochastic::INTERLEAVE_MAX`].
+        #[serde(default = "one", skip_serializing_if = "is_one")]
+        interleave: u32,
     },
+}
+
+fn one() -> u32 {
+    1
+}
+
+fn is_one(n: &u32) -> bool {
+    *n == 1
 }
 
 fn unit() -> f32 {
@@ -154,7 +168,18 @@ impl LightSpec {
                 exposure,
                 accumulate,
                 seeds,
+                interleave,
             } => {
+                if !(1..=crate::stochastic::INTERLEAVE_MAX).contains(&interleave) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.interleave",
+                        interleave,
+                        &format!(
+                            "1 (none) to {} (n x n pixel classes)",
+                            crate::stochastic::INTERLEAVE_MAX
+                        ),
+                    ));
+                }
                 if !(error.is_finite() && error > 0.0) {
                     return Err(SceneError::invalid(
                         "lights.radius.error",
@@ -314,12 +339,16 @@ impl LightSpec {
     pub fn stochastic(&self, scene: &Scene) -> Option<StochasticParams> {
         match self.radius {
             RadiusRule::Stochastic {
-                error, exposure, ..
+                error,
+                exposure,
+                interleave,
+                ..
             } => Some(StochasticParams {
                 error,
                 exposure,
                 rho_max: crate::stochastic::rho_max(&scene.materials),
                 seed: (self.seed ^ (self.seed >> 32)) as u32,
+                interleave,
             }),
             _ => None,
         }
@@ -430,6 +459,17 @@ mod tests {
                 exposure: 1.0,
                 accumulate,
                 seeds,
+                interleave: 1,
+            },
+            ..LightSpec::default()
+        };
+        let interleaved = |interleave: u32| LightSpec {
+            radius: RadiusRule::Stochastic {
+                error: 0.1,
+                exposure: 1.0,
+                accumulate: 0,
+                seeds: 4,
+                interleave,
             },
             ..LightSpec::default()
         };
@@ -440,12 +480,23 @@ mod tests {
             (rule(f32::INFINITY, 0, 4), "lights.radius.error = inf"),
             (rule(0.1, 1, 4), "lights.radius.accumulate = 1"),
             (rule(0.1, 0, 0), "lights.radius.seeds = 0"),
+            (interleaved(0), "lights.radius.interleave = 0"),
+            (interleaved(9), "lights.radius.interleave = 9"),
         ] {
             let e = spec.validate().unwrap_err().to_string();
             assert!(e.contains(field), "{e}");
         }
         assert!(rule(0.1, 4, 1).validate().is_ok());
         assert!(rule(0.1, 0, 4).validate().is_ok());
+        assert!(interleaved(8).validate().is_ok());
+        // Interleave 1 is left out of the serialised form (cell identifiers stay), and read
+        // back as the default.
+        let text = ron::to_string(&rule(0.1, 0, 4).radius).unwrap();
+        assert!(!text.contains("interleave"), "{text}");
+        let back: RadiusRule = ron::from_str("Stochastic(error: 0.1)").unwrap();
+        assert_eq!(back, rule(0.1, 0, 4).radius);
+        let text = ron::to_string(&interleaved(2).radius).unwrap();
+        assert!(text.contains("interleave:2"), "{text}");
     }
 
     use super::*;

@@ -24,6 +24,18 @@
 //! from `x` by at most `2^-25`, a bias below `2^-25` of one light's largest term (documented,
 //! not measurable at any error bound a report uses).
 //!
+//! Interleaved sampling (Tokuyoshi and Harada, CGF 36(4), 2017; Keller and Heidrich 2001):
+//! with `interleave: n` (n >= 2) the pixels fall into `n x n` classes by their coordinates
+//! modulo n ([`pixel_class`]), and each light draws one `xi` per class each frame
+//! ([`class_xi`], from a 24-bit [`key`] of the seed, frame and light). A pixel evaluates the
+//! light out to its own class's range, so neighbouring pixels see independent draws and the
+//! noise is spread over the `n x n` block instead of shared by the whole image. Culling runs
+//! over one sphere a light, the longest of its classes' ranges (the smallest `xi`); the exact
+//! oracle counts false negatives against that sphere, so it is conservative for every class.
+//! The longest of `n^2` draws is about `n` times the range of one (the smallest of `n^2`
+//! uniforms has mean `1 / (n^2 + 1)`), so lists grow with `n`: interleaving trades list length
+//! for noise that a spatial filter (the eye, FLIP's contrast sensitivity, a denoiser) averages.
+//!
 //! The same draw and ranges run on the GPU (`shaders/lights/stochastic.wgsl`, pass
 //! `lights.stochastic`); [`shade`] is the estimate in f64 that the tests hold the GPU to.
 
@@ -36,11 +48,37 @@ use crate::{Light, Material};
 /// Bits of the uniform number drawn for each light and frame.
 pub const XI_BITS: u32 = 24;
 
+/// The largest `n` of interleaved sampling over `n x n` pixel classes.
+pub const INTERLEAVE_MAX: u32 = 8;
+
+/// The uniform number in (0, 1) of a 32-bit hash: its top [`XI_BITS`] bits, at the midpoint
+/// of their step.
+fn unit(h: u32) -> f32 {
+    ((h >> (32 - XI_BITS)) as f32 + 0.5) / (1u32 << XI_BITS) as f32
+}
+
 /// The uniform number of light `index` at frame `frame` under seed `seed`: in (0, 1), never 0.
 /// The GPU's `stochastic_xi` computes the same bits.
 pub fn xi(seed: u32, frame: u32, index: u32) -> f32 {
-    let h = pcg(index ^ pcg(frame ^ pcg(seed)));
-    ((h >> (32 - XI_BITS)) as f32 + 0.5) / (1u32 << XI_BITS) as f32
+    unit(pcg(index ^ pcg(frame ^ pcg(seed))))
+}
+
+/// The 24-bit key of light `index` at frame `frame` under seed `seed` from which its
+/// interleaved classes draw ([`class_xi`]): the same hash as [`xi`]'s, its top 24 bits.
+pub fn key(seed: u32, frame: u32, index: u32) -> u32 {
+    pcg(index ^ pcg(frame ^ pcg(seed))) >> 8
+}
+
+/// The uniform number in (0, 1) of pixel class `class` (< 256) for a light with `key`: the
+/// hash of the key with the class in its top byte (distinct inputs for distinct pairs). The
+/// GPU's `light_range` computes the same bits.
+pub fn class_xi(key: u32, class: u32) -> f32 {
+    unit(pcg(key ^ (class << 24)))
+}
+
+/// The class of pixel `(x, y)` among `n x n`: `x mod n + n (y mod n)`.
+pub fn pixel_class(x: u32, y: u32, n: u32) -> u32 {
+    x % n + n * (y % n)
 }
 
 /// The largest BRDF times cosine of `materials` under the shading model
@@ -69,6 +107,9 @@ pub struct StochasticParams {
     pub rho_max: f32,
     /// The seed of every draw.
     pub seed: u32,
+    /// Interleaved sampling over `interleave x interleave` pixel classes; 1: none (every pixel
+    /// shares one draw a light).
+    pub interleave: u32,
 }
 
 impl StochasticParams {
@@ -88,12 +129,53 @@ impl StochasticParams {
         1.0 / (alpha * xi).sqrt()
     }
 
-    /// Light `index` (of the scene's light buffer) as shaded at frame `frame`: its range for
-    /// the frame in `radius`, and its alpha.
+    /// Light `index` (of the scene's light buffer) as culled at frame `frame`: its range for
+    /// the frame in `radius` (with interleaving, the longest of its classes' ranges), and its
+    /// alpha.
     pub fn at_frame(&self, light: &Light, index: u32, frame: u32) -> (Light, f32) {
         let alpha = self.alpha(light);
-        let radius = Self::range(alpha, xi(self.seed, frame, index));
-        (Light { radius, ..*light }, alpha)
+        let xi = if self.interleave > 1 {
+            let k = key(self.seed, frame, index);
+            (0..self.interleave * self.interleave)
+                .map(|c| class_xi(k, c))
+                .fold(1.0f32, f32::min)
+        } else {
+            xi(self.seed, frame, index)
+        };
+        (
+            Light {
+                radius: Self::range(alpha, xi),
+                ..*light
+            },
+            alpha,
+        )
+    }
+
+    /// Light `index` as shaded at frame `frame` by a pixel of class `class` (ignored without
+    /// interleaving): its class's range in `radius`, and its alpha.
+    pub fn at_pixel(&self, light: &Light, index: u32, frame: u32, class: u32) -> (Light, f32) {
+        if self.interleave <= 1 {
+            return self.at_frame(light, index, frame);
+        }
+        let alpha = self.alpha(light);
+        let xi = class_xi(key(self.seed, frame, index), class);
+        (
+            Light {
+                radius: Self::range(alpha, xi),
+                ..*light
+            },
+            alpha,
+        )
+    }
+
+    /// The word the GPU keeps in a drawn light's `interleave`: 0 without interleaving,
+    /// otherwise `n << 24 | key` (`light_range` in `shaders/common/light.wgsl` reads it).
+    pub fn interleave_word(&self, index: u32, frame: u32) -> u32 {
+        if self.interleave > 1 {
+            self.interleave << 24 | key(self.seed, frame, index)
+        } else {
+            0
+        }
     }
 }
 
@@ -150,6 +232,7 @@ mod tests {
             exposure: 1.0,
             rho_max: rho_max(&[Material::new(Vec3::ONE, 1.0)]),
             seed: 1,
+            interleave: 1,
         };
         let alpha = params.alpha(&light);
         // 2 * 0.01 / (4 * 1 * (1 / pi + 5 / pi)).
@@ -175,6 +258,7 @@ mod tests {
             exposure: 1.0,
             rho_max: rho_max(&[m]),
             seed: 3,
+            interleave: 1,
         };
         let (n, v) = (DVec3::Y, DVec3::Y);
         for x in [0.0, 0.5, 2.0, 6.0] {
@@ -196,5 +280,51 @@ mod tests {
                 "x = {x}: mean {mean} vs {exact} (standard error {se})"
             );
         }
+    }
+
+    #[test]
+    fn interleaved_classes_draw_apart_and_the_culled_range_covers_every_class() {
+        let light = Light::point(Vec3::ZERO, 1.0, Vec3::ONE, 4.0);
+        let params = StochasticParams {
+            error: 0.01,
+            exposure: 1.0,
+            rho_max: rho_max(&[Material::new(Vec3::ONE, 1.0)]),
+            seed: 9,
+            interleave: 3,
+        };
+        assert_eq!(pixel_class(4, 5, 3), 1 + 3 * 2);
+        let (mut mean, mut n) = (0.0f64, 0);
+        for frame in 0..200 {
+            let (culled, _) = params.at_frame(&light, 7, frame);
+            let ranges: Vec<f32> = (0..9)
+                .map(|c| params.at_pixel(&light, 7, frame, c).0.radius)
+                .collect();
+            let longest = ranges.iter().copied().fold(0.0f32, f32::max);
+            assert_eq!(culled.radius, longest, "frame {frame}: the culled sphere");
+            assert!(
+                ranges.windows(2).any(|w| w[0] != w[1]),
+                "classes draw apart"
+            );
+            for c in 0..9 {
+                mean += f64::from(class_xi(key(9, frame, 7), c));
+                n += 1;
+            }
+            let word = params.interleave_word(7, frame);
+            assert_eq!((word >> 24, word & 0xff_ffff), (3, key(9, frame, 7)));
+        }
+        mean /= f64::from(n);
+        assert!(
+            (mean - 0.5).abs() < 5.0 / (12.0 * f64::from(n)).sqrt(),
+            "{mean}"
+        );
+        let plain = StochasticParams {
+            interleave: 1,
+            ..params
+        };
+        assert_eq!(plain.interleave_word(7, 0), 0);
+        assert_eq!(
+            plain.at_pixel(&light, 7, 0, 5),
+            plain.at_frame(&light, 7, 0)
+        );
     }
 }
