@@ -282,6 +282,12 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
         assert_eq!(json.len(), s.rows.len());
         manylights_lab::report::write_report(&out).unwrap();
         assert!(out.join("report.md").is_file() && out.join("report.html").is_file());
+        if name.starts_with("infinite-range") {
+            // Speed against the error against infinite range: culling + shading, and the frame.
+            for f in ["frame_infinite.svg", "frame_steady_infinite.svg"] {
+                assert!(out.join("figures").join(f).is_file(), "{name}: {f}");
+            }
+        }
     }
 }
 
@@ -443,6 +449,12 @@ fn resumed_and_sharded_runs_equal_a_clean_run() {
     let merged = manylights_lab::results::merge(&inputs, &tmp.path().join("merged")).unwrap();
     let m: Vec<_> = merged.iter().map(deterministic).collect();
     assert_eq!(a, m, "merged shards differ from a clean run");
+    let meta: serde_json::Value = serde_json::from_slice(
+        &std::fs::read(tmp.path().join("merged").join("meta.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(meta["merged_shards"], serde_json::json!(["0/2", "1/2"]));
+    assert!(meta.get("shard").is_none(), "{meta}");
 }
 
 fn manylights(args: &[&str]) -> std::process::Output {

@@ -376,6 +376,13 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade) against mean FLIP against the infinite-range reference (at the reference's exposure), conservative radius cut-offs and stochastic light culling on one chart. Black: the Pareto front.",
         &|p| speed_accuracy(&rows, p, frame, flip_inf),
     )?;
+    if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
+        draw(
+            "frame_steady_infinite.svg",
+            "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading) against mean FLIP against the infinite-range reference. Black: the Pareto front.",
+            &|p| speed_accuracy(&rows, p, gpu, flip_inf),
+        )?;
+    }
     draw(
         "shade_vs_lights.svg",
         "What a loose list costs: the shading pass against the lights it evaluates per pixel, one point per cell.",

@@ -463,7 +463,8 @@ pub fn write_results(dir: &Path, rows: &[Row]) -> Result<(), LabError> {
 }
 
 /// Joins the cells of several run directories (shards of one experiment) into `out`: copies
-/// `experiment.ron` and `meta.json` from the first, every cell file, and writes the results.
+/// `experiment.ron` and `meta.json` from the first (its `shard` replaced by `merged_shards`, the
+/// inputs' shards), every cell file, and writes the results.
 /// Two shards holding the same cell with different contents is an error.
 pub fn merge(inputs: &[&Path], out: &Path) -> Result<Vec<Row>, LabError> {
     let first = inputs
@@ -507,6 +508,22 @@ pub fn merge(inputs: &[&Path], out: &Path) -> Result<Vec<Row>, LabError> {
         experiment.unwrap_or_default().as_bytes(),
     )?;
     if let Ok(meta) = std::fs::read(first.join("meta.json")) {
+        // The first input's meta, with the shards joined in place of its own.
+        let meta = match serde_json::from_slice::<serde_json::Value>(&meta) {
+            Ok(serde_json::Value::Object(mut m)) => {
+                let shards: Vec<serde_json::Value> = inputs
+                    .iter()
+                    .filter_map(|d| std::fs::read(d.join("meta.json")).ok())
+                    .filter_map(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+                    .filter_map(|v| v.get("shard").cloned())
+                    .filter(|v| !v.is_null())
+                    .collect();
+                m.remove("shard");
+                m.insert("merged_shards".into(), shards.into());
+                serde_json::to_vec_pretty(&m).unwrap_or(meta)
+            }
+            _ => meta,
+        };
         write_atomic(&out.join("meta.json"), &meta)?;
     }
     for r in &rows {

@@ -174,7 +174,7 @@ impl LightSpec {
                     return Err(SceneError::invalid(
                         "lights.radius.interleave",
                         interleave,
-                        &format!(
+                        format!(
                             "1 (none) to {} (n x n pixel classes)",
                             crate::stochastic::INTERLEAVE_MAX
                         ),

@@ -383,12 +383,18 @@ mod tests {
             }
             let gpu: Axis<'_> = ("GPU ms", &|r| r.gpu_ms_total);
             let fp: Axis<'_> = ("false-positive ratio", &|r| r.false_positive_ratio);
+            let frame: Axis<'_> = ("culling + shading", &|r| r.gpu_ms_cull_shade);
+            let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
             let figures = [
                 ("time_vs_lights", time_vs_lights(&rows, &svg).unwrap()),
                 ("passes", passes(&rows, &svg).unwrap()),
                 (
                     "speed_accuracy",
                     speed_accuracy(&rows, &svg, gpu, fp).unwrap(),
+                ),
+                (
+                    "frame_infinite",
+                    speed_accuracy(&rows, &svg, frame, flip_inf).unwrap(),
                 ),
                 ("shade_vs_lights", shade_vs_lights(&rows, &svg).unwrap()),
             ];
