@@ -8,6 +8,7 @@ mod cull_cmd;
 mod lab_cmds;
 mod options;
 mod render_cmd;
+mod score_cmd;
 mod tune_cmd;
 
 use std::path::{Path, PathBuf};
@@ -17,6 +18,7 @@ use clap::{Parser, Subcommand};
 use cull_cmd::{CullArgs, cull};
 use lab_cmds::{MergeArgs, ReportArgs, RunArgs, report, run_experiment};
 use render_cmd::{RenderArgs, render};
+use score_cmd::{ScoreArgs, run_score};
 use tune_cmd::{TuneArgs, run_tune};
 
 /// Light-culling research workbench: culling strategies and shading backends on wgpu,
@@ -93,6 +95,12 @@ enum Command {
     /// (gpu_ms_cull_shade), print the table, and write the best as an experiment file
     /// (OUT/best.ron) with the candidates' results and report in OUT (default out/tune).
     Tune(TuneArgs),
+    /// Score another program's light lists (an engine's clusters or tiles, written as
+    /// grid.json, offsets.npy and indices.npy) against the exact per-pixel oracle over an
+    /// export's depth buffer, camera and lights: false negatives and where they are, lights
+    /// evaluated per light needed, lights per pixel, the longest list (docs/EXPERIMENTS.md,
+    /// "Scoring another engine's lists").
+    Score(ScoreArgs),
 }
 
 /// Mesa's implicit Vulkan layer `VK_LAYER_MESA_device_select` connects to a Wayland display while
@@ -140,6 +148,7 @@ fn main() -> std::process::ExitCode {
         }
         Command::Report(args) => report(&args.dir),
         Command::Tune(args) => run_tune(args),
+        Command::Score(args) => run_score(args),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

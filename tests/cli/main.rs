@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 
 mod msaa;
 mod outputs;
+mod score;
 mod transparent;
 mod tune;
 

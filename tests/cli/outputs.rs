@@ -148,7 +148,7 @@ fn exports_let_numpy_recompute_the_false_negatives() {
             !extra.is_empty() && extra[0] == "--capacity",
             "{args:?}: {stdout}"
         );
-        assert!(stdout.contains("exported 19 files"), "{stdout}");
+        assert!(stdout.contains("exported 22 files"), "{stdout}");
         dirs.push((dir, Some(fneg)));
     }
     let render = tmp.path().join("render");

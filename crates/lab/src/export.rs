@@ -206,15 +206,82 @@ pub fn write(dir: &Path, d: &ExportData<'_>) -> Result<Vec<PathBuf>, LabError> {
         npy("clip_from_view.npy", &[4, 4], &m(&d.frame.clip_from_view))?,
     ];
     let manifest = manifest(d, &files);
-    let mut written = Vec::with_capacity(files.len() + 1);
+    let mut written = Vec::with_capacity(files.len() + 4);
     for a in files {
         let path = dir.join(a.name);
         write_atomic(&path, &a.bytes)?;
         written.push(path);
     }
+    written.extend(write_lists(&dir.join("lists"), d)?);
     let path = dir.join("manifest.json");
     let text = serde_json::to_string_pretty(&manifest)
         .map_err(|e| LabError::Other(format!("export manifest: {e}")))?;
+    write_atomic(&path, text.as_bytes())?;
+    written.push(path);
+    Ok(written)
+}
+
+/// The lists again in the format `manylights score` reads (`lists/grid.json`, `offsets.npy`,
+/// `indices.npy`; docs/EXPERIMENTS.md, "Scoring another engine's lists"): the bins as a grid
+/// of tiles, x fastest, slices outermost, sliced as the run sliced them. Scoring them gives
+/// back the run's own figures; they are also a template for another engine's lists.
+fn write_lists(dir: &Path, d: &ExportData<'_>) -> Result<Vec<PathBuf>, LabError> {
+    use crate::score::grid::{CellOrder, FORMAT, Grid, ScreenMapping, Slicing};
+    let p = d.params;
+    let slices = p.slices.max(1);
+    let cells = u64::from(p.tiles_x) * u64::from(p.tiles_y) * u64::from(slices);
+    if d.lists.ranges.len() as u64 != cells {
+        return Ok(Vec::new());
+    }
+    let (near, z) = (f64::from(p.near), f64::from(slices));
+    let slicing = if slices == 1 {
+        Slicing::None
+    } else if p.slicing == manylights_cull::layout::SLICING_EXPONENTIAL {
+        Slicing::Exponential {
+            near,
+            far: near * (z / f64::from(p.slice_scale)).exp(),
+        }
+    } else {
+        Slicing::Linear {
+            near,
+            far: near + z / f64::from(p.slice_scale),
+        }
+    };
+    let grid = Grid {
+        format: FORMAT.into(),
+        source: format!("manylights {}", d.strategy),
+        width: d.size.0,
+        height: d.size.1,
+        dims: [p.tiles_x, p.tiles_y, slices],
+        screen: ScreenMapping::Tiles {
+            tile_size: [p.tile_size, p.tile_size],
+        },
+        slicing,
+        order: CellOrder::XFastest,
+        light_ids: None,
+    };
+    let mut offsets = vec![0u32];
+    let mut indices = Vec::new();
+    for r in &d.lists.ranges {
+        indices.extend_from_slice(&d.lists.indices[r[0] as usize..(r[0] + r[1]) as usize]);
+        offsets.push(indices.len() as u32);
+    }
+    std::fs::create_dir_all(dir).map_err(|e| LabError::Io {
+        path: dir.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let mut written = Vec::new();
+    for a in [
+        npy("offsets.npy", &[offsets.len() as u64], &offsets)?,
+        npy("indices.npy", &[indices.len() as u64], &indices)?,
+    ] {
+        let path = dir.join(a.name);
+        write_atomic(&path, &a.bytes)?;
+        written.push(path);
+    }
+    let path = dir.join("grid.json");
+    let text = serde_json::to_string_pretty(&grid)
+        .map_err(|e| LabError::Other(format!("export lists: {e}")))?;
     write_atomic(&path, text.as_bytes())?;
     written.push(path);
     Ok(written)
@@ -255,6 +322,7 @@ fn manifest(d: &ExportData<'_>, files: &[Array]) -> serde_json::Value {
             "exact_set": "light i reaches world point q when |q - position_i| < radius_i and, for a spot, dot(q - position_i, direction_i) / |q - position_i| > cos_outer_i",
             "needed": "the size of each pixel's exact set",
             "evaluated": "the length of the list each pixel reads",
+            "scoring": "lists/ holds the same lists in the format manylights score reads (grid.json, offsets.npy, indices.npy), where the bins form a grid of tiles and slices",
         },
     })
 }

@@ -20,6 +20,7 @@ pub mod reference_cache;
 pub mod report;
 pub mod results;
 pub mod runner;
+pub mod score;
 pub mod stability;
 pub mod steady;
 pub mod tune;

@@ -163,17 +163,26 @@ impl Light {
     /// Whether this light contributes anything at point `p` (inside the radius and, for a spot,
     /// strictly inside the outer cone). This defines the *exact set* of a surface point.
     pub fn reaches(&self, p: DVec3) -> bool {
-        let to_p = p - self.position.as_dvec3();
-        let d = to_p.length();
-        if d >= f64::from(self.radius) {
-            return false;
-        }
-        match self.cone() {
-            None => true,
-            Some((axis, _, cos_outer)) => {
-                d > 0.0 && to_p.dot(axis.as_dvec3()) / d > f64::from(cos_outer)
-            }
-        }
+        reaches(
+            self.position,
+            self.radius,
+            self.cone().map(|(axis, _, cos_outer)| (axis, cos_outer)),
+            p,
+        )
+    }
+}
+
+/// [`Light::reaches`] for a light given as the GPU holds it: its position, radius and, for a
+/// spot, its unit axis and the cosine of its outer half-angle (as exports store them).
+pub fn reaches(position: Vec3, radius: f32, cone: Option<(Vec3, f32)>, p: DVec3) -> bool {
+    let to_p = p - position.as_dvec3();
+    let d = to_p.length();
+    if d >= f64::from(radius) {
+        return false;
+    }
+    match cone {
+        None => true,
+        Some((axis, cos_outer)) => d > 0.0 && to_p.dot(axis.as_dvec3()) / d > f64::from(cos_outer),
     }
 }
 

@@ -1,0 +1,86 @@
+//! `score`: another program's light lists against the exact per-pixel oracle
+//! (`manylights_lab::score`; the format in docs/EXPERIMENTS.md, "Scoring another engine's
+//! lists").
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use manylights_cull::heatmap;
+use manylights_lab::score::{Frame, Lists, score};
+use manylights_shade::image_out::write_atomic;
+
+#[derive(clap::Args, Debug)]
+pub(crate) struct ScoreArgs {
+    /// The export the lists were made for (`cull --export DIR`, `render --export DIR`, or a
+    /// cell of an experiment with `export: true`): its depth buffer, camera and lights.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) export: PathBuf,
+    /// The lists: a directory with grid.json, offsets.npy and indices.npy (and the light-id
+    /// map grid.json names, if any).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) lists: PathBuf,
+    /// Where the score (score.json) and its heatmaps (false negatives and lights evaluated
+    /// beyond need, per pixel) are written.
+    #[arg(long, value_name = "DIR", default_value = "out/score")]
+    pub(crate) out: PathBuf,
+}
+
+pub(crate) fn run_score(args: &ScoreArgs) -> Result<()> {
+    let frame = Frame::from_export(&args.export)?;
+    let lists = Lists::load(&args.lists, frame.width, frame.height, frame.lights.len())?;
+    let s = score(&frame, &lists);
+    let m = &s.metrics;
+    let (w, h) = (frame.width, frame.height);
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.out.display()))?;
+    let missed_png = args.out.join("heatmap_false_negatives.png");
+    let extra_png = args.out.join("heatmap_extra.png");
+    for (path, counts) in [(&missed_png, &s.missed), (&extra_png, &s.extra)] {
+        let max = counts.iter().copied().max().unwrap_or(0).max(1);
+        let img = heatmap::pixels(counts, w, h, max);
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        })?;
+    }
+    let score_json = args.out.join("score.json");
+    let json = s.to_json(&frame, &lists);
+    write_atomic(&score_json, |f| {
+        std::io::Write::write_all(f, json.as_bytes()).map_err(|e| e.to_string())
+    })?;
+    let source = if lists.grid.source.is_empty() {
+        "lists".to_string()
+    } else {
+        lists.grid.source.clone()
+    };
+    println!(
+        "{source}: {} cells ({} x {} x {}), {} lights, {w}x{h}",
+        lists.grid.cells(),
+        lists.grid.dims[0],
+        lists.grid.dims[1],
+        lists.grid.dims[2],
+        frame.lights.len()
+    );
+    println!(
+        "false negatives: {} (pixel, light) pairs at {} pixels",
+        m.false_negatives,
+        s.missed.iter().filter(|&&n| n > 0).count()
+    );
+    for &(x, y, l) in &s.first_misses {
+        println!("  missed: light {l} at pixel ({x}, {y})");
+    }
+    let ratio = m
+        .false_positive_ratio
+        .map_or("-".to_string(), |r| format!("{r:.3}"));
+    println!(
+        "lights evaluated per light needed: {ratio}; lights per pixel {:.2} (needed {:.2}); longest list {}",
+        m.lights_per_pixel_mean, m.lights_needed_per_pixel_mean, m.max_lights_per_bin
+    );
+    println!(
+        "wrote {}, {}, {}",
+        score_json.display(),
+        missed_png.display(),
+        extra_png.display()
+    );
+    Ok(())
+}
