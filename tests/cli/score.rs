@@ -285,3 +285,87 @@ fn every_strategys_export_scores_as_its_run_measured_it() {
         );
     }
 }
+
+/// Bevy's lists, committed with the frame they were made for (tests/fixtures/bevy, made by
+/// referees/bevy): its default grid misses one (pixel, light) pair, a spot light at a pixel
+/// whose cluster column differs between Bevy's CPU clusterer (whole tiles of 9 px) and its
+/// shader (proportional); its fixed 7 x 5 x 12 grid misses none. The finding is checked from
+/// the arrays: the light reaches the pixel's point, and the cell the shader reads lacks it
+/// while the cell of the pixel's whole tile has it.
+#[test]
+fn bevys_committed_lists_score_with_the_false_negative_where_its_tiles_and_lookup_disagree() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bevy");
+    let export = root.join("export");
+    let tmp = tempfile::tempdir().unwrap();
+    let xyz = score(&export, &root.join("xyz"), &tmp.path().join("xyz"));
+    assert_eq!(xyz["false_negatives"], 0, "{xyz}");
+    assert!(xyz["false_positive_ratio"].as_f64().unwrap() > 1.0);
+    let s = score(&export, &root.join("default"), &tmp.path().join("default"));
+    assert_eq!(s["false_negatives"], 1, "{s}");
+    let miss = &s["first_false_negatives"][0];
+    let (x, y, light) = (
+        miss["x"].as_u64().unwrap() as usize,
+        miss["y"].as_u64().unwrap() as usize,
+        miss["light"].as_u64().unwrap() as usize,
+    );
+    assert_eq!((x, y, light), (97, 47, 240), "{s}");
+    // The pixel's point, in f64, from the depth buffer and the camera.
+    let depth: Vec<f32> = read_npy(&export.join("depth.npy"));
+    let (w, h) = (150usize, 85usize);
+    let m = |name: &str| {
+        let v: Vec<f32> = read_npy(&export.join(name));
+        glam::DMat4::from_cols_array(&std::array::from_fn(|k| f64::from(v[k]))).transpose()
+    };
+    let ndc = glam::DVec4::new(
+        (x as f64 + 0.5) / w as f64 * 2.0 - 1.0,
+        1.0 - (y as f64 + 0.5) / h as f64 * 2.0,
+        f64::from(depth[y * w + x]),
+        1.0,
+    );
+    let p = m("clip_from_world.npy").inverse() * ndc;
+    let q = p.truncate() / p.w;
+    // The light reaches it, well inside its range and cone.
+    let v3 = |name: &str| -> glam::DVec3 {
+        let a: Vec<f32> = read_npy(&export.join(name));
+        glam::DVec3::new(
+            a[3 * light].into(),
+            a[3 * light + 1].into(),
+            a[3 * light + 2].into(),
+        )
+    };
+    let radius = f64::from(read_npy::<f32>(&export.join("light_radius.npy"))[light]);
+    let cos_outer = f64::from(read_npy::<f32>(&export.join("light_cos_outer.npy"))[light]);
+    assert_eq!(
+        read_npy::<u32>(&export.join("light_kind.npy"))[light],
+        1,
+        "a spot"
+    );
+    let to_q = q - v3("light_position.npy");
+    let d = to_q.length();
+    assert!(d < radius * 0.99, "{d} of {radius}");
+    assert!(to_q.dot(v3("light_direction.npy")) / d > cos_outer + 0.1);
+    // The cells: Bevy's order (y X + x) Z + z over 17 x 9 x 24, slice 0 [0, near).
+    let grid: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(root.join("default/grid.json")).unwrap()).unwrap();
+    assert_eq!(grid["dims"], serde_json::json!([17, 9, 24]));
+    let (near, far) = (
+        grid["slicing"]["near"].as_f64().unwrap(),
+        grid["slicing"]["far"].as_f64().unwrap(),
+    );
+    let view_z = -(m("view_from_world.npy") * q.extend(1.0)).z;
+    let z = 1 + ((view_z / near).ln() * 23.0 / (far / near).ln()).floor() as usize;
+    let offsets: Vec<u32> = read_npy(&root.join("default/offsets.npy"));
+    let indices: Vec<u32> = read_npy(&root.join("default/indices.npy"));
+    let has = |cx: usize, cy: usize| {
+        let c = (cy * 17 + cx) * 24 + z;
+        indices[offsets[c] as usize..offsets[c + 1] as usize].contains(&(light as u32))
+    };
+    // The shader's cell: floor((px + 0.5) X / W); the clusterer's tile: px / 9, py / 10.
+    let shader = ((2 * x + 1) * 17 / (2 * w), (2 * y + 1) * 9 / (2 * h));
+    assert_eq!(shader, (11, 5));
+    assert_eq!((x / 9, y / 10), (10, 4));
+    assert!(
+        !has(11, 5) && has(10, 4),
+        "the light is in the tile's cell, not the shader's"
+    );
+}

@@ -1,0 +1,361 @@
+//! Bevy's CPU light clusters for a manylights export, in the format `manylights score` reads
+//! (docs/EXPERIMENTS.md, "Scoring another engine's lists").
+//!
+//! Usage: `manylights-bevy-referee EXPORT OUT [--xyz X,Y,Z]`. EXPORT is a directory written by
+//! `manylights cull --export` (or `render --export`, or `export: true`); OUT receives
+//! `grid.json`, `offsets.npy` and `indices.npy`. Without `--xyz` Bevy's default grid
+//! (`ClusterConfig::FixedZ`: 4,096 clusters, 24 slices, the first 5 m deep, the far bound from
+//! the previous frame's farthest light); with it, a fixed X x Y x Z grid of the same slicing.
+//!
+//! Bevy runs headless: a plain ECS `App` with the task pool, assets, transforms and
+//! `LightPlugin`, CPU clustering (`GlobalClusterSettings::gpu_clustering: None`), a `Camera3d`
+//! whose projection and render-target size are set by hand, and the export's point and spot
+//! lights, all visible. Two frames run (the second slices to the first's farthest light, as an
+//! application's steady state does); then the camera's `Clusters` are written out.
+//!
+//! Conventions converted here: the export's camera is right-handed, looking down -z, as
+//! Bevy's is; Bevy's projection is the reversed-z infinite perspective of the export's field of
+//! view, aspect and near plane (its clusterer assumes reversed z), and its frustum's far plane
+//! the export's far plane. A Bevy spot light points along its transform's forward (-z). Bevy's
+//! shader looks a pixel's cluster up at `floor((px + 0.5) X / W)`, `floor((py + 0.5) Y / H)`
+//! (rows from the top) and its slice from the view depth (slice 0 is `[0, near)`), cluster
+//! `(y X + x) Z + z`: the grid written says so.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+use bevy_app::{App, TaskPoolPlugin};
+use bevy_asset::{AssetApp, AssetPlugin};
+use bevy_camera::visibility::ViewVisibility;
+use bevy_camera::{
+    Camera, Camera3d, CameraProjection, ComputedCameraValues, PerspectiveProjection,
+    RenderTargetInfo,
+};
+use bevy_ecs::entity::Entity;
+use bevy_image::Image;
+use bevy_light::cluster::{ClusterConfig, ClusterableObjects, Clusters, GlobalClusterSettings};
+use bevy_light::{LightPlugin, PointLight, SpotLight};
+use bevy_math::{Mat4, UVec2, UVec3, Vec3};
+use bevy_transform::TransformPlugin;
+use bevy_transform::components::{GlobalTransform, Transform};
+use npyz::WriterBuilder;
+
+type Result<T> = std::result::Result<T, String>;
+
+fn read<T: npyz::Deserialize>(dir: &Path, name: &str) -> Result<(Vec<u64>, Vec<T>)> {
+    let path = dir.join(name);
+    let bytes = std::fs::read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let npy = npyz::NpyFile::new(&bytes[..]).map_err(|e| format!("{}: {e}", path.display()))?;
+    let shape = npy.shape().to_vec();
+    let v = npy
+        .into_vec()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok((shape, v))
+}
+
+fn write<T: npyz::AutoSerialize + Copy>(path: &Path, data: &[T]) -> Result<()> {
+    let mut bytes = Vec::new();
+    let mut w = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(&[data.len() as u64])
+        .writer(&mut bytes)
+        .begin_nd()
+        .map_err(|e| e.to_string())?;
+    w.extend(data.iter().copied()).map_err(|e| e.to_string())?;
+    w.finish().map_err(|e| e.to_string())?;
+    std::fs::write(path, bytes).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// A row-major 4 x 4 matrix of the export.
+fn matrix(dir: &Path, name: &str) -> Result<Mat4> {
+    let (_, m) = read::<f32>(dir, name)?;
+    let a: [f32; 16] = m.try_into().map_err(|_| format!("{name}: not 4 x 4"))?;
+    Ok(Mat4::from_cols_array(&a).transpose())
+}
+
+/// One light of the export.
+struct ExportLight {
+    position: Vec3,
+    radius: f32,
+    /// For a spot: its axis and the cosines of its inner and outer half-angles.
+    spot: Option<(Vec3, f32, f32)>,
+}
+
+fn lights(dir: &Path) -> Result<Vec<ExportLight>> {
+    let (_, p) = read::<f32>(dir, "light_position.npy")?;
+    let (_, r) = read::<f32>(dir, "light_radius.npy")?;
+    let (_, k) = read::<u32>(dir, "light_kind.npy")?;
+    let (_, d) = read::<f32>(dir, "light_direction.npy")?;
+    let (_, ci) = read::<f32>(dir, "light_cos_inner.npy")?;
+    let (_, co) = read::<f32>(dir, "light_cos_outer.npy")?;
+    let v = |a: &[f32], i: usize| Vec3::new(a[3 * i], a[3 * i + 1], a[3 * i + 2]);
+    Ok((0..r.len())
+        .map(|i| ExportLight {
+            position: v(&p, i),
+            radius: r[i],
+            spot: (k[i] == 1).then(|| (v(&d, i), ci[i], co[i])),
+        })
+        .collect())
+}
+
+/// Bevy's projection of the export's field of view, aspect and near and far planes (Bevy's
+/// own `PerspectiveProjection`: reversed z, infinite, the far plane bounding its frustum).
+fn projection(clip_from_view: &Mat4) -> Result<PerspectiveProjection> {
+    let m = clip_from_view;
+    if m.w_axis.w != 0.0 {
+        return Err("orthographic cameras are not supported by this adapter".into());
+    }
+    // The export's projection maps view z = -near to NDC z 0 and -far to 1:
+    // z_ndc = (a z + b) / -z, so near = b / a and far = b / (a + 1).
+    let (a, b) = (m.z_axis.z, m.w_axis.z);
+    Ok(PerspectiveProjection {
+        fov: 2.0 * (1.0 / m.y_axis.y).atan(),
+        aspect_ratio: m.y_axis.y / m.x_axis.x,
+        near: b / a,
+        far: b / (a + 1.0),
+        ..Default::default()
+    })
+}
+
+struct Args {
+    export: PathBuf,
+    out: PathBuf,
+    xyz: Option<UVec3>,
+}
+
+fn args() -> Result<Args> {
+    let usage = "usage: manylights-bevy-referee EXPORT OUT [--xyz X,Y,Z]";
+    let a: Vec<String> = std::env::args().skip(1).collect();
+    let (mut pos, mut xyz) = (Vec::new(), None);
+    let mut it = a.iter();
+    while let Some(s) = it.next() {
+        if s == "--xyz" {
+            let v = it.next().ok_or(usage)?;
+            let n: Vec<u32> = v
+                .split(',')
+                .map(|x| x.trim().parse::<u32>())
+                .collect::<std::result::Result<_, _>>()
+                .map_err(|_| format!("--xyz {v}: expected three counts, X,Y,Z"))?;
+            if n.len() != 3 || n.contains(&0) {
+                return Err(format!("--xyz {v}: expected three counts >= 1, X,Y,Z"));
+            }
+            xyz = Some(UVec3::new(n[0], n[1], n[2]));
+        } else {
+            pos.push(PathBuf::from(s));
+        }
+    }
+    let [export, out] = <[PathBuf; 2]>::try_from(pos).map_err(|_| usage.to_string())?;
+    Ok(Args { export, out, xyz })
+}
+
+fn run() -> Result<()> {
+    let args = args()?;
+    let dir = &args.export;
+    let (shape, _) = read::<f32>(dir, "depth.npy")?;
+    let (h, w) = (shape[0] as u32, shape[1] as u32);
+    let view_from_world = matrix(dir, "view_from_world.npy")?;
+    let projection = projection(&matrix(dir, "clip_from_view.npy")?)?;
+    let lights = lights(dir)?;
+
+    let mut app = App::new();
+    app.add_plugins((
+        TaskPoolPlugin::default(),
+        AssetPlugin::default(),
+        TransformPlugin,
+    ));
+    app.init_asset::<Image>();
+    app.add_plugins(LightPlugin);
+    app.insert_resource(GlobalClusterSettings {
+        supports_storage_buffers: true,
+        clustered_decals_are_usable: false,
+        gpu_clustering: None,
+        max_uniform_buffer_clusterable_objects: 256,
+        view_cluster_bindings_max_indices: 1 << 24,
+    });
+    let world_from_view = view_from_world.inverse();
+    let frustum = projection.compute_frustum(&GlobalTransform::from(Transform::from_matrix(
+        world_from_view,
+    )));
+    let camera = Camera {
+        computed: ComputedCameraValues {
+            clip_from_view: projection.get_clip_from_view(),
+            target_info: Some(RenderTargetInfo {
+                physical_size: UVec2::new(w, h),
+                scale_factor: 1.0,
+            }),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let config = match args.xyz {
+        None => ClusterConfig::default(),
+        Some(dimensions) => ClusterConfig::XYZ {
+            dimensions,
+            z_config: Default::default(),
+            dynamic_resizing: false,
+        },
+    };
+    let view = app
+        .world_mut()
+        .spawn((
+            Camera3d::default(),
+            camera,
+            Transform::from_matrix(world_from_view),
+            frustum,
+            config,
+        ))
+        .id();
+    let mut index: HashMap<Entity, u32> = HashMap::new();
+    for (i, l) in lights.iter().enumerate() {
+        let at = Transform::from_translation(l.position);
+        let e = match l.spot {
+            None => app
+                .world_mut()
+                .spawn((
+                    PointLight {
+                        range: l.radius,
+                        radius: 0.0,
+                        shadow_maps_enabled: false,
+                        ..Default::default()
+                    },
+                    at,
+                    ViewVisibility::VISIBLE,
+                ))
+                .id(),
+            Some((axis, cos_inner, cos_outer)) => {
+                let up = if axis.normalize().dot(Vec3::Y).abs() > 0.99 {
+                    Vec3::X
+                } else {
+                    Vec3::Y
+                };
+                app.world_mut()
+                    .spawn((
+                        SpotLight {
+                            range: l.radius,
+                            radius: 0.0,
+                            inner_angle: cos_inner.clamp(-1.0, 1.0).acos(),
+                            outer_angle: cos_outer.clamp(-1.0, 1.0).acos(),
+                            shadow_maps_enabled: false,
+                            ..Default::default()
+                        },
+                        at.looking_to(axis, up),
+                        ViewVisibility::VISIBLE,
+                    ))
+                    .id()
+            }
+        };
+        index.insert(e, i as u32);
+    }
+    // Two frames: the second slices to the first's farthest light.
+    app.update();
+    app.update();
+    let clusters = app
+        .world()
+        .get::<Clusters>(view)
+        .ok_or("the camera has no Clusters: LightPlugin did not run")?;
+    let ClusterableObjects::Cpu(cells) = &clusters.clusterable_objects else {
+        return Err("Bevy clustered on the GPU; the adapter asked for the CPU".into());
+    };
+    let d = clusters.dimensions;
+    if cells.len() != (d.x * d.y * d.z) as usize {
+        return Err(format!(
+            "{} cluster lists for {} x {} x {} clusters",
+            cells.len(),
+            d.x,
+            d.y,
+            d.z
+        ));
+    }
+    let mut offsets = vec![0u32];
+    let mut indices = Vec::new();
+    for c in cells {
+        indices.extend(c.iter().filter_map(|e| index.get(e).copied()));
+        offsets.push(indices.len() as u32);
+    }
+    std::fs::create_dir_all(&args.out).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    write(&args.out.join("offsets.npy"), &offsets)?;
+    write(&args.out.join("indices.npy"), &indices)?;
+    let grid = serde_json::json!({
+        "format": "manylights-lists/1",
+        "source": format!("bevy_light 0.20.1, CPU clustering, {}", match args.xyz {
+            None => "ClusterConfig::default() (FixedZ: 4096 clusters, 24 slices)".to_string(),
+            Some(v) => format!("ClusterConfig::XYZ {} x {} x {}", v.x, v.y, v.z),
+        }),
+        "width": w,
+        "height": h,
+        "dims": [d.x, d.y, d.z],
+        "screen": {"kind": "proportional"},
+        "slicing": {"kind": "near_slice", "near": clusters.near, "far": clusters.far},
+        "order": "z_fastest",
+    });
+    std::fs::write(
+        args.out.join("grid.json"),
+        serde_json::to_string_pretty(&grid).map_err(|e| e.to_string())?,
+    )
+    .map_err(|e| e.to_string())?;
+    println!(
+        "bevy: {} x {} x {} clusters (tiles of {} x {} px), slices [0, {}) then to {}; {} lights, {} entries",
+        d.x,
+        d.y,
+        d.z,
+        clusters.tile_size.x,
+        clusters.tile_size.y,
+        clusters.near,
+        clusters.far,
+        lights.len(),
+        indices.len()
+    );
+    Ok(())
+}
+
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The export's projection (glam's right-handed, depth in [0, 1]) gives back its field of
+    /// view, aspect and planes, and Bevy's matrix of them maps the near plane to NDC z 1.
+    #[test]
+    fn the_projection_converts_to_bevys() {
+        let m = Mat4::from_cols_array(&[
+            1.0 / (0.6f32.tan() * 1.5),
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            1.0 / 0.6f32.tan(),
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            80.0 / (0.1 - 80.0),
+            -1.0,
+            0.0,
+            0.0,
+            0.1 * 80.0 / (0.1 - 80.0),
+            0.0,
+        ]);
+        let p = projection(&m).unwrap();
+        assert!((p.fov - 1.2).abs() < 1e-5 && (p.aspect_ratio - 1.5).abs() < 1e-5);
+        assert!(
+            (p.near - 0.1).abs() < 1e-5 && (p.far - 80.0).abs() < 1e-2,
+            "{p:?}"
+        );
+        let c = p.get_clip_from_view() * bevy_math::Vec4::new(0.0, 0.0, -0.1, 1.0);
+        assert!(
+            (c.z / c.w - 1.0).abs() < 1e-5,
+            "reversed z: the near plane at 1"
+        );
+        // An orthographic matrix keeps w = 1.
+        assert!(projection(&Mat4::IDENTITY).unwrap_err().contains("orthographic"));
+    }
+}
