@@ -19,8 +19,8 @@ pub(crate) struct ScoreArgs {
     /// map grid.json names, if any).
     #[arg(long, value_name = "DIR")]
     pub(crate) lists: PathBuf,
-    /// Where the score (score.json) and its heatmaps (false negatives and lights evaluated
-    /// beyond need, per pixel) are written.
+    /// Where the score (score.json), each pixel's false negatives and lights evaluated beyond
+    /// need (false_negatives.npy, extra.npy) and their heatmaps are written.
     #[arg(long, value_name = "DIR", default_value = "out/score")]
     pub(crate) out: PathBuf,
 }
@@ -43,11 +43,7 @@ pub(crate) fn run_score(args: &ScoreArgs) -> Result<()> {
                 .map_err(|e| e.to_string())
         })?;
     }
-    let score_json = args.out.join("score.json");
-    let json = s.to_json(&frame, &lists);
-    write_atomic(&score_json, |f| {
-        std::io::Write::write_all(f, json.as_bytes()).map_err(|e| e.to_string())
-    })?;
+    let files = s.write(&args.out, &frame, &lists)?;
     let source = if lists.grid.source.is_empty() {
         "lists".to_string()
     } else {
@@ -76,11 +72,11 @@ pub(crate) fn run_score(args: &ScoreArgs) -> Result<()> {
         "lights evaluated per light needed: {ratio}; lights per pixel {:.2} (needed {:.2}); longest list {}",
         m.lights_per_pixel_mean, m.lights_needed_per_pixel_mean, m.max_lights_per_bin
     );
-    println!(
-        "wrote {}, {}, {}",
-        score_json.display(),
-        missed_png.display(),
-        extra_png.display()
-    );
+    let shown: Vec<String> = files
+        .iter()
+        .chain([&missed_png, &extra_png])
+        .map(|p| p.display().to_string())
+        .collect();
+    println!("wrote {}", shown.join(", "));
     Ok(())
 }

@@ -163,6 +163,41 @@ fn score_reproduces_our_lists_and_finds_planted_errors_where_they_are() {
         sum(&evaluated) + covered,
         "the extra light counts once at each covered pixel of its tile"
     );
+    let before: Vec<u32> = read_npy(&tmp.path().join("s0/extra.npy"));
+    let after: Vec<u32> = read_npy(&tmp.path().join("s2/extra.npy"));
+    for k in 0..(w * h) as usize {
+        let want = u32::from(pixel_bin[k] == tile as i32);
+        assert_eq!(
+            after[k] - before[k],
+            want,
+            "pixel ({}, {})",
+            k as u32 % w,
+            k as u32 / w
+        );
+    }
+    // Light ids through a map: the lists name lights by other ids, light_ids.npy maps them to
+    // the scene's; the score is the same.
+    let mapped = tmp.path().join("mapped");
+    let ids: Vec<u32> = indices.iter().map(|&i| 299 - i).collect();
+    let with_map = grid.replace(
+        r#""order": "x_fastest""#,
+        r#""order": "x_fastest", "light_ids": "light_ids.npy""#,
+    );
+    assert_ne!(with_map, grid);
+    write_lists(&mapped, &with_map, &offsets, &ids);
+    let map: Vec<u32> = (0..300u32).map(|k| 299 - k).collect();
+    write_npy(&mapped.join("light_ids.npy"), &[300], &map);
+    let s3 = score(&export, &mapped, &tmp.path().join("s_mapped"));
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(tmp.path().join("s0/score.json")).unwrap()).unwrap();
+    for k in [
+        "false_negatives",
+        "evaluated",
+        "needed",
+        "max_lights_per_cell",
+    ] {
+        assert_eq!(s3[k], s[k], "{k} through the light-id map");
+    }
     // Bad lists: an id past the lights, the wrong dtype, a grid for another image.
     let bad = tmp.path().join("bad");
     let mut idx = indices.clone();
@@ -204,6 +239,11 @@ fn score_reproduces_our_lists_and_finds_planted_errors_where_they_are() {
     fails(
         "another image",
         &["grid.json", "width x height = 128 x 64", "96 x 64"],
+    );
+    write_lists(&bad, &grid, &offsets[..24], &indices);
+    fails(
+        "offsets of the wrong shape",
+        &["offsets.npy", "shape [24]", "expected (25)"],
     );
 }
 

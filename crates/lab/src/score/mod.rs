@@ -224,6 +224,31 @@ pub struct Score {
 }
 
 impl Score {
+    /// Writes `dir/score.json` ([`Score::to_json`]) and the per-pixel counts as NumPy arrays,
+    /// `false_negatives.npy` and `extra.npy` (uint32, (H, W), rows from the top); returns the
+    /// files.
+    pub fn write(
+        &self,
+        dir: &Path,
+        frame: &Frame,
+        lists: &Lists,
+    ) -> Result<Vec<std::path::PathBuf>, LabError> {
+        std::fs::create_dir_all(dir).map_err(|e| LabError::Io {
+            path: dir.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let hw = [u64::from(frame.height), u64::from(frame.width)];
+        let (missed, extra, json) = (
+            dir.join("false_negatives.npy"),
+            dir.join("extra.npy"),
+            dir.join("score.json"),
+        );
+        npy::write_u32(&missed, &hw, &self.missed)?;
+        npy::write_u32(&extra, &hw, &self.extra)?;
+        crate::write_atomic(&json, self.to_json(frame, lists).as_bytes())?;
+        Ok(vec![json, missed, extra])
+    }
+
     /// `score.json`: the metrics, where the false negatives are, and what was scored.
     pub fn to_json(&self, frame: &Frame, lists: &Lists) -> String {
         let m = &self.metrics;

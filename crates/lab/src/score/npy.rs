@@ -57,3 +57,19 @@ pub(crate) fn read<T: npyz::Deserialize>(
         .map_err(|e| bad(path, format!("reading the values: {e}")))?;
     Ok((shape, values))
 }
+
+/// `data` as a `uint32` array of `shape`, written whole or not at all.
+pub(crate) fn write_u32(path: &Path, shape: &[u64], data: &[u32]) -> Result<(), LabError> {
+    use npyz::WriterBuilder;
+    let io = |e: std::io::Error| bad(path, e.to_string());
+    let mut bytes = Vec::new();
+    let mut w = npyz::WriteOptions::new()
+        .default_dtype()
+        .shape(shape)
+        .writer(&mut bytes)
+        .begin_nd()
+        .map_err(io)?;
+    w.extend(data.iter().copied()).map_err(io)?;
+    w.finish().map_err(io)?;
+    crate::write_atomic(path, &bytes)
+}
