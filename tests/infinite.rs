@@ -1,7 +1,7 @@
 //! Accuracy against infinite range: the compute reference (`shade.reference_infinite`) against
-//! the shading model in f64, and stochastic light culling (`lights.stochastic`): its draws
-//! against their host oracle, its estimate against the f64 one, and its unbiasedness by a
-//! z-test that a deliberately biased variant fails.
+//! the shading model in f64, and stochastic light culling (`lights.stochastic`), with and
+//! without interleaved pixel classes: its draws against their host oracle, its estimate against
+//! the f64 one, and its unbiasedness by a z-test that a deliberately biased variant fails.
 
 mod common;
 
