@@ -9,7 +9,6 @@ use manylights_cull::layout::GpuCullParams;
 use manylights_cull::{BinLists, CullOutput, Culler, geometry};
 use manylights_gpu::layout::{GpuFrame, GpuLight, LIGHT_KIND_SPOT};
 use manylights_gpu::{GpuContext, GpuScene, readback};
-use npyz::WriterBuilder;
 use serde_json::json;
 
 use crate::{LabError, write_atomic};
@@ -120,16 +119,8 @@ impl Dtype for i32 {
 
 /// `data` as array `name` of `shape` (C order, little-endian).
 fn npy<T: Dtype>(name: &'static str, shape: &[u64], data: &[T]) -> Result<Array, LabError> {
-    let io = |e: std::io::Error| LabError::Other(format!("encoding {name}: {e}"));
-    let mut bytes = Vec::new();
-    let mut w = npyz::WriteOptions::new()
-        .default_dtype()
-        .shape(shape)
-        .writer(&mut bytes)
-        .begin_nd()
-        .map_err(io)?;
-    w.extend(data.iter().copied()).map_err(io)?;
-    w.finish().map_err(io)?;
+    let bytes = crate::score::npy::encode(shape, data)
+        .map_err(|e| LabError::Other(format!("encoding {name}: {e}")))?;
     Ok(Array {
         name,
         shape: shape.to_vec(),

@@ -7,7 +7,7 @@
 //! light needed, lights per pixel and the longest list.
 
 pub mod grid;
-mod npy;
+pub(crate) mod npy;
 
 use std::path::Path;
 

@@ -58,18 +58,25 @@ pub(crate) fn read<T: npyz::Deserialize>(
     Ok((shape, values))
 }
 
-/// `data` as a `uint32` array of `shape`, written whole or not at all.
-pub(crate) fn write_u32(path: &Path, shape: &[u64], data: &[u32]) -> Result<(), LabError> {
+/// The `.npy` bytes of `data` as an array of `shape` (C order, little-endian, the dtype of `T`).
+pub(crate) fn encode<T: npyz::AutoSerialize + Copy>(
+    shape: &[u64],
+    data: &[T],
+) -> std::io::Result<Vec<u8>> {
     use npyz::WriterBuilder;
-    let io = |e: std::io::Error| bad(path, e.to_string());
     let mut bytes = Vec::new();
     let mut w = npyz::WriteOptions::new()
         .default_dtype()
         .shape(shape)
         .writer(&mut bytes)
-        .begin_nd()
-        .map_err(io)?;
-    w.extend(data.iter().copied()).map_err(io)?;
-    w.finish().map_err(io)?;
+        .begin_nd()?;
+    w.extend(data.iter().copied())?;
+    w.finish()?;
+    Ok(bytes)
+}
+
+/// `data` as a `uint32` array of `shape`, written whole or not at all.
+pub(crate) fn write_u32(path: &Path, shape: &[u64], data: &[u32]) -> Result<(), LabError> {
+    let bytes = encode(shape, data).map_err(|e| bad(path, e.to_string()))?;
     crate::write_atomic(path, &bytes)
 }
