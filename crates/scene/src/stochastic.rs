@@ -133,7 +133,6 @@ impl StochasticParams {
     /// the frame in `radius` (with interleaving, the longest of its classes' ranges), and its
     /// alpha.
     pub fn at_frame(&self, light: &Light, index: u32, frame: u32) -> (Light, f32) {
-        let alpha = self.alpha(light);
         let xi = if self.interleave > 1 {
             let k = key(self.seed, frame, index);
             (0..self.interleave * self.interleave)
@@ -142,6 +141,12 @@ impl StochasticParams {
         } else {
             xi(self.seed, frame, index)
         };
+        self.with_xi(light, xi)
+    }
+
+    /// `light` with the range of the draw `xi` in `radius`, and its alpha.
+    fn with_xi(&self, light: &Light, xi: f32) -> (Light, f32) {
+        let alpha = self.alpha(light);
         (
             Light {
                 radius: Self::range(alpha, xi),
@@ -157,15 +162,7 @@ impl StochasticParams {
         if self.interleave <= 1 {
             return self.at_frame(light, index, frame);
         }
-        let alpha = self.alpha(light);
-        let xi = class_xi(key(self.seed, frame, index), class);
-        (
-            Light {
-                radius: Self::range(alpha, xi),
-                ..*light
-            },
-            alpha,
-        )
+        self.with_xi(light, class_xi(key(self.seed, frame, index), class))
     }
 
     /// The word the GPU keeps in a drawn light's `interleave`: 0 without interleaving,
