@@ -11,7 +11,7 @@ use manylights_cull::{CullSettings, Slicing, Strategy};
 use manylights_gpu::{GpuContext, GpuOptions};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::procedural::{self, ProceduralScene};
-use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
+use manylights_scene::{LightGenerator, LightSpec, Model, RadiusRule, Scene};
 
 /// Scene, lights, resolution and adapter: shared by every subcommand.
 #[derive(clap::Args, Debug)]
@@ -23,6 +23,12 @@ pub(crate) struct SceneArgs {
     /// a pane in front of the pillars' far wall, sheets before the CIS 5650 hall's pillars.
     #[arg(long)]
     pub(crate) glass: bool,
+    /// Material models to give the scene's surfaces in turns, comma-separated (`ggx` makes
+    /// every surface glTF's metallic-roughness GGX; `blinn-phong,ggx,sheen,clear-coat,wrap`
+    /// mixes five in one frame). Default: the scene's own (procedural scenes: Blinn-Phong;
+    /// glTF files: GGX).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub(crate) materials: Vec<ModelName>,
     /// Number of lights to generate (0 renders only the scene's own lights).
     #[arg(long, default_value_t = 1024)]
     pub(crate) lights: u32,
@@ -58,6 +64,33 @@ pub(crate) struct SceneArgs {
     /// first discrete GPU, else any adapter, lavapipe included).
     #[arg(long)]
     pub(crate) adapter: Option<String>,
+}
+
+/// A material model's command-line name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum ModelName {
+    /// Lambert plus a normalised Blinn-Phong lobe (the procedural scenes' own).
+    BlinnPhong,
+    /// glTF's metallic-roughness GGX.
+    Ggx,
+    /// Cloth: Lambert plus a Charlie sheen lobe.
+    Sheen,
+    /// A clear coat over GGX.
+    ClearCoat,
+    /// Wrapped diffuse.
+    Wrap,
+}
+
+impl From<ModelName> for Model {
+    fn from(m: ModelName) -> Self {
+        match m {
+            ModelName::BlinnPhong => Model::BlinnPhong,
+            ModelName::Ggx => Model::Ggx,
+            ModelName::Sheen => Model::Sheen,
+            ModelName::ClearCoat => Model::ClearCoat,
+            ModelName::Wrap => Model::Wrap,
+        }
+    }
 }
 
 /// A culling strategy and its parameters.
@@ -219,6 +252,12 @@ pub(crate) fn load_scene(name: &str) -> Result<Scene> {
                 report.skipped_primitives, report.skipped_directional_lights
             );
         }
+        if report.unread_textures > 0 {
+            eprintln!(
+                "warning: {name}: {} material textures are not read (their factors are)",
+                report.unread_textures
+            );
+        }
         Ok(scene)
     } else {
         ProceduralScene::from_name(name)
@@ -235,6 +274,20 @@ pub(crate) fn load_scene(name: &str) -> Result<Scene> {
 
 impl SceneArgs {
     /// The scene with its generated lights, validated.
+    /// The `--materials` models, each at most once.
+    pub(crate) fn models(&self) -> Result<Vec<Model>> {
+        let models: Vec<Model> = self.materials.iter().map(|&m| m.into()).collect();
+        for (i, m) in models.iter().enumerate() {
+            if models[..i].contains(m) {
+                bail!(
+                    "--materials names {} twice: each model at most once",
+                    m.name()
+                );
+            }
+        }
+        Ok(models)
+    }
+
     pub(crate) fn build(&self) -> Result<Scene> {
         let mut scene = if self.glass {
             let mut spec = ProceduralScene::from_name(&self.scene).with_context(|| {
@@ -256,6 +309,7 @@ impl SceneArgs {
         } else {
             load_scene(&self.scene)?
         };
+        scene.assign_models(&self.models()?);
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
             "invalid light options (--radius, --threshold, --intensity, --spot-fraction)",

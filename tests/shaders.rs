@@ -152,7 +152,7 @@ fn host_structs_match_wgsl_layout() {
         clip_from_view => "clip_from_view", world_from_view => "world_from_view", eye => "eye", viewport => "viewport", light_count => "light_count", flags => "flags"]);
     check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
         direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer", alpha => "alpha", interleave => "interleave"]);
-    check!(GpuMaterial, "Material", [base_color => "base_color", specular => "specular", opacity => "opacity"]);
+    check!(GpuMaterial, "Material", [base_color => "base_color", model => "model", emissive => "emissive", opacity => "opacity", params => "params"]);
     let cull = validate(&manylights_cull::shaders::DEPTH_BOUNDS);
     let (size, members) = wgsl_layout(&cull, "CullParams");
     assert_eq!(size as usize, size_of::<GpuCullParams>());

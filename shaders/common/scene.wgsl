@@ -4,9 +4,16 @@
 // What the shading model reads of a material. Host mirror: manylights_gpu::layout::GpuMaterial.
 struct Material {
     base_color: vec3<f32>,
-    specular: f32,
+    // MODEL_* (brdf.wgsl).
+    model: u32,
+    // Added once a pixel to what the lights reflect.
+    emissive: vec3<f32>,
     // 1: opaque; below 1 a transparent surface's blend weight.
     opacity: f32,
+    // The model's parameters (manylights_scene::Brdf::params): Blinn-Phong (specular); GGX
+    // (metallic, roughness); sheen (sheen colour, roughness); clear coat (metallic, roughness,
+    // coat, coat roughness); wrap (w).
+    params: vec4<f32>,
 }
 
 @group(0) @binding(1) var<storage, read> lights: array<Light>;

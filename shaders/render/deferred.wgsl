@@ -123,13 +123,14 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     }
     let range = workgroupUniformLoad(&wg_range_plain);
     var c = vec3<f32>(0.0);
+    var s: Surface;
+    if covered {
+        s = surface(pixel, stored);
+        c = emitted(s.m);
+    }
     if range.x < range.y {
         let tile = group * 8u / cull.tile_size;
         let group_cell = ZBinCell(cull.light_count + (tile.y * cull.tiles_x + tile.x) * zbin_words(), range.x, range.y);
-        var s: Surface;
-        if covered {
-            s = surface(pixel, stored);
-        }
         let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
         for (var w = range.x / 32u; w <= (range.y - 1u) / 32u; w++) {
             var bits = zbin_bits(group_cell, w);
@@ -179,6 +180,9 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     }
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
     var c = vec3<f32>(0.0);
+    if covered {
+        c = emitted(s.m);
+    }
     for (var base = 0u; base < list.y; base += 64u) {
         let n = min(64u, list.y - base);
         if li < n {

@@ -14,7 +14,7 @@
 // infinite-range falloff (FRAME_FLAG_INFINITE_RANGE) skips nothing.
 fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
-    var c = vec3<f32>(0.0);
+    var c = emitted(m);
     for (var k = 0u; k < list.y; k++) {
         let i = light_indices[list.x + k];
         let to_light = lights[i].position - p;
@@ -31,7 +31,7 @@ fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mate
 // every run; the same reject as shade_list.
 fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
-    var c = vec3<f32>(0.0);
+    var c = emitted(m);
     if cell.first >= cell.end {
         return c;
     }

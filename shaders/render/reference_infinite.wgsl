@@ -51,6 +51,11 @@ fn reference_infinite(
     }
     let covered = live && p.w > 0.0;
     let m = materials[u32(n.w)];
+    // The emission once, with the first chunk of lights.
+    if covered && params.first == 0u {
+        sum = emitted(m);
+        comp = vec3<f32>(0.0);
+    }
     let v = view_dir(p.xyz);
     // Every thread runs every batch (the barriers need uniform control flow); only covered
     // pixels shade.

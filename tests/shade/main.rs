@@ -17,6 +17,7 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod materials;
 mod msaa;
 mod steady;
 mod transparent;

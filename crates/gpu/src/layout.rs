@@ -28,12 +28,24 @@ pub fn wgsl_prelude() -> String {
          const LIGHT_KIND_POINT: u32 = {LIGHT_KIND_POINT}u;\n\
          const LIGHT_KIND_SPOT: u32 = {LIGHT_KIND_SPOT}u;\n\
          const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n\
-         const XI_BITS: u32 = {xi_bits}u;\n",
+         const XI_BITS: u32 = {xi_bits}u;\n\
+         const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
+         const F0_DIELECTRIC: f32 = {f0:?};\n{models}",
         pi = std::f32::consts::PI,
         d_min = light::D_MIN as f32,
         spot_eps = light::SPOT_EPS as f32,
         shininess = light::SHININESS as f32,
         xi_bits = manylights_scene::stochastic::XI_BITS,
+        min_roughness = manylights_scene::brdf::MIN_ROUGHNESS as f32,
+        f0 = manylights_scene::brdf::F0_DIELECTRIC as f32,
+        models = manylights_scene::Model::ALL
+            .iter()
+            .map(|m| format!(
+                "const MODEL_{}: u32 = {}u;\n",
+                m.name().to_uppercase(),
+                m.id()
+            ))
+            .collect::<String>(),
     )
 }
 
@@ -140,28 +152,31 @@ impl From<&Light> for GpuLight {
     }
 }
 
-/// Mirror of WGSL `Material` (`shaders/common/shading.wgsl`).
+/// Mirror of WGSL `Material` (`shaders/common/scene.wgsl`): 48 bytes.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GpuMaterial {
-    /// Diffuse albedo.
+    /// Base colour.
     pub base_color: Vec3,
-    /// Specular weight.
-    pub specular: f32,
+    /// The material model's id (`Model::id`, `MODEL_*` in the prelude).
+    pub model: u32,
+    /// Emitted radiance.
+    pub emissive: Vec3,
     /// Opacity (1: opaque).
     pub opacity: f32,
-    /// Padding to WGSL's 16-byte struct alignment.
-    pub _pad: [f32; 3],
+    /// The model's parameters (`Brdf::params`).
+    pub params: [f32; 4],
 }
-const _: () = assert!(size_of::<GpuMaterial>() == 32);
+const _: () = assert!(size_of::<GpuMaterial>() == 48);
 
 impl From<&Material> for GpuMaterial {
     fn from(m: &Material) -> Self {
         Self {
             base_color: m.base_color,
-            specular: m.specular,
+            model: m.brdf.model().id(),
+            emissive: m.emissive,
             opacity: m.opacity,
-            _pad: [0.0; 3],
+            params: m.brdf.params(),
         }
     }
 }

@@ -66,6 +66,24 @@ pub fn raster_msaa(
     depth: DepthTest,
     samples: u32,
 ) -> wgpu::RenderPipeline {
+    raster_with(device, label, module, groups, fragment, depth, samples, &[])
+}
+
+/// [`raster_msaa`] with values of the fragment stage's `override` constants.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "raster_msaa's arguments and the constants"
+)]
+pub fn raster_with(
+    device: &wgpu::Device,
+    label: &str,
+    module: &wgpu::ShaderModule,
+    groups: &[&wgpu::BindGroupLayout],
+    fragment: Option<(&str, &[Option<wgpu::ColorTargetState>])>,
+    depth: DepthTest,
+    samples: u32,
+    constants: &[(&str, f64)],
+) -> wgpu::RenderPipeline {
     let layout = layout(device, label, groups);
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
@@ -98,7 +116,10 @@ pub fn raster_msaa(
         fragment: fragment.map(|(entry, targets)| wgpu::FragmentState {
             module,
             entry_point: Some(entry),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
             targets,
         }),
         multiview_mask: None,

@@ -20,6 +20,9 @@ pub struct GpuScene {
     pub index_count: u32,
     /// Indices of the opaque triangles (the first ones).
     pub opaque_index_count: u32,
+    /// The opaque triangles grouped by material model: each group's model id
+    /// (`manylights_scene::Model::id`) and its range of indices, in the order of the ids.
+    pub opaque_models: Vec<(u32, std::ops::Range<u32>)>,
     /// The transparent triangles (materials with opacity below 1), as uploaded, and their
     /// centroids, for sorting them for each view.
     transparent: Vec<[u32; 3]>,
@@ -48,14 +51,15 @@ impl GpuScene {
         height: u32,
     ) -> Result<Self, GpuError> {
         let mut vertices = Vec::with_capacity(scene.vertex_count());
-        let mut indices = Vec::with_capacity(scene.triangle_count() * 3);
+        let mut by_model: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
         let mut transparent: Vec<u32> = Vec::new();
         for p in &scene.primitives {
             let base = vertices.len() as u32;
-            let out = if scene.materials[p.material as usize].is_transparent() {
+            let material = &scene.materials[p.material as usize];
+            let out = if material.is_transparent() {
                 &mut transparent
             } else {
-                &mut indices
+                by_model.entry(material.brdf.model().id()).or_default()
             };
             out.extend(p.indices.iter().map(|i| base + i));
             vertices.extend(
@@ -69,7 +73,15 @@ impl GpuScene {
                     }),
             );
         }
-        // Opaque triangles first, then the transparent ones, sorted for the camera.
+        // Opaque triangles first, a model at a time, then the transparent ones, sorted for the
+        // camera.
+        let mut indices = Vec::with_capacity(scene.triangle_count() * 3);
+        let mut opaque_models = Vec::new();
+        for (model, ix) in by_model {
+            let start = indices.len() as u32;
+            indices.extend(ix);
+            opaque_models.push((model, start..indices.len() as u32));
+        }
         let opaque_index_count = indices.len() as u32;
         let centroids: Vec<Vec3> = transparent
             .chunks(3)
@@ -181,6 +193,7 @@ impl GpuScene {
             indices: indices_buf,
             index_count: indices.len() as u32,
             opaque_index_count,
+            opaque_models,
             transparent: triangles,
             centroids,
             lights: lights_buf,
@@ -220,6 +233,19 @@ impl GpuScene {
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
         self.bind_geometry(pass);
         pass.draw_indexed(0..self.opaque_index_count, 0, 0..1);
+    }
+
+    /// The material models of the opaque triangles, a bit each (`1 << Model::id`): the
+    /// `MATERIAL_MODELS` of a pass that shades them all (`shaders/common/brdf.wgsl`).
+    pub fn opaque_model_mask(&self) -> u32 {
+        self.opaque_models.iter().fold(0, |m, (id, _)| m | 1 << id)
+    }
+
+    /// Binds group 0 and the geometry, and draws the opaque triangles of
+    /// `opaque_models[group]`.
+    pub fn draw_model(&self, pass: &mut wgpu::RenderPass<'_>, group: usize) {
+        self.bind_geometry(pass);
+        pass.draw_indexed(self.opaque_models[group].1.clone(), 0, 0..1);
     }
 
     /// Binds group 0 and the geometry, and draws the transparent triangles, back to front for

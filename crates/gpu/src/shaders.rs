@@ -88,6 +88,8 @@ pub const LIGHT: ShaderFile = shader_file!("common/light.wgsl");
 pub const SCENE: ShaderFile = shader_file!("common/scene.wgsl");
 /// Material and shading model.
 pub const SHADING: ShaderFile = shader_file!("common/shading.wgsl");
+/// The material models (`shaders/common/brdf.wgsl`), composed before [`SHADING`].
+pub const BRDF: ShaderFile = shader_file!("common/brdf.wgsl");
 
 /// A constant generated into a shader's prelude from its Rust definition.
 #[derive(Clone, Copy, Debug)]

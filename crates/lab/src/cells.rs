@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use manylights_cull::Strategy;
-use manylights_scene::{LightGenerator, LightSpec, Motion, RadiusRule};
+use manylights_scene::{LightGenerator, LightSpec, Model, Motion, RadiusRule};
 use manylights_shade::Backend;
 use serde::Serialize;
 
@@ -45,6 +45,18 @@ fn locate(src: &str, needle: &str, from: usize) -> (usize, usize) {
     let line = src[..at].matches('\n').count() + 1;
     let col = at - src[..at].rfind('\n').map_or(0, |i| i + 1) + 1;
     (line, col)
+}
+
+/// Material models as a label: their names joined by `+` (`scene` for none: the scene's own).
+pub fn models_label(models: &[Model]) -> String {
+    if models.is_empty() {
+        return "scene".into();
+    }
+    models
+        .iter()
+        .map(|m| m.name())
+        .collect::<Vec<_>>()
+        .join("+")
 }
 
 fn strategy_label(s: &Strategy) -> String {
@@ -131,6 +143,9 @@ pub fn params_label(c: &Config) -> String {
     if c.msaa > 1 {
         p.push_str(&format!(";msaa={}", c.msaa));
     }
+    if !c.materials.is_empty() {
+        p.push_str(&format!(";materials={}", models_label(&c.materials)));
+    }
     if !c.lights.motion.is_static() {
         p.push_str(&format!(
             ";motion={};light_update={}",
@@ -212,6 +227,7 @@ impl Experiment {
             ("motion", s.motion.as_ref().map(Vec::len)),
             ("light_update", s.light_update.as_ref().map(Vec::len)),
             ("msaa", s.msaa.as_ref().map(Vec::len)),
+            ("materials", s.materials.as_ref().map(Vec::len)),
             ("variants", s.variants.as_ref().map(Vec::len)),
         ];
         for (field, len) in lens {
@@ -345,6 +361,11 @@ impl Experiment {
         axis!(s.msaa, |c: &mut Config, v: u32| {
             c.msaa = v;
             format!("msaa={v}")
+        });
+        axis!(s.materials, |c: &mut Config, v: Vec<Model>| {
+            let label = format!("materials={}", models_label(&v));
+            c.materials = v;
+            label
         });
         axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
             c.device_limit = v;

@@ -12,7 +12,7 @@ use manylights_cull::{CullSettings, Strategy};
 use manylights_scene::procedural::{
     AtriumParams, Cis5650Params, CityParams, PillarsParams, ProceduralScene, TopdownParams,
 };
-use manylights_scene::{Camera, LightGenerator, LightSpec, Motion, Projection, RadiusRule};
+use manylights_scene::{Camera, LightGenerator, LightSpec, Model, Motion, Projection, RadiusRule};
 use manylights_shade::Backend;
 use serde::{Deserialize, Serialize};
 
@@ -285,6 +285,9 @@ pub struct Sweep {
     /// MSAA sample counts.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub msaa: Option<Vec<u32>>,
+    /// Material model lists (`materials`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub materials: Option<Vec<Vec<Model>>>,
     /// Device limits (`None` entries mean none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub device_limit: Option<Vec<Option<DeviceLimit>>>,
@@ -341,6 +344,15 @@ pub struct Config {
     /// `DeferredStoredPosition` takes no MSAA. (Left out of a cell's identity when 1.)
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub msaa: u32,
+    /// Material models to give the scene's surfaces, in turns (`manylights_scene::material::
+    /// assign_models`): `[Ggx]` makes every surface GGX; `[BlinnPhong, Ggx, Sheen, ClearCoat,
+    /// Wrap]` mixes five models in one frame, each material's parameters carried over
+    /// (`Material::with_model`). Empty (the default): the scene's own materials (procedural
+    /// scenes: Blinn-Phong; glTF files: GGX). Forward draws each model with its own pipeline;
+    /// deferred branches on the model in one lighting pass. (Left out of a cell's identity when
+    /// empty.)
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub materials: Vec<Model>,
     /// Conservative culling slack.
     #[serde(default = "slack")]
     pub slack: f32,
@@ -482,6 +494,17 @@ pub struct Experiment {
 impl Config {
     /// Checks values that the types do not; errors name the field.
     pub fn check(&self) -> Result<(), (&'static str, String)> {
+        for (i, m) in self.materials.iter().enumerate() {
+            if self.materials[..i].contains(m) {
+                return Err((
+                    "materials",
+                    format!(
+                        "materials lists {m:?} twice: each of BlinnPhong, Ggx, Sheen, ClearCoat, \
+                         Wrap at most once"
+                    ),
+                ));
+            }
+        }
         let (w, h) = self.resolution;
         if !(1..=65536).contains(&w) || !(1..=65536).contains(&h) {
             return Err((

@@ -68,7 +68,10 @@ pub fn scene_fingerprint(scene: &Scene) -> u64 {
         for x in m.base_color.to_array() {
             f(&mut h, x);
         }
-        f(&mut h, m.specular);
+        h.write_u32(m.brdf.model().id());
+        for x in m.brdf.params().into_iter().chain(m.emissive.to_array()) {
+            f(&mut h, x);
+        }
         f(&mut h, m.opacity);
     }
     h.write_usize(scene.lights.len());

@@ -214,6 +214,7 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
                 .0
         }
     };
+    scene.assign_models(&c.materials);
     let lights = c
         .lights
         .generate(&scene)

@@ -3,12 +3,22 @@
 //!
 //! What is read, and nothing else: triangle geometry (`TRIANGLES`, `TRIANGLE_STRIP` and
 //! `TRIANGLE_FAN`, converted to lists; points and lines are skipped and counted), positions,
-//! normals (computed from faces where absent), node transforms baked into world space, the base
-//! colour factor of each material (its texture is not read) with `specular = 0.5 * (1 -
-//! roughness)`, the first camera of the scene if any, and point and spot lights (directional
+//! normals (computed from faces where absent), node transforms baked into world space, each
+//! material's factors as glTF's metallic-roughness model ([`Brdf::Ggx`]: base colour, metallic,
+//! roughness, emissive times `KHR_materials_emissive_strength`, and with `alphaMode: BLEND` the
+//! base colour's alpha as opacity), the first camera of the scene if any, and point and spot lights (directional
 //! lights have no position or radius and are skipped and counted). A light without a `range`
 //! gets the radius at which its inverse-square irradiance falls to
-//! [`GltfOptions::light_threshold`].
+//! [`GltfOptions::light_threshold`]. A primitive without a material gets glTF's default
+//! material (white, metallic 1, roughness 1).
+//!
+//! Not read: textures (base colour, metallic-roughness, normal, occlusion, emissive: their
+//! count is [`ImportReport::unread_textures`], which the CLI prints as a warning), vertex
+//! colours and texture coordinates, `alphaCutoff` (MASK is opaque), `doubleSided` (every
+//! surface is two-sided) and the material extensions other than emissive strength (clear coat,
+//! sheen, transmission, specular, IOR, volume: the procedural scenes' `materials` option has
+//! clear coat and sheen models of its own). A factor out of range (negative roughness, metallic
+//! above 1, a base colour channel above 1) is an error naming the material and the field.
 //!
 //! Malformed files give a [`SceneError::Gltf`] naming the file and the problem: schema errors,
 //! missing buffers, indices out of range, attribute arrays of unequal length, non-finite
@@ -18,7 +28,9 @@ use std::path::Path;
 
 use glam::{Mat3, Mat4, Vec3};
 
-use crate::{Aabb, Camera, Light, LightKind, Material, Primitive, Projection, Scene, SceneError};
+use crate::{
+    Aabb, Brdf, Camera, Light, LightKind, Material, Primitive, Projection, Scene, SceneError,
+};
 
 /// Options of the importer.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,6 +54,8 @@ pub struct ImportReport {
     pub skipped_primitives: usize,
     /// Directional lights skipped.
     pub skipped_directional_lights: usize,
+    /// Textures that materials name, none of which is read (their factors are).
+    pub unread_textures: usize,
 }
 
 /// Deepest node hierarchy accepted; deeper files are reported as malformed.
@@ -89,38 +103,26 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
             .map_err(err)?;
     }
 
-    let mut materials: Vec<Material> = doc
-        .materials()
-        .map(|m| {
-            let pbr = m.pbr_metallic_roughness();
-            let c = pbr.base_color_factor();
-            let base = Vec3::new(c[0], c[1], c[2]);
-            let base = if base.is_finite() {
-                base.clamp(Vec3::ZERO, Vec3::ONE)
-            } else {
-                Vec3::splat(0.8)
-            };
-            // `alphaMode: BLEND` makes the surface transparent with the base colour's alpha;
-            // OPAQUE and MASK (an alpha test without textures: every fragment passes) are opaque.
-            let opacity = if m.alpha_mode() == gltf::material::AlphaMode::Blend {
-                if c[3].is_finite() {
-                    c[3].clamp(0.0, 1.0)
-                } else {
-                    1.0
-                }
-            } else {
-                1.0
-            };
-            Material::transparent(
-                base,
-                (0.5 * (1.0 - pbr.roughness_factor())).clamp(0.0, 1.0),
-                opacity,
-            )
-        })
-        .collect();
+    let mut materials = Vec::new();
+    for (i, m) in doc.materials().enumerate() {
+        let at = match m.name() {
+            Some(name) => format!("materials[{i}] ({name:?})"),
+            None => format!("materials[{i}]"),
+        };
+        materials.push(material(&m, &at).map_err(|e| err(e.to_string()))?);
+        out.report.unread_textures += textures(&m);
+    }
     // Primitives without a material use the glTF default material, appended last.
     let default_material = materials.len() as u32;
-    materials.push(Material::new(Vec3::splat(0.8), 0.0));
+    materials.push(Material {
+        base_color: Vec3::ONE,
+        brdf: Brdf::Ggx {
+            metallic: 1.0,
+            roughness: 1.0,
+        },
+        opacity: 1.0,
+        emissive: Vec3::ZERO,
+    });
     let primitives: Vec<Primitive> = out
         .prims
         .into_iter()
@@ -150,6 +152,71 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
     };
     result.validate().map_err(|e| err(e.to_string()))?;
     Ok((result, out.report))
+}
+
+/// A glTF material as the metallic-roughness model ([`Brdf::Ggx`]): its base colour, metallic,
+/// roughness and emissive factors (times `KHR_materials_emissive_strength`), and with
+/// `alphaMode: BLEND` its base colour alpha as the opacity (OPAQUE and MASK are opaque: an alpha
+/// test without textures passes every fragment). Factors out of range are an error naming the
+/// material (`at`) and the field.
+fn material(m: &gltf::Material<'_>, at: &str) -> Result<Material, SceneError> {
+    let pbr = m.pbr_metallic_roughness();
+    let c = pbr.base_color_factor();
+    let opacity = if m.alpha_mode() == gltf::material::AlphaMode::Blend {
+        c[3]
+    } else {
+        1.0
+    };
+    if !(0.0..=1.0).contains(&c[3]) {
+        return Err(SceneError::invalid(
+            format!("{at}.pbrMetallicRoughness.baseColorFactor[3]"),
+            c[3],
+            "a value in [0, 1]",
+        ));
+    }
+    let emissive = Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0);
+    let material = Material {
+        base_color: Vec3::new(c[0], c[1], c[2]),
+        brdf: Brdf::Ggx {
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
+        },
+        opacity,
+        emissive,
+    };
+    material.validate(at).map_err(|e| match e {
+        // The glTF names of the fields.
+        SceneError::InvalidValue {
+            field,
+            value,
+            accepted,
+        } => SceneError::InvalidValue {
+            field: field
+                .replace(".brdf.metallic", ".pbrMetallicRoughness.metallicFactor")
+                .replace(".brdf.roughness", ".pbrMetallicRoughness.roughnessFactor")
+                .replace(".base_color", ".pbrMetallicRoughness.baseColorFactor")
+                .replace(".emissive", ".emissiveFactor"),
+            value,
+            accepted,
+        },
+        e => e,
+    })?;
+    Ok(material)
+}
+
+/// The textures a material names, none of which is read.
+fn textures(m: &gltf::Material<'_>) -> usize {
+    let pbr = m.pbr_metallic_roughness();
+    [
+        pbr.base_color_texture().is_some(),
+        pbr.metallic_roughness_texture().is_some(),
+        m.normal_texture().is_some(),
+        m.occlusion_texture().is_some(),
+        m.emissive_texture().is_some(),
+    ]
+    .into_iter()
+    .filter(|&t| t)
+    .count()
 }
 
 /// The glTF schema validation, less one rule: accessor `min`/`max` are required on POSITION by

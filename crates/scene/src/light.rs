@@ -22,13 +22,17 @@
 //! point. It is exactly zero at and outside the outer cone.
 //!
 //! # Shading model
-//! Lambert plus a normalised Blinn-Phong lobe of fixed exponent [`SHININESS`]:
+//! Each light adds its irradiance times the material's reflectance and cosine, the material
+//! model's [`crate::brdf::brdf_cos`]; the material's emission is added once:
 //!
 //! ```text
 //! E  = colour * intensity * falloff(d, r) * spot
-//! Lo = sum over lights of  E * max(n.l, 0) * (base_colour / pi + specular * (s + 8) / (8 pi) * max(n.h, 0)^s)
+//! Lo = emissive + sum over lights of  E * brdf_cos(material, n, l, v)
 //! ```
-//! with `s = SHININESS`. Materials therefore carry only `base_colour` and `specular`.
+//! The models ([`crate::Brdf`]): Lambert plus a normalised Blinn-Phong lobe of fixed exponent
+//! [`SHININESS`] (`base_colour / pi + specular * (s + 8) / (8 pi) * max(n.h, 0)^s`, the
+//! procedural scenes' own), glTF's metallic-roughness GGX, a sheen lobe over Lambert, a clear
+//! coat over GGX, and a wrapped diffuse.
 
 use glam::{DVec3, Vec3};
 use serde::{Deserialize, Serialize};
@@ -248,9 +252,8 @@ pub fn shade_with(
     lights: &[Light],
     atten: impl Fn(usize, &Light, f64) -> f64,
 ) -> DVec3 {
-    let albedo = material.base_color.as_dvec3();
-    let spec_norm = (SHININESS + 8.0) / (8.0 * std::f64::consts::PI);
-    let mut out = DVec3::ZERO;
+    let base = material.base_color.as_dvec3();
+    let mut out = material.emissive.as_dvec3();
     for (k, light) in lights.iter().enumerate() {
         let to_light = light.position.as_dvec3() - p;
         let d = to_light.length();
@@ -267,16 +270,11 @@ pub fn shade_with(
                 f64::from(cos_outer),
             ),
         };
-        let ndotl = n.dot(l).max(0.0);
-        if cone == 0.0 || ndotl == 0.0 {
+        if cone == 0.0 {
             continue;
         }
-        let h = (l + v).normalize_or_zero();
-        let brdf = albedo / std::f64::consts::PI
-            + DVec3::splat(
-                f64::from(material.specular) * spec_norm * n.dot(h).max(0.0).powf(SHININESS),
-            );
-        out += light.color.as_dvec3() * f64::from(light.intensity) * atten * cone * ndotl * brdf;
+        let f = crate::brdf::brdf_cos(&material.brdf, base, n, l, v);
+        out += light.color.as_dvec3() * f64::from(light.intensity) * atten * cone * f;
     }
     out
 }

@@ -1,52 +1,10 @@
-//! Geometry and materials: triangle primitives in world space, one material index each.
+//! Geometry: triangle primitives in world space, one material index each (materials are in
+//! [`crate::material`]).
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::{Camera, Light, SceneError};
-
-/// A material: only what the shading model reads (see [`crate::light`]), and its opacity.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Material {
-    /// Linear RGB diffuse albedo, each channel in [0, 1].
-    pub base_color: Vec3,
-    /// Weight of the Blinn-Phong lobe, in [0, 1].
-    pub specular: f32,
-    /// Opacity in [0, 1]: 1 is opaque; below 1 the surface is transparent, drawn after the
-    /// opaque ones, sorted back to front and blended over them with this weight (glTF's
-    /// `alphaMode: BLEND` and base colour alpha).
-    #[serde(default = "opaque")]
-    pub opacity: f32,
-}
-
-fn opaque() -> f32 {
-    1.0
-}
-
-impl Material {
-    /// An opaque material with the given albedo and specular weight.
-    pub const fn new(base_color: Vec3, specular: f32) -> Self {
-        Self {
-            base_color,
-            specular,
-            opacity: 1.0,
-        }
-    }
-
-    /// A transparent material (`opacity` below 1; 1 is opaque).
-    pub const fn transparent(base_color: Vec3, specular: f32, opacity: f32) -> Self {
-        Self {
-            base_color,
-            specular,
-            opacity,
-        }
-    }
-
-    /// Whether surfaces of this material are transparent (opacity below 1).
-    pub fn is_transparent(&self) -> bool {
-        self.opacity < 1.0
-    }
-}
+use crate::{Camera, Light, Material, SceneError};
 
 /// An indexed triangle list in world space with per-vertex normals and one material.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -142,6 +100,18 @@ impl Scene {
             .fold(Aabb::EMPTY, |b, &p| b.union_point(p))
     }
 
+    /// Gives the surfaces the material models `models` in turns
+    /// ([`crate::material::assign_models`]); none changes nothing.
+    pub fn assign_models(&mut self, models: &[crate::Model]) {
+        if models.is_empty() {
+            return;
+        }
+        let (primitives, materials) =
+            crate::material::assign_models(&self.primitives, &self.materials, models);
+        self.primitives = primitives;
+        self.materials = materials;
+    }
+
     /// Checks geometry, materials, lights and camera; the error names the first bad value.
     pub fn validate(&self) -> Result<(), SceneError> {
         if self.materials.is_empty() {
@@ -152,24 +122,7 @@ impl Scene {
             ));
         }
         for (i, m) in self.materials.iter().enumerate() {
-            let ok = m.base_color.is_finite()
-                && m.base_color.min_element() >= 0.0
-                && m.base_color.max_element() <= 1.0
-                && (0.0..=1.0).contains(&m.specular);
-            if !ok {
-                return Err(SceneError::invalid(
-                    format!("materials[{i}]"),
-                    format!("{m:?}"),
-                    "base_color channels and specular in [0, 1]",
-                ));
-            }
-            if !(0.0..=1.0).contains(&m.opacity) {
-                return Err(SceneError::invalid(
-                    format!("materials[{i}].opacity"),
-                    m.opacity,
-                    "an opacity in [0, 1] (1: opaque)",
-                ));
-            }
+            m.validate(&format!("materials[{i}]"))?;
         }
         for (i, p) in self.primitives.iter().enumerate() {
             if p.normals.len() != p.positions.len() {
@@ -227,31 +180,5 @@ impl Scene {
             l.validate(i)?;
         }
         self.camera.validate()
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// An opacity outside [0, 1] is an error naming the material, the value and the range;
-    /// a material written without one is opaque.
-    #[test]
-    fn opacity_outside_zero_to_one_is_rejected() {
-        let mut scene = crate::procedural::ProceduralScene::from_name("pillars")
-            .unwrap()
-            .build()
-            .unwrap();
-        for bad in [1.5, -0.1, f32::NAN] {
-            scene.materials[1].opacity = bad;
-            let e = scene.validate().unwrap_err().to_string();
-            assert!(
-                e.contains("materials[1].opacity") && e.contains("[0, 1]"),
-                "{bad}: {e}"
-            );
-        }
-        let m: Material = ron::from_str("(base_color: (0.5, 0.5, 0.5), specular: 0.1)").unwrap();
-        assert_eq!(m.opacity, 1.0);
-        assert!(!m.is_transparent());
     }
 }

@@ -41,7 +41,7 @@
 
 use glam::DVec3;
 
-use crate::light::{D_MIN, SHININESS};
+use crate::light::D_MIN;
 use crate::motion::pcg;
 use crate::{Light, Material};
 
@@ -81,17 +81,13 @@ pub fn pixel_class(x: u32, y: u32, n: u32) -> u32 {
     x % n + n * (y % n)
 }
 
-/// The largest BRDF times cosine of `materials` under the shading model
-/// (`crate::light::shade`): `max(base_colour) / pi + specular * (s + 8) / (8 pi)`, at least
-/// that of a white Lambertian surface where `materials` is empty.
+/// The largest BRDF times cosine of `materials` under their models, or a bound of it
+/// ([`crate::brdf::rho_max`]; Blinn-Phong's `max(base_colour) / pi + specular * (s + 8) / (8
+/// pi)`), at least that of a white Lambertian surface where `materials` is empty.
 pub fn rho_max(materials: &[Material]) -> f32 {
-    let spec = (SHININESS + 8.0) / (8.0 * std::f64::consts::PI);
     materials
         .iter()
-        .map(|m| {
-            f64::from(m.base_color.max_element()) / std::f64::consts::PI
-                + f64::from(m.specular) * spec
-        })
+        .map(|m| crate::brdf::rho_max(&m.brdf, m.base_color.as_dvec3()))
         .fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.max(b))))
         .unwrap_or(1.0 / std::f64::consts::PI) as f32
 }

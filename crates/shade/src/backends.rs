@@ -123,9 +123,9 @@ pub struct Renderer {
     /// MSAA or transparent surfaces: the depth culling reads, where lists are looked up off
     /// the depth buffer's samples.
     pub(crate) lookup_bounds: Option<LookupBounds>,
-    pub(crate) forward: wgpu::RenderPipeline,
+    pub(crate) forward: Vec<wgpu::RenderPipeline>,
     /// `shade.forward` over z-binning's lists.
-    pub(crate) forward_zbin: wgpu::RenderPipeline,
+    pub(crate) forward_zbin: Vec<wgpu::RenderPipeline>,
     /// `shade.forward_transparent` over transparent surfaces, blended (a list a bin, and
     /// z-binning's); forward's, and deferred's after its lighting.
     pub(crate) forward_transparent: [wgpu::RenderPipeline; 2],
@@ -281,11 +281,11 @@ impl Renderer {
                     enc,
                     timer,
                     "shade.gbuffer",
-                    if stored {
+                    std::slice::from_ref(if stored {
                         &self.gbuffer_stored
                     } else {
                         &self.gbuffer
-                    },
+                    }),
                     scene,
                     &targets
                         .gbuffer_targets(stored)
@@ -320,7 +320,7 @@ impl Renderer {
             enc,
             timer,
             "shade.naive",
-            &self.naive,
+            std::slice::from_ref(&self.naive),
             scene,
             &[targets.color_attachment(!transparent)],
             &targets.depth_view,
@@ -332,7 +332,7 @@ impl Renderer {
                 enc,
                 timer,
                 "shade.naive_transparent",
-                &self.naive_transparent,
+                std::slice::from_ref(&self.naive_transparent),
                 scene,
                 &[targets.color_attachment(true)],
                 &targets.depth_view,
@@ -394,7 +394,7 @@ impl Renderer {
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
         label: &str,
-        pipeline: &wgpu::RenderPipeline,
+        pipelines: &[wgpu::RenderPipeline],
         scene: &GpuScene,
         targets: &[(&wgpu::TextureView, Option<&wgpu::TextureView>)],
         depth: &wgpu::TextureView,
@@ -442,14 +442,26 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(pipeline);
         if let Some(group) = lists {
             pass.set_bind_group(1, group, &[]);
         }
-        if loads == Loads::Transparent {
-            scene.draw_transparent(&mut pass);
-        } else {
-            scene.draw(&mut pass);
+        // One pipeline draws every triangle; several (forward's, a material model each) draw
+        // the opaque triangles of a model each.
+        match pipelines {
+            [one] => {
+                pass.set_pipeline(one);
+                if loads == Loads::Transparent {
+                    scene.draw_transparent(&mut pass);
+                } else {
+                    scene.draw(&mut pass);
+                }
+            }
+            by_model => {
+                for (group, pipeline) in by_model.iter().enumerate() {
+                    pass.set_pipeline(pipeline);
+                    scene.draw_model(&mut pass, group);
+                }
+            }
         }
     }
 }

@@ -7,7 +7,7 @@ use manylights_gpu::lookup_bounds::{LookupBounds, bound_samples};
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::shaders::{
-    FRAME, LIGHT, SCENE, SCREEN, SHADING, ShaderDef, ShaderFile, VERTEX,
+    BRDF, FRAME, LIGHT, SCENE, SCREEN, SHADING, ShaderDef, ShaderFile, VERTEX,
 };
 use manylights_gpu::{GpuContext, GpuScene, shader_file};
 
@@ -23,6 +23,7 @@ pub const FORWARD: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BRDF,
         SHADING,
         VERTEX,
         GEOMETRY,
@@ -39,6 +40,7 @@ pub const GBUFFER: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BRDF,
         SHADING,
         VERTEX,
         shader_file!("render/gbuffer.wgsl"),
@@ -52,6 +54,7 @@ pub const DEFERRED: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BRDF,
         SHADING,
         GEOMETRY,
         LOOKUP,
@@ -69,6 +72,7 @@ pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BRDF,
         SHADING,
         GEOMETRY,
         LOOKUP,
@@ -147,20 +151,29 @@ impl Renderer {
                 pipeline::entry(3, compute, unfiltered),
             ],
         );
-        use pipeline::{DepthTest, raster, raster_msaa, target};
+        use pipeline::{DepthTest, raster, raster_msaa, raster_with, target};
         let fwd = FORWARD.create_samples(d, samples);
         let gb = GBUFFER.create(d);
         let g0 = &scene.layout;
+        // Forward: a pipeline a material model of the opaque triangles, each shading its model
+        // alone (MATERIAL_MODELS, brdf.wgsl), drawn a model at a time.
         let forward_with = |entry| {
-            raster_msaa(
-                d,
-                "shade.forward",
-                &fwd,
-                &[g0, &forward_lists],
-                Some((entry, &[target(HDR)])),
-                DepthTest::Equal,
-                samples,
-            )
+            scene
+                .opaque_models
+                .iter()
+                .map(|&(model, _)| {
+                    raster_with(
+                        d,
+                        "shade.forward",
+                        &fwd,
+                        &[g0, &forward_lists],
+                        Some((entry, &[target(HDR)])),
+                        DepthTest::Equal,
+                        samples,
+                        &[("MATERIAL_MODELS", f64::from(1u32 << model))],
+                    )
+                })
+                .collect::<Vec<_>>()
         };
         let forward = forward_with("fs_forward");
         let forward_zbin = forward_with("fs_forward_zbin");
@@ -226,12 +239,22 @@ impl Renderer {
             "shade.deferred",
             &[g0, &deferred_lists, &deferred_gbuffer],
         );
+        // Deferred: one lighting pass over every model of the opaque triangles, branching on
+        // each pixel's.
+        let models = [("MATERIAL_MODELS", f64::from(scene.opaque_model_mask()))];
+        let models = wgpu::PipelineCompilationOptions {
+            constants: &models,
+            ..Default::default()
+        };
+        let compute = |def: &wgpu::ShaderModule, entry| {
+            pipeline::compute_with(d, def, &def_layout, entry, &models)
+        };
         // With MSAA, one pass a form of lists (a list a bin or a tile, and z-binning's), the
         // position rebuilt; the stored position takes no MSAA (`render` says so).
         let (deferred, deferred_stored, deferred_zbin, deferred_tiles) = if samples > 1 {
             let def = DEFERRED_MSAA.create_samples(d, samples);
-            let bins = pipeline::compute(d, &def, &def_layout, "deferred_shade_msaa");
-            let zbin = pipeline::compute(d, &def, &def_layout, "deferred_shade_msaa_zbin");
+            let bins = compute(&def, "deferred_shade_msaa");
+            let zbin = compute(&def, "deferred_shade_msaa_zbin");
             (
                 bins.clone(),
                 bins.clone(),
@@ -241,12 +264,12 @@ impl Renderer {
         } else {
             let def = DEFERRED.create(d);
             (
-                pipeline::compute(d, &def, &def_layout, "deferred_shade"),
-                pipeline::compute(d, &def, &def_layout, "deferred_shade_stored"),
+                compute(&def, "deferred_shade"),
+                compute(&def, "deferred_shade_stored"),
                 ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
-                    .map(|entry| pipeline::compute(d, &def, &def_layout, entry)),
+                    .map(|entry| compute(&def, entry)),
                 ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
-                    .map(|entry| pipeline::compute(d, &def, &def_layout, entry)),
+                    .map(|entry| compute(&def, entry)),
             )
         };
         let transparent = scene.has_transparent();

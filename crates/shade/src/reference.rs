@@ -6,7 +6,7 @@
 
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
-use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
+use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
 
@@ -20,6 +20,7 @@ pub const SHADER: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BRDF,
         SHADING,
         VERTEX,
         shader_file!("render/reference.wgsl"),

@@ -241,7 +241,7 @@ impl ShadePass<'_> {
             enc,
             timer,
             "shade.forward_transparent",
-            &r.forward_transparent[usize::from(self.form == ListForm::ZBin)],
+            std::slice::from_ref(&r.forward_transparent[usize::from(self.form == ListForm::ZBin)]),
             self.scene,
             &[self.targets.color_attachment(true)],
             &self.targets.depth_view,
