@@ -13,7 +13,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 13] = [
+const SHIPPED: [&str; 14] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -27,6 +27,7 @@ const SHIPPED: [&str; 13] = [
     "msaa-transparency",
     "infinite-range",
     "infinite-range-1m",
+    "material-variety",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -171,8 +172,8 @@ fn every_documented_ron_example_parses() {
 /// A tiny variant of every shipped experiment (48 x 27 at most, one frame, at most 256 lights)
 /// runs end to end: every cell has a row, no false negatives anywhere, and a report. The two
 /// infinite-range experiments (156 cells, each stochastic one rendered for several seeds) run
-/// one cell in 13 and in 7 (a shard: every variant, and most radius rules, among them), so that
-/// the suite stays within its time.
+/// one cell in 13 and in 7 (a shard: every variant, and most radius rules, among them), and
+/// material variety one in 9, so that the suite stays within its time.
 #[test]
 fn a_tiny_variant_of_each_shipped_experiment_runs() {
     let ctx = common::gpu();
@@ -184,6 +185,9 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
         let shard = match name {
             "infinite-range" => Some((0, 13)),
             "infinite-range-1m" => Some((0, 7)),
+            // 56 cells: one in 9 has both settings, every variant, and 4 of the 7 model
+            // lists (the five mixed among them).
+            "material-variety" => Some((0, 9)),
             _ => None,
         };
         let options = RunOptions { shard, ..opts() };
@@ -200,6 +204,13 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                 r.cell
             );
             assert_eq!(r.dropped_lights, 0);
+            assert!(!r.materials.is_empty(), "{name} {}: no materials", r.cell);
+            assert!(
+                r.ns_per_light_eval.is_some_and(|ns| ns > 0.0)
+                    || r.lights_per_pixel_mean == Some(0.0),
+                "{name} {}: no shading time per light evaluated",
+                r.cell
+            );
             assert!(
                 r.gpu_ms_total.is_some_and(|t| t > 0.0),
                 "{name} {}: no GPU time",

@@ -24,6 +24,8 @@ pub(crate) struct PoseEval {
     pub(crate) metrics: Option<ListMetrics>,
     pub(crate) per_pixel: Vec<u32>,
     pub(crate) lights_per_pixel_mean: f64,
+    /// Covered pixels (samples with MSAA where the exact oracle counted them).
+    pub(crate) covered: u64,
     pub(crate) color: HdrImage,
     pub(crate) reference: Option<HdrImage>,
     /// The infinite-range reference (with accuracy).
@@ -232,6 +234,7 @@ pub(crate) fn evaluate(
         metrics,
         lights_per_pixel_mean: per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>()
             / covered.max(1) as f64,
+        covered,
         per_pixel,
         nonfinite: o.color.non_finite_count() as u64,
         color: o.color,

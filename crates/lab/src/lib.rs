@@ -15,6 +15,7 @@ mod evaluate;
 pub mod experiment;
 pub mod export;
 mod figures;
+mod forward_deferred;
 mod noise;
 pub mod reference_cache;
 pub mod report;

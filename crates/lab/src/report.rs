@@ -53,7 +53,7 @@ pub fn utc(secs: u64) -> String {
     format!("{year:04}-{month:02}-{d:02} {h:02}:{m:02} UTC")
 }
 
-fn fmt_opt(v: Option<f64>, digits: usize) -> String {
+pub(crate) fn fmt_opt(v: Option<f64>, digits: usize) -> String {
     v.map_or("-".into(), |x| {
         if x.is_infinite() {
             "inf".into()
@@ -90,106 +90,6 @@ fn moving_lights_summary(by_lights: &BTreeMap<u64, Vec<&Row>>) -> Vec<String> {
                 ms(copy)
             ));
         }
-    }
-    out
-}
-
-/// MSAA and glass, where cells ran at several sample counts or with transparent surfaces: for
-/// each (glass, strategy, sample count), forward against deferred (the frame, what it is spent
-/// on, the memory of the multisampled targets, the error against the reference at that count),
-/// and what going from one sample to several cost each.
-fn msaa_summary(rows: &[Row]) -> Vec<String> {
-    let mut out = Vec::new();
-    if !rows.iter().any(|r| r.msaa > 1 || r.transparent) {
-        return out;
-    }
-    let find = |backend: &str, strategy: &str, n: u32, glass: bool| {
-        rows.iter().find(|r| {
-            r.backend == backend && r.strategy == strategy && r.msaa == n && r.transparent == glass
-        })
-    };
-    let mib = |b: u64| b as f64 / (1024.0 * 1024.0);
-    let mut strategies: Vec<&str> = rows.iter().map(|r| r.strategy.as_str()).collect();
-    strategies.sort_unstable();
-    strategies.dedup();
-    let mut counts: Vec<u32> = rows.iter().map(|r| r.msaa).collect();
-    counts.sort_unstable();
-    counts.dedup();
-    for glass in [false, true] {
-        for s in &strategies {
-            for &n in &counts {
-                let (Some(f), Some(d)) =
-                    (find("forward", s, n, glass), find("deferred", s, n, glass))
-                else {
-                    continue;
-                };
-                // The frame in steady state where both have it (geometry, then culling and
-                // shading, each back to back after the clock has risen); otherwise the frames
-                // timed one at a time.
-                let steady = f.gpu_ms_frame_steady.is_some() && d.gpu_ms_frame_steady.is_some();
-                let time = |r: &Row| {
-                    if steady {
-                        (
-                            r.gpu_ms_frame_steady,
-                            r.gpu_ms_geometry_steady,
-                            r.gpu_ms_cull_shade,
-                        )
-                    } else {
-                        let cull_shade = r.gpu_ms_shade.map(|t| t + r.gpu_ms_cull.unwrap_or(0.0));
-                        (r.gpu_ms_total, r.gpu_ms_prepass, cull_shade)
-                    }
-                };
-                let ((Some(ft), fg, fs), (Some(dt), dg, ds)) = (time(f), time(d)) else {
-                    continue;
-                };
-                let scale = |b: &str, t: f64| {
-                    (n > 1)
-                        .then(|| find(b, s, 1, glass).and_then(|r| time(r).0))
-                        .flatten()
-                        .map_or(String::new(), |t1| {
-                            format!(", {:.1}x its time at one sample", t / t1)
-                        })
-                };
-                out.push(format!(
-                    "{} {}, {s}: {} is faster, {:.2} ms a frame for forward (geometry and bounds {} ms, culling and shading {} ms{}) against {:.2} ms for deferred (G-buffer and bounds {} ms, culling and lighting{} {} ms{}){}. Multisampled targets: forward {:.0} MiB, deferred {:.0} MiB (its G-buffer {:.0} MiB); lists {:.0} and {:.0} KiB. Against the reference: forward PSNR {} dB, deferred mean FLIP {}{}.",
-                    if n > 1 { format!("MSAA {n}") } else { "One sample".to_owned() },
-                    if glass { "with glass" } else { "without glass" },
-                    if ft <= dt { "forward" } else { "deferred" },
-                    ft,
-                    fmt_opt(fg, 2),
-                    fmt_opt(fs, 2),
-                    scale("forward", ft),
-                    dt,
-                    fmt_opt(dg, 2),
-                    if glass { " and its forward pass over the glass" } else { "" },
-                    fmt_opt(ds, 2),
-                    scale("deferred", dt),
-                    if steady {
-                        " in steady state (`gpu_ms_frame_steady`)"
-                    } else {
-                        ""
-                    },
-                    mib(f.msaa_target_bytes),
-                    mib(d.msaa_target_bytes.max(d.gbuffer_bytes)),
-                    mib(d.gbuffer_bytes),
-                    f.list_bytes as f64 / 1024.0,
-                    d.list_bytes as f64 / 1024.0,
-                    fmt_opt(f.psnr_db, 1),
-                    fmt_opt(d.flip_mean, 4),
-                    if n > 1 {
-                        " (deferred lights an edge's samples apart, the reference each fragment once)"
-                    } else {
-                        ""
-                    },
-                ));
-            }
-        }
-    }
-    if rows
-        .iter()
-        .any(|r| r.transparent && r.backend == "deferred")
-    {
-        out.push("Deferred cannot shade transparent surfaces: it shades them with a forward pass over the same lists after its lighting (`shade.forward_transparent`), as engines do.".into());
     }
     out
 }
@@ -246,7 +146,8 @@ fn summary(rows: &[Row]) -> Vec<String> {
     }
     out.extend(crate::budgets::findings(rows));
     out.extend(moving_lights_summary(&by_lights));
-    out.extend(msaa_summary(rows));
+    out.extend(crate::forward_deferred::msaa_summary(rows));
+    out.extend(crate::forward_deferred::materials_summary(rows));
     let fns: Vec<&Row> = rows
         .iter()
         .filter(|r| r.false_negatives.unwrap_or(0) > 0)

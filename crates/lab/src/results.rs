@@ -231,6 +231,21 @@ pub struct Row {
     /// (`references/`): a sweep computes it once per view.
     #[serde(default)]
     pub reference_infinite_cached: Option<bool>,
+    /// The material models of the frame's surfaces (the config's `materials`, or the scene's
+    /// own), their names joined by `+` in the order of their ids (`blinn_phong+ggx+...`).
+    #[serde(default)]
+    pub materials: String,
+    /// Covered pixels (samples with MSAA) of the first pose: with `lights_per_pixel_mean`,
+    /// the lights the frame evaluates.
+    #[serde(default)]
+    pub covered_pixels: Option<u64>,
+    /// The shading passes' time in steady state (`passes_steady`'s `shade.*` passes other
+    /// than the G-buffer's and the MSAA expansion; naive forward's `shade.naive`) per light
+    /// evaluated (`lights_per_pixel_mean` times `covered_pixels`), ns: what one evaluation of
+    /// the frame's material models costs, the per-pixel reject included. Empty where the
+    /// passes were not timed apart.
+    #[serde(default)]
+    pub ns_per_light_eval: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s and
@@ -352,6 +367,9 @@ pub const COLUMNS: &[&str] = &[
     "noise_infinite",
     "temporal_flicker_mean",
     "reference_infinite_cached",
+    "materials",
+    "covered_pixels",
+    "ns_per_light_eval",
 ];
 
 fn one() -> u32 {

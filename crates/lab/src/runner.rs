@@ -227,6 +227,31 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
     Ok((scene, own))
 }
 
+/// The material models of the scene's surfaces, by id, their names joined by `+`.
+fn frame_models(scene: &Scene) -> String {
+    let models: std::collections::BTreeSet<manylights_scene::Model> = scene
+        .primitives
+        .iter()
+        .map(|p| scene.materials[p.material as usize].brdf.model())
+        .collect();
+    crate::cells::models_label(&models.into_iter().collect::<Vec<_>>())
+}
+
+/// The shading passes' steady-state time (`shade.*` but the G-buffer and the MSAA expansion)
+/// per light evaluated, ns; none where they were not timed apart or nothing was evaluated.
+fn ns_per_light_eval(passes: &[(String, f64)], evaluated: f64) -> Option<f64> {
+    let ms: f64 = passes
+        .iter()
+        .filter(|(label, _)| {
+            label.starts_with("shade.")
+                && label != "shade.gbuffer"
+                && label != "shade.deferred_expand"
+        })
+        .map(|(_, ms)| ms)
+        .sum();
+    (ms > 0.0 && evaluated > 0.0).then(|| ms * 1e6 / evaluated)
+}
+
 /// Pass category for the result columns.
 pub(crate) fn category(label: &str) -> &'static str {
     if label.starts_with("prepass.") || label == "shade.gbuffer" {
@@ -568,6 +593,16 @@ fn run_cell(
         noise_infinite: noise.and_then(|n| n.noise),
         temporal_flicker_mean: noise.and_then(|n| n.flicker_mean),
         reference_infinite_cached: first.infinite_cached,
+        materials: frame_models(&scene),
+        covered_pixels: Some(first.covered),
+        ns_per_light_eval: ns_per_light_eval(
+            &first.steady_passes,
+            if c.backend == Backend::NaiveForward {
+                light_count as f64
+            } else {
+                first.lights_per_pixel_mean
+            } * first.covered as f64,
+        ),
         lights_needed_per_pixel_mean: max_f64(&|e| {
             e.metrics.as_ref().map(|m| m.lights_needed_per_pixel_mean)
         }),
