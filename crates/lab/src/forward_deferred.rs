@@ -109,8 +109,10 @@ pub(crate) fn msaa_summary(rows: &[Row]) -> Vec<String> {
 
 /// Material variety, where cells ran with several `materials` values: for each setting (scene,
 /// lights, resolution) and strategy, forward against deferred in steady state at each list of
-/// models (in the order of their counts), where deferred's advantage turns if it does, and each
-/// model's shading time per light evaluated from the cells that shade it alone.
+/// models (in the order of their counts), where deferred's advantage turns if it does; what
+/// mixing costs each backend (a mixed frame's shading pass against the mean of its models'
+/// passes alone); and each model's shading time per light evaluated from the cells that shade
+/// it alone.
 pub(crate) fn materials_summary(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     let mut kinds: Vec<&str> = rows.iter().map(|r| r.materials.as_str()).collect();
@@ -119,7 +121,6 @@ pub(crate) fn materials_summary(rows: &[Row]) -> Vec<String> {
     if kinds.len() < 2 {
         return out;
     }
-    let frame = |r: &Row| r.gpu_ms_frame_steady;
     let mut groups: BTreeMap<(String, u64, u32, u32, &str), Vec<&Row>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.msaa == 1 && !r.transparent) {
         groups
@@ -137,15 +138,16 @@ pub(crate) fn materials_summary(rows: &[Row]) -> Vec<String> {
         let mut lists: Vec<&str> = rs.iter().map(|r| r.materials.as_str()).collect();
         lists.sort_by_key(|m| (m.matches('+').count(), *m));
         lists.dedup();
-        let pick = |backend: &str, m: &str| {
+        let row = |backend: &str, m: &str| {
             rs.iter()
                 .find(|r| r.backend == backend && r.materials == m)
-                .and_then(|r| frame(r))
+                .copied()
         };
+        let frame = |backend: &str, m: &str| row(backend, m).and_then(|r| r.gpu_ms_frame_steady);
         let mut parts = Vec::new();
         let mut turns = None;
         for m in &lists {
-            let (Some(f), Some(d)) = (pick("forward", m), pick("deferred", m)) else {
+            let (Some(f), Some(d)) = (frame("forward", m), frame("deferred", m)) else {
                 continue;
             };
             parts.push(format!("{m} {f:.3} against {d:.3} ms ({:.2}x)", f / d));
@@ -162,28 +164,53 @@ pub(crate) fn materials_summary(rows: &[Row]) -> Vec<String> {
             None => "deferred's advantage does not turn at these counts".to_owned(),
         };
         out.push(format!(
-            "Material variety, {scene} ({lights} lights, {w} x {h}), {strategy}: the frame in steady state, forward against deferred (forward / deferred): {}; {verdict}.",
+            "Material variety, {scene} ({lights} lights, {w} x {h}), {strategy}: the frame in steady state, forward against deferred (forward / deferred): {}; {verdict}. Forward shades in a raster pass, deferred in a compute pass: on a GPU with little raster hardware (H100, H200) the ratio measures that hardware as much as the backends, and what mixing costs each (below) is the comparison that carries over.",
             parts.join("; ")
         ));
+        // The shading pass alone: what the models cost.
+        let shade = |backend: &str, m: &str| row(backend, m).and_then(shade_ms);
+        let mut mixing = Vec::new();
+        for m in lists.iter().filter(|m| m.contains('+')) {
+            for backend in ["forward", "deferred"] {
+                let alone: Option<Vec<f64>> = m.split('+').map(|one| shade(backend, one)).collect();
+                if let (Some(mixed), Some(alone)) = (shade(backend, m), alone) {
+                    let mean = alone.iter().sum::<f64>() / alone.len() as f64;
+                    mixing.push(format!("{backend} {m} {:.2}x", mixed / mean));
+                }
+            }
+        }
+        if !mixing.is_empty() {
+            out.push(format!(
+                "What mixing models costs, {scene}, {strategy}: the shading pass of the mixed frame against the mean of its models' passes alone (1.00x: nothing; deferred's lighting branches a pixel at a time, forward draws a model at a time): {}.",
+                mixing.join("; ")
+            ));
+        }
         let mut costs = Vec::new();
         for m in lists.iter().filter(|m| !m.contains('+')) {
-            let ns = |backend: &str| {
-                rs.iter()
-                    .find(|r| r.backend == backend && r.materials == *m)
+            let ps = |backend: &str| {
+                row(backend, m)
                     .and_then(|r| r.ns_per_light_eval)
+                    .map_or("-".to_owned(), |ns| format!("{:.1}", ns * 1e3))
             };
-            costs.push(format!(
-                "{m} {} (forward) and {} (deferred)",
-                fmt_opt(ns("forward"), 2),
-                fmt_opt(ns("deferred"), 2)
-            ));
+            costs.push(format!("{m} {} and {}", ps("forward"), ps("deferred")));
         }
         if !costs.is_empty() {
             out.push(format!(
-                "Shading time per light evaluated (ns, `ns_per_light_eval`), {scene}, {strategy}, each model alone: {}.",
+                "Shading time per light evaluated (ps, forward and deferred; `ns_per_light_eval` times 1,000), {scene}, {strategy}, each model alone: {}.",
                 costs.join("; ")
             ));
         }
     }
     out
+}
+
+/// A cell's shading passes in steady state (forward's or deferred's), ms.
+fn shade_ms(r: &Row) -> Option<f64> {
+    let ms: f64 = r
+        .passes_steady
+        .iter()
+        .filter(|(label, _)| *label == "shade.forward" || *label == "shade.deferred")
+        .map(|(_, ms)| ms)
+        .sum();
+    (ms > 0.0).then_some(ms)
 }

@@ -636,4 +636,64 @@ mod tests {
         assert!((blended - 0.4).abs() < 1e-6, "{blended}");
         assert_eq!(opaque, 1.0);
     }
+
+    /// The material is glTF's metallic-roughness model with the file's factors (the default
+    /// roughness 1 where the file gives none), its texture counted as unread; a factor out of
+    /// range is an error that names the material and the glTF field.
+    #[test]
+    fn metallic_roughness_factors_are_read_and_checked() {
+        let src = std::fs::read_to_string(
+            "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Embedded/BoxTextured.gltf",
+        )
+        .expect("install assimp-testmodels (as .ci/run does)");
+        let dir = std::env::temp_dir().join(format!("manylights-pbr-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // The factors go in the pbrMetallicRoughness object; the emission beside it.
+        let edit = |pbr: &str| {
+            src.replace("\"metallicFactor\": 0.0", pbr).replace(
+                "\"name\": \"Texture\"",
+                "\"name\": \"Texture\", \"emissiveFactor\": [0.5, 0.25, 0.0]",
+            )
+        };
+        let load_text = |text: String, name: &str| {
+            let path = dir.join(name);
+            std::fs::write(&path, text).unwrap();
+            load(&path, &GltfOptions::default())
+        };
+        let (scene, report) = load_text(
+            edit("\"metallicFactor\": 0.25, \"roughnessFactor\": 0.6"),
+            "good.gltf",
+        )
+        .unwrap();
+        let m = scene.materials[scene.primitives[0].material as usize];
+        assert_eq!(
+            m.brdf,
+            Brdf::Ggx {
+                metallic: 0.25,
+                roughness: 0.6
+            }
+        );
+        assert_eq!(m.emissive, Vec3::new(0.5, 0.25, 0.0));
+        assert_eq!(report.unread_textures, 1);
+        for (pbr, field) in [
+            (
+                "\"metallicFactor\": 1.5",
+                "pbrMetallicRoughness.metallicFactor = 1.5",
+            ),
+            (
+                "\"metallicFactor\": 0.0, \"roughnessFactor\": -0.2",
+                "pbrMetallicRoughness.roughnessFactor = -0.2",
+            ),
+        ] {
+            let e = load_text(edit(pbr), "bad.gltf").unwrap_err().to_string();
+            assert!(
+                e.contains("bad.gltf")
+                    && e.contains("materials[0] (\"Texture\")")
+                    && e.contains(field)
+                    && e.contains("[0, 1]"),
+                "{e}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -11,9 +11,10 @@
 //! `alpha` follows from an error bound. One light's falloff estimate has variance
 //! `f (alpha - f) <= alpha^2 / 4`, so its radiance at a pixel has a standard deviation of at most
 //! `exposure * intensity * max(colour) * rho_max * alpha / 2`, with `rho_max` the largest value
-//! of BRDF times cosine of the scene's materials under this project's shading model (Lambert
-//! plus the normalised Blinn-Phong lobe: `max(base_colour) / pi + specular * (s + 8) / (8 pi)`,
-//! not Lambert's `1 / pi` alone). Bounding it by `error` gives
+//! of BRDF times cosine of the scene's materials, or a bound of it ([`crate::brdf::rho_max`]:
+//! for Blinn-Phong `max(base_colour) / pi + specular * (s + 8) / (8 pi)`, not Lambert's `1 / pi`
+//! alone; for GGX the distribution's peak times the visibility's, `1 / (2 pi alpha^3)`, which
+//! makes glossy materials' ranges long). Bounding it by `error` gives
 //! `alpha = 2 error / (exposure * intensity * max(colour) * rho_max)`, clamped to at most
 //! `1 / D_MIN^2` (the falloff's largest value: above it the estimate would not be unbiased
 //! inside `D_MIN`).
