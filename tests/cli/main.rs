@@ -99,6 +99,27 @@ fn bad_light_values_name_the_value() {
 }
 
 #[test]
+fn bad_material_models_list_the_valid_ones() {
+    rejects(
+        &["--materials", "phong"],
+        2,
+        &[
+            "'phong'",
+            "blinn-phong",
+            "ggx",
+            "sheen",
+            "clear-coat",
+            "wrap",
+        ],
+    );
+    rejects(
+        &["--materials", "ggx,sheen,ggx"],
+        1,
+        &["--materials names ggx twice"],
+    );
+}
+
+#[test]
 fn bad_resolutions_name_the_value_and_the_limit() {
     rejects(&["--width", "0"], 2, &["'0'", "1..=65536"]);
     rejects(&["--height", "0"], 2, &["'0'", "1..=65536"]);

@@ -12,15 +12,17 @@ use manylights_shade::{Backend, ReferenceRenderer, Renderer};
 
 use super::{common, naive_against, scene, within_tolerance};
 
-/// Forward, deferred and the stored-position deferred, over a tile strategy (deferred's tile
-/// path), clusters (a list a bin) and z-binning (its workgroup walk), and naive forward: within
-/// tolerance of the reference, with every model in the frame and with GGX alone.
+/// Forward, deferred and the stored-position deferred over every strategy (deferred's tile path,
+/// clusters' list a bin, z-binning's workgroup walk), and naive forward: within tolerance of the
+/// reference, with every model in the frame and with GGX alone.
 #[test]
 fn every_material_model_and_backend_matches_the_reference() {
     let ctx = common::gpu();
     let (w, h) = (64, 48);
     let strategies = [
         Strategy::tiled_gather(16),
+        Strategy::TiledScatter { tile_size: 8 },
+        Strategy::depth_mask(16),
         Strategy::Clustered {
             tile_size: 16,
             slices: 16,
