@@ -62,6 +62,33 @@ fn plane_hit(camera: &Camera, w: u32, h: u32, x: u32, y: u32) -> Option<DVec3> {
         .filter(|p| p.x.abs() < 9.9 && p.z.abs() < 9.9)
 }
 
+/// Each pixel whose centre's ray meets the plane, with the hit and the shading model there in
+/// f64 (windowed falloff, the scene's first material), and the largest value.
+fn f64_on_plane(scene: &Scene, w: u32, h: u32) -> (f64, Vec<(u32, u32, DVec3, DVec3)>) {
+    let camera = &scene.camera;
+    let eye = camera.position.as_dvec3();
+    let (mut peak, mut cases) = (0.0f64, Vec::new());
+    for y in 0..h {
+        for x in 0..w {
+            let Some(p) = plane_hit(camera, w, h, x, y) else {
+                continue;
+            };
+            let v = (eye - p).normalize();
+            let want = shade(
+                p,
+                DVec3::Y,
+                v,
+                &scene.materials[0],
+                &scene.lights,
+                Range::Windowed,
+            );
+            peak = peak.max(want.max_element());
+            cases.push((x, y, p, want));
+        }
+    }
+    (peak, cases)
+}
+
 /// Every material model (and an emission) over the plane against the model in f64 at each
 /// pixel's exact ray hit, within the same 1e-3 of the peak as the Blinn-Phong test below.
 #[test]
@@ -74,7 +101,6 @@ fn every_material_model_matches_f64() {
     );
     let camera = Camera::perspective(Vec3::new(0.0, 6.0, 6.0), Vec3::ZERO, 60.0, 0.1, 50.0);
     let (w, h) = (48, 32);
-    let eye = camera.position.as_dvec3();
     for (brdf, emissive) in [
         (
             Brdf::Ggx {
@@ -115,25 +141,8 @@ fn every_material_model_matches_f64() {
             ..scene.materials[0]
         };
         let frame = render(&scene, w, h);
-        let (mut peak, mut cases) = (0.0f64, Vec::new());
-        for y in 0..h {
-            for x in 0..w {
-                if let Some(p) = plane_hit(&camera, w, h, x, y) {
-                    let v = (eye - p).normalize();
-                    let want = shade(
-                        p,
-                        DVec3::Y,
-                        v,
-                        &scene.materials[0],
-                        &scene.lights,
-                        Range::Windowed,
-                    );
-                    peak = peak.max(want.max_element());
-                    cases.push((x, y, want));
-                }
-            }
-        }
-        for (x, y, want) in cases {
+        let (peak, cases) = f64_on_plane(&scene, w, h);
+        for (x, y, _, want) in cases {
             let got = frame.color.at(x, y);
             let got = DVec3::new(got[0].into(), got[1].into(), got[2].into());
             let err = (got - want).abs().max_element();
@@ -168,25 +177,7 @@ fn point_light_above_plane_matches_closed_form() {
     let (w, h) = (96, 64);
     let frame = render(&scene, w, h);
     let eye = camera.position.as_dvec3();
-    let mut peak = 0.0f64;
-    let mut cases = Vec::new();
-    for y in 0..h {
-        for x in 0..w {
-            let Some(p) = plane_hit(&camera, w, h, x, y) else {
-                continue;
-            };
-            let expected = shade(
-                p,
-                DVec3::Y,
-                (eye - p).normalize(),
-                &scene.materials[0],
-                &scene.lights,
-                Range::Windowed,
-            );
-            peak = peak.max(expected.max_element());
-            cases.push((x, y, p, expected));
-        }
-    }
+    let (peak, cases) = f64_on_plane(&scene, w, h);
     assert!(
         cases.len() > (w * h / 2) as usize,
         "the plane should cover most of the image"

@@ -44,9 +44,24 @@ fn interleaved_stochastic_cells_match_their_reference_with_no_false_negatives() 
         assert_eq!(r.radius_rule, "stochastic", "{cell}");
         assert_eq!(r.false_negatives.unwrap_or(0), 0, "{cell}: false negatives");
         let flip = r.flip_mean.expect("the same-draw reference");
-        // Forward shades each pixel's list as the reference shades every light; deferred
-        // rebuilds the surface point from the depth (the tolerance of every deferred cell).
-        let tolerance = if r.backend == "deferred" { 1e-3 } else { 1e-6 };
+        // Forward shades each pixel's list as the reference shades every light, in the same
+        // order (bit for bit) but for z-binning's, summed in depth order: its rounding differs,
+        // and where it moves a pixel across a level of the 8-bit image FLIP compares, FLIP
+        // sees it (measured 7.4e-5 at interleave 3), while the HDR values agree to rounding
+        // (PSNR). Deferred rebuilds the surface point from the depth (the tolerance of every
+        // deferred cell).
+        let tolerance = match (r.backend.as_str(), r.strategy.as_str()) {
+            ("deferred", _) => 1e-3,
+            (_, "zbin") => {
+                let psnr = r.psnr_db.unwrap_or(f64::INFINITY);
+                assert!(
+                    psnr >= 100.0,
+                    "{cell}: PSNR {psnr} dB against the same draws"
+                );
+                2e-4
+            }
+            _ => 1e-6,
+        };
         assert!(
             flip <= tolerance,
             "{cell}: mean FLIP {flip} against the same draws"

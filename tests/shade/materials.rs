@@ -4,13 +4,13 @@
 //! at the models' edges (grazing views, lights at the surface, roughness and metalness 0 and 1).
 
 use glam::Vec3;
-use manylights_cull::{CullSettings, Slicing, Strategy};
+use manylights_cull::{CullSettings, Strategy};
 use manylights_gpu::GpuScene;
 use manylights_scene::{Aabb, Brdf, Camera, Light, Material, Model, Primitive, Scene};
 use manylights_shade::accuracy::compare;
 use manylights_shade::{Backend, ReferenceRenderer, Renderer};
 
-use super::{common, naive_against, scene, within_tolerance};
+use super::{common, naive_against, scene, strategies, within_tolerance};
 
 /// Forward, deferred and the stored-position deferred over every strategy (deferred's tile path,
 /// clusters' list a bin, z-binning's workgroup walk), and naive forward: within tolerance of the
@@ -19,23 +19,7 @@ use super::{common, naive_against, scene, within_tolerance};
 fn every_material_model_and_backend_matches_the_reference() {
     let ctx = common::gpu();
     let (w, h) = (64, 48);
-    let strategies = [
-        Strategy::tiled_gather(16),
-        Strategy::TiledScatter { tile_size: 8 },
-        Strategy::depth_mask(16),
-        Strategy::Clustered {
-            tile_size: 16,
-            slices: 16,
-            slicing: Slicing::Exponential,
-            skip_empty: true,
-            ordered: true,
-        },
-        Strategy::ZBin {
-            tile_size: 8,
-            bins: 64,
-            slicing: Slicing::Exponential,
-        },
-    ];
+    let strategies = strategies();
     for models in [Model::ALL.to_vec(), vec![Model::Ggx]] {
         let mut s = scene("atrium");
         s.assign_models(&models);

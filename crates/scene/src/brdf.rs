@@ -87,6 +87,17 @@ pub fn brdf_cos(brdf: &Brdf, base: DVec3, n: DVec3, l: DVec3, v: DVec3) -> DVec3
     // (1 - v.h)^5 negative with it.
     let nh = n.dot(h).clamp(0.0, 1.0);
     let vh = v.dot(h).clamp(0.0, 1.0);
+    let ggx_of = |metallic: f32, roughness: f32| {
+        ggx(
+            base,
+            f64::from(metallic),
+            f64::from(roughness),
+            nl,
+            nv,
+            nh,
+            vh,
+        )
+    };
     let f = match *brdf {
         Brdf::BlinnPhong { specular } => {
             let norm = (SHININESS + 8.0) / (8.0 * PI);
@@ -95,15 +106,7 @@ pub fn brdf_cos(brdf: &Brdf, base: DVec3, n: DVec3, l: DVec3, v: DVec3) -> DVec3
         Brdf::Ggx {
             metallic,
             roughness,
-        } => ggx(
-            base,
-            f64::from(metallic),
-            f64::from(roughness),
-            nl,
-            nv,
-            nh,
-            vh,
-        ),
+        } => ggx_of(metallic, roughness),
         Brdf::Sheen { roughness, sheen } => {
             let a = alpha(f64::from(roughness));
             base / PI + sheen.as_dvec3() * (d_charlie(nh, a) * v_neubelt(nl, nv))
@@ -114,18 +117,10 @@ pub fn brdf_cos(brdf: &Brdf, base: DVec3, n: DVec3, l: DVec3, v: DVec3) -> DVec3
             coat,
             coat_roughness,
         } => {
-            let under = ggx(
-                base,
-                f64::from(metallic),
-                f64::from(roughness),
-                nl,
-                nv,
-                nh,
-                vh,
-            );
             let ac = alpha(f64::from(coat_roughness));
             let fc = f64::from(coat) * f_schlick(DVec3::splat(F0_DIELECTRIC), vh).x;
-            under * (1.0 - fc) + DVec3::splat(fc * d_ggx(nh, ac) * v_smith(nl, nv, ac))
+            ggx_of(metallic, roughness) * (1.0 - fc)
+                + DVec3::splat(fc * d_ggx(nh, ac) * v_smith(nl, nv, ac))
         }
         Brdf::Wrap { .. } => unreachable!("returned above"),
     };
