@@ -209,9 +209,16 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
             } else {
                 base.join(p)
             };
-            gltf_import::load(&path, &GltfOptions::default())
-                .map_err(|e| LabError::Other(e.to_string()))?
-                .0
+            let (scene, report) = gltf_import::load(&path, &GltfOptions::default())
+                .map_err(|e| LabError::Other(e.to_string()))?;
+            if report.unread_textures > 0 {
+                tracing::warn!(
+                    "{}: {} material textures are not read (their factors are)",
+                    path.display(),
+                    report.unread_textures
+                );
+            }
+            scene
         }
     };
     scene.assign_models(&c.materials);
