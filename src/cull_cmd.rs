@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use manylights_cull::{CullOutput, CullSettings, Culler, Strategy, heatmap, metrics};
-use manylights_gpu::lookup_bounds::{LookupBounds, bound_samples};
+use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
 use manylights_gpu::{GpuContext, GpuScene};
@@ -105,10 +105,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     }
     ctx.submit_and_wait(enc, "depth prepass")?;
     let (culler, cull_depth) = match &bounds {
-        Some((_, t)) => (
-            Culler::with_bounds(&ctx, &gpu_scene, samples, bound_samples(samples)),
-            &t.bounds,
-        ),
+        Some((_, t)) => (Culler::with_bounds(&ctx, &gpu_scene, samples), &t.bounds),
         None => (Culler::with_samples(&ctx, &gpu_scene, samples), &depth),
     };
     let settings = CullSettings {
@@ -124,10 +121,14 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     )?;
     let timings = timer.read(&ctx)?;
     let repeated = if args.repeat > 0 {
-        // The culling passes of the run above (the raster passes are the prepass and bounds).
+        // The culling passes of the run above (the others are the prepass, a raster pass, and
+        // the lookup bounds', `prepass.*`).
         let passes = timings.as_ref().map(|t| {
             t.iter()
-                .filter(|p| p.kind == manylights_gpu::timing::PassKind::Compute)
+                .filter(|p| {
+                    p.kind == manylights_gpu::timing::PassKind::Compute
+                        && !p.label.starts_with("prepass.")
+                })
                 .count() as u32
         });
         repeated_timings(

@@ -29,14 +29,19 @@ fn validate(def: &ShaderDef) -> naga::Module {
 /// `def` composed over a depth buffer of `samples` samples a pixel.
 fn validate_samples(def: &ShaderDef, samples: u32) -> naga::Module {
     let src = manylights_gpu::shaders::with_samples(def.compose(), samples, def.name);
-    let module = naga::front::wgsl::parse_str(&src)
-        .unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
+    validate_source(def.name, &src)
+}
+
+/// The WGSL `src` of shader `name`, parsed and validated.
+fn validate_source(name: &str, src: &str) -> naga::Module {
+    let module = naga::front::wgsl::parse_str(src)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(src)));
     naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::all(),
     )
     .validate(&module)
-    .unwrap_or_else(|e| panic!("{}: {}", def.name, e.emit_to_string(&src)));
+    .unwrap_or_else(|e| panic!("{name}: {}", e.emit_to_string(src)));
     module
 }
 
@@ -79,12 +84,41 @@ fn every_culling_shader_validates_over_multisampled_depth() {
     }
 }
 
+/// Every culling shader that reads depth also over lookup bounds, as `Culler::with_bounds`
+/// builds it: `depth_input_bounds.wgsl` in place of `depth_input.wgsl`, two "samples" a pixel.
+#[test]
+fn every_culling_shader_validates_over_lookup_bounds() {
+    use manylights_cull::shaders::{BOUNDS_SWAPS, DEPTH_INPUT};
+    let mut over_bounds = 0;
+    for def in manylights_cull::shaders::SHADERS {
+        if !def.files.iter().any(|f| f.path == DEPTH_INPUT.path) {
+            continue;
+        }
+        let src =
+            manylights_gpu::shaders::with_samples(def.compose_swapped(BOUNDS_SWAPS), 2, def.name);
+        assert!(
+            src.contains("var depth_tex: texture_2d<f32>;") && !src.contains("texture_depth"),
+            "{}: still reads a depth texture",
+            def.name
+        );
+        validate_source(def.name, &src);
+        over_bounds += 1;
+    }
+    assert!(over_bounds >= 3, "{over_bounds} culling shaders read depth");
+}
+
 #[test]
 fn every_wgsl_file_is_used_by_a_shader() {
-    let used: BTreeSet<String> = all_shaders()
+    let mut used: BTreeSet<String> = all_shaders()
         .iter()
         .flat_map(|d| d.files.iter().map(|f| f.path.to_owned()))
         .collect();
+    // Files built in place of others: validated in those builds.
+    used.extend(
+        manylights_cull::shaders::BOUNDS_SWAPS
+            .iter()
+            .map(|(_, to)| to.path.to_owned()),
+    );
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let mut stack = vec![root.clone()];
     let mut found = Vec::new();

@@ -1,19 +1,18 @@
-// prepass.depth_bounds (manylights_gpu::lookup_bounds): the depth texture culling takes its
-// bounds from, of BOUND_SAMPLES samples a pixel, drawn by one triangle over the screen: with
-// MSAA twice, each run once a pixel (fs_bounds_far into every sample, then fs_bounds_near into
-// sample 0), as run once a sample each sample would repeat the pixel's loads; at one sample a
-// pixel once, run once a sample (fs_bounds). A covered pixel's first sample holds the nearest depth at which a fragment drawn there is looked up, its other samples the farthest (kept short of the
-// far plane, which means no surface); an uncovered pixel's samples stay at 1.0. Bounds over
-// every sample of a tile or a cluster then hold every depth a forward pass looks a list up at:
+// prepass.depth_bounds (manylights_gpu::lookup_bounds): a compute pass, a thread a pixel, that
+// writes the lookup bounds culling reads (shaders/cull/common/depth_input_bounds.wgsl): a covered
+// pixel's nearest depth at which a fragment drawn there is looked up into x and its farthest
+// into y (kept short of the far plane, which means no surface); an uncovered pixel's both 1.0.
+// Bounds over every pixel of a tile or a cluster then hold every depth a forward pass looks a
+// list up at:
 // - the opaque surface's: with MSAA forward the depth ranges its visible fragments keep
 //   (depth_range.wgsl, RANGES: a fragment is looked up at its centroid); otherwise its depth
-//   (deferred lighting looks up at its samples and, where one fragment covers them all, at
-//   the pixel centre, between their depths);
+//   samples (deferred lighting looks up at its samples and, where one fragment covers them
+//   all, at the pixel centre, between their depths);
 // - with TRANSPARENT surfaces, the nearest and the farthest transparent fragment's (their
 //   depth ranges over their pixels, as depth_range.wgsl's passes keep them): a pixel behind
 //   glass needs lights from the glass to the opaque surface (AMD's TiledLighting11), and a
 //   pixel of glass over the background is covered.
-// DEPTH_SAMPLES, RANGES and TRANSPARENT are set by the host, and the textures declared
+// DEPTH_SAMPLES, RANGES and TRANSPARENT are set by the host, and the textures it reads declared
 // multisampled where DEPTH_SAMPLES is more than one.
 const DEPTH_SAMPLES: u32 = 1u;
 const RANGES: bool = false;
@@ -23,6 +22,7 @@ const TRANSPARENT: bool = false;
 @group(0) @binding(1) var depth: texture_depth_2d;
 @group(0) @binding(2) var near: texture_depth_2d;
 @group(0) @binding(3) var far: texture_depth_2d;
+@group(0) @binding(4) var bounds: texture_storage_2d<rg32float, write>;
 
 // A pixel's nearest and farthest lookup depth, and whether anything covers it (z: 1.0 or
 // 0.0).
@@ -61,25 +61,12 @@ fn bound_depth(b: vec3<f32>, bound: f32) -> f32 {
     return select(1.0, clamp(bound, 0.0, below_far), b.z > 0.0);
 }
 
-// Run once a sample: where the frame has one sample a pixel (its loads are then few, and one
-// draw writes each of the 4 samples once).
-@fragment
-fn fs_bounds(@builtin(position) pos: vec4<f32>, @builtin(sample_index) k: u32) -> @builtin(frag_depth) f32 {
-    let b = pixel_bounds(vec2<u32>(pos.xy));
-    return bound_depth(b, select(b.y, b.x, k == 0u));
-}
-
-// Run once a pixel in two draws of one pass: the farthest into every sample, then (the
-// pipeline's sample mask 1) the nearest into sample 0. Where the frame has several samples a
-// pixel, whose loads each sample would repeat.
-@fragment
-fn fs_bounds_far(@builtin(position) pos: vec4<f32>) -> @builtin(frag_depth) f32 {
-    let b = pixel_bounds(vec2<u32>(pos.xy));
-    return bound_depth(b, b.y);
-}
-
-@fragment
-fn fs_bounds_near(@builtin(position) pos: vec4<f32>) -> @builtin(frag_depth) f32 {
-    let b = pixel_bounds(vec2<u32>(pos.xy));
-    return bound_depth(b, b.x);
+@compute @workgroup_size(8, 8)
+fn depth_bounds(@builtin(global_invocation_id) id: vec3<u32>) {
+    let size = textureDimensions(bounds);
+    if any(id.xy >= size) {
+        return;
+    }
+    let b = pixel_bounds(id.xy);
+    textureStore(bounds, id.xy, vec4<f32>(bound_depth(b, b.x), bound_depth(b, b.y), 0.0, 0.0));
 }

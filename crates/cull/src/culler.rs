@@ -13,7 +13,7 @@ use crate::blocks::tile_masks::TileMasks;
 use crate::frame::{self, Done, Frame, Repeat};
 use crate::layout::{GpuCullParams, LINE_THREADS_MIN};
 use crate::per_pixel::PerPixel;
-use crate::program::Program;
+use crate::program::{DepthInput, Program};
 use crate::radix_sort::RadixSort;
 use crate::record::{ListPass, Recorder};
 use crate::scan::Scan;
@@ -29,10 +29,10 @@ pub struct Culler {
     /// Samples a pixel of the depth buffers its oracle checks (MSAA where more than one): the
     /// exact oracle checks every sample.
     pub samples: u32,
-    /// Samples a pixel of the depth textures it culls over: `samples`, or more where it culls
-    /// over lookup bounds (`Culler::with_bounds`). Tile and cluster depth bounds are taken over
-    /// every sample.
-    pub bound_samples: u32,
+    /// Whether it culls over lookup bounds (`Culler::with_bounds`: a pixel's nearest and
+    /// farthest lookup depth) in place of depth buffers of `samples`. Tile and cluster depth
+    /// bounds are taken over every sample, or over both bounds.
+    pub lookup_bounds: bool,
     /// Layout of group 1 for list consumers (shading, `cull.lights_per_pixel`): 0 params,
     /// 1 ranges, 2 indices, 3 depth, 4 a per-pixel output, 5 a pass-specific uniform.
     pub lists_layout: wgpu::BindGroupLayout,
@@ -97,7 +97,7 @@ impl Culler {
     /// As [`Culler::new`]; with `subgroups` false, gather keeps its portable scans even where
     /// the device has subgroup operations (both paths give the same lists; the tests run both).
     pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
-        Self::build(ctx, scene, subgroups, 1, 1)
+        Self::build(ctx, scene, subgroups, 1, false)
     }
 
     /// As [`Culler::new`], for depth buffers of `samples` samples a pixel (MSAA; see
@@ -105,20 +105,16 @@ impl Culler {
     /// bounds, so lists stay conservative for every sample. Its lists are for culling and the
     /// exact oracle; the shading backends read lists of single-sample depth buffers.
     pub fn with_samples(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
-        Self::build(ctx, scene, true, samples, samples)
+        Self::build(ctx, scene, true, samples, false)
     }
 
-    /// As [`Culler::with_samples`], culling over depth textures of `bound_samples` samples a
-    /// pixel (lookup bounds: `manylights_gpu::lookup_bounds`, a pixel's nearest and farthest
-    /// lookup depths in its samples) while its oracle and per-pixel consumers read depth
-    /// buffers of `samples`.
-    pub fn with_bounds(
-        ctx: &GpuContext,
-        scene: &GpuScene,
-        samples: u32,
-        bound_samples: u32,
-    ) -> Self {
-        Self::build(ctx, scene, true, samples, bound_samples)
+    /// As [`Culler::with_samples`], culling over lookup bounds
+    /// (`manylights_gpu::lookup_bounds`: a texture of
+    /// [`BOUNDS_FORMAT`](manylights_gpu::lookup_bounds::BOUNDS_FORMAT), a pixel's nearest and
+    /// farthest lookup depth) while its oracle and per-pixel consumers read depth buffers of
+    /// `samples`.
+    pub fn with_bounds(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
+        Self::build(ctx, scene, true, samples, true)
     }
 
     fn build(
@@ -126,10 +122,19 @@ impl Culler {
         scene: &GpuScene,
         subgroups: bool,
         samples: u32,
-        bound_samples: u32,
+        lookup_bounds: bool,
     ) -> Self {
         let d = &ctx.device;
-        let mut entries = vec![entry(0, UNIFORM), entry(1, depth_texture(bound_samples))];
+        let depth = if lookup_bounds {
+            wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            }
+        } else {
+            depth_texture(samples)
+        };
+        let mut entries = vec![entry(0, UNIFORM), entry(1, depth)];
         entries.extend((2..=11).map(|b| entry(b, storage(false))));
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.group1"),
@@ -146,7 +151,12 @@ impl Culler {
                 entry(5, UNIFORM),
             ],
         });
-        let program = |def| Program::new(d, def, bound_samples, &scene.layout, &layout);
+        let input = if lookup_bounds {
+            DepthInput::Bounds
+        } else {
+            DepthInput::Samples(samples)
+        };
+        let program = |def| Program::new(d, def, input, &scene.layout, &layout);
         let depth = program(&DEPTH_BOUNDS);
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
         // One module for all of gather's pipelines, and the blocks' whose passes it holds.
@@ -167,7 +177,7 @@ impl Culler {
             per_pixel: PerPixel::new(d, samples, &scene.layout, &lists_layout),
             layout,
             samples,
-            bound_samples,
+            lookup_bounds,
             lists_layout,
             gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,

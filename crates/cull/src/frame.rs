@@ -50,8 +50,13 @@ impl<'a> Frame<'a> {
             params,
             size: (depth.width(), depth.height()),
             params_buf,
+            // A depth buffer's depth aspect, or lookup bounds (a colour texture) whole.
             depth_view: depth.create_view(&wgpu::TextureViewDescriptor {
-                aspect: wgpu::TextureAspect::DepthOnly,
+                aspect: if depth.format().is_depth_stencil_format() {
+                    wgpu::TextureAspect::DepthOnly
+                } else {
+                    wgpu::TextureAspect::All
+                },
                 ..Default::default()
             }),
             tile_depth: storage_buf(ctx, Buf::TileDepth.name(), tiles * 16),

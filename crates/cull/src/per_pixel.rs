@@ -6,7 +6,7 @@
 
 use manylights_gpu::{GpuContext, GpuError, GpuScene, pipeline, readback};
 
-use crate::program::Program;
+use crate::program::{DepthInput, Program};
 use crate::shaders::{EXACT, EXACT_TRANSPARENT, LIGHTS_PER_PIXEL};
 use crate::{CullOutput, Culler};
 
@@ -27,7 +27,15 @@ impl PerPixel {
         scene_layout: &wgpu::BindGroupLayout,
         lists_layout: &wgpu::BindGroupLayout,
     ) -> Self {
-        let program = |def| Program::new(d, def, samples, scene_layout, lists_layout);
+        let program = |def| {
+            Program::new(
+                d,
+                def,
+                DepthInput::Samples(samples),
+                scene_layout,
+                lists_layout,
+            )
+        };
         Self {
             lights_per_pixel: program(&LIGHTS_PER_PIXEL).pipeline(d, "lights_per_pixel"),
             depth_samples: program(&LIGHTS_PER_PIXEL).pipeline(d, "depth_samples"),

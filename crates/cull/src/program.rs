@@ -4,6 +4,17 @@
 use manylights_gpu::pipeline;
 use manylights_gpu::shaders::ShaderDef;
 
+use crate::shaders::BOUNDS_SWAPS;
+
+/// What culling reads its depth from (`shaders/cull/common/depth_input.wgsl`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum DepthInput {
+    /// The depth buffer, of this many samples a pixel.
+    Samples(u32),
+    /// Lookup bounds (`manylights_gpu::lookup_bounds`), read as two samples a pixel.
+    Bounds,
+}
+
 /// A compiled shader over bind group 0 (the scene) and one group 1.
 pub(crate) struct Program {
     module: wgpu::ShaderModule,
@@ -11,17 +22,20 @@ pub(crate) struct Program {
 }
 
 impl Program {
-    /// `def` compiled over a depth buffer of `samples` samples a pixel, over `scene_layout`
-    /// and `group1`.
+    /// `def` compiled over `input`, over `scene_layout` and `group1`.
     pub fn new(
         d: &wgpu::Device,
         def: &ShaderDef,
-        samples: u32,
+        input: DepthInput,
         scene_layout: &wgpu::BindGroupLayout,
         group1: &wgpu::BindGroupLayout,
     ) -> Self {
         Self {
-            module: def.create_samples(d, samples),
+            module: match input {
+                DepthInput::Samples(samples) => def.create_samples(d, samples),
+                // Two "samples": the nearest and the farthest.
+                DepthInput::Bounds => def.create_swapped(d, 2, BOUNDS_SWAPS),
+            },
             layout: pipeline::layout(d, def.name, &[scene_layout, group1]),
         }
     }

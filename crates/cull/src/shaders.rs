@@ -18,6 +18,13 @@ pub const GEOMETRY: ShaderFile = shader_file!("cull/common/geometry.wgsl");
 pub const LISTS: ShaderFile = shader_file!("cull/common/lists.wgsl");
 /// The pixel-to-list lookup of every list consumer.
 pub const LOOKUP: ShaderFile = shader_file!("cull/common/lookup.wgsl");
+/// The depth culling reads (`depth_at`, binding 1): the depth buffer's samples.
+pub const DEPTH_INPUT: ShaderFile = shader_file!("cull/common/depth_input.wgsl");
+/// [`DEPTH_INPUT`]'s place where culling reads lookup bounds (`Culler::with_bounds`).
+pub const DEPTH_INPUT_BOUNDS: ShaderFile = shader_file!("cull/common/depth_input_bounds.wgsl");
+/// The files that take another's place where culling reads lookup bounds (`Culler::with_bounds`;
+/// the shader tests validate every culling shader so built).
+pub const BOUNDS_SWAPS: &[(ShaderFile, ShaderFile)] = &[(DEPTH_INPUT, DEPTH_INPUT_BOUNDS)];
 /// Tile masks and their fill ([`crate::blocks::tile_masks`]; composed into gather's module,
 /// which holds the workgroup scan the fill uses; tiled scatter's count pass that sets them is in
 /// its own module).
@@ -38,6 +45,7 @@ pub const DEPTH_BOUNDS: ShaderDef = ShaderDef {
         LIGHT,
         SCENE,
         GEOMETRY,
+        DEPTH_INPUT,
         shader_file!("cull/common/depth_bounds.wgsl"),
         TILE_DEPTH,
     ],
@@ -53,6 +61,7 @@ pub const TILED_GATHER: ShaderDef = ShaderDef {
         LIGHT,
         SCENE,
         GEOMETRY,
+        DEPTH_INPUT,
         LISTS,
         shader_file!("cull/tiled_gather/tiled_gather.wgsl"),
         TILE_MASKS,
@@ -71,6 +80,7 @@ pub const TILED_GATHER_SUBGROUP: ShaderDef = ShaderDef {
         LIGHT,
         SCENE,
         GEOMETRY,
+        DEPTH_INPUT,
         LISTS,
         shader_file!("cull/tiled_gather/tiled_gather.wgsl"),
         TILE_MASKS,
@@ -101,6 +111,7 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
         LIGHT,
         SCENE,
         GEOMETRY,
+        DEPTH_INPUT,
         LISTS,
         shader_file!("cull/clustered/clustered.wgsl"),
         shader_file!("cull/clustered/cluster_tiles.wgsl"),

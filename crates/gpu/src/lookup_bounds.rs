@@ -12,15 +12,16 @@
 //!   the lights that reach them (failure case 16). Their nearest and farthest depth ranges go
 //!   into two depth targets (`prepass.transparent_near`, `prepass.transparent_far`).
 //!
-//! `prepass.depth_bounds` (`shaders/common/depth_bounds.wgsl`) then writes a multisampled depth
-//! texture whose samples hold each covered pixel's nearest and farthest lookup depth: of the
-//! frame's sample count, or 4 where the frame has one sample a pixel (two values a pixel need
-//! two samples; every device has 4). Culling reads that texture (`Culler::with_bounds`); the
-//! shading passes test against the depth buffer, and the exact oracle checks the depth buffer's
-//! samples and the transparent fragments.
+//! `prepass.depth_bounds` (`shaders/common/depth_bounds.wgsl`, a compute pass) then writes each
+//! covered pixel's nearest and farthest lookup depth into an `Rg32Float` texture
+//! ([`BOUNDS_FORMAT`]). Culling reads that texture (`Culler::with_bounds`) in place of the depth
+//! buffer; the shading passes test against the depth buffer, and the exact oracle checks the
+//! depth buffer's samples and the transparent fragments. (The pass was a full-screen raster pass
+//! writing a multisampled depth texture until the H100 measured raster work there ~35x dearer
+//! than compute: docs/bench/HISTORY.md.)
 
 use crate::prepass::depth_target_msaa;
-use crate::shaders::{FRAME, SCREEN, ShaderDef, VERTEX};
+use crate::shaders::{FRAME, ShaderDef, VERTEX};
 use crate::timing::GpuTimer;
 use crate::{GpuContext, GpuScene, pipeline, shader_file};
 
@@ -39,14 +40,12 @@ pub const PREPASS_RANGES: ShaderDef = ShaderDef {
 pub const BOUNDS: ShaderDef = ShaderDef {
     name: "prepass.depth_bounds",
     consts: &[],
-    files: &[SCREEN, shader_file!("common/depth_bounds.wgsl")],
+    files: &[shader_file!("common/depth_bounds.wgsl")],
 };
 
-/// The samples a pixel of the bounds texture for frames of `samples`: two values a pixel need
-/// two samples, and every device has 4.
-pub fn bound_samples(samples: u32) -> u32 {
-    if samples > 1 { samples } else { 4 }
-}
+/// Format of the lookup bounds culling reads: a pixel's nearest lookup depth in x, its farthest
+/// in y.
+pub const BOUNDS_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
 
 /// The pipelines of the lookup bounds for one sample count and scene.
 pub struct LookupBounds {
@@ -54,10 +53,8 @@ pub struct LookupBounds {
     prepass: Option<wgpu::RenderPipeline>,
     /// Transparent surfaces: their nearest and farthest depth.
     transparent: Option<[wgpu::RenderPipeline; 2]>,
-    /// `prepass.depth_bounds` over the depth alone, and over the prepass's depth ranges: each
-    /// its draws (with MSAA the farthest depth into every sample, then the nearest into sample
-    /// 0; at one sample one draw, a sample at a time).
-    bounds: [Vec<wgpu::RenderPipeline>; 2],
+    /// `prepass.depth_bounds` over the depth alone, and over the prepass's depth ranges.
+    bounds: [wgpu::ComputePipeline; 2],
     layout: wgpu::BindGroupLayout,
     samples: u32,
 }
@@ -67,9 +64,8 @@ pub struct BoundsTargets {
     ranges: wgpu::TextureView,
     near: wgpu::TextureView,
     far: wgpu::TextureView,
-    /// The depth texture culling reads ([`bound_samples`] samples a pixel).
+    /// The lookup bounds culling reads ([`BOUNDS_FORMAT`]).
     pub bounds: wgpu::Texture,
-    bounds_view: wgpu::TextureView,
     group: wgpu::BindGroup,
     /// Bytes of its targets.
     pub bytes: u64,
@@ -116,29 +112,39 @@ impl LookupBounds {
                 ),
             ]
         });
-        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let compute = wgpu::ShaderStages::COMPUTE;
         let multisampled = samples > 1;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("prepass.depth_bounds"),
             entries: &[
                 pipeline::entry(
                     0,
-                    fragment,
+                    compute,
                     wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Float { filterable: false },
                         view_dimension: wgpu::TextureViewDimension::D2,
                         multisampled,
                     },
                 ),
-                pipeline::entry(1, fragment, pipeline::depth_texture(samples)),
-                pipeline::entry(2, fragment, pipeline::depth_texture(samples)),
-                pipeline::entry(3, fragment, pipeline::depth_texture(samples)),
+                pipeline::entry(1, compute, pipeline::depth_texture(samples)),
+                pipeline::entry(2, compute, pipeline::depth_texture(samples)),
+                pipeline::entry(3, compute, pipeline::depth_texture(samples)),
+                pipeline::entry(
+                    4,
+                    compute,
+                    wgpu::BindingType::StorageTexture {
+                        access: wgpu::StorageTextureAccess::WriteOnly,
+                        format: BOUNDS_FORMAT,
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                    },
+                ),
             ],
         });
-        // With MSAA, one pass over the forward prepass's depth ranges and one over the depth
-        // alone (deferred's G-buffer keeps no ranges); without, over the depth.
+        let pipeline_layout = pipeline::layout(d, BOUNDS.name, &[&layout]);
+        // With MSAA, one pipeline over the forward prepass's depth ranges and one over the
+        // depth alone (deferred's G-buffer keeps no ranges); without, over the depth.
         let bounds_with = |ranges: bool| {
-            let mut source = BOUNDS.source();
+            let mut source = BOUNDS.source(BOUNDS.files);
             if multisampled {
                 source = source
                     .replace("texture_2d<f32>", "texture_multisampled_2d<f32>")
@@ -162,29 +168,7 @@ impl LookupBounds {
                 label: Some(BOUNDS.name),
                 source: wgpu::ShaderSource::Wgsl(source.into()),
             });
-            // With MSAA the farthest into every sample, then the nearest into sample 0, each
-            // once a pixel; at one sample a pixel (a pixel's loads few) once a sample.
-            let draws: &[(&str, u64)] = if multisampled {
-                &[("fs_bounds_far", !0), ("fs_bounds_near", 1)]
-            } else {
-                &[("fs_bounds", !0)]
-            };
-            draws
-                .iter()
-                .map(|&(entry, mask)| {
-                    pipeline::screen(
-                        d,
-                        "prepass.depth_bounds",
-                        &module,
-                        &[&layout],
-                        entry,
-                        &[],
-                        true,
-                        bound_samples(samples),
-                        mask,
-                    )
-                })
-                .collect::<Vec<_>>()
+            pipeline::compute(d, &module, &pipeline_layout, "depth_bounds")
         };
         let bounds = [bounds_with(false), bounds_with(multisampled)];
         Self {
@@ -240,8 +224,15 @@ impl LookupBounds {
         } else {
             (depth.clone(), depth.clone())
         };
-        let bound_samples = bound_samples(samples);
-        let bounds = depth_target_msaa(ctx, width, height, bound_samples);
+        let bounds = pipeline::texture_2d(
+            d,
+            "prepass.depth_bounds",
+            (width, height),
+            BOUNDS_FORMAT,
+            wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+        );
         let group = pipeline::group(
             d,
             "prepass.depth_bounds",
@@ -251,23 +242,21 @@ impl LookupBounds {
                 wgpu::BindingResource::TextureView(&depth_only(depth)),
                 wgpu::BindingResource::TextureView(&depth_only(&near)),
                 wgpu::BindingResource::TextureView(&depth_only(&far)),
+                wgpu::BindingResource::TextureView(&view(&bounds)),
             ],
         );
         let pixels = u64::from(width) * u64::from(height);
         let bytes = pixels
-            * (u64::from(bound_samples) * 4
-                + if with_ranges {
-                    u64::from(samples) * 8
-                } else {
-                    0
-                }
-                + if transparent {
-                    u64::from(samples) * 8
-                } else {
-                    0
-                });
+            * (8 + if with_ranges {
+                u64::from(samples) * 8
+            } else {
+                0
+            } + if transparent {
+                u64::from(samples) * 8
+            } else {
+                0
+            });
         BoundsTargets {
-            bounds_view: view(&bounds),
             bounds,
             ranges,
             near: view(&near),
@@ -338,19 +327,15 @@ impl LookupBounds {
                 scene.draw_transparent(&mut pass);
             }
         }
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("prepass.depth_bounds"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(depth_attachment(&targets.bounds_view, 1.0)),
-            timestamp_writes: timer.render_pass("prepass.depth_bounds"),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_bind_group(0, &targets.group, &[]);
-        for pipeline in &self.bounds[usize::from(ranges && self.prepass.is_some())] {
-            pass.set_pipeline(pipeline);
-            pass.draw(0..3, 0..1);
-        }
+        let (width, height) = (targets.bounds.width(), targets.bounds.height());
+        pipeline::dispatch(
+            enc,
+            timer,
+            BOUNDS.name,
+            &self.bounds[usize::from(ranges && self.prepass.is_some())],
+            &[&targets.group],
+            (width.div_ceil(8), height.div_ceil(8)),
+        );
     }
 }
 

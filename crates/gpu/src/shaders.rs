@@ -121,6 +121,31 @@ impl ShaderDef {
     /// The full WGSL text, each file taken from `dir` (laid out like `shaders/`) where it exists
     /// there, and embedded otherwise. Errors name the file that could not be read.
     pub fn compose_from(&self, dir: Option<&Path>) -> Result<String, String> {
+        self.compose_files(self.files, dir)
+    }
+
+    /// [`ShaderDef::compose`] with each file `from` of `swaps` replaced by its `to` (a variant
+    /// of a shared building block, such as what culling reads its depth from).
+    pub fn compose_swapped(&self, swaps: &[(ShaderFile, ShaderFile)]) -> String {
+        self.compose_files(&self.swapped(swaps), None)
+            .expect("embedded shader files need no reading")
+    }
+
+    /// This shader's files with each file `from` of `swaps` replaced by its `to`.
+    fn swapped(&self, swaps: &[(ShaderFile, ShaderFile)]) -> Vec<ShaderFile> {
+        self.files
+            .iter()
+            .map(|f| {
+                swaps
+                    .iter()
+                    .find(|(from, _)| from.path == f.path)
+                    .map_or(*f, |&(_, to)| to)
+            })
+            .collect()
+    }
+
+    /// The WGSL text of `files` after the prelude, each taken from `dir` where it exists there.
+    fn compose_files(&self, files: &[ShaderFile], dir: Option<&Path>) -> Result<String, String> {
         let mut s = wgsl_prelude();
         for c in self.consts {
             match c {
@@ -128,7 +153,7 @@ impl ShaderDef {
                 WgslConst::F32(name, v) => s.push_str(&format!("const {name}: f32 = {v:?};\n")),
             }
         }
-        for f in self.files {
+        for f in files {
             let replaced = dir.map(|d| d.join(f.path)).filter(|p| p.is_file());
             s.push_str("\n// ---- shaders/");
             s.push_str(f.path);
@@ -168,20 +193,34 @@ impl ShaderDef {
     /// As [`ShaderDef::create`]; and for `samples` > 1 when the definition has no
     /// `DEPTH_SAMPLES`.
     pub fn create_samples(&self, device: &wgpu::Device, samples: u32) -> wgpu::ShaderModule {
-        let source = with_samples(self.source(), samples, self.name);
+        self.create_swapped(device, samples, &[])
+    }
+
+    /// [`ShaderDef::create_samples`] with each file `from` of `swaps` replaced by its `to` (see
+    /// [`ShaderDef::compose_swapped`]).
+    pub fn create_swapped(
+        &self,
+        device: &wgpu::Device,
+        samples: u32,
+        swaps: &[(ShaderFile, ShaderFile)],
+    ) -> wgpu::ShaderModule {
+        let source = with_samples(self.source(&self.swapped(swaps)), samples, self.name);
         device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(self.name),
             source: wgpu::ShaderSource::Wgsl(source.into()),
         })
     }
 
-    /// The WGSL text, with the files of `MANYLIGHTS_SHADER_DIR` where it is set.
-    pub(crate) fn source(&self) -> String {
+    /// The WGSL text of `files` (this shader's, or a variant's: [`ShaderDef::swapped`]), with
+    /// the files of `MANYLIGHTS_SHADER_DIR` where it is set.
+    pub(crate) fn source(&self, files: &[ShaderFile]) -> String {
         match override_dir() {
-            Ok(None) => self.compose(),
+            Ok(None) => self
+                .compose_files(files, None)
+                .expect("embedded shader files need no reading"),
             Ok(Some(dir)) => {
                 static WARNED: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
-                for f in self.files {
+                for f in files {
                     let p = dir.join(f.path);
                     if p.is_file() {
                         let mut warned = WARNED.lock().unwrap_or_else(|e| e.into_inner());
@@ -193,7 +232,7 @@ impl ShaderDef {
                         }
                     }
                 }
-                self.compose_from(Some(dir))
+                self.compose_files(files, Some(dir))
                     .unwrap_or_else(|e| panic!("{SHADER_DIR_ENV}: {e}"))
             }
             Err(e) => panic!("{e}"),

@@ -210,6 +210,14 @@ impl Renderer {
             self.encode_naive(&mut enc, &mut timer, scene, &targets);
             timer.resolve(&mut enc);
             ctx.submit_and_wait(enc, "naive forward")?;
+            if targets.bounds.is_some() {
+                // Not the naive frame's: what a culler measuring its lights needed reads
+                // (`ShadeOutput::cull_depth`), untimed.
+                let mut enc = ctx.encoder("lookup bounds");
+                let mut untimed = GpuTimer::new(ctx, 4);
+                self.encode_lookup_bounds(&mut enc, &mut untimed, scene, backend, &targets);
+                ctx.submit_and_wait(enc, "lookup bounds")?;
+            }
             None
         } else {
             let deferred = backend != Backend::Forward;
@@ -298,7 +306,22 @@ impl Renderer {
                 );
             }
         }
-        // The lookup bounds, after the geometry: what culling reads.
+        // The lookup bounds, after the geometry: what culling reads (naive forward culls
+        // nothing: `Renderer::render` makes its bounds outside its frame).
+        if backend != Backend::NaiveForward {
+            self.encode_lookup_bounds(enc, timer, scene, backend, targets);
+        }
+    }
+
+    /// Encodes the lookup bounds culling reads, where the renderer keeps them.
+    fn encode_lookup_bounds(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scene: &GpuScene,
+        backend: Backend,
+        targets: &Targets,
+    ) {
         if let (Some(b), Some(t)) = (&self.lookup_bounds, &targets.bounds) {
             // Forward's prepass kept the depth ranges (with MSAA); deferred's G-buffer did not.
             let ranges = backend == Backend::Forward && b.has_prepass();

@@ -3,7 +3,7 @@
 use manylights_cull::Culler;
 use manylights_cull::layout::CULL_CONSTS;
 use manylights_cull::shaders::{GEOMETRY, LOOKUP};
-use manylights_gpu::lookup_bounds::{LookupBounds, bound_samples};
+use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::shaders::{
@@ -299,7 +299,7 @@ impl Renderer {
             (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
         Self {
             culler: if lookup_bounds.is_some() {
-                Culler::with_bounds(ctx, scene, samples, bound_samples(samples))
+                Culler::with_bounds(ctx, scene, samples)
             } else {
                 Culler::with_samples(ctx, scene, samples)
             },

@@ -75,21 +75,14 @@ impl Targets {
             .create_view(&Default::default())
         });
         let depth = depth_target_msaa(ctx, width, height, samples);
-        // Culling over the lookup bounds: forward with MSAA or transparent surfaces; deferred
-        // with transparent surfaces (its lighting looks up at samples and pixel centres, between
-        // the samples' depths); naive forward only where its culler cannot read the depth
-        // buffer (one sample a pixel, culling over 4: the exact oracle's lists).
-        let uses_bounds = match backend {
-            Backend::Forward => true,
-            Backend::NaiveForward => samples == 1 && renderer.transparent,
-            Backend::Deferred | Backend::DeferredStoredPosition => renderer.transparent,
-        };
-        let bounds = match &renderer.lookup_bounds {
-            Some(b) if uses_bounds => {
-                Some(b.targets(ctx, (width, height), &depth, backend == Backend::Forward))
-            }
-            _ => None,
-        };
+        // Where the renderer has lookup bounds (MSAA, transparent surfaces), every backend culls
+        // over them: forward's over the depth ranges its prepass keeps (a fragment is looked up
+        // at its centroid), the others' over the depth samples (deferred lighting looks up at
+        // samples and pixel centres, between the samples' depths) and the glass.
+        let bounds = renderer
+            .lookup_bounds
+            .as_ref()
+            .map(|b| b.targets(ctx, (width, height), &depth, backend == Backend::Forward));
         let gbuffer = deferred.then(|| {
             let usage =
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
@@ -119,7 +112,11 @@ impl Targets {
             depth,
             gbuffer_bytes,
             gbuffer,
-            msaa_bytes: bounds.as_ref().map_or(0, |b| b.bytes)
+            // Naive forward's frame reads no lookup bounds (they are made for measuring it).
+            msaa_bytes: bounds
+                .as_ref()
+                .filter(|_| backend != Backend::NaiveForward)
+                .map_or(0, |b| b.bytes)
                 + match (samples > 1, deferred) {
                     (false, _) => 0,
                     // The G-buffer, depth included, and for glass the colour it is blended in.
@@ -140,7 +137,8 @@ impl Targets {
         }
     }
 
-    /// The depth culling reads: the depth buffer, or with MSAA forward its bounds.
+    /// The depth culling reads: the depth buffer, or the lookup bounds where the renderer has
+    /// them.
     pub(crate) fn cull_depth(&self) -> &wgpu::Texture {
         self.bounds.as_ref().map_or(&self.depth, |b| &b.bounds)
     }

@@ -78,7 +78,7 @@ fn slice_bounds(tile: vec2<u32>, li: u32) {
             var z0 = 1.0;
             var z1 = 0.0;
             for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-                let z = textureLoad(depth_tex, p, sample_k);
+                let z = depth_at(p, sample_k);
                 if z < 1.0 {
                     z0 = min(z0, z);
                     z1 = max(z1, z);

@@ -221,7 +221,6 @@ fn clustered_wide_args() {
 }
 
 // Marks the clusters that hold covered pixels, one thread per pixel.
-@group(1) @binding(1) var depth_tex: texture_depth_2d;
 
 // A workgroup's pixels: the least and greatest bin, and (with the box test) the nearest and
 // farthest depth as the occupancy stores them.
@@ -249,7 +248,7 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
     var z1 = 0.0;
     if inside {
         for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-            let z = textureLoad(depth_tex, p, sample_k);
+            let z = depth_at(p, sample_k);
             if z < 1.0 {
                 z0 = min(z0, z);
                 z1 = max(z1, z);

@@ -18,7 +18,6 @@
 // workgroups, each taking 64 DEPTH_TILES lights and a chunk of lines, and writing those words
 // of the tile lines and the lights' depth extents (store_light_lines); that path's list passes
 // compute the tiles' depth data themselves.
-@group(1) @binding(1) var depth_tex: texture_depth_2d;
 @group(1) @binding(2) var<storage, read_write> tile_depth: array<TileDepth>;
 @group(1) @binding(7) var<storage, read_write> block_queue: array<u32>;
 @group(1) @binding(9) var<storage, read_write> light_rects: array<vec2<u32>>;

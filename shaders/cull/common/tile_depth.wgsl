@@ -5,7 +5,7 @@
 // 1.0, the clear value) are not covered and need no lights, so they do not widen the bounds.
 // With MSAA every sample counts (DEPTH_SAMPLES a pixel; `covered` then counts samples), and
 // the mask holds every cell between a pixel's samples.
-// The module declares depth_tex (binding 1) and tile_depth (binding 2).
+// The module composes depth_input.wgsl (depth_at) and declares tile_depth (binding 2).
 
 var<workgroup> wg_tile_zmin: array<atomic<u32>, TILE_SLOTS>;
 var<workgroup> wg_tile_zmax: array<atomic<u32>, TILE_SLOTS>;
@@ -35,7 +35,7 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
             for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-                let z = textureLoad(depth_tex, p, sample_k);
+                let z = depth_at(p, sample_k);
                 if z < 1.0 {
                     let bits = bitcast<u32>(z);
                     own = vec3<u32>(min(own.x, bits), max(own.y, bits), own.z + 1u);
@@ -63,7 +63,7 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
                     var z0 = 1.0;
                     var z1 = 0.0;
                     for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-                        let z = textureLoad(depth_tex, p, sample_k);
+                        let z = depth_at(p, sample_k);
                         if z < 1.0 {
                             z0 = min(z0, z);
                             z1 = max(z1, z);

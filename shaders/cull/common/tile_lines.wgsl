@@ -35,8 +35,6 @@
 //
 // Binding 11 (declared as tile_masks in tile_masks.wgsl) holds the tile lines in these runs.
 
-@group(1) @binding(1) var depth_tex: texture_depth_2d;
-
 fn line_word(line: u32, w: u32) -> u32 {
     return tile_masks[line * mask_words() + w];
 }
