@@ -8,9 +8,31 @@
 // between its samples' (the culling bounds cover every sample, and clusters every slice between
 // a pixel's samples). At an edge: each sample at its own depth and standard position, looked up
 // at its depth, exactly the points the exact oracle checks.
+// With GLASS, shade.forward_transparent has drawn the transparent surfaces first into a layer
+// of their own (each sample: their contribution in rgb, their transmittance in alpha), and each
+// sample's colour is composited under it before the average, as the reference blends the glass
+// over each sample.
 @group(2) @binding(0) var gb_normal_depth: texture_multisampled_2d<f32>;
 @group(2) @binding(1) var gb_material: texture_multisampled_2d<u32>;
 @group(2) @binding(2) var out_color: texture_storage_2d<rgba32float, write>;
+@group(2) @binding(3) var glass: texture_multisampled_2d<f32>;
+
+override GLASS: bool = false;
+
+// Sample k's colour c (alpha: 1 where covered, 0 for background) under the glass layer.
+fn under_glass(pixel: vec2<u32>, k: u32, c: vec4<f32>) -> vec4<f32> {
+    let g = textureLoad(glass, pixel, k);
+    return vec4<f32>(g.rgb + g.a * c.rgb, 1.0 - g.a + g.a * c.a);
+}
+
+// The mean of the samples' colours each under the glass, where each has the colour c.
+fn all_under_glass(pixel: vec2<u32>, c: vec4<f32>) -> vec4<f32> {
+    var sum = vec4<f32>(0.0);
+    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+        sum += under_glass(pixel, k, c);
+    }
+    return sum / f32(DEPTH_SAMPLES);
+}
 
 // An entry point for each form of lists, as deferred.wgsl has.
 @compute @workgroup_size(8, 8)
@@ -59,26 +81,37 @@ fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
         edge = edge || any(textureLoad(gb_normal_depth, pixel, k) != g0) || textureLoad(gb_material, pixel, k).x != m0;
     }
     if covered == 0u {
-        textureStore(out_color, pixel, vec4<f32>(0.0));
+        var background = vec4<f32>(0.0);
+        if GLASS {
+            background = all_under_glass(pixel, background);
+        }
+        textureStore(out_color, pixel, background);
         return;
     }
     if !edge && covered == DEPTH_SAMPLES {
         let q = view_point(screen_ndc(vec2<f32>(pixel) + 0.5), g0.w);
         let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
-        let c = shade_point(pixel, ndc_depth(g0.w), p, g0.xyz, m0, zbin);
-        textureStore(out_color, pixel, vec4<f32>(c, 1.0));
+        var c = vec4<f32>(shade_point(pixel, ndc_depth(g0.w), p, g0.xyz, m0, zbin), 1.0);
+        if GLASS {
+            c = all_under_glass(pixel, c);
+        }
+        textureStore(out_color, pixel, c);
         return;
     }
-    var c = vec3<f32>(0.0);
+    var c = vec4<f32>(0.0);
     for (var k = 0u; k < DEPTH_SAMPLES; k++) {
         let z = textureLoad(depth_tex, pixel, k);
+        var ck = vec4<f32>(0.0);
         if z < 1.0 {
             let q = view_point(screen_ndc(vec2<f32>(pixel) + sample_position(k)), -linear_depth(z));
             let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
             let g = textureLoad(gb_normal_depth, pixel, k);
-            c += shade_point(pixel, z, p, g.xyz, textureLoad(gb_material, pixel, k).x, zbin);
+            ck = vec4<f32>(shade_point(pixel, z, p, g.xyz, textureLoad(gb_material, pixel, k).x, zbin), 1.0);
         }
+        if GLASS {
+            ck = under_glass(pixel, k, ck);
+        }
+        c += ck;
     }
-    let n = f32(DEPTH_SAMPLES);
-    textureStore(out_color, pixel, vec4<f32>(c / n, f32(covered) / n));
+    textureStore(out_color, pixel, c / f32(DEPTH_SAMPLES));
 }

@@ -127,59 +127,6 @@ pub fn raster_with(
     })
 }
 
-/// A pipeline drawing one triangle over the screen (`vs_screen` of [`crate::shaders::SCREEN`],
-/// which `module` must compose, then `draw(0..3, 0..1)`) at `samples` samples a pixel: its
-/// fragment entry `entry` into `targets`, and where `depth` the depth it returns written over
-/// the depth target whatever was there; only into the samples of `mask` (bit k: sample k;
-/// `!0`: all).
-#[expect(
-    clippy::too_many_arguments,
-    reason = "a pipeline: its shader, groups, targets, sample count and mask"
-)]
-pub fn screen(
-    device: &wgpu::Device,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    groups: &[&wgpu::BindGroupLayout],
-    entry: &str,
-    targets: &[Option<wgpu::ColorTargetState>],
-    depth: bool,
-    samples: u32,
-    mask: u64,
-) -> wgpu::RenderPipeline {
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(label),
-        layout: Some(&layout(device, label, groups)),
-        vertex: wgpu::VertexState {
-            module,
-            entry_point: Some("vs_screen"),
-            compilation_options: Default::default(),
-            buffers: &[],
-        },
-        primitive: PRIMITIVE,
-        depth_stencil: depth.then(|| wgpu::DepthStencilState {
-            format: DEPTH_FORMAT,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Always),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: wgpu::MultisampleState {
-            count: samples,
-            mask,
-            ..Default::default()
-        },
-        fragment: Some(wgpu::FragmentState {
-            module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            targets,
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
-}
-
 /// A colour target of `format` blending what a transparent surface draws over what is there:
 /// colour `src * a + dst * (1 - a)`, alpha (coverage) `a + dst * (1 - a)`, `a` the fragment's
 /// alpha (its opacity).
@@ -187,6 +134,25 @@ pub fn blended_target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetSt
     Some(wgpu::ColorTargetState {
         format,
         blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+        write_mask: wgpu::ColorWrites::ALL,
+    })
+}
+
+/// A colour target of `format` that keeps what is blended over it as a layer: colour blended
+/// as [`blended_target`] does, alpha the product of one minus each source's (cleared to black
+/// with alpha 1, it holds the layer's own contribution and its transmittance, to composite
+/// over what lies behind it later).
+pub fn layer_target(format: wgpu::TextureFormat) -> Option<wgpu::ColorTargetState> {
+    Some(wgpu::ColorTargetState {
+        format,
+        blend: Some(wgpu::BlendState {
+            color: wgpu::BlendState::ALPHA_BLENDING.color,
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+        }),
         write_mask: wgpu::ColorWrites::ALL,
     })
 }

@@ -80,8 +80,6 @@ macro_rules! shader_file {
 pub const FRAME: ShaderFile = shader_file!("common/frame.wgsl");
 /// The shared vertex stage.
 pub const VERTEX: ShaderFile = shader_file!("common/vertex.wgsl");
-/// The full-screen passes' vertex stage (`vs_screen`; [`crate::pipeline::screen`]).
-pub const SCREEN: ShaderFile = shader_file!("common/screen.wgsl");
 /// Light struct, falloff, spot cone.
 pub const LIGHT: ShaderFile = shader_file!("common/light.wgsl");
 /// Material struct and the scene's light and material buffers (after LIGHT).

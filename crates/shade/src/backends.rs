@@ -20,7 +20,7 @@ use manylights_gpu::{GpuContext, GpuScene, readback};
 use serde::{Deserialize, Serialize};
 
 use crate::HdrImage;
-pub use crate::pipelines::{DEFERRED, DEFERRED_MSAA, EXPAND, FORWARD, GBUFFER, LIST_SHADING};
+pub use crate::pipelines::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
 use crate::shade_pass::{ShadePass, Targets};
 
 pub(crate) const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -108,6 +108,10 @@ pub(crate) enum Loads {
     Depth,
     /// Keeps colour and depth, draws the transparent surfaces (blended over the opaque ones).
     Transparent,
+    /// Clears colour to no glass (black, transmittance 1 in alpha), keeps depth, draws the
+    /// transparent surfaces: their own contribution and transmittance, a layer that deferred
+    /// lighting with MSAA composites over each sample.
+    GlassLayer,
 }
 
 /// Pipelines of every backend for one scene layout, and the culler.
@@ -130,9 +134,9 @@ pub struct Renderer {
     /// z-binning's); forward's, and deferred's after its lighting.
     pub(crate) forward_transparent: [wgpu::RenderPipeline; 2],
     pub(crate) naive: wgpu::RenderPipeline,
-    /// Deferred with MSAA over transparent surfaces: its lit image into every sample, and the
-    /// layout of that pass's one texture.
-    pub(crate) expand: Option<(wgpu::RenderPipeline, wgpu::BindGroupLayout)>,
+    /// Deferred with MSAA over transparent surfaces: `shade.forward_transparent` into a layer
+    /// of their own ([`Loads::GlassLayer`]), which the lighting composites.
+    pub(crate) glass_layer: Option<[wgpu::RenderPipeline; 2]>,
     /// `shade.naive` over transparent surfaces, blended.
     pub(crate) naive_transparent: wgpu::RenderPipeline,
     pub(crate) gbuffer: wgpu::RenderPipeline,
@@ -432,10 +436,12 @@ impl Renderer {
                     depth_slice: None,
                     resolve_target,
                     ops: wgpu::Operations {
-                        load: if loads == Loads::Transparent {
-                            wgpu::LoadOp::Load
-                        } else {
-                            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+                        load: match loads {
+                            Loads::Transparent => wgpu::LoadOp::Load,
+                            Loads::GlassLayer => wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            Loads::Clear | Loads::Depth => {
+                                wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+                            }
                         },
                         store: if resolve_target.is_some() {
                             wgpu::StoreOp::Discard
@@ -473,7 +479,7 @@ impl Renderer {
         match pipelines {
             [one] => {
                 pass.set_pipeline(one);
-                if loads == Loads::Transparent {
+                if matches!(loads, Loads::Transparent | Loads::GlassLayer) {
                     scene.draw_transparent(&mut pass);
                 } else {
                     scene.draw(&mut pass);

@@ -28,5 +28,4 @@ pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     pipelines::GBUFFER,
     pipelines::DEFERRED,
     pipelines::DEFERRED_MSAA,
-    pipelines::EXPAND,
 ];

@@ -6,9 +6,7 @@ use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
-use manylights_gpu::shaders::{
-    BRDF, FRAME, LIGHT, SCENE, SCREEN, SHADING, ShaderDef, ShaderFile, VERTEX,
-};
+use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
 use manylights_gpu::{GpuContext, GpuScene, shader_file};
 
 use crate::backends::{GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HDR, Renderer};
@@ -81,14 +79,6 @@ pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
     ],
 };
 
-/// `shade.deferred_expand`: deferred's lit image into every sample of a multisampled target,
-/// before the glass over it is blended with MSAA.
-pub const EXPAND: ShaderDef = ShaderDef {
-    name: "shade.deferred_expand",
-    consts: &[],
-    files: &[SCREEN, shader_file!("render/expand.wgsl")],
-};
-
 fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
     vec![
         pipeline::entry(0, visibility, pipeline::UNIFORM),
@@ -126,7 +116,6 @@ impl Renderer {
             pipeline::depth_texture(samples),
         ));
         let deferred_lists = layout("shade.deferred.lists", &entries);
-        let unfiltered = texture(wgpu::TextureSampleType::Float { filterable: false }, 1);
         let deferred_gbuffer = layout(
             "shade.deferred.gbuffer",
             &[
@@ -148,7 +137,15 @@ impl Renderer {
                         view_dimension: wgpu::TextureViewDimension::D2,
                     },
                 ),
-                pipeline::entry(3, compute, unfiltered),
+                // The stored position; with MSAA, the glass layer lighting composites.
+                pipeline::entry(
+                    3,
+                    compute,
+                    texture(
+                        wgpu::TextureSampleType::Float { filterable: false },
+                        samples,
+                    ),
+                ),
             ],
         );
         use pipeline::{DepthTest, raster, raster_msaa, raster_with, target};
@@ -177,18 +174,23 @@ impl Renderer {
         };
         let forward = forward_with("fs_forward");
         let forward_zbin = forward_with("fs_forward_zbin");
-        let forward_transparent =
+        let transparent_with = |target: Option<wgpu::ColorTargetState>| {
             ["fs_forward_transparent", "fs_forward_transparent_zbin"].map(|entry| {
                 raster_msaa(
                     d,
                     "shade.forward_transparent",
                     &fwd,
                     &[g0, &forward_lists],
-                    Some((entry, &[pipeline::blended_target(HDR)])),
+                    Some((entry, std::slice::from_ref(&target))),
                     DepthTest::Less,
                     samples,
                 )
-            });
+            })
+        };
+        let forward_transparent = transparent_with(pipeline::blended_target(HDR));
+        let transparent = scene.has_transparent();
+        let glass_layer =
+            (samples > 1 && transparent).then(|| transparent_with(pipeline::layer_target(HDR)));
         let naive = raster_msaa(
             d,
             "shade.naive",
@@ -241,9 +243,18 @@ impl Renderer {
         );
         // Deferred: one lighting pass over every model of the opaque triangles, branching on
         // each pixel's.
-        let models = [("MATERIAL_MODELS", f64::from(scene.opaque_model_mask()))];
+        // With MSAA, GLASS: the lighting composites the glass layer over each sample.
+        let models = [
+            ("MATERIAL_MODELS", f64::from(scene.opaque_model_mask())),
+            ("GLASS", f64::from(u8::from(glass_layer.is_some()))),
+        ];
+        let models = if samples > 1 {
+            &models[..]
+        } else {
+            &models[..1]
+        };
         let models = wgpu::PipelineCompilationOptions {
-            constants: &models,
+            constants: models,
             ..Default::default()
         };
         let compute = |def: &wgpu::ShaderModule, entry| {
@@ -272,29 +283,6 @@ impl Renderer {
                     .map(|entry| compute(&def, entry)),
             )
         };
-        let transparent = scene.has_transparent();
-        let expand = (samples > 1 && transparent).then(|| {
-            let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                label: Some("shade.deferred_expand"),
-                entries: &[pipeline::entry(
-                    0,
-                    wgpu::ShaderStages::FRAGMENT,
-                    texture(wgpu::TextureSampleType::Float { filterable: false }, 1),
-                )],
-            });
-            let pipeline = pipeline::screen(
-                d,
-                "shade.deferred_expand",
-                &EXPAND.create(d),
-                &[&layout],
-                "fs_expand",
-                &[target(HDR)],
-                false,
-                samples,
-                !0,
-            );
-            (pipeline, layout)
-        });
         let lookup_bounds =
             (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
         Self {
@@ -307,7 +295,7 @@ impl Renderer {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
             lookup_bounds,
-            expand,
+            glass_layer,
             forward,
             forward_zbin,
             forward_transparent,

@@ -61,15 +61,16 @@ impl Targets {
         );
         let stored = backend == Backend::DeferredStoredPosition;
         let deferred = stored || backend == Backend::Deferred;
-        // Deferred lighting writes the image itself: a multisampled colour target only for the
-        // glass blended over it with MSAA.
+        // Deferred lighting writes the image itself: with MSAA a multisampled colour target
+        // only for the glass, drawn into it first and composited sample by sample by the
+        // lighting pass (which reads it).
         let color_msaa = (samples > 1 && (!deferred || renderer.transparent)).then(|| {
             pipeline::texture_2d_msaa(
                 d,
                 "shade.color_msaa",
                 (width, height),
                 HDR,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
+                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
                 samples,
             )
             .create_view(&Default::default())
@@ -89,13 +90,26 @@ impl Targets {
             let (pw, ph) = if stored { (width, height) } else { (1, 1) };
             let ms = |label, format| {
                 pipeline::texture_2d_msaa(d, label, (width, height), format, usage, samples)
+                    .create_view(&Default::default())
+            };
+            // The third: the stored position (a 1 x 1 stand-in where it is not stored); with
+            // MSAA, the glass the lighting composites (a stand-in without glass).
+            let third = match (samples > 1, &color_msaa) {
+                (false, _) => {
+                    pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage)
+                        .create_view(&Default::default())
+                }
+                (true, Some(glass)) => glass.clone(),
+                (true, None) => {
+                    pipeline::texture_2d_msaa(d, "shade.glass", (1, 1), HDR, usage, samples)
+                        .create_view(&Default::default())
+                }
             };
             [
                 ms("gbuffer.normal_depth", GB_NORMAL_DEPTH),
                 ms("gbuffer.material", GB_MATERIAL),
-                pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage),
+                third,
             ]
-            .map(|t| t.create_view(&Default::default()))
         });
         let per_pixel = GBUFFER_BYTES_PER_PIXEL + if stored { 16 } else { 0 };
         let gbuffer_bytes = if deferred {
@@ -177,8 +191,6 @@ pub struct ShadePass<'a> {
     gbuffer: Option<wgpu::BindGroup>,
     /// Deferred over transparent surfaces: the lists for their forward pass.
     forward_lists: Option<wgpu::BindGroup>,
-    /// Deferred with MSAA over transparent surfaces: the lit image for `shade.deferred_expand`.
-    expand: Option<wgpu::BindGroup>,
 }
 
 impl<'a> ShadePass<'a> {
@@ -210,15 +222,6 @@ impl<'a> ShadePass<'a> {
             targets,
             lists: None,
             form: ListForm::Bins,
-            expand: match (&renderer.expand, &targets.gbuffer) {
-                (Some((_, layout)), Some(_)) => Some(pipeline::group(
-                    &ctx.device,
-                    "shade.deferred_expand",
-                    layout,
-                    &[wgpu::BindingResource::TextureView(&targets.color_view)],
-                )),
-                _ => None,
-            },
             gbuffer,
             forward_lists: None,
         }
@@ -227,23 +230,35 @@ impl<'a> ShadePass<'a> {
 
 impl ShadePass<'_> {
     /// `shade.forward_transparent`: the glass over `lists`, blended into the colour target
-    /// (resolved from its samples with MSAA).
+    /// (resolved from its samples with MSAA); with `layer` (deferred with MSAA) into the
+    /// multisampled target alone, as its own contribution and transmittance, which the
+    /// lighting pass then composites over each sample.
     fn transparent_pass(
         &self,
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,
         lists: &wgpu::BindGroup,
+        layer: bool,
     ) {
         let r = self.renderer;
+        let zbin = usize::from(self.form == ListForm::ZBin);
+        let (pipeline, target, loads) = match (layer, &self.targets.color_msaa, &r.glass_layer) {
+            (true, Some(msaa), Some(glass)) => (&glass[zbin], (msaa, None), Loads::GlassLayer),
+            _ => (
+                &r.forward_transparent[zbin],
+                self.targets.color_attachment(true),
+                Loads::Transparent,
+            ),
+        };
         r.raster_pass(
             enc,
             timer,
             "shade.forward_transparent",
-            std::slice::from_ref(&r.forward_transparent[usize::from(self.form == ListForm::ZBin)]),
+            std::slice::from_ref(pipeline),
             self.scene,
-            &[self.targets.color_attachment(true)],
+            &[target],
             &self.targets.depth_view,
-            Loads::Transparent,
+            loads,
             Some(lists),
         );
     }
@@ -251,9 +266,9 @@ impl ShadePass<'_> {
 
 impl ListPass for ShadePass<'_> {
     fn passes(&self) -> u32 {
-        // The transparent surfaces' forward pass after the opaque shading (and, for deferred
-        // with MSAA, the lit image expanded into every sample before it).
-        1 + u32::from(self.renderer.transparent) + u32::from(self.expand.is_some())
+        // The transparent surfaces' forward pass (after the opaque shading; for deferred with
+        // MSAA, before the lighting that composites it).
+        1 + u32::from(self.renderer.transparent)
     }
 
     fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3], form: ListForm) {
@@ -311,11 +326,19 @@ impl ListPass for ShadePass<'_> {
                     Some(lists),
                 );
                 if transparent {
-                    self.transparent_pass(enc, timer, lists);
+                    self.transparent_pass(enc, timer, lists, false);
                 }
             }
             Some(gbuffer) => {
                 let (w, h) = self.targets.size;
+                // With MSAA the glass first, into its own multisampled layer, which the
+                // lighting composites over each sample it lights (the reference blends each
+                // sample its own).
+                let layer = self.renderer.samples > 1;
+                let glass = self.forward_lists.as_ref();
+                if let (true, Some(forward_lists)) = (layer, glass) {
+                    self.transparent_pass(enc, timer, forward_lists, true);
+                }
                 pipeline::dispatch(
                     enc,
                     timer,
@@ -329,35 +352,10 @@ impl ListPass for ShadePass<'_> {
                     &[&self.scene.bind_group, lists, gbuffer],
                     (w.div_ceil(8), h.div_ceil(8)),
                 );
-                // Deferred cannot shade transparent surfaces: a forward pass over the same
-                // lists does, over the lit image (as engines do).
-                if let Some(forward_lists) = &self.forward_lists {
-                    // With MSAA, the lit image into every sample first, the glass blended
-                    // sample by sample and resolved back into it.
-                    if let (Some(group), Some((expand, _)), Some(msaa)) =
-                        (&self.expand, &r.expand, &self.targets.color_msaa)
-                    {
-                        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-                            label: Some("shade.deferred_expand"),
-                            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                                view: msaa,
-                                depth_slice: None,
-                                resolve_target: None,
-                                ops: wgpu::Operations {
-                                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                                    store: wgpu::StoreOp::Store,
-                                },
-                            })],
-                            depth_stencil_attachment: None,
-                            timestamp_writes: timer.render_pass("shade.deferred_expand"),
-                            occlusion_query_set: None,
-                            multiview_mask: None,
-                        });
-                        pass.set_pipeline(expand);
-                        pass.set_bind_group(0, group, &[]);
-                        pass.draw(0..3, 0..1);
-                    }
-                    self.transparent_pass(enc, timer, forward_lists);
+                // Deferred cannot shade transparent surfaces: at one sample a pixel a forward
+                // pass over the same lists does, over the lit image (as engines do).
+                if let (false, Some(forward_lists)) = (layer, glass) {
+                    self.transparent_pass(enc, timer, forward_lists, false);
                 }
             }
         }
