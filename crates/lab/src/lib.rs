@@ -18,6 +18,7 @@ mod figures;
 mod forward_deferred;
 mod noise;
 pub mod reference_cache;
+mod renderers;
 pub mod report;
 pub mod results;
 pub mod runner;

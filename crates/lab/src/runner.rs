@@ -19,12 +19,13 @@ use manylights_gpu::timing::{PassKind, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::{Camera, Scene};
-use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer, Renderer};
+use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer};
 
 use crate::dynamic::Movers;
 use crate::evaluate::{PoseEval, References, evaluate, temporal_stability};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
 use crate::noise::{Draws, Noise, measure};
+use crate::renderers::Renderers;
 use crate::results::{Row, load_cells, percentiles, save_cell, write_results};
 use crate::{LabError, write_atomic};
 
@@ -145,6 +146,7 @@ pub fn run_parsed(
     );
     bar.set_position(skipped as u64);
     let mut ran = 0;
+    let mut renderers = Renderers::default();
     for cell in todo {
         if opts.max_cells.is_some_and(|m| ran >= m)
             || opts.deadline.is_some_and(|d| Instant::now() >= d)
@@ -153,10 +155,12 @@ pub fn run_parsed(
         }
         bar.set_message(cell.name.clone());
         let row =
-            run_cell(ctx, exp, cell, base, out, &opts.commit).map_err(|e| LabError::Cell {
-                index: cell.index,
-                name: cell.name.clone(),
-                message: e.to_string(),
+            run_cell(ctx, exp, cell, (base, out), &opts.commit, &mut renderers).map_err(|e| {
+                LabError::Cell {
+                    index: cell.index,
+                    name: cell.name.clone(),
+                    message: e.to_string(),
+                }
             })?;
         save_cell(out, &row)?;
         ran += 1;
@@ -273,9 +277,9 @@ fn run_cell(
     ctx: &GpuContext,
     exp: &Experiment,
     cell: &Cell,
-    base: &Path,
-    out: &Path,
+    (base, out): (&Path, &Path),
     commit: &str,
+    renderers: &mut Renderers,
 ) -> Result<Row, LabError> {
     let resolved = cell.config.at_limits(ctx);
     let c = &resolved;
@@ -295,7 +299,7 @@ fn run_cell(
     })
     .map_err(|e| other(&e))?;
     let renderer = stage(name, "pipelines built", || {
-        Renderer::with_samples(ctx, &gpu_scene, c.msaa)
+        renderers.get(ctx, &gpu_scene, c.msaa)
     })
     .map_err(|e| other(&format!("msaa = {}: {e}", c.msaa)))?;
     let settings = |cam: &Camera| CullSettings {

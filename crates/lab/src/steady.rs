@@ -13,7 +13,7 @@
 //! clock the GPU runs at under load, where a frame of the experiments' loop (rendered, read
 //! back and checked one at a time) leaves the GPU idle long enough for its clock to fall.
 //!
-//! The runs are repeated untimed for [`WARM_UP`] first, so that they are timed at the clock the
+//! The runs are repeated untimed for [`WARM_UP`] first (not on a CPU adapter), so that they are timed at the clock the
 //! GPU runs at under load, not the lower one it falls to while the host works between cells.
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
@@ -38,8 +38,18 @@ pub struct SteadyCull {
 }
 
 /// How long the runs are repeated, untimed, before the timed ones: long enough for the GPU's
-/// clock to rise from idle (DVFS), short next to a cell's other work.
+/// clock to rise from idle (DVFS), short next to a cell's other work. Not on a CPU adapter
+/// (lavapipe), which has no such clock ([`warm_up`]).
 pub const WARM_UP: std::time::Duration = std::time::Duration::from_millis(200);
+
+/// The warm-up on `ctx`'s adapter: [`WARM_UP`], or none on a CPU adapter.
+pub fn warm_up(ctx: &GpuContext) -> std::time::Duration {
+    if ctx.info.device_type == wgpu::DeviceType::Cpu {
+        std::time::Duration::ZERO
+    } else {
+        WARM_UP
+    }
+}
 
 /// The most runs one timer holds for a strategy whose single run took `passes` passes.
 pub fn max_runs(passes: u32) -> u32 {
@@ -166,7 +176,7 @@ pub fn steady_geometry(
 }
 
 /// `repeat` (n runs of `passes` passes each, back to back into the timer it is given)
-/// repeated untimed for [`WARM_UP`], then timed per pass and as spans.
+/// repeated untimed for [`warm_up`], then timed per pass and as spans.
 fn timed_runs(
     ctx: &GpuContext,
     passes: u32,
@@ -177,7 +187,8 @@ fn timed_runs(
     // idle GPU clocks down (an H100 sampled at 465-1,455 MHz between a tuner's cells, 1,980 MHz
     // under load), so that the first passes after the host's work measure slow.
     let warm = std::time::Instant::now();
-    while warm.elapsed() < WARM_UP {
+    let warm_up = warm_up(ctx);
+    while warm.elapsed() < warm_up {
         repeat(&mut GpuTimer::new(ctx, n * passes.max(1)))?;
     }
     let mut timer = GpuTimer::new(ctx, n * passes.max(1));
