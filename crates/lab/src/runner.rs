@@ -403,7 +403,7 @@ fn run_cell(
         }
         evals.push(evaluate(
             ctx,
-            &renderer,
+            renderer,
             refs.as_ref(),
             &gpu_scene,
             c,
@@ -424,7 +424,7 @@ fn run_cell(
         (Some(d), Some(inf), None) => Some(stage(name, "seeds measured", || {
             measure(
                 ctx,
-                &renderer,
+                renderer,
                 &gpu_scene,
                 c,
                 &poses[0],
