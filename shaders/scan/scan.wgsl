@@ -1,7 +1,8 @@
 // scan: exclusive prefix sum of u32, in place, portable (assumes no subgroup size).
 // scan_blocks scans blocks of SCAN_BLOCK = 1024 elements (256 threads x 4) with a Hillis-Steele
 // scan in workgroup memory and writes each block's total; the host scans the block totals the
-// same way (recursively) and scan_add adds them back. Host side: manylights_cull::scan.
+// same way (recursively) and scan_add adds them back; where n is small, scan_single does it all
+// in one pass (below). Host side: manylights_cull::scan.
 struct ScanParams {
     n: u32,
     _pad0: u32,
@@ -62,5 +63,57 @@ fn scan_add(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
         if idx < params.n {
             data[idx] += add;
         }
+    }
+}
+
+// scan_single: the whole scan in one workgroup and one pass, where n is at most SCAN_SINGLE_MAX
+// (the host's choice): rounds of SCAN_BLOCK elements, each scanned as scan_blocks scans a block,
+// plus the running total of the rounds before. One pass where the block scan takes three (the
+// blocks, their totals, the add back), each after the gap between dependent passes.
+var<workgroup> single_carry: u32;
+
+@compute @workgroup_size(SCAN_THREADS)
+fn scan_single(@builtin(local_invocation_index) li: u32) {
+    if li == 0u {
+        single_carry = 0u;
+    }
+    let rounds = (params.n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
+    for (var r = 0u; r < rounds; r++) {
+        let base = r * SCAN_BLOCK + li * SCAN_PER_THREAD;
+        var local: array<u32, SCAN_PER_THREAD>;
+        var sum = 0u;
+        for (var k = 0u; k < SCAN_PER_THREAD; k++) {
+            let idx = base + k;
+            var x = 0u;
+            if idx < params.n {
+                x = data[idx];
+            }
+            local[k] = sum;
+            sum += x;
+        }
+        sh[li] = sum;
+        workgroupBarrier();
+        for (var offset = 1u; offset < SCAN_THREADS; offset <<= 1u) {
+            var t = 0u;
+            if li >= offset {
+                t = sh[li - offset];
+            }
+            workgroupBarrier();
+            sh[li] += t;
+            workgroupBarrier();
+        }
+        let prefix = single_carry + sh[li] - sum;
+        for (var k = 0u; k < SCAN_PER_THREAD; k++) {
+            let idx = base + k;
+            if idx < params.n {
+                data[idx] = prefix + local[k];
+            }
+        }
+        // Every thread has read the carry and its slot before they change.
+        workgroupBarrier();
+        if li == 0u {
+            single_carry += sh[SCAN_THREADS - 1u];
+        }
+        workgroupBarrier();
     }
 }

@@ -1,5 +1,6 @@
 //! The portable GPU exclusive scan (`shaders/scan/scan.wgsl`), in place over a u32 buffer:
-//! block scans of 1,024 elements, the block totals scanned recursively, then added back.
+//! block scans of 1,024 elements, the block totals scanned recursively, then added back; up to
+//! [`Scan::single_max`] elements one workgroup does it all in one pass (`scan.single`).
 //! It assumes no subgroup size, so it runs on any adapter.
 
 use manylights_gpu::shader_file;
@@ -8,6 +9,9 @@ use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, pipeline};
 
 use crate::layout::{SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X};
+
+/// The most elements [`Scan`] scans in one pass by default (16 blocks).
+pub const SCAN_SINGLE_MAX: u32 = 16 * SCAN_BLOCK;
 
 /// The scan shader.
 pub const SHADER: ShaderDef = ShaderDef {
@@ -40,8 +44,13 @@ pub struct Scan {
     layout: wgpu::BindGroupLayout,
     blocks: wgpu::ComputePipeline,
     add: wgpu::ComputePipeline,
+    single: wgpu::ComputePipeline,
     /// The path in use.
     pub path: ScanPath,
+    /// The most elements scanned in one pass by one workgroup (`scan.single`, rounds of a
+    /// block) instead of three (the blocks, their totals, the add back) with the gaps between
+    /// dependent passes: [`SCAN_SINGLE_MAX`] by default; 0: never.
+    pub single_max: u32,
 }
 
 /// Workgroup counts (x, y) for `groups` workgroups laid out in rows of `SCAN_MAX_GROUPS_X`.
@@ -94,8 +103,10 @@ impl Scan {
         Some(Self {
             blocks,
             add: pipeline::compute(d, &module, &pl, "scan_add"),
+            single: pipeline::compute(d, &module, &pl, "scan_single"),
             layout,
             path,
+            single_max: SCAN_SINGLE_MAX,
         })
     }
 
@@ -125,6 +136,17 @@ impl Scan {
         );
         let group =
             pipeline::buffers_group(&ctx.device, "scan", &self.layout, &[&params, data, &sums]);
+        if n <= self.single_max {
+            pipeline::dispatch(
+                encoder,
+                timer,
+                "scan.single",
+                &self.single,
+                &[&group],
+                (1, 1),
+            );
+            return;
+        }
         let (gx, gy) = groups_2d(blocks, SCAN_MAX_GROUPS_X);
         pipeline::dispatch(
             encoder,
