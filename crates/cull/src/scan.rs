@@ -94,16 +94,23 @@ impl Scan {
         });
         let module = SHADER.create(d);
         let pl = pipeline::layout(d, "scan", &[&layout]);
-        let blocks = match path {
+        let (blocks, single) = match path {
             ScanPath::Subgroup => {
-                pipeline::compute(d, &SUBGROUP_SHADER.create(d), &pl, "scan_blocks_subgroup")
+                let sub = SUBGROUP_SHADER.create(d);
+                (
+                    pipeline::compute(d, &sub, &pl, "scan_blocks_subgroup"),
+                    pipeline::compute(d, &sub, &pl, "scan_single_subgroup"),
+                )
             }
-            ScanPath::Portable => pipeline::compute(d, &module, &pl, "scan_blocks"),
+            ScanPath::Portable => (
+                pipeline::compute(d, &module, &pl, "scan_blocks"),
+                pipeline::compute(d, &module, &pl, "scan_single"),
+            ),
         };
         Some(Self {
             blocks,
             add: pipeline::compute(d, &module, &pl, "scan_add"),
-            single: pipeline::compute(d, &module, &pl, "scan_single"),
+            single,
             layout,
             path,
             single_max: SCAN_SINGLE_MAX,
