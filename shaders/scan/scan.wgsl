@@ -2,7 +2,7 @@
 // scan_blocks scans blocks of SCAN_BLOCK = 1024 elements (256 threads x 4) with a Hillis-Steele
 // scan in workgroup memory and writes each block's total; the host scans the block totals the
 // same way (recursively) and scan_add adds them back; where n is small, scan_single does it all
-// in one pass (below). Host side: manylights_cull::scan.
+// in one pass (scan_single, below). Host side: manylights_cull::scan.
 struct ScanParams {
     n: u32,
     _pad0: u32,
@@ -66,54 +66,48 @@ fn scan_add(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_inde
     }
 }
 
-// scan_single: the whole scan in one workgroup and one pass, where n is at most SCAN_SINGLE_MAX
-// (the host's choice): rounds of SCAN_BLOCK elements, each scanned as scan_blocks scans a block,
-// plus the running total of the rounds before. One pass where the block scan takes three (the
-// blocks, their totals, the add back), each after the gap between dependent passes.
-var<workgroup> single_carry: u32;
+// scan_single: the whole scan in one workgroup and one pass, where n is at most SCAN_THREADS x
+// SCAN_SINGLE_PER_THREAD (the host's SCAN_SINGLE_MAX): each thread loads a
+// run of up to SCAN_SINGLE_PER_THREAD consecutive elements at once (all loads in flight
+// together), the threads' sums are scanned as scan_blocks scans them, and each thread writes
+// its run's prefixes. One pass where the block scan takes three (the blocks, their totals, the
+// add back), each after the gap between dependent passes.
+// The run of thread li: [li * per, li * per + per) of n, per = ceil(n / SCAN_THREADS).
+fn single_run(li: u32) -> vec2<u32> {
+    let per = (params.n + SCAN_THREADS - 1u) / SCAN_THREADS;
+    let begin = min(li * per, params.n);
+    return vec2<u32>(begin, min(begin + per, params.n));
+}
 
 @compute @workgroup_size(SCAN_THREADS)
 fn scan_single(@builtin(local_invocation_index) li: u32) {
-    if li == 0u {
-        single_carry = 0u;
+    let run = single_run(li);
+    var vals: array<u32, SCAN_SINGLE_PER_THREAD>;
+    var sum = 0u;
+    for (var k = 0u; k < SCAN_SINGLE_PER_THREAD; k++) {
+        var x = 0u;
+        if run.x + k < run.y {
+            x = data[run.x + k];
+        }
+        vals[k] = x;
+        sum += x;
     }
-    let rounds = (params.n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
-    for (var r = 0u; r < rounds; r++) {
-        let base = r * SCAN_BLOCK + li * SCAN_PER_THREAD;
-        var local: array<u32, SCAN_PER_THREAD>;
-        var sum = 0u;
-        for (var k = 0u; k < SCAN_PER_THREAD; k++) {
-            let idx = base + k;
-            var x = 0u;
-            if idx < params.n {
-                x = data[idx];
-            }
-            local[k] = sum;
-            sum += x;
-        }
-        sh[li] = sum;
-        workgroupBarrier();
-        for (var offset = 1u; offset < SCAN_THREADS; offset <<= 1u) {
-            var t = 0u;
-            if li >= offset {
-                t = sh[li - offset];
-            }
-            workgroupBarrier();
-            sh[li] += t;
-            workgroupBarrier();
-        }
-        let prefix = single_carry + sh[li] - sum;
-        for (var k = 0u; k < SCAN_PER_THREAD; k++) {
-            let idx = base + k;
-            if idx < params.n {
-                data[idx] = prefix + local[k];
-            }
-        }
-        // Every thread has read the carry and its slot before they change.
-        workgroupBarrier();
-        if li == 0u {
-            single_carry += sh[SCAN_THREADS - 1u];
+    sh[li] = sum;
+    workgroupBarrier();
+    for (var offset = 1u; offset < SCAN_THREADS; offset <<= 1u) {
+        var t = 0u;
+        if li >= offset {
+            t = sh[li - offset];
         }
         workgroupBarrier();
+        sh[li] += t;
+        workgroupBarrier();
+    }
+    var acc = sh[li] - sum;
+    for (var k = 0u; k < SCAN_SINGLE_PER_THREAD; k++) {
+        if run.x + k < run.y {
+            data[run.x + k] = acc;
+        }
+        acc += vals[k];
     }
 }

@@ -54,9 +54,8 @@ fn scan_blocks_subgroup(
     }
 }
 
-// scan_single_subgroup: scan_single (scan.wgsl) with this block scan: three barriers a round
-// where the portable one takes seventeen. Each thread keeps the running total of the rounds
-// before (the same in every thread).
+// scan_single_subgroup: scan_single (scan.wgsl) with this scan of the threads' sums (two
+// barriers where the portable one takes seventeen). Runs go by slot, as the blocks' do.
 @compute @workgroup_size(SCAN_THREADS)
 fn scan_single_subgroup(
     @builtin(local_invocation_index) li: u32,
@@ -65,46 +64,36 @@ fn scan_single_subgroup(
     @builtin(subgroup_id) sg_id: u32,
     @builtin(num_subgroups) sg_count: u32,
 ) {
-    let slot = sg_id * sg_size + lane;
-    let rounds = (params.n + SCAN_BLOCK - 1u) / SCAN_BLOCK;
-    var carry = 0u;
-    for (var r = 0u; r < rounds; r++) {
-        let base = r * SCAN_BLOCK + slot * SCAN_PER_THREAD;
-        var local: array<u32, SCAN_PER_THREAD>;
-        var sum = 0u;
-        for (var k = 0u; k < SCAN_PER_THREAD; k++) {
-            let idx = base + k;
-            var x = 0u;
-            if idx < params.n {
-                x = data[idx];
-            }
-            local[k] = sum;
-            sum += x;
+    let run = single_run(sg_id * sg_size + lane);
+    var vals: array<u32, SCAN_SINGLE_PER_THREAD>;
+    var sum = 0u;
+    for (var k = 0u; k < SCAN_SINGLE_PER_THREAD; k++) {
+        var x = 0u;
+        if run.x + k < run.y {
+            x = data[run.x + k];
         }
-        let inclusive = subgroupInclusiveAdd(sum);
-        if lane == sg_size - 1u {
-            sg_totals[sg_id] = inclusive;
+        vals[k] = x;
+        sum += x;
+    }
+    let inclusive = subgroupInclusiveAdd(sum);
+    if lane == sg_size - 1u {
+        sg_totals[sg_id] = inclusive;
+    }
+    workgroupBarrier();
+    if li == 0u {
+        var acc = 0u;
+        for (var s = 0u; s < sg_count; s++) {
+            let t = sg_totals[s];
+            sg_totals[s] = acc;
+            acc += t;
         }
-        workgroupBarrier();
-        if li == 0u {
-            var acc = 0u;
-            for (var s = 0u; s < sg_count; s++) {
-                let t = sg_totals[s];
-                sg_totals[s] = acc;
-                acc += t;
-            }
-            sg_totals[sg_count] = acc;
+    }
+    workgroupBarrier();
+    var acc = sg_totals[sg_id] + inclusive - sum;
+    for (var k = 0u; k < SCAN_SINGLE_PER_THREAD; k++) {
+        if run.x + k < run.y {
+            data[run.x + k] = acc;
         }
-        workgroupBarrier();
-        let prefix = carry + sg_totals[sg_id] + inclusive - sum;
-        for (var k = 0u; k < SCAN_PER_THREAD; k++) {
-            let idx = base + k;
-            if idx < params.n {
-                data[idx] = prefix + local[k];
-            }
-        }
-        carry += sg_totals[sg_count];
-        // Every thread has read this round's totals before the next round writes them.
-        workgroupBarrier();
+        acc += vals[k];
     }
 }

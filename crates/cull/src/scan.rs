@@ -8,10 +8,13 @@ use manylights_gpu::shaders::ShaderDef;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, pipeline};
 
-use crate::layout::{SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X};
+use crate::layout::{
+    SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X, SCAN_SINGLE_PER_THREAD, SCAN_THREADS,
+};
 
-/// The most elements [`Scan`] scans in one pass by default (16 blocks).
-pub const SCAN_SINGLE_MAX: u32 = 16 * SCAN_BLOCK;
+/// The most elements [`Scan`] scans in one pass by default (and at most): a run of
+/// [`SCAN_SINGLE_PER_THREAD`] a thread.
+pub const SCAN_SINGLE_MAX: u32 = SCAN_THREADS * SCAN_SINGLE_PER_THREAD;
 
 /// The scan shader.
 pub const SHADER: ShaderDef = ShaderDef {
@@ -47,9 +50,10 @@ pub struct Scan {
     single: wgpu::ComputePipeline,
     /// The path in use.
     pub path: ScanPath,
-    /// The most elements scanned in one pass by one workgroup (`scan.single`, rounds of a
-    /// block) instead of three (the blocks, their totals, the add back) with the gaps between
-    /// dependent passes: [`SCAN_SINGLE_MAX`] by default; 0: never.
+    /// The most elements scanned in one pass by one workgroup (`scan.single`, a run of
+    /// consecutive elements a thread) instead of three (the blocks, their totals, the add back)
+    /// with the gaps between dependent passes: [`SCAN_SINGLE_MAX`] by default and at most; 0:
+    /// never.
     pub single_max: u32,
 }
 
@@ -143,7 +147,7 @@ impl Scan {
         );
         let group =
             pipeline::buffers_group(&ctx.device, "scan", &self.layout, &[&params, data, &sums]);
-        if n <= self.single_max {
+        if n <= self.single_max.min(SCAN_SINGLE_MAX) {
             pipeline::dispatch(
                 encoder,
                 timer,
