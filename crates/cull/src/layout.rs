@@ -36,8 +36,6 @@ pub const SCAN_THREADS: u32 = 256;
 pub const SCAN_PER_THREAD: u32 = 4;
 /// Elements one scan workgroup handles.
 pub const SCAN_BLOCK: u32 = SCAN_THREADS * SCAN_PER_THREAD;
-/// Elements each thread of the one-pass scan (`scan.single`) handles at most.
-pub const SCAN_SINGLE_PER_THREAD: u32 = 64;
 /// Workgroups along x in a 2D scan dispatch (rows of this many blocks).
 pub const SCAN_MAX_GROUPS_X: u32 = 32768;
 
@@ -161,7 +159,6 @@ pub const SCAN_CONSTS: &[WgslConst] = &[
     WgslConst::U32("SCAN_THREADS", SCAN_THREADS),
     WgslConst::U32("SCAN_PER_THREAD", SCAN_PER_THREAD),
     WgslConst::U32("SCAN_BLOCK", SCAN_BLOCK),
-    WgslConst::U32("SCAN_SINGLE_PER_THREAD", SCAN_SINGLE_PER_THREAD),
     WgslConst::U32("SCAN_MAX_GROUPS_X", SCAN_MAX_GROUPS_X),
 ];
 

@@ -1,6 +1,5 @@
 //! The portable GPU exclusive scan (`shaders/scan/scan.wgsl`), in place over a u32 buffer:
-//! block scans of 1,024 elements, the block totals scanned recursively, then added back; up to
-//! [`Scan::single_max`] elements one workgroup does it all in one pass (`scan.single`).
+//! block scans of 1,024 elements, the block totals scanned recursively, then added back.
 //! It assumes no subgroup size, so it runs on any adapter.
 
 use manylights_gpu::shader_file;
@@ -8,13 +7,7 @@ use manylights_gpu::shaders::ShaderDef;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, pipeline};
 
-use crate::layout::{
-    SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X, SCAN_SINGLE_PER_THREAD, SCAN_THREADS,
-};
-
-/// The most elements [`Scan`] scans in one pass by default (and at most): a run of
-/// [`SCAN_SINGLE_PER_THREAD`] a thread.
-pub const SCAN_SINGLE_MAX: u32 = SCAN_THREADS * SCAN_SINGLE_PER_THREAD;
+use crate::layout::{SCAN_BLOCK, SCAN_CONSTS, SCAN_MAX_GROUPS_X};
 
 /// The scan shader.
 pub const SHADER: ShaderDef = ShaderDef {
@@ -47,14 +40,8 @@ pub struct Scan {
     layout: wgpu::BindGroupLayout,
     blocks: wgpu::ComputePipeline,
     add: wgpu::ComputePipeline,
-    single: wgpu::ComputePipeline,
     /// The path in use.
     pub path: ScanPath,
-    /// The most elements scanned in one pass by one workgroup (`scan.single`, a run of
-    /// consecutive elements a thread) instead of three (the blocks, their totals, the add back)
-    /// with the gaps between dependent passes: [`SCAN_SINGLE_MAX`] by default and at most; 0:
-    /// never.
-    pub single_max: u32,
 }
 
 /// Workgroup counts (x, y) for `groups` workgroups laid out in rows of `SCAN_MAX_GROUPS_X`.
@@ -98,26 +85,17 @@ impl Scan {
         });
         let module = SHADER.create(d);
         let pl = pipeline::layout(d, "scan", &[&layout]);
-        let (blocks, single) = match path {
+        let blocks = match path {
             ScanPath::Subgroup => {
-                let sub = SUBGROUP_SHADER.create(d);
-                (
-                    pipeline::compute(d, &sub, &pl, "scan_blocks_subgroup"),
-                    pipeline::compute(d, &sub, &pl, "scan_single_subgroup"),
-                )
+                pipeline::compute(d, &SUBGROUP_SHADER.create(d), &pl, "scan_blocks_subgroup")
             }
-            ScanPath::Portable => (
-                pipeline::compute(d, &module, &pl, "scan_blocks"),
-                pipeline::compute(d, &module, &pl, "scan_single"),
-            ),
+            ScanPath::Portable => pipeline::compute(d, &module, &pl, "scan_blocks"),
         };
         Some(Self {
             blocks,
             add: pipeline::compute(d, &module, &pl, "scan_add"),
-            single,
             layout,
             path,
-            single_max: SCAN_SINGLE_MAX,
         })
     }
 
@@ -147,17 +125,6 @@ impl Scan {
         );
         let group =
             pipeline::buffers_group(&ctx.device, "scan", &self.layout, &[&params, data, &sums]);
-        if n <= self.single_max.min(SCAN_SINGLE_MAX) {
-            pipeline::dispatch(
-                encoder,
-                timer,
-                "scan.single",
-                &self.single,
-                &[&group],
-                (1, 1),
-            );
-            return;
-        }
         let (gx, gy) = groups_2d(blocks, SCAN_MAX_GROUPS_X);
         pipeline::dispatch(
             encoder,
