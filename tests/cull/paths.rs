@@ -343,7 +343,41 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 !ran(&b, "cull.clustered.tiles_count"),
                 "{what}: the per-light passes"
             );
+            // The tile path sizes its lists from its count pass's total: no scan.
+            assert_eq!(
+                a.passes.iter().any(|p| p.name == "scan"),
+                !tiles,
+                "{what}: the scan"
+            );
+            assert_eq!(a.total, b.total, "{what}: the lists' total");
             let lb = b.read(&ctx).unwrap();
+            if tiles {
+                // With a capacity (which caps the counts after the count pass) the tile path
+                // scans the capped counts: each list the first lights of its uncapped one.
+                let capped = by_tiles
+                    .run(
+                        &ctx,
+                        &r.gpu_scene,
+                        &r.depth_tex,
+                        &s,
+                        &CullSettings {
+                            capacity: Some(2),
+                            ..settings
+                        },
+                        &mut GpuTimer::new(&ctx, 16),
+                    )
+                    .unwrap();
+                assert!(
+                    capped.passes.iter().any(|p| p.name == "scan"),
+                    "{what}: a capacity's scan"
+                );
+                let lc = capped.read(&ctx).unwrap();
+                for bin in 0..lb.ranges.len() {
+                    let full = lb.list(bin);
+                    let kept = &full[..full.len().min(2)];
+                    assert_eq!(lc.list(bin), kept, "{what}, capacity 2: bin {bin}");
+                }
+            }
             let occupancy = b.read_occupancy(&ctx).unwrap();
             for (o, path) in [(&a, "tile path"), (&r2, "tile path with rectangles")] {
                 let la = o.read(&ctx).unwrap();

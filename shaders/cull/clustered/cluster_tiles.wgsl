@@ -52,6 +52,8 @@ var<workgroup> wg_cand_info: array<u32, CLUSTER_TILE_THREADS>;
 var<workgroup> wg_cand_count: atomic<u32>;
 // Each slice's mask of the batch: bit k of word w for the light at slot 32 w + k.
 var<workgroup> wg_slice_mask: array<atomic<u32>, CLUSTER_TILE_SLICES * CLUSTER_TILE_WORDS>;
+// The tile's lists' total (its clusters' counts summed).
+var<workgroup> wg_tile_total: atomic<u32>;
 
 fn widen_slice(s: u32, near: u32, far: u32) {
     if far != 0u {
@@ -185,6 +187,7 @@ fn cluster_tile(tile: vec2<u32>, li: u32) {
     if li == 0u {
         atomicStore(&wg_slice_count, 0u);
         atomicStore(&wg_cand_count, 0u);
+        atomicStore(&wg_tile_total, 0u);
     }
     workgroupBarrier();
     let pixels = (cull.flags & (CULL_FLAG_SKIP_EMPTY | CULL_FLAG_TILE_BOX)) != 0u;
@@ -254,6 +257,12 @@ fn cluster_tile(tile: vec2<u32>, li: u32) {
     }
     if li < cull.slices && li < CLUSTER_TILE_SLICES {
         atomicStore(&bin_counts[bin], kept);
+        atomicAdd(&wg_tile_total, kept);
+    }
+    // The lists' total, for the fill that takes its ranges from a cursor (no scan).
+    workgroupBarrier();
+    if li == 0u {
+        atomicAdd(&cull_stats[3], atomicLoad(&wg_tile_total));
     }
 }
 
@@ -290,14 +299,40 @@ fn cluster_tiles_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invo
 
 // A thread a cluster: its range, and its lights from its mask in light order, up to its count
 // (capped by a capacity: the first lights are kept).
+// With CLUSTER_FILL_CURSOR (no capacity: the host then runs no scan), each cluster's range starts
+// where a cursor (cull_stats[7]) stood when its workgroup took its clusters' total, and the
+// count pass's total (cull_stats[3]) sizes the lists: the same lists, at other offsets, one pass
+// where the scan takes three.
+override CLUSTER_FILL_CURSOR: bool = false;
+var<workgroup> wg_fill_total: atomic<u32>;
+var<workgroup> wg_fill_base: u32;
+
 @compute @workgroup_size(64)
-fn cluster_masks_fill(@builtin(global_invocation_id) id: vec3<u32>) {
+fn cluster_masks_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let bin = id.y * GROUPS_X * 64u + id.x;
-    if bin >= cull.bins {
+    let inside = bin < cull.bins;
+    var n = 0u;
+    if inside {
+        n = atomicLoad(&bin_counts[bin]);
+    }
+    var at = 0u;
+    if CLUSTER_FILL_CURSOR {
+        if li == 0u {
+            atomicStore(&wg_fill_total, 0u);
+        }
+        workgroupBarrier();
+        let own = atomicAdd(&wg_fill_total, n);
+        workgroupBarrier();
+        if li == 0u {
+            wg_fill_base = atomicAdd(&cull_stats[7], atomicLoad(&wg_fill_total));
+        }
+        at = workgroupUniformLoad(&wg_fill_base) + own;
+    } else if inside {
+        at = bin_offsets[bin];
+    }
+    if !inside {
         return;
     }
-    let n = atomicLoad(&bin_counts[bin]);
-    let at = bin_offsets[bin];
     out_ranges[bin] = vec2<u32>(at, n);
     var kept = 0u;
     let words = (cull.light_count + 31u) / 32u;

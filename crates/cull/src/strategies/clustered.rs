@@ -20,10 +20,12 @@
 //! [`crate::layout::CLUSTER_TILE_SLICES`] slices, the tile path runs instead: a workgroup a tile
 //! of `cull.clustered.tiles_count` (`shaders/cull/clustered/cluster_tiles.wgsl`) reduces its
 //! pixels to each slice's depth bounds, takes the lights 256 at a time, shares the (light,
-//! slice) tests among its threads and stores each cluster's count and its mask, a bit a light;
-//! after the scan, `cull.clustered.masks_fill` (a thread a cluster) writes each list from its
-//! mask, and its range. The same lists, in light order, without occupancy, queue, atomics,
-//! order or finalize passes. The masks hold a bit per (cluster, light), rounded to 256 lights:
+//! slice) tests among its threads and stores each cluster's count and its mask, a bit a light,
+//! and adds its clusters' counts to the lists' total; then `cull.clustered.masks_fill` (a
+//! thread a cluster) writes each list from its mask, and its range, taking its offset from a
+//! cursor a workgroup at a time (no scan; with a capacity, which caps the counts after the
+//! count pass, after the scan of the counts). The same lists, in light order (at offsets that
+//! differ run to run), without occupancy, queue, order or finalize passes. The masks hold a bit per (cluster, light), rounded to 256 lights:
 //! 0.8 MB at 500 lights at 1080p in 64-pixel tiles of 24 slices, at most 128 MB (2^24 pairs x
 //! 64 slices); where they would not fit a storage binding, the per-light passes run.
 
@@ -55,6 +57,8 @@ pub(crate) struct Pipelines {
     /// The same, reading `cull.clustered.rects`' rectangles (`CLUSTER_TILE_RECTS`).
     tiles_count_rects: wgpu::ComputePipeline,
     masks_fill: wgpu::ComputePipeline,
+    /// The same, its ranges from a cursor (`CLUSTER_FILL_CURSOR`: no scan).
+    masks_fill_cursor: wgpu::ComputePipeline,
 }
 
 impl Pipelines {
@@ -108,6 +112,14 @@ impl Pipelines {
                 },
             ),
             masks_fill,
+            masks_fill_cursor: program.pipeline_with(
+                d,
+                "cluster_masks_fill",
+                &wgpu::PipelineCompilationOptions {
+                    constants: &[("CLUSTER_FILL_CURSOR", 1.0)],
+                    ..Default::default()
+                },
+            ),
         }
     }
 }
@@ -157,6 +169,10 @@ struct ClusterPlan<'a> {
     by_tiles: bool,
     /// On it, with `cull.clustered.rects`.
     rects: bool,
+    /// On it, no scan: the count pass's total sizes the lists, and the fill takes each
+    /// cluster's offset from a cursor (without a capacity, which caps the counts after the
+    /// count pass, and where the total fits a u32).
+    cursor: bool,
     /// The wide lights' queue (binding 9; its first word is its length).
     wide: wgpu::Buffer,
     /// Their indirect dispatch arguments (binding 11 of the pass that writes them; an indirect
@@ -193,11 +209,15 @@ impl<'a> ClusterPlan<'a> {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
             mapped_at_creation: false,
         });
+        let cursor = by_tiles
+            && p.capacity == 0
+            && u64::from(p.bins) * u64::from(p.light_count) <= u64::from(u32::MAX);
         Self {
             r,
             f,
             ordered,
             by_tiles,
+            cursor,
             rects,
             group_a: f.group(
                 placeholder,
@@ -258,7 +278,9 @@ impl Plan for ClusterPlan<'_> {
                     writes,
                 ));
             }
-            steps.extend(c.lists.count_tail(f, &self.group_a, f.params.bins));
+            if !self.cursor {
+                steps.extend(c.lists.count_tail(f, &self.group_a, f.params.bins));
+            }
             return steps;
         }
         let mut steps = f.clears(false);
@@ -310,6 +332,10 @@ impl Plan for ClusterPlan<'_> {
     }
 
     fn total(&self) -> Result<u64, GpuError> {
+        if self.cursor {
+            // The count pass's total (cull_stats[3]).
+            return Ok(u64::from(self.f.stats(3, 1)?[0]));
+        }
         self.f.bins_total(self.f.params.bins)
     }
 
@@ -327,14 +353,26 @@ impl Plan for ClusterPlan<'_> {
         let g = &c.clustered;
         if self.by_tiles {
             // It writes every range: no cull.finalize.
-            return vec![Step::pass(
-                "cull.clustered.masks_fill",
-                &g.masks_fill,
-                group,
-                groups_2d(f.params.bins.div_ceil(64), GROUPS_X),
-                &[Buf::Counts, Buf::Offsets, Buf::ClusterMasks],
-                &[Buf::Indices, Buf::Ranges],
-            )];
+            let groups = groups_2d(f.params.bins.div_ceil(64), GROUPS_X);
+            return vec![if self.cursor {
+                Step::pass(
+                    "cull.clustered.masks_fill",
+                    &g.masks_fill_cursor,
+                    group,
+                    groups,
+                    &[Buf::Counts, Buf::ClusterMasks, Buf::Stats],
+                    &[Buf::Indices, Buf::Ranges, Buf::Stats],
+                )
+            } else {
+                Step::pass(
+                    "cull.clustered.masks_fill",
+                    &g.masks_fill,
+                    group,
+                    groups,
+                    &[Buf::Counts, Buf::Offsets, Buf::ClusterMasks],
+                    &[Buf::Indices, Buf::Ranges],
+                )
+            }];
         }
         let mut steps = vec![
             Step::pass(
