@@ -76,13 +76,14 @@ pub struct ShadeOutput {
     pub lists: Option<CullOutput>,
     /// The depth buffer (its samples are what the exact oracle checks).
     pub depth: wgpu::Texture,
-    /// The depth the lists were built from: the depth buffer, or with MSAA forward the bounds
-    /// of every depth a fragment looks its list up at (`manylights_gpu::lookup_bounds`). Culling
-    /// timed again for this frame runs on it.
+    /// The depth the lists were built from: the depth buffer, or with MSAA or glass the lookup
+    /// bounds, each pixel's nearest and farthest depth a list is looked up at
+    /// (`manylights_gpu::lookup_bounds`). Culling timed again for this frame runs on it.
     pub cull_depth: wgpu::Texture,
     /// G-buffer bytes (deferred only; 0 otherwise).
     pub gbuffer_bytes: u64,
-    /// Bytes of the multisampled targets (depth and HDR colour; 0 without MSAA).
+    /// Bytes of the multisampled targets (depth and HDR colour, or the G-buffer), and of the
+    /// lookup bounds where forward or deferred culls over them; 0 without MSAA or glass.
     pub msaa_target_bytes: u64,
     /// The backend that rendered it.
     pub backend: Backend,
