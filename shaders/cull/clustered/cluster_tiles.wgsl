@@ -188,6 +188,10 @@ fn cluster_tile(tile: vec2<u32>, li: u32) {
         atomicStore(&wg_slice_count, 0u);
         atomicStore(&wg_cand_count, 0u);
         atomicStore(&wg_tile_total, 0u);
+        // The fill's cursor starts at zero (no clear: each clear is a transfer between passes).
+        if all(tile == vec2<u32>(0u)) {
+            atomicStore(&cull_stats[7], 0u);
+        }
     }
     workgroupBarrier();
     let pixels = (cull.flags & (CULL_FLAG_SKIP_EMPTY | CULL_FLAG_TILE_BOX)) != 0u;
@@ -302,7 +306,8 @@ fn cluster_tiles_count(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invo
 // With CLUSTER_FILL_CURSOR (no capacity: the host then runs no scan), each cluster's range starts
 // where a cursor (cull_stats[7]) stood when its workgroup took its clusters' total, and the
 // count pass's total (cull_stats[3]) sizes the lists: the same lists, at other offsets, one pass
-// where the scan takes three.
+// where the scan takes three. Neither word is cleared: the count pass zeroes the cursor, and
+// this pass the total, for the next run's count (the cursor's end is the total then).
 override CLUSTER_FILL_CURSOR: bool = false;
 var<workgroup> wg_fill_total: atomic<u32>;
 var<workgroup> wg_fill_base: u32;
@@ -329,6 +334,9 @@ fn cluster_masks_fill(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loc
         at = workgroupUniformLoad(&wg_fill_base) + own;
     } else if inside {
         at = bin_offsets[bin];
+    }
+    if CLUSTER_FILL_CURSOR && bin == 0u {
+        atomicStore(&cull_stats[3], 0u);
     }
     if !inside {
         return;

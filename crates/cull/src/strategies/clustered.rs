@@ -248,9 +248,13 @@ impl Plan for ClusterPlan<'_> {
         let g = &c.clustered;
         if self.by_tiles {
             // Every cluster's count is stored and every range finalized: only the stats need
-            // clearing.
-            let mut steps = f.clears(true);
-            let writes = &[Buf::Counts, Buf::Occupancy, Buf::ClusterMasks];
+            // clearing, and with the cursor not those (its passes zero the words they use).
+            let mut steps = if self.cursor {
+                Vec::new()
+            } else {
+                f.clears(true)
+            };
+            let writes = &[Buf::Counts, Buf::Occupancy, Buf::ClusterMasks, Buf::Stats];
             if self.rects {
                 steps.push(Step::pass(
                     "cull.clustered.rects",
@@ -333,8 +337,10 @@ impl Plan for ClusterPlan<'_> {
 
     fn total(&self) -> Result<u64, GpuError> {
         if self.cursor {
-            // The count pass's total (cull_stats[3]).
-            return Ok(u64::from(self.f.stats(3, 1)?[0]));
+            // Before the fill, the count pass's total (cull_stats[3]); after it (back to back,
+            // sized up front), the cursor's end (cull_stats[7]): the fill zeroes the total.
+            let word = if self.sized.is_some() { 7 } else { 3 };
+            return Ok(u64::from(self.f.stats(word, 1)?[0]));
         }
         self.f.bins_total(self.f.params.bins)
     }
