@@ -63,12 +63,8 @@ impl GpuTimer {
         let capacity = capacity.clamp(1, MAX_QUERIES / 2);
         if !ctx.features.timestamps {
             return Self {
-                set: None,
-                resolve: None,
-                passes: Vec::new(),
                 capacity,
-                spans: false,
-                open: None,
+                ..Self::untimed()
             };
         }
         let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
@@ -87,6 +83,19 @@ impl GpuTimer {
             resolve: Some(resolve),
             passes: Vec::new(),
             capacity,
+            spans: false,
+            open: None,
+        }
+    }
+
+    /// A timer that times nothing (no queries are made): for passes encoded outside any
+    /// measured frame.
+    pub fn untimed() -> Self {
+        Self {
+            set: None,
+            resolve: None,
+            passes: Vec::new(),
+            capacity: 1,
             spans: false,
             open: None,
         }

@@ -219,7 +219,7 @@ impl Renderer {
                 // Not the naive frame's: what a culler measuring its lights needed reads
                 // (`ShadeOutput::cull_depth`), untimed.
                 let mut enc = ctx.encoder("lookup bounds");
-                let mut untimed = GpuTimer::new(ctx, 4);
+                let mut untimed = GpuTimer::untimed();
                 self.encode_lookup_bounds(&mut enc, &mut untimed, scene, backend, &targets);
                 ctx.submit_and_wait(enc, "lookup bounds")?;
             }

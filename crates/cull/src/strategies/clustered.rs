@@ -359,26 +359,27 @@ impl Plan for ClusterPlan<'_> {
         let g = &c.clustered;
         if self.by_tiles {
             // It writes every range: no cull.finalize.
-            let groups = groups_2d(f.params.bins.div_ceil(64), GROUPS_X);
-            return vec![if self.cursor {
-                Step::pass(
-                    "cull.clustered.masks_fill",
+            let (pipeline, reads, writes): (_, &[Buf], &[Buf]) = if self.cursor {
+                (
                     &g.masks_fill_cursor,
-                    group,
-                    groups,
                     &[Buf::Counts, Buf::ClusterMasks, Buf::Stats],
                     &[Buf::Indices, Buf::Ranges, Buf::Stats],
                 )
             } else {
-                Step::pass(
-                    "cull.clustered.masks_fill",
+                (
                     &g.masks_fill,
-                    group,
-                    groups,
                     &[Buf::Counts, Buf::Offsets, Buf::ClusterMasks],
                     &[Buf::Indices, Buf::Ranges],
                 )
-            }];
+            };
+            return vec![Step::pass(
+                "cull.clustered.masks_fill",
+                pipeline,
+                group,
+                groups_2d(f.params.bins.div_ceil(64), GROUPS_X),
+                reads,
+                writes,
+            )];
         }
         let mut steps = vec![
             Step::pass(
