@@ -14,6 +14,7 @@
 // infinite-range falloff (FRAME_FLAG_INFINITE_RANGE) skips nothing.
 fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
+    let point = point_lights_only();
     var c = emitted(m);
     for (var k = 0u; k < list.y; k++) {
         let i = light_indices[list.x + k];
@@ -22,7 +23,7 @@ fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mate
         if !infinite && d >= lights[i].radius {
             continue;
         }
-        c += shade_light_at(lights[i], to_light, d, n, v, m);
+        c += shade_listed(lights[i], to_light, d, n, v, m, point);
     }
     return c;
 }
@@ -31,6 +32,7 @@ fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mate
 // every run; the same reject as shade_list.
 fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
+    let point = point_lights_only();
     var c = emitted(m);
     if cell.first >= cell.end {
         return c;
@@ -46,7 +48,7 @@ fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mater
             if !infinite && d >= lights[i].radius {
                 continue;
             }
-            c += shade_light_at(lights[i], to_light, d, n, v, m);
+            c += shade_listed(lights[i], to_light, d, n, v, m, point);
         }
     }
     return c;

@@ -19,6 +19,7 @@
 mod common;
 mod materials;
 mod msaa;
+mod point_lights;
 mod steady;
 mod transparent;
 

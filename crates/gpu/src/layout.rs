@@ -17,6 +17,13 @@ pub const LIGHT_KIND_SPOT: u32 = 1;
 /// that measures what the cut-off costs.
 pub const FRAME_FLAG_INFINITE_RANGE: u32 = 1;
 
+/// `Frame.flags`: every light is a point light shaded with the windowed falloff (no spot cone,
+/// no stochastic alpha), so the shading loops take `shade_point_light` (shaders/common/
+/// shading.wgsl): the same sums without the general model's branches and loads. Set by
+/// [`crate::GpuScene`] from the lights it holds; a light buffer that may hold anything else
+/// must not carry it.
+pub const FRAME_FLAG_POINT_LIGHTS: u32 = 2;
+
 /// WGSL constants generated from their Rust definitions; prepended to every composed shader.
 pub fn wgsl_prelude() -> String {
     format!(
@@ -28,6 +35,7 @@ pub fn wgsl_prelude() -> String {
          const LIGHT_KIND_POINT: u32 = {LIGHT_KIND_POINT}u;\n\
          const LIGHT_KIND_SPOT: u32 = {LIGHT_KIND_SPOT}u;\n\
          const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n\
+         const FRAME_FLAG_POINT_LIGHTS: u32 = {FRAME_FLAG_POINT_LIGHTS}u;\n\
          const XI_BITS: u32 = {xi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
          const F0_DIELECTRIC: f32 = {f0:?};\n{models}",

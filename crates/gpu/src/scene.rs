@@ -2,12 +2,14 @@
 //! index travels per vertex), the lights and materials as storage buffers, and the frame uniform.
 //! Group 0 of every pass binds: 0 = frame, 1 = lights, 2 = materials.
 
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+
 use bytemuck::cast_slice;
 use glam::Vec3;
 use manylights_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex};
+use crate::layout::{FRAME_FLAG_POINT_LIGHTS, GpuFrame, GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT};
 use crate::{GpuContext, GpuError};
 
 /// A scene uploaded for rendering.
@@ -35,6 +37,11 @@ pub struct GpuScene {
     pub materials: wgpu::Buffer,
     /// The frame uniform.
     pub frame: wgpu::Buffer,
+    /// Whether every light is a point light with the windowed falloff (`FRAME_FLAG_POINT_LIGHTS`):
+    /// as uploaded, until [`GpuScene::mark_general_lights`].
+    point_lights: AtomicBool,
+    /// The flags of the last [`GpuScene::set_view`], without `FRAME_FLAG_POINT_LIGHTS`.
+    view_flags: AtomicU32,
     /// Layout of group 0.
     pub layout: wgpu::BindGroupLayout,
     /// Group 0.
@@ -105,6 +112,9 @@ impl GpuScene {
             limit_name: "u32 light index",
         })?;
         let mut lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
+        let point_lights = lights
+            .iter()
+            .all(|l| l.kind == LIGHT_KIND_POINT && l.alpha == 0.0);
         if lights.is_empty() {
             lights.push(bytemuck::Zeroable::zeroed());
         }
@@ -147,7 +157,10 @@ impl GpuScene {
             cast_slice(&materials),
             wgpu::BufferUsages::STORAGE | copy,
         );
-        let frame = GpuFrame::new(camera, width, height, light_count);
+        let frame = GpuFrame {
+            flags: if point_lights { FRAME_FLAG_POINT_LIGHTS } else { 0 },
+            ..GpuFrame::new(camera, width, height, light_count)
+        };
         let frame_buf = init(
             "scene.frame",
             bytemuck::bytes_of(&frame),
@@ -200,16 +213,21 @@ impl GpuScene {
             light_count,
             materials: materials_buf,
             frame: frame_buf,
+            point_lights: AtomicBool::new(point_lights),
+            view_flags: AtomicU32::new(0),
             layout,
             bind_group,
         })
     }
 
-    /// Rewrites the frame uniform for another camera, resolution or flags, and sorts the
+    /// Rewrites the frame uniform for another camera, resolution or flags (`FRAME_FLAG_*`; the
+    /// scene adds `FRAME_FLAG_POINT_LIGHTS` where its lights allow it), and sorts the
     /// transparent triangles back to front for the camera.
     pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
+        let flags = flags & !FRAME_FLAG_POINT_LIGHTS;
+        self.view_flags.store(flags, Ordering::Relaxed);
         let frame = GpuFrame {
-            flags,
+            flags: self.frame_flags(flags),
             ..GpuFrame::new(camera, width, height, self.light_count)
         };
         ctx.queue
@@ -222,6 +240,34 @@ impl GpuScene {
                 cast_slice(&sorted),
             );
         }
+    }
+
+    /// `flags` with `FRAME_FLAG_POINT_LIGHTS` where every light is a windowed point light.
+    fn frame_flags(&self, flags: u32) -> u32 {
+        if self.point_lights.load(Ordering::Relaxed) {
+            flags | FRAME_FLAG_POINT_LIGHTS
+        } else {
+            flags
+        }
+    }
+
+    /// Whether the frame tells shading that every light is a windowed point light
+    /// (`FRAME_FLAG_POINT_LIGHTS`).
+    pub fn point_lights(&self) -> bool {
+        self.point_lights.load(Ordering::Relaxed)
+    }
+
+    /// From now on the lights may be anything the general model shades (stochastic alphas
+    /// written on the GPU): the frame drops `FRAME_FLAG_POINT_LIGHTS`, so every light is shaded
+    /// with its spot cone and alpha read.
+    pub fn mark_general_lights(&self, ctx: &GpuContext) {
+        self.point_lights.store(false, Ordering::Relaxed);
+        let flags = self.view_flags.load(Ordering::Relaxed);
+        ctx.queue.write_buffer(
+            &self.frame,
+            std::mem::offset_of!(GpuFrame, flags) as u64,
+            bytemuck::bytes_of(&flags),
+        );
     }
 
     /// Whether the scene has transparent triangles.

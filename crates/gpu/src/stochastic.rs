@@ -78,6 +78,8 @@ impl StochasticRanges {
                 limit_name: "the scene's light count",
             });
         }
+        // The drawn lights carry alpha: shading must read it.
+        scene.mark_general_lights(ctx);
         let d = &ctx.device;
         let groups_needed = count.div_ceil(WORKGROUP).max(1);
         let max = ctx.limits.max_compute_workgroups_per_dimension;

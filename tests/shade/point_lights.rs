@@ -1,0 +1,88 @@
+//! Windowed point lights take the shading loops' short path (`FRAME_FLAG_POINT_LIGHTS`,
+//! `shade_point_light` in shaders/common/shading.wgsl): the same image as the general model's
+//! path, on every form of lists (a workgroup's tile list, a pixel's bin list, z-binning's masks
+//! a workgroup and a pixel at a time) and every culled backend.
+
+use manylights_gpu::layout::GpuLight;
+
+use super::*;
+
+/// `scene(name)` with point lights only (the same generator, no spots).
+fn point_scene(name: &str) -> Scene {
+    let mut s = scene(name);
+    for l in &mut s.lights {
+        l.kind = manylights_scene::LightKind::Point;
+    }
+    s
+}
+
+/// Each culled backend's frame of `gpu_scene` with `strategy`.
+fn frames(ctx: &GpuContext, gpu_scene: &GpuScene, s: &Scene, strategy: &Strategy, size: (u32, u32)) -> Vec<HdrImage> {
+    let renderer = Renderer::new(ctx, gpu_scene);
+    let settings = CullSettings::for_camera(&s.camera);
+    CULLED
+        .into_iter()
+        .map(|backend| {
+            renderer
+                .render(ctx, gpu_scene, backend, strategy, &settings, size)
+                .unwrap()
+                .color
+        })
+        .collect()
+}
+
+/// The largest difference of two images' colour channels, relative to the first one's peak.
+fn max_difference(a: &HdrImage, b: &HdrImage) -> f32 {
+    let d = a
+        .data
+        .iter()
+        .zip(&b.data)
+        .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs()))
+        .fold(0.0f32, f32::max);
+    d / a.peak()
+}
+
+/// A scene of point lights is flagged, one with spots is not, and a scene marked for general
+/// lights (as stochastic ranges mark it) drops the flag. The short path's images equal the
+/// general path's within rounding. And the flag is what picks the path: spot lights written
+/// into a flagged scene's buffer are shaded as points (cones ignored), so the flag must only
+/// be set where the lights allow it.
+#[test]
+fn point_lights_shade_as_the_general_model_does() {
+    let ctx = common::gpu();
+    let size = (70, 45);
+    let spots = scene("atrium");
+    let points = point_scene("atrium");
+    let spot_gpu = GpuScene::upload(&ctx, &spots, &spots.camera, size.0, size.1).unwrap();
+    assert!(!spot_gpu.point_lights(), "a scene with spots must not be flagged");
+    let fast = GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
+    assert!(fast.point_lights(), "a scene of point lights is flagged");
+    let general = GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
+    general.mark_general_lights(&ctx);
+    assert!(!general.point_lights());
+    for strategy in strategies() {
+        let a = frames(&ctx, &fast, &points, &strategy, size);
+        let b = frames(&ctx, &general, &points, &strategy, size);
+        for (k, backend) in CULLED.into_iter().enumerate() {
+            let what = format!("{} {}", strategy.name(), backend.name());
+            assert!(a[k].peak() > 0.0, "{what}: black");
+            let d = max_difference(&a[k], &b[k]);
+            assert!(d <= 1e-5, "{what}: short and general paths differ by {d:e} of the peak");
+        }
+    }
+    // Spots in a flagged scene's buffer: the short path ignores their cones.
+    let spot_lights: Vec<GpuLight> = spots.lights.iter().map(GpuLight::from).collect();
+    ctx.queue
+        .write_buffer(&fast.lights, 0, bytemuck::cast_slice(&spot_lights));
+    let strategy = Strategy::tiled_gather(16);
+    let flagged = frames(&ctx, &fast, &spots, &strategy, size);
+    let right = frames(&ctx, &spot_gpu, &spots, &strategy, size);
+    for (k, backend) in CULLED.into_iter().enumerate() {
+        let d = max_difference(&right[k], &flagged[k]);
+        assert!(
+            d > 1e-2,
+            "{}: the flag did not switch the path (cones shaded either way, difference {d:e})",
+            backend.name()
+        );
+    }
+}
