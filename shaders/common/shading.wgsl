@@ -40,28 +40,41 @@ fn shade_light_at(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: ve
     return shade_light_atten(light, to_light, d, atten, n, v, m);
 }
 
-// Whether every light of the frame is a point light shaded with the windowed falloff
-// (FRAME_FLAG_POINT_LIGHTS, which the host sets from the lights it holds, and no infinite-range
-// falloff): the loops over lists then shade with shade_point_light.
+// POINT_LIGHTS: the pipeline is built for frames whose lights are all point lights shaded with
+// the windowed falloff (no spot cone, no stochastic alpha; manylights_shade::Renderer builds it
+// where GpuScene::point_lights says so). Its loops over lists then shade with shade_point_light
+// alone: with the general model's code beside it in the same loop, the lighting pass kept most
+// of that code's cost (docs/bench/HISTORY.md, "The lighting pass against its floor").
+override POINT_LIGHTS: bool = false;
+
+// Whether the frame says every light is a windowed point light (FRAME_FLAG_POINT_LIGHTS, which
+// GpuScene sets from the lights it holds, and no infinite-range falloff).
 fn point_lights_only() -> bool {
     return (frame.flags & (FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_INFINITE_RANGE)) == FRAME_FLAG_POINT_LIGHTS;
 }
 
 // A listed light the per-pixel reject kept (d < radius, or any d with the infinite-range
-// falloff): shade_point_light where `point` (point_lights_only(), uniform over the pass), else
-// shade_light_at.
-fn shade_listed(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material, point: bool) -> vec3<f32> {
-    if point {
+// falloff): shade_point_light in a POINT_LIGHTS pipeline, else shade_light_at.
+fn shade_listed(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
+    if POINT_LIGHTS {
         return shade_point_light(light, to_light, d, n, v, m);
     }
     return shade_light_at(light, to_light, d, n, v, m);
 }
 
+// A loop's sum `c`, or NaN where a POINT_LIGHTS pipeline shades a frame whose lights are not
+// all windowed point lights: a count of non-finite pixels in the results, never a plausible
+// image. (Renderer::render refuses that combination first.)
+fn lights_checked(c: vec3<f32>) -> vec3<f32> {
+    if POINT_LIGHTS && !point_lights_only() {
+        return vec3<f32>(bitcast<f32>(0x7fc00000u | (frame.flags & 0u)));
+    }
+    return c;
+}
+
 // shade_light_at for a point light with the windowed falloff and no stochastic alpha: the same
 // sum without the general model's branches and loads (its cone is 1, and a zero falloff adds
-// zero, as brdf_cos is finite). On an H100 the general model's branches cost the lighting pass
-// of the Forward+ configuration about 16% (docs/bench/HISTORY.md, "The lighting pass against
-// its floor").
+// zero, as brdf_cos is finite).
 fn shade_point_light(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let l = select(n, to_light / d, d > 0.0);
     return light.color * (light.intensity * light_falloff(d, light.radius)) * brdf_cos(m, n, l, v);

@@ -132,7 +132,6 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
         let tile = group * 8u / cull.tile_size;
         let group_cell = ZBinCell(cull.light_count + (tile.y * cull.tiles_x + tile.x) * zbin_words(), range.x, range.y);
         let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
-        let point = point_lights_only();
         for (var w = range.x / 32u; w <= (range.y - 1u) / 32u; w++) {
             var bits = zbin_bits(group_cell, w);
             while bits != 0u {
@@ -147,12 +146,12 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
                 if !infinite && d >= lights[i].radius {
                     continue;
                 }
-                c += shade_listed(lights[i], to_light, d, s.n, s.v, s.m, point);
+                c += shade_listed(lights[i], to_light, d, s.n, s.v, s.m);
             }
         }
     }
     if inside {
-        textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(c, 1.0), covered));
+        textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(lights_checked(c), 1.0), covered));
     }
 }
 
@@ -180,7 +179,6 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
         s = surface(pixel, stored);
     }
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
-    let point = point_lights_only();
     var c = vec3<f32>(0.0);
     if covered {
         c = emitted(s.m);
@@ -198,12 +196,12 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
                 if !infinite && d >= wg_lights[k].radius {
                     continue;
                 }
-                c += shade_listed(wg_lights[k], to_light, d, s.n, s.v, s.m, point);
+                c += shade_listed(wg_lights[k], to_light, d, s.n, s.v, s.m);
             }
         }
         workgroupBarrier();
     }
     if inside {
-        textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(c, 1.0), covered));
+        textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(lights_checked(c), 1.0), covered));
     }
 }

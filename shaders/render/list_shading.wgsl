@@ -14,7 +14,6 @@
 // infinite-range falloff (FRAME_FLAG_INFINITE_RANGE) skips nothing.
 fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
-    let point = point_lights_only();
     var c = emitted(m);
     for (var k = 0u; k < list.y; k++) {
         let i = light_indices[list.x + k];
@@ -23,19 +22,18 @@ fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mate
         if !infinite && d >= lights[i].radius {
             continue;
         }
-        c += shade_listed(lights[i], to_light, d, n, v, m, point);
+        c += shade_listed(lights[i], to_light, d, n, v, m);
     }
-    return c;
+    return lights_checked(c);
 }
 
 // Z-binning's cell: its set bits in order, so lights are summed in depth order, the same order on
 // every run; the same reject as shade_list.
 fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
-    let point = point_lights_only();
     var c = emitted(m);
     if cell.first >= cell.end {
-        return c;
+        return lights_checked(c);
     }
     for (var w = cell.first / 32u; w <= (cell.end - 1u) / 32u; w++) {
         var bits = zbin_bits(cell, w);
@@ -48,8 +46,8 @@ fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mater
             if !infinite && d >= lights[i].radius {
                 continue;
             }
-            c += shade_listed(lights[i], to_light, d, n, v, m, point);
+            c += shade_listed(lights[i], to_light, d, n, v, m);
         }
     }
-    return c;
+    return lights_checked(c);
 }

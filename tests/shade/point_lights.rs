@@ -17,7 +17,13 @@ fn point_scene(name: &str) -> Scene {
 }
 
 /// Each culled backend's frame of `gpu_scene` with `strategy`.
-fn frames(ctx: &GpuContext, gpu_scene: &GpuScene, s: &Scene, strategy: &Strategy, size: (u32, u32)) -> Vec<HdrImage> {
+fn frames(
+    ctx: &GpuContext,
+    gpu_scene: &GpuScene,
+    s: &Scene,
+    strategy: &Strategy,
+    size: (u32, u32),
+) -> Vec<HdrImage> {
     let renderer = Renderer::new(ctx, gpu_scene);
     let settings = CullSettings::for_camera(&s.camera);
     CULLED
@@ -43,10 +49,11 @@ fn max_difference(a: &HdrImage, b: &HdrImage) -> f32 {
 }
 
 /// A scene of point lights is flagged, one with spots is not, and a scene marked for general
-/// lights (as stochastic ranges mark it) drops the flag. The short path's images equal the
-/// general path's within rounding. And the flag is what picks the path: spot lights written
-/// into a flagged scene's buffer are shaded as points (cones ignored), so the flag must only
-/// be set where the lights allow it.
+/// lights (as stochastic ranges mark it) drops the flag. A renderer built for a flagged scene
+/// shades with the short path, and its images equal those of a renderer built for the general
+/// path within rounding; it refuses a scene marked since. And the flag is what picks the
+/// path: spot lights written into a flagged scene's buffer are shaded as points (cones
+/// ignored), so the flag must only be set where the lights allow it.
 #[test]
 fn point_lights_shade_as_the_general_model_does() {
     let ctx = common::gpu();
@@ -54,12 +61,31 @@ fn point_lights_shade_as_the_general_model_does() {
     let spots = scene("atrium");
     let points = point_scene("atrium");
     let spot_gpu = GpuScene::upload(&ctx, &spots, &spots.camera, size.0, size.1).unwrap();
-    assert!(!spot_gpu.point_lights(), "a scene with spots must not be flagged");
+    assert!(
+        !spot_gpu.point_lights(),
+        "a scene with spots must not be flagged"
+    );
     let fast = GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
     assert!(fast.point_lights(), "a scene of point lights is flagged");
     let general = GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
     general.mark_general_lights(&ctx);
     assert!(!general.point_lights());
+    let point_renderer = Renderer::new(&ctx, &fast);
+    assert!(point_renderer.point_lights());
+    assert!(!Renderer::new(&ctx, &general).point_lights());
+    let refused = point_renderer.render(
+        &ctx,
+        &general,
+        Backend::Deferred,
+        &Strategy::tiled_gather(16),
+        &CullSettings::for_camera(&points.camera),
+        size,
+    );
+    let message = refused
+        .err()
+        .expect("a point-light renderer over general lights")
+        .to_string();
+    assert!(message.contains("point lights"), "{message}");
     for strategy in strategies() {
         let a = frames(&ctx, &fast, &points, &strategy, size);
         let b = frames(&ctx, &general, &points, &strategy, size);
@@ -67,7 +93,10 @@ fn point_lights_shade_as_the_general_model_does() {
             let what = format!("{} {}", strategy.name(), backend.name());
             assert!(a[k].peak() > 0.0, "{what}: black");
             let d = max_difference(&a[k], &b[k]);
-            assert!(d <= 1e-5, "{what}: short and general paths differ by {d:e} of the peak");
+            assert!(
+                d <= 1e-5,
+                "{what}: short and general paths differ by {d:e} of the peak"
+            );
         }
     }
     // Spots in a flagged scene's buffer: the short path ignores their cones.

@@ -9,7 +9,9 @@ use glam::Vec3;
 use manylights_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::layout::{FRAME_FLAG_POINT_LIGHTS, GpuFrame, GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT};
+use crate::layout::{
+    FRAME_FLAG_POINT_LIGHTS, GpuFrame, GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT,
+};
 use crate::{GpuContext, GpuError};
 
 /// A scene uploaded for rendering.
@@ -158,7 +160,11 @@ impl GpuScene {
             wgpu::BufferUsages::STORAGE | copy,
         );
         let frame = GpuFrame {
-            flags: if point_lights { FRAME_FLAG_POINT_LIGHTS } else { 0 },
+            flags: if point_lights {
+                FRAME_FLAG_POINT_LIGHTS
+            } else {
+                0
+            },
             ..GpuFrame::new(camera, width, height, light_count)
         };
         let frame_buf = init(

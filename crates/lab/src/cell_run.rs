@@ -106,6 +106,8 @@ pub(crate) fn run_cell(
         GpuScene::upload(ctx, &scene, &poses[0], w, h)
     })
     .map_err(|e| other(&e))?;
+    // Stochastic ranges first: they make the lights general, which the renderer is built for.
+    let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let renderer = stage(name, "pipelines built", || {
         renderers.get(ctx, &gpu_scene, c.msaa)
     })
@@ -118,7 +120,6 @@ pub(crate) fn run_cell(
         ..CullSettings::for_camera(cam)
     };
     let mut movers = Movers::new(ctx, c, &gpu_scene, &scene, own_lights)?;
-    let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
     let mut encode = Vec::new();
     let mut uploads = Vec::new();

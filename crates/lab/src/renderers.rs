@@ -1,14 +1,15 @@
 //! The renderers of a run, kept from cell to cell: building one compiles every culling and
 //! shading pipeline, most of a small cell's time (on lavapipe about 1.5 s of a tiny stability
 //! cell's 2.3). A renderer's pipelines depend only on the sample count, whether the scene has
-//! transparent surfaces and its opaque surfaces' material models: bind group layouts of equal
-//! entries are one layout to wgpu, so a renderer serves every scene laid out alike.
-
+//! transparent surfaces, its opaque surfaces' material models and whether its lights are all
+//! windowed point lights: bind group layouts of equal entries are one layout to wgpu, so a
+//! renderer serves every scene laid out alike.
 use manylights_gpu::{GpuContext, GpuError, GpuScene};
 use manylights_shade::Renderer;
 
-/// What a renderer is built for: samples a pixel, glass, the opaque material models in order.
-type Key = (u32, bool, Vec<u32>);
+/// What a renderer is built for: samples a pixel, glass, the opaque material models in order,
+/// windowed point lights alone.
+type Key = (u32, bool, Vec<u32>, bool);
 
 /// The renderers built so far in a run (the most recent [`Renderers::KEEP`]).
 #[derive(Default)]
@@ -34,6 +35,7 @@ impl Renderers {
                 .iter()
                 .map(|&(model, _)| model)
                 .collect(),
+            scene.point_lights(),
         );
         let i = match self.0.iter().position(|(k, _)| *k == key) {
             Some(i) => i,

@@ -122,6 +122,9 @@ pub struct Renderer {
     /// Samples a pixel of the depth buffer and the forward passes' colour target (MSAA where
     /// more than one).
     pub(crate) samples: u32,
+    /// Built for windowed point lights alone (`POINT_LIGHTS`, shaders/common/shading.wgsl):
+    /// the scene said so when the renderer was built ([`GpuScene::point_lights`]).
+    pub(crate) point_lights: bool,
     pub(crate) prepass: DepthPrepass,
     /// Whether the scene has transparent surfaces.
     pub(crate) transparent: bool,
@@ -181,6 +184,12 @@ impl Renderer {
         Ok(Self::build(ctx, scene, samples))
     }
 
+    /// Whether its shading passes are built for windowed point lights alone (see
+    /// [`GpuScene::point_lights`]); such a renderer refuses a scene whose lights are not.
+    pub fn point_lights(&self) -> bool {
+        self.point_lights
+    }
+
     /// Samples a pixel of its frames.
     pub fn samples(&self) -> u32 {
         self.samples
@@ -198,6 +207,15 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
+        if self.point_lights && !scene.point_lights() {
+            return Err(manylights_gpu::GpuError::Unsupported(
+                "a renderer built for windowed point lights cannot shade this scene's lights \
+                 (spots, or stochastic ranges drawn since): build the renderer after \
+                 StochasticRanges::new, from the scene as it will be shaded"
+                    .into(),
+            )
+            .into());
+        }
         if self.samples > 1 && backend == Backend::DeferredStoredPosition {
             return Err(manylights_gpu::GpuError::Unsupported(format!(
                 "backend {} with MSAA ({} samples): not built; MSAA renders with forward, \

@@ -154,6 +154,9 @@ impl Renderer {
         let g0 = &scene.layout;
         // Forward: a pipeline a material model of the opaque triangles, each shading its model
         // alone (MATERIAL_MODELS, brdf.wgsl), drawn a model at a time.
+        // A POINT_LIGHTS pipeline where every light is a windowed point light (shading.wgsl).
+        let point_lights = scene.point_lights();
+        let point = ("POINT_LIGHTS", f64::from(u8::from(point_lights)));
         let forward_with = |entry| {
             scene
                 .opaque_models
@@ -167,7 +170,7 @@ impl Renderer {
                         Some((entry, &[target(HDR)])),
                         DepthTest::Equal,
                         samples,
-                        &[("MATERIAL_MODELS", f64::from(1u32 << model))],
+                        &[("MATERIAL_MODELS", f64::from(1u32 << model)), point],
                     )
                 })
                 .collect::<Vec<_>>()
@@ -176,7 +179,7 @@ impl Renderer {
         let forward_zbin = forward_with("fs_forward_zbin");
         let transparent_with = |target: Option<wgpu::ColorTargetState>| {
             ["fs_forward_transparent", "fs_forward_transparent_zbin"].map(|entry| {
-                raster_msaa(
+                raster_with(
                     d,
                     "shade.forward_transparent",
                     &fwd,
@@ -184,6 +187,7 @@ impl Renderer {
                     Some((entry, std::slice::from_ref(&target))),
                     DepthTest::Less,
                     samples,
+                    &[point],
                 )
             })
         };
@@ -246,12 +250,13 @@ impl Renderer {
         // With MSAA, GLASS: the lighting composites the glass layer over each sample.
         let models = [
             ("MATERIAL_MODELS", f64::from(scene.opaque_model_mask())),
+            point,
             ("GLASS", f64::from(u8::from(glass_layer.is_some()))),
         ];
         let models = if samples > 1 {
             &models[..]
         } else {
-            &models[..1]
+            &models[..2]
         };
         let models = wgpu::PipelineCompilationOptions {
             constants: models,
@@ -292,6 +297,7 @@ impl Renderer {
                 Culler::with_samples(ctx, scene, samples)
             },
             samples,
+            point_lights,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
             lookup_bounds,
