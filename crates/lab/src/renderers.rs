@@ -4,6 +4,7 @@
 //! transparent surfaces, its opaque surfaces' material models and whether its lights are all
 //! windowed point lights: bind group layouts of equal entries are one layout to wgpu, so a
 //! renderer serves every scene laid out alike.
+
 use manylights_gpu::{GpuContext, GpuError, GpuScene};
 use manylights_shade::Renderer;
 
