@@ -155,13 +155,18 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     }
 }
 
+// The lights a workgroup holds in workgroup memory at a time (shade_tile_group): 32 lights of
+// 64 bytes, 2 KB a workgroup. On an H100 culling and lighting took 7-11% longer with 64 (4 KB),
+// 2-3% with 48, up to 1% with 24, 1-2% with 16 and 6% with 8 (docs/bench/HISTORY.md, "The
+// lighting pass against its floor").
+const TILE_GROUP_LIGHTS: u32 = 32u;
 var<workgroup> wg_list: vec2<u32>;
-var<workgroup> wg_lights: array<Light, 64>;
+var<workgroup> wg_lights: array<Light, TILE_GROUP_LIGHTS>;
 
 // A list a tile, in tiles of a multiple of 8 pixels (ListForm::Tiles: the tiled strategies, and
 // clusters of one slice): a workgroup's 8 x 8 pixels lie in one tile and read one list, so its
-// lights go through workgroup memory 64 at a time, each loaded once by one thread for all 64
-// pixels, in the list's order (the same sums as shade_list).
+// lights go through workgroup memory TILE_GROUP_LIGHTS at a time, each loaded once by one
+// thread for all 64 pixels, in the list's order (the same sums as shade_list).
 fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     let inside = all(pixel < vec2<u32>(frame.viewport.xy));
     var z = 1.0;
@@ -183,8 +188,8 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     if covered {
         c = emitted(s.m);
     }
-    for (var base = 0u; base < list.y; base += 64u) {
-        let n = min(64u, list.y - base);
+    for (var base = 0u; base < list.y; base += TILE_GROUP_LIGHTS) {
+        let n = min(TILE_GROUP_LIGHTS, list.y - base);
         if li < n {
             wg_lights[li] = lights[light_indices[list.x + base + li]];
         }
