@@ -2,7 +2,8 @@
 # On the GPU machine, from the repository root: the GPU benches of two builds side by side in one
 # run, interleaved (A B A B ...), so that a change is compared with the build before it on one
 # machine at one time (the machines vary by several percent). Each build is a folder holding the
-# `gpu` bench executable of scripts/bench-bundle.sh and its commit.txt.
+# bundle of scripts/bench-bundle.sh (its `gpu` bench executable, unpacked here from gpu.xz) and
+# its commit.txt.
 #
 # usage: bench-ab.sh A_DIR B_DIR ROUNDS FILTER OUT_DIR [MORE_ENV]
 #   FILTER: criterion's regex over bench ids, such as 'cull\.harada2012/tiled_gather8/'
@@ -15,8 +16,7 @@ set -uo pipefail
 a="$1"; b="$2"; rounds="$3"; filter="$4"; out="$5"; more="${6:-}"
 exe="${BENCH_EXE:-gpu}"
 mkdir -p "$out"
-for f in .device/gl/*.deb; do dpkg -x "$f" /; done; ldconfig
-export XDG_RUNTIME_DIR=/tmp
+source "$(dirname "$0")/bench-unpack.sh" "$a" "$b"
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader > "$out/gpu.txt" 2>/dev/null || true
 date -u +%Y-%m-%dT%H:%M:%SZ > "$out/date.txt"
 for r in $(seq 1 "$rounds"); do
