@@ -64,7 +64,8 @@ fn shade_listed(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3
 
 // A loop's sum `c`, or NaN where a POINT_LIGHTS pipeline shades a frame whose lights are not
 // all windowed point lights: a count of non-finite pixels in the results, never a plausible
-// image. (Renderer::render refuses that combination first.)
+// image. (Renderer::render refuses that combination first.) The NaN's bits are or-ed with a
+// runtime zero, so that it is not a constant expression for the shader compiler to refuse.
 fn lights_checked(c: vec3<f32>) -> vec3<f32> {
     if POINT_LIGHTS && !point_lights_only() {
         return vec3<f32>(bitcast<f32>(0x7fc00000u | (frame.flags & 0u)));
