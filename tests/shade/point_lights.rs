@@ -115,3 +115,51 @@ fn point_lights_shade_as_the_general_model_does() {
         );
     }
 }
+
+/// The shader's own guard: a point-light renderer's shading pass run past the host's check
+/// (`Renderer::shade_pass`, as the benches drive it) over a frame whose lights were marked
+/// general since writes NaN at every covered pixel, for forward and deferred lighting alike.
+#[test]
+fn point_light_pipelines_write_nan_over_general_lights() {
+    let ctx = common::gpu();
+    let (w, h) = (64, 48);
+    let s = point_scene("atrium");
+    let settings = CullSettings::for_camera(&s.camera);
+    let strategy = Strategy::tiled_gather(16);
+    for backend in [Backend::Forward, Backend::Deferred] {
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let out = renderer
+            .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
+            .unwrap();
+        let covered = out.color.data.iter().filter(|p| p[3] > 0.0).count();
+        assert!(
+            covered > 0 && out.color.non_finite_count() == 0,
+            "{}",
+            backend.name()
+        );
+        gpu_scene.mark_general_lights(&ctx);
+        let mut pass = renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap();
+        renderer
+            .culler
+            .run_repeated_with(
+                &ctx,
+                &gpu_scene,
+                &out.depth,
+                &strategy,
+                &settings,
+                out.lists.as_ref().unwrap(),
+                1,
+                &mut GpuTimer::new(&ctx, 64),
+                &mut pass,
+            )
+            .unwrap();
+        let again = out.read_color(&ctx).unwrap();
+        let nan = again
+            .data
+            .iter()
+            .filter(|p| p[3] > 0.0 && p[..3].iter().any(|c| c.is_nan()))
+            .count();
+        assert_eq!(nan, covered, "{}: every covered pixel NaN", backend.name());
+    }
+}
