@@ -16,15 +16,15 @@ fn point_scene(name: &str) -> Scene {
     s
 }
 
-/// Each culled backend's frame of `gpu_scene` with `strategy`.
+/// Each culled backend's frame of `gpu_scene` with `strategy`, by `renderer`.
 fn frames(
     ctx: &GpuContext,
+    renderer: &Renderer,
     gpu_scene: &GpuScene,
     s: &Scene,
     strategy: &Strategy,
     size: (u32, u32),
 ) -> Vec<HdrImage> {
-    let renderer = Renderer::new(ctx, gpu_scene);
     let settings = CullSettings::for_camera(&s.camera);
     CULLED
         .into_iter()
@@ -72,7 +72,8 @@ fn point_lights_shade_as_the_general_model_does() {
     assert!(!general.point_lights());
     let point_renderer = Renderer::new(&ctx, &fast);
     assert!(point_renderer.point_lights());
-    assert!(!Renderer::new(&ctx, &general).point_lights());
+    let general_renderer = Renderer::new(&ctx, &general);
+    assert!(!general_renderer.point_lights());
     let refused = point_renderer.render(
         &ctx,
         &general,
@@ -87,8 +88,8 @@ fn point_lights_shade_as_the_general_model_does() {
         .to_string();
     assert!(message.contains("point lights"), "{message}");
     for strategy in strategies() {
-        let a = frames(&ctx, &fast, &points, &strategy, size);
-        let b = frames(&ctx, &general, &points, &strategy, size);
+        let a = frames(&ctx, &point_renderer, &fast, &points, &strategy, size);
+        let b = frames(&ctx, &general_renderer, &general, &points, &strategy, size);
         for (k, backend) in CULLED.into_iter().enumerate() {
             let what = format!("{} {}", strategy.name(), backend.name());
             assert!(a[k].peak() > 0.0, "{what}: black");
@@ -104,8 +105,8 @@ fn point_lights_shade_as_the_general_model_does() {
     ctx.queue
         .write_buffer(&fast.lights, 0, bytemuck::cast_slice(&spot_lights));
     let strategy = Strategy::tiled_gather(16);
-    let flagged = frames(&ctx, &fast, &spots, &strategy, size);
-    let right = frames(&ctx, &spot_gpu, &spots, &strategy, size);
+    let flagged = frames(&ctx, &point_renderer, &fast, &spots, &strategy, size);
+    let right = frames(&ctx, &general_renderer, &spot_gpu, &spots, &strategy, size);
     for (k, backend) in CULLED.into_iter().enumerate() {
         let d = max_difference(&right[k], &flagged[k]);
         assert!(

@@ -13,8 +13,9 @@
 //! clock the GPU runs at under load, where a frame of the experiments' loop (rendered, read
 //! back and checked one at a time) leaves the GPU idle long enough for its clock to fall.
 //!
-//! The runs are repeated untimed for [`WARM_UP`] first (not on a CPU adapter), so that they are timed at the clock the
-//! GPU runs at under load, not the lower one it falls to while the host works between cells.
+//! The runs are repeated untimed for [`WARM_UP`] first (not on a CPU adapter), so that they
+//! are timed at the clock the GPU runs at under load, not the lower one it falls to while the
+//! host works between cells.
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES, PassKind};

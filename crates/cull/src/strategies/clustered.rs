@@ -25,9 +25,10 @@
 //! thread a cluster) writes each list from its mask, and its range, taking its offset from a
 //! cursor a workgroup at a time (no scan; with a capacity, which caps the counts after the
 //! count pass, after the scan of the counts). The same lists, in light order (at offsets that
-//! differ run to run), without occupancy, queue, order or finalize passes. The masks hold a bit per (cluster, light), rounded to 256 lights:
-//! 0.8 MB at 500 lights at 1080p in 64-pixel tiles of 24 slices, at most 128 MB (2^24 pairs x
-//! 64 slices); where they would not fit a storage binding, the per-light passes run.
+//! differ run to run), without occupancy, queue, order or finalize passes. The masks hold a
+//! bit per (cluster, light), rounded to 256 lights: 0.8 MB at 500 lights at 1080p in 64-pixel
+//! tiles of 24 slices, at most 128 MB (2^24 pairs x 64 slices); where they would not fit a
+//! storage binding, the per-light passes run.
 
 use manylights_gpu::GpuError;
 
