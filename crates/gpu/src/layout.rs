@@ -18,8 +18,8 @@ pub const LIGHT_KIND_SPOT: u32 = 1;
 pub const FRAME_FLAG_INFINITE_RANGE: u32 = 1;
 
 /// `Frame.flags`: every light is a point light shaded with the windowed falloff (no spot cone,
-/// no stochastic alpha), so the shading loops take `shade_point_light` (shaders/common/
-/// shading.wgsl): the same sums without the general model's branches and loads. Set by
+/// no stochastic alpha). Shading pipelines built for such lights (`POINT_LIGHTS`,
+/// shaders/common/shading.wgsl) check it and write NaN where it is missing. Set by
 /// [`crate::GpuScene`] from the lights it holds; a light buffer that may hold anything else
 /// must not carry it.
 pub const FRAME_FLAG_POINT_LIGHTS: u32 = 2;
