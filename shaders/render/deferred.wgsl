@@ -33,6 +33,18 @@ fn deferred_shade_stored_tiles(@builtin(global_invocation_id) id: vec3<u32>, @bu
 }
 
 @compute @workgroup_size(8, 8)
+fn deferred_shade_clusters(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
+    shade_cluster_group(id.xy, wg.xy, li, false);
+}
+
+@compute @workgroup_size(8, 8)
+fn deferred_shade_stored_clusters(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
+    shade_cluster_group(id.xy, wg.xy, li, true);
+}
+
+@compute @workgroup_size(8, 8)
 fn deferred_shade_zbin(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     shading_pixel = id.xy;
     shade_zbin_group(id.xy, wg.xy, li, false);
@@ -53,9 +65,26 @@ struct Surface {
     m: Material,
 }
 
-fn surface(pixel: vec2<u32>, stored: bool) -> Surface {
-    let g = textureLoad(gb_normal_depth, pixel, 0);
-    let m = materials[textureLoad(gb_material, pixel, 0).x];
+// A pixel's depth and G-buffer texels, loaded together: one memory round trip, not the depth's
+// and then, behind its test, the G-buffer's. (The tile path reads no depth: a pixel is covered
+// where its G-buffer's view-space z is not zero, the G-buffer's clear value, as every camera's
+// near plane is at a positive distance.)
+struct Texels {
+    z: f32,
+    g: vec4<f32>,
+    material: u32,
+}
+
+fn load_texels(pixel: vec2<u32>) -> Texels {
+    return Texels(textureLoad(depth_tex, pixel, 0), textureLoad(gb_normal_depth, pixel, 0), textureLoad(gb_material, pixel, 0).x);
+}
+
+// Texels of a pixel outside the view: not covered (by depth or by view-space z).
+const NO_TEXELS = Texels(1.0, vec4<f32>(0.0), 0u);
+
+fn surface(pixel: vec2<u32>, t: Texels, stored: bool) -> Surface {
+    let g = t.g;
+    let m = materials[t.material];
     let ndc = vec2<f32>((f32(pixel.x) + 0.5) * frame.viewport.z * 2.0 - 1.0, 1.0 - (f32(pixel.y) + 0.5) * frame.viewport.w * 2.0);
     var p = (frame.world_from_view * vec4<f32>(view_point(ndc, g.w), 1.0)).xyz;
     if stored {
@@ -69,12 +98,13 @@ fn shade_pixel(pixel: vec2<u32>, stored: bool, zbin: bool) {
     if any(pixel >= size) {
         return;
     }
-    let z = textureLoad(depth_tex, pixel, 0);
+    let t = load_texels(pixel);
+    let z = t.z;
     if z >= 1.0 {
         textureStore(out_color, pixel, vec4<f32>(0.0));
         return;
     }
-    let s = surface(pixel, stored);
+    let s = surface(pixel, t, stored);
     var c: vec3<f32>;
     if zbin {
         c = shade_zbin(zbin_cell(pixel, z), s.p, s.n, s.v, s.m);
@@ -104,11 +134,12 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     }
     workgroupBarrier();
     let inside = all(pixel < vec2<u32>(frame.viewport.xy));
-    var z = 1.0;
+    var t = NO_TEXELS;
     if inside {
-        z = textureLoad(depth_tex, pixel, 0);
+        t = load_texels(pixel);
     }
-    let covered = inside && z < 1.0;
+    let z = t.z;
+    let covered = z < 1.0;
     var cell = ZBinCell(0u, 1u, 0u);
     if covered {
         cell = zbin_cell(pixel, z);
@@ -125,7 +156,7 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     var c = vec3<f32>(0.0);
     var s: Surface;
     if covered {
-        s = surface(pixel, stored);
+        s = surface(pixel, t, stored);
         c = emitted(s.m);
     }
     if range.x < range.y {
@@ -165,36 +196,46 @@ var<workgroup> wg_lights: array<Light, TILE_GROUP_LIGHTS>;
 
 // A list a tile, in tiles of a multiple of 8 pixels (ListForm::Tiles: the tiled strategies, and
 // clusters of one slice): a workgroup's 8 x 8 pixels lie in one tile and read one list, so its
-// lights go through workgroup memory TILE_GROUP_LIGHTS at a time, each loaded once by one
-// thread for all 64 pixels, in the list's order (the same sums as shade_list).
+// lights go through workgroup memory (shade_group_list). Coverage comes from the G-buffer
+// (Texels): without the depth's load the Forward+ configuration took 0.5% less and the hall at
+// 5,000 lights 1.3% (H100, docs/bench/HISTORY.md).
 fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     let inside = all(pixel < vec2<u32>(frame.viewport.xy));
-    var z = 1.0;
+    var t = NO_TEXELS;
     if inside {
-        z = textureLoad(depth_tex, pixel, 0);
+        t = Texels(0.0, textureLoad(gb_normal_depth, pixel, 0), textureLoad(gb_material, pixel, 0).x);
     }
-    let covered = inside && z < 1.0;
+    let covered = t.g.w != 0.0;
     if li == 0u {
         let tile = group * 8u / cull.tile_size;
         wg_list = bin_ranges[tile.y * cull.tiles_x + tile.x];
     }
     let list = workgroupUniformLoad(&wg_list);
     var s: Surface;
-    if covered {
-        s = surface(pixel, stored);
-    }
-    let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
     var c = vec3<f32>(0.0);
     if covered {
+        s = surface(pixel, t, stored);
         c = emitted(s.m);
     }
+    c = shade_group_list(list, li, covered, s, c);
+    if inside {
+        textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(lights_checked(c), 1.0), covered));
+    }
+}
+
+// Adds the lights of `list` (uniform) to `c` where the pixel `takes` them: the workgroup loads
+// them into workgroup memory TILE_GROUP_LIGHTS at a time, each by one thread for all 64 pixels,
+// and each pixel that takes them sums them in the list's order (the same sums as shade_list).
+fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec3<f32>) -> vec3<f32> {
+    let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
+    var c = c_in;
     for (var base = 0u; base < list.y; base += TILE_GROUP_LIGHTS) {
         let n = min(TILE_GROUP_LIGHTS, list.y - base);
         if li < n {
             wg_lights[li] = lights[light_indices[list.x + base + li]];
         }
         workgroupBarrier();
-        if covered {
+        if takes {
             for (var k = 0u; k < n; k++) {
                 let to_light = wg_lights[k].position - s.p;
                 let d = length(to_light);
@@ -205,6 +246,63 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
             }
         }
         workgroupBarrier();
+    }
+    return c;
+}
+
+// The slices a workgroup's covered pixels lie in, a bit a slice (shade_cluster_group).
+var<workgroup> wg_slice_bits: array<atomic<u32>, CLUSTER_GROUP_SLICES / 32u>;
+var<workgroup> wg_slice_bits_plain: array<u32, CLUSTER_GROUP_SLICES / 32u>;
+
+// A list a cluster, in tiles of a multiple of 8 pixels and with many lights (ListForm::Clusters):
+// a workgroup's 8 x 8 pixels lie in one tile and read the lists of the slices they lie in. The
+// workgroup takes those slices in turn, each list's lights through workgroup memory
+// (shade_group_list), and each pixel sums the lights of its own slice's list, in its order (the
+// same sums as shade_list). A warp whose pixels lie in several slices walks each slice's list,
+// where the loop a pixel walks them side by side; but the loop a pixel loads each index and then
+// its light, one after the other, which at 50,000 lights and more cost more (H100: the hall at
+// 50,000 lights 2.90 -> 2.44 ms; 1M lights, 32 px x 32 slices, 3.70 -> 3.31 ms), and at 500 and
+// 3,072 lights less (109 against 216 µs; 268 against 277 µs): ListForm::of's rule. Walking the
+// lists side by side through workgroup memory, or choosing a path a workgroup by its lists'
+// lengths, was slower at every count (docs/bench/HISTORY.md).
+fn shade_cluster_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
+    if li < CLUSTER_GROUP_SLICES / 32u {
+        atomicStore(&wg_slice_bits[li], 0u);
+    }
+    workgroupBarrier();
+    let inside = all(pixel < vec2<u32>(frame.viewport.xy));
+    var t = NO_TEXELS;
+    if inside {
+        t = load_texels(pixel);
+    }
+    let z = t.z;
+    let covered = z < 1.0;
+    var slice = 0u;
+    if covered {
+        slice = depth_slice(linear_depth(z));
+        atomicOr(&wg_slice_bits[slice / 32u], 1u << (slice % 32u));
+    }
+    workgroupBarrier();
+    if li < CLUSTER_GROUP_SLICES / 32u {
+        wg_slice_bits_plain[li] = atomicLoad(&wg_slice_bits[li]);
+    }
+    let slices = workgroupUniformLoad(&wg_slice_bits_plain);
+    var s: Surface;
+    var c = vec3<f32>(0.0);
+    if covered {
+        s = surface(pixel, t, stored);
+        c = emitted(s.m);
+    }
+    let tile = group * 8u / cull.tile_size;
+    let bin = tile.y * cull.tiles_x + tile.x;
+    for (var w = 0u; w < CLUSTER_GROUP_SLICES / 32u; w++) {
+        var bits = slices[w];
+        while bits != 0u {
+            let k = w * 32u + firstTrailingBit(bits);
+            bits &= bits - 1u;
+            let list = bin_ranges[k * cull.tiles_x * cull.tiles_y + bin];
+            c = shade_group_list(list, li, covered && slice == k, s, c);
+        }
     }
     if inside {
         textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(lights_checked(c), 1.0), covered));

@@ -15,6 +15,7 @@
 //!   position differences, so this is the real cost of rebuilding positions; the stored-position
 //!   variant shows it is nothing else. The measured maxima are printed.
 
+mod cluster_group;
 #[path = "../common/mod.rs"]
 mod common;
 mod materials;

@@ -47,6 +47,14 @@ pub const CLUSTER_LANES: u32 = 32;
 /// The most depth slices of the clusters' tile path (`cull.clustered.tiles_count`: each of the
 /// first 64 threads of a tile's workgroup owns a slice).
 pub const CLUSTER_TILE_SLICES: u32 = 64;
+/// The most depth slices of clusters whose lists deferred lighting takes a workgroup at a time
+/// ([`crate::ListForm::Clusters`]: a bit a slice in the workgroup's memory, 32 bytes).
+pub const CLUSTER_GROUP_SLICES: u32 = 256;
+/// Deferred lighting takes clusters' lists a workgroup at a time above this many lights, and a
+/// pixel at a time up to it ([`crate::ListForm::Clusters`]; on an H100 the loop a pixel was
+/// faster at 500 and 3,072 lights, the workgroup's at 50,000 and 1M: shaders/render/deferred.wgsl,
+/// `shade_cluster_group`).
+pub const CLUSTER_GROUP_MIN_LIGHTS: u32 = 4096;
 /// Threads sharing one light's tiles in `cull.tiled_scatter`; each (light, lane) has a count, so
 /// the scan runs over lights x SCATTER_LANES entries.
 pub const SCATTER_LANES: u32 = 16;
@@ -143,6 +151,7 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("ZBIN_MAX_SPAN", ZBIN_MAX_SPAN),
     WgslConst::U32("CLUSTER_LANES", CLUSTER_LANES),
     WgslConst::U32("CLUSTER_TILE_SLICES", CLUSTER_TILE_SLICES),
+    WgslConst::U32("CLUSTER_GROUP_SLICES", CLUSTER_GROUP_SLICES),
     WgslConst::U32("SCATTER_LANES", SCATTER_LANES),
     WgslConst::U32("SCATTER_MASK_THREADS", SCATTER_MASK_THREADS),
     WgslConst::U32("CULL_FLAG_DEPTH_MASK", CULL_FLAG_DEPTH_MASK),

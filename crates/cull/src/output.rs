@@ -4,7 +4,9 @@
 use manylights_gpu::{GpuContext, GpuError, readback};
 
 use crate::blocks::{tile_lines, tile_masks};
-use crate::layout::{CULL_FLAG_ZBIN, GpuCullParams, GpuTileDepth};
+use crate::layout::{
+    CLUSTER_GROUP_MIN_LIGHTS, CLUSTER_GROUP_SLICES, CULL_FLAG_ZBIN, GpuCullParams, GpuTileDepth,
+};
 use crate::record::StepInfo;
 
 /// The form of a run's lists on the GPU (`shaders/cull/common/lookup.wgsl`): a consumer picks
@@ -18,6 +20,12 @@ pub enum ListForm {
     Tiles,
     /// Z-binning's depth bins' ranges of depth-sorted lights and tile masks.
     ZBin,
+    /// A list a cluster, in tiles of a multiple of 8 pixels and 2 to
+    /// [`crate::layout::CLUSTER_GROUP_SLICES`] slices, with more than
+    /// [`crate::layout::CLUSTER_GROUP_MIN_LIGHTS`] lights: an 8 x 8 block of pixels reads the
+    /// lists of its tile's clusters it lies in, and deferred lighting takes them a workgroup
+    /// at a time (a pixel at a time with fewer lights, as `Bins`).
+    Clusters,
 }
 
 impl ListForm {
@@ -27,6 +35,11 @@ impl ListForm {
             Self::ZBin
         } else if p.slices <= 1 && p.tile_size.is_multiple_of(8) {
             Self::Tiles
+        } else if p.slices <= CLUSTER_GROUP_SLICES
+            && p.tile_size.is_multiple_of(8)
+            && p.light_count > CLUSTER_GROUP_MIN_LIGHTS
+        {
+            Self::Clusters
         } else {
             Self::Bins
         }

@@ -265,29 +265,34 @@ impl Renderer {
         let compute = |def: &wgpu::ShaderModule, entry| {
             pipeline::compute_with(d, def, &def_layout, entry, &models)
         };
-        // With MSAA, one pass a form of lists (a list a bin or a tile, and z-binning's), the
-        // position rebuilt; the stored position takes no MSAA (`render` says so).
-        let (deferred, deferred_stored, deferred_zbin, deferred_tiles) = if samples > 1 {
-            let def = DEFERRED_MSAA.create_samples(d, samples);
-            let bins = compute(&def, "deferred_shade_msaa");
-            let zbin = compute(&def, "deferred_shade_msaa_zbin");
-            (
-                bins.clone(),
-                bins.clone(),
-                [zbin.clone(), zbin],
-                [bins.clone(), bins],
-            )
-        } else {
-            let def = DEFERRED.create(d);
-            (
-                compute(&def, "deferred_shade"),
-                compute(&def, "deferred_shade_stored"),
-                ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
-                    .map(|entry| compute(&def, entry)),
-                ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
-                    .map(|entry| compute(&def, entry)),
-            )
-        };
+        // With MSAA, one pass for the lists a bin (a tile's or a cluster's too) and one for
+        // z-binning's, the position rebuilt; the stored position takes no MSAA (`render` says
+        // so).
+        let (deferred, deferred_stored, deferred_zbin, deferred_tiles, deferred_clusters) =
+            if samples > 1 {
+                let def = DEFERRED_MSAA.create_samples(d, samples);
+                let bins = compute(&def, "deferred_shade_msaa");
+                let zbin = compute(&def, "deferred_shade_msaa_zbin");
+                (
+                    bins.clone(),
+                    bins.clone(),
+                    [zbin.clone(), zbin],
+                    [bins.clone(), bins.clone()],
+                    [bins.clone(), bins],
+                )
+            } else {
+                let def = DEFERRED.create(d);
+                (
+                    compute(&def, "deferred_shade"),
+                    compute(&def, "deferred_shade_stored"),
+                    ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
+                        .map(|entry| compute(&def, entry)),
+                    ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
+                        .map(|entry| compute(&def, entry)),
+                    ["deferred_shade_clusters", "deferred_shade_stored_clusters"]
+                        .map(|entry| compute(&def, entry)),
+                )
+            };
         let lookup_bounds =
             (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
         Self {
@@ -313,6 +318,7 @@ impl Renderer {
             deferred_stored,
             deferred_zbin,
             deferred_tiles,
+            deferred_clusters,
             forward_lists,
             deferred_lists,
             deferred_gbuffer,

@@ -316,7 +316,7 @@ impl ListPass for ShadePass<'_> {
                     timer,
                     "shade.forward",
                     match self.form {
-                        ListForm::Bins | ListForm::Tiles => &r.forward,
+                        ListForm::Bins | ListForm::Tiles | ListForm::Clusters => &r.forward,
                         ListForm::ZBin => &r.forward_zbin,
                     },
                     self.scene,
@@ -348,6 +348,7 @@ impl ListPass for ShadePass<'_> {
                         (ListForm::Bins, true) => &r.deferred_stored,
                         (ListForm::ZBin, stored) => &r.deferred_zbin[usize::from(stored)],
                         (ListForm::Tiles, stored) => &r.deferred_tiles[usize::from(stored)],
+                        (ListForm::Clusters, stored) => &r.deferred_clusters[usize::from(stored)],
                     },
                     &[&self.scene.bind_group, lists, gbuffer],
                     (w.div_ceil(8), h.div_ceil(8)),

@@ -1,0 +1,167 @@
+//! Deferred lighting over clusters a workgroup at a time (`ListForm::Clusters`,
+//! `shade_cluster_group` in shaders/render/deferred.wgsl) against the loop a pixel over the same
+//! lists (`ListForm::Bins`, `shade_list`): the same image, bit for bit, with lists shorter and
+//! longer than the workgroup's memory holds, and with a workgroup's pixels in several slices.
+
+use manylights_cull::layout::{CLUSTER_GROUP_MIN_LIGHTS, CLUSTER_GROUP_SLICES};
+use manylights_cull::{CullOutput, ListForm, ListPass};
+
+use super::*;
+
+/// A list consumer bound as if the lists were in `form`: the loop a pixel reads any lists a
+/// bin, so binding clusters' lists as `Bins` runs it over them.
+struct BoundAs<P>(P, ListForm);
+
+impl<P: ListPass> ListPass for BoundAs<P> {
+    fn bind(&mut self, ctx: &GpuContext, lists: [wgpu::BindingResource<'_>; 3], _: ListForm) {
+        self.0.bind(ctx, lists, self.1);
+    }
+
+    fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        self.0.record(enc, timer);
+    }
+
+    fn passes(&self) -> u32 {
+        self.0.passes()
+    }
+}
+
+/// The atrium with `count` lights of radius `radius` times its lights' bounds' diagonal.
+fn atrium_lights(count: u32, radius: f32) -> Scene {
+    let mut s = scene("atrium");
+    s.lights = LightSpec {
+        generator: LightGenerator::Uniform,
+        count,
+        seed: 9,
+        radius: RadiusRule::Fixed(s.light_bounds.extent().length() * radius),
+        intensity: 0.05,
+        spot_fraction: 0.0,
+        spot_outer_deg: 40.0,
+        ..LightSpec::default()
+    }
+    .generate(&s)
+    .unwrap();
+    s
+}
+
+fn clusters(tile_size: u32, slices: u32) -> Strategy {
+    Strategy::Clustered {
+        tile_size,
+        slices,
+        slicing: Slicing::Exponential,
+        skip_empty: true,
+        ordered: true,
+    }
+}
+
+#[test]
+fn cluster_group_lighting_equals_the_loop_a_pixel() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    // More lights than CLUSTER_GROUP_MIN_LIGHTS: small ones (lists of a few lights) and larger
+    // ones (several loads of the workgroup's 32 lights a list, the last one partial).
+    for s in [
+        atrium_lights(CLUSTER_GROUP_MIN_LIGHTS + 1, 0.02),
+        atrium_lights(CLUSTER_GROUP_MIN_LIGHTS + 500, 0.1),
+    ] {
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let settings = CullSettings::for_camera(&s.camera);
+        for (tile_size, slices) in [(8, 32), (16, 16), (32, 256)] {
+            let strategy = clusters(tile_size, slices);
+            for backend in [Backend::Deferred, Backend::DeferredStoredPosition] {
+                let what = format!(
+                    "{} {} {} lights",
+                    strategy.name(),
+                    backend.name(),
+                    s.lights.len()
+                );
+                let out = renderer
+                    .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
+                    .unwrap();
+                let lists: &CullOutput = out.lists.as_ref().unwrap();
+                assert_eq!(lists.form(), ListForm::Clusters, "{what}");
+                let covered = out.color.data.iter().filter(|p| p[3] > 0.0).count();
+                assert!(
+                    covered > w as usize * h as usize / 2,
+                    "{what}: {covered} pixels covered"
+                );
+                let mut per_pixel = BoundAs(
+                    renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap(),
+                    ListForm::Bins,
+                );
+                renderer
+                    .culler
+                    .run_repeated_with(
+                        &ctx,
+                        &gpu_scene,
+                        &out.depth,
+                        &strategy,
+                        &settings,
+                        lists,
+                        1,
+                        &mut GpuTimer::new(&ctx, 64),
+                        &mut per_pixel,
+                    )
+                    .unwrap();
+                let again = out.read_color(&ctx).unwrap();
+                let differ = again
+                    .data
+                    .iter()
+                    .zip(&out.color.data)
+                    .filter(|(a, b)| a != b)
+                    .count();
+                assert_eq!(
+                    differ, 0,
+                    "{what}: pixels that differ from the loop a pixel"
+                );
+            }
+        }
+    }
+}
+
+/// The form follows the grid and the lights: a list a tile for one slice; a list a cluster taken
+/// a workgroup at a time for 2 to CLUSTER_GROUP_SLICES slices in tiles of a multiple of 8 pixels
+/// with more than CLUSTER_GROUP_MIN_LIGHTS lights; the loop a pixel otherwise.
+#[test]
+fn cluster_list_form_follows_the_grid_and_the_lights() {
+    let ctx = common::gpu();
+    let (w, h) = (40, 24);
+    for count in [CLUSTER_GROUP_MIN_LIGHTS, CLUSTER_GROUP_MIN_LIGHTS + 1] {
+        let s = atrium_lights(count, 0.02);
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let settings = CullSettings::for_camera(&s.camera);
+        let many = count > CLUSTER_GROUP_MIN_LIGHTS;
+        let clusters_form = if many {
+            ListForm::Clusters
+        } else {
+            ListForm::Bins
+        };
+        for (tile_size, slices, form) in [
+            (16, 1, ListForm::Tiles),
+            (16, 2, clusters_form),
+            (8, CLUSTER_GROUP_SLICES, clusters_form),
+            (8, CLUSTER_GROUP_SLICES + 1, ListForm::Bins),
+            (12, 16, ListForm::Bins),
+        ] {
+            let strategy = clusters(tile_size, slices);
+            let out = renderer
+                .render(
+                    &ctx,
+                    &gpu_scene,
+                    Backend::Deferred,
+                    &strategy,
+                    &settings,
+                    (w, h),
+                )
+                .unwrap();
+            assert_eq!(
+                out.lists.as_ref().unwrap().form(),
+                form,
+                "{} with {count} lights",
+                strategy.name()
+            );
+        }
+    }
+}
