@@ -14,6 +14,9 @@ pub const CULL_FLAG_ZBIN: u32 = 4;
 /// `CullParams.flags`: tile tests also test each light's sphere against the view-space box of
 /// the tile's frustum between its depth bounds (`CullSettings::tile_boxes`).
 pub const CULL_FLAG_TILE_BOX: u32 = 8;
+/// `CullParams.flags`: the clusters' per-light passes read each cluster's box from
+/// `cull.clustered.boxes` (8 words a cluster) rather than computing it for every light.
+pub const CULL_FLAG_CLUSTER_BOXES: u32 = 16;
 /// `CullParams.slicing`: slices of equal depth.
 pub const SLICING_LINEAR: u32 = 0;
 /// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
@@ -158,6 +161,7 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("CULL_FLAG_SKIP_EMPTY", CULL_FLAG_SKIP_EMPTY),
     WgslConst::U32("CULL_FLAG_ZBIN", CULL_FLAG_ZBIN),
     WgslConst::U32("CULL_FLAG_TILE_BOX", CULL_FLAG_TILE_BOX),
+    WgslConst::U32("CULL_FLAG_CLUSTER_BOXES", CULL_FLAG_CLUSTER_BOXES),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
     WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),
     WgslConst::F32("CONE_MIN_COS", CONE_MIN_COS),

@@ -58,6 +58,8 @@ pub enum Buf {
     ClusterMasks,
     /// The indirect dispatch arguments of the wide lights' passes.
     WideArgs,
+    /// The clusters' boxes (`cull.clustered.boxes`).
+    ClusterBoxes,
     /// Tiled scatter's pair keys (tiles).
     PairKeys,
 }
@@ -86,6 +88,7 @@ impl Buf {
             Self::WideLights => "cull.clustered.wide_lights",
             Self::ClusterMasks => "cull.clustered.masks",
             Self::WideArgs => "cull.clustered.wide_args",
+            Self::ClusterBoxes => "cull.clustered.boxes",
             Self::PairKeys => "cull.pair_keys",
         }
     }

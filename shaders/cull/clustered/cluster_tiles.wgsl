@@ -241,13 +241,13 @@ fn cluster_tile(tile: vec2<u32>, li: u32) {
         }
         if i < cull.light_count && CLUSTER_TILE_RECTS {
             // The light's rectangle and slices from cull.clustered.rects.
-            let lo = wide_args[4u * i];
-            let hi = wide_args[4u * i + 1u];
+            let lo = cluster_aux[4u * i];
+            let hi = cluster_aux[4u * i + 1u];
             let t = tile;
-            if wide_args[4u * i + 3u] != 0u && t.x >= (lo & 0xffffu) && t.y >= (lo >> 16u) && t.x <= (hi & 0xffffu) && t.y <= (hi >> 16u) {
+            if cluster_aux[4u * i + 3u] != 0u && t.x >= (lo & 0xffffu) && t.y >= (lo >> 16u) && t.x <= (hi & 0xffffu) && t.y <= (hi >> 16u) {
                 let l = cull_light(lights[i]);
                 if !(outside_plane(planes[0], l) || outside_plane(planes[1], l) || outside_plane(planes[2], l) || outside_plane(planes[3], l)) {
-                    let sl = wide_args[4u * i + 2u];
+                    let sl = cluster_aux[4u * i + 2u];
                     let c = atomicAdd(&wg_cand_count, 1u);
                     wg_cand[c] = l;
                     wg_cand_info[c] = li | ((sl & 0xffu) << 8u) | ((sl >> 16u) << 16u);
@@ -306,13 +306,13 @@ fn cluster_light_rects(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let r = light_rect(i);
     if r.count == 0u {
-        wide_args[4u * i + 3u] = 0u;
+        cluster_aux[4u * i + 3u] = 0u;
         return;
     }
-    wide_args[4u * i] = u32(r.rect.x) | (u32(r.rect.y) << 16u);
-    wide_args[4u * i + 1u] = u32(r.rect.z) | (u32(r.rect.w) << 16u);
-    wide_args[4u * i + 2u] = r.s0 | (r.s1 << 16u);
-    wide_args[4u * i + 3u] = 1u;
+    cluster_aux[4u * i] = u32(r.rect.x) | (u32(r.rect.y) << 16u);
+    cluster_aux[4u * i + 1u] = u32(r.rect.z) | (u32(r.rect.w) << 16u);
+    cluster_aux[4u * i + 2u] = r.s0 | (r.s1 << 16u);
+    cluster_aux[4u * i + 3u] = 1u;
 }
 
 @compute @workgroup_size(256)

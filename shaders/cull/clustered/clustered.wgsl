@@ -19,7 +19,11 @@
 // need not recompute them. A workgroup of the count pass reserves its entries with one atomic,
 // not one per light: a quarter of a million lights may be wide.
 @group(1) @binding(9) var<storage, read_write> wide_lights: array<atomic<u32>>;
-@group(1) @binding(11) var<storage, read_write> wide_args: array<u32>;
+// Binding 11: the wide passes' dispatch arguments in cull.clustered.wide_args (an indirect
+// buffer cannot also be bound for storage in the dispatch that reads it); with
+// CULL_FLAG_CLUSTER_BOXES, the clusters' boxes in the passes after cull.clustered.boxes; on the
+// tile path, the lights' rectangles (cluster_tiles.wgsl).
+@group(1) @binding(11) var<storage, read_write> cluster_aux: array<u32>;
 
 const CLUSTER_NARROW: u32 = 4u;
 
@@ -64,6 +68,9 @@ fn tile_holds(tile: vec2<u32>, l: CullLight) -> bool {
 // of tile `tile`: the depths of its pixels (none: no), then the box of the tile's frustum
 // between them (tile_box), so a cluster is tested as its pixels bound it, not as its slice.
 fn cluster_box_keeps(l: CullLight, tile: vec2<u32>, bin: u32) -> bool {
+    if (cull.flags & CULL_FLAG_CLUSTER_BOXES) != 0u {
+        return stored_box_keeps(l, bin);
+    }
     let at = cull.bins + 2u * bin;
     let far = atomicLoad(&occupancy[at + 1u]);
     if far == 0u {
@@ -75,6 +82,62 @@ fn cluster_box_keeps(l: CullLight, tile: vec2<u32>, bin: u32) -> bool {
     t.mask = 0u;
     t.covered = 1u;
     return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t));
+}
+
+// The words of cluster `bin`'s box in cluster_aux (CULL_FLAG_CLUSTER_BOXES): the box's low
+// corner and the cluster's nearest depth as the occupancy stores it, then its high corner and
+// the farthest depth (0: no pixel).
+const CLUSTER_BOX_WORDS: u32 = 8u;
+
+// cluster_box_keeps from the box cull.clustered.boxes stored: the same floats, computed once a
+// cluster, not once for each light that reaches its tile.
+fn stored_box_keeps(l: CullLight, bin: u32) -> bool {
+    let at = CLUSTER_BOX_WORDS * bin;
+    let far = cluster_aux[at + 7u];
+    if far == 0u {
+        return false;
+    }
+    var t: TileDepth;
+    t.dmin = from_ordered_bits(~cluster_aux[at + 3u]);
+    t.dmax = from_ordered_bits(far);
+    t.mask = 0u;
+    t.covered = 1u;
+    let lo = vec3<f32>(bitcast<f32>(cluster_aux[at]), bitcast<f32>(cluster_aux[at + 1u]), bitcast<f32>(cluster_aux[at + 2u]));
+    let hi = vec3<f32>(bitcast<f32>(cluster_aux[at + 4u]), bitcast<f32>(cluster_aux[at + 5u]), bitcast<f32>(cluster_aux[at + 6u]));
+    return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, array<vec3<f32>, 2>(lo, hi));
+}
+
+// cull.clustered.boxes (with CULL_FLAG_CLUSTER_BOXES, after cull.occupancy): a thread a cluster
+// stores its box (tile_box between its pixels' depths) for the count and fill passes.
+@compute @workgroup_size(64)
+fn cluster_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
+    let bin = id.y * GROUPS_X * 64u + id.x;
+    if bin >= cull.bins {
+        return;
+    }
+    let at = cull.bins + 2u * bin;
+    let near = atomicLoad(&occupancy[at]);
+    let far = atomicLoad(&occupancy[at + 1u]);
+    var b = array<vec3<f32>, 2>(vec3<f32>(0.0), vec3<f32>(0.0));
+    if far != 0u {
+        let tiles = cull.tiles_x * cull.tiles_y;
+        let t = bin % tiles;
+        var d: TileDepth;
+        d.dmin = from_ordered_bits(~near);
+        d.dmax = from_ordered_bits(far);
+        d.mask = 0u;
+        d.covered = 1u;
+        b = tile_box(vec2<u32>(t % cull.tiles_x, t / cull.tiles_x), d);
+    }
+    let o = CLUSTER_BOX_WORDS * bin;
+    cluster_aux[o] = bitcast<u32>(b[0].x);
+    cluster_aux[o + 1u] = bitcast<u32>(b[0].y);
+    cluster_aux[o + 2u] = bitcast<u32>(b[0].z);
+    cluster_aux[o + 3u] = near;
+    cluster_aux[o + 4u] = bitcast<u32>(b[1].x);
+    cluster_aux[o + 5u] = bitcast<u32>(b[1].y);
+    cluster_aux[o + 6u] = bitcast<u32>(b[1].z);
+    cluster_aux[o + 7u] = far;
 }
 
 fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, fill: bool) {
@@ -215,9 +278,9 @@ fn clustered_fill_wide(@builtin(global_invocation_id) id: vec3<u32>) {
 @compute @workgroup_size(1)
 fn clustered_wide_args() {
     let groups = (atomicLoad(&wide_lights[0]) * CLUSTER_LANES + 63u) / 64u;
-    wide_args[0] = min(groups, GROUPS_X);
-    wide_args[1] = (groups + GROUPS_X - 1u) / GROUPS_X;
-    wide_args[2] = 1u;
+    cluster_aux[0] = min(groups, GROUPS_X);
+    cluster_aux[1] = (groups + GROUPS_X - 1u) / GROUPS_X;
+    cluster_aux[2] = 1u;
 }
 
 // Marks the clusters that hold covered pixels, one thread per pixel.

@@ -3,7 +3,10 @@
 //! [`crate::cpu::clustered`]). The passes of a run:
 //!
 //! 1. `cull.occupancy` (with `skip_empty` or the box test): the clusters that hold covered
-//!    pixels, and with the box test the depth bounds of each cluster's pixels.
+//!    pixels, and with the box test the depth bounds of each cluster's pixels; then, where the
+//!    boxes fit a binding, `cull.clustered.boxes` stores each cluster's box once
+//!    (`CULL_FLAG_CLUSTER_BOXES`), which the count and fill passes read rather than computing
+//!    it again for every light that reaches the cluster's tile.
 //! 2. `cull.clustered.count`: a thread a light counts the clusters of its tiles and slices;
 //!    a light over [`crate::layout::CLUSTER_LANES`]-worth of tiles is queued instead, and
 //!    `cull.clustered.wide_args` turns the queue's length into the indirect dispatch of
@@ -35,7 +38,8 @@ use manylights_gpu::GpuError;
 use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::{
-    CLUSTER_TILE_SLICES, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
+    CLUSTER_TILE_SLICES, CULL_FLAG_CLUSTER_BOXES, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX,
+    GROUPS_X, GpuCullParams,
 };
 use crate::program::Program;
 use crate::record::{Buf, Dispatch, Step};
@@ -54,6 +58,7 @@ pub(crate) struct Pipelines {
     order_short: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
     light_rects: wgpu::ComputePipeline,
+    boxes: wgpu::ComputePipeline,
     tiles_count: wgpu::ComputePipeline,
     /// The same, reading `cull.clustered.rects`' rectangles (`CLUSTER_TILE_RECTS`).
     tiles_count_rects: wgpu::ComputePipeline,
@@ -75,6 +80,7 @@ impl Pipelines {
             order_short,
             occupancy,
             light_rects,
+            boxes,
             tiles_count,
             masks_fill,
         ] = program.pipelines(
@@ -89,6 +95,7 @@ impl Pipelines {
                 "cluster_order_short",
                 "cluster_occupancy",
                 "cluster_light_rects",
+                "cluster_boxes",
                 "cluster_tiles_count",
                 "cluster_masks_fill",
             ],
@@ -103,6 +110,7 @@ impl Pipelines {
             order_short,
             occupancy,
             light_rects,
+            boxes,
             tiles_count,
             tiles_count_rects: program.pipeline_with(
                 d,
@@ -136,16 +144,22 @@ pub(crate) fn run(
         "clusters' wide-light queue",
         (u64::from(params.light_count) + 1) * 16,
     )?;
-    let f = r.frame(params, u64::from(params.bins));
     let ordered = matches!(r.strategy, Strategy::Clustered { ordered: true, .. });
     let limits = &r.ctx.limits;
+    let binding = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
     let by_tiles = params.slices <= CLUSTER_TILE_SLICES
         && params.light_count <= r.culler.cluster_tiles_max_lights
         && pairs(&params) <= crate::CLUSTER_TILES_MAX_PAIRS
-        && mask_bytes(&params)
-            <= limits
-                .max_storage_buffer_binding_size
-                .min(limits.max_buffer_size);
+        && mask_bytes(&params) <= binding;
+    // The per-light passes with the box test read each cluster's box, computed once, where
+    // the boxes fit a binding.
+    let mut params = params;
+    if !by_tiles && params.flags & CULL_FLAG_TILE_BOX != 0 && box_bytes(&params) <= binding {
+        params.flags |= CULL_FLAG_CLUSTER_BOXES;
+    }
+    let f = r.frame(params, u64::from(params.bins));
     let done = r.execute(&f, ClusterPlan::new(r, &f, ordered, by_tiles), t)?;
     f.finish(done)
 }
@@ -159,6 +173,11 @@ fn pairs(p: &GpuCullParams) -> u64 {
 /// `CLUSTER_TILE_THREADS` (256) lights.
 fn mask_bytes(p: &GpuCullParams) -> u64 {
     u64::from(p.bins) * u64::from(p.light_count.div_ceil(256)) * 32
+}
+
+/// The bytes of the clusters' boxes (`cull.clustered.boxes`): 8 words a cluster.
+fn box_bytes(p: &GpuCullParams) -> u64 {
+    u64::from(p.bins) * 32
 }
 
 /// A run of the clusters.
@@ -179,6 +198,8 @@ struct ClusterPlan<'a> {
     /// Their indirect dispatch arguments (binding 11 of the pass that writes them; an indirect
     /// buffer cannot also be bound for storage in the dispatch that reads it).
     wide_args: wgpu::Buffer,
+    /// The clusters' boxes (binding 11 of the per-light passes, `CULL_FLAG_CLUSTER_BOXES`).
+    boxes: Option<wgpu::Buffer>,
     group_a: wgpu::BindGroup,
     group_args: wgpu::BindGroup,
     sized: Option<(wgpu::Buffer, wgpu::BindGroup)>,
@@ -213,6 +234,13 @@ impl<'a> ClusterPlan<'a> {
         let cursor = by_tiles
             && p.capacity == 0
             && u64::from(p.bins) * u64::from(p.light_count) <= u64::from(u32::MAX);
+        let boxes = (p.flags & CULL_FLAG_CLUSTER_BOXES != 0)
+            .then(|| f.buf(Buf::ClusterBoxes.name(), box_bytes(p)));
+        let args = match (&boxes, by_tiles) {
+            (Some(b), _) => b,
+            (None, true) => &wide_args,
+            (None, false) => placeholder,
+        };
         Self {
             r,
             f,
@@ -220,15 +248,21 @@ impl<'a> ClusterPlan<'a> {
             by_tiles,
             cursor,
             rects,
-            group_a: f.group(
-                placeholder,
-                &wide,
-                if by_tiles { &wide_args } else { placeholder },
-            ),
+            group_a: f.group(placeholder, &wide, args),
             group_args: f.group(placeholder, &wide, &wide_args),
             wide,
             wide_args,
+            boxes,
             sized: None,
+        }
+    }
+
+    /// What a per-light pass reads: `with_boxes` where it reads the clusters' boxes.
+    fn reads(&self, without: &'static [Buf], with_boxes: &'static [Buf]) -> &'static [Buf] {
+        if self.boxes.is_some() {
+            with_boxes
+        } else {
+            without
         }
     }
 
@@ -306,13 +340,26 @@ impl Plan for ClusterPlan<'_> {
                 &[Buf::Occupancy],
             ));
         }
+        if self.boxes.is_some() {
+            steps.push(Step::pass(
+                "cull.clustered.boxes",
+                &g.boxes,
+                &self.group_a,
+                groups_2d(f.params.bins.div_ceil(64), GROUPS_X),
+                &[Buf::Occupancy],
+                &[Buf::ClusterBoxes],
+            ));
+        }
         steps.extend([
             Step::pass(
                 "cull.clustered.count",
                 &g.count,
                 &self.group_a,
                 self.light_groups(),
-                &[Buf::Lights, Buf::Occupancy],
+                self.reads(
+                    &[Buf::Lights, Buf::Occupancy],
+                    &[Buf::Lights, Buf::Occupancy, Buf::ClusterBoxes],
+                ),
                 &[Buf::Counts, Buf::WideLights],
             ),
             Step::pass(
@@ -328,7 +375,16 @@ impl Plan for ClusterPlan<'_> {
                 &g.count_wide,
                 &self.group_a,
                 Dispatch::Indirect(&self.wide_args),
-                &[Buf::WideLights, Buf::WideArgs, Buf::Lights, Buf::Occupancy],
+                self.reads(
+                    &[Buf::WideLights, Buf::WideArgs, Buf::Lights, Buf::Occupancy],
+                    &[
+                        Buf::WideLights,
+                        Buf::WideArgs,
+                        Buf::Lights,
+                        Buf::Occupancy,
+                        Buf::ClusterBoxes,
+                    ],
+                ),
                 &[Buf::Counts],
             ),
         ]);
@@ -347,7 +403,8 @@ impl Plan for ClusterPlan<'_> {
     }
 
     fn size(&mut self, total: u32) {
-        self.sized = Some(self.f.lists(total, &self.wide, &self.r.culler.placeholder));
+        let args = self.boxes.as_ref().unwrap_or(&self.r.culler.placeholder);
+        self.sized = Some(self.f.lists(total, &self.wide, args));
     }
 
     fn indices(&self) -> &wgpu::Buffer {
@@ -388,7 +445,10 @@ impl Plan for ClusterPlan<'_> {
                 &g.fill,
                 group,
                 self.light_groups(),
-                &[Buf::Lights, Buf::Occupancy, Buf::Offsets],
+                self.reads(
+                    &[Buf::Lights, Buf::Occupancy, Buf::Offsets],
+                    &[Buf::Lights, Buf::Occupancy, Buf::Offsets, Buf::ClusterBoxes],
+                ),
                 &[Buf::Indices, Buf::Cursors],
             ),
             Step::pass(
@@ -396,13 +456,23 @@ impl Plan for ClusterPlan<'_> {
                 &g.fill_wide,
                 group,
                 Dispatch::Indirect(&self.wide_args),
-                &[
-                    Buf::WideLights,
-                    Buf::WideArgs,
-                    Buf::Lights,
-                    Buf::Occupancy,
-                    Buf::Offsets,
-                ],
+                self.reads(
+                    &[
+                        Buf::WideLights,
+                        Buf::WideArgs,
+                        Buf::Lights,
+                        Buf::Occupancy,
+                        Buf::Offsets,
+                    ],
+                    &[
+                        Buf::WideLights,
+                        Buf::WideArgs,
+                        Buf::Lights,
+                        Buf::Occupancy,
+                        Buf::Offsets,
+                        Buf::ClusterBoxes,
+                    ],
+                ),
                 &[Buf::Indices, Buf::Cursors],
             ),
         ];
