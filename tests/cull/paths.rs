@@ -272,7 +272,9 @@ fn tile_boxes_keep_a_subset_of_the_planes_lists() {
 /// lights' rectangles computed at every tile or in a pass of their own, gives the per-light
 /// passes' lists, bin for bin and in light order, and leaves the same occupancy words,
 /// with and without the box test and `skip_empty`, over several seeds; past
-/// `CLUSTER_TILE_SLICES` slices the per-light passes run.
+/// `CLUSTER_TILE_SLICES` slices the per-light passes run. The per-light passes give the same
+/// lists with each cluster's box stored once (`cull.clustered.boxes`, with the box test) and
+/// computed at every test ([`Culler::cluster_boxes`] false).
 #[test]
 fn cluster_tile_path_equals_the_per_light_passes() {
     use manylights_cull::layout::CLUSTER_TILE_SLICES;
@@ -282,14 +284,22 @@ fn cluster_tile_path_equals_the_per_light_passes() {
     for seed in [31u64, 32, 33, 34, 35, 36] {
         let case = random_case(seed);
         let r = render(&ctx, &case, w, h);
-        let [by_tiles, with_rects, per_light] = cullers.get_or_insert_with(|| {
+        let [by_tiles, with_rects, per_light, boxes_inline] = cullers.get_or_insert_with(|| {
             // With the lights' rectangles in a pass of their own (these scenes are too small
             // to reach its default bound).
             let mut with_rects = Culler::new(&ctx, &r.gpu_scene);
             with_rects.cluster_tile_rect_pairs = 0;
             let mut per_light = Culler::new(&ctx, &r.gpu_scene);
             per_light.cluster_tiles_max_lights = 0;
-            [Culler::new(&ctx, &r.gpu_scene), with_rects, per_light]
+            let mut boxes_inline = Culler::new(&ctx, &r.gpu_scene);
+            boxes_inline.cluster_tiles_max_lights = 0;
+            boxes_inline.cluster_boxes = false;
+            [
+                Culler::new(&ctx, &r.gpu_scene),
+                with_rects,
+                per_light,
+                boxes_inline,
+            ]
         });
         for (tile_size, slices, skip_empty, tile_boxes) in [
             (8, 24, false, true),
@@ -313,7 +323,7 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 tile_boxes,
                 ..CullSettings::for_camera(&case.camera)
             };
-            let [a, r2, b] = [&*by_tiles, &*with_rects, &*per_light].map(|c| {
+            let [a, r2, b, b2] = [&*by_tiles, &*with_rects, &*per_light, &*boxes_inline].map(|c| {
                 let mut timer = GpuTimer::new(&ctx, 16);
                 let out = c
                     .run(&ctx, &r.gpu_scene, &r.depth_tex, &s, &settings, &mut timer)
@@ -343,6 +353,17 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 !ran(&b, "cull.clustered.tiles_count"),
                 "{what}: the per-light passes"
             );
+            assert_eq!(
+                ran(&b, "cull.clustered.boxes"),
+                tile_boxes,
+                "{what}: the clusters' boxes"
+            );
+            assert_eq!(
+                ran(&a, "cull.clustered.boxes"),
+                tile_boxes && !tiles,
+                "{what}: the boxes' pass past the tile path"
+            );
+            assert!(!ran(&b2, "cull.clustered.boxes"), "{what}: no boxes' pass");
             // The tile path sizes its lists from its count pass's total: no scan.
             assert_eq!(
                 a.passes.iter().any(|p| p.name == "scan"),
@@ -379,7 +400,11 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 }
             }
             let occupancy = b.read_occupancy(&ctx).unwrap();
-            for (o, path) in [(&a, "tile path"), (&r2, "tile path with rectangles")] {
+            for (o, path) in [
+                (&a, "tile path"),
+                (&r2, "tile path with rectangles"),
+                (&b2, "per-light passes computing each box"),
+            ] {
                 let la = o.read(&ctx).unwrap();
                 assert_eq!(la.ranges.len(), lb.ranges.len(), "{what}, {path}: bins");
                 for bin in 0..la.ranges.len() {

@@ -64,6 +64,10 @@ pub struct Culler {
     /// The fewest (tile, light) pairs at which that path computes the lights' rectangles in a
     /// pass of their own ([`crate::CLUSTER_TILE_RECT_PAIRS`] by default; 0: always).
     pub cluster_tile_rect_pairs: u64,
+    /// Whether the clusters' per-light passes with the box test read each cluster's box from
+    /// `cull.clustered.boxes`, which stores it once a run where the boxes fit a binding (true
+    /// by default); false: each (light, cluster) test computes it. The same lists either way.
+    pub cluster_boxes: bool,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
     pub(crate) tile_masks: TileMasks,
@@ -186,6 +190,7 @@ impl Culler {
             gather_lines: true,
             cluster_tiles_max_lights: crate::CLUSTER_TILES_MAX_LIGHTS,
             cluster_tile_rect_pairs: crate::CLUSTER_TILE_RECT_PAIRS,
+            cluster_boxes: true,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),

@@ -156,7 +156,11 @@ pub(crate) fn run(
     // The per-light passes with the box test read each cluster's box, computed once, where
     // the boxes fit a binding.
     let mut params = params;
-    if !by_tiles && params.flags & CULL_FLAG_TILE_BOX != 0 && box_bytes(&params) <= binding {
+    if !by_tiles
+        && r.culler.cluster_boxes
+        && params.flags & CULL_FLAG_TILE_BOX != 0
+        && box_bytes(&params) <= binding
+    {
         params.flags |= CULL_FLAG_CLUSTER_BOXES;
     }
     let f = r.frame(params, u64::from(params.bins));
