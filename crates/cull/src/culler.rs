@@ -68,6 +68,11 @@ pub struct Culler {
     /// `cull.clustered.boxes`, which stores it once a run where the boxes fit a binding (true
     /// by default); false: each (light, cluster) test computes it. The same lists either way.
     pub cluster_boxes: bool,
+    /// With the clusters' boxes, whether their per-light passes test only the slices of a tile
+    /// that hold pixels, from a mask a tile (`CULL_FLAG_SLICE_MASKS`; at most
+    /// [`crate::layout::CLUSTER_MASK_SLICES`] slices). False by default: not yet measured
+    /// against the loop over the light's slices. The same lists either way.
+    pub cluster_slice_masks: bool,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
     pub(crate) tile_masks: TileMasks,
@@ -191,6 +196,7 @@ impl Culler {
             cluster_tiles_max_lights: crate::CLUSTER_TILES_MAX_LIGHTS,
             cluster_tile_rect_pairs: crate::CLUSTER_TILE_RECT_PAIRS,
             cluster_boxes: true,
+            cluster_slice_masks: false,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),

@@ -17,6 +17,10 @@ pub const CULL_FLAG_TILE_BOX: u32 = 8;
 /// `CullParams.flags`: the clusters' per-light passes read each cluster's box from
 /// `cull.clustered.boxes` (8 words a cluster) rather than computing it for every light.
 pub const CULL_FLAG_CLUSTER_BOXES: u32 = 16;
+/// `CullParams.flags` (with `CULL_FLAG_CLUSTER_BOXES`, at most [`CLUSTER_MASK_SLICES`]
+/// slices): the clusters' per-light passes test only the slices of a tile that hold pixels,
+/// from the tile's mask of occupied slices (`cull.clustered.boxes` sets it).
+pub const CULL_FLAG_SLICE_MASKS: u32 = 32;
 /// `CullParams.slicing`: slices of equal depth.
 pub const SLICING_LINEAR: u32 = 0;
 /// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
@@ -53,6 +57,9 @@ pub const CLUSTER_TILE_SLICES: u32 = 64;
 /// The most depth slices of clusters whose lists deferred lighting takes a workgroup at a time
 /// ([`crate::ListForm::Clusters`]: a bit a slice in the workgroup's memory, 32 bytes).
 pub const CLUSTER_GROUP_SLICES: u32 = 256;
+/// The most slices of a tile's mask of occupied slices (`CULL_FLAG_SLICE_MASKS`): two words a
+/// tile after the occupancy words.
+pub const CLUSTER_MASK_SLICES: u32 = 64;
 /// Deferred lighting takes clusters' lists a workgroup at a time above this many lights, and a
 /// pixel at a time up to it ([`crate::ListForm::Clusters`]; on an H100 the loop a pixel was
 /// faster at 500 and 3,072 lights, the workgroup's at 50,000 and 1M: shaders/render/deferred.wgsl,
@@ -162,6 +169,8 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("CULL_FLAG_ZBIN", CULL_FLAG_ZBIN),
     WgslConst::U32("CULL_FLAG_TILE_BOX", CULL_FLAG_TILE_BOX),
     WgslConst::U32("CULL_FLAG_CLUSTER_BOXES", CULL_FLAG_CLUSTER_BOXES),
+    WgslConst::U32("CULL_FLAG_SLICE_MASKS", CULL_FLAG_SLICE_MASKS),
+    WgslConst::U32("CLUSTER_MASK_SLICES", CLUSTER_MASK_SLICES),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
     WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),
     WgslConst::F32("CONE_MIN_COS", CONE_MIN_COS),

@@ -108,7 +108,8 @@ fn stored_box_keeps(l: CullLight, bin: u32) -> bool {
 }
 
 // cull.clustered.boxes (with CULL_FLAG_CLUSTER_BOXES, after cull.occupancy): a thread a cluster
-// stores its box (tile_box between its pixels' depths) for the count and fill passes.
+// stores its box (tile_box between its pixels' depths) for the count and fill passes, and with
+// CULL_FLAG_SLICE_MASKS sets its slice's bit in its tile's mask of occupied slices.
 @compute @workgroup_size(64)
 fn cluster_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
     let bin = id.y * GROUPS_X * 64u + id.x;
@@ -122,6 +123,10 @@ fn cluster_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
     if far != 0u {
         let tiles = cull.tiles_x * cull.tiles_y;
         let t = bin % tiles;
+        if (cull.flags & CULL_FLAG_SLICE_MASKS) != 0u {
+            let s = bin / tiles;
+            atomicOr(&occupancy[3u * cull.bins + 2u * t + s / 32u], 1u << (s % 32u));
+        }
         var d: TileDepth;
         d.dmin = from_ordered_bits(~near);
         d.dmax = from_ordered_bits(far);
@@ -142,6 +147,25 @@ fn cluster_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
 
 fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, fill: bool) {
     let tiles = cull.tiles_x * cull.tiles_y;
+    if (cull.flags & CULL_FLAG_SLICE_MASKS) != 0u {
+        // Only the slices of s0..=s1 that hold pixels, from the tile's mask (s1 < 64).
+        let t = tile.y * cull.tiles_x + tile.x;
+        let at = 3u * cull.bins + 2u * t;
+        for (var w = s0 / 32u; w <= s1 / 32u; w++) {
+            let lo = select(0u, s0 % 32u, w == s0 / 32u);
+            let hi = select(31u, s1 % 32u, w == s1 / 32u);
+            var bits = atomicLoad(&occupancy[at + w]) & bit_range(lo, hi);
+            while bits != 0u {
+                let s = w * 32u + firstTrailingBit(bits);
+                bits &= bits - 1u;
+                let bin = s * tiles + t;
+                if cluster_box_keeps(l, tile, bin) {
+                    emit(bin, i, fill);
+                }
+            }
+        }
+        return;
+    }
     for (var s = s0; s <= s1; s++) {
         let bin = s * tiles + tile.y * cull.tiles_x + tile.x;
         if tile_boxes() {

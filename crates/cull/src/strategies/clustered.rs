@@ -38,8 +38,8 @@ use manylights_gpu::GpuError;
 use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::{
-    CLUSTER_TILE_SLICES, CULL_FLAG_CLUSTER_BOXES, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX,
-    GROUPS_X, GpuCullParams,
+    CLUSTER_MASK_SLICES, CLUSTER_TILE_SLICES, CULL_FLAG_CLUSTER_BOXES, CULL_FLAG_SKIP_EMPTY,
+    CULL_FLAG_SLICE_MASKS, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
 };
 use crate::program::Program;
 use crate::record::{Buf, Dispatch, Step};
@@ -162,6 +162,9 @@ pub(crate) fn run(
         && box_bytes(&params) <= binding
     {
         params.flags |= CULL_FLAG_CLUSTER_BOXES;
+        if r.culler.cluster_slice_masks && params.slices <= CLUSTER_MASK_SLICES {
+            params.flags |= CULL_FLAG_SLICE_MASKS;
+        }
     }
     let f = r.frame(params, u64::from(params.bins));
     let done = r.execute(&f, ClusterPlan::new(r, &f, ordered, by_tiles), t)?;
