@@ -90,21 +90,15 @@ fn cluster_group_lighting_equals_the_loop_a_pixel() {
                     renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap(),
                     ListForm::Bins,
                 );
-                renderer
-                    .culler
-                    .run_repeated_with(
-                        &ctx,
-                        &gpu_scene,
-                        &out.depth,
-                        &strategy,
-                        &settings,
-                        lists,
-                        1,
-                        &mut GpuTimer::new(&ctx, 64),
-                        &mut per_pixel,
-                    )
-                    .unwrap();
-                let again = out.read_color(&ctx).unwrap();
+                let again = shade_again(
+                    &ctx,
+                    &renderer,
+                    &gpu_scene,
+                    &out,
+                    &strategy,
+                    &settings,
+                    &mut per_pixel,
+                );
                 let differ = again
                     .data
                     .iter()

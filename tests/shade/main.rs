@@ -119,6 +119,34 @@ fn within_tolerance(e: &ImageError, backend: Backend) -> bool {
     e.max_abs_error <= tolerance(backend) * e.peak && e.flip_mean < 1e-3
 }
 
+/// `out`'s frame shaded again by `pass` after culling it once more with `strategy` (as the
+/// benches drive `Renderer::shade_pass`): the image read back.
+fn shade_again(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    out: &ShadeOutput,
+    strategy: &Strategy,
+    settings: &CullSettings,
+    pass: &mut impl manylights_cull::ListPass,
+) -> HdrImage {
+    renderer
+        .culler
+        .run_repeated_with(
+            ctx,
+            gpu_scene,
+            &out.depth,
+            strategy,
+            settings,
+            out.lists.as_ref().unwrap(),
+            1,
+            &mut GpuTimer::new(ctx, 64),
+            pass,
+        )
+        .unwrap();
+    out.read_color(ctx).unwrap()
+}
+
 fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
     let t = out.timings.as_ref().unwrap_or_else(|| {
         panic!("{what}: no timings (lavapipe and NVIDIA have timestamp queries)")

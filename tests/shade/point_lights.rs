@@ -141,21 +141,9 @@ fn point_light_pipelines_write_nan_over_general_lights() {
         );
         gpu_scene.mark_general_lights(&ctx);
         let mut pass = renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap();
-        renderer
-            .culler
-            .run_repeated_with(
-                &ctx,
-                &gpu_scene,
-                &out.depth,
-                &strategy,
-                &settings,
-                out.lists.as_ref().unwrap(),
-                1,
-                &mut GpuTimer::new(&ctx, 64),
-                &mut pass,
-            )
-            .unwrap();
-        let again = out.read_color(&ctx).unwrap();
+        let again = shade_again(
+            &ctx, &renderer, &gpu_scene, &out, &strategy, &settings, &mut pass,
+        );
         let nan = again
             .data
             .iter()

@@ -151,6 +151,8 @@ pub struct Renderer {
     pub(crate) deferred_zbin: [wgpu::ComputePipeline; 2],
     /// `shade.deferred` over a list a tile of a multiple of 8 pixels (rebuilt and stored).
     pub(crate) deferred_tiles: [wgpu::ComputePipeline; 2],
+    /// `shade.deferred` over a list a cluster, a workgroup's slices' lists one after another
+    /// (`ListForm::Clusters`; rebuilt and stored).
     pub(crate) deferred_clusters: [wgpu::ComputePipeline; 2],
     pub(crate) forward_lists: wgpu::BindGroupLayout,
     pub(crate) deferred_lists: wgpu::BindGroupLayout,

@@ -76,12 +76,19 @@ fn cluster_box_keeps(l: CullLight, tile: vec2<u32>, bin: u32) -> bool {
     if far == 0u {
         return false;
     }
+    let t = cluster_depth(atomicLoad(&occupancy[at]), far);
+    return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t));
+}
+
+// A cluster's pixels' depth bounds from its occupancy words (nearest as ~ordered bits,
+// farthest as ordered bits), as the box test takes them.
+fn cluster_depth(near: u32, far: u32) -> TileDepth {
     var t: TileDepth;
-    t.dmin = from_ordered_bits(~atomicLoad(&occupancy[at]));
+    t.dmin = from_ordered_bits(~near);
     t.dmax = from_ordered_bits(far);
     t.mask = 0u;
     t.covered = 1u;
-    return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t));
+    return t;
 }
 
 // The words of cluster `bin`'s box in cluster_aux (CULL_FLAG_CLUSTER_BOXES): the box's low
@@ -97,11 +104,7 @@ fn stored_box_keeps(l: CullLight, bin: u32) -> bool {
     if far == 0u {
         return false;
     }
-    var t: TileDepth;
-    t.dmin = from_ordered_bits(~cluster_aux[at + 3u]);
-    t.dmax = from_ordered_bits(far);
-    t.mask = 0u;
-    t.covered = 1u;
+    let t = cluster_depth(cluster_aux[at + 3u], far);
     let lo = vec3<f32>(bitcast<f32>(cluster_aux[at]), bitcast<f32>(cluster_aux[at + 1u]), bitcast<f32>(cluster_aux[at + 2u]));
     let hi = vec3<f32>(bitcast<f32>(cluster_aux[at + 4u]), bitcast<f32>(cluster_aux[at + 5u]), bitcast<f32>(cluster_aux[at + 6u]));
     return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, array<vec3<f32>, 2>(lo, hi));
@@ -127,12 +130,7 @@ fn cluster_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
             let s = bin / tiles;
             atomicOr(&occupancy[3u * cull.bins + 2u * t + s / 32u], 1u << (s % 32u));
         }
-        var d: TileDepth;
-        d.dmin = from_ordered_bits(~near);
-        d.dmax = from_ordered_bits(far);
-        d.mask = 0u;
-        d.covered = 1u;
-        b = tile_box(vec2<u32>(t % cull.tiles_x, t / cull.tiles_x), d);
+        b = tile_box(vec2<u32>(t % cull.tiles_x, t / cull.tiles_x), cluster_depth(near, far));
     }
     let o = CLUSTER_BOX_WORDS * bin;
     cluster_aux[o] = bitcast<u32>(b[0].x);

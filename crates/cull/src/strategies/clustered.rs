@@ -136,7 +136,7 @@ impl Pipelines {
 /// Runs the clusters.
 pub(crate) fn run(
     r: &RunInputs<'_>,
-    params: GpuCullParams,
+    mut params: GpuCullParams,
     t: Timing<'_>,
 ) -> Result<CullOutput, CullError> {
     r.check_bins(&params)?;
@@ -155,7 +155,6 @@ pub(crate) fn run(
         && mask_bytes(&params) <= binding;
     // The per-light passes with the box test read each cluster's box, computed once, where
     // the boxes fit a binding.
-    let mut params = params;
     if !by_tiles
         && r.culler.cluster_boxes
         && params.flags & CULL_FLAG_TILE_BOX != 0
