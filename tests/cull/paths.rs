@@ -274,8 +274,8 @@ fn tile_boxes_keep_a_subset_of_the_planes_lists() {
 /// with and without the box test and `skip_empty`, over several seeds; past
 /// `CLUSTER_TILE_SLICES` slices the per-light passes run. The per-light passes give the same
 /// lists with each cluster's box stored once (`cull.clustered.boxes`, with the box test) and
-/// computed at every test ([`Culler::cluster_boxes`] false), and testing only a tile's occupied
-/// slices ([`Culler::cluster_slice_masks`]).
+/// computed at every test ([`Culler::cluster_boxes`] false), and testing every slice of a light's
+/// range rather than only a tile's occupied slices ([`Culler::cluster_slice_masks`] false).
 #[test]
 fn cluster_tile_path_equals_the_per_light_passes() {
     use manylights_cull::layout::CLUSTER_TILE_SLICES;
@@ -285,7 +285,7 @@ fn cluster_tile_path_equals_the_per_light_passes() {
     for seed in [31u64, 32, 33, 34, 35, 36] {
         let case = random_case(seed);
         let r = render(&ctx, &case, w, h);
-        let [by_tiles, with_rects, per_light, boxes_inline, masked] =
+        let [by_tiles, with_rects, per_light, boxes_inline, unmasked] =
             cullers.get_or_insert_with(|| {
                 // With the lights' rectangles in a pass of their own (these scenes are too small
                 // to reach its default bound).
@@ -296,15 +296,15 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 let mut boxes_inline = Culler::new(&ctx, &r.gpu_scene);
                 boxes_inline.cluster_tiles_max_lights = 0;
                 boxes_inline.cluster_boxes = false;
-                let mut masked = Culler::new(&ctx, &r.gpu_scene);
-                masked.cluster_tiles_max_lights = 0;
-                masked.cluster_slice_masks = true;
+                let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
+                unmasked.cluster_tiles_max_lights = 0;
+                unmasked.cluster_slice_masks = false;
                 [
                     Culler::new(&ctx, &r.gpu_scene),
                     with_rects,
                     per_light,
                     boxes_inline,
-                    masked,
+                    unmasked,
                 ]
             });
         for (tile_size, slices, skip_empty, tile_boxes) in [
@@ -334,7 +334,7 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 &*with_rects,
                 &*per_light,
                 &*boxes_inline,
-                &*masked,
+                &*unmasked,
             ];
             let [a, r2, b, b2, b3] = cullers.map(|c| {
                 let mut timer = GpuTimer::new(&ctx, 16);
@@ -417,7 +417,7 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 (&a, "tile path"),
                 (&r2, "tile path with rectangles"),
                 (&b2, "per-light passes computing each box"),
-                (&b3, "per-light passes over the tiles' occupied slices"),
+                (&b3, "per-light passes over every slice of a light's range"),
             ] {
                 let la = o.read(&ctx).unwrap();
                 assert_eq!(la.ranges.len(), lb.ranges.len(), "{what}, {path}: bins");

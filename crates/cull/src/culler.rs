@@ -70,8 +70,9 @@ pub struct Culler {
     pub cluster_boxes: bool,
     /// With the clusters' boxes, whether their per-light passes test only the slices of a tile
     /// that hold pixels, from a mask a tile (`CULL_FLAG_SLICE_MASKS`; at most
-    /// [`crate::layout::CLUSTER_MASK_SLICES`] slices). False by default: not yet measured
-    /// against the loop over the light's slices. The same lists either way.
+    /// [`crate::layout::CLUSTER_MASK_SLICES`] slices). True by default: culling at 1M lights
+    /// (clusters 32 px x 32) took 1.60 ms against 1.86 looping over the light's slices, and at
+    /// 50,000 lights in the hall 0.378 against 0.447 (H100). The same lists either way.
     pub cluster_slice_masks: bool,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
@@ -196,7 +197,7 @@ impl Culler {
             cluster_tiles_max_lights: crate::CLUSTER_TILES_MAX_LIGHTS,
             cluster_tile_rect_pairs: crate::CLUSTER_TILE_RECT_PAIRS,
             cluster_boxes: true,
-            cluster_slice_masks: false,
+            cluster_slice_masks: true,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),
