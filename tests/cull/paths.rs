@@ -274,8 +274,11 @@ fn tile_boxes_keep_a_subset_of_the_planes_lists() {
 /// with and without the box test and `skip_empty`, over several seeds; past
 /// `CLUSTER_TILE_SLICES` slices the per-light passes run. The per-light passes give the same
 /// lists with each cluster's box stored once (`cull.clustered.boxes`, with the box test) and
-/// computed at every test ([`Culler::cluster_boxes`] false), and testing every slice of a light's
-/// range rather than only a tile's occupied slices ([`Culler::cluster_slice_masks`] false).
+/// computed at every test ([`Culler::cluster_boxes`] false), testing every slice of a light's
+/// range rather than only a tile's occupied slices ([`Culler::cluster_slice_masks`] false), and
+/// with the wide lights split into bands of rows ([`Culler::cluster_lane_tiles`] 1: a band for
+/// each 32 tiles), also where the band pool holds only some of the bands
+/// ([`Culler::cluster_band_pool`]).
 #[test]
 fn cluster_tile_path_equals_the_per_light_passes() {
     use manylights_cull::layout::CLUSTER_TILE_SLICES;
@@ -285,28 +288,44 @@ fn cluster_tile_path_equals_the_per_light_passes() {
     for seed in [31u64, 32, 33, 34, 35, 36] {
         let case = random_case(seed);
         let r = render(&ctx, &case, w, h);
-        let [by_tiles, with_rects, per_light, boxes_inline, unmasked] =
-            cullers.get_or_insert_with(|| {
-                // With the lights' rectangles in a pass of their own (these scenes are too small
-                // to reach its default bound).
-                let mut with_rects = Culler::new(&ctx, &r.gpu_scene);
-                with_rects.cluster_tile_rect_pairs = 0;
-                let mut per_light = Culler::new(&ctx, &r.gpu_scene);
-                per_light.cluster_tiles_max_lights = 0;
-                let mut boxes_inline = Culler::new(&ctx, &r.gpu_scene);
-                boxes_inline.cluster_tiles_max_lights = 0;
-                boxes_inline.cluster_boxes = false;
-                let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
-                unmasked.cluster_tiles_max_lights = 0;
-                unmasked.cluster_slice_masks = false;
-                [
-                    Culler::new(&ctx, &r.gpu_scene),
-                    with_rects,
-                    per_light,
-                    boxes_inline,
-                    unmasked,
-                ]
-            });
+        let [
+            by_tiles,
+            with_rects,
+            per_light,
+            boxes_inline,
+            unmasked,
+            banded,
+            pool_short,
+        ] = cullers.get_or_insert_with(|| {
+            // With the lights' rectangles in a pass of their own (these scenes are too small
+            // to reach its default bound).
+            let mut with_rects = Culler::new(&ctx, &r.gpu_scene);
+            with_rects.cluster_tile_rect_pairs = 0;
+            let mut per_light = Culler::new(&ctx, &r.gpu_scene);
+            per_light.cluster_tiles_max_lights = 0;
+            let mut boxes_inline = Culler::new(&ctx, &r.gpu_scene);
+            boxes_inline.cluster_tiles_max_lights = 0;
+            boxes_inline.cluster_boxes = false;
+            let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
+            unmasked.cluster_tiles_max_lights = 0;
+            unmasked.cluster_slice_masks = false;
+            let mut banded = Culler::new(&ctx, &r.gpu_scene);
+            banded.cluster_tiles_max_lights = 0;
+            banded.cluster_lane_tiles = 1;
+            let mut pool_short = Culler::new(&ctx, &r.gpu_scene);
+            pool_short.cluster_tiles_max_lights = 0;
+            pool_short.cluster_lane_tiles = 1;
+            pool_short.cluster_band_pool = Some(3);
+            [
+                Culler::new(&ctx, &r.gpu_scene),
+                with_rects,
+                per_light,
+                boxes_inline,
+                unmasked,
+                banded,
+                pool_short,
+            ]
+        });
         for (tile_size, slices, skip_empty, tile_boxes) in [
             (8, 24, false, true),
             (16, 8, true, false),
@@ -335,8 +354,10 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 &*per_light,
                 &*boxes_inline,
                 &*unmasked,
+                &*banded,
+                &*pool_short,
             ];
-            let [a, r2, b, b2, b3] = cullers.map(|c| {
+            let [a, r2, b, b2, b3, b4, b5] = cullers.map(|c| {
                 let mut timer = GpuTimer::new(&ctx, 16);
                 let out = c
                     .run(&ctx, &r.gpu_scene, &r.depth_tex, &s, &settings, &mut timer)
@@ -418,6 +439,8 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 (&r2, "tile path with rectangles"),
                 (&b2, "per-light passes computing each box"),
                 (&b3, "per-light passes over every slice of a light's range"),
+                (&b4, "per-light passes with bands of 32 tiles"),
+                (&b5, "per-light passes with bands, the pool holding 3"),
             ] {
                 let la = o.read(&ctx).unwrap();
                 assert_eq!(la.ranges.len(), lb.ranges.len(), "{what}, {path}: bins");

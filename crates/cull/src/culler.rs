@@ -74,6 +74,14 @@ pub struct Culler {
     /// (clusters 32 px x 32) took 1.60 ms against 1.86 looping over the light's slices, and at
     /// 50,000 lights in the hall 0.378 against 0.447 (H100). The same lists either way.
     pub cluster_slice_masks: bool,
+    /// The tiles a lane of the clusters' wide-light passes should take
+    /// ([`crate::CLUSTER_LANE_TILES`] by default): a light whose rectangle holds more than
+    /// [`crate::layout::CLUSTER_LANES`] times as many tiles is split into bands of its rows, each
+    /// with lanes of its own (0: never split). The same lists either way.
+    pub cluster_lane_tiles: u32,
+    /// The queue entries for the bands past each light's first (the band pool; `None`: one a
+    /// light). A light whose bands do not fit keeps its whole rectangle in one entry.
+    pub cluster_band_pool: Option<u32>,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
     pub(crate) tile_masks: TileMasks,
@@ -198,6 +206,8 @@ impl Culler {
             cluster_tile_rect_pairs: crate::CLUSTER_TILE_RECT_PAIRS,
             cluster_boxes: true,
             cluster_slice_masks: true,
+            cluster_lane_tiles: crate::CLUSTER_LANE_TILES,
+            cluster_band_pool: None,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),

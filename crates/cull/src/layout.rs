@@ -218,7 +218,9 @@ pub struct GpuCullParams {
     pub coarse: u32,
     /// Coarse tiles across (0 without a coarse level).
     pub coarse_x: u32,
-    /// Lights of a chunk in gather's coarse-to-fine passes (a multiple of 64).
+    /// Lights of a chunk in gather's coarse-to-fine passes (a multiple of 64); for clusters,
+    /// the tiles a lane of a wide light takes before the light is split into bands
+    /// ([`crate::Culler::cluster_lane_tiles`]).
     pub chunk: u32,
 }
 const _: () = assert!(size_of::<GpuCullParams>() == 64);

@@ -211,6 +211,10 @@ pub const CLUSTER_TILES_MAX_PAIRS: u64 = 1 << 24;
 /// 164 µs.
 pub const CLUSTER_TILE_RECT_PAIRS: u64 = 1 << 19;
 
+/// The default tiles a lane of the clusters' wide-light passes takes before the light is split
+/// into bands of its rows, each with lanes of its own ([`crate::Culler::cluster_lane_tiles`]).
+pub const CLUSTER_LANE_TILES: u32 = 4;
+
 /// The step of chunk sizes: a batch of the shader, 64 lights, one a thread.
 pub const CHUNK_STEP: u32 = 64;
 

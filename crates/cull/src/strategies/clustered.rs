@@ -8,10 +8,11 @@
 //!    (`CULL_FLAG_CLUSTER_BOXES`), which the count and fill passes read rather than computing
 //!    it again for every light that reaches the cluster's tile.
 //! 2. `cull.clustered.count`: a thread a light counts the clusters of its tiles and slices;
-//!    a light over [`crate::layout::CLUSTER_LANES`]-worth of tiles is queued instead, and
-//!    `cull.clustered.wide_args` turns the queue's length into the indirect dispatch of
-//!    `cull.clustered.count_wide`, [`crate::layout::CLUSTER_LANES`] threads a wide light (one
-//!    thread emitting a whole-screen light's 12,000 entries would idle the GPU).
+//!    a light over 4 tiles is queued instead, and `cull.clustered.wide_args` turns the queue's
+//!    lengths into the indirect dispatch of `cull.clustered.count_wide`: 8 threads a medium
+//!    light (at most 32 tiles), [`crate::layout::CLUSTER_LANES`] a wide one or a band of its
+//!    rows ([`crate::Culler::cluster_lane_tiles`]; one thread emitting a whole-screen light's
+//!    12,000 entries would idle the GPU).
 //! 3. The capacity cap and the scan ([`crate::blocks::lists`]).
 //! 4. `cull.clustered.fill` and `cull.clustered.fill_wide`, in the same split.
 //! 5. With `ordered` (the default), `cull.clustered.order_short` and `cull.clustered.order`
@@ -140,10 +141,9 @@ pub(crate) fn run(
     t: Timing<'_>,
 ) -> Result<CullOutput, CullError> {
     r.check_bins(&params)?;
-    r.ctx.check_storage(
-        "clusters' wide-light queue",
-        (u64::from(params.light_count) + 1) * 16,
-    )?;
+    params.chunk = r.culler.cluster_lane_tiles;
+    r.ctx
+        .check_storage("clusters' wide-light queue", queue_bytes(r, &params))?;
     let ordered = matches!(r.strategy, Strategy::Clustered { ordered: true, .. });
     let limits = &r.ctx.limits;
     let binding = limits
@@ -168,6 +168,13 @@ pub(crate) fn run(
     let f = r.frame(params, u64::from(params.bins));
     let done = r.execute(&f, ClusterPlan::new(r, &f, ordered, by_tiles), t)?;
     f.finish(done)
+}
+
+/// The bytes of the wide lights' queue: a header, an entry for each light, and the band pool
+/// ([`crate::Culler::cluster_band_pool`]; one entry a light by default), 16 bytes an entry.
+fn queue_bytes(r: &RunInputs<'_>, p: &GpuCullParams) -> u64 {
+    let pool = r.culler.cluster_band_pool.unwrap_or(p.light_count);
+    (1 + u64::from(p.light_count) + u64::from(pool)) * 16
 }
 
 /// The (tile, light) pairs of a run.
@@ -219,7 +226,7 @@ impl<'a> ClusterPlan<'a> {
         let wide = if by_tiles {
             f.buf(Buf::ClusterMasks.name(), mask_bytes(p).max(16))
         } else {
-            f.buf(Buf::WideLights.name(), (u64::from(p.light_count) + 1) * 16)
+            f.buf(Buf::WideLights.name(), queue_bytes(r, p))
         };
         // On the tile path, the lights' rectangles at the same binding.
         let rects = by_tiles && pairs(p) >= r.culler.cluster_tile_rect_pairs;
@@ -329,11 +336,12 @@ impl Plan for ClusterPlan<'_> {
             return steps;
         }
         let mut steps = f.clears(false);
+        // The queue's lengths: wide lights, bands reserved, medium lights.
         steps.push(Step::Clear {
             what: Buf::WideLights,
             buffer: &self.wide,
             offset: 0,
-            size: Some(4),
+            size: Some(12),
         });
         if f.params.flags & (CULL_FLAG_SKIP_EMPTY | CULL_FLAG_TILE_BOX) != 0 {
             let (w, h) = f.size;
