@@ -333,8 +333,9 @@ fn infinite_range_reference_measures_the_cutoff() {
 /// stably, clusters sort each list after their atomic fill): the same lists, order included,
 /// and bit-identical images on every run. (Where each list sits in the index buffer may
 /// differ: gather with tile masks places a tile's list with an atomic add.) The small, mid and big cases' clusters hold at most
-/// 512, 1,000 and over 2,048 lights, so that `cull.clustered.order_short` and both paths of
-/// `cull.clustered.order` (workgroup memory and in place) run, and gather's
+/// 512, 1,000 and over 2,048 lights, so that, on the clusters' per-light passes (the tile path,
+/// which these light counts would take, fills its lists in order), `cull.clustered.order_short`
+/// and both paths of `cull.clustered.order` (workgroup memory and in place) run, and gather's
 /// tiles take their coarse tile's candidates in more than one chunk of 2,048.
 #[test]
 fn ordered_strategies_render_bit_identical_frames() {
@@ -374,6 +375,15 @@ fn ordered_strategies_render_bit_identical_frames() {
         bins: 16,
         slicing: Slicing::Linear,
     };
+    // The same clusters on the per-light passes and their order passes (the tile path is off
+    // for this strategy below: 12 slices).
+    let per_light = Strategy::Clustered {
+        tile_size: 16,
+        slices: 12,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered: true,
+    };
     let cases = [
         (&small, zbin),
         (&big, zbin),
@@ -383,6 +393,9 @@ fn ordered_strategies_render_bit_identical_frames() {
         (&small, clusters),
         (&mid, clusters),
         (&big, clusters),
+        (&small, per_light),
+        (&mid, per_light),
+        (&big, per_light),
         // Gather's coarse level hands each tile its candidates 2,048 at a time.
         (
             &big,
@@ -394,7 +407,10 @@ fn ordered_strategies_render_bit_identical_frames() {
     ];
     for (s, strategy) in cases {
         let gpu_scene = GpuScene::upload(&ctx, s, &s.camera, w, h).unwrap();
-        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let mut renderer = Renderer::new(&ctx, &gpu_scene);
+        if strategy == per_light {
+            renderer.culler.cluster_tiles_max_lights = 0;
+        }
         let settings = CullSettings::for_camera(&s.camera);
         let mut longest = 0;
         for backend in [Backend::Forward, Backend::Deferred] {

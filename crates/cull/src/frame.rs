@@ -67,7 +67,7 @@ impl<'a> Frame<'a> {
             // A flag a bin, then (clusters with the box test) its pixels' depth bounds, then
             // (CULL_FLAG_SLICE_MASKS) each tile's mask of occupied slices, two words.
             occupancy: storage_buf(ctx, Buf::Occupancy.name(), bins * 12 + tiles * 8),
-            stats: storage_buf(ctx, Buf::Stats.name(), 32),
+            stats: storage_buf(ctx, Buf::Stats.name(), 48),
             span: format!("cull.{}", strategy.name()),
         }
     }

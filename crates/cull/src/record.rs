@@ -99,8 +99,8 @@ impl Buf {
 pub enum Dispatch<'a> {
     /// A grid of workgroups.
     Grid([u32; 3]),
-    /// Arguments written by an earlier pass (offset 0).
-    Indirect(&'a wgpu::Buffer),
+    /// Arguments written by an earlier pass, at a byte offset.
+    Indirect(&'a wgpu::Buffer, u64),
 }
 
 impl From<(u32, u32)> for Dispatch<'_> {
@@ -299,7 +299,7 @@ impl Recorder<'_> {
                 &[self.scene, p.group],
                 groups,
             ),
-            Dispatch::Indirect(args) => {
+            Dispatch::Indirect(args, offset) => {
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(&p.name),
                     timestamp_writes: timer.compute_pass(&p.name),
@@ -307,7 +307,7 @@ impl Recorder<'_> {
                 pass.set_pipeline(p.pipeline);
                 pass.set_bind_group(0, self.scene, &[]);
                 pass.set_bind_group(1, p.group, &[]);
-                pass.dispatch_workgroups_indirect(args, 0);
+                pass.dispatch_workgroups_indirect(args, offset);
             }
         }
     }

@@ -549,9 +549,75 @@ fn padded(n: u32) -> u32 {
     return size;
 }
 
+// cull.clustered.order_lists (after the fill passes, which were the last to read the wide
+// lights' queue): a thread a cluster lists those whose lists need sorting in that buffer, the
+// short ones (2 to ORDER_SHORT lights) from word 4 on and the long ones from its end back,
+// counted in cull_stats[8] and [9] (cleared at the start of the run), with one atomic a
+// workgroup and kind; cull.clustered.order_args turns the counts into the order passes'
+// indirect dispatches, so that these take a workgroup only for a list to sort. (A workgroup for
+// every cluster, most of them with nothing to sort, reserved the order pass's 8 KB and 256
+// threads each.)
+var<workgroup> wg_order: array<atomic<u32>, 2>;
+var<workgroup> wg_order_base: array<u32, 2>;
+
+@compute @workgroup_size(64)
+fn cluster_order_lists(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if li < 2u {
+        atomicStore(&wg_order[li], 0u);
+    }
+    workgroupBarrier();
+    let bin = id.y * GROUPS_X * 64u + id.x;
+    var n = 0u;
+    if bin < cull.bins {
+        n = atomicLoad(&bin_counts[bin]);
+    }
+    let kind = select(0u, 1u, n > ORDER_SHORT);
+    var at = 0u;
+    if n >= 2u {
+        at = atomicAdd(&wg_order[kind], 1u);
+    }
+    workgroupBarrier();
+    if li < 2u {
+        let m = atomicLoad(&wg_order[li]);
+        var base = 0u;
+        if m != 0u {
+            base = atomicAdd(&cull_stats[8u + li], m);
+        }
+        wg_order_base[li] = base;
+    }
+    workgroupBarrier();
+    if n >= 2u {
+        let k = wg_order_base[kind] + at;
+        let w = select(4u + k, arrayLength(&wide_lights) - 1u - k, kind == 1u);
+        atomicStore(&wide_lights[w], bin);
+    }
+}
+
+// The order passes' indirect dispatches: a workgroup a listed cluster, laid out as groups_2d
+// does (GROUPS_X across); the short lists' at words 0-2 of binding 11, the long ones' at 4-6.
+@compute @workgroup_size(1)
+fn cluster_order_args() {
+    for (var k = 0u; k < 2u; k++) {
+        let groups = atomicLoad(&cull_stats[8u + k]);
+        cluster_aux[4u * k] = min(groups, GROUPS_X);
+        cluster_aux[4u * k + 1u] = (groups + GROUPS_X - 1u) / GROUPS_X;
+        cluster_aux[4u * k + 2u] = 1u;
+    }
+}
+
+// The cluster of the order passes' workgroup `wg`: listed cluster `k` of `kind` (0: short,
+// 1: long), or cull.bins (nothing to sort) past the listed ones.
+fn order_bin(wg: vec3<u32>, kind: u32) -> u32 {
+    let k = wg.y * GROUPS_X + wg.x;
+    if k >= atomicLoad(&cull_stats[8u + kind]) {
+        return cull.bins;
+    }
+    return atomicLoad(&wide_lights[select(4u + k, arrayLength(&wide_lights) - 1u - k, kind == 1u)]);
+}
+
 @compute @workgroup_size(256)
 fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let bin = wg.y * GROUPS_X + wg.x;
+    let bin = order_bin(wg, 1u);
     let n = list_len(bin, li);
     // Short lists are cluster_order_short's.
     if n <= ORDER_SHORT {
@@ -613,7 +679,7 @@ var<workgroup> wg_short: array<u32, ORDER_SHORT>;
 
 @compute @workgroup_size(ORDER_SHORT_THREADS)
 fn cluster_order_short(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let bin = wg.y * GROUPS_X + wg.x;
+    let bin = order_bin(wg, 0u);
     let n = list_len(bin, li);
     if n < 2u || n > ORDER_SHORT {
         return;

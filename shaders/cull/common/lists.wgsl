@@ -12,7 +12,9 @@
 // Statistics: [0] = lights dropped by a deliberate capacity; [1], [2] = tiled scatter's pair
 // total, low word and carries; [4] = the list total with tile masks, [5] = the cursor from
 // which their fill places each tile's list; [6] = the blocks tiled scatter queued for its
-// masks' count pass (depth_bounds.wgsl).
+// masks' count pass (depth_bounds.wgsl); [3], [7] = the clusters' tile path's total and
+// cursor (cluster_tiles.wgsl); [8], [9] = the clusters' lists to sort, short and long
+// (cull.clustered.order_lists).
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
 
 // The lights a workgroup kept into tile masks (zeroed by its first thread at the start).

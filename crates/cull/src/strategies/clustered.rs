@@ -15,8 +15,10 @@
 //!    12,000 entries would idle the GPU).
 //! 3. The capacity cap and the scan ([`crate::blocks::lists`]).
 //! 4. `cull.clustered.fill` and `cull.clustered.fill_wide`, in the same split.
-//! 5. With `ordered` (the default), `cull.clustered.order_short` and `cull.clustered.order`
-//!    sort each cluster's list into light order, so that images are bit-identical run to run.
+//! 5. With `ordered` (the default), `cull.clustered.order_lists` lists the clusters whose lists
+//!    need sorting, `cull.clustered.order_args` turns their counts into indirect dispatches, and
+//!    `cull.clustered.order_short` and `cull.clustered.order` sort each listed cluster's list
+//!    into light order, so that images are bit-identical run to run.
 //! 6. `cull.finalize`.
 //!
 //! With few lights (at most [`crate::Culler::cluster_tiles_max_lights`], and at most
@@ -57,6 +59,8 @@ pub(crate) struct Pipelines {
     wide_args: wgpu::ComputePipeline,
     order: wgpu::ComputePipeline,
     order_short: wgpu::ComputePipeline,
+    order_lists: wgpu::ComputePipeline,
+    order_args: wgpu::ComputePipeline,
     occupancy: wgpu::ComputePipeline,
     light_rects: wgpu::ComputePipeline,
     boxes: wgpu::ComputePipeline,
@@ -79,6 +83,8 @@ impl Pipelines {
             wide_args,
             order,
             order_short,
+            order_lists,
+            order_args,
             occupancy,
             light_rects,
             boxes,
@@ -94,6 +100,8 @@ impl Pipelines {
                 "clustered_wide_args",
                 "cluster_order",
                 "cluster_order_short",
+                "cluster_order_lists",
+                "cluster_order_args",
                 "cluster_occupancy",
                 "cluster_light_rects",
                 "cluster_boxes",
@@ -109,6 +117,8 @@ impl Pipelines {
             wide_args,
             order,
             order_short,
+            order_lists,
+            order_args,
             occupancy,
             light_rects,
             boxes,
@@ -226,7 +236,11 @@ impl<'a> ClusterPlan<'a> {
         let wide = if by_tiles {
             f.buf(Buf::ClusterMasks.name(), mask_bytes(p).max(16))
         } else {
-            f.buf(Buf::WideLights.name(), queue_bytes(r, p))
+            // After the fill, the clusters whose lists need sorting (cull.clustered.order_lists).
+            f.buf(
+                Buf::WideLights.name(),
+                queue_bytes(r, p).max((4 + u64::from(p.bins)) * 4),
+            )
         };
         // On the tile path, the lights' rectangles at the same binding.
         let rects = by_tiles && pairs(p) >= r.culler.cluster_tile_rect_pairs;
@@ -236,10 +250,11 @@ impl<'a> ClusterPlan<'a> {
             } else {
                 Buf::WideArgs.name()
             }),
+            // The wide passes' dispatch, then the order passes' two.
             size: if rects {
                 u64::from(p.light_count).max(1) * 16
             } else {
-                16
+                32
             },
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::INDIRECT,
             mapped_at_creation: false,
@@ -388,7 +403,7 @@ impl Plan for ClusterPlan<'_> {
                 "cull.clustered.count_wide",
                 &g.count_wide,
                 &self.group_a,
-                Dispatch::Indirect(&self.wide_args),
+                Dispatch::Indirect(&self.wide_args, 0),
                 self.reads(
                     &[Buf::WideLights, Buf::WideArgs, Buf::Lights, Buf::Occupancy],
                     &[
@@ -469,7 +484,7 @@ impl Plan for ClusterPlan<'_> {
                 "cull.clustered.fill_wide",
                 &g.fill_wide,
                 group,
-                Dispatch::Indirect(&self.wide_args),
+                Dispatch::Indirect(&self.wide_args, 0),
                 self.reads(
                     &[
                         Buf::WideLights,
@@ -491,16 +506,39 @@ impl Plan for ClusterPlan<'_> {
             ),
         ];
         if self.ordered {
-            for (name, pipeline) in [
-                ("cull.clustered.order_short", &g.order_short),
-                ("cull.clustered.order", &g.order),
+            steps.push(Step::pass(
+                "cull.clustered.order_lists",
+                &g.order_lists,
+                group,
+                groups_2d(f.params.bins.div_ceil(64), GROUPS_X),
+                &[Buf::Counts],
+                &[Buf::WideLights, Buf::Stats],
+            ));
+            steps.push(Step::pass(
+                "cull.clustered.order_args",
+                &g.order_args,
+                &self.group_args,
+                (1, 1),
+                &[Buf::Stats],
+                &[Buf::WideArgs],
+            ));
+            for (name, pipeline, offset) in [
+                ("cull.clustered.order_short", &g.order_short, 0),
+                ("cull.clustered.order", &g.order, 16),
             ] {
                 steps.push(Step::pass(
                     name,
                     pipeline,
                     group,
-                    groups_2d(f.params.bins, GROUPS_X),
-                    &[Buf::Offsets, Buf::Counts, Buf::Indices],
+                    Dispatch::Indirect(&self.wide_args, offset),
+                    &[
+                        Buf::WideLights,
+                        Buf::WideArgs,
+                        Buf::Stats,
+                        Buf::Offsets,
+                        Buf::Counts,
+                        Buf::Indices,
+                    ],
                     &[Buf::Indices],
                 ));
             }
