@@ -81,7 +81,6 @@ impl Pipelines {
             count_wide,
             fill_wide,
             wide_args,
-            order,
             order_short,
             order_lists,
             order_args,
@@ -98,7 +97,6 @@ impl Pipelines {
                 "clustered_count_wide",
                 "clustered_fill_wide",
                 "clustered_wide_args",
-                "cluster_order",
                 "cluster_order_short",
                 "cluster_order_lists",
                 "cluster_order_args",
@@ -115,7 +113,6 @@ impl Pipelines {
             count_wide,
             fill_wide,
             wide_args,
-            order,
             order_short,
             order_lists,
             order_args,
@@ -132,6 +129,14 @@ impl Pipelines {
                 },
             ),
             masks_fill,
+            order: program.pipeline_with(
+                d,
+                "cluster_order",
+                &wgpu::PipelineCompilationOptions {
+                    constants: &[("ORDER_THREADS", f64::from(order_threads(d)))],
+                    ..Default::default()
+                },
+            ),
             masks_fill_cursor: program.pipeline_with(
                 d,
                 "cluster_masks_fill",
@@ -141,6 +146,18 @@ impl Pipelines {
                 },
             ),
         }
+    }
+}
+
+/// The threads of the long lists' order pass (`cull.clustered.order`): 512 where the device
+/// allows a workgroup that many, else 256.
+fn order_threads(d: &wgpu::Device) -> u32 {
+    if d.limits().max_compute_invocations_per_workgroup >= 512
+        && d.limits().max_compute_workgroup_size_x >= 512
+    {
+        512
+    } else {
+        256
     }
 }
 
