@@ -509,3 +509,101 @@ fn depth_bounds_light_rows_widen_within_the_dispatch_limit() {
             .unwrap_or_else(|e| panic!("{what}: {e}"));
     }
 }
+
+/// The clusters with each light's tile rectangle from the exact bounds of its sphere's
+/// projection ([`Culler::cluster_sphere_bounds`], Mara and McGuire 2013): on the per-light
+/// passes and the tile path, the lists equal the CPU oracle's with the same bounds, have no
+/// false negative, and are a subset of the lists from the box's corners, bin for bin (with the
+/// box test, the same lists: only the candidate tiles are fewer, as the rectangles' tiles
+/// summed over the lights show).
+#[test]
+fn cluster_sphere_bounds_give_a_conservative_subset() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let mut cullers = None;
+    let (mut exact_tiles, mut corner_tiles) = (0i64, 0i64);
+    for seed in [41u64, 42, 43, 44, 45, 46] {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        let cullers = cullers.get_or_insert_with(|| {
+            let make = |exact: bool, tiles: bool| {
+                let mut c = Culler::new(&ctx, &r.gpu_scene);
+                c.cluster_sphere_bounds = exact;
+                if !tiles {
+                    c.cluster_tiles_max_lights = 0;
+                }
+                c
+            };
+            [
+                (make(false, false), make(true, false)),
+                (make(false, true), make(true, true)),
+            ]
+        });
+        for (corners, exact) in cullers.iter() {
+            for (tile_size, slices) in [(8, 24), (16, 12)] {
+                let s = Strategy::Clustered {
+                    tile_size,
+                    slices,
+                    slicing: Slicing::Exponential,
+                    skip_empty: false,
+                    ordered: true,
+                };
+                let what = format!(
+                    "{}: {tile_size} px x {slices}, per-light passes {}",
+                    case.label,
+                    exact.cluster_tiles_max_lights == 0
+                );
+                let a = run_gpu(&ctx, corners, &r, &case, &s);
+                let b = run_gpu(&ctx, exact, &r, &case, &s);
+                let (la, lb) = (a.read(&ctx).unwrap(), b.read(&ctx).unwrap());
+                let p = b.params;
+                assert!(
+                    p.flags & manylights_cull::layout::CULL_FLAG_SPHERE_BOUNDS != 0
+                        && geometry::sphere_bounds_apply(&r.frame, &p),
+                    "{what}: the exact bounds apply"
+                );
+                cpu::clustered(&r.frame, &p, &r.lights, &b.read_occupancy(&ctx).unwrap())
+                    .compare(&lb)
+                    .unwrap_or_else(|e| panic!("{what}: {e}"));
+                assert_eq!(
+                    metrics(&r, &p, &lb).false_negatives,
+                    0,
+                    "{what}: false negatives"
+                );
+                for bin in 0..la.ranges.len() {
+                    let (with, without) = (lb.sorted(bin), la.sorted(bin));
+                    assert!(
+                        with.iter().all(|l| without.contains(l)),
+                        "{what}: bin {bin}: {with:?} not within {without:?}"
+                    );
+                }
+                let without = GpuCullParams {
+                    flags: p.flags & !manylights_cull::layout::CULL_FLAG_SPHERE_BOUNDS,
+                    ..p
+                };
+                let area =
+                    |r: [i32; 4]| i64::from((r[2] - r[0] + 1).max(0) * (r[3] - r[1] + 1).max(0));
+                for l in &r.lights {
+                    let c = geometry::CullLight::new(&r.frame, l, p.slack);
+                    let (e, k) = (
+                        geometry::light_tiles(&r.frame, &p, &c),
+                        geometry::light_tiles(&r.frame, &without, &c),
+                    );
+                    assert!(
+                        e[0] > e[2]
+                            || e[1] > e[3]
+                            || (e[0] >= k[0] && e[1] >= k[1] && e[2] <= k[2] && e[3] <= k[3]),
+                        "{what}: rectangle {e:?} not within {k:?}"
+                    );
+                    exact_tiles += area(e);
+                    corner_tiles += area(k);
+                }
+            }
+        }
+    }
+    assert!(
+        exact_tiles < corner_tiles,
+        "the exact bounds' rectangles hold {exact_tiles} tiles, the corners' {corner_tiles}"
+    );
+    eprintln!("rectangles' tiles: {exact_tiles} exact, {corner_tiles} from the corners");
+}

@@ -82,6 +82,13 @@ pub struct Culler {
     /// The queue entries for the bands past each light's first (the band pool; `None`: one a
     /// light). A light whose bands do not fit keeps its whole rectangle in one entry.
     pub cluster_band_pool: Option<u32>,
+    /// Whether the clusters take each light's tile rectangle from the exact bounds of its
+    /// sphere's projection (Mara and McGuire 2013; `CULL_FLAG_SPHERE_BOUNDS`, for a perspective
+    /// without skew) rather than from its box's corners: fewer candidate tiles, lists a subset
+    /// of those without (with the box test, the same lists). True by default: on the H100,
+    /// culling at 1M lights 1.183 against 1.109 ms in 32-pixel tiles, 2.01 against 1.64 in
+    /// 16-pixel tiles; in the hall at 50,000 lights 0.379 against 0.353 ms.
+    pub cluster_sphere_bounds: bool,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
     pub(crate) tile_masks: TileMasks,
@@ -208,6 +215,7 @@ impl Culler {
             cluster_slice_masks: true,
             cluster_lane_tiles: crate::CLUSTER_LANE_TILES,
             cluster_band_pool: None,
+            cluster_sphere_bounds: true,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),

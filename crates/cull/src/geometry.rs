@@ -8,8 +8,8 @@ use glam::{Mat4, Vec2, Vec3, Vec4, Vec4Swizzles};
 use manylights_gpu::layout::{GpuFrame, GpuLight, LIGHT_KIND_SPOT};
 
 use crate::layout::{
-    CONE_MIN_COS, CULL_FLAG_DEPTH_MASK, CULL_FLAG_TILE_BOX, GpuCullParams, GpuTileDepth,
-    SLICING_EXPONENTIAL,
+    CONE_MIN_COS, CULL_FLAG_DEPTH_MASK, CULL_FLAG_SPHERE_BOUNDS, CULL_FLAG_TILE_BOX, GpuCullParams,
+    GpuTileDepth, SLICING_EXPONENTIAL,
 };
 
 fn row(m: &Mat4, i: usize) -> Vec4 {
@@ -311,6 +311,27 @@ pub fn light_tiles(frame: &GpuFrame, p: &GpuCullParams, l: &CullLight) -> [i32; 
     if -l.center.z + r < near {
         return [0, 0, -1, -1];
     }
+    if sphere_bounds_apply(frame, p) {
+        let m = &frame.clip_from_view;
+        let [ax0, az0, ax1, az1] = sphere_axis_bounds(l.center.x, l.center.z, r, -near);
+        let [ay0, bz0, ay1, bz1] = sphere_axis_bounds(l.center.y, l.center.z, r, -near);
+        let x0 = *m * Vec4::new(ax0, 0.0, az0, 1.0);
+        let x1 = *m * Vec4::new(ax1, 0.0, az1, 1.0);
+        let y0 = *m * Vec4::new(0.0, ay0, bz0, 1.0);
+        let y1 = *m * Vec4::new(0.0, ay1, bz1, 1.0);
+        if x0.w.min(x1.w).min(y0.w.min(y1.w)) <= 1e-6 {
+            return full;
+        }
+        let lo = Vec2::new(
+            (x0.x / x0.w).min(x1.x / x1.w),
+            (y0.y / y0.w).min(y1.y / y1.w),
+        );
+        let hi = Vec2::new(
+            (x0.x / x0.w).max(x1.x / x1.w),
+            (y0.y / y0.w).max(y1.y / y1.w),
+        );
+        return tiles_of_ndc(frame, p, lo, hi, full);
+    }
     let mut lo = Vec2::splat(1e30);
     let mut hi = Vec2::splat(-1e30);
     for k in 0..8u32 {
@@ -325,6 +346,58 @@ pub fn light_tiles(frame: &GpuFrame, p: &GpuCullParams, l: &CullLight) -> [i32; 
         lo = lo.min(ndc);
         hi = hi.max(ndc);
     }
+    tiles_of_ndc(frame, p, lo, hi, full)
+}
+
+/// WGSL `sphere_bounds_apply`: `CULL_FLAG_SPHERE_BOUNDS` and a perspective without skew.
+pub fn sphere_bounds_apply(frame: &GpuFrame, p: &GpuCullParams) -> bool {
+    let m = &frame.clip_from_view;
+    p.flags & CULL_FLAG_SPHERE_BOUNDS != 0
+        && m.x_axis.y == 0.0
+        && m.y_axis.x == 0.0
+        && m.x_axis.w == 0.0
+        && m.y_axis.w == 0.0
+        && m.z_axis.w == -1.0
+        && m.w_axis.w == 0.0
+}
+
+/// WGSL `sphere_axis_bounds` (Mara and McGuire 2013): in the plane of view axis `a` and z, the
+/// two points bounding the projection of the sphere's part beyond the near plane `near_z`:
+/// (a0, z0, a1, z1).
+pub fn sphere_axis_bounds(a: f32, z: f32, r: f32, near_z: f32) -> [f32; 4] {
+    let c = Vec2::new(a, z);
+    let t2 = c.dot(c) - r * r;
+    let inside = t2 <= 0.0;
+    let mut v = if inside {
+        Vec2::ZERO
+    } else {
+        Vec2::new(t2.sqrt(), r) / c.length()
+    };
+    let clip = c.y + r >= near_z;
+    let mut k = -(r * r - (c.y - near_z) * (c.y - near_z)).max(0.0).sqrt();
+    let mut b = [c, c];
+    for bound in &mut b {
+        if !inside {
+            *bound = Vec2::new(v.x * c.x + v.y * c.y, v.x * c.y - v.y * c.x) * v.x;
+        }
+        if clip && (inside || bound.y > near_z) {
+            *bound = Vec2::new(c.x + k, near_z);
+        }
+        v.y = -v.y;
+        k = -k;
+    }
+    [b[0].x, b[0].y, b[1].x, b[1].y]
+}
+
+/// WGSL `tiles_of_ndc`: the inclusive tile rectangle of the NDC rectangle `lo..hi`, within
+/// `full`.
+fn tiles_of_ndc(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    lo: Vec2,
+    hi: Vec2,
+    full: [i32; 4],
+) -> [i32; 4] {
     let px0 = (lo.x + 1.0) * 0.5 * frame.viewport.x - 1.0;
     let px1 = (hi.x + 1.0) * 0.5 * frame.viewport.x + 1.0;
     let py0 = (1.0 - hi.y) * 0.5 * frame.viewport.y - 1.0;

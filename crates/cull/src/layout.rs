@@ -21,6 +21,10 @@ pub const CULL_FLAG_CLUSTER_BOXES: u32 = 16;
 /// slices): the clusters' per-light passes test only the slices of a tile that hold pixels,
 /// from the tile's mask of occupied slices (`cull.clustered.boxes` sets it).
 pub const CULL_FLAG_SLICE_MASKS: u32 = 32;
+/// `CullParams.flags`: a light's tile rectangle from the exact bounds of its sphere's
+/// projection (Mara and McGuire 2013, `light_tiles`) where the projection is a perspective
+/// without skew, rather than from its view-space box's corners.
+pub const CULL_FLAG_SPHERE_BOUNDS: u32 = 64;
 /// `CullParams.slicing`: slices of equal depth.
 pub const SLICING_LINEAR: u32 = 0;
 /// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
@@ -170,6 +174,7 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("CULL_FLAG_TILE_BOX", CULL_FLAG_TILE_BOX),
     WgslConst::U32("CULL_FLAG_CLUSTER_BOXES", CULL_FLAG_CLUSTER_BOXES),
     WgslConst::U32("CULL_FLAG_SLICE_MASKS", CULL_FLAG_SLICE_MASKS),
+    WgslConst::U32("CULL_FLAG_SPHERE_BOUNDS", CULL_FLAG_SPHERE_BOUNDS),
     WgslConst::U32("CLUSTER_MASK_SLICES", CLUSTER_MASK_SLICES),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
     WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),

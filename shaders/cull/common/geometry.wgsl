@@ -399,6 +399,11 @@ fn bin_of(pixel: vec2<u32>, z: f32) -> u32 {
 // front of the eye, are projected one by one; their rectangle contains the projection of the
 // sphere's visible part. (Only a degenerate camera leaves a corner at w <= 0: then the whole
 // screen is a candidate, and the plane tests decide.)
+//
+// With CULL_FLAG_SPHERE_BOUNDS and a perspective without skew (sphere_bounds_apply), the
+// rectangle holds the exact projection of the sphere's part beyond the near plane instead
+// (sphere_axis_bounds): a box's corners project up to 1.4 times as wide on each axis for a
+// sphere near the camera or the screen's edge.
 fn light_tiles(l: CullLight) -> vec4<i32> {
     let full = vec4<i32>(0, 0, i32(cull.tiles_x) - 1, i32(cull.tiles_y) - 1);
     let r = l.radius + l.slack;
@@ -408,6 +413,20 @@ fn light_tiles(l: CullLight) -> vec4<i32> {
     }
     var lo = vec2<f32>(1e30);
     var hi = vec2<f32>(-1e30);
+    if sphere_bounds_apply() {
+        let bx = sphere_axis_bounds(l.center.x, l.center.z, r, -near);
+        let by = sphere_axis_bounds(l.center.y, l.center.z, r, -near);
+        let x0 = frame.clip_from_view * vec4<f32>(bx.x, 0.0, bx.y, 1.0);
+        let x1 = frame.clip_from_view * vec4<f32>(bx.z, 0.0, bx.w, 1.0);
+        let y0 = frame.clip_from_view * vec4<f32>(0.0, by.x, by.y, 1.0);
+        let y1 = frame.clip_from_view * vec4<f32>(0.0, by.z, by.w, 1.0);
+        if min(min(x0.w, x1.w), min(y0.w, y1.w)) <= 1e-6 {
+            return full;
+        }
+        lo = vec2<f32>(min(x0.x / x0.w, x1.x / x1.w), min(y0.y / y0.w, y1.y / y1.w));
+        hi = vec2<f32>(max(x0.x / x0.w, x1.x / x1.w), max(y0.y / y0.w, y1.y / y1.w));
+        return tiles_of_ndc(lo, hi, full);
+    }
     for (var k = 0u; k < 8u; k++) {
         var corner = l.center + r * vec3<f32>(select(-1.0, 1.0, (k & 1u) != 0u), select(-1.0, 1.0, (k & 2u) != 0u), select(-1.0, 1.0, (k & 4u) != 0u));
         corner.z = min(corner.z, -near);
@@ -419,6 +438,49 @@ fn light_tiles(l: CullLight) -> vec4<i32> {
         lo = min(lo, ndc);
         hi = max(hi, ndc);
     }
+    return tiles_of_ndc(lo, hi, full);
+}
+
+// Whether light_tiles takes the sphere's exact bounds: CULL_FLAG_SPHERE_BOUNDS and a
+// perspective whose NDC x depends on view x and z only, NDC y on y and z, and w = -z.
+fn sphere_bounds_apply() -> bool {
+    let m = frame.clip_from_view;
+    return (cull.flags & CULL_FLAG_SPHERE_BOUNDS) != 0u && m[0][1] == 0.0 && m[1][0] == 0.0 && m[0][3] == 0.0 && m[1][3] == 0.0 && m[2][3] == -1.0 && m[3][3] == 0.0;
+}
+
+// Mara and McGuire, "2D Polyhedral Bounds of a Clipped, Perspective-Projected 3D Sphere"
+// (JCGT 2013): in the plane of one view axis `a` and z, the two points of the sphere (center
+// (a, z), radius r) whose projections bound it on that axis, its tangents from the eye or,
+// where a tangent point lies nearer than the near plane (z = near_z < 0) or the eye is inside
+// the sphere, the ends of its chord on the near plane. Returns (a0, z0, a1, z1).
+fn sphere_axis_bounds(a: f32, z: f32, r: f32, near_z: f32) -> vec4<f32> {
+    let c = vec2<f32>(a, z);
+    let t2 = dot(c, c) - r * r;
+    let inside = t2 <= 0.0;
+    var v = vec2<f32>(0.0);
+    if !inside {
+        v = vec2<f32>(sqrt(t2), r) / length(c);
+    }
+    let clip = c.y + r >= near_z;
+    // The first bound is the lower one (c turned by -θ, then the chord's lower end): the signs
+    // of Mara and McGuire's listing, as a's projection a / -z grows with the angle from -z.
+    var k = -sqrt(max(r * r - (c.y - near_z) * (c.y - near_z), 0.0));
+    var b = array<vec2<f32>, 2>(c, c);
+    for (var i = 0u; i < 2u; i++) {
+        if !inside {
+            b[i] = vec2<f32>(v.x * c.x + v.y * c.y, v.x * c.y - v.y * c.x) * v.x;
+        }
+        if clip && (inside || b[i].y > near_z) {
+            b[i] = vec2<f32>(c.x + k, near_z);
+        }
+        v.y = -v.y;
+        k = -k;
+    }
+    return vec4<f32>(b[0], b[1]);
+}
+
+// The inclusive tile rectangle of the NDC rectangle lo..hi, within `full`.
+fn tiles_of_ndc(lo: vec2<f32>, hi: vec2<f32>, full: vec4<i32>) -> vec4<i32> {
     // NDC to pixels (y flips), one pixel of margin for rounding, then tiles.
     let px0 = (lo.x + 1.0) * 0.5 * frame.viewport.x - 1.0;
     let px1 = (hi.x + 1.0) * 0.5 * frame.viewport.x + 1.0;

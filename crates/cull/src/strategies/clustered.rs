@@ -42,7 +42,7 @@ use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::{
     CLUSTER_MASK_SLICES, CLUSTER_TILE_SLICES, CULL_FLAG_CLUSTER_BOXES, CULL_FLAG_SKIP_EMPTY,
-    CULL_FLAG_SLICE_MASKS, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
+    CULL_FLAG_SLICE_MASKS, CULL_FLAG_SPHERE_BOUNDS, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
 };
 use crate::program::Program;
 use crate::record::{Buf, Dispatch, Step};
@@ -169,6 +169,9 @@ pub(crate) fn run(
 ) -> Result<CullOutput, CullError> {
     r.check_bins(&params)?;
     params.chunk = r.culler.cluster_lane_tiles;
+    if r.culler.cluster_sphere_bounds {
+        params.flags |= CULL_FLAG_SPHERE_BOUNDS;
+    }
     r.ctx
         .check_storage("clusters' wide-light queue", queue_bytes(r, &params))?;
     let ordered = matches!(r.strategy, Strategy::Clustered { ordered: true, .. });
