@@ -297,33 +297,28 @@ fn cluster_tile_path_equals_the_per_light_passes() {
             banded,
             pool_short,
         ] = cullers.get_or_insert_with(|| {
-            // With the lights' rectangles in a pass of their own (these scenes are too small
-            // to reach its default bound).
-            let mut with_rects = Culler::new(&ctx, &r.gpu_scene);
-            with_rects.cluster_tile_rect_pairs = 0;
-            let mut per_light = Culler::new(&ctx, &r.gpu_scene);
-            per_light.cluster_tiles_max_lights = 0;
-            let mut boxes_inline = Culler::new(&ctx, &r.gpu_scene);
-            boxes_inline.cluster_tiles_max_lights = 0;
-            boxes_inline.cluster_boxes = false;
-            let mut unmasked = Culler::new(&ctx, &r.gpu_scene);
-            unmasked.cluster_tiles_max_lights = 0;
-            unmasked.cluster_slice_masks = false;
-            let mut banded = Culler::new(&ctx, &r.gpu_scene);
-            banded.cluster_tiles_max_lights = 0;
-            banded.cluster_lane_tiles = 1;
-            let mut pool_short = Culler::new(&ctx, &r.gpu_scene);
-            pool_short.cluster_tiles_max_lights = 0;
-            pool_short.cluster_lane_tiles = 1;
-            pool_short.cluster_band_pool = Some(3);
+            // A culler set by `set`; `per_light`: on the per-light passes.
+            let culler = |per_light: bool, set: &dyn Fn(&mut Culler)| {
+                let mut c = Culler::new(&ctx, &r.gpu_scene);
+                if per_light {
+                    c.cluster_tiles_max_lights = 0;
+                }
+                set(&mut c);
+                c
+            };
             [
-                Culler::new(&ctx, &r.gpu_scene),
-                with_rects,
-                per_light,
-                boxes_inline,
-                unmasked,
-                banded,
-                pool_short,
+                culler(false, &|_| {}),
+                // With the lights' rectangles in a pass of their own (these scenes are too
+                // small to reach its default bound).
+                culler(false, &|c| c.cluster_tile_rect_pairs = 0),
+                culler(true, &|_| {}),
+                culler(true, &|c| c.cluster_boxes = false),
+                culler(true, &|c| c.cluster_slice_masks = false),
+                culler(true, &|c| c.cluster_lane_tiles = 1),
+                culler(true, &|c| {
+                    c.cluster_lane_tiles = 1;
+                    c.cluster_band_pool = Some(3);
+                }),
             ]
         });
         for (tile_size, slices, skip_empty, tile_boxes) in [

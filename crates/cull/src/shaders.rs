@@ -114,6 +114,7 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
         DEPTH_INPUT,
         LISTS,
         shader_file!("cull/clustered/clustered.wgsl"),
+        shader_file!("cull/clustered/order.wgsl"),
         shader_file!("cull/clustered/cluster_tiles.wgsl"),
     ],
 };
