@@ -335,7 +335,9 @@ fn infinite_range_reference_measures_the_cutoff() {
 /// differ: gather with tile masks places a tile's list with an atomic add.) The small, mid and big cases' clusters hold at most
 /// 512, 1,000 and over 2,048 lights, so that, on the clusters' per-light passes (the tile path,
 /// which these light counts would take, fills its lists in order), `cull.clustered.order_short`
-/// and both paths of `cull.clustered.order` (workgroup memory and in place) run, and gather's
+/// and `cull.clustered.order_bits` (the bitmap's rank sort) run, and, with
+/// `Culler::cluster_order_bits` off, `order_short`'s network alone and both paths of
+/// `cull.clustered.order` (workgroup memory and in place), and gather's
 /// tiles take their coarse tile's candidates in more than one chunk of 2,048.
 #[test]
 fn ordered_strategies_render_bit_identical_frames() {
@@ -405,12 +407,23 @@ fn ordered_strategies_render_bit_identical_frames() {
             },
         ),
     ];
-    for (s, strategy) in cases {
+    // The per-light passes' order passes both ways: by the bitmap of light indices (these runs
+    // have at most 65,536 lights) and by the bitonic network.
+    let runs = cases.into_iter().flat_map(|(s, strategy)| {
+        let bits: &[bool] = if strategy == per_light {
+            &[true, false]
+        } else {
+            &[true]
+        };
+        bits.iter().map(move |&bits| (s, strategy, bits))
+    });
+    for (s, strategy, order_bits) in runs {
         let gpu_scene = GpuScene::upload(&ctx, s, &s.camera, w, h).unwrap();
         let mut renderer = Renderer::new(&ctx, &gpu_scene);
         if strategy == per_light {
             renderer.culler.cluster_tiles_max_lights = 0;
         }
+        renderer.culler.cluster_order_bits = order_bits;
         let settings = CullSettings::for_camera(&s.camera);
         let mut longest = 0;
         for backend in [Backend::Forward, Backend::Deferred] {
@@ -427,15 +440,17 @@ fn ordered_strategies_render_bit_identical_frames() {
             assert!(
                 a.ranges.len() == b.ranges.len()
                     && (0..a.ranges.len()).all(|bin| a.list(bin) == b.list(bin)),
-                "{} {}: lists differ between runs",
+                "{} {}: lists differ between runs (order bits: {})",
                 strategy.name(),
-                backend.name()
+                backend.name(),
+                order_bits
             );
             assert!(
                 runs[0].0 == runs[1].0,
-                "{} {}: images differ between runs",
+                "{} {}: images differ between runs (order bits: {})",
                 strategy.name(),
-                backend.name()
+                backend.name(),
+                order_bits
             );
             for b in 0..runs[0].1.ranges.len() {
                 let l = runs[0].1.list(b);

@@ -25,6 +25,10 @@ pub const CULL_FLAG_SLICE_MASKS: u32 = 32;
 /// projection (Mara and McGuire 2013, `light_tiles`) where the projection is a perspective
 /// without skew, rather than from its view-space box's corners.
 pub const CULL_FLAG_SPHERE_BOUNDS: u32 = 64;
+/// `CullParams.flags` (at most [`CLUSTER_ORDER_BITS_LIGHTS`] lights): the clusters' order
+/// passes sort a list by a bitmap of the light indices (`bits_sort`) rather than by the bitonic
+/// network ([`crate::Culler::cluster_order_bits`]).
+pub const CULL_FLAG_ORDER_BITS: u32 = 128;
 /// `CullParams.slicing`: slices of equal depth.
 pub const SLICING_LINEAR: u32 = 0;
 /// `CullParams.slicing`: slices of equal depth ratio (Olsson et al. 2012).
@@ -61,6 +65,9 @@ pub const CLUSTER_TILE_SLICES: u32 = 64;
 /// The most depth slices of clusters whose lists deferred lighting takes a workgroup at a time
 /// ([`crate::ListForm::Clusters`]: a bit a slice in the workgroup's memory, 32 bytes).
 pub const CLUSTER_GROUP_SLICES: u32 = 256;
+/// The most lights for which the clusters' order passes sort by a bitmap of the light indices
+/// (`CULL_FLAG_ORDER_BITS`): a bit a light in workgroup memory, 8 KB.
+pub const CLUSTER_ORDER_BITS_LIGHTS: u32 = 65536;
 /// The most slices of a tile's mask of occupied slices (`CULL_FLAG_SLICE_MASKS`): two words a
 /// tile after the occupancy words.
 pub const CLUSTER_MASK_SLICES: u32 = 64;
@@ -175,6 +182,8 @@ pub const CULL_CONSTS: &[WgslConst] = &[
     WgslConst::U32("CULL_FLAG_CLUSTER_BOXES", CULL_FLAG_CLUSTER_BOXES),
     WgslConst::U32("CULL_FLAG_SLICE_MASKS", CULL_FLAG_SLICE_MASKS),
     WgslConst::U32("CULL_FLAG_SPHERE_BOUNDS", CULL_FLAG_SPHERE_BOUNDS),
+    WgslConst::U32("CULL_FLAG_ORDER_BITS", CULL_FLAG_ORDER_BITS),
+    WgslConst::U32("CLUSTER_ORDER_BITS_LIGHTS", CLUSTER_ORDER_BITS_LIGHTS),
     WgslConst::U32("CLUSTER_MASK_SLICES", CLUSTER_MASK_SLICES),
     WgslConst::U32("SLICING_LINEAR", SLICING_LINEAR),
     WgslConst::U32("SLICING_EXPONENTIAL", SLICING_EXPONENTIAL),

@@ -17,8 +17,10 @@
 //! 4. `cull.clustered.fill` and `cull.clustered.fill_wide`, in the same split.
 //! 5. With `ordered` (the default), `cull.clustered.order_lists` lists the clusters whose lists
 //!    need sorting, `cull.clustered.order_args` turns their counts into indirect dispatches, and
-//!    `cull.clustered.order_short` and `cull.clustered.order` sort each listed cluster's list
-//!    into light order, so that images are bit-identical run to run.
+//!    `cull.clustered.order_short` and `cull.clustered.order_bits` (or, past
+//!    [`crate::layout::CLUSTER_ORDER_BITS_LIGHTS`] lights or without
+//!    [`crate::Culler::cluster_order_bits`], `cull.clustered.order`) sort each listed cluster's
+//!    list into light order, so that images are bit-identical run to run.
 //! 6. `cull.finalize`.
 //!
 //! With few lights (at most [`crate::Culler::cluster_tiles_max_lights`], and at most
@@ -41,8 +43,9 @@ use manylights_gpu::GpuError;
 use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::{
-    CLUSTER_MASK_SLICES, CLUSTER_TILE_SLICES, CULL_FLAG_CLUSTER_BOXES, CULL_FLAG_SKIP_EMPTY,
-    CULL_FLAG_SLICE_MASKS, CULL_FLAG_SPHERE_BOUNDS, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
+    CLUSTER_MASK_SLICES, CLUSTER_ORDER_BITS_LIGHTS, CLUSTER_TILE_SLICES, CULL_FLAG_CLUSTER_BOXES,
+    CULL_FLAG_ORDER_BITS, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_SLICE_MASKS, CULL_FLAG_SPHERE_BOUNDS,
+    CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
 };
 use crate::program::Program;
 use crate::record::{Buf, Dispatch, Step};
@@ -58,6 +61,9 @@ pub(crate) struct Pipelines {
     fill_wide: wgpu::ComputePipeline,
     wide_args: wgpu::ComputePipeline,
     order: wgpu::ComputePipeline,
+    /// `cull.clustered.order`'s lists by the bitmap's rank sort, run in its place with at most
+    /// `CULL_FLAG_ORDER_BITS`.
+    order_bits: wgpu::ComputePipeline,
     order_short: wgpu::ComputePipeline,
     order_lists: wgpu::ComputePipeline,
     order_args: wgpu::ComputePipeline,
@@ -129,14 +135,8 @@ impl Pipelines {
                 },
             ),
             masks_fill,
-            order: program.pipeline_with(
-                d,
-                "cluster_order",
-                &wgpu::PipelineCompilationOptions {
-                    constants: &[("ORDER_THREADS", f64::from(order_threads(d)))],
-                    ..Default::default()
-                },
-            ),
+            order: order_pipeline(d, program, "cluster_order"),
+            order_bits: order_pipeline(d, program, "cluster_order_bits"),
             masks_fill_cursor: program.pipeline_with(
                 d,
                 "cluster_masks_fill",
@@ -147,6 +147,18 @@ impl Pipelines {
             ),
         }
     }
+}
+
+/// A long lists' order pass, with [`order_threads`] threads.
+fn order_pipeline(d: &wgpu::Device, program: &Program, entry: &str) -> wgpu::ComputePipeline {
+    program.pipeline_with(
+        d,
+        entry,
+        &wgpu::PipelineCompilationOptions {
+            constants: &[("ORDER_THREADS", f64::from(order_threads(d)))],
+            ..Default::default()
+        },
+    )
 }
 
 /// The threads of the long lists' order pass (`cull.clustered.order`): 512 where the device
@@ -171,6 +183,9 @@ pub(crate) fn run(
     params.chunk = r.culler.cluster_lane_tiles;
     if r.culler.cluster_sphere_bounds {
         params.flags |= CULL_FLAG_SPHERE_BOUNDS;
+    }
+    if r.culler.cluster_order_bits && params.light_count <= CLUSTER_ORDER_BITS_LIGHTS {
+        params.flags |= CULL_FLAG_ORDER_BITS;
     }
     r.ctx
         .check_storage("clusters' wide-light queue", queue_bytes(r, &params))?;
@@ -542,10 +557,14 @@ impl Plan for ClusterPlan<'_> {
                 &[Buf::Stats],
                 &[Buf::WideArgs],
             ));
-            for (name, pipeline, offset) in [
-                ("cull.clustered.order_short", &g.order_short, 0),
-                ("cull.clustered.order", &g.order, 16),
-            ] {
+            let long = if f.params.flags & CULL_FLAG_ORDER_BITS != 0 {
+                ("cull.clustered.order_bits", &g.order_bits, 16)
+            } else {
+                ("cull.clustered.order", &g.order, 16)
+            };
+            for (name, pipeline, offset) in
+                [("cull.clustered.order_short", &g.order_short, 0), long]
+            {
                 steps.push(Step::pass(
                     name,
                     pipeline,
