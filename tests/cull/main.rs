@@ -8,6 +8,7 @@ mod cases;
 mod exactness;
 mod lists;
 mod msaa;
+mod order;
 mod paths;
 mod transparent;
 

@@ -115,6 +115,7 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
         LISTS,
         shader_file!("cull/clustered/clustered.wgsl"),
         shader_file!("cull/clustered/order.wgsl"),
+        shader_file!("cull/clustered/order_rank.wgsl"),
         shader_file!("cull/clustered/cluster_tiles.wgsl"),
     ],
 };

@@ -1,0 +1,104 @@
+//! The clusters' order passes, each sort on lists built to reach it.
+
+use super::*;
+
+/// The clusters' order passes put every list into light order by each of their sorts, on the
+/// per-light passes with 20,000 lights (over 16,384, so that a bucket of the bucket sort spans
+/// 128 light indices and a list can crowd one; at most 65,536, so that the bitmap's sort runs).
+/// Among 20,000 small lights (a seventh of them in view), some cover the whole view: every 20th or 64th light (lists over
+/// and under 512 lights, a few lights a bucket: the bucket sort), or the first 600 or 300 (lists
+/// that crowd their buckets, which the network sorts instead). Each list, with the bitmap
+/// ([`Culler::cluster_order_bits`]) and without it, is the unordered run's, sorted.
+#[test]
+fn cluster_order_passes_sort_every_list() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let mut scene = ProceduralScene::Atrium(AtriumParams {
+        bays: 3,
+        storeys: 2,
+        cloth: false,
+        glass: false,
+    })
+    .build()
+    .unwrap();
+    let ext = scene.light_bounds.extent();
+    let small = LightSpec {
+        generator: LightGenerator::Uniform,
+        count: 20_000,
+        seed: 9,
+        radius: RadiusRule::Fixed(ext.max_element() * 0.002),
+        intensity: 1.0,
+        spot_fraction: 0.0,
+        ..LightSpec::default()
+    }
+    .generate(&scene)
+    .unwrap();
+    let clusters = |ordered| Strategy::Clustered {
+        tile_size: 16,
+        slices: 8,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered,
+    };
+    let mut cullers: Option<[Culler; 2]> = None;
+    // (label, whether light `i` covers the view, whether the lists exceed 512 lights)
+    type Covering = (&'static str, fn(usize) -> bool, bool);
+    let covering: [Covering; 4] = [
+        ("every 20th", |i| i % 20 == 0, true),
+        ("every 64th", |i| i % 64 == 0, false),
+        ("the first 600", |i| i < 600, true),
+        ("the first 300", |i| i < 300, false),
+    ];
+    for (label, covers, long) in covering {
+        scene.lights = small.clone();
+        for (i, l) in scene.lights.iter_mut().enumerate() {
+            if covers(i) {
+                l.radius = ext.length() * 2.0;
+            } else if i % 7 != 0 {
+                // Out of every list: a seventh of the small lights stay in the scene.
+                l.position = scene.light_bounds.min - ext * 10.0;
+            }
+        }
+        let case = Case {
+            camera: scene.camera,
+            scene: scene.clone(),
+            label: format!("{label} covering"),
+        };
+        let r = render(&ctx, &case, w, h);
+        let [bits, network] = cullers.get_or_insert_with(|| {
+            let culler = |bits: bool| {
+                let mut c = Culler::new(&ctx, &r.gpu_scene);
+                c.cluster_order_bits = bits;
+                c
+            };
+            [culler(true), culler(false)]
+        });
+        let unordered = run_gpu(&ctx, bits, &r, &case, &clusters(false))
+            .read(&ctx)
+            .unwrap();
+        let longest = (0..unordered.ranges.len())
+            .map(|b| unordered.list(b).len())
+            .max()
+            .unwrap();
+        assert_eq!(
+            longest > 512,
+            long,
+            "{}: the longest list, {longest}",
+            case.label
+        );
+        for (culler, sort) in [(&*bits, "bitmap"), (&*network, "buckets")] {
+            let ordered = run_gpu(&ctx, culler, &r, &case, &clusters(true))
+                .read(&ctx)
+                .unwrap();
+            assert_eq!(ordered.ranges.len(), unordered.ranges.len());
+            for b in 0..ordered.ranges.len() {
+                assert_eq!(
+                    ordered.list(b),
+                    unordered.sorted(b).as_slice(),
+                    "{} ({sort}): bin {b}",
+                    case.label
+                );
+            }
+        }
+    }
+}
