@@ -5,21 +5,21 @@
 // (bit-identical images), by one workgroup, in one of three ways:
 // - the bitmap's rank sort (order_rank.wgsl, bits_sort) with CULL_FLAG_ORDER_BITS: lists of
 //   more than ORDER_SHORT lights in cull.clustered.order_bits;
-// - the bucket rank sort (order_rank.wgsl, bucket_sort): lists of ORDER_BUCKET_MIN to
-//   ORDER_SHORT lights in cull.clustered.order_short, and without the bitmap up to ORDER_LOCAL
-//   in cull.clustered.order, unless the list's lights crowd a bucket;
-// - a bitonic network (below): the rest, in workgroup memory up to ORDER_LOCAL lights, in
-//   place in the list buffer beyond (slower, and rare: a cluster holds that many lights only
-//   when thousands overlap it).
+// - the bucket rank sort (order_rank.wgsl, bucket_sort), unless the list's lights crowd a
+//   bucket: lists of ORDER_BUCKET_MIN to ORDER_SHORT lights in cull.clustered.order_short, in
+//   workgroup memory, and, without the bitmap, longer ones of up to ORDER_WIDE_ENTRIES
+//   lights a thread in cull.clustered.order, in place in the list buffer;
+// - a bitonic network (below): the rest, in workgroup memory in cull.clustered.order_short, in
+//   place in the list buffer in cull.clustered.order (slower, and rare: a list the buckets do
+//   not take there is a crowded one or one of over 4,096 lights).
 // The network sorts the list padded to a power of two with virtual +inf entries; in the form
 // used here every compare-exchange puts the smaller value at the lower index, so a pair whose
 // upper index is in the padding never swaps, and the padding never needs storing.
-const ORDER_LOCAL: u32 = 2048u;
 // Threads of the long lists' passes: 512 where the device allows (Pipelines::new), else 256: on
 // the H100, culling at 1M lights in 32-pixel tiles 1.191 against 1.178 ms, and in the hall at
 // 50,000 0.387 against 0.379 ms (1,024: no faster), by the network.
 override ORDER_THREADS: u32 = 256u;
-var<workgroup> wg_list: array<u32, ORDER_LOCAL>;
+var<workgroup> wg_list: array<u32, ORDER_SHORT>;
 var<workgroup> wg_len: u32;
 
 // Pair `t` of the bitonic step (`k`: the merge size, `d`: the distance; `d == k / 2` is the
@@ -126,7 +126,7 @@ fn order_bin(wg: vec3<u32>, kind: u32) -> u32 {
     return atomicLoad(&wide_lights[order_slot(k, kind)]);
 }
 
-// Sorts wg_list's first `n` entries by the network and writes them at `base`, with `threads`
+// Sorts wg_list's first `n` (at most ORDER_SHORT) entries by the network and writes them at `base`, with `threads`
 // threads. Called in uniform control flow, after a barrier past wg_list's loading.
 fn network_local(base: u32, n: u32, li: u32, threads: u32) {
     let size = padded(n);
@@ -173,12 +173,13 @@ fn network_in_place(base: u32, n: u32, li: u32, threads: u32) {
     }
 }
 
-// Sorts the `n` (at least 2, at most ORDER_LOCAL and 4 a thread) entries at `base`: by buckets
-// from ORDER_BUCKET_MIN entries on, else (or where the lights crowd a bucket) by the network.
+// Sorts the `n` (at least 2, at most ORDER_SHORT) entries at `base` in wg_list: by 256
+// buckets from ORDER_BUCKET_MIN entries on, else (or where the lights crowd a bucket) by the
+// network.
 fn sort_local(base: u32, n: u32, li: u32, threads: u32) {
     var sorted = false;
     if n >= ORDER_BUCKET_MIN {
-        sorted = bucket_sort(base, n, li, threads);
+        sorted = bucket_sort_local(base, n, li, threads);
     } else {
         for (var i = li; i < n; i += threads) {
             wg_list[i] = out_indices[base + i];
@@ -199,9 +200,13 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         return;
     }
     let base = bin_offsets[bin];
-    if n <= ORDER_LOCAL {
-        sort_local(base, n, li, ORDER_THREADS);
-    } else {
+    // A bucket for every 4 entries or fewer (256 to 2,048 buckets).
+    var sorted = false;
+    if n <= ORDER_WIDE_ENTRIES * ORDER_THREADS {
+        let bucket_bits = clamp(32u - countLeadingZeros(n - 1u), 10u, 13u) - 2u;
+        sorted = bucket_sort_wide(base, n, li, ORDER_THREADS, bucket_bits);
+    }
+    if !sorted {
         network_in_place(base, n, li, ORDER_THREADS);
     }
 }

@@ -71,32 +71,99 @@ fn bits_sort(base: u32, n: u32, li: u32, threads: u32) {
     }
 }
 
-// The bucket rank sort: each entry counted into one of ORDER_BUCKETS buckets by the high bits
-// of its light index (of the run's light count); the buckets' offsets prefix-summed; the
-// entries scattered into wg_list by bucket; and each written at its bucket's offset plus the
-// entries of its bucket below it. Seven barriers; the work grows with the list's length times
-// its entries a bucket, a few where the list's lights spread over the indices. Where a bucket
-// holds more than ORDER_BUCKET_MAX (a list of lights with neighbouring indices) it returns
-// false, with the list loaded into wg_list for the network. For lists of at most 4 entries a
-// thread and ORDER_LOCAL. At 1M lights in 32-pixel tiles (H100) the short lists' pass took 54 µs,
-// against 116 by the network.
-const ORDER_BUCKETS: u32 = 256u;
+// The bucket rank sort: each entry counted into one of 2^`bucket_bits` buckets by the high
+// bits of its light index (of the run's light count); the buckets' offsets prefix-summed; the
+// entries scattered by bucket, into wg_list (bucket_sort_local) or in place in the list buffer
+// (bucket_sort_wide); and each written at its bucket's offset plus the entries of its bucket
+// below it. Seven barriers; the work grows with the list's length times its entries a bucket,
+// a few where the list's lights spread over the indices. Where a bucket holds more than
+// ORDER_BUCKET_MAX (a list of lights with neighbouring indices) each returns false, the list
+// as it was (bucket_sort_local: loaded into wg_list), for the network. The entries of a
+// thread are held in registers, 4 (local) or ORDER_WIDE_ENTRIES (wide): on the H100 16 a
+// thread for both made the short lists' pass at 1M lights in 32-pixel tiles 45 -> 78 µs, and
+// the long lists' 8 against 16 a thread took 43 against 51 µs.
 const ORDER_BUCKET_MIN: u32 = 16u;
 const ORDER_BUCKET_MAX: u32 = 64u;
-var<workgroup> wg_buckets: array<atomic<u32>, ORDER_BUCKETS>;
+const ORDER_WIDE_ENTRIES: u32 = 8u;
+var<workgroup> wg_buckets: array<atomic<u32>, 2048>;
 var<workgroup> wg_crowded: atomic<u32>;
 var<workgroup> wg_crowded_all: u32;
 
-fn bucket_sort(base: u32, n: u32, li: u32, threads: u32) -> bool {
+// The shift of a light index to its bucket of 2^`bucket_bits`.
+fn bucket_shift(bucket_bits: u32) -> u32 {
     let bits = 32u - countLeadingZeros(max(cull.light_count, 2u) - 1u);
-    let shift = select(0u, bits - 8u, bits > 8u);
-    for (var b = li; b < ORDER_BUCKETS; b += threads) {
+    return select(0u, bits - bucket_bits, bits > bucket_bits);
+}
+
+// Zeroes the buckets' counts and the crowded flag, then a barrier.
+fn buckets_clear(li: u32, threads: u32, buckets: u32) {
+    for (var b = li; b < buckets; b += threads) {
         atomicStore(&wg_buckets[b], 0u);
     }
     if li == 0u {
         atomicStore(&wg_crowded, 0u);
     }
     workgroupBarrier();
+}
+
+// After the count (and a barrier): true, the same in every thread, where a bucket holds more
+// than ORDER_BUCKET_MAX entries; else each bucket's count replaced by its offset, then a
+// barrier. Each thread takes a run of buckets.
+fn buckets_place(li: u32, threads: u32, buckets: u32) -> bool {
+    let per = (buckets + threads - 1u) / threads;
+    let first = min(li * per, buckets);
+    let last = min(first + per, buckets);
+    var s = 0u;
+    for (var b = first; b < last; b++) {
+        let c = atomicLoad(&wg_buckets[b]);
+        s += c;
+        if c > ORDER_BUCKET_MAX {
+            atomicStore(&wg_crowded, 1u);
+        }
+    }
+    var at = wg_prefix(s, li, threads);
+    if li == 0u {
+        wg_crowded_all = atomicLoad(&wg_crowded);
+    }
+    if workgroupUniformLoad(&wg_crowded_all) != 0u {
+        return true;
+    }
+    for (var b = first; b < last; b++) {
+        let c = atomicLoad(&wg_buckets[b]);
+        atomicStore(&wg_buckets[b], at);
+        at += c;
+    }
+    workgroupBarrier();
+    return false;
+}
+
+// The rank of light `e`, of bucket `b`, in its list of `n`: its bucket's offset plus the
+// entries of its bucket below it, scattered into wg_list (`local`) or at `base`.
+fn bucket_rank(e: u32, b: u32, buckets: u32, n: u32, base: u32, local: bool) -> u32 {
+    let o = atomicLoad(&wg_buckets[b]);
+    var end = n;
+    if b + 1u < buckets {
+        end = atomicLoad(&wg_buckets[b + 1u]);
+    }
+    var r = o;
+    for (var j = o; j < end; j++) {
+        var x: u32;
+        if local {
+            x = wg_list[j];
+        } else {
+            x = out_indices[base + j];
+        }
+        r += select(0u, 1u, x < e);
+    }
+    return r;
+}
+
+// The short lists' bucket sort: at most ORDER_SHORT entries and 4 a thread, 256 buckets, in
+// wg_list.
+fn bucket_sort_local(base: u32, n: u32, li: u32, threads: u32) -> bool {
+    let buckets = 256u;
+    let shift = bucket_shift(8u);
+    buckets_clear(li, threads, buckets);
     var e: array<u32, 4>;
     var slot: array<u32, 4>;
     for (var k = 0u; k < 4u; k++) {
@@ -107,25 +174,7 @@ fn bucket_sort(base: u32, n: u32, li: u32, threads: u32) -> bool {
         }
     }
     workgroupBarrier();
-    // Each thread's run of buckets (2 at most: ORDER_BUCKETS / 128), their offsets from the
-    // prefix of the runs' sums.
-    let per = (ORDER_BUCKETS + threads - 1u) / threads;
-    let first = min(li * per, ORDER_BUCKETS);
-    let last = min(first + per, ORDER_BUCKETS);
-    var c: array<u32, 2>;
-    var s = 0u;
-    for (var b = first; b < last; b++) {
-        c[b - first] = atomicLoad(&wg_buckets[b]);
-        s += c[b - first];
-        if c[b - first] > ORDER_BUCKET_MAX {
-            atomicStore(&wg_crowded, 1u);
-        }
-    }
-    var at = wg_prefix(s, li, threads);
-    if li == 0u {
-        wg_crowded_all = atomicLoad(&wg_crowded);
-    }
-    if workgroupUniformLoad(&wg_crowded_all) != 0u {
+    if buckets_place(li, threads, buckets) {
         for (var k = 0u; k < 4u; k++) {
             if li + k * threads < n {
                 wg_list[li + k * threads] = e[k];
@@ -134,11 +183,6 @@ fn bucket_sort(base: u32, n: u32, li: u32, threads: u32) -> bool {
         workgroupBarrier();
         return false;
     }
-    for (var b = first; b < last; b++) {
-        atomicStore(&wg_buckets[b], at);
-        at += c[b - first];
-    }
-    workgroupBarrier();
     for (var k = 0u; k < 4u; k++) {
         if li + k * threads < n {
             wg_list[atomicLoad(&wg_buckets[e[k] >> shift]) + slot[k]] = e[k];
@@ -147,17 +191,49 @@ fn bucket_sort(base: u32, n: u32, li: u32, threads: u32) -> bool {
     workgroupBarrier();
     for (var k = 0u; k < 4u; k++) {
         if li + k * threads < n {
-            let b = e[k] >> shift;
-            let o = atomicLoad(&wg_buckets[b]);
-            var end = n;
-            if b + 1u < ORDER_BUCKETS {
-                end = atomicLoad(&wg_buckets[b + 1u]);
-            }
-            var r = o;
-            for (var j = o; j < end; j++) {
-                r += select(0u, 1u, wg_list[j] < e[k]);
-            }
-            out_indices[base + r] = e[k];
+            out_indices[base + bucket_rank(e[k], e[k] >> shift, buckets, n, base, true)] = e[k];
+        }
+    }
+    return true;
+}
+
+// The long lists' bucket sort: at most ORDER_WIDE_ENTRIES entries a thread, 2^`bucket_bits`
+// buckets (at most 2,048), in place in the list buffer: every thread ranks its entries among
+// the scattered ones before any is written at its rank.
+fn bucket_sort_wide(base: u32, n: u32, li: u32, threads: u32, bucket_bits: u32) -> bool {
+    let buckets = 1u << bucket_bits;
+    let shift = bucket_shift(bucket_bits);
+    buckets_clear(li, threads, buckets);
+    var e: array<u32, ORDER_WIDE_ENTRIES>;
+    var slot: array<u32, ORDER_WIDE_ENTRIES>;
+    for (var k = 0u; k < ORDER_WIDE_ENTRIES; k++) {
+        let i = li + k * threads;
+        if i < n {
+            e[k] = out_indices[base + i];
+            slot[k] = atomicAdd(&wg_buckets[e[k] >> shift], 1u);
+        }
+    }
+    workgroupBarrier();
+    if buckets_place(li, threads, buckets) {
+        return false;
+    }
+    for (var k = 0u; k < ORDER_WIDE_ENTRIES; k++) {
+        if li + k * threads < n {
+            out_indices[base + atomicLoad(&wg_buckets[e[k] >> shift]) + slot[k]] = e[k];
+        }
+    }
+    storageBarrier();
+    workgroupBarrier();
+    for (var k = 0u; k < ORDER_WIDE_ENTRIES; k++) {
+        if li + k * threads < n {
+            slot[k] = bucket_rank(e[k], e[k] >> shift, buckets, n, base, false);
+        }
+    }
+    storageBarrier();
+    workgroupBarrier();
+    for (var k = 0u; k < ORDER_WIDE_ENTRIES; k++) {
+        if li + k * threads < n {
+            out_indices[base + slot[k]] = e[k];
         }
     }
     return true;
