@@ -200,10 +200,11 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         return;
     }
     let base = bin_offsets[bin];
-    // A bucket for every 4 entries or fewer (256 to 1,024 buckets).
+    // A bucket for every 4 entries up to 2,048, 8 beyond (256 or 512 buckets: the short lists'
+    // pass reserves the buckets too, and is bound by its workgroup memory).
     var sorted = false;
     if n <= ORDER_WIDE_ENTRIES * ORDER_THREADS {
-        let bucket_bits = clamp(32u - countLeadingZeros(n - 1u), 10u, 12u) - 2u;
+        let bucket_bits = clamp(32u - countLeadingZeros(n - 1u), 10u, 11u) - 2u;
         sorted = bucket_sort_wide(base, n, li, ORDER_THREADS, bucket_bits);
     }
     if !sorted {

@@ -82,12 +82,12 @@ fn bits_sort(base: u32, n: u32, li: u32, threads: u32) {
 // thread are held in registers, 4 (local) or ORDER_WIDE_ENTRIES (wide): on the H100 16 a
 // thread for both made the short lists' pass at 1M lights in 32-pixel tiles 45 -> 78 µs, and
 // the long lists' 8 against 16 a thread took 43 against 51 µs. The short lists' pass is bound
-// by its workgroup memory: wg_buckets of 2,048 words in place of 1,024 made it 40 -> 53 µs
-// there (96 -> 140 in 16-pixel tiles).
+// by its workgroup memory: wg_buckets of 2,048, 1,024 and 512 words took 53, 40 and 35 µs
+// there (140, 95 and 77 in 16-pixel tiles).
 const ORDER_BUCKET_MIN: u32 = 16u;
 const ORDER_BUCKET_MAX: u32 = 64u;
 const ORDER_WIDE_ENTRIES: u32 = 8u;
-var<workgroup> wg_buckets: array<atomic<u32>, 1024>;
+var<workgroup> wg_buckets: array<atomic<u32>, 512>;
 var<workgroup> wg_crowded: atomic<u32>;
 var<workgroup> wg_crowded_all: u32;
 
@@ -200,7 +200,7 @@ fn bucket_sort_local(base: u32, n: u32, li: u32, threads: u32) -> bool {
 }
 
 // The long lists' bucket sort: at most ORDER_WIDE_ENTRIES entries a thread, 2^`bucket_bits`
-// buckets (at most 1,024), in place in the list buffer: every thread ranks its entries among
+// buckets (at most 512), in place in the list buffer: every thread ranks its entries among
 // the scattered ones before any is written at its rank.
 fn bucket_sort_wide(base: u32, n: u32, li: u32, threads: u32, bucket_bits: u32) -> bool {
     let buckets = 1u << bucket_bits;
