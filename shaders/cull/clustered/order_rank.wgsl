@@ -83,7 +83,7 @@ fn bits_sort(base: u32, n: u32, li: u32, threads: u32) {
 // thread for both made the short lists' pass at 1M lights in 32-pixel tiles 45 -> 78 µs, and
 // the long lists' 8 against 16 a thread took 43 against 51 µs. The short lists' pass is bound
 // by its workgroup memory: wg_buckets of 2,048, 1,024 and 512 words took 53, 40 and 35 µs
-// there (140, 95 and 77 in 16-pixel tiles).
+// there (140, 95 and 77 in 16-pixel tiles), and 32 (67) without wg_sums (buckets_place).
 const ORDER_BUCKET_MIN: u32 = 16u;
 const ORDER_BUCKET_MAX: u32 = 64u;
 const ORDER_WIDE_ENTRIES: u32 = 8u;
@@ -110,30 +110,48 @@ fn buckets_clear(li: u32, threads: u32, buckets: u32) {
 
 // After the count (and a barrier): true, the same in every thread, where a bucket holds more
 // than ORDER_BUCKET_MAX entries; else each bucket's count replaced by its offset, then a
-// barrier. Each thread takes a run of buckets.
+// barrier. Each thread takes a run of buckets (at most 2: `buckets` at most 2 a thread); the
+// prefix is summed in place, groups of 16 buckets first (wg_groups), so that the passes that
+// sort by buckets reserve no word a thread (wg_sums: the short lists' pass is bound by its
+// workgroup memory).
 fn buckets_place(li: u32, threads: u32, buckets: u32) -> bool {
     let per = (buckets + threads - 1u) / threads;
     let first = min(li * per, buckets);
     let last = min(first + per, buckets);
-    var s = 0u;
     for (var b = first; b < last; b++) {
-        let c = atomicLoad(&wg_buckets[b]);
-        s += c;
-        if c > ORDER_BUCKET_MAX {
+        if atomicLoad(&wg_buckets[b]) > ORDER_BUCKET_MAX {
             atomicStore(&wg_crowded, 1u);
         }
     }
-    var at = wg_prefix(s, li, threads);
+    if li < buckets / 16u {
+        var g = 0u;
+        for (var k = 0u; k < 16u; k++) {
+            g += atomicLoad(&wg_buckets[16u * li + k]);
+        }
+        wg_groups[li] = g;
+    }
+    workgroupBarrier();
+    var at = 0u;
+    for (var k = 0u; k < first / 16u; k++) {
+        at += wg_groups[k];
+    }
+    for (var b = first & ~15u; b < first; b++) {
+        at += atomicLoad(&wg_buckets[b]);
+    }
+    var offsets: array<u32, 2>;
+    for (var b = first; b < last; b++) {
+        offsets[b - first] = at;
+        at += atomicLoad(&wg_buckets[b]);
+    }
     if li == 0u {
         wg_crowded_all = atomicLoad(&wg_crowded);
     }
+    // (Also keeps every count read above from the offsets written below.)
     if workgroupUniformLoad(&wg_crowded_all) != 0u {
         return true;
     }
     for (var b = first; b < last; b++) {
-        let c = atomicLoad(&wg_buckets[b]);
-        atomicStore(&wg_buckets[b], at);
-        at += c;
+        atomicStore(&wg_buckets[b], offsets[b - first]);
     }
     workgroupBarrier();
     return false;
