@@ -77,6 +77,13 @@ fn settings() -> Vec<Setting> {
         skip_empty: false,
         ordered,
     };
+    let clusters24x48 = |ordered| Strategy::Clustered {
+        tile_size: 24,
+        slices: 48,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered,
+    };
     let million = || {
         atrium(LightSpec {
             generator: LightGenerator::Uniform,
@@ -186,6 +193,13 @@ fn settings() -> Vec<Setting> {
             scene: million(),
             size: full,
             strategy: clusters32(false),
+        },
+        // The fastest grid there in `manylights run` (H100, 2026-11-27): 24 px x 48 slices.
+        Setting {
+            name: "atrium_1m_clustered24x48",
+            scene: million(),
+            size: full,
+            strategy: clusters24x48(true),
         },
     ]
 }
