@@ -126,8 +126,21 @@ fn order_bin(wg: vec3<u32>, kind: u32) -> u32 {
     return atomicLoad(&wide_lights[order_slot(k, kind)]);
 }
 
-// Sorts wg_list's first `n` (at most ORDER_SHORT) entries by the network and writes them at `base`, with `threads`
-// threads. Called in uniform control flow, after a barrier past wg_list's loading.
+// The list of the order passes' workgroup `wg` of `kind`: its length, the same in every thread
+// (0: none), and its offset. Called in uniform control flow.
+fn order_list(wg: vec3<u32>, kind: u32, li: u32) -> vec2<u32> {
+    let bin = order_bin(wg, kind);
+    let n = list_len(bin, li);
+    var base = 0u;
+    if n != 0u {
+        base = bin_offsets[bin];
+    }
+    return vec2<u32>(n, base);
+}
+
+// Sorts wg_list's first `n` (at most ORDER_SHORT) entries by the network and writes them at
+// `base`, with `threads` threads. Called in uniform control flow, after a barrier past
+// wg_list's loading.
 fn network_local(base: u32, n: u32, li: u32, threads: u32) {
     let size = padded(n);
     for (var k = 2u; k <= size; k <<= 1u) {
@@ -194,12 +207,12 @@ fn sort_local(base: u32, n: u32, li: u32, threads: u32) {
 // cull.clustered.order: the lists of more than ORDER_SHORT lights, without CULL_FLAG_ORDER_BITS.
 @compute @workgroup_size(ORDER_THREADS)
 fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let bin = order_bin(wg, 1u);
-    let n = list_len(bin, li);
+    let list = order_list(wg, 1u, li);
+    let n = list.x;
+    let base = list.y;
     if n <= ORDER_SHORT {
         return;
     }
-    let base = bin_offsets[bin];
     // A bucket for every 4 entries up to 2,048, 8 beyond (256 or 512 buckets: the short lists'
     // pass reserves the buckets too, and is bound by its workgroup memory).
     var sorted = false;
@@ -215,12 +228,11 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
 // cull.clustered.order_bits: the same lists, with CULL_FLAG_ORDER_BITS, by the bitmap.
 @compute @workgroup_size(ORDER_THREADS)
 fn cluster_order_bits(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let bin = order_bin(wg, 1u);
-    let n = list_len(bin, li);
-    if n <= ORDER_SHORT {
+    let list = order_list(wg, 1u, li);
+    if list.x <= ORDER_SHORT {
         return;
     }
-    bits_sort(bin_offsets[bin], n, li, ORDER_THREADS);
+    bits_sort(list.y, list.x, li, ORDER_THREADS);
 }
 
 // cull.clustered.order_short: the lists of 2 to ORDER_SHORT lights, with 128 threads, so that
@@ -232,10 +244,9 @@ const ORDER_SHORT_THREADS: u32 = 128u;
 
 @compute @workgroup_size(ORDER_SHORT_THREADS)
 fn cluster_order_short(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let bin = order_bin(wg, 0u);
-    let n = list_len(bin, li);
-    if n < 2u || n > ORDER_SHORT {
+    let list = order_list(wg, 0u, li);
+    if list.x < 2u || list.x > ORDER_SHORT {
         return;
     }
-    sort_local(bin_offsets[bin], n, li, ORDER_SHORT_THREADS);
+    sort_local(list.y, list.x, li, ORDER_SHORT_THREADS);
 }

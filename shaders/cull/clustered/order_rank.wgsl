@@ -3,31 +3,30 @@
 // Both sorts take distinct lights (a light enters a cluster's list once) and write each at its
 // rank, the lights before it in light order.
 
-// Each thread's value, then, in the first threads / 16, each group of 16 threads' sum.
-var<workgroup> wg_sums: array<u32, 512>;
+// Sums of 16 words of wg_buckets (buckets_before).
 var<workgroup> wg_groups: array<u32, 32>;
 
-// The sum of `s` over the threads before this one (`li`) of `threads` (at most 512, a multiple
-// of 16): two barriers. Called in uniform control flow.
-fn wg_prefix(s: u32, li: u32, threads: u32) -> u32 {
-    wg_sums[li] = s;
-    workgroupBarrier();
-    if li < threads / 16u {
+// The sum of wg_buckets' first `at` words of `words` (a multiple of 16, at most 512), in every
+// thread: the words' groups of 16 summed first (wg_groups), then one barrier. Called in uniform
+// control flow, after a barrier past the words' last store. The passes keep no word a thread
+// for it: the short lists' pass is bound by its workgroup memory.
+fn buckets_before(at: u32, li: u32, words: u32) -> u32 {
+    if li < words / 16u {
         var g = 0u;
         for (var k = 0u; k < 16u; k++) {
-            g += wg_sums[16u * li + k];
+            g += atomicLoad(&wg_buckets[16u * li + k]);
         }
         wg_groups[li] = g;
     }
     workgroupBarrier();
-    var at = 0u;
-    for (var k = 0u; k < li / 16u; k++) {
-        at += wg_groups[k];
+    var sum = 0u;
+    for (var k = 0u; k < at / 16u; k++) {
+        sum += wg_groups[k];
     }
-    for (var k = li & ~15u; k < li; k++) {
-        at += wg_sums[k];
+    for (var b = at & ~15u; b < at; b++) {
+        sum += atomicLoad(&wg_buckets[b]);
     }
-    return at;
+    return sum;
 }
 
 // The bitmap's rank sort (CULL_FLAG_ORDER_BITS: at most CLUSTER_ORDER_BITS_LIGHTS lights): a
@@ -60,7 +59,10 @@ fn bits_sort(base: u32, n: u32, li: u32, threads: u32) {
     for (var w = first; w < last; w++) {
         s += countOneBits(atomicLoad(&wg_bits[w]));
     }
-    var at = base + wg_prefix(s, li, threads);
+    // The threads' sums in wg_buckets (this pass sorts by no bucket).
+    atomicStore(&wg_buckets[li], s);
+    workgroupBarrier();
+    var at = base + buckets_before(li, li, threads);
     for (var w = first; w < last; w++) {
         var m = atomicLoad(&wg_bits[w]);
         while m != 0u {
@@ -83,10 +85,12 @@ fn bits_sort(base: u32, n: u32, li: u32, threads: u32) {
 // thread for both made the short lists' pass at 1M lights in 32-pixel tiles 45 -> 78 µs, and
 // the long lists' 8 against 16 a thread took 43 against 51 µs. The short lists' pass is bound
 // by its workgroup memory: wg_buckets of 2,048, 1,024 and 512 words took 53, 40 and 35 µs
-// there (140, 95 and 77 in 16-pixel tiles), and 32 (67) without wg_sums (buckets_place).
+// there (140, 95 and 77 in 16-pixel tiles), and 32 (67) without a word a thread for the
+// prefix (buckets_before).
 const ORDER_BUCKET_MIN: u32 = 16u;
 const ORDER_BUCKET_MAX: u32 = 64u;
 const ORDER_WIDE_ENTRIES: u32 = 8u;
+// The buckets' counts, then offsets; in the bitmap's sort, its threads' sums (at most 512).
 var<workgroup> wg_buckets: array<atomic<u32>, 512>;
 var<workgroup> wg_crowded: atomic<u32>;
 var<workgroup> wg_crowded_all: u32;
@@ -110,10 +114,8 @@ fn buckets_clear(li: u32, threads: u32, buckets: u32) {
 
 // After the count (and a barrier): true, the same in every thread, where a bucket holds more
 // than ORDER_BUCKET_MAX entries; else each bucket's count replaced by its offset, then a
-// barrier. Each thread takes a run of buckets (at most 2: `buckets` at most 2 a thread); the
-// prefix is summed in place, groups of 16 buckets first (wg_groups), so that the passes that
-// sort by buckets reserve no word a thread (wg_sums: the short lists' pass is bound by its
-// workgroup memory).
+// barrier. Each thread takes a run of buckets (at most 2: `buckets` at most 2 a thread), and
+// their offsets from the counts in place (buckets_before).
 fn buckets_place(li: u32, threads: u32, buckets: u32) -> bool {
     let per = (buckets + threads - 1u) / threads;
     let first = min(li * per, buckets);
@@ -123,21 +125,7 @@ fn buckets_place(li: u32, threads: u32, buckets: u32) -> bool {
             atomicStore(&wg_crowded, 1u);
         }
     }
-    if li < buckets / 16u {
-        var g = 0u;
-        for (var k = 0u; k < 16u; k++) {
-            g += atomicLoad(&wg_buckets[16u * li + k]);
-        }
-        wg_groups[li] = g;
-    }
-    workgroupBarrier();
-    var at = 0u;
-    for (var k = 0u; k < first / 16u; k++) {
-        at += wg_groups[k];
-    }
-    for (var b = first & ~15u; b < first; b++) {
-        at += atomicLoad(&wg_buckets[b]);
-    }
+    var at = buckets_before(first, li, buckets);
     var offsets: array<u32, 2>;
     for (var b = first; b < last; b++) {
         offsets[b - first] = at;
