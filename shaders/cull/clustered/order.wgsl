@@ -138,50 +138,43 @@ fn order_list(wg: vec3<u32>, kind: u32, li: u32) -> vec2<u32> {
     return vec2<u32>(n, base);
 }
 
-// Sorts wg_list's first `n` (at most ORDER_SHORT) entries by the network and writes them at
-// `base`, with `threads` threads. Called in uniform control flow, after a barrier past
-// wg_list's loading.
-fn network_local(base: u32, n: u32, li: u32, threads: u32) {
+// Sorts the `n` entries at `base` by the network with `threads` threads: in wg_list (`local`:
+// at most ORDER_SHORT, loaded there, after a barrier), then written back; or in place in the
+// list buffer. Called in uniform control flow.
+fn network(base: u32, n: u32, li: u32, threads: u32, local: bool) {
     let size = padded(n);
     for (var k = 2u; k <= size; k <<= 1u) {
         for (var d = k / 2u; d > 0u; d >>= 1u) {
             for (var t = li; t < size / 2u; t += threads) {
                 let p = order_pair(t, k, d);
                 if p.y < n {
-                    let a = wg_list[p.x];
-                    let b = wg_list[p.y];
-                    if a > b {
-                        wg_list[p.x] = b;
-                        wg_list[p.y] = a;
+                    if local {
+                        let a = wg_list[p.x];
+                        let b = wg_list[p.y];
+                        if a > b {
+                            wg_list[p.x] = b;
+                            wg_list[p.y] = a;
+                        }
+                    } else {
+                        let a = out_indices[base + p.x];
+                        let b = out_indices[base + p.y];
+                        if a > b {
+                            out_indices[base + p.x] = b;
+                            out_indices[base + p.y] = a;
+                        }
                     }
                 }
+            }
+            // Only the in-place sort reads what other threads wrote to storage.
+            if !local {
+                storageBarrier();
             }
             workgroupBarrier();
         }
     }
-    for (var i = li; i < n; i += threads) {
-        out_indices[base + i] = wg_list[i];
-    }
-}
-
-// The network in place in the list buffer: lists longer than wg_list.
-fn network_in_place(base: u32, n: u32, li: u32, threads: u32) {
-    let size = padded(n);
-    for (var k = 2u; k <= size; k <<= 1u) {
-        for (var d = k / 2u; d > 0u; d >>= 1u) {
-            for (var t = li; t < size / 2u; t += threads) {
-                let p = order_pair(t, k, d);
-                if p.y < n {
-                    let a = out_indices[base + p.x];
-                    let b = out_indices[base + p.y];
-                    if a > b {
-                        out_indices[base + p.x] = b;
-                        out_indices[base + p.y] = a;
-                    }
-                }
-            }
-            storageBarrier();
-            workgroupBarrier();
+    if local {
+        for (var i = li; i < n; i += threads) {
+            out_indices[base + i] = wg_list[i];
         }
     }
 }
@@ -200,7 +193,7 @@ fn sort_local(base: u32, n: u32, li: u32, threads: u32) {
         workgroupBarrier();
     }
     if !sorted {
-        network_local(base, n, li, threads);
+        network(base, n, li, threads, true);
     }
 }
 
@@ -221,7 +214,7 @@ fn cluster_order(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation
         sorted = bucket_sort_wide(base, n, li, ORDER_THREADS, bucket_bits);
     }
     if !sorted {
-        network_in_place(base, n, li, ORDER_THREADS);
+        network(base, n, li, ORDER_THREADS, false);
     }
 }
 

@@ -167,7 +167,8 @@ fn bucket_rank(e: u32, b: u32, buckets: u32, n: u32, base: u32, local: bool) -> 
 }
 
 // The short lists' bucket sort: at most ORDER_SHORT entries and 4 a thread, 256 buckets, in
-// wg_list.
+// wg_list. (Its count and bucket_sort_wide's differ only in their register arrays' sizes,
+// which WGSL cannot take as a parameter; the short lists' pass was slower holding 8 or 16.)
 fn bucket_sort_local(base: u32, n: u32, li: u32, threads: u32) -> bool {
     let buckets = 256u;
     let shift = bucket_shift(8u);

@@ -61,7 +61,7 @@ pub(crate) struct Pipelines {
     fill_wide: wgpu::ComputePipeline,
     wide_args: wgpu::ComputePipeline,
     order: wgpu::ComputePipeline,
-    /// `cull.clustered.order`'s lists by the bitmap's rank sort, run in its place with at most
+    /// `cull.clustered.order`'s lists by the bitmap's rank sort, run in its place with
     /// `CULL_FLAG_ORDER_BITS`.
     order_bits: wgpu::ComputePipeline,
     order_short: wgpu::ComputePipeline,
