@@ -163,23 +163,6 @@ fn cluster_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
     cluster_aux[o + 7u] = far;
 }
 
-// With CULL_FLAG_SLICE_MASKS, whether `tile` holds pixels in a slice of s0..=s1 (its mask of
-// occupied slices), checked before its side planes: at 1M lights in 24-pixel tiles, 24% of the
-// queued lights' tiles do (a CPU count, docs/bench/HISTORY.md); the others need no plane.
-fn tile_occupied(tile: vec2<u32>, s0: u32, s1: u32) -> bool {
-    if (cull.flags & CULL_FLAG_SLICE_MASKS) == 0u {
-        return true;
-    }
-    let at = 3u * cull.bins + 2u * (tile.y * cull.tiles_x + tile.x);
-    var held = 0u;
-    for (var w = s0 / 32u; w <= s1 / 32u; w++) {
-        let lo = select(0u, s0 % 32u, w == s0 / 32u);
-        let hi = select(31u, s1 % 32u, w == s1 / 32u);
-        held |= atomicLoad(&occupancy[at + w]) & bit_range(lo, hi);
-    }
-    return held != 0u;
-}
-
 fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, fill: bool) {
     let tiles = cull.tiles_x * cull.tiles_y;
     if (cull.flags & CULL_FLAG_SLICE_MASKS) != 0u {
@@ -225,7 +208,7 @@ fn assign_narrow(i: u32, r: LightRect, fill: bool) {
     let width = u32(r.rect.z - r.rect.x + 1);
     for (var k = 0u; k < r.count; k++) {
         let tile = vec2<u32>(u32(r.rect.x) + k % width, u32(r.rect.y) + k / width);
-        if tile_occupied(tile, r.s0, r.s1) && tile_holds(tile, r.l) {
+        if tile_holds(tile, r.l) {
             emit_slices(i, r.l, tile, r.s0, r.s1, fill);
         }
     }
@@ -307,7 +290,7 @@ fn assign_wide(id: vec3<u32>, fill: bool) {
         // each of its tiles once, for all slices (with the masks, only the occupied ones).
         for (var k = lane; k < tiles; k += lanes) {
             let tile = vec2<u32>(x0 + k % width, y0 + k / width);
-            if tile_occupied(tile, s0, s0 + slices - 1u) && tile_holds(tile, l) {
+            if tile_holds(tile, l) {
                 emit_slices(i, l, tile, s0, s0 + slices - 1u, fill);
             }
         }
