@@ -250,6 +250,97 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
     return c;
 }
 
+// The workgroup's 8 x 8 pixels in GROUP_PARTS parts of whole rows (part h: pixels
+// h * GROUP_PART .. of the workgroup), each with the box of its covered pixels' surface points,
+// words 6 h .. 6 h + 5: the least x, y, z as ~ordered_bits, the greatest as ordered_bits,
+// widened from zero (workgroup memory starts at zero; a part without covered pixels keeps
+// zeros). One part, the whole workgroup: culling and lighting at 1M lights in clusters of
+// 24 px x 32 took 1.97-1.98 ms on an H100 with one, 2.02 with two (rows 0-3 and 4-7), 2.14 with
+// four, and 2.11 without the boxes (docs/bench/HISTORY.md).
+const GROUP_PARTS: u32 = 1u;
+const GROUP_PART: u32 = 64u / GROUP_PARTS;
+var<workgroup> wg_part_box: array<atomic<u32>, 6u * GROUP_PARTS>;
+// The lights of a batch of shade_parts_list that may reach a pixel of each part: bit k of word
+// GROUP_PARTS p + h for part h, p the batch's parity (two sets, so that one is cleared while
+// the other is read, with no barrier of its own).
+var<workgroup> wg_part_keep: array<atomic<u32>, 2u * GROUP_PARTS>;
+
+fn widen_part_box(li: u32, p: vec3<f32>) {
+    let at = 6u * (li / GROUP_PART);
+    atomicMax(&wg_part_box[at], ~ordered_bits(p.x));
+    atomicMax(&wg_part_box[at + 1u], ~ordered_bits(p.y));
+    atomicMax(&wg_part_box[at + 2u], ~ordered_bits(p.z));
+    atomicMax(&wg_part_box[at + 3u], ordered_bits(p.x));
+    atomicMax(&wg_part_box[at + 4u], ordered_bits(p.y));
+    atomicMax(&wg_part_box[at + 5u], ordered_bits(p.z));
+}
+
+// Whether `light`'s sphere may hold a covered pixel of part h: the squared distance from its
+// centre to the part's box against its squared radius, with a relative margin of 1e-4. Each
+// component of a point in the box is at least as far from the centre as the box's nearest
+// point's, and rounding keeps that order, so a pixel the loop would shade (length(to_light) <
+// radius) is never dropped: the same sums.
+fn part_box_holds(h: u32, light: Light) -> bool {
+    let at = 6u * h;
+    let far = atomicLoad(&wg_part_box[at + 3u]);
+    if far == 0u {
+        return false;
+    }
+    let lo = vec3<f32>(from_ordered_bits(~atomicLoad(&wg_part_box[at])), from_ordered_bits(~atomicLoad(&wg_part_box[at + 1u])), from_ordered_bits(~atomicLoad(&wg_part_box[at + 2u])));
+    let hi = vec3<f32>(from_ordered_bits(far), from_ordered_bits(atomicLoad(&wg_part_box[at + 4u])), from_ordered_bits(atomicLoad(&wg_part_box[at + 5u])));
+    let q = light.position - clamp(light.position, lo, hi);
+    return dot(q, q) <= light.radius * light.radius * 1.0001;
+}
+
+// shade_group_list for the clusters' lists (shade_cluster_group): the loading thread also
+// tests its light against each part's box of pixels (widen_part_box, before a barrier ahead of
+// this call), and a pixel walks only the lights that may reach its part, in the list's order (a
+// light out of reach adds nothing where it is skipped: the same sums). A cluster's list holds
+// the lights that meet its tile's frustum between its pixels' depths; an 8 x 8 block's pixels
+// are a ninth of a 24-pixel tile's, and at 1M lights most of the list misses them. `parity`
+// carries the batches' parity from call to call in one workgroup. (On the tiles' lists, at the
+// Forward+ configuration in 8-pixel tiles and the hall at 5,000 lights in 16, the same test with
+// two parts cost 11% more: H100, docs/bench/HISTORY.md.)
+fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec3<f32>, parity: ptr<function, u32>) -> vec3<f32> {
+    let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
+    var c = c_in;
+    let h = li / GROUP_PART;
+    for (var base = 0u; base < list.y; base += TILE_GROUP_LIGHTS) {
+        let n = min(TILE_GROUP_LIGHTS, list.y - base);
+        let p = *parity;
+        if li < n {
+            let light = lights[light_indices[list.x + base + li]];
+            wg_lights[li] = light;
+            for (var part = 0u; part < GROUP_PARTS; part++) {
+                if infinite || part_box_holds(part, light) {
+                    atomicOr(&wg_part_keep[GROUP_PARTS * p + part], 1u << li);
+                }
+            }
+        }
+        workgroupBarrier();
+        var keep = atomicLoad(&wg_part_keep[GROUP_PARTS * p + h]);
+        // The other parity's words, read in the batch before, cleared for the next.
+        if li < GROUP_PARTS {
+            atomicStore(&wg_part_keep[GROUP_PARTS * (1u - p) + li], 0u);
+        }
+        *parity = 1u - p;
+        if takes {
+            while keep != 0u {
+                let k = firstTrailingBit(keep);
+                keep &= keep - 1u;
+                let to_light = wg_lights[k].position - s.p;
+                let d = length(to_light);
+                if !infinite && d >= wg_lights[k].radius {
+                    continue;
+                }
+                c += shade_listed(wg_lights[k], to_light, d, s.n, s.v, s.m);
+            }
+        }
+        workgroupBarrier();
+    }
+    return c;
+}
+
 // The slices a workgroup's covered pixels lie in, a bit a slice (shade_cluster_group).
 var<workgroup> wg_slice_bits: array<atomic<u32>, CLUSTER_GROUP_SLICES / 32u>;
 var<workgroup> wg_slice_bits_plain: array<u32, CLUSTER_GROUP_SLICES / 32u>;
@@ -278,21 +369,21 @@ fn shade_cluster_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool
     let z = t.z;
     let covered = z < 1.0;
     var slice = 0u;
+    var s: Surface;
+    var c = vec3<f32>(0.0);
     if covered {
         slice = depth_slice(linear_depth(z));
         atomicOr(&wg_slice_bits[slice / 32u], 1u << (slice % 32u));
+        s = surface(pixel, t, stored);
+        c = emitted(s.m);
+        widen_part_box(li, s.p);
     }
     workgroupBarrier();
     if li < CLUSTER_GROUP_SLICES / 32u {
         wg_slice_bits_plain[li] = atomicLoad(&wg_slice_bits[li]);
     }
     let slices = workgroupUniformLoad(&wg_slice_bits_plain);
-    var s: Surface;
-    var c = vec3<f32>(0.0);
-    if covered {
-        s = surface(pixel, t, stored);
-        c = emitted(s.m);
-    }
+    var parity = 0u;
     let tile = group * 8u / cull.tile_size;
     let bin = tile.y * cull.tiles_x + tile.x;
     for (var w = 0u; w < CLUSTER_GROUP_SLICES / 32u; w++) {
@@ -301,7 +392,7 @@ fn shade_cluster_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool
             let k = w * 32u + firstTrailingBit(bits);
             bits &= bits - 1u;
             let list = bin_ranges[k * cull.tiles_x * cull.tiles_y + bin];
-            c = shade_group_list(list, li, covered && slice == k, s, c);
+            c = shade_parts_list(list, li, covered && slice == k, s, c, &parity);
         }
     }
     if inside {
