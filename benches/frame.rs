@@ -13,7 +13,7 @@
 //! 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass. Z-binning (256
 //! exponential bins) at the Forward+ configuration in 8-pixel tiles and in the hall in 16-pixel
 //! tiles (not at 1M lights: its masks would take 1 GB). At 1M lights also the clusters `tune`
-//! picks there (32 px x 32 slices), ordered and not.
+//! picks there (32 px x 32 slices), ordered and not, and ordered at 24 px x 48 and x 32.
 //!
 //! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
 //! lighting instead (clears and gaps between passes included). `MANYLIGHTS_BENCH_QUICK=1`
@@ -80,6 +80,13 @@ fn settings() -> Vec<Setting> {
     let clusters24x48 = |ordered| Strategy::Clustered {
         tile_size: 24,
         slices: 48,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered,
+    };
+    let clusters24x32 = |ordered| Strategy::Clustered {
+        tile_size: 24,
+        slices: 32,
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
@@ -194,12 +201,20 @@ fn settings() -> Vec<Setting> {
             size: full,
             strategy: clusters32(false),
         },
-        // The fastest grid there in `manylights run` (H100, 2026-11-27): 24 px x 48 slices.
+        // The fastest grid there in `manylights run` (H100, 2026-11-27, 04:10Z): 24 px x 48
+        // slices; and since the lighting pass tests each clusters' light against the box of a
+        // workgroup's pixels (06:25Z), 24 x 32.
         Setting {
             name: "atrium_1m_clustered24x48",
             scene: million(),
             size: full,
             strategy: clusters24x48(true),
+        },
+        Setting {
+            name: "atrium_1m_clustered24x32",
+            scene: million(),
+            size: full,
+            strategy: clusters24x32(true),
         },
     ]
 }

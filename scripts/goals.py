@@ -98,6 +98,8 @@ def main():
               "atrium_1m_clustered32x32", 2.0)
     frame_row("the same at the fastest grid, 24 px x 48 slices (issue 33)",
               "atrium_1m_clustered24x48", 2.0)
+    frame_row("the same at 24 px x 32 slices (issue 33)",
+              "atrium_1m_clustered24x32", 2.0)
     h500 = check(root, "hall500_clusters64x24")
     rows.append(("clusters at 500 lights: culling at most 60 µs as a span (issue 33)",
                  "-" if h500 is None else f"hall, 64 px x 24: span **{us(h500[1])}** (summed {us(h500[0])})",
