@@ -60,8 +60,8 @@ pub struct TuneReport {
 /// The strategies and parameters tried: tiles of 8, 16 and 32 pixels for gather, 2.5D, tiled
 /// scatter and z-binning (its default 256 exponential bins); clusters of 16, 24, 32 and 64
 /// pixels with 16, 32 and 48 exponential slices, their lists in light order (bit-identical
-/// frames). (At 1M lights of radius 0.5 m at 1080p on the H100, 24 x 48 took 2.114 ms, 24 x 32
-/// 2.119, 32 x 48 2.186, 32 x 32 2.209 and 16 x 32 2.373: docs/BENCHMARKS.md, "Goals".)
+/// frames). (At 1M lights of radius 0.5 m at 1080p on the H100, 24 x 32 took 1.971 ms, 32 x 32
+/// 1.989, 32 x 24 2.00, 24 x 48 2.02 and 40 x 32 2.03: docs/BENCHMARKS.md, "Goals".)
 pub fn candidates() -> Vec<Strategy> {
     let mut v = Vec::new();
     for tile in [8, 16, 32] {
