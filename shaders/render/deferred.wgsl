@@ -191,8 +191,12 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
 // 2-3% with 48, up to 1% with 24, 1-2% with 16 and 6% with 8 (docs/bench/HISTORY.md, "The
 // lighting pass against its floor").
 const TILE_GROUP_LIGHTS: u32 = 32u;
-var<workgroup> wg_list: vec2<u32>;
-var<workgroup> wg_lights: array<Light, TILE_GROUP_LIGHTS>;
+// In a POINT_LIGHTS pipeline the tile path holds only what shade_point_light reads, 32 bytes a
+// light (position and radius, colour and intensity) in wg_points, and wg_lights shrinks to one
+// entry (arrays sized by the override): at the Forward+ configuration 152.8 -> 151.7 µs, the
+// hall at 5,000 lights 226.6 -> 225.7 (H100, docs/bench/HISTORY.md).
+var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
+var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, TILE_GROUP_LIGHTS, POINT_LIGHTS)>;
 
 // A list a tile, in tiles of a multiple of 8 pixels (ListForm::Tiles: the tiled strategies, and
 // clusters of one slice): a workgroup's 8 x 8 pixels lie in one tile and read one list, so its
@@ -206,11 +210,12 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
         t = Texels(0.0, textureLoad(gb_normal_depth, pixel, 0), textureLoad(gb_material, pixel, 0).x);
     }
     let covered = t.g.w != 0.0;
-    if li == 0u {
-        let tile = group * 8u / cull.tile_size;
-        wg_list = bin_ranges[tile.y * cull.tiles_x + tile.x];
-    }
-    let list = workgroupUniformLoad(&wg_list);
+    // Every thread loads the tile's range (one address for the workgroup, so the loop's bounds
+    // are the same in every thread), with no barrier: 154.2 -> 152.7 µs at the Forward+
+    // configuration, 229.7 -> 226.6 in the hall at 5,000 lights (H100), where one thread stored
+    // it in workgroup memory for a workgroupUniformLoad.
+    let tile = group * 8u / cull.tile_size;
+    let list = bin_ranges[tile.y * cull.tiles_x + tile.x];
     var s: Surface;
     var c = vec3<f32>(0.0);
     if covered {
@@ -232,17 +237,32 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
     for (var base = 0u; base < list.y; base += TILE_GROUP_LIGHTS) {
         let n = min(TILE_GROUP_LIGHTS, list.y - base);
         if li < n {
-            wg_lights[li] = lights[light_indices[list.x + base + li]];
+            let light = lights[light_indices[list.x + base + li]];
+            if POINT_LIGHTS {
+                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), vec4<f32>(light.color, light.intensity));
+            } else {
+                wg_lights[li] = light;
+            }
         }
         workgroupBarrier();
         if takes {
             for (var k = 0u; k < n; k++) {
-                let to_light = wg_lights[k].position - s.p;
+                var light: Light;
+                if POINT_LIGHTS {
+                    let q = wg_points[k];
+                    light.position = q[0].xyz;
+                    light.radius = q[0].w;
+                    light.color = q[1].xyz;
+                    light.intensity = q[1].w;
+                } else {
+                    light = wg_lights[k];
+                }
+                let to_light = light.position - s.p;
                 let d = length(to_light);
-                if !infinite && d >= wg_lights[k].radius {
+                if !infinite && d >= light.radius {
                     continue;
                 }
-                c += shade_listed(wg_lights[k], to_light, d, s.n, s.v, s.m);
+                c += shade_listed(light, to_light, d, s.n, s.v, s.m);
             }
         }
         workgroupBarrier();
@@ -263,6 +283,8 @@ var<workgroup> wg_part_box: array<atomic<u32>, 6u * GROUP_PARTS>;
 // The lights of a batch of shade_parts_list that may reach a pixel of each part: bit k of word
 // GROUP_PARTS p + h for part h, p the batch's parity (two sets, so that one is cleared while
 // the other is read, with no barrier of its own).
+// The clusters' batch of lights (shade_parts_list), whole whatever the pipeline.
+var<workgroup> wg_cluster_lights: array<Light, TILE_GROUP_LIGHTS>;
 var<workgroup> wg_part_keep: array<atomic<u32>, 2u * GROUP_PARTS>;
 
 fn widen_part_box(li: u32, p: vec3<f32>) {
@@ -310,7 +332,7 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         let p = *parity;
         if li < n {
             let light = lights[light_indices[list.x + base + li]];
-            wg_lights[li] = light;
+            wg_cluster_lights[li] = light;
             for (var part = 0u; part < GROUP_PARTS; part++) {
                 if infinite || part_box_holds(part, light) {
                     atomicOr(&wg_part_keep[GROUP_PARTS * p + part], 1u << li);
@@ -331,12 +353,12 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             while keep != 0u {
                 let k = firstTrailingBit(keep);
                 keep &= keep - 1u;
-                let to_light = wg_lights[k].position - s.p;
+                let to_light = wg_cluster_lights[k].position - s.p;
                 let d = length(to_light);
-                if !infinite && d >= wg_lights[k].radius {
+                if !infinite && d >= wg_cluster_lights[k].radius {
                     continue;
                 }
-                c += shade_listed(wg_lights[k], to_light, d, s.n, s.v, s.m);
+                c += shade_listed(wg_cluster_lights[k], to_light, d, s.n, s.v, s.m);
             }
         }
         workgroupBarrier();
