@@ -194,7 +194,9 @@ const TILE_GROUP_LIGHTS: u32 = 32u;
 // In a POINT_LIGHTS pipeline the tile path holds only what shade_point_light reads, 32 bytes a
 // light (position and radius, colour and intensity) in wg_points, and wg_lights shrinks to one
 // entry (arrays sized by the override): at the Forward+ configuration 152.8 -> 151.7 µs, the
-// hall at 5,000 lights 226.6 -> 225.7 (H100, docs/bench/HISTORY.md).
+// hall at 5,000 lights 226.6 -> 225.7; the clusters' path (shade_parts_list) likewise, at 1M
+// lights in clusters of 32 px x 32 1.92 -> 1.84 ms (H100, docs/bench/HISTORY.md). Each loop
+// writes the store and the load out, as measured.
 var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
 var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, TILE_GROUP_LIGHTS, POINT_LIGHTS)>;
 
@@ -283,8 +285,6 @@ var<workgroup> wg_part_box: array<atomic<u32>, 6u * GROUP_PARTS>;
 // The lights of a batch of shade_parts_list that may reach a pixel of each part: bit k of word
 // GROUP_PARTS p + h for part h, p the batch's parity (two sets, so that one is cleared while
 // the other is read, with no barrier of its own).
-// The clusters' batch of lights (shade_parts_list), whole whatever the pipeline.
-var<workgroup> wg_cluster_lights: array<Light, TILE_GROUP_LIGHTS>;
 var<workgroup> wg_part_keep: array<atomic<u32>, 2u * GROUP_PARTS>;
 
 fn widen_part_box(li: u32, p: vec3<f32>) {
@@ -332,7 +332,11 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         let p = *parity;
         if li < n {
             let light = lights[light_indices[list.x + base + li]];
-            wg_cluster_lights[li] = light;
+            if POINT_LIGHTS {
+                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), vec4<f32>(light.color, light.intensity));
+            } else {
+                wg_lights[li] = light;
+            }
             for (var part = 0u; part < GROUP_PARTS; part++) {
                 if infinite || part_box_holds(part, light) {
                     atomicOr(&wg_part_keep[GROUP_PARTS * p + part], 1u << li);
@@ -353,12 +357,22 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             while keep != 0u {
                 let k = firstTrailingBit(keep);
                 keep &= keep - 1u;
-                let to_light = wg_cluster_lights[k].position - s.p;
+                var light: Light;
+                if POINT_LIGHTS {
+                    let q = wg_points[k];
+                    light.position = q[0].xyz;
+                    light.radius = q[0].w;
+                    light.color = q[1].xyz;
+                    light.intensity = q[1].w;
+                } else {
+                    light = wg_lights[k];
+                }
+                let to_light = light.position - s.p;
                 let d = length(to_light);
-                if !infinite && d >= wg_cluster_lights[k].radius {
+                if !infinite && d >= light.radius {
                     continue;
                 }
-                c += shade_listed(wg_cluster_lights[k], to_light, d, s.n, s.v, s.m);
+                c += shade_listed(light, to_light, d, s.n, s.v, s.m);
             }
         }
         workgroupBarrier();
