@@ -188,9 +188,9 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
 
 // The lights a workgroup holds in workgroup memory at a time (shade_tile_group,
 // shade_cluster_group): 32 lights of 64 bytes, 2 KB a workgroup (1 KB for point lights, below;
-// the timings here are from before that). On an H100 culling and lighting took 7-11% longer with 64 (4 KB),
-// 2-3% with 48, up to 1% with 24, 1-2% with 16 and 6% with 8 (docs/bench/HISTORY.md, "The
-// lighting pass against its floor").
+// the timings here are from before that). On an H100 culling and lighting took 7-11% longer
+// with 64 (4 KB), 2-3% with 48, up to 1% with 24, 1-2% with 16 and 6% with 8
+// (docs/bench/HISTORY.md, "The lighting pass against its floor").
 const TILE_GROUP_LIGHTS: u32 = 32u;
 // In a POINT_LIGHTS pipeline the tile path holds only what shade_point_light reads, 32 bytes a
 // light (position and radius, colour and intensity) in wg_points, and wg_lights shrinks to one
