@@ -196,35 +196,10 @@ const TILE_GROUP_LIGHTS: u32 = 32u;
 // light (position and radius, colour and intensity) in wg_points, and wg_lights shrinks to one
 // entry (arrays sized by the override): at the Forward+ configuration 152.8 -> 151.7 µs, the
 // hall at 5,000 lights 226.6 -> 225.7; the clusters' path (shade_parts_list) likewise, at 1M
-// lights in clusters of 32 px x 32 1.92 -> 1.84 ms (H100, docs/bench/HISTORY.md). Both paths
-// go through hold_light and held_light.
+// lights in clusters of 32 px x 32 1.92 -> 1.84 ms (H100, docs/bench/HISTORY.md). Each loop
+// writes the store and the load out, as measured.
 var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
 var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, TILE_GROUP_LIGHTS, POINT_LIGHTS)>;
-
-// Light `light` into slot k of the workgroup's batch (wg_points in a POINT_LIGHTS pipeline).
-fn hold_light(k: u32, light: Light) {
-    if POINT_LIGHTS {
-        wg_points[k] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), vec4<f32>(light.color, light.intensity));
-    } else {
-        wg_lights[k] = light;
-    }
-}
-
-// Slot k of the workgroup's batch, as shading reads it (in a POINT_LIGHTS pipeline only what
-// shade_point_light reads is set).
-fn held_light(k: u32) -> Light {
-    var light: Light;
-    if POINT_LIGHTS {
-        let q = wg_points[k];
-        light.position = q[0].xyz;
-        light.radius = q[0].w;
-        light.color = q[1].xyz;
-        light.intensity = q[1].w;
-    } else {
-        light = wg_lights[k];
-    }
-    return light;
-}
 
 // A list a tile, in tiles of a multiple of 8 pixels (ListForm::Tiles: the tiled strategies, and
 // clusters of one slice): a workgroup's 8 x 8 pixels lie in one tile and read one list, so its
@@ -266,12 +241,25 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         let n = min(TILE_GROUP_LIGHTS, list.y - base);
         if li < n {
             let light = lights[light_indices[list.x + base + li]];
-            hold_light(li, light);
+            if POINT_LIGHTS {
+                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), vec4<f32>(light.color, light.intensity));
+            } else {
+                wg_lights[li] = light;
+            }
         }
         workgroupBarrier();
         if takes {
             for (var k = 0u; k < n; k++) {
-                let light = held_light(k);
+                var light: Light;
+                if POINT_LIGHTS {
+                    let q = wg_points[k];
+                    light.position = q[0].xyz;
+                    light.radius = q[0].w;
+                    light.color = q[1].xyz;
+                    light.intensity = q[1].w;
+                } else {
+                    light = wg_lights[k];
+                }
                 let to_light = light.position - s.p;
                 let d = length(to_light);
                 if !infinite && d >= light.radius {
@@ -345,7 +333,11 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         let p = *parity;
         if li < n {
             let light = lights[light_indices[list.x + base + li]];
-            hold_light(li, light);
+            if POINT_LIGHTS {
+                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), vec4<f32>(light.color, light.intensity));
+            } else {
+                wg_lights[li] = light;
+            }
             for (var part = 0u; part < GROUP_PARTS; part++) {
                 if infinite || part_box_holds(part, light) {
                     atomicOr(&wg_part_keep[GROUP_PARTS * p + part], 1u << li);
@@ -366,7 +358,16 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             while keep != 0u {
                 let k = firstTrailingBit(keep);
                 keep &= keep - 1u;
-                let light = held_light(k);
+                var light: Light;
+                if POINT_LIGHTS {
+                    let q = wg_points[k];
+                    light.position = q[0].xyz;
+                    light.radius = q[0].w;
+                    light.color = q[1].xyz;
+                    light.intensity = q[1].w;
+                } else {
+                    light = wg_lights[k];
+                }
                 let to_light = light.position - s.p;
                 let d = length(to_light);
                 if !infinite && d >= light.radius {
