@@ -158,6 +158,13 @@ fn settings() -> Vec<Setting> {
             size: full,
             strategy: Strategy::tiled_gather(16),
         },
+        // The fastest tiles for gather there in `manylights run` (H100, 2026-11-27, 08:05Z).
+        Setting {
+            name: "cis5650_5k_gather24",
+            scene: cis5650(if q { 500 } else { 5000 }),
+            size: full,
+            strategy: Strategy::tiled_gather(24),
+        },
         Setting {
             name: "cis5650_5k_zbin16",
             scene: cis5650(if q { 500 } else { 5000 }),

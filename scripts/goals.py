@@ -94,6 +94,8 @@ def main():
               "harada2012_gather8", 0.150)
     frame_row("CIS 5650 hall, 5,000 lights: twice as fast as gather was (414.7 µs), at most 207 µs (issue 33)",
               "cis5650_5k_gather", 0.207)
+    frame_row("the same hall in 24-pixel tiles, gather's fastest there (issue 33)",
+              "cis5650_5k_gather24", 0.207)
     frame_row("1M lights at 1080p: culling + deferred lighting under 2 ms, ordered (issues 21, 33)",
               "atrium_1m_clustered32x32", 2.0)
     frame_row("the same at 24 px x 48 slices (issue 33)",

@@ -197,9 +197,15 @@ const TILE_GROUP_LIGHTS: u32 = 32u;
 // entry (arrays sized by the override): at the Forward+ configuration 152.8 -> 151.7 µs, the
 // hall at 5,000 lights 226.6 -> 225.7; the clusters' path (shade_parts_list) likewise, at 1M
 // lights in clusters of 32 px x 32 1.92 -> 1.84 ms (H100, docs/bench/HISTORY.md). Each loop
-// writes the store and the load out, as measured.
+// writes the store and the load out, as measured: through functions (hold_light, held_light)
+// the tile path took 0.6% longer at the Forward+ configuration and in the hall at 5,000 lights.
+// The clusters' loader reads a light's fields, not the whole Light: 1M lights at 32 x 32 1.847
+// -> 1.832 ms. The tile path takes POINT_BATCH lights a batch, one a thread, in the same 2 KB as
+// 32 of 64 bytes: 151.8 -> 151.2 µs at the Forward+ configuration, the hall at 5,000 lights
+// 226.0 -> 224.8 (16 px) and 219.9 -> 218.5 (24 px) (H100, 2026-11-27).
+const POINT_BATCH: u32 = 64u;
 var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
-var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, TILE_GROUP_LIGHTS, POINT_LIGHTS)>;
+var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, POINT_BATCH, POINT_LIGHTS)>;
 
 // A list a tile, in tiles of a multiple of 8 pixels (ListForm::Tiles: the tiled strategies, and
 // clusters of one slice): a workgroup's 8 x 8 pixels lie in one tile and read one list, so its
@@ -232,13 +238,15 @@ fn shade_tile_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
 }
 
 // Adds the lights of `list` (uniform) to `c` where the pixel `takes` them: the workgroup loads
-// them into workgroup memory TILE_GROUP_LIGHTS at a time, each by one thread for all 64 pixels,
-// and each pixel that takes them sums them in the list's order (the same sums as shade_list).
+// them into workgroup memory TILE_GROUP_LIGHTS (POINT_BATCH in a POINT_LIGHTS pipeline) at a
+// time, each by one thread for all 64 pixels, and each pixel that takes them sums them in the
+// list's order (the same sums as shade_list).
 fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec3<f32>) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
     var c = c_in;
-    for (var base = 0u; base < list.y; base += TILE_GROUP_LIGHTS) {
-        let n = min(TILE_GROUP_LIGHTS, list.y - base);
+    let batch = select(TILE_GROUP_LIGHTS, POINT_BATCH, POINT_LIGHTS);
+    for (var base = 0u; base < list.y; base += batch) {
+        let n = min(batch, list.y - base);
         if li < n {
             let light = lights[light_indices[list.x + base + li]];
             if POINT_LIGHTS {
@@ -303,7 +311,7 @@ fn widen_part_box(li: u32, p: vec3<f32>) {
 // component of a point in the box is at least as far from the centre as the box's nearest
 // point's, and rounding keeps that order, so a pixel the loop would shade (length(to_light) <
 // radius) is never dropped: the same sums.
-fn part_box_holds(h: u32, light: Light) -> bool {
+fn part_box_holds(h: u32, position: vec3<f32>, radius: f32) -> bool {
     let at = 6u * h;
     let far = atomicLoad(&wg_part_box[at + 3u]);
     if far == 0u {
@@ -311,8 +319,8 @@ fn part_box_holds(h: u32, light: Light) -> bool {
     }
     let lo = vec3<f32>(from_ordered_bits(~atomicLoad(&wg_part_box[at])), from_ordered_bits(~atomicLoad(&wg_part_box[at + 1u])), from_ordered_bits(~atomicLoad(&wg_part_box[at + 2u])));
     let hi = vec3<f32>(from_ordered_bits(far), from_ordered_bits(atomicLoad(&wg_part_box[at + 4u])), from_ordered_bits(atomicLoad(&wg_part_box[at + 5u])));
-    let q = light.position - clamp(light.position, lo, hi);
-    return dot(q, q) <= light.radius * light.radius * 1.0001;
+    let q = position - clamp(position, lo, hi);
+    return dot(q, q) <= radius * radius * 1.0001;
 }
 
 // shade_group_list for the clusters' lists (shade_cluster_group): the loading thread also
@@ -332,14 +340,14 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         let n = min(TILE_GROUP_LIGHTS, list.y - base);
         let p = *parity;
         if li < n {
-            let light = lights[light_indices[list.x + base + li]];
+            let i = light_indices[list.x + base + li];
             if POINT_LIGHTS {
-                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), vec4<f32>(light.color, light.intensity));
+                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(lights[i].position, lights[i].radius), vec4<f32>(lights[i].color, lights[i].intensity));
             } else {
-                wg_lights[li] = light;
+                wg_lights[li] = lights[i];
             }
             for (var part = 0u; part < GROUP_PARTS; part++) {
-                if infinite || part_box_holds(part, light) {
+                if infinite || part_box_holds(part, lights[i].position, lights[i].radius) {
                     atomicOr(&wg_part_keep[GROUP_PARTS * p + part], 1u << li);
                 }
             }
