@@ -9,11 +9,12 @@
 //! Settings (issue 21's table): the Forward+ paper's configuration (3,072 light-field lights of
 //! radius 2.5 m in the atrium, 1280 x 720) with gather's 8-pixel tiles and with clusters of 64
 //! pixels x 24 slices; the CIS 5650 hall (`cis5650`) with 5,000 and 50,000 lights of radius 2 m
-//! at 1920 x 1080, gather's 16-pixel tiles, and at 50,000 clusters too; 1M lights of radius
-//! 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass. Z-binning (256
-//! exponential bins) at the Forward+ configuration in 8-pixel tiles and in the hall in 16-pixel
-//! tiles (not at 1M lights: its masks would take 1 GB). At 1M lights also the clusters `tune`
-//! picks there (32 px x 32 slices), ordered and not, and ordered at 24 px x 48 and x 32.
+//! at 1920 x 1080, gather's 16-pixel tiles (at 5,000 also 24), and at 50,000 clusters too; 1M
+//! lights of radius 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass.
+//! Z-binning (256 exponential bins) at the Forward+ configuration in 8-pixel tiles and in the
+//! hall in 16-pixel tiles (not at 1M lights: its masks would take 1 GB). At 1M lights also the
+//! clusters `tune` picks there (32 px x 32 slices), ordered and not, and ordered at 24 px x 48
+//! and x 32.
 //!
 //! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
 //! lighting instead (clears and gaps between passes included). `MANYLIGHTS_BENCH_QUICK=1`
