@@ -291,10 +291,12 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
 const GROUP_PARTS: u32 = 1u;
 const GROUP_PART: u32 = 64u / GROUP_PARTS;
 var<workgroup> wg_part_box: array<atomic<u32>, 6u * GROUP_PARTS>;
-// The lights of a batch of shade_parts_list that may reach a pixel of each part: bit k of word
-// GROUP_PARTS p + h for part h, p the batch's parity (two sets, so that one is cleared while
-// the other is read, with no barrier of its own).
-var<workgroup> wg_part_keep: array<atomic<u32>, 2u * GROUP_PARTS>;
+// The lights of a batch of shade_parts_list that may reach a pixel of each part: bit k % 32 of
+// word 2 (GROUP_PARTS p + h) + k / 32 for part h, p the batch's parity (two sets, so that one is
+// cleared while the other is read, with no barrier of its own). Two words a part: a
+// POINT_LIGHTS pipeline takes POINT_BATCH (64) lights a batch here too, 1M lights at 32 x 32
+// 1.832 -> 1.805 ms, at 24 x 32 1.896 -> 1.880 (H100, 2026-11-27).
+var<workgroup> wg_part_keep: array<atomic<u32>, 4u * GROUP_PARTS>;
 
 fn widen_part_box(li: u32, p: vec3<f32>) {
     let at = 6u * (li / GROUP_PART);
@@ -336,8 +338,9 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
     var c = c_in;
     let h = li / GROUP_PART;
-    for (var base = 0u; base < list.y; base += TILE_GROUP_LIGHTS) {
-        let n = min(TILE_GROUP_LIGHTS, list.y - base);
+    let batch = select(TILE_GROUP_LIGHTS, POINT_BATCH, POINT_LIGHTS);
+    for (var base = 0u; base < list.y; base += batch) {
+        let n = min(batch, list.y - base);
         let p = *parity;
         if li < n {
             let i = light_indices[list.x + base + li];
@@ -348,23 +351,24 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             }
             for (var part = 0u; part < GROUP_PARTS; part++) {
                 if infinite || part_box_holds(part, lights[i].position, lights[i].radius) {
-                    atomicOr(&wg_part_keep[GROUP_PARTS * p + part], 1u << li);
+                    atomicOr(&wg_part_keep[2u * (GROUP_PARTS * p + part) + li / 32u], 1u << (li % 32u));
                 }
             }
         }
         workgroupBarrier();
-        var keep = atomicLoad(&wg_part_keep[GROUP_PARTS * p + h]);
+        let keeps = vec2<u32>(atomicLoad(&wg_part_keep[2u * (GROUP_PARTS * p + h)]), atomicLoad(&wg_part_keep[2u * (GROUP_PARTS * p + h) + 1u]));
         // The other parity's words, read in the batch before, cleared for the next.
-        if li < GROUP_PARTS {
-            atomicStore(&wg_part_keep[GROUP_PARTS * (1u - p) + li], 0u);
+        if li < 2u * GROUP_PARTS {
+            atomicStore(&wg_part_keep[2u * GROUP_PARTS * (1u - p) + li], 0u);
         }
         *parity = 1u - p;
         // The loop's body is shade_group_list's, written again: as a function adding to `c`
         // through a pointer, the Forward+ configuration took 2.3% longer and the hall at 5,000
         // lights 2.6% (H100, docs/bench/HISTORY.md).
-        if takes {
+        for (var w = 0u; takes && w < 2u; w++) {
+            var keep = keeps[w];
             while keep != 0u {
-                let k = firstTrailingBit(keep);
+                let k = 32u * w + firstTrailingBit(keep);
                 keep &= keep - 1u;
                 var light: Light;
                 if POINT_LIGHTS {
