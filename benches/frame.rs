@@ -14,7 +14,8 @@
 //! Z-binning (256 exponential bins) at the Forward+ configuration in 8-pixel tiles and in the
 //! hall in 16-pixel tiles (not at 1M lights: its masks would take 1 GB). At 1M lights also the
 //! clusters `tune` picks there (32 px x 32 slices), ordered and not, and ordered at 24 px x 48
-//! and x 32.
+//! and x 32. The Forward+ configuration and the hall at 5,000 lights (16 and 24 px) also into a
+//! 16-bit float lit image (`<name>_f16`, `HdrFormat::F16`); every other setting's is 32-bit.
 //!
 //! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
 //! lighting instead (clears and gaps between passes included). `MANYLIGHTS_BENCH_QUICK=1`
@@ -30,7 +31,7 @@ use manylights_gpu::GpuScene;
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
-use manylights_shade::{Backend, Renderer};
+use manylights_shade::{Backend, HdrFormat, Renderer};
 
 use common::{configure, gpu, quick};
 
@@ -44,12 +45,13 @@ fn atrium(spec: LightSpec) -> Scene {
     s
 }
 
-/// One setting: its name, scene, resolution and strategy.
+/// One setting: its name, scene, resolution, strategy and lit image's format.
 struct Setting {
     name: &'static str,
     scene: Scene,
     size: (u32, u32),
     strategy: Strategy,
+    hdr: HdrFormat,
 }
 
 fn settings() -> Vec<Setting> {
@@ -127,24 +129,27 @@ fn settings() -> Vec<Setting> {
         .unwrap();
         s
     };
-    vec![
+    let mut v = vec![
         Setting {
             name: "harada2012_gather8",
             scene: paper(),
             size: paper_size,
             strategy: Strategy::tiled_gather(8),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "harada2012_clustered64x24",
             scene: paper(),
             size: paper_size,
             strategy: clusters(true),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "harada2012_zbin8",
             scene: paper(),
             size: paper_size,
             strategy: zbin(8),
+            hdr: HdrFormat::F32,
         },
         // Issue 21's clusters at 500 lights (the clusters' tile path).
         Setting {
@@ -152,12 +157,14 @@ fn settings() -> Vec<Setting> {
             scene: cis5650(500),
             size: full,
             strategy: clusters(true),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "cis5650_5k_gather",
             scene: cis5650(if q { 500 } else { 5000 }),
             size: full,
             strategy: Strategy::tiled_gather(16),
+            hdr: HdrFormat::F32,
         },
         // The fastest tiles for gather there in `manylights run` (H100, 2026-11-27, 08:05Z).
         Setting {
@@ -165,36 +172,42 @@ fn settings() -> Vec<Setting> {
             scene: cis5650(if q { 500 } else { 5000 }),
             size: full,
             strategy: Strategy::tiled_gather(24),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "cis5650_5k_zbin16",
             scene: cis5650(if q { 500 } else { 5000 }),
             size: full,
             strategy: zbin(16),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "cis5650_50k_gather",
             scene: cis5650(if q { 2000 } else { 50_000 }),
             size: full,
             strategy: Strategy::tiled_gather(16),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "cis5650_50k_clustered64x24",
             scene: cis5650(if q { 2000 } else { 50_000 }),
             size: full,
             strategy: clusters(true),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "cis5650_50k_zbin16",
             scene: cis5650(if q { 2000 } else { 50_000 }),
             size: full,
             strategy: zbin(16),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "atrium_1m_clustered_unordered",
             scene: million(),
             size: full,
             strategy: clusters(false),
+            hdr: HdrFormat::F32,
         },
         // What `manylights tune` picks there: clusters of 32 px x 32 slices, ordered and not.
         Setting {
@@ -202,12 +215,14 @@ fn settings() -> Vec<Setting> {
             scene: million(),
             size: full,
             strategy: clusters32(true),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "atrium_1m_clustered32x32_unordered",
             scene: million(),
             size: full,
             strategy: clusters32(false),
+            hdr: HdrFormat::F32,
         },
         // The fastest grid there in `manylights run` (H100, 2026-11-27, 04:10Z): 24 px x 48
         // slices; and since the lighting pass tests each clusters' light against the box of a
@@ -217,14 +232,42 @@ fn settings() -> Vec<Setting> {
             scene: million(),
             size: full,
             strategy: clusters24x48(true),
+            hdr: HdrFormat::F32,
         },
         Setting {
             name: "atrium_1m_clustered24x32",
             scene: million(),
             size: full,
             strategy: clusters24x32(true),
+            hdr: HdrFormat::F32,
         },
-    ]
+    ];
+    // The lit image in 16-bit floats (`HdrFormat::F16`, as engines' HDR targets): the
+    // Forward+ configuration and the hall at 5,000 lights.
+    let half = [
+        "harada2012_gather8",
+        "cis5650_5k_gather",
+        "cis5650_5k_gather24",
+    ];
+    let names = [
+        "harada2012_gather8_f16",
+        "cis5650_5k_gather_f16",
+        "cis5650_5k_gather24_f16",
+    ];
+    for (from, name) in half.into_iter().zip(names) {
+        let s = v
+            .iter()
+            .find(|s| s.name == from)
+            .expect("a setting of that name");
+        v.push(Setting {
+            name,
+            scene: s.scene.clone(),
+            size: s.size,
+            strategy: s.strategy,
+            hdr: HdrFormat::F16,
+        });
+    }
+    v
 }
 
 fn spans() -> bool {
@@ -238,7 +281,7 @@ fn cull_shade(c: &mut Criterion) {
     for s in settings() {
         let (w, h) = s.size;
         let gs = GpuScene::upload(&ctx, &s.scene, &s.scene.camera, w, h).unwrap();
-        let renderer = Renderer::new(&ctx, &gs);
+        let renderer = Renderer::with_format(&ctx, &gs, 1, s.hdr).unwrap();
         let settings = CullSettings::for_camera(&s.scene.camera);
         let first = renderer
             .render(&ctx, &gs, Backend::Deferred, &s.strategy, &settings, (w, h))

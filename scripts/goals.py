@@ -92,10 +92,15 @@ def main():
                      "yes" if rate >= 0.25 else f"no, {rate:.0%}"))
     frame_row("Forward+ configuration: culling + deferred lighting at most 150 µs (issues 21, 33)",
               "harada2012_gather8", 0.150)
+    frame_row("the same into a 16-bit float lit image (`hdr: F16`, issue 33)",
+              "harada2012_gather8_f16", 0.150)
     frame_row("CIS 5650 hall, 5,000 lights: twice as fast as gather was (414.7 µs), at most 207 µs (issue 33)",
               "cis5650_5k_gather", 0.207)
     frame_row("the same hall in 24-pixel tiles, gather's fastest there (issue 33)",
               "cis5650_5k_gather24", 0.207)
+    frame_row("the same hall, 16-bit float lit image, 16 and 24 px (issue 33): 16 px",
+              "cis5650_5k_gather_f16", 0.207)
+    frame_row("the same, 24 px", "cis5650_5k_gather24_f16", 0.207)
     frame_row("1M lights at 1080p: culling + deferred lighting under 2 ms, ordered (issues 21, 33)",
               "atrium_1m_clustered32x32", 2.0)
     frame_row("the same at 24 px x 48 slices (issue 33)",

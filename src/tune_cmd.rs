@@ -93,6 +93,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         tile_boxes: true,
         light_update: Default::default(),
         msaa: 1,
+        hdr: Default::default(),
         materials: a.models()?,
         slack: DEFAULT_SLACK,
         frames: args.frames,

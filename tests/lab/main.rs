@@ -708,3 +708,47 @@ fn tune_leaves_out_what_the_device_cannot_hold() {
     ));
     assert_eq!(fit.len() + 3, manylights_lab::tune::candidates().len());
 }
+
+/// The lit image's format as an experiment parameter: swept over F32 and F16, each cell with
+/// its accuracy against the 32-bit reference; `params` names `hdr=f16`, the 16-bit image is
+/// finite and as accurate as the 32-bit one within half's rounding, and the lists are the same.
+#[test]
+fn hdr_sweeps_the_lit_image_format() {
+    let ctx = common::gpu();
+    let tmp = tempfile::tempdir().unwrap();
+    let src = r#"Experiment(
+        name: "hdr",
+        config: Config(
+            scene: Atrium(bays: 2),
+            lights: (generator: Uniform, count: 96, seed: 5, radius: Fixed(1.5)),
+            resolution: (64, 40),
+            backend: Deferred,
+            frames: 1,
+            warmup: 0,
+        ),
+        sweep: (
+            strategy: [TiledGather(tile_size: 8)],
+            hdr: [F32, F16],
+        ),
+    )"#;
+    let path = tmp.path().join("hdr.ron");
+    let e = Experiment::parse(src, &path).unwrap();
+    assert_eq!(e.cells().len(), 2);
+    let s = run_parsed(&ctx, &e, src, tmp.path(), &tmp.path().join("out"), &opts()).unwrap();
+    let (full, half) = (&s.rows[0], &s.rows[1]);
+    assert!(!full.params.contains("hdr"), "{}", full.params);
+    assert!(half.params.ends_with(";hdr=f16"), "{}", half.params);
+    assert!(half.cell.contains("hdr=f16"), "{}", half.cell);
+    assert_eq!(half.nonfinite_pixels, 0);
+    assert_eq!(full.lights_per_pixel_mean, half.lights_per_pixel_mean);
+    let (a, b) = (full.max_abs_error.unwrap(), half.max_abs_error.unwrap());
+    println!(
+        "max_abs_error: f32 {a:e}, f16 {b:e}; flip_mean {:?} {:?}",
+        full.flip_mean, half.flip_mean
+    );
+    assert!(
+        b > a,
+        "the 16-bit image carries its rounding: {b} against {a}"
+    );
+    assert!(half.flip_mean.unwrap() < 1e-3, "{:?}", half.flip_mean);
+}

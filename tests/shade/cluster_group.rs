@@ -27,7 +27,7 @@ impl<P: ListPass> ListPass for BoundAs<P> {
 }
 
 /// The atrium with `count` lights of radius `radius` times its lights' bounds' diagonal.
-fn atrium_lights(count: u32, radius: f32) -> Scene {
+pub(crate) fn atrium_lights(count: u32, radius: f32) -> Scene {
     let mut s = scene("atrium");
     s.lights = LightSpec {
         generator: LightGenerator::Uniform,
@@ -59,7 +59,7 @@ fn cluster_group_lighting_equals_the_loop_a_pixel() {
     let ctx = common::gpu();
     let (w, h) = (70, 45);
     // More lights than CLUSTER_GROUP_MIN_LIGHTS: small ones (lists of a few lights) and larger
-    // ones (several loads of the workgroup's 32 lights a list, the last one partial).
+    // ones (several loads of the workgroup's batch of lights a list, the last one partial).
     for s in [
         atrium_lights(CLUSTER_GROUP_MIN_LIGHTS + 1, 0.02),
         atrium_lights(CLUSTER_GROUP_MIN_LIGHTS + 500, 0.1),

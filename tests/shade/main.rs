@@ -18,6 +18,7 @@
 mod cluster_group;
 #[path = "../common/mod.rs"]
 mod common;
+mod hdr_f16;
 mod materials;
 mod msaa;
 mod point_lights;

@@ -209,6 +209,25 @@ impl ShaderDef {
         })
     }
 
+    /// [`ShaderDef::create_samples`] with its composed text passed through `edit` (such as a
+    /// storage texture's format chosen at run time).
+    pub fn create_edited(
+        &self,
+        device: &wgpu::Device,
+        samples: u32,
+        edit: &dyn Fn(String) -> String,
+    ) -> wgpu::ShaderModule {
+        let source = edit(with_samples(
+            self.source(&self.swapped(&[])),
+            samples,
+            self.name,
+        ));
+        device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(self.name),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        })
+    }
+
     /// The WGSL text of `files` (this shader's, or a variant's: [`ShaderDef::swapped`]), with
     /// the files of `MANYLIGHTS_SHADER_DIR` where it is set.
     pub(crate) fn source(&self, files: &[ShaderFile]) -> String {

@@ -143,6 +143,9 @@ pub fn params_label(c: &Config) -> String {
     if c.msaa > 1 {
         p.push_str(&format!(";msaa={}", c.msaa));
     }
+    if c.hdr != manylights_shade::HdrFormat::F32 {
+        p.push_str(&format!(";hdr={}", c.hdr.name()));
+    }
     if !c.materials.is_empty() {
         p.push_str(&format!(";materials={}", models_label(&c.materials)));
     }
@@ -227,6 +230,7 @@ impl Experiment {
             ("motion", s.motion.as_ref().map(Vec::len)),
             ("light_update", s.light_update.as_ref().map(Vec::len)),
             ("msaa", s.msaa.as_ref().map(Vec::len)),
+            ("hdr", s.hdr.as_ref().map(Vec::len)),
             ("materials", s.materials.as_ref().map(Vec::len)),
             ("variants", s.variants.as_ref().map(Vec::len)),
         ];
@@ -361,6 +365,10 @@ impl Experiment {
         axis!(s.msaa, |c: &mut Config, v: u32| {
             c.msaa = v;
             format!("msaa={v}")
+        });
+        axis!(s.hdr, |c: &mut Config, v: manylights_shade::HdrFormat| {
+            c.hdr = v;
+            format!("hdr={}", v.name())
         });
         axis!(s.materials, |c: &mut Config, v: Vec<Model>| {
             let label = format!("materials={}", models_label(&v));

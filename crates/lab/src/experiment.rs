@@ -13,7 +13,7 @@ use manylights_scene::procedural::{
     AtriumParams, Cis5650Params, CityParams, PillarsParams, ProceduralScene, TopdownParams,
 };
 use manylights_scene::{Camera, LightGenerator, LightSpec, Model, Motion, Projection, RadiusRule};
-use manylights_shade::Backend;
+use manylights_shade::{Backend, HdrFormat};
 use serde::{Deserialize, Serialize};
 
 pub use crate::cells::{Cell, params_label};
@@ -285,6 +285,9 @@ pub struct Sweep {
     /// MSAA sample counts.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub msaa: Option<Vec<u32>>,
+    /// Lit image formats (`hdr`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hdr: Option<Vec<HdrFormat>>,
     /// Material model lists (`materials`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub materials: Option<Vec<Vec<Model>>>,
@@ -344,6 +347,12 @@ pub struct Config {
     /// `DeferredStoredPosition` takes no MSAA. (Left out of a cell's identity when 1.)
     #[serde(default = "one", skip_serializing_if = "is_one")]
     pub msaa: u32,
+    /// The lit image's format: `F32` (the default) or `F16`, a 16-bit float HDR target as
+    /// engines' (`manylights_shade::HdrFormat`: half the bytes the lighting pass writes, each
+    /// channel rounded to half precision; the references keep 32 bits, so accuracy carries the
+    /// rounding). (Left out of a cell's identity when `F32`; `hdr=f16` in its `params`.)
+    #[serde(default, skip_serializing_if = "is_f32")]
+    pub hdr: HdrFormat,
     /// Material models to give the scene's surfaces, in turns (`manylights_scene::material::
     /// assign_models`): `[Ggx]` makes every surface GGX; `[BlinnPhong, Ggx, Sheen, ClearCoat,
     /// Wrap]` mixes five models in one frame, each material's parameters carried over
@@ -469,6 +478,10 @@ fn yes() -> bool {
 }
 fn is_one(n: &u32) -> bool {
     *n == 1
+}
+
+fn is_f32(h: &HdrFormat) -> bool {
+    *h == HdrFormat::F32
 }
 
 fn one() -> u32 {

@@ -23,7 +23,6 @@ use crate::HdrImage;
 pub use crate::pipelines::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
 use crate::shade_pass::{ShadePass, Targets};
 
-pub(crate) const HDR: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub(crate) const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub(crate) const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 pub(crate) const GB_POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -66,6 +65,66 @@ impl Backend {
     ];
 }
 
+/// The format of the lit (HDR) image a [`Renderer`] shades into and reads back: 32-bit floats
+/// (the default: the image as shading computed it), or 16-bit floats, as engines' HDR targets
+/// commonly are (half the bytes the lighting pass writes; each channel rounded to 11
+/// significant bits, a relative error of at most 2^-11, and a channel past 65,504 becomes
+/// infinite, counted as a non-finite pixel in the results). The reference renderers keep 32 bits,
+/// so accuracy against them carries the rounding.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum HdrFormat {
+    /// `Rgba32Float`.
+    #[default]
+    F32,
+    /// `Rgba16Float`.
+    F16,
+}
+
+impl HdrFormat {
+    /// The texture format.
+    pub fn texture_format(self) -> wgpu::TextureFormat {
+        match self {
+            Self::F32 => wgpu::TextureFormat::Rgba32Float,
+            Self::F16 => wgpu::TextureFormat::Rgba16Float,
+        }
+    }
+
+    /// Its name in experiment files' cell parameters: `f32` or `f16`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::F32 => "f32",
+            Self::F16 => "f16",
+        }
+    }
+
+    /// The WGSL storage texel format of the lighting pass's image (`rgba32float`, `rgba16float`).
+    pub(crate) fn wgsl(self) -> &'static str {
+        match self {
+            Self::F32 => "rgba32float",
+            Self::F16 => "rgba16float",
+        }
+    }
+
+    /// The image from tightly packed texels of this format, as f32.
+    pub fn image(self, width: u32, height: u32, bytes: &[u8]) -> HdrImage {
+        match self {
+            Self::F32 => HdrImage::from_bytes(width, height, bytes),
+            Self::F16 => HdrImage {
+                width,
+                height,
+                data: bytes
+                    .chunks_exact(8)
+                    .map(|t| {
+                        std::array::from_fn(|c| {
+                            half::f16::from_le_bytes([t[2 * c], t[2 * c + 1]]).to_f32()
+                        })
+                    })
+                    .collect(),
+            },
+        }
+    }
+}
+
 /// What one frame of a backend produced.
 pub struct ShadeOutput {
     /// HDR radiance (alpha 1 where covered).
@@ -96,7 +155,7 @@ impl ShadeOutput {
     pub fn read_color(&self, ctx: &GpuContext) -> Result<HdrImage, manylights_gpu::GpuError> {
         let (w, h) = self.targets.size;
         let bytes = readback::read_texture(ctx, &self.targets.color, wgpu::TextureAspect::All)?;
-        Ok(HdrImage::from_bytes(w, h, &bytes))
+        Ok(self.targets.hdr.image(w, h, &bytes))
     }
 }
 
@@ -122,6 +181,8 @@ pub struct Renderer {
     /// Samples a pixel of the depth buffer and the forward passes' colour target (MSAA where
     /// more than one).
     pub(crate) samples: u32,
+    /// The lit image's format.
+    pub(crate) hdr: HdrFormat,
     /// Built for windowed point lights alone (`POINT_LIGHTS`, shaders/common/shading.wgsl):
     /// the scene said so when the renderer was built ([`GpuScene::point_lights`]).
     pub(crate) point_lights: bool,
@@ -162,7 +223,7 @@ pub struct Renderer {
 impl Renderer {
     /// Builds every pipeline for scenes laid out as [`GpuScene`].
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
-        Self::build(ctx, scene, 1)
+        Self::build(ctx, scene, 1, HdrFormat::F32)
     }
 
     /// Every pipeline for frames of `samples` samples a pixel: MSAA where more than one
@@ -174,17 +235,27 @@ impl Renderer {
         scene: &GpuScene,
         samples: u32,
     ) -> Result<Self, manylights_gpu::GpuError> {
+        Self::with_format(ctx, scene, samples, HdrFormat::F32)
+    }
+
+    /// [`Renderer::with_samples`] shading into a lit image of format `hdr`.
+    pub fn with_format(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        samples: u32,
+        hdr: HdrFormat,
+    ) -> Result<Self, manylights_gpu::GpuError> {
         ctx.check_msaa_of(
             samples,
             &[
                 manylights_gpu::prepass::DEPTH_FORMAT,
-                HDR,
+                hdr.texture_format(),
                 manylights_gpu::lookup_bounds::RANGE_FORMAT,
                 GB_NORMAL_DEPTH,
                 GB_MATERIAL,
             ],
         )?;
-        Ok(Self::build(ctx, scene, samples))
+        Ok(Self::build(ctx, scene, samples, hdr))
     }
 
     /// Whether its shading passes are built for windowed point lights alone (see
@@ -196,6 +267,11 @@ impl Renderer {
     /// Samples a pixel of its frames.
     pub fn samples(&self) -> u32 {
         self.samples
+    }
+
+    /// The format of its lit image.
+    pub fn hdr_format(&self) -> HdrFormat {
+        self.hdr
     }
 
     /// Renders one frame of `scene` (its frame uniform set for `width` x `height`) with
@@ -278,7 +354,7 @@ impl Renderer {
         };
         let bytes = readback::read_texture(ctx, &targets.color, wgpu::TextureAspect::All)?;
         Ok(ShadeOutput {
-            color: HdrImage::from_bytes(width, height, &bytes),
+            color: self.hdr.image(width, height, &bytes),
             timings: timer.read(ctx)?,
             lists,
             depth: targets.depth.clone(),

@@ -14,7 +14,7 @@ pub mod pipelines;
 pub mod reference;
 pub mod shade_pass;
 
-pub use backends::{Backend, Renderer, ShadeOutput};
+pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput};
 pub use image_out::HdrImage;
 pub use infinite::InfiniteReference;
 pub use reference::{ReferenceFrame, ReferenceRenderer};

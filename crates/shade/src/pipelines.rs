@@ -9,7 +9,7 @@ use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
 use manylights_gpu::{GpuContext, GpuScene, shader_file};
 
-use crate::backends::{GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HDR, Renderer};
+use crate::backends::{GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer};
 
 /// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
 pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
@@ -96,8 +96,9 @@ fn texture(sample_type: wgpu::TextureSampleType, samples: u32) -> wgpu::BindingT
 }
 
 impl Renderer {
-    pub(crate) fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
+    pub(crate) fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32, hdr: HdrFormat) -> Self {
         let d = &ctx.device;
+        let color = hdr.texture_format();
         let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
             d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
@@ -133,7 +134,7 @@ impl Renderer {
                     compute,
                     wgpu::BindingType::StorageTexture {
                         access: wgpu::StorageTextureAccess::WriteOnly,
-                        format: HDR,
+                        format: color,
                         view_dimension: wgpu::TextureViewDimension::D2,
                     },
                 ),
@@ -167,7 +168,7 @@ impl Renderer {
                         "shade.forward",
                         &fwd,
                         &[g0, &forward_lists],
-                        Some((entry, &[target(HDR)])),
+                        Some((entry, &[target(color)])),
                         DepthTest::Equal,
                         samples,
                         &[("MATERIAL_MODELS", f64::from(1u32 << model)), point],
@@ -191,16 +192,16 @@ impl Renderer {
                 )
             })
         };
-        let forward_transparent = transparent_with(pipeline::blended_target(HDR));
+        let forward_transparent = transparent_with(pipeline::blended_target(color));
         let transparent = scene.has_transparent();
         let glass_layer =
-            (samples > 1 && transparent).then(|| transparent_with(pipeline::layer_target(HDR)));
+            (samples > 1 && transparent).then(|| transparent_with(pipeline::layer_target(color)));
         let naive = raster_msaa(
             d,
             "shade.naive",
             &fwd,
             &[g0],
-            Some(("fs_naive", &[target(HDR)])),
+            Some(("fs_naive", &[target(color)])),
             DepthTest::Equal,
             samples,
         );
@@ -209,7 +210,7 @@ impl Renderer {
             "shade.naive_transparent",
             &fwd,
             &[g0],
-            Some(("fs_naive_transparent", &[pipeline::blended_target(HDR)])),
+            Some(("fs_naive_transparent", &[pipeline::blended_target(color)])),
             DepthTest::Less,
             samples,
         );
@@ -270,7 +271,7 @@ impl Renderer {
         // so).
         let (deferred, deferred_stored, deferred_zbin, deferred_tiles, deferred_clusters) =
             if samples > 1 {
-                let def = DEFERRED_MSAA.create_samples(d, samples);
+                let def = DEFERRED_MSAA.create_edited(d, samples, &|s| hdr_storage(s, hdr));
                 let bins = compute(&def, "deferred_shade_msaa");
                 let zbin = compute(&def, "deferred_shade_msaa_zbin");
                 (
@@ -281,7 +282,7 @@ impl Renderer {
                     [bins.clone(), bins],
                 )
             } else {
-                let def = DEFERRED.create(d);
+                let def = DEFERRED.create_edited(d, 1, &|s| hdr_storage(s, hdr));
                 (
                     compute(&def, "deferred_shade"),
                     compute(&def, "deferred_shade_stored"),
@@ -302,6 +303,7 @@ impl Renderer {
                 Culler::with_samples(ctx, scene, samples)
             },
             samples,
+            hdr,
             point_lights,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
@@ -324,4 +326,17 @@ impl Renderer {
             deferred_gbuffer,
         }
     }
+}
+
+/// The deferred lighting passes' image (`out_color`, declared `rgba32float`) in format `hdr`.
+fn hdr_storage(source: String, hdr: HdrFormat) -> String {
+    const DECLARED: &str = "var out_color: texture_storage_2d<rgba32float, write>;";
+    assert!(
+        source.contains(DECLARED),
+        "out_color is declared as {DECLARED}"
+    );
+    source.replace(
+        DECLARED,
+        &format!("var out_color: texture_storage_2d<{}, write>;", hdr.wgsl()),
+    )
 }

@@ -12,7 +12,7 @@ use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
 
 use crate::backends::{
-    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, GBUFFER_BYTES_PER_PIXEL, HDR, Loads,
+    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, GBUFFER_BYTES_PER_PIXEL, HdrFormat, Loads,
     Renderer,
 };
 
@@ -20,6 +20,8 @@ use crate::backends::{
 pub struct Targets {
     /// Width and height.
     pub(crate) size: (u32, u32),
+    /// The colour targets' format.
+    pub(crate) hdr: HdrFormat,
     /// HDR radiance (MSAA: resolved).
     pub(crate) color: wgpu::Texture,
     pub(crate) color_view: wgpu::TextureView,
@@ -48,12 +50,14 @@ impl Targets {
         (width, height): (u32, u32),
     ) -> Self {
         let samples = renderer.samples;
+        let hdr = renderer.hdr;
+        let hdr_bytes = u64::from(hdr.texture_format().block_copy_size(None).unwrap_or(16));
         let d = &ctx.device;
         let tex =
             |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
         let color = tex(
             "shade.color",
-            HDR,
+            hdr.texture_format(),
             wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::TEXTURE_BINDING
@@ -69,7 +73,7 @@ impl Targets {
                 d,
                 "shade.color_msaa",
                 (width, height),
-                HDR,
+                hdr.texture_format(),
                 wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
                 samples,
             )
@@ -100,10 +104,15 @@ impl Targets {
                         .create_view(&Default::default())
                 }
                 (true, Some(glass)) => glass.clone(),
-                (true, None) => {
-                    pipeline::texture_2d_msaa(d, "shade.glass", (1, 1), HDR, usage, samples)
-                        .create_view(&Default::default())
-                }
+                (true, None) => pipeline::texture_2d_msaa(
+                    d,
+                    "shade.glass",
+                    (1, 1),
+                    hdr.texture_format(),
+                    usage,
+                    samples,
+                )
+                .create_view(&Default::default()),
             };
             [
                 ms("gbuffer.normal_depth", GB_NORMAL_DEPTH),
@@ -119,6 +128,7 @@ impl Targets {
         };
         Self {
             size: (width, height),
+            hdr,
             color_view: color.create_view(&Default::default()),
             color,
             color_msaa,
@@ -137,14 +147,17 @@ impl Targets {
                     (true, true) => {
                         gbuffer_bytes
                             + if renderer.transparent {
-                                u64::from(width) * u64::from(height) * u64::from(samples) * 16
+                                u64::from(width)
+                                    * u64::from(height)
+                                    * u64::from(samples)
+                                    * hdr_bytes
                             } else {
                                 0
                             }
                     }
-                    // Depth32Float and Rgba32Float, `samples` each a pixel.
+                    // Depth32Float and the colour, `samples` each a pixel.
                     (true, false) => {
-                        u64::from(width) * u64::from(height) * u64::from(samples) * (4 + 16)
+                        u64::from(width) * u64::from(height) * u64::from(samples) * (4 + hdr_bytes)
                     }
                 },
             bounds,
