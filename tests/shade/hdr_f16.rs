@@ -64,12 +64,10 @@ fn the_16_bit_image_is_the_32_bit_image_rounded() {
             Strategy::tiled_gather(12),
         ] {
             for backend in CULLED.into_iter().chain([Backend::NaiveForward]) {
-                let a = full
-                    .render(&ctx, &gpu_scene, backend, &strategy, &settings, size)
-                    .unwrap();
-                let b = half
-                    .render(&ctx, &gpu_scene, backend, &strategy, &settings, size)
-                    .unwrap();
+                let [a, b] = [&full, &half].map(|r| {
+                    r.render(&ctx, &gpu_scene, backend, &strategy, &settings, size)
+                        .unwrap()
+                });
                 let w = worst(&a.color, &b.color, 2f32.powi(-10));
                 let what = format!(
                     "{} lights, {} {}",
@@ -95,12 +93,10 @@ fn the_16_bit_image_with_msaa_over_glass() {
     let settings = CullSettings::for_camera(&s.camera);
     let strategy = Strategy::tiled_gather(16);
     for backend in [Backend::Forward, Backend::Deferred, Backend::NaiveForward] {
-        let a = full
-            .render(&ctx, &gpu_scene, backend, &strategy, &settings, size)
-            .unwrap();
-        let b = half
-            .render(&ctx, &gpu_scene, backend, &strategy, &settings, size)
-            .unwrap();
+        let [a, b] = [&full, &half].map(|r| {
+            r.render(&ctx, &gpu_scene, backend, &strategy, &settings, size)
+                .unwrap()
+        });
         assert!(b.msaa_target_bytes < a.msaa_target_bytes || backend == Backend::Deferred);
         let peak = a.color.peak();
         let w = a
