@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use manylights_cull::heatmap;
 use manylights_gpu::GpuScene;
 use manylights_shade::image_out::write_atomic;
-use manylights_shade::{Backend, ReferenceRenderer, Renderer, accuracy};
+use manylights_shade::{Backend, HdrFormat, ReferenceRenderer, Renderer, accuracy};
 
 use crate::options::{BackendName, SceneArgs, StrategyArgs, print_timings};
 
@@ -44,6 +44,19 @@ pub(crate) struct RenderArgs {
     /// takes no MSAA).
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub(crate) msaa: u32,
+    /// The backend's lit image: f32 (32-bit floats), or f16 (16-bit floats, as engines' HDR
+    /// targets: half the bytes the lighting pass writes, each channel rounded to half
+    /// precision; the references keep 32 bits, so --compare shows the rounding). Not with
+    /// --backend reference.
+    #[arg(long, value_enum, default_value_t = HdrName::F32)]
+    pub(crate) hdr: HdrName,
+}
+
+/// `--hdr`'s values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum HdrName {
+    F32,
+    F16,
 }
 
 pub(crate) fn render(args: &RenderArgs) -> Result<()> {
@@ -64,6 +77,16 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         );
     }
     let samples = args.msaa;
+    if args.hdr == HdrName::F16 && args.backend == BackendName::Reference {
+        bail!(
+            "--hdr f16 with --backend reference: the reference keeps 32 bits (a backend, such \
+             as --backend deferred, or --hdr f32)"
+        );
+    }
+    let hdr = match args.hdr {
+        HdrName::F32 => HdrFormat::F32,
+        HdrName::F16 => HdrFormat::F16,
+    };
     if args.scene.glass && args.export.is_some() {
         bail!(
             "--export with --glass: exports hold one depth a pixel, not glass; export without --glass"
@@ -114,7 +137,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             BackendName::DeferredStoredPosition => Backend::DeferredStoredPosition,
             BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
-        let renderer = Renderer::with_samples(&ctx, &gpu_scene, samples).map_err(bad_msaa)?;
+        let renderer = Renderer::with_format(&ctx, &gpu_scene, samples, hdr).map_err(bad_msaa)?;
         let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;
         if backend != Backend::NaiveForward {
             println!("  strategy {strategy:?}");

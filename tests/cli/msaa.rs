@@ -1,4 +1,4 @@
-//! MSAA on the command line: `cull --msaa` and `render --msaa`.
+//! MSAA on the command line: `cull --msaa` and `render --msaa`; and `render --hdr`.
 
 use super::*;
 
@@ -117,5 +117,47 @@ fn render_msaa_matches_the_reference_at_its_count() {
         &["--msaa", "4", "--backend", "forward", "--export", "x"],
         1,
         &["--export with --msaa 4"],
+    );
+}
+
+/// `render --hdr f16`: deferred into a 16-bit lit image, compared with the 32-bit references:
+/// near them (PSNR over 80 dB) but not as near as the 32-bit image (the rounding shows); with the
+/// reference backend it is an error that says what is accepted.
+#[test]
+fn render_hdr_f16_shows_its_rounding() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("render");
+    let psnr = |hdr: &str| {
+        let args = [
+            "render",
+            "--scene",
+            "pillars",
+            "--width",
+            "64",
+            "--height",
+            "36",
+            "--lights",
+            "64",
+            "--backend",
+            "deferred",
+            "--strategy",
+            "tiled-gather",
+            "--hdr",
+            hdr,
+            "--compare",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        psnr_vs_reference(&succeeds(&args, hdr))
+    };
+    let (full, half) = (psnr("f32"), psnr("f16"));
+    assert!(
+        half > 80.0 && half < full,
+        "PSNR f16 {half} against f32 {full}"
+    );
+    rejects(
+        &["--hdr", "f16", "--backend", "reference"],
+        1,
+        &["--hdr f16 with --backend reference", "--hdr f32"],
     );
 }
