@@ -1,4 +1,4 @@
-//! Deferred lighting over clusters a workgroup at a time (`ListForm::Clusters`,
+//! Deferred lighting over clusters (and tiles) a workgroup at a time (`ListForm::Clusters`,
 //! `shade_cluster_group` in shaders/render/deferred.wgsl) against the loop a pixel over the same
 //! lists (`ListForm::Bins`, `shade_list`): the same image, bit for bit, with lists shorter and
 //! longer than the workgroup's memory holds, and with a workgroup's pixels in several slices.
@@ -110,6 +110,62 @@ fn cluster_group_lighting_equals_the_loop_a_pixel() {
                     "{what}: pixels that differ from the loop a pixel"
                 );
             }
+        }
+    }
+}
+
+/// Deferred lighting over a list a tile a workgroup at a time (`ListForm::Tiles`,
+/// `shade_tile_group`; with point lights four at a time) against the loop a pixel over the same
+/// lists: the same image, bit for bit, with lists shorter and longer than a batch.
+#[test]
+fn tile_group_lighting_equals_the_loop_a_pixel() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    for s in [atrium_lights(300, 0.02), atrium_lights(700, 0.1)] {
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        assert!(renderer.point_lights());
+        let settings = CullSettings::for_camera(&s.camera);
+        for strategy in [Strategy::tiled_gather(8), Strategy::tiled_gather(16)] {
+            let what = format!("{} {} lights", strategy.name(), s.lights.len());
+            let out = renderer
+                .render(
+                    &ctx,
+                    &gpu_scene,
+                    Backend::Deferred,
+                    &strategy,
+                    &settings,
+                    (w, h),
+                )
+                .unwrap();
+            assert_eq!(
+                out.lists.as_ref().unwrap().form(),
+                ListForm::Tiles,
+                "{what}"
+            );
+            let mut per_pixel = BoundAs(
+                renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap(),
+                ListForm::Bins,
+            );
+            let again = shade_again(
+                &ctx,
+                &renderer,
+                &gpu_scene,
+                &out,
+                &strategy,
+                &settings,
+                &mut per_pixel,
+            );
+            let differ = again
+                .data
+                .iter()
+                .zip(&out.color.data)
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(
+                differ, 0,
+                "{what}: pixels that differ from the loop a pixel"
+            );
         }
     }
 }
