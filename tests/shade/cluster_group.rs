@@ -54,6 +54,37 @@ fn clusters(tile_size: u32, slices: u32) -> Strategy {
     }
 }
 
+/// How many pixels of `out` differ from the image of the loop a pixel over the same lists
+/// (`shade_list`, the lists bound as `Bins`).
+fn differ_from_the_loop_a_pixel(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    out: &ShadeOutput,
+    strategy: &Strategy,
+    settings: &CullSettings,
+) -> usize {
+    let mut per_pixel = BoundAs(
+        renderer.shade_pass(ctx, gpu_scene, out).unwrap(),
+        ListForm::Bins,
+    );
+    let again = shade_again(
+        ctx,
+        renderer,
+        gpu_scene,
+        out,
+        strategy,
+        settings,
+        &mut per_pixel,
+    );
+    again
+        .data
+        .iter()
+        .zip(&out.color.data)
+        .filter(|(a, b)| a != b)
+        .count()
+}
+
 #[test]
 fn cluster_group_lighting_equals_the_loop_a_pixel() {
     let ctx = common::gpu();
@@ -86,25 +117,9 @@ fn cluster_group_lighting_equals_the_loop_a_pixel() {
                     covered > w as usize * h as usize / 2,
                     "{what}: {covered} pixels covered"
                 );
-                let mut per_pixel = BoundAs(
-                    renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap(),
-                    ListForm::Bins,
+                let differ = differ_from_the_loop_a_pixel(
+                    &ctx, &renderer, &gpu_scene, &out, &strategy, &settings,
                 );
-                let again = shade_again(
-                    &ctx,
-                    &renderer,
-                    &gpu_scene,
-                    &out,
-                    &strategy,
-                    &settings,
-                    &mut per_pixel,
-                );
-                let differ = again
-                    .data
-                    .iter()
-                    .zip(&out.color.data)
-                    .filter(|(a, b)| a != b)
-                    .count();
                 assert_eq!(
                     differ, 0,
                     "{what}: pixels that differ from the loop a pixel"
@@ -143,25 +158,9 @@ fn tile_group_lighting_equals_the_loop_a_pixel() {
                 ListForm::Tiles,
                 "{what}"
             );
-            let mut per_pixel = BoundAs(
-                renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap(),
-                ListForm::Bins,
+            let differ = differ_from_the_loop_a_pixel(
+                &ctx, &renderer, &gpu_scene, &out, &strategy, &settings,
             );
-            let again = shade_again(
-                &ctx,
-                &renderer,
-                &gpu_scene,
-                &out,
-                &strategy,
-                &settings,
-                &mut per_pixel,
-            );
-            let differ = again
-                .data
-                .iter()
-                .zip(&out.color.data)
-                .filter(|(a, b)| a != b)
-                .count();
             assert_eq!(
                 differ, 0,
                 "{what}: pixels that differ from the loop a pixel"
