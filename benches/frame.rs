@@ -244,17 +244,11 @@ fn settings() -> Vec<Setting> {
     ];
     // The lit image in 16-bit floats (`HdrFormat::F16`, as engines' HDR targets): the
     // Forward+ configuration and the hall at 5,000 lights.
-    let half = [
-        "harada2012_gather8",
-        "cis5650_5k_gather",
-        "cis5650_5k_gather24",
-    ];
-    let names = [
-        "harada2012_gather8_f16",
-        "cis5650_5k_gather_f16",
-        "cis5650_5k_gather24_f16",
-    ];
-    for (from, name) in half.into_iter().zip(names) {
+    for (from, name) in [
+        ("harada2012_gather8", "harada2012_gather8_f16"),
+        ("cis5650_5k_gather", "cis5650_5k_gather_f16"),
+        ("cis5650_5k_gather24", "cis5650_5k_gather24_f16"),
+    ] {
         let s = v
             .iter()
             .find(|s| s.name == from)

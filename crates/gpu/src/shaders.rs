@@ -203,10 +203,7 @@ impl ShaderDef {
         swaps: &[(ShaderFile, ShaderFile)],
     ) -> wgpu::ShaderModule {
         let source = with_samples(self.source(&self.swapped(swaps)), samples, self.name);
-        device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(self.name),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        })
+        self.module(device, source)
     }
 
     /// [`ShaderDef::create_samples`] with its composed text passed through `edit` (such as a
@@ -217,11 +214,12 @@ impl ShaderDef {
         samples: u32,
         edit: &dyn Fn(String) -> String,
     ) -> wgpu::ShaderModule {
-        let source = edit(with_samples(
-            self.source(&self.swapped(&[])),
-            samples,
-            self.name,
-        ));
+        let source = with_samples(self.source(&self.swapped(&[])), samples, self.name);
+        self.module(device, edit(source))
+    }
+
+    /// The module of `source`, labelled with this shader's name.
+    fn module(&self, device: &wgpu::Device, source: String) -> wgpu::ShaderModule {
         device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(self.name),
             source: wgpu::ShaderSource::Wgsl(source.into()),

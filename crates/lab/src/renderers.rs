@@ -1,9 +1,9 @@
 //! The renderers of a run, kept from cell to cell: building one compiles every culling and
 //! shading pipeline, most of a small cell's time (on lavapipe about 1.5 s of a tiny stability
 //! cell's 2.3). A renderer's pipelines depend only on the sample count, the lit image's format,
-//! whether the scene has transparent surfaces, its opaque surfaces' material models and whether its lights are all
-//! windowed point lights: bind group layouts of equal entries are one layout to wgpu, so a
-//! renderer serves every scene laid out alike.
+//! whether the scene has transparent surfaces, its opaque surfaces' material models and whether
+//! its lights are all windowed point lights: bind group layouts of equal entries are one layout
+//! to wgpu, so a renderer serves every scene laid out alike.
 
 use manylights_gpu::{GpuContext, GpuError, GpuScene};
 use manylights_shade::{HdrFormat, Renderer};

@@ -68,8 +68,9 @@ impl Backend {
 /// The format of the lit (HDR) image a [`Renderer`] shades into and reads back: 32-bit floats
 /// (the default: the image as shading computed it), or 16-bit floats, as engines' HDR targets
 /// commonly are (half the bytes the lighting pass writes; each channel rounded to 11
-/// significant bits, a relative error of at most 2^-11, and a channel past 65,504 becomes
-/// infinite, counted as a non-finite pixel in the results). The reference renderers keep 32 bits,
+/// significant bits, to nearest or towards zero as Vulkan allows, a relative error of at most
+/// 2^-10, and a channel past 65,504 becomes infinite, counted as a non-finite pixel in the
+/// results). The reference renderers keep 32 bits,
 /// so accuracy against them carries the rounding.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum HdrFormat {
@@ -86,6 +87,14 @@ impl HdrFormat {
         match self {
             Self::F32 => wgpu::TextureFormat::Rgba32Float,
             Self::F16 => wgpu::TextureFormat::Rgba16Float,
+        }
+    }
+
+    /// Bytes a texel.
+    pub fn texel_bytes(self) -> u64 {
+        match self {
+            Self::F32 => 16,
+            Self::F16 => 8,
         }
     }
 

@@ -51,7 +51,7 @@ impl Targets {
     ) -> Self {
         let samples = renderer.samples;
         let hdr = renderer.hdr;
-        let hdr_bytes = u64::from(hdr.texture_format().block_copy_size(None).unwrap_or(16));
+        let hdr_bytes = hdr.texel_bytes();
         let d = &ctx.device;
         let tex =
             |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
