@@ -11,8 +11,8 @@
 //! pixels x 24 slices; the CIS 5650 hall (`cis5650`) with 5,000 and 50,000 lights of radius 2 m
 //! at 1920 x 1080, gather's 16-pixel tiles (at 5,000 also 24), and at 50,000 clusters too; 1M
 //! lights of radius 0.5 m in the atrium at 1920 x 1080 with clusters without their order pass.
-//! Z-binning (256 exponential bins) at the Forward+ configuration in 8-pixel tiles and in the
-//! hall in 16-pixel tiles (not at 1M lights: its masks would take 1 GB). At 1M lights also the
+//! Z-binning (256 exponential bins) at the Forward+ configuration in 8-pixel tiles, in the
+//! hall in 16-pixel tiles, and at 1M lights in 32- and 16-pixel tiles. At 1M lights also the
 //! clusters `tune` picks there (32 px x 32 slices), ordered and not, and ordered at 24 px x 48
 //! and x 32. The Forward+ configuration and the hall at 5,000 lights (16 and 24 px) also into a
 //! 16-bit float lit image (`<name>_f16`, `HdrFormat::F16`); every other setting's is 32-bit.
@@ -239,6 +239,22 @@ fn settings() -> Vec<Setting> {
             scene: million(),
             size: full,
             strategy: clusters24x32(true),
+            hdr: HdrFormat::F32,
+        },
+        // Z-binning with its masks set a light at a time (`cull.zbin.scatter`): 255 MB of
+        // masks in 32-pixel tiles, 1 GB in 16-pixel ones.
+        Setting {
+            name: "atrium_1m_zbin32",
+            scene: million(),
+            size: full,
+            strategy: zbin(32),
+            hdr: HdrFormat::F32,
+        },
+        Setting {
+            name: "atrium_1m_zbin16",
+            scene: million(),
+            size: full,
+            strategy: zbin(16),
             hdr: HdrFormat::F32,
         },
     ];

@@ -18,7 +18,7 @@ use crate::radix_sort::RadixSort;
 use crate::record::{ListPass, Recorder};
 use crate::scan::Scan;
 use crate::shaders::{
-    CLUSTERED, DEPTH_BOUNDS, TILED_GATHER, TILED_GATHER_SUBGROUP, TILED_SCATTER, ZBIN,
+    CLUSTERED, DEPTH_BOUNDS, TILED_GATHER, TILED_GATHER_SUBGROUP, TILED_SCATTER, ZBIN, ZBIN_SCATTER,
 };
 use crate::strategies::{Plan, clustered, depth_mask, tiled_gather, tiled_scatter, zbin};
 use crate::{CullError, CullOutput, CullSettings, Strategy};
@@ -97,6 +97,12 @@ pub struct Culler {
     /// longer than 4,096, the bitonic network). The same lists. True by default: on the H100,
     /// the hall at 50,000 lights, that pass 28 against 23 µs (67 µs by the network alone).
     pub cluster_order_bits: bool,
+    /// The fewest lights at which z-binning sets its masks a light at a time
+    /// (`cull.zbin.covers`, `cull.zbin.scatter`: work as the (light, tile) pairs) rather than a
+    /// tile at a time (`cull.zbin.masks`: tiles x the lights of a tile's depth bins)
+    /// ([`crate::ZBIN_SCATTER_MIN_LIGHTS`] by default; 0: always, `u32::MAX`: never). The same
+    /// masks either way.
+    pub zbin_scatter_min_lights: u32,
     pub(crate) tile_depth: TileDepth,
     pub(crate) tile_lines: TileLines,
     pub(crate) tile_masks: TileMasks,
@@ -206,7 +212,7 @@ impl Culler {
             gather: tiled_gather::Pipelines::new(d, &gather),
             scatter: tiled_scatter::Pipelines::new(d, &program(&TILED_SCATTER)),
             clustered: clustered::Pipelines::new(d, &program(&CLUSTERED)),
-            zbin: zbin::Pipelines::new(d, &program(&ZBIN)),
+            zbin: zbin::Pipelines::new(d, &program(&ZBIN), &program(&ZBIN_SCATTER)),
             per_pixel: PerPixel::new(d, samples, &scene.layout, &lists_layout),
             layout,
             samples,
@@ -225,6 +231,7 @@ impl Culler {
             cluster_band_pool: None,
             cluster_sphere_bounds: true,
             cluster_order_bits: true,
+            zbin_scatter_min_lights: crate::ZBIN_SCATTER_MIN_LIGHTS,
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),

@@ -215,6 +215,10 @@ pub const CLUSTER_TILE_RECT_PAIRS: u64 = 1 << 19;
 /// into bands of its rows, each with lanes of its own ([`crate::Culler::cluster_lane_tiles`]).
 pub const CLUSTER_LANE_TILES: u32 = 4;
 
+/// The default fewest lights at which z-binning sets its masks a light at a time
+/// ([`crate::Culler::zbin_scatter_min_lights`]).
+pub const ZBIN_SCATTER_MIN_LIGHTS: u32 = 16384;
+
 /// The step of chunk sizes: a batch of the shader, 64 lights, one a thread.
 pub const CHUNK_STEP: u32 = 64;
 

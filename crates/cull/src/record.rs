@@ -62,6 +62,8 @@ pub enum Buf {
     ClusterBoxes,
     /// Tiled scatter's pair keys (tiles).
     PairKeys,
+    /// Z-binning's covers: each tile's range of sorted lights (its scatter path).
+    ZBinCovers,
 }
 
 impl Buf {
@@ -90,6 +92,7 @@ impl Buf {
             Self::WideArgs => "cull.clustered.wide_args",
             Self::ClusterBoxes => "cull.clustered.boxes",
             Self::PairKeys => "cull.pair_keys",
+            Self::ZBinCovers => "cull.zbin.covers",
         }
     }
 }

@@ -119,7 +119,7 @@ pub const CLUSTERED: ShaderDef = ShaderDef {
         shader_file!("cull/clustered/cluster_tiles.wgsl"),
     ],
 };
-/// `cull.zbin`: its keys, bins and masks.
+/// `cull.zbin`: its keys, bins, masks and covers (the scatter path's first pass).
 pub const ZBIN: ShaderDef = ShaderDef {
     name: "cull.zbin",
     consts: CULL_CONSTS,
@@ -129,6 +129,19 @@ pub const ZBIN: ShaderDef = ShaderDef {
         SCENE,
         GEOMETRY,
         shader_file!("cull/zbin/zbin.wgsl"),
+    ],
+};
+/// `cull.zbin.scatter`: z-binning's masks a light at a time (its scatter path; a module of
+/// its own, with the masks as atomics).
+pub const ZBIN_SCATTER: ShaderDef = ShaderDef {
+    name: "cull.zbin.scatter",
+    consts: CULL_CONSTS,
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        GEOMETRY,
+        shader_file!("cull/zbin/zbin_scatter.wgsl"),
     ],
 };
 /// `cull.lights_per_pixel`: the shared lookup, per pixel.
@@ -185,6 +198,7 @@ pub const SHADERS: &[ShaderDef] = &[
     TILED_SCATTER,
     CLUSTERED,
     ZBIN,
+    ZBIN_SCATTER,
     LIGHTS_PER_PIXEL,
     EXACT,
     EXACT_TRANSPARENT,
