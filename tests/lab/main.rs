@@ -13,7 +13,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 14] = [
+const SHIPPED: [&str; 15] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -28,6 +28,7 @@ const SHIPPED: [&str; 14] = [
     "infinite-range",
     "infinite-range-1m",
     "material-variety",
+    "zbin-1m",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
