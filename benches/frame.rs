@@ -14,7 +14,8 @@
 //! Z-binning (256 exponential bins) at the Forward+ configuration in 8-pixel tiles, in the
 //! hall in 16-pixel tiles, and at 1M lights in 32- and 16-pixel tiles. At 1M lights also the
 //! clusters `tune` picks there (32 px x 32 slices), ordered and not, and ordered at 24 px x 48
-//! and x 32. The Forward+ configuration and the hall at 5,000 lights (16 and 24 px) also into a
+//! and x 32, and at 32 x 32 and 24 x 32 with the clusters' 2.5D cells (`<name>_cells`). The
+//! Forward+ configuration and the hall at 5,000 lights (16 and 24 px) also into a
 //! 16-bit float lit image (`<name>_f16`, `HdrFormat::F16`); every other setting's is 32-bit.
 //!
 //! `MANYLIGHTS_BENCH_SPANS=1` times each frame with one timestamp pair around its culling and
@@ -72,6 +73,7 @@ fn settings() -> Vec<Setting> {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
+        cells: false,
     };
     let clusters32 = |ordered| Strategy::Clustered {
         tile_size: 32,
@@ -79,6 +81,7 @@ fn settings() -> Vec<Setting> {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
+        cells: false,
     };
     let clusters24x48 = |ordered| Strategy::Clustered {
         tile_size: 24,
@@ -86,6 +89,7 @@ fn settings() -> Vec<Setting> {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
+        cells: false,
     };
     let clusters24x32 = |ordered| Strategy::Clustered {
         tile_size: 24,
@@ -93,6 +97,25 @@ fn settings() -> Vec<Setting> {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
+        cells: false,
+    };
+    let with_cells = |s: Strategy| match s {
+        Strategy::Clustered {
+            tile_size,
+            slices,
+            slicing,
+            skip_empty,
+            ordered,
+            ..
+        } => Strategy::Clustered {
+            tile_size,
+            slices,
+            slicing,
+            skip_empty,
+            ordered,
+            cells: true,
+        },
+        other => other,
     };
     let million = || {
         atrium(LightSpec {
@@ -239,6 +262,21 @@ fn settings() -> Vec<Setting> {
             scene: million(),
             size: full,
             strategy: clusters24x32(true),
+            hdr: HdrFormat::F32,
+        },
+        // The same two grids with the clusters' 2.5D cells (`cells: true`, issue 33).
+        Setting {
+            name: "atrium_1m_clustered32x32_cells",
+            scene: million(),
+            size: full,
+            strategy: with_cells(clusters32(true)),
+            hdr: HdrFormat::F32,
+        },
+        Setting {
+            name: "atrium_1m_clustered24x32_cells",
+            scene: million(),
+            size: full,
+            strategy: with_cells(clusters24x32(true)),
             hdr: HdrFormat::F32,
         },
         // Z-binning with its masks set a light at a time (`cull.zbin.scatter`): 255 MB of

@@ -132,6 +132,7 @@ fn cull(c: &mut Criterion) {
                 slicing: manylights_cull::Slicing::Exponential,
                 skip_empty: false,
                 ordered: false,
+                cells: false,
             };
             let single = Strategy::TiledGather {
                 tile_size: 16,
@@ -264,6 +265,7 @@ fn cull_paper(c: &mut Criterion) {
         slicing: manylights_cull::Slicing::Exponential,
         skip_empty: false,
         ordered,
+        cells: false,
     };
     let variants = [
         ("tiled_gather8", Strategy::tiled_gather(8)),

@@ -115,6 +115,11 @@ pub(crate) struct StrategyArgs {
     /// Emit lights only into clusters that hold geometry (clustered only).
     #[arg(long)]
     pub(crate) skip_empty: bool,
+    /// 2.5D cells inside each cluster: a light is kept only where its depth extent meets the
+    /// 32 cells of the cluster's pixels' depth range that hold pixels (clustered only; needs
+    /// the box test).
+    #[arg(long)]
+    pub(crate) cells: bool,
     /// Keep the clusters' atomic fill order instead of sorting each list into light order
     /// (clustered only; one pass less, images no longer bit-identical across runs).
     #[arg(long)]
@@ -161,6 +166,7 @@ impl StrategyArgs {
                 slicing: self.slicing.into(),
                 skip_empty: self.skip_empty,
                 ordered: !self.unordered,
+                cells: self.cells,
             },
             StrategyName::Zbin => Strategy::ZBin {
                 tile_size,

@@ -27,6 +27,7 @@ pub(crate) fn strategies() -> Vec<Strategy> {
             slicing: Slicing::Exponential,
             skip_empty: false,
             ordered: true,
+            cells: false,
         },
         Strategy::Clustered {
             tile_size: 8,
@@ -34,6 +35,7 @@ pub(crate) fn strategies() -> Vec<Strategy> {
             slicing: Slicing::Linear,
             skip_empty: true,
             ordered: false,
+            cells: false,
         },
         Strategy::ZBin {
             tile_size: 8,

@@ -364,6 +364,7 @@ fn gpu_exact_oracle_matches_cpu() {
                 slicing: Slicing::Exponential,
                 skip_empty: true,
                 ordered: true,
+                cells: false,
             },
         ] {
             let out = run_gpu(&ctx, culler, &r, &case, &s);
@@ -428,6 +429,7 @@ fn capacity_drops_are_counted() {
             slicing: Slicing::Linear,
             skip_empty: false,
             ordered: true,
+            cells: false,
         },
     ] {
         let full = run_gpu(&ctx, &culler, &r, &case, &s);

@@ -180,6 +180,7 @@ fn msaa_clusters_hold_every_slice_between_a_pixels_samples() {
                 slicing: Slicing::Exponential,
                 skip_empty: true,
                 ordered: true,
+                cells: false,
             };
             let mut timer = GpuTimer::new(&ctx, 16);
             let out = culler

@@ -41,6 +41,7 @@ fn cluster_order_passes_sort_every_list() {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
+        cells: false,
     };
     let mut cullers: Option<[Culler; 2]> = None;
     // (label, whether light `i` covers the view, the longest list's length)

@@ -203,6 +203,7 @@ fn tile_boxes_keep_a_subset_of_the_planes_lists() {
                 slicing: Slicing::Exponential,
                 skip_empty: false,
                 ordered: true,
+                cells: false,
             },
         ];
         for (culler, s) in cullers
@@ -334,6 +335,7 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 slicing: Slicing::Exponential,
                 skip_empty,
                 ordered: true,
+                cells: false,
             };
             let what = format!(
                 "{}: {tile_size} px, {slices} slices, skip_empty {skip_empty}, tile_boxes {tile_boxes}",
@@ -428,7 +430,10 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                     assert_eq!(lc.list(bin), kept, "{what}, capacity 2: bin {bin}");
                 }
             }
-            let occupancy = b.read_occupancy(&ctx).unwrap();
+            // The flags and the depth bounds (the slice masks after them are the per-light
+            // passes' own).
+            let flags_and_bounds = 3 * lb.ranges.len();
+            let occupancy = b.read_occupancy(&ctx).unwrap()[..flags_and_bounds].to_vec();
             for (o, path) in [
                 (&a, "tile path"),
                 (&r2, "tile path with rectangles"),
@@ -444,7 +449,7 @@ fn cluster_tile_path_equals_the_per_light_passes() {
                 }
                 if skip_empty || tile_boxes {
                     assert_eq!(
-                        o.read_occupancy(&ctx).unwrap(),
+                        o.read_occupancy(&ctx).unwrap()[..flags_and_bounds],
                         occupancy,
                         "{what}, {path}: occupancy"
                     );
@@ -542,6 +547,7 @@ fn cluster_sphere_bounds_give_a_conservative_subset() {
                     slicing: Slicing::Exponential,
                     skip_empty: false,
                     ordered: true,
+                    cells: false,
                 };
                 let what = format!(
                     "{}: {tile_size} px x {slices}, per-light passes {}",
@@ -713,4 +719,116 @@ fn zbin_scatter_masks_equal_the_gather_masks() {
         }
     }
     assert!(words > 128, "some case has masks of over 128 words a tile");
+}
+
+/// The clusters' 2.5D cells (`Strategy::Clustered::cells`, `cull.clustered.cells`) against the
+/// clusters without them, over 8 seeds, two grids, and each cluster's box stored or computed
+/// at each test: each cluster's cells equal the CPU oracle's (over the GPU's depth bounds), the
+/// lists equal the CPU oracle's with no false negative and are a subset of the lists without
+/// cells, bin for bin, and over all seeds they hold fewer entries. Without the box test the run
+/// is refused, naming the field.
+#[test]
+fn cluster_cells_keep_a_subset_of_the_lists_without() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let mut cullers = None;
+    let mut entries = [0usize; 2];
+    let mut cells_set = 0;
+    for seed in [61u64, 62, 63, 64, 65, 66, 67, 68] {
+        let case = random_case(seed);
+        let r = render(&ctx, &case, w, h);
+        let cullers = cullers.get_or_insert_with(|| {
+            let mut computed = Culler::new(&ctx, &r.gpu_scene);
+            computed.cluster_boxes = false;
+            [Culler::new(&ctx, &r.gpu_scene), computed]
+        });
+        for (culler, (tile_size, slices, slicing)) in cullers.iter().flat_map(|c| {
+            [(16, 16, Slicing::Exponential), (8, 32, Slicing::Linear)]
+                .into_iter()
+                .map(move |g| (c, g))
+        }) {
+            let strategy = |cells| Strategy::Clustered {
+                tile_size,
+                slices,
+                slicing,
+                skip_empty: false,
+                ordered: true,
+                cells,
+            };
+            let what = format!(
+                "{} clusters {tile_size} x {slices} {slicing:?} (stored boxes: {})",
+                case.label, culler.cluster_boxes
+            );
+            let [(without, _), (with, out)] = [false, true].map(|cells| {
+                let out = run_gpu(&ctx, culler, &r, &case, &strategy(cells));
+                let p = out.params;
+                assert_eq!(
+                    out.passes.iter().any(|s| s.name == "cull.clustered.cells"),
+                    cells,
+                    "{what}, cells {cells}: the cells pass"
+                );
+                let occ = out.read_occupancy(&ctx).unwrap();
+                let gpu = out.read(&ctx).unwrap();
+                cpu::clustered(&r.frame, &p, &r.lights, &occ)
+                    .compare(&gpu)
+                    .unwrap_or_else(|e| panic!("{what}, cells {cells}: {e}"));
+                assert_eq!(
+                    metrics(&r, &p, &gpu).false_negatives,
+                    0,
+                    "{what}, cells {cells}"
+                );
+                entries[usize::from(cells)] += gpu.indices.len();
+                (gpu, out)
+            });
+            let p = out.params;
+            let occ = out.read_occupancy(&ctx).unwrap();
+            let bins = p.bins as usize;
+            let at = 3 * bins + 2 * (p.tiles_x * p.tiles_y) as usize;
+            let cells = cpu::cluster_cells(&r.frame, &p, &r.depth, (w, h), 1, &occ);
+            for (b, (&g, &c)) in occ[at..at + bins].iter().zip(&cells).enumerate() {
+                assert_eq!(
+                    g, c,
+                    "{what}: cluster {b} cells {g:#034b}, oracle {c:#034b}"
+                );
+            }
+            cells_set += occ[at..at + bins].iter().filter(|&&c| c != 0).count();
+            for b in 0..with.ranges.len() {
+                let all = without.sorted(b);
+                for l in with.sorted(b) {
+                    assert!(
+                        all.binary_search(&l).is_ok(),
+                        "{what}: the cells keep light {l} in cluster {b}, the clusters without them do not"
+                    );
+                }
+            }
+        }
+    }
+    println!(
+        "list entries over 8 seeds: {} with cells, {} without",
+        entries[1], entries[0]
+    );
+    assert!(cells_set > 0, "no cluster has cells set");
+    assert!(entries[1] < entries[0], "cells: {entries:?}");
+    // Without the box test, whose depth bounds the cells divide: refused.
+    let case = random_case(61);
+    let r = render(&ctx, &case, w, h);
+    let culler = Culler::new(&ctx, &r.gpu_scene);
+    let settings = CullSettings {
+        tile_boxes: false,
+        ..CullSettings::for_camera(&case.camera)
+    };
+    let s = Strategy::Clustered {
+        tile_size: 16,
+        slices: 16,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered: true,
+        cells: true,
+    };
+    let mut timer = GpuTimer::new(&ctx, 16);
+    let e = culler
+        .run(&ctx, &r.gpu_scene, &r.depth_tex, &s, &settings, &mut timer)
+        .err()
+        .expect("cells without the box test are refused");
+    assert!(e.to_string().contains("cells"), "{e}");
 }

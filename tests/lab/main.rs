@@ -13,7 +13,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 15] = [
+const SHIPPED: [&str; 16] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -29,6 +29,7 @@ const SHIPPED: [&str; 15] = [
     "infinite-range-1m",
     "material-variety",
     "zbin-1m",
+    "cluster-cells-1m",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {

@@ -51,6 +51,7 @@ fn clusters(tile_size: u32, slices: u32) -> Strategy {
         slicing: Slicing::Exponential,
         skip_empty: true,
         ordered: true,
+        cells: false,
     }
 }
 

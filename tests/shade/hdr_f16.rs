@@ -57,6 +57,7 @@ fn the_16_bit_image_is_the_32_bit_image_rounded() {
             slicing: Slicing::Exponential,
             skip_empty: false,
             ordered: true,
+            cells: false,
         };
         for strategy in [
             Strategy::tiled_gather(8),

@@ -68,6 +68,7 @@ fn strategies() -> [Strategy; 6] {
             slicing: Slicing::Exponential,
             skip_empty: true,
             ordered: true,
+            cells: false,
         },
         // Deferred lighting walks z-binning's masks a workgroup at a time where its 8 x 8 pixels
         // lie in one tile, and a pixel at a time otherwise: both.
@@ -372,6 +373,7 @@ fn ordered_strategies_render_bit_identical_frames() {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered: true,
+        cells: false,
     };
     let zbin = Strategy::ZBin {
         tile_size: 8,
@@ -386,6 +388,7 @@ fn ordered_strategies_render_bit_identical_frames() {
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered: true,
+        cells: false,
     };
     let cases = [
         (&small, zbin),

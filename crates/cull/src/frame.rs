@@ -65,8 +65,9 @@ impl<'a> Frame<'a> {
             cursors: storage_buf(ctx, Buf::Cursors.name(), bins * 4),
             ranges: storage_buf(ctx, Buf::Ranges.name(), bins * 8),
             // A flag a bin, then (clusters with the box test) its pixels' depth bounds, then
-            // (CULL_FLAG_SLICE_MASKS) each tile's mask of occupied slices, two words.
-            occupancy: storage_buf(ctx, Buf::Occupancy.name(), bins * 12 + tiles * 8),
+            // (CULL_FLAG_SLICE_MASKS) each tile's mask of occupied slices, two words, then (the
+            // clusters' cells, CULL_FLAG_DEPTH_MASK) a word a bin.
+            occupancy: storage_buf(ctx, Buf::Occupancy.name(), bins * 16 + tiles * 8),
             stats: storage_buf(ctx, Buf::Stats.name(), 48),
             span: format!("cull.{}", strategy.name()),
         }

@@ -130,6 +130,14 @@ pub enum Strategy {
         /// sets, one pass less).
         #[serde(default = "default_ordered")]
         ordered: bool,
+        /// 2.5D cells inside each cluster (Harada 2012's depth masks, a cluster at a time;
+        /// `cull.clustered.cells`): each cluster's pixels' depth range in 32 cells, a bit a
+        /// cell its pixels fall in, and a light kept only where its depth extent's cells meet
+        /// them. Lists a subset of those without; needs the box test (`tile_boxes`, on by
+        /// default), whose depth bounds of a cluster's pixels the cells divide, and takes the
+        /// per-light passes (not the tile path). `false` by default.
+        #[serde(default)]
+        cells: bool,
     },
     /// Z-binning with tile bitmasks (Drobot, SIGGRAPH 2017; Unity URP's Forward+): the lights
     /// sorted by view depth, each depth bin holding the index range of the sorted lights that
@@ -323,6 +331,7 @@ impl Strategy {
                 slicing: Slicing::Exponential,
                 skip_empty: false,
                 ordered: true,
+                cells: false,
             },
             Self::ZBin {
                 tile_size: 16,
@@ -431,11 +440,17 @@ impl Strategy {
                 slices,
                 slicing,
                 skip_empty,
+                cells,
                 ..
             } => (
                 slices,
                 slicing.code(),
-                if skip_empty { CULL_FLAG_SKIP_EMPTY } else { 0 },
+                (if skip_empty { CULL_FLAG_SKIP_EMPTY } else { 0 })
+                    | if cells && tile_boxes {
+                        CULL_FLAG_DEPTH_MASK
+                    } else {
+                        0
+                    },
             ),
         };
         let flags = strategy_flags | if tile_boxes { CULL_FLAG_TILE_BOX } else { 0 };

@@ -208,13 +208,19 @@ impl CullOutput {
 
     /// Reads the cluster occupancy back (meaningful for clusters with `skip_empty` or the box
     /// test): a flag a bin, then two words a bin, the depth bounds of its pixels as
-    /// (`!ordered(dmin)`, `ordered(dmax)`), zero where none ([`crate::cpu::occupancy`]).
+    /// (`!ordered(dmin)`, `ordered(dmax)`), zero where none ([`crate::cpu::occupancy`]); then
+    /// two words a tile (its mask of occupied slices, `CULL_FLAG_SLICE_MASKS`), then a word a
+    /// bin, its 2.5D cells (`Strategy::Clustered::cells`, [`crate::cpu::cluster_cells`]).
     pub fn read_occupancy(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        let (bins, tiles) = (
+            u64::from(self.params.bins),
+            u64::from(self.params.tiles_x * self.params.tiles_y),
+        );
         Ok(bytemuck::pod_collect_to_vec(&readback::read_buffer(
             ctx,
             &self.occupancy,
             0,
-            u64::from(self.params.bins) * 12,
+            bins * 16 + tiles * 8,
         )?))
     }
 }

@@ -76,11 +76,13 @@ fn strategy_label(s: &Strategy) -> String {
             slicing,
             skip_empty,
             ordered,
+            cells,
         } => format!(
-            "clustered{tile_size}x{slices}{}{}{}",
+            "clustered{tile_size}x{slices}{}{}{}{}",
             slicing_label(slicing),
             if skip_empty { "skip" } else { "" },
-            if ordered { "" } else { "unordered" }
+            if ordered { "" } else { "unordered" },
+            if cells { "cells" } else { "" }
         ),
         Strategy::ZBin {
             tile_size,
@@ -114,11 +116,14 @@ pub fn params_label(c: &Config) -> String {
             slicing,
             skip_empty,
             ordered,
+            cells,
         } => {
-            // `ordered` is the default: named only when off, so that labels stay as they were.
+            // `ordered` is the default: named only when off, and `cells` only when on, so that
+            // labels stay as they were.
             let unordered = if ordered { "" } else { ";ordered=false" };
+            let cells = if cells { ";cells=true" } else { "" };
             format!(
-                "tile_size={tile_size};slices={slices};slicing={slicing:?};skip_empty={skip_empty}{unordered}"
+                "tile_size={tile_size};slices={slices};slicing={slicing:?};skip_empty={skip_empty}{unordered}{cells}"
             )
             .to_lowercase()
         }

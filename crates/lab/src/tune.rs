@@ -82,6 +82,7 @@ pub fn candidates() -> Vec<Strategy> {
                 slicing: Slicing::Exponential,
                 skip_empty: false,
                 ordered: true,
+                cells: false,
             });
         }
     }

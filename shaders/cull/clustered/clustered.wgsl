@@ -96,8 +96,25 @@ fn cluster_box_keeps(l: CullLight, tile: vec2<u32>, bin: u32) -> bool {
     if far == 0u {
         return false;
     }
-    let t = cluster_depth(atomicLoad(&occupancy[at]), far);
+    var t = cluster_depth(atomicLoad(&occupancy[at]), far);
+    t.mask = cells_of(bin);
     return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, tile_box(tile, t));
+}
+
+// The first occupancy word of the clusters' 2.5D cells (after the flags, the depth bounds and
+// the tiles' slice masks): cluster `bin`'s at cells_at() + bin.
+fn cells_at() -> u32 {
+    return 3u * cull.bins + 2u * cull.tiles_x * cull.tiles_y;
+}
+
+// Cluster `bin`'s 2.5D cells with CULL_FLAG_DEPTH_MASK (cull.clustered.cells: a bit for each of
+// the 32 cells of its pixels' depth range that holds a pixel), which depth_keeps tests the
+// light's cells against; 0 (unused) otherwise.
+fn cells_of(bin: u32) -> u32 {
+    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
+        return atomicLoad(&occupancy[cells_at() + bin]);
+    }
+    return 0u;
 }
 
 // A cluster's pixels' depth bounds from its occupancy words (nearest as ~ordered bits,
@@ -124,7 +141,8 @@ fn stored_box_keeps(l: CullLight, bin: u32) -> bool {
     if far == 0u {
         return false;
     }
-    let t = cluster_depth(cluster_aux[at + 3u], far);
+    var t = cluster_depth(cluster_aux[at + 3u], far);
+    t.mask = cells_of(bin);
     let lo = vec3<f32>(bitcast<f32>(cluster_aux[at]), bitcast<f32>(cluster_aux[at + 1u]), bitcast<f32>(cluster_aux[at + 2u]));
     let hi = vec3<f32>(bitcast<f32>(cluster_aux[at + 4u]), bitcast<f32>(cluster_aux[at + 5u]), bitcast<f32>(cluster_aux[at + 6u]));
     return depth_keeps(l, t) && sphere_meets_box(l.center, l.radius + l.slack, array<vec3<f32>, 2>(lo, hi));
@@ -427,6 +445,42 @@ fn clustered_wide_args() {
 // farthest depth as the occupancy stores them.
 var<workgroup> wg_occ: array<atomic<u32>, 4>;
 
+// A pixel's nearest and farthest covered sample (MSAA: of DEPTH_SAMPLES; one otherwise), their
+// bins and linear depths: its clusters are every one from the nearest sample's to the
+// farthest's (pixel_slice_range says why). b0 past the last bin where nothing is covered.
+struct PixelDepths {
+    covered: bool,
+    b0: u32,
+    b1: u32,
+    d0: f32,
+    d1: f32,
+}
+
+fn pixel_depths(p: vec2<u32>) -> PixelDepths {
+    let inside = all(p < vec2<u32>(frame.viewport.xy));
+    var z0 = 1.0;
+    var z1 = 0.0;
+    if inside {
+        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
+            let z = depth_at(p, sample_k);
+            if z < 1.0 {
+                z0 = min(z0, z);
+                z1 = max(z1, z);
+            }
+        }
+    }
+    let b0 = bin_of(p, z0);
+    let d0 = linear_depth(z0);
+    // With one sample a pixel (DEPTH_SAMPLES is a constant) z1 is z0: not computed again.
+    var b1 = b0;
+    var d1 = d0;
+    if DEPTH_SAMPLES > 1u {
+        b1 = bin_of(p, z1);
+        d1 = linear_depth(z1);
+    }
+    return PixelDepths(z0 < 1.0, b0, b1, d0, d1);
+}
+
 // Where a workgroup's 8 x 8 pixels fall in one cluster (most of them: a cluster is a tile of
 // several such blocks, and neighbouring pixels mostly share a slice), its first thread writes
 // the cluster's flag and bounds once; elsewhere each pixel writes its own. (Every pixel of a
@@ -440,32 +494,12 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
         atomicStore(&wg_occ[3], 0u);
     }
     workgroupBarrier();
-    let p = id.xy;
-    let inside = all(p < vec2<u32>(frame.viewport.xy));
-    // The pixel's nearest and farthest covered sample (MSAA: of DEPTH_SAMPLES; one otherwise),
-    // and its clusters: every one from the nearest sample's to the farthest's
-    // (pixel_slice_range says why).
-    var z0 = 1.0;
-    var z1 = 0.0;
-    if inside {
-        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-            let z = depth_at(p, sample_k);
-            if z < 1.0 {
-                z0 = min(z0, z);
-                z1 = max(z1, z);
-            }
-        }
-    }
-    let covered = z0 < 1.0;
-    let b0 = bin_of(p, z0);
-    let d0 = linear_depth(z0);
-    // With one sample a pixel (DEPTH_SAMPLES is a constant) z1 is z0: not computed again.
-    var b1 = b0;
-    var d1 = d0;
-    if DEPTH_SAMPLES > 1u {
-        b1 = bin_of(p, z1);
-        d1 = linear_depth(z1);
-    }
+    let px = pixel_depths(id.xy);
+    let covered = px.covered;
+    let b0 = px.b0;
+    let b1 = px.b1;
+    let d0 = px.d0;
+    let d1 = px.d1;
     if covered {
         atomicMin(&wg_occ[0], b0);
         atomicMax(&wg_occ[1], b1);
@@ -499,5 +533,50 @@ fn cluster_occupancy(@builtin(global_invocation_id) id: vec3<u32>, @builtin(loca
                 atomicMax(&occupancy[cull.bins + 2u * bin + 1u], ordered_bits(r.y));
             }
         }
+    }
+}
+
+// cull.clustered.cells (with CULL_FLAG_DEPTH_MASK, after cull.occupancy): each covered pixel
+// sets, in each of its clusters, the bits of the 2.5D cells its depths there fall in (its part
+// of the pixel's depths, pixel_slice_range; depth_cell over the cluster's pixels' depth bounds
+// from cull.occupancy). A light's cells (light_depth_mask, over the same bounds) that hold a
+// pixel's depth hold its cell: floor is monotone. Where the workgroup's pixels fall in one
+// cluster, they gather their bits in workgroup memory and the first thread stores them once.
+var<workgroup> wg_cells: atomic<u32>;
+
+@compute @workgroup_size(8, 8)
+fn cluster_cells(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    if li == 0u {
+        atomicStore(&wg_occ[0], 0xffffffffu);
+        atomicStore(&wg_occ[1], 0u);
+        atomicStore(&wg_cells, 0u);
+    }
+    workgroupBarrier();
+    let px = pixel_depths(id.xy);
+    if px.covered {
+        atomicMin(&wg_occ[0], px.b0);
+        atomicMax(&wg_occ[1], px.b1);
+    }
+    workgroupBarrier();
+    let first = atomicLoad(&wg_occ[0]);
+    let one = first == atomicLoad(&wg_occ[1]);
+    if px.covered {
+        let tiles = cull.tiles_x * cull.tiles_y;
+        for (var bin = px.b0; bin <= px.b1; bin += tiles) {
+            let r = pixel_slice_range(bin / tiles, px.b0 / tiles, px.b1 / tiles, px.d0, px.d1);
+            let at = cull.bins + 2u * bin;
+            let t = cluster_depth(atomicLoad(&occupancy[at]), atomicLoad(&occupancy[at + 1u]));
+            let scale = depth_cell_scale(t);
+            let bits = bit_range(depth_cell(r.x, t.dmin, scale), depth_cell(r.y, t.dmin, scale));
+            if one {
+                atomicOr(&wg_cells, bits);
+            } else {
+                atomicOr(&occupancy[cells_at() + bin], bits);
+            }
+        }
+    }
+    workgroupBarrier();
+    if one && li == 0u && first < cull.bins {
+        atomicOr(&occupancy[cells_at() + first], atomicLoad(&wg_cells));
     }
 }

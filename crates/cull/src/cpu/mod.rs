@@ -12,7 +12,10 @@ use crate::geometry::{
     self, CullLight, bin_of, depth_cell, depth_cell_scale, light_depth_extent, light_tiles,
     line_planes, linear_depth, outside_plane, tile_box, tile_keeps, tile_side_planes, zbin,
 };
-use crate::layout::{CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, GpuCullParams, GpuTileDepth, ZBINS};
+use crate::layout::{
+    CULL_FLAG_DEPTH_MASK, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_TILE_BOX, GpuCullParams, GpuTileDepth,
+    ZBINS,
+};
 
 mod zbin;
 pub use zbin::{zbin_keys, zbin_lists, zbin_order, zbin_ranges};
@@ -284,8 +287,63 @@ pub fn occupancy_samples(
     occ
 }
 
+/// The first occupancy word of the clusters' 2.5D cells (WGSL `cells_at`): after a flag a
+/// bin, two depth bounds a bin and two slice-mask words a tile.
+fn cells_at(p: &GpuCullParams) -> usize {
+    (3 * p.bins + 2 * p.tiles_x * p.tiles_y) as usize
+}
+
+/// Oracle of `cull.clustered.cells` (`Strategy::Clustered::cells`), given the occupancy's depth
+/// bounds (from the GPU pass, so that this checks the cells alone): each cluster's bits of the
+/// 32 cells of its pixels' depth range that its pixels' depths fall in (a pixel of several
+/// samples: its part of their range in each of its clusters, `geometry::pixel_slice_range`).
+/// A word a bin.
+pub fn cluster_cells(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    depth: &[f32],
+    (w, h): (u32, u32),
+    samples: u32,
+    occupancy: &[u32],
+) -> Vec<u32> {
+    let tiles = p.tiles_x * p.tiles_y;
+    let mut cells = vec![0u32; p.bins as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let at = ((y * w + x) * samples) as usize;
+            let covered = depth[at..at + samples as usize]
+                .iter()
+                .filter(|&&z| z < 1.0);
+            let (z0, z1) = covered.fold((1.0f32, 0.0f32), |(a, b), &z| (a.min(z), b.max(z)));
+            if z0 >= 1.0 {
+                continue;
+            }
+            let (b0, b1) = (bin_of(frame, p, [x, y], z0), bin_of(frame, p, [x, y], z1));
+            let d = [linear_depth(frame, z0), linear_depth(frame, z1)];
+            for b in (b0..=b1).step_by(tiles as usize) {
+                let [lo, hi] =
+                    geometry::pixel_slice_range(p, b / tiles, [b0 / tiles, b1 / tiles], d);
+                let k = (p.bins + 2 * b) as usize;
+                let t = GpuTileDepth {
+                    dmin: geometry::from_ordered_bits(!occupancy[k]),
+                    dmax: geometry::from_ordered_bits(occupancy[k + 1]),
+                    mask: 0,
+                    covered: 1,
+                };
+                let scale = depth_cell_scale(&t);
+                cells[b as usize] |= geometry::bit_range(
+                    depth_cell(lo, t.dmin, scale),
+                    depth_cell(hi, t.dmin, scale),
+                );
+            }
+        }
+    }
+    cells
+}
+
 /// With the box test, whether light `l` may reach a pixel of cluster `bin` of tile `tile`
-/// (WGSL `cluster_box_keeps`), from the occupancy's depth bounds.
+/// (WGSL `cluster_box_keeps`), from the occupancy's depth bounds (and with
+/// `CULL_FLAG_DEPTH_MASK` its 2.5D cells).
 fn cluster_box_keeps(
     frame: &GpuFrame,
     p: &GpuCullParams,
@@ -302,7 +360,11 @@ fn cluster_box_keeps(
     let t = GpuTileDepth {
         dmin: geometry::from_ordered_bits(!occupancy[at]),
         dmax: geometry::from_ordered_bits(far),
-        mask: 0,
+        mask: if p.flags & CULL_FLAG_DEPTH_MASK != 0 {
+            occupancy[cells_at(p) + bin as usize]
+        } else {
+            0
+        },
         covered: 1,
     };
     geometry::depth_keeps(p, l, &t)

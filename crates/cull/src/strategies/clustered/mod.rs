@@ -3,7 +3,10 @@
 //! [`crate::cpu::clustered`]). The passes of a run:
 //!
 //! 1. `cull.occupancy` (with `skip_empty` or the box test): the clusters that hold covered
-//!    pixels, and with the box test the depth bounds of each cluster's pixels; then, where the
+//!    pixels, and with the box test the depth bounds of each cluster's pixels; with `cells`,
+//!    `cull.clustered.cells` then sets each cluster's 2.5D cells (a bit for each of the 32
+//!    cells of its pixels' depth range that holds a pixel; `CULL_FLAG_DEPTH_MASK`, which the
+//!    cluster test applies as 2.5D culling does a tile's); then, where the
 //!    boxes fit a binding, `cull.clustered.boxes` stores each cluster's box once
 //!    (`CULL_FLAG_CLUSTER_BOXES`), which the count and fill passes read rather than computing
 //!    it again for every light that reaches the cluster's tile.
@@ -44,134 +47,17 @@ use crate::culler::{RunInputs, Timing};
 use crate::frame::{Frame, Outputs};
 use crate::layout::{
     CLUSTER_MASK_SLICES, CLUSTER_ORDER_BITS_LIGHTS, CLUSTER_TILE_SLICES, CULL_FLAG_CLUSTER_BOXES,
-    CULL_FLAG_ORDER_BITS, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_SLICE_MASKS, CULL_FLAG_SPHERE_BOUNDS,
-    CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
+    CULL_FLAG_DEPTH_MASK, CULL_FLAG_ORDER_BITS, CULL_FLAG_SKIP_EMPTY, CULL_FLAG_SLICE_MASKS,
+    CULL_FLAG_SPHERE_BOUNDS, CULL_FLAG_TILE_BOX, GROUPS_X, GpuCullParams,
 };
-use crate::program::Program;
 use crate::record::{Buf, Dispatch, Step};
 use crate::scan::groups_2d;
 use crate::strategies::Plan;
 use crate::{CullError, CullOutput, Strategy};
 
-/// The clusters' pipelines.
-pub(crate) struct Pipelines {
-    count: wgpu::ComputePipeline,
-    fill: wgpu::ComputePipeline,
-    count_wide: wgpu::ComputePipeline,
-    fill_wide: wgpu::ComputePipeline,
-    wide_args: wgpu::ComputePipeline,
-    order: wgpu::ComputePipeline,
-    /// `cull.clustered.order`'s lists by the bitmap's rank sort, run in its place with
-    /// `CULL_FLAG_ORDER_BITS`.
-    order_bits: wgpu::ComputePipeline,
-    order_short: wgpu::ComputePipeline,
-    order_lists: wgpu::ComputePipeline,
-    order_args: wgpu::ComputePipeline,
-    occupancy: wgpu::ComputePipeline,
-    light_rects: wgpu::ComputePipeline,
-    boxes: wgpu::ComputePipeline,
-    tiles_count: wgpu::ComputePipeline,
-    /// The same, reading `cull.clustered.rects`' rectangles (`CLUSTER_TILE_RECTS`).
-    tiles_count_rects: wgpu::ComputePipeline,
-    masks_fill: wgpu::ComputePipeline,
-    /// The same, its ranges from a cursor (`CLUSTER_FILL_CURSOR`: no scan).
-    masks_fill_cursor: wgpu::ComputePipeline,
-}
+mod pipelines;
 
-impl Pipelines {
-    /// From the clusters' program.
-    pub fn new(d: &wgpu::Device, program: &Program) -> Self {
-        let [
-            count,
-            fill,
-            count_wide,
-            fill_wide,
-            wide_args,
-            order_short,
-            order_lists,
-            order_args,
-            occupancy,
-            light_rects,
-            boxes,
-            tiles_count,
-            masks_fill,
-        ] = program.pipelines(
-            d,
-            [
-                "clustered_count",
-                "clustered_fill",
-                "clustered_count_wide",
-                "clustered_fill_wide",
-                "clustered_wide_args",
-                "cluster_order_short",
-                "cluster_order_lists",
-                "cluster_order_args",
-                "cluster_occupancy",
-                "cluster_light_rects",
-                "cluster_boxes",
-                "cluster_tiles_count",
-                "cluster_masks_fill",
-            ],
-        );
-        Self {
-            count,
-            fill,
-            count_wide,
-            fill_wide,
-            wide_args,
-            order_short,
-            order_lists,
-            order_args,
-            occupancy,
-            light_rects,
-            boxes,
-            tiles_count,
-            tiles_count_rects: program.pipeline_with(
-                d,
-                "cluster_tiles_count",
-                &wgpu::PipelineCompilationOptions {
-                    constants: &[("CLUSTER_TILE_RECTS", 1.0)],
-                    ..Default::default()
-                },
-            ),
-            masks_fill,
-            order: order_pipeline(d, program, "cluster_order"),
-            order_bits: order_pipeline(d, program, "cluster_order_bits"),
-            masks_fill_cursor: program.pipeline_with(
-                d,
-                "cluster_masks_fill",
-                &wgpu::PipelineCompilationOptions {
-                    constants: &[("CLUSTER_FILL_CURSOR", 1.0)],
-                    ..Default::default()
-                },
-            ),
-        }
-    }
-}
-
-/// A long lists' order pass, with [`order_threads`] threads.
-fn order_pipeline(d: &wgpu::Device, program: &Program, entry: &str) -> wgpu::ComputePipeline {
-    program.pipeline_with(
-        d,
-        entry,
-        &wgpu::PipelineCompilationOptions {
-            constants: &[("ORDER_THREADS", f64::from(order_threads(d)))],
-            ..Default::default()
-        },
-    )
-}
-
-/// The threads of the long lists' order pass (`cull.clustered.order`): 512 where the device
-/// allows a workgroup that many, else 256.
-fn order_threads(d: &wgpu::Device) -> u32 {
-    if d.limits().max_compute_invocations_per_workgroup >= 512
-        && d.limits().max_compute_workgroup_size_x >= 512
-    {
-        512
-    } else {
-        256
-    }
-}
+pub(crate) use pipelines::Pipelines;
 
 /// Runs the clusters.
 pub(crate) fn run(
@@ -190,11 +76,22 @@ pub(crate) fn run(
     r.ctx
         .check_storage("clusters' wide-light queue", queue_bytes(r, &params))?;
     let ordered = matches!(r.strategy, Strategy::Clustered { ordered: true, .. });
+    let cells = matches!(r.strategy, Strategy::Clustered { cells: true, .. });
+    if cells && params.flags & CULL_FLAG_TILE_BOX == 0 {
+        return Err(CullError::InvalidParameter {
+            field: "cells",
+            value: "true".into(),
+            accepted: "false where tile_boxes is false (the cells divide each cluster's pixels' \
+                       depth range, which the box test keeps)",
+        });
+    }
     let limits = &r.ctx.limits;
     let binding = limits
         .max_storage_buffer_binding_size
         .min(limits.max_buffer_size);
-    let by_tiles = params.slices <= CLUSTER_TILE_SLICES
+    // (The cells take the per-light passes.)
+    let by_tiles = !cells
+        && params.slices <= CLUSTER_TILE_SLICES
         && params.light_count <= r.culler.cluster_tiles_max_lights
         && pairs(&params) <= crate::CLUSTER_TILES_MAX_PAIRS
         && mask_bytes(&params) <= binding;
@@ -401,6 +298,17 @@ impl Plan for ClusterPlan<'_> {
                 &self.group_a,
                 (w.div_ceil(8), h.div_ceil(8)),
                 &[Buf::Depth],
+                &[Buf::Occupancy],
+            ));
+        }
+        if f.params.flags & CULL_FLAG_DEPTH_MASK != 0 {
+            let (w, h) = f.size;
+            steps.push(Step::pass(
+                "cull.clustered.cells",
+                &g.cells,
+                &self.group_a,
+                (w.div_ceil(8), h.div_ceil(8)),
+                &[Buf::Depth, Buf::Occupancy],
                 &[Buf::Occupancy],
             ));
         }

@@ -1,0 +1,128 @@
+//! The clusters' pipelines, built once from their program (`shaders/cull/clustered/`).
+
+use crate::program::Program;
+
+/// The clusters' pipelines.
+pub(crate) struct Pipelines {
+    pub(super) count: wgpu::ComputePipeline,
+    pub(super) fill: wgpu::ComputePipeline,
+    pub(super) count_wide: wgpu::ComputePipeline,
+    pub(super) fill_wide: wgpu::ComputePipeline,
+    pub(super) wide_args: wgpu::ComputePipeline,
+    pub(super) order: wgpu::ComputePipeline,
+    /// `cull.clustered.order`'s lists by the bitmap's rank sort, run in its place with
+    /// `CULL_FLAG_ORDER_BITS`.
+    pub(super) order_bits: wgpu::ComputePipeline,
+    pub(super) order_short: wgpu::ComputePipeline,
+    pub(super) order_lists: wgpu::ComputePipeline,
+    pub(super) order_args: wgpu::ComputePipeline,
+    pub(super) occupancy: wgpu::ComputePipeline,
+    pub(super) light_rects: wgpu::ComputePipeline,
+    pub(super) boxes: wgpu::ComputePipeline,
+    /// `cull.clustered.cells`: each cluster's 2.5D cells (`Strategy::Clustered::cells`).
+    pub(super) cells: wgpu::ComputePipeline,
+    pub(super) tiles_count: wgpu::ComputePipeline,
+    /// The same, reading `cull.clustered.rects`' rectangles (`CLUSTER_TILE_RECTS`).
+    pub(super) tiles_count_rects: wgpu::ComputePipeline,
+    pub(super) masks_fill: wgpu::ComputePipeline,
+    /// The same, its ranges from a cursor (`CLUSTER_FILL_CURSOR`: no scan).
+    pub(super) masks_fill_cursor: wgpu::ComputePipeline,
+}
+
+impl Pipelines {
+    /// From the clusters' program.
+    pub fn new(d: &wgpu::Device, program: &Program) -> Self {
+        let [
+            count,
+            fill,
+            count_wide,
+            fill_wide,
+            wide_args,
+            order_short,
+            order_lists,
+            order_args,
+            occupancy,
+            light_rects,
+            boxes,
+            cells,
+            tiles_count,
+            masks_fill,
+        ] = program.pipelines(
+            d,
+            [
+                "clustered_count",
+                "clustered_fill",
+                "clustered_count_wide",
+                "clustered_fill_wide",
+                "clustered_wide_args",
+                "cluster_order_short",
+                "cluster_order_lists",
+                "cluster_order_args",
+                "cluster_occupancy",
+                "cluster_light_rects",
+                "cluster_boxes",
+                "cluster_cells",
+                "cluster_tiles_count",
+                "cluster_masks_fill",
+            ],
+        );
+        Self {
+            count,
+            fill,
+            count_wide,
+            fill_wide,
+            wide_args,
+            order_short,
+            order_lists,
+            order_args,
+            occupancy,
+            light_rects,
+            boxes,
+            cells,
+            tiles_count,
+            tiles_count_rects: program.pipeline_with(
+                d,
+                "cluster_tiles_count",
+                &wgpu::PipelineCompilationOptions {
+                    constants: &[("CLUSTER_TILE_RECTS", 1.0)],
+                    ..Default::default()
+                },
+            ),
+            masks_fill,
+            order: order_pipeline(d, program, "cluster_order"),
+            order_bits: order_pipeline(d, program, "cluster_order_bits"),
+            masks_fill_cursor: program.pipeline_with(
+                d,
+                "cluster_masks_fill",
+                &wgpu::PipelineCompilationOptions {
+                    constants: &[("CLUSTER_FILL_CURSOR", 1.0)],
+                    ..Default::default()
+                },
+            ),
+        }
+    }
+}
+
+/// A long lists' order pass, with [`order_threads`] threads.
+fn order_pipeline(d: &wgpu::Device, program: &Program, entry: &str) -> wgpu::ComputePipeline {
+    program.pipeline_with(
+        d,
+        entry,
+        &wgpu::PipelineCompilationOptions {
+            constants: &[("ORDER_THREADS", f64::from(order_threads(d)))],
+            ..Default::default()
+        },
+    )
+}
+
+/// The threads of the long lists' order pass (`cull.clustered.order`): 512 where the device
+/// allows a workgroup that many, else 256.
+fn order_threads(d: &wgpu::Device) -> u32 {
+    if d.limits().max_compute_invocations_per_workgroup >= 512
+        && d.limits().max_compute_workgroup_size_x >= 512
+    {
+        512
+    } else {
+        256
+    }
+}
