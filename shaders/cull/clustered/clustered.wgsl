@@ -107,11 +107,15 @@ fn cells_at() -> u32 {
     return 3u * cull.bins + 2u * cull.tiles_x * cull.tiles_y;
 }
 
-// Cluster `bin`'s 2.5D cells with CULL_FLAG_DEPTH_MASK (cull.clustered.cells: a bit for each of
+// Whether the pipeline tests the clusters' cells (their runs set CULL_FLAG_DEPTH_MASK): a
+// constant, so that the pipelines without them test no flag at every (light, cluster).
+override CLUSTER_CELLS: bool = false;
+
+// Cluster `bin`'s 2.5D cells in a CLUSTER_CELLS pipeline (cull.clustered.cells: a bit for each of
 // the 32 cells of its pixels' depth range that holds a pixel), which depth_keeps tests the
 // light's cells against; 0 (unused) otherwise.
 fn cells_of(bin: u32) -> u32 {
-    if (cull.flags & CULL_FLAG_DEPTH_MASK) != 0u {
+    if CLUSTER_CELLS {
         return atomicLoad(&occupancy[cells_at() + bin]);
     }
     return 0u;

@@ -237,6 +237,13 @@ impl<'a> ClusterPlan<'a> {
     }
 }
 
+impl ClusterPlan<'_> {
+    /// Which per-light pipelines run: with the cells (`CULL_FLAG_DEPTH_MASK`) or without.
+    fn cells(&self) -> usize {
+        usize::from(self.f.params.flags & CULL_FLAG_DEPTH_MASK != 0)
+    }
+}
+
 impl Plan for ClusterPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
         let (f, c) = (self.f, self.r.culler);
@@ -325,7 +332,7 @@ impl Plan for ClusterPlan<'_> {
         steps.extend([
             Step::pass(
                 "cull.clustered.count",
-                &g.count,
+                &g.per_light[self.cells()].count,
                 &self.group_a,
                 self.light_groups(),
                 self.reads(
@@ -344,7 +351,7 @@ impl Plan for ClusterPlan<'_> {
             ),
             Step::pass(
                 "cull.clustered.count_wide",
-                &g.count_wide,
+                &g.per_light[self.cells()].count_wide,
                 &self.group_a,
                 Dispatch::Indirect(&self.wide_args, 0),
                 self.reads(
@@ -414,7 +421,7 @@ impl Plan for ClusterPlan<'_> {
         let mut steps = vec![
             Step::pass(
                 "cull.clustered.fill",
-                &g.fill,
+                &g.per_light[self.cells()].fill,
                 group,
                 self.light_groups(),
                 self.reads(
@@ -425,7 +432,7 @@ impl Plan for ClusterPlan<'_> {
             ),
             Step::pass(
                 "cull.clustered.fill_wide",
-                &g.fill_wide,
+                &g.per_light[self.cells()].fill_wide,
                 group,
                 Dispatch::Indirect(&self.wide_args, 0),
                 self.reads(
