@@ -121,7 +121,8 @@ var<workgroup> wg_range_plain: vec2<u32>;
 // (tiles of a multiple of 8 pixels), they share the tile's mask and differ only in their depth
 // bins' ranges: the workgroup walks the mask's bits within the union of its pixels' ranges
 // together, each light loaded once for all of them, and each pixel shades the lights of its own
-// range. (A loop a pixel over its own range, shade_zbin, makes neighbouring threads load
+// range: in a POINT_LIGHTS pipeline from ZBIN_ROUNDS_MIN_LIGHTS lights in rounds
+// (shade_zbin_rounds; layout.rs has the measurements), otherwise one light after another. (A loop a pixel over its own range, shade_zbin, makes neighbouring threads load
 // different lights at once.) Other tile sizes take the loop a pixel.
 fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     if cull.tile_size % 8u != 0u {
@@ -141,11 +142,18 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     let z = t.z;
     let covered = z < 1.0;
     var cell = ZBinCell(0u, 1u, 0u);
+    var c = vec3<f32>(0.0);
+    var s: Surface;
     if covered {
         cell = zbin_cell(pixel, z);
         if cell.first < cell.end {
             atomicMax(&wg_range[0], ~cell.first);
             atomicMax(&wg_range[1], cell.end);
+        }
+        s = surface(pixel, t, stored);
+        c = emitted(s.m);
+        if POINT_LIGHTS {
+            widen_part_box(li, s.p);
         }
     }
     workgroupBarrier();
@@ -153,13 +161,11 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
         wg_range_plain = vec2<u32>(~atomicLoad(&wg_range[0]), atomicLoad(&wg_range[1]));
     }
     let range = workgroupUniformLoad(&wg_range_plain);
-    var c = vec3<f32>(0.0);
-    var s: Surface;
-    if covered {
-        s = surface(pixel, t, stored);
-        c = emitted(s.m);
-    }
-    if range.x < range.y {
+    if range.x < range.y && POINT_LIGHTS && cull.light_count >= ZBIN_ROUNDS_MIN_LIGHTS {
+        let tile = group * 8u / cull.tile_size;
+        let group_cell = ZBinCell(cull.light_count + (tile.y * cull.tiles_x + tile.x) * zbin_words(), range.x, range.y);
+        c = shade_zbin_rounds(group_cell, li, covered, cell, s, c);
+    } else if range.x < range.y {
         let tile = group * 8u / cull.tile_size;
         let group_cell = ZBinCell(cull.light_count + (tile.y * cull.tiles_x + tile.x) * zbin_words(), range.x, range.y);
         let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
@@ -184,6 +190,85 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     if inside {
         textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(lights_checked(c), 1.0), covered));
     }
+}
+
+
+// The slot of each thread in a round of shade_zbin_rounds: its sorted light, or ZBIN_NO_SLOT.
+const ZBIN_NO_SLOT: u32 = 0xffffffffu;
+var<workgroup> wg_zslot: array<u32, POINT_BATCH>;
+// Whether a thread has bits left after a round: two words, a round's and the next's, so that one
+// is cleared while the other is set.
+var<workgroup> wg_zmore: array<atomic<u32>, 2>;
+var<workgroup> wg_zmore_plain: u32;
+
+// Z-binning's lights of a workgroup in a POINT_LIGHTS pipeline (shade_zbin_group). The words of
+// the union of its pixels' ranges (`group`) are split into POINT_BATCH runs, one a thread; in
+// each round every thread walks its run to its next set bit and loads that light into its slot
+// of wg_points (one load a thread, side by side, where the workgroup walking the bits together
+// loads one light after another), kept where it may reach the workgroup's box of pixels
+// (part_box_holds); then each pixel shades the slots' lights of its own range, in slot order
+// (the same order every run). The rounds go on while any thread has bits left.
+fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: Surface, c_in: vec3<f32>) -> vec3<f32> {
+    var c = c_in;
+    let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
+    let first = group.first / 32u;
+    let words = (group.end - 1u) / 32u + 1u - first;
+    let run = (words + POINT_BATCH - 1u) / POINT_BATCH;
+    var w = first + min(li * run, words);
+    let end = first + min(li * run + run, words);
+    var bits = 0u;
+    if w < end {
+        bits = zbin_bits(group, w);
+    }
+    var parity = 0u;
+    loop {
+        while bits == 0u && w + 1u < end {
+            w += 1u;
+            bits = zbin_bits(group, w);
+        }
+        var slot = ZBIN_NO_SLOT;
+        if bits != 0u {
+            let k = 32u * w + firstTrailingBit(bits);
+            bits &= bits - 1u;
+            let i = light_indices[k];
+            let q = vec4<f32>(lights[i].position, lights[i].radius);
+            if infinite || part_box_holds(0u, q.xyz, q.w) {
+                wg_points[li] = array<vec4<f32>, 2>(q, vec4<f32>(lights[i].color, lights[i].intensity));
+                slot = k;
+            }
+        }
+        wg_zslot[li] = slot;
+        if bits != 0u || w + 1u < end {
+            atomicStore(&wg_zmore[parity], 1u);
+        }
+        workgroupBarrier();
+        if li == 0u {
+            wg_zmore_plain = atomicLoad(&wg_zmore[parity]);
+            atomicStore(&wg_zmore[1u - parity], 0u);
+        }
+        let more = workgroupUniformLoad(&wg_zmore_plain);
+        parity = 1u - parity;
+        for (var j = 0u; takes && j < POINT_BATCH; j++) {
+            let k = wg_zslot[j];
+            // (ZBIN_NO_SLOT lies past every range.)
+            if k < cell.first || k >= cell.end {
+                continue;
+            }
+            let q = wg_points[j];
+            let light = point_light(q[0], q[1]);
+            let to_light = light.position - s.p;
+            let d = length(to_light);
+            if !infinite && d >= light.radius {
+                continue;
+            }
+            c += shade_listed(light, to_light, d, s.n, s.v, s.m);
+        }
+        workgroupBarrier();
+        if more == 0u {
+            break;
+        }
+    }
+    return c;
 }
 
 // The lights a workgroup holds in workgroup memory at a time (shade_tile_group,

@@ -3,7 +3,9 @@
 //! lists (`ListForm::Bins`, `shade_list`): the same image, bit for bit, with lists shorter and
 //! longer than the workgroup's memory holds, and with a workgroup's pixels in several slices.
 
-use manylights_cull::layout::{CLUSTER_GROUP_MIN_LIGHTS, CLUSTER_GROUP_SLICES};
+use manylights_cull::layout::{
+    CLUSTER_GROUP_MIN_LIGHTS, CLUSTER_GROUP_SLICES, ZBIN_ROUNDS_MIN_LIGHTS,
+};
 use manylights_cull::{CullOutput, ListForm, ListPass};
 
 use super::*;
@@ -212,6 +214,69 @@ fn cluster_list_form_follows_the_grid_and_the_lights() {
                 "{} with {count} lights",
                 strategy.name()
             );
+        }
+    }
+}
+
+/// Deferred lighting over z-binning's lists a workgroup at a time in a point-light pipeline,
+/// below `ZBIN_ROUNDS_MIN_LIGHTS` lights by the workgroup's one walk and from there in rounds
+/// (`shade_zbin_rounds`: each thread walks its run of the mask's words and loads a light a
+/// round), against gather's lists of the same tiles (`shade_tile_group`): both sum, at each
+/// pixel, the lights within range, in other orders, so the images agree to rounding (a light
+/// missed or shaded twice would not), with several rounds' worth of lights a workgroup.
+#[test]
+fn zbin_group_lighting_matches_the_tile_lists() {
+    let ctx = common::gpu();
+    let (w, h) = (70, 45);
+    let many = ZBIN_ROUNDS_MIN_LIGHTS + 100;
+    for s in [
+        atrium_lights(700, 0.1),
+        atrium_lights(many, 0.02),
+        atrium_lights(many, 0.05),
+    ] {
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        assert!(renderer.point_lights());
+        let settings = CullSettings::for_camera(&s.camera);
+        for tile_size in [8, 16] {
+            let render = |strategy: Strategy| {
+                renderer
+                    .render(
+                        &ctx,
+                        &gpu_scene,
+                        Backend::Deferred,
+                        &strategy,
+                        &settings,
+                        (w, h),
+                    )
+                    .unwrap()
+            };
+            let zbin = render(Strategy::ZBin {
+                tile_size,
+                bins: 32,
+                slicing: Slicing::Exponential,
+            });
+            assert_eq!(zbin.lists.as_ref().unwrap().form(), ListForm::ZBin);
+            let gather = render(Strategy::tiled_gather(tile_size));
+            let peak = gather
+                .color
+                .data
+                .iter()
+                .flat_map(|p| p[..3].iter().copied())
+                .fold(0.0f32, f32::max);
+            let what = format!("zbin {tile_size} px, {} lights", s.lights.len());
+            let mut lit = 0;
+            for (k, (a, b)) in zbin.color.data.iter().zip(&gather.color.data).enumerate() {
+                for ch in 0..4 {
+                    let (x, y) = (a[ch], b[ch]);
+                    assert!(
+                        (x - y).abs() <= 1e-4 * x.abs().max(y.abs()) + 1e-6 * peak,
+                        "{what}: pixel {k} channel {ch}: {x} against {y}"
+                    );
+                }
+                lit += usize::from(b[0] > 1e-3 * peak);
+            }
+            assert!(lit > (w * h) as usize / 4, "{what}: {lit} pixels lit");
         }
     }
 }
