@@ -237,6 +237,41 @@ pub fn tile_lines(frame: &GpuFrame, p: &GpuCullParams, lights: &[GpuLight]) -> [
     })
 }
 
+/// Calls `f` for each cluster of each covered pixel of a depth buffer of `samples` samples a
+/// pixel, with the pixel's part of its depths there (linear; `geometry::pixel_slice_range`): a
+/// pixel holds every cluster of its tile from its nearest covered sample's slice to its
+/// farthest's.
+fn for_pixel_clusters(
+    frame: &GpuFrame,
+    p: &GpuCullParams,
+    depth: &[f32],
+    (w, h): (u32, u32),
+    samples: u32,
+    mut f: impl FnMut(u32, [f32; 2]),
+) {
+    let tiles = p.tiles_x * p.tiles_y;
+    for y in 0..h {
+        for x in 0..w {
+            let at = ((y * w + x) * samples) as usize;
+            let covered = depth[at..at + samples as usize]
+                .iter()
+                .filter(|&&z| z < 1.0);
+            let (z0, z1) = covered.fold((1.0f32, 0.0f32), |(a, b), &z| (a.min(z), b.max(z)));
+            if z0 >= 1.0 {
+                continue;
+            }
+            let (b0, b1) = (bin_of(frame, p, [x, y], z0), bin_of(frame, p, [x, y], z1));
+            let d = [linear_depth(frame, z0), linear_depth(frame, z1)];
+            for b in (b0..=b1).step_by(tiles as usize) {
+                f(
+                    b,
+                    geometry::pixel_slice_range(p, b / tiles, [b0 / tiles, b1 / tiles], d),
+                );
+            }
+        }
+    }
+}
+
 /// Oracle of `cull.occupancy`: 1 for each cluster holding a covered pixel, and after the bins'
 /// flags, with the box test, two words a bin: its pixels' depth bounds as
 /// (`!ordered_bits(dmin)`, `ordered_bits(dmax)`), zero where none (a GPU's `linear_depth` may
@@ -258,32 +293,15 @@ pub fn occupancy_samples(
     samples: u32,
 ) -> Vec<u32> {
     let bins = p.bins as usize;
-    let tiles = p.tiles_x * p.tiles_y;
     let mut occ = vec![0u32; bins * 3];
-    for y in 0..h {
-        for x in 0..w {
-            let at = ((y * w + x) * samples) as usize;
-            let covered = depth[at..at + samples as usize]
-                .iter()
-                .filter(|&&z| z < 1.0);
-            let (z0, z1) = covered.fold((1.0f32, 0.0f32), |(a, b), &z| (a.min(z), b.max(z)));
-            if z0 >= 1.0 {
-                continue;
-            }
-            let (b0, b1) = (bin_of(frame, p, [x, y], z0), bin_of(frame, p, [x, y], z1));
-            let d = [linear_depth(frame, z0), linear_depth(frame, z1)];
-            for b in (b0..=b1).step_by(tiles as usize) {
-                let k = b as usize;
-                occ[k] = 1;
-                if p.flags & CULL_FLAG_TILE_BOX != 0 {
-                    let [lo, hi] =
-                        geometry::pixel_slice_range(p, b / tiles, [b0 / tiles, b1 / tiles], d);
-                    occ[bins + 2 * k] = occ[bins + 2 * k].max(!geometry::ordered_bits(lo));
-                    occ[bins + 2 * k + 1] = occ[bins + 2 * k + 1].max(geometry::ordered_bits(hi));
-                }
-            }
+    for_pixel_clusters(frame, p, depth, (w, h), samples, |b, [lo, hi]| {
+        let k = b as usize;
+        occ[k] = 1;
+        if p.flags & CULL_FLAG_TILE_BOX != 0 {
+            occ[bins + 2 * k] = occ[bins + 2 * k].max(!geometry::ordered_bits(lo));
+            occ[bins + 2 * k + 1] = occ[bins + 2 * k + 1].max(geometry::ordered_bits(hi));
         }
-    }
+    });
     occ
 }
 
@@ -306,38 +324,19 @@ pub fn cluster_cells(
     samples: u32,
     occupancy: &[u32],
 ) -> Vec<u32> {
-    let tiles = p.tiles_x * p.tiles_y;
     let mut cells = vec![0u32; p.bins as usize];
-    for y in 0..h {
-        for x in 0..w {
-            let at = ((y * w + x) * samples) as usize;
-            let covered = depth[at..at + samples as usize]
-                .iter()
-                .filter(|&&z| z < 1.0);
-            let (z0, z1) = covered.fold((1.0f32, 0.0f32), |(a, b), &z| (a.min(z), b.max(z)));
-            if z0 >= 1.0 {
-                continue;
-            }
-            let (b0, b1) = (bin_of(frame, p, [x, y], z0), bin_of(frame, p, [x, y], z1));
-            let d = [linear_depth(frame, z0), linear_depth(frame, z1)];
-            for b in (b0..=b1).step_by(tiles as usize) {
-                let [lo, hi] =
-                    geometry::pixel_slice_range(p, b / tiles, [b0 / tiles, b1 / tiles], d);
-                let k = (p.bins + 2 * b) as usize;
-                let t = GpuTileDepth {
-                    dmin: geometry::from_ordered_bits(!occupancy[k]),
-                    dmax: geometry::from_ordered_bits(occupancy[k + 1]),
-                    mask: 0,
-                    covered: 1,
-                };
-                let scale = depth_cell_scale(&t);
-                cells[b as usize] |= geometry::bit_range(
-                    depth_cell(lo, t.dmin, scale),
-                    depth_cell(hi, t.dmin, scale),
-                );
-            }
-        }
-    }
+    for_pixel_clusters(frame, p, depth, (w, h), samples, |b, [lo, hi]| {
+        let k = (p.bins + 2 * b) as usize;
+        let t = GpuTileDepth {
+            dmin: geometry::from_ordered_bits(!occupancy[k]),
+            dmax: geometry::from_ordered_bits(occupancy[k + 1]),
+            mask: 0,
+            covered: 1,
+        };
+        let scale = depth_cell_scale(&t);
+        cells[b as usize] |=
+            geometry::bit_range(depth_cell(lo, t.dmin, scale), depth_cell(hi, t.dmin, scale));
+    });
     cells
 }
 
