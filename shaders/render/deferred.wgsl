@@ -56,6 +56,18 @@ fn deferred_shade_stored_zbin(@builtin(global_invocation_id) id: vec3<u32>, @bui
     shade_zbin_group(id.xy, wg.xy, li, true);
 }
 
+@compute @workgroup_size(8, 8)
+fn deferred_shade_zbin_rounds(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
+    shade_zbin_rounds_group(id.xy, wg.xy, li, false);
+}
+
+@compute @workgroup_size(8, 8)
+fn deferred_shade_stored_zbin_rounds(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    shading_pixel = id.xy;
+    shade_zbin_rounds_group(id.xy, wg.xy, li, true);
+}
+
 // A covered pixel's surface point (rebuilt from the view depth, or stored), normal, view
 // direction and material.
 struct Surface {
@@ -121,9 +133,9 @@ var<workgroup> wg_range_plain: vec2<u32>;
 // (tiles of a multiple of 8 pixels), they share the tile's mask and differ only in their depth
 // bins' ranges: the workgroup walks the mask's bits within the union of its pixels' ranges
 // together, each light loaded once for all of them, and each pixel shades the lights of its own
-// range: in a POINT_LIGHTS pipeline from ZBIN_ROUNDS_MIN_LIGHTS lights in rounds
-// (shade_zbin_rounds; layout.rs has the measurements), otherwise one light after another. (A loop a pixel over its own range, shade_zbin, makes neighbouring threads load
-// different lights at once.) Other tile sizes take the loop a pixel.
+// range. (A loop a pixel over its own range, shade_zbin, makes neighbouring threads load
+// different lights at once.) Other tile sizes take the loop a pixel. With many lights in a
+// POINT_LIGHTS pipeline the host picks shade_zbin_rounds_group instead.
 fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     if cull.tile_size % 8u != 0u {
         shade_pixel(pixel, stored, true);
@@ -142,18 +154,11 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     let z = t.z;
     let covered = z < 1.0;
     var cell = ZBinCell(0u, 1u, 0u);
-    var c = vec3<f32>(0.0);
-    var s: Surface;
     if covered {
         cell = zbin_cell(pixel, z);
         if cell.first < cell.end {
             atomicMax(&wg_range[0], ~cell.first);
             atomicMax(&wg_range[1], cell.end);
-        }
-        s = surface(pixel, t, stored);
-        c = emitted(s.m);
-        if POINT_LIGHTS {
-            widen_part_box(li, s.p);
         }
     }
     workgroupBarrier();
@@ -161,11 +166,13 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
         wg_range_plain = vec2<u32>(~atomicLoad(&wg_range[0]), atomicLoad(&wg_range[1]));
     }
     let range = workgroupUniformLoad(&wg_range_plain);
-    if range.x < range.y && POINT_LIGHTS && cull.light_count >= ZBIN_ROUNDS_MIN_LIGHTS {
-        let tile = group * 8u / cull.tile_size;
-        let group_cell = ZBinCell(cull.light_count + (tile.y * cull.tiles_x + tile.x) * zbin_words(), range.x, range.y);
-        c = shade_zbin_rounds(group_cell, li, covered, cell, s, c);
-    } else if range.x < range.y {
+    var c = vec3<f32>(0.0);
+    var s: Surface;
+    if covered {
+        s = surface(pixel, t, stored);
+        c = emitted(s.m);
+    }
+    if range.x < range.y {
         let tile = group * 8u / cull.tile_size;
         let group_cell = ZBinCell(cull.light_count + (tile.y * cull.tiles_x + tile.x) * zbin_words(), range.x, range.y);
         let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
@@ -192,6 +199,56 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
     }
 }
 
+// shade_zbin_group in rounds (shade_zbin_rounds), with many lights in a POINT_LIGHTS pipeline
+// (the entry points deferred_shade_zbin_rounds, their pipelines chosen by the host from
+// ZBIN_ROUNDS_MIN_LIGHTS lights; layout.rs has the measurements). Its pixels' surfaces and box
+// come before the barrier, so that the rounds' loads can test the box. An entry point of its
+// own, so that the one walk's pipelines run the code they ran before (with both in one, the
+// hall at 5,000 lights took 2.7% longer).
+fn shade_zbin_rounds_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
+    if cull.tile_size % 8u != 0u || !POINT_LIGHTS {
+        shade_zbin_group(pixel, group, li, stored);
+        return;
+    }
+    if li == 0u {
+        atomicStore(&wg_range[0], 0u);
+        atomicStore(&wg_range[1], 0u);
+    }
+    workgroupBarrier();
+    let inside = all(pixel < vec2<u32>(frame.viewport.xy));
+    var t = NO_TEXELS;
+    if inside {
+        t = load_texels(pixel);
+    }
+    let z = t.z;
+    let covered = z < 1.0;
+    var cell = ZBinCell(0u, 1u, 0u);
+    var c = vec3<f32>(0.0);
+    var s: Surface;
+    if covered {
+        cell = zbin_cell(pixel, z);
+        if cell.first < cell.end {
+            atomicMax(&wg_range[0], ~cell.first);
+            atomicMax(&wg_range[1], cell.end);
+        }
+        s = surface(pixel, t, stored);
+        c = emitted(s.m);
+        widen_part_box(li, s.p);
+    }
+    workgroupBarrier();
+    if li == 0u {
+        wg_range_plain = vec2<u32>(~atomicLoad(&wg_range[0]), atomicLoad(&wg_range[1]));
+    }
+    let range = workgroupUniformLoad(&wg_range_plain);
+    if range.x < range.y {
+        let tile = group * 8u / cull.tile_size;
+        let group_cell = ZBinCell(cull.light_count + (tile.y * cull.tiles_x + tile.x) * zbin_words(), range.x, range.y);
+        c = shade_zbin_rounds(group_cell, li, covered, cell, s, c);
+    }
+    if inside {
+        textureStore(out_color, pixel, select(vec4<f32>(0.0), vec4<f32>(lights_checked(c), 1.0), covered));
+    }
+}
 
 // The slot of each thread in a round of shade_zbin_rounds: its sorted light, or ZBIN_NO_SLOT.
 const ZBIN_NO_SLOT: u32 = 0xffffffffu;

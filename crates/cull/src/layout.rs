@@ -83,7 +83,9 @@ pub const CLUSTER_GROUP_MIN_LIGHTS: u32 = 4096;
 /// side by side): 1M lights in the atrium 4.04 against 8.81 ms (32-pixel tiles) and 3.87
 /// against 9.11 (16); the hall at 50,000 lights 2.98 against 3.64 ms, but at 5,000 601 against
 /// 486 µs and the Forward+ configuration 481 against 363 µs, where a workgroup's lights are few
-/// and a round's barriers cost more than the loads they overlap.
+/// and a round's barriers cost more than the loads they overlap. The rounds have entry points
+/// and pipelines of their own (`shade_zbin_rounds_group`): in the one walk's pipeline they cost
+/// it 1-3% below this count.
 pub const ZBIN_ROUNDS_MIN_LIGHTS: u32 = 16384;
 /// Threads sharing one light's tiles in `cull.tiled_scatter`; each (light, lane) has a count, so
 /// the scan runs over lights x SCATTER_LANES entries.

@@ -217,8 +217,10 @@ pub struct Renderer {
     pub(crate) gbuffer_stored: wgpu::RenderPipeline,
     pub(crate) deferred: wgpu::ComputePipeline,
     pub(crate) deferred_stored: wgpu::ComputePipeline,
-    /// `shade.deferred` over z-binning's lists (rebuilt and stored position).
-    pub(crate) deferred_zbin: [wgpu::ComputePipeline; 2],
+    /// `shade.deferred` over z-binning's lists (rebuilt and stored position; then the same in
+    /// rounds, `shade_zbin_rounds_group`, for a point-light pipeline with at least
+    /// `ZBIN_ROUNDS_MIN_LIGHTS` lights; with MSAA four times the one pipeline).
+    pub(crate) deferred_zbin: [wgpu::ComputePipeline; 4],
     /// `shade.deferred` over a list a tile of a multiple of 8 pixels (rebuilt and stored).
     pub(crate) deferred_tiles: [wgpu::ComputePipeline; 2],
     /// `shade.deferred` over a list a cluster, a workgroup's slices' lists one after another

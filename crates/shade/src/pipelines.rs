@@ -277,7 +277,7 @@ impl Renderer {
                 (
                     bins.clone(),
                     bins.clone(),
-                    [zbin.clone(), zbin],
+                    [zbin.clone(), zbin.clone(), zbin.clone(), zbin],
                     [bins.clone(), bins.clone()],
                     [bins.clone(), bins],
                 )
@@ -286,8 +286,13 @@ impl Renderer {
                 (
                     compute(&def, "deferred_shade"),
                     compute(&def, "deferred_shade_stored"),
-                    ["deferred_shade_zbin", "deferred_shade_stored_zbin"]
-                        .map(|entry| compute(&def, entry)),
+                    [
+                        "deferred_shade_zbin",
+                        "deferred_shade_stored_zbin",
+                        "deferred_shade_zbin_rounds",
+                        "deferred_shade_stored_zbin_rounds",
+                    ]
+                    .map(|entry| compute(&def, entry)),
                     ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
                         .map(|entry| compute(&def, entry)),
                     ["deferred_shade_clusters", "deferred_shade_stored_clusters"]

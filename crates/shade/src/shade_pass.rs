@@ -5,6 +5,7 @@
 //! timed with their culling ([`manylights_cull::Culler::run_repeated_with`], through
 //! [`crate::Renderer::shade_pass`]), so that a frame's culling and shading are measured as one.
 
+use manylights_cull::layout::ZBIN_ROUNDS_MIN_LIGHTS;
 use manylights_cull::{ListForm, ListPass};
 use manylights_gpu::lookup_bounds::BoundsTargets;
 use manylights_gpu::prepass::depth_target_msaa;
@@ -359,7 +360,12 @@ impl ListPass for ShadePass<'_> {
                     match (self.form, self.backend == Backend::DeferredStoredPosition) {
                         (ListForm::Bins, false) => &r.deferred,
                         (ListForm::Bins, true) => &r.deferred_stored,
-                        (ListForm::ZBin, stored) => &r.deferred_zbin[usize::from(stored)],
+                        (ListForm::ZBin, stored) => {
+                            // In rounds with many point lights (`ZBIN_ROUNDS_MIN_LIGHTS`).
+                            let rounds =
+                                r.point_lights && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
+                            &r.deferred_zbin[usize::from(stored) + 2 * usize::from(rounds)]
+                        }
                         (ListForm::Tiles, stored) => &r.deferred_tiles[usize::from(stored)],
                         (ListForm::Clusters, stored) => &r.deferred_clusters[usize::from(stored)],
                     },
