@@ -67,56 +67,15 @@ fn settings() -> Vec<Setting> {
             ..LightSpec::default()
         })
     };
-    let clusters = |ordered| Strategy::Clustered {
-        tile_size: 64,
-        slices: 24,
+    let grid = |tile_size, slices, ordered, cells| Strategy::Clustered {
+        tile_size,
+        slices,
         slicing: Slicing::Exponential,
         skip_empty: false,
         ordered,
-        cells: false,
+        cells,
     };
-    let clusters32 = |ordered| Strategy::Clustered {
-        tile_size: 32,
-        slices: 32,
-        slicing: Slicing::Exponential,
-        skip_empty: false,
-        ordered,
-        cells: false,
-    };
-    let clusters24x48 = |ordered| Strategy::Clustered {
-        tile_size: 24,
-        slices: 48,
-        slicing: Slicing::Exponential,
-        skip_empty: false,
-        ordered,
-        cells: false,
-    };
-    let clusters24x32 = |ordered| Strategy::Clustered {
-        tile_size: 24,
-        slices: 32,
-        slicing: Slicing::Exponential,
-        skip_empty: false,
-        ordered,
-        cells: false,
-    };
-    let with_cells = |s: Strategy| match s {
-        Strategy::Clustered {
-            tile_size,
-            slices,
-            slicing,
-            skip_empty,
-            ordered,
-            ..
-        } => Strategy::Clustered {
-            tile_size,
-            slices,
-            slicing,
-            skip_empty,
-            ordered,
-            cells: true,
-        },
-        other => other,
-    };
+    let clusters = |ordered| grid(64, 24, ordered, false);
     let million = || {
         atrium(LightSpec {
             generator: LightGenerator::Uniform,
@@ -237,14 +196,14 @@ fn settings() -> Vec<Setting> {
             name: "atrium_1m_clustered32x32",
             scene: million(),
             size: full,
-            strategy: clusters32(true),
+            strategy: grid(32, 32, true, false),
             hdr: HdrFormat::F32,
         },
         Setting {
             name: "atrium_1m_clustered32x32_unordered",
             scene: million(),
             size: full,
-            strategy: clusters32(false),
+            strategy: grid(32, 32, false, false),
             hdr: HdrFormat::F32,
         },
         // The fastest grid there in `manylights run` (H100, 2026-11-27, 04:10Z): 24 px x 48
@@ -254,14 +213,14 @@ fn settings() -> Vec<Setting> {
             name: "atrium_1m_clustered24x48",
             scene: million(),
             size: full,
-            strategy: clusters24x48(true),
+            strategy: grid(24, 48, true, false),
             hdr: HdrFormat::F32,
         },
         Setting {
             name: "atrium_1m_clustered24x32",
             scene: million(),
             size: full,
-            strategy: clusters24x32(true),
+            strategy: grid(24, 32, true, false),
             hdr: HdrFormat::F32,
         },
         // The same two grids with the clusters' 2.5D cells (`cells: true`, issue 33).
@@ -269,14 +228,14 @@ fn settings() -> Vec<Setting> {
             name: "atrium_1m_clustered32x32_cells",
             scene: million(),
             size: full,
-            strategy: with_cells(clusters32(true)),
+            strategy: grid(32, 32, true, true),
             hdr: HdrFormat::F32,
         },
         Setting {
             name: "atrium_1m_clustered24x32_cells",
             scene: million(),
             size: full,
-            strategy: with_cells(clusters24x32(true)),
+            strategy: grid(24, 32, true, true),
             hdr: HdrFormat::F32,
         },
         // Z-binning with its masks set a light at a time (`cull.zbin.scatter`): 255 MB of

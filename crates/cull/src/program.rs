@@ -54,13 +54,17 @@ impl Program {
         entries.map(|e| self.pipeline(d, e))
     }
 
-    /// The pipeline of `entry` with `options` (values of the shader's `override` constants).
+    /// The pipeline of `entry` with values of the shader's `override` constants.
     pub fn pipeline_with(
         &self,
         d: &wgpu::Device,
         entry: &str,
-        options: &wgpu::PipelineCompilationOptions<'_>,
+        constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
-        pipeline::compute_with(d, &self.module, &self.layout, entry, options)
+        let options = wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        };
+        pipeline::compute_with(d, &self.module, &self.layout, entry, &options)
     }
 }

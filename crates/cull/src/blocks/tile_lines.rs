@@ -68,16 +68,9 @@ impl TileLines {
 /// Entry point `entry` of `program` built once for each of [`LINE_THREAD_COUNTS`] (the
 /// shader's `LINE_THREADS` override).
 fn line_pipelines(d: &wgpu::Device, program: &Program, entry: &str) -> [wgpu::ComputePipeline; 3] {
-    LINE_THREAD_COUNTS.map(|t| {
-        let constants = [("LINE_THREADS", f64::from(t))];
-        // (Without zeroing workgroup memory, which these passes do not need, measured the same
-        // on an H100.)
-        let options = wgpu::PipelineCompilationOptions {
-            constants: &constants,
-            ..Default::default()
-        };
-        program.pipeline_with(d, entry, &options)
-    })
+    // (Without zeroing workgroup memory, which these passes do not need, measured the same on
+    // an H100.)
+    LINE_THREAD_COUNTS.map(|t| program.pipeline_with(d, entry, &[("LINE_THREADS", f64::from(t))]))
 }
 
 /// The pipeline of `set` for `light_count` lights ([`line_threads`]).

@@ -235,9 +235,7 @@ impl<'a> ClusterPlan<'a> {
     fn tile_groups(&self) -> (u32, u32) {
         (self.f.params.tiles_x, self.f.params.tiles_y)
     }
-}
 
-impl ClusterPlan<'_> {
     /// Which per-light pipelines run: with the cells (`CULL_FLAG_DEPTH_MASK`) or without.
     fn cells(&self) -> usize {
         usize::from(self.f.params.flags & CULL_FLAG_DEPTH_MASK != 0)

@@ -39,17 +39,14 @@ pub(crate) struct PerLight {
 
 impl PerLight {
     fn new(d: &wgpu::Device, program: &Program, cells: bool) -> Self {
-        let options = wgpu::PipelineCompilationOptions {
-            constants: &[("CLUSTER_CELLS", f64::from(u8::from(cells)))],
-            ..Default::default()
-        };
+        let constants = [("CLUSTER_CELLS", f64::from(u8::from(cells)))];
         let [count, fill, count_wide, fill_wide] = [
             "clustered_count",
             "clustered_fill",
             "clustered_count_wide",
             "clustered_fill_wide",
         ]
-        .map(|e| program.pipeline_with(d, e, &options));
+        .map(|e| program.pipeline_with(d, e, &constants));
         Self {
             count,
             fill,
@@ -102,10 +99,7 @@ impl Pipelines {
             tiles_count_rects: program.pipeline_with(
                 d,
                 "cluster_tiles_count",
-                &wgpu::PipelineCompilationOptions {
-                    constants: &[("CLUSTER_TILE_RECTS", 1.0)],
-                    ..Default::default()
-                },
+                &[("CLUSTER_TILE_RECTS", 1.0)],
             ),
             masks_fill,
             order: order_pipeline(d, program, "cluster_order"),
@@ -113,10 +107,7 @@ impl Pipelines {
             masks_fill_cursor: program.pipeline_with(
                 d,
                 "cluster_masks_fill",
-                &wgpu::PipelineCompilationOptions {
-                    constants: &[("CLUSTER_FILL_CURSOR", 1.0)],
-                    ..Default::default()
-                },
+                &[("CLUSTER_FILL_CURSOR", 1.0)],
             ),
         }
     }
@@ -124,14 +115,7 @@ impl Pipelines {
 
 /// A long lists' order pass, with [`order_threads`] threads.
 fn order_pipeline(d: &wgpu::Device, program: &Program, entry: &str) -> wgpu::ComputePipeline {
-    program.pipeline_with(
-        d,
-        entry,
-        &wgpu::PipelineCompilationOptions {
-            constants: &[("ORDER_THREADS", f64::from(order_threads(d)))],
-            ..Default::default()
-        },
-    )
+    program.pipeline_with(d, entry, &[("ORDER_THREADS", f64::from(order_threads(d)))])
 }
 
 /// The threads of the long lists' order pass (`cull.clustered.order`): 512 where the device
