@@ -153,14 +153,58 @@ fn stochastic_scene(
     interleave: u32,
     (w, h): (u32, u32),
 ) -> Stochastic {
-    let rule = RadiusRule::Stochastic {
+    stochastic_scene_in(
+        ctx,
+        atrium_with(count, error, interleave, false),
         error,
+        interleave,
+        (w, h),
+    )
+}
+
+/// The atrium of [`stochastic_scene`] with `count` lights, its surfaces glTF's GGX where
+/// `glossy`: every third material a mirror-like metal at the roughness floor (roughness 0),
+/// every third a dielectric at roughness 0.05, the rest as their Blinn-Phong weight maps.
+fn atrium_with(count: u32, error: f32, interleave: u32, glossy: bool) -> Scene {
+    let mut scene = atrium(count, stochastic_rule(error, interleave), 0.25);
+    if glossy {
+        scene.assign_models(&[manylights_scene::Model::Ggx]);
+        for (k, m) in scene.materials.iter_mut().enumerate() {
+            m.brdf = match k % 3 {
+                0 => manylights_scene::Brdf::Ggx {
+                    metallic: 1.0,
+                    roughness: 0.0,
+                },
+                1 => manylights_scene::Brdf::Ggx {
+                    metallic: 0.0,
+                    roughness: 0.05,
+                },
+                _ => m.brdf,
+            };
+        }
+    }
+    scene
+}
+
+fn stochastic_rule(error: f32, interleave: u32) -> RadiusRule {
+    RadiusRule::Stochastic {
+        error,
+        bound: stochastic::StochasticBound::Light,
         exposure: 1.0,
         accumulate: 0,
         seeds: 1,
         interleave,
-    };
-    let scene = atrium(count, rule, 0.25);
+    }
+}
+
+fn stochastic_scene_in(
+    ctx: &manylights_gpu::GpuContext,
+    scene: Scene,
+    error: f32,
+    interleave: u32,
+    (w, h): (u32, u32),
+) -> Stochastic {
+    let rule = stochastic_rule(error, interleave);
     let spec = LightSpec {
         radius: rule,
         seed: 5,
@@ -362,6 +406,26 @@ fn stochastic_estimate_is_unbiased_by_a_z_test_that_a_biased_variant_fails() {
     assert!(
         zmax_il <= 5.0,
         "the interleaved estimate is biased: max |z| = {zmax_il}"
+    );
+    // On glTF's GGX, mirror-like metal at the roughness floor among it: the same lists (the
+    // bound is the light's own contribution) and unbiased too.
+    let g = stochastic_scene_in(&ctx, atrium_with(400, 0.05, 1, true), 0.05, 1, (w, h));
+    assert_eq!(
+        g.params, s.params,
+        "the default bound does not depend on the materials"
+    );
+    let rr_g = ReferenceRenderer::new(&ctx, &g.gpu);
+    let surfaces_g = rr_g.surfaces(&ctx, &g.gpu, w, h).unwrap();
+    let reference_g = InfiniteReference::new(&ctx, &g.gpu)
+        .render(&ctx, &g.gpu, &surfaces_g)
+        .unwrap();
+    let draw_g = StochasticRanges::new(&ctx, &g.gpu, 0, g.gpu.light_count, &g.params).unwrap();
+    let images = stochastic_frames(&ctx, &g, &draw_g, frames, (w, h));
+    let (zmax_g, zmean_g, _) = z_stats(&images, &reference_g);
+    println!("GGX: max |z| {zmax_g:.2}, mean z {zmean_g:.2}");
+    assert!(
+        zmax_g <= 5.0,
+        "the estimate on GGX is biased: max |z| = {zmax_g}"
     );
     let biased = draw.biased(&ctx);
     let images = stochastic_frames(&ctx, &s, &biased, frames, (w, h));

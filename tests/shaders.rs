@@ -228,7 +228,7 @@ fn host_structs_match_wgsl_layout() {
     let stochastic = validate(&manylights_gpu::stochastic::STOCHASTIC);
     check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
         row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",
-        exposure => "exposure", rho_max => "rho_max", interleave => "interleave"]);
+        exposure => "exposure", scale => "scale", interleave => "interleave"]);
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.
     let (_, members) = wgsl_layout(&reference, "VertexIn");

@@ -21,7 +21,8 @@ struct StochasticParams {
     biased: u32,
     error: f32,
     exposure: f32,
-    rho_max: f32,
+    // StochasticParams::scale: 1 bounds the light's own contribution (the default).
+    scale: f32,
     // n of n x n pixel classes; 1: no interleaving.
     interleave: u32,
     _pad1: u32,
@@ -38,7 +39,7 @@ fn stochastic_hash(index: u32) -> u32 {
 
 // manylights_scene::stochastic::StochasticParams::alpha.
 fn stochastic_alpha(l: Light) -> f32 {
-    let scale = stochastic.exposure * l.intensity * max(l.color.x, max(l.color.y, l.color.z)) * stochastic.rho_max;
+    let scale = stochastic.exposure * l.intensity * max(l.color.x, max(l.color.y, l.color.z)) * stochastic.scale;
     let largest = 1.0 / (D_MIN * D_MIN);
     return select(largest, min(2.0 * stochastic.error / scale, largest), scale > 0.0);
 }

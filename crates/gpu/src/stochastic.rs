@@ -44,8 +44,9 @@ pub struct GpuStochasticParams {
     pub error: f32,
     /// The exposure of the error bound.
     pub exposure: f32,
-    /// The largest BRDF times cosine of the scene's materials.
-    pub rho_max: f32,
+    /// The error bound's scale (`StochasticParams::scale`: 1 for the light's own
+    /// contribution).
+    pub scale: f32,
     /// n of n x n interleaved pixel classes; 1: none.
     pub interleave: u32,
     /// Padding to 16 bytes.
@@ -93,7 +94,7 @@ impl StochasticRanges {
             biased: 0,
             error: params.error,
             exposure: params.exposure,
-            rho_max: params.rho_max,
+            scale: params.scale,
             interleave: params.interleave.max(1),
             _pad: [0; 2],
         };

@@ -6,7 +6,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
-use crate::stochastic::StochasticParams;
+use crate::stochastic::{StochasticBound, StochasticParams};
 use crate::{Light, LightKind, Motion, Scene, SceneError};
 
 /// How light positions are chosen.
@@ -44,8 +44,15 @@ pub enum RadiusRule {
     /// generated radius is the shortest range (`xi = 1`); `lights.stochastic` draws each
     /// frame's.
     Stochastic {
-        /// Bound on one light's standard deviation at a pixel, in exposed radiance, > 0.
+        /// Bound on one light's standard deviation, > 0: of its exposed incident contribution
+        /// (`exposure * intensity * max(colour) * falloff`) with the default `bound: Light`,
+        /// of its reflected radiance off the scene's most reflective diffuse-equivalent
+        /// surface with `bound: Albedo` ([`crate::stochastic`]).
         error: f32,
+        /// What `error` bounds: `Light` (the default, left out of the serialised form) or
+        /// `Albedo`.
+        #[serde(default, skip_serializing_if = "is_light_bound")]
+        bound: StochasticBound,
         /// The exposure `error` is measured at, > 0 (default 1).
         #[serde(default = "unit")]
         exposure: f32,
@@ -63,6 +70,10 @@ pub enum RadiusRule {
         #[serde(default = "one", skip_serializing_if = "is_one")]
         interleave: u32,
     },
+}
+
+fn is_light_bound(b: &StochasticBound) -> bool {
+    *b == StochasticBound::Light
 }
 
 fn one() -> u32 {
@@ -169,6 +180,7 @@ impl LightSpec {
                 accumulate,
                 seeds,
                 interleave,
+                ..
             } => {
                 if !(1..=crate::stochastic::INTERLEAVE_MAX).contains(&interleave) {
                     return Err(SceneError::invalid(
@@ -340,13 +352,14 @@ impl LightSpec {
         match self.radius {
             RadiusRule::Stochastic {
                 error,
+                bound,
                 exposure,
                 interleave,
                 ..
             } => Some(StochasticParams {
                 error,
                 exposure,
-                rho_max: crate::stochastic::rho_max(&scene.materials),
+                scale: bound.scale(&scene.materials),
                 seed: (self.seed ^ (self.seed >> 32)) as u32,
                 interleave,
             }),
@@ -456,6 +469,7 @@ mod tests {
         let rule = |error: f32, accumulate: u32, seeds: u32| LightSpec {
             radius: RadiusRule::Stochastic {
                 error,
+                bound: StochasticBound::Light,
                 exposure: 1.0,
                 accumulate,
                 seeds,
@@ -466,6 +480,7 @@ mod tests {
         let interleaved = |interleave: u32| LightSpec {
             radius: RadiusRule::Stochastic {
                 error: 0.1,
+                bound: StochasticBound::Light,
                 exposure: 1.0,
                 accumulate: 0,
                 seeds: 4,
@@ -497,6 +512,19 @@ mod tests {
         assert_eq!(back, rule(0.1, 0, 4).radius);
         let text = ron::to_string(&interleaved(2).radius).unwrap();
         assert!(text.contains("interleave:2"), "{text}");
+        // The bound likewise: `Light` left out, `Albedo` named.
+        assert!(!text.contains("bound"), "{text}");
+        let back: RadiusRule = ron::from_str("Stochastic(error: 0.1, bound: Albedo)").unwrap();
+        assert!(matches!(
+            back,
+            RadiusRule::Stochastic {
+                bound: StochasticBound::Albedo,
+                ..
+            }
+        ));
+        assert!(ron::to_string(&back).unwrap().contains("bound:Albedo"));
+        let e = ron::from_str::<RadiusRule>("Stochastic(error: 0.1, bound: Peak)").unwrap_err();
+        assert!(e.to_string().contains("Light"), "{e}");
     }
 
     use super::*;
