@@ -8,9 +8,11 @@ use anyhow::{Context, Result, bail};
 use clap::ValueEnum;
 use manylights_cull::layout::DEFAULT_SLACK;
 use manylights_cull::{CullSettings, Slicing, Strategy};
-use manylights_gpu::{GpuContext, GpuOptions};
+use manylights_gpu::stochastic::StochasticRanges;
+use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::procedural::{self, ProceduralScene};
+use manylights_scene::stochastic::{INTERLEAVE_MAX, StochasticBound};
 use manylights_scene::{LightGenerator, LightSpec, Model, RadiusRule, Scene};
 
 /// Scene, lights, resolution and adapter: shared by every subcommand.
@@ -45,6 +47,25 @@ pub(crate) struct SceneArgs {
     /// to this threshold.
     #[arg(long)]
     pub(crate) threshold: Option<f32>,
+    /// Stochastic light culling (Tokuyoshi and Harada 2016) instead of a cut-off: each light
+    /// draws a random range every frame, so that the image is an unbiased estimate of infinite
+    /// range. E bounds one light's standard deviation: of its incident contribution
+    /// (exposure * intensity * max(colour) * falloff at exposure 1) by default, of its
+    /// reflected radiance with --bound albedo (docs/EXPERIMENTS.md).
+    #[arg(long, value_name = "E", conflicts_with = "threshold", value_parser = positive_f32)]
+    pub(crate) stochastic: Option<f32>,
+    /// With --stochastic: what E bounds.
+    #[arg(long, value_enum, requires = "stochastic")]
+    pub(crate) bound: Option<BoundName>,
+    /// With --stochastic: frames drawn afresh, K >= 1 (1: one frame). render averages them
+    /// into one image (a static view accumulated) and --compare scores that image; cull
+    /// checks every frame's lists.
+    #[arg(long, value_name = "K", requires = "stochastic")]
+    pub(crate) accumulate: Option<u32>,
+    /// With --stochastic: interleaved sampling over N x N pixel classes, each drawing its own
+    /// ranges, N from 1 (none) to 8.
+    #[arg(long, value_name = "N", requires = "stochastic")]
+    pub(crate) interleave: Option<u32>,
     /// Intensity of every generated light.
     #[arg(long, default_value_t = 4.0)]
     pub(crate) intensity: f32,
@@ -65,6 +86,27 @@ pub(crate) struct SceneArgs {
     #[arg(long)]
     pub(crate) adapter: Option<String>,
 }
+
+/// `--bound`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum BoundName {
+    /// One light's incident contribution, whatever the materials (the default).
+    Light,
+    /// The radiance a light reflects off a surface spreading the scene's largest directional
+    /// albedo diffusely.
+    Albedo,
+}
+
+/// A finite number above 0, for clap.
+pub(crate) fn positive_f32(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}`: a finite number above 0")),
+    }
+}
+
+/// The most frames `--accumulate` takes.
+pub(crate) const ACCUMULATE_MAX: u32 = 4096;
 
 /// A material model's command-line name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -315,10 +357,11 @@ impl SceneArgs {
         } else {
             load_scene(&self.scene)?
         };
+        self.check_stochastic()?;
         scene.assign_models(&self.models()?);
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
-            "invalid light options (--radius, --threshold, --intensity, --spot-fraction)",
+            "invalid light options (--radius, --threshold, --stochastic, --intensity, --spot-fraction)",
         )?;
         scene.lights.extend(generated);
         scene
@@ -341,13 +384,68 @@ impl SceneArgs {
             },
             count: self.lights,
             seed: self.seed,
-            radius: self
-                .threshold
-                .map_or(RadiusRule::Fixed(self.radius), RadiusRule::Threshold),
+            radius: match (self.stochastic, self.threshold) {
+                (Some(error), _) => RadiusRule::Stochastic {
+                    error,
+                    bound: match self.bound {
+                        Some(BoundName::Albedo) => StochasticBound::Albedo,
+                        Some(BoundName::Light) | None => StochasticBound::Light,
+                    },
+                    exposure: 1.0,
+                    // The experiments' form: 0 is one frame.
+                    accumulate: if self.frames() > 1 { self.frames() } else { 0 },
+                    seeds: 1,
+                    interleave: self.interleave.unwrap_or(1),
+                },
+                (None, Some(t)) => RadiusRule::Threshold(t),
+                (None, None) => RadiusRule::Fixed(self.radius),
+            },
             intensity: self.intensity,
             spot_fraction: self.spot_fraction,
             ..LightSpec::default()
         }
+    }
+
+    /// Checks the stochastic options; the error names the option and what it accepts.
+    pub(crate) fn check_stochastic(&self) -> Result<()> {
+        if let Some(k) = self.accumulate
+            && !(1..=ACCUMULATE_MAX).contains(&k)
+        {
+            bail!("invalid --accumulate {k}: frames from 1 (one frame) to {ACCUMULATE_MAX}");
+        }
+        if let Some(n) = self.interleave
+            && !(1..=INTERLEAVE_MAX).contains(&n)
+        {
+            bail!("invalid --interleave {n}: 1 (none) to {INTERLEAVE_MAX} (N x N pixel classes)");
+        }
+        Ok(())
+    }
+
+    /// The frames drawn with --stochastic (`--accumulate`, 1 by default and without it).
+    pub(crate) fn frames(&self) -> u32 {
+        self.accumulate.unwrap_or(1).max(1)
+    }
+
+    /// The stochastic ranges of `scene`'s generated lights (the last `--lights` of its light
+    /// buffer) where --stochastic asks for them; built before any renderer, since they mark
+    /// the scene's lights general.
+    pub(crate) fn draws(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        scene: &Scene,
+    ) -> Result<Option<StochasticRanges>> {
+        let Some(params) = self.light_spec().stochastic(scene) else {
+            return Ok(None);
+        };
+        let first = scene.lights.len() as u32 - self.lights;
+        Ok(Some(StochasticRanges::new(
+            ctx,
+            gpu_scene,
+            first,
+            self.lights,
+            &params,
+        )?))
     }
 
     /// The device, checked against the resolution.

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use anyhow::{Result, bail};
 use manylights_cull::heatmap;
 use manylights_gpu::GpuScene;
-use manylights_shade::image_out::write_atomic;
+use manylights_scene::RadiusRule;
+use manylights_shade::image_out::{ImageSum, write_atomic};
 use manylights_shade::{Backend, HdrFormat, ReferenceRenderer, Renderer, accuracy};
 
 use crate::options::{BackendName, SceneArgs, StrategyArgs, print_timings};
@@ -112,6 +113,15 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     let bad_msaa = |e| anyhow::anyhow!("invalid --msaa {samples}: {e}");
     let (w, h) = (a.width, a.height);
     let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
+    // Stochastic ranges before any renderer: they mark the lights general.
+    let draws = a.draws(&ctx, &gpu_scene, &scene)?;
+    let frames = if draws.is_some() { a.frames() } else { 1 };
+    let draw = |f: u32| -> Result<()> {
+        if let Some(d) = &draws {
+            d.draw(&ctx, f)?;
+        }
+        Ok(())
+    };
     let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/render"));
     println!(
         "{}: {} triangles, {} lights, {w}x{h}{}",
@@ -124,12 +134,38 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             String::new()
         }
     );
+    if let Some(RadiusRule::Stochastic {
+        error,
+        bound,
+        interleave,
+        ..
+    }) = draws.as_ref().map(|_| a.light_spec().radius)
+    {
+        println!(
+            "  stochastic light culling: error {error} ({} bound), {frames} frame{} drawn{}{}",
+            bound.name(),
+            if frames > 1 { "s" } else { "" },
+            if frames > 1 { " and averaged" } else { "" },
+            if interleave > 1 {
+                format!(", {interleave} x {interleave} interleaved classes")
+            } else {
+                String::new()
+            }
+        );
+    }
     let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, samples).map_err(bad_msaa)?;
     let mut outputs: Vec<(PathBuf, image::RgbImage)> = Vec::new();
     let (name, image) = if args.backend == BackendName::Reference {
-        let frame = reference.render(&ctx, &gpu_scene, w, h)?;
-        print_timings(frame.timings.as_deref());
-        ("reference", frame.color)
+        let mut sum = ImageSum::default();
+        let mut timings = None;
+        for f in 0..frames {
+            draw(f)?;
+            let frame = reference.render(&ctx, &gpu_scene, w, h)?;
+            sum.add(&frame.color);
+            timings = frame.timings;
+        }
+        print_timings(timings.as_deref());
+        ("reference", sum.mean().expect("at least one frame"))
     } else {
         let backend = match args.backend {
             BackendName::Forward => Backend::Forward,
@@ -138,7 +174,23 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
         let renderer = Renderer::with_format(&ctx, &gpu_scene, samples, hdr).map_err(bad_msaa)?;
-        let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;
+        // With --accumulate, the frames' mean; lists, counts and exports are the last
+        // frame's (whose ranges the lights hold afterwards).
+        let mut sum = ImageSum::default();
+        let mut last = None;
+        for f in 0..frames {
+            draw(f)?;
+            let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;
+            sum.add(&out.color);
+            last = Some(out);
+        }
+        let out = last.expect("at least one frame");
+        if frames > 1 {
+            println!(
+                "  (lists, counts and timings: frame {} of {frames})",
+                frames - 1
+            );
+        }
         if backend != Backend::NaiveForward {
             println!("  strategy {strategy:?}");
         }
@@ -196,14 +248,24 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         }
         let heat = dir.join(format!("heatmap_lights_per_pixel_{}.png", backend.name()));
         outputs.push((heat, heatmap::pixels(&per_pixel, w, h, max)));
-        (backend.name(), out.color)
+        (backend.name(), sum.mean().expect("at least one frame"))
     };
     let bad = image.non_finite_count();
     if bad > 0 {
         bail!("the render holds {bad} NaN/Inf pixels; nothing was written");
     }
     if args.compare {
-        let windowed_frame = reference.render(&ctx, &gpu_scene, w, h)?;
+        // The reference over the same frames' draws (the same estimate, no culling), then
+        // infinite range (no draws: ranges do not enter it).
+        let mut windowed_sum = ImageSum::default();
+        let mut windowed_frame = None;
+        for f in 0..frames {
+            draw(f)?;
+            let frame = reference.render(&ctx, &gpu_scene, w, h)?;
+            windowed_sum.add(&frame.color);
+            windowed_frame = Some(frame);
+        }
+        let windowed_frame = windowed_frame.expect("at least one frame");
         let infinite = manylights_shade::infinite::infinite_image(
             &ctx,
             (
@@ -215,11 +277,19 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             (w, h),
             Some(&windowed_frame),
         )?;
-        let windowed = windowed_frame.color;
+        let windowed = windowed_sum.mean().expect("at least one frame");
         // The same cut-off at the output's exposure; infinite range at the exposure adapted to
         // its reference (accuracy::exposure_of).
+        let cutoff = if draws.is_some() {
+            "reference (same draws)"
+        } else {
+            "reference"
+        };
+        if frames > 1 {
+            println!("  errors of the mean of {frames} frames:");
+        }
         for (label, r, exposure) in [
-            ("reference", &windowed, args.exposure),
+            (cutoff, &windowed, args.exposure),
             (
                 "infinite-range reference",
                 &infinite,

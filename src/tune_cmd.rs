@@ -10,9 +10,10 @@ use manylights_cull::layout::DEFAULT_SLACK;
 use manylights_lab::experiment::{CameraSpec, Config, SceneSpec};
 use manylights_lab::tune::{TuneOptions, tune};
 use manylights_scene::RadiusRule;
+use manylights_scene::stochastic::StochasticBound;
 use manylights_shade::Backend;
 
-use crate::options::SceneArgs;
+use crate::options::{SceneArgs, positive_f32};
 use crate::show_progress;
 
 #[derive(clap::Args, Debug)]
@@ -47,8 +48,8 @@ pub(crate) struct TuneArgs {
     /// (radius = sqrt(intensity * max(colour) / threshold)).
     #[arg(long, value_delimiter = ',', default_values_t = [1.0, 0.3, 0.1, 0.03], value_parser = positive_f32)]
     pub(crate) thresholds: Vec<f32>,
-    /// With --max-error: the error bounds of stochastic light culling tried (one light's
-    /// standard deviation at a pixel, in radiance at exposure 1).
+    /// With --max-error: the error bounds of stochastic light culling tried (as --stochastic's
+    /// E, which joins them; --bound, --accumulate and --interleave apply to each).
     #[arg(long, value_delimiter = ',', default_values_t = [4.0, 1.0, 0.25], value_parser = positive_f32)]
     pub(crate) errors: Vec<f32>,
 }
@@ -58,10 +59,6 @@ fn positive_f64(s: &str) -> Result<f64, String> {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("`{s}`: a finite number above 0")),
     }
-}
-
-fn positive_f32(s: &str) -> Result<f32, String> {
-    positive_f64(s).map(|v| v as f32)
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -105,7 +102,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         export: false,
     };
     let ranges = if args.max_error.is_some() {
-        args.thresholds.len() + args.errors.len()
+        candidate_ranges(args).len()
     } else {
         1
     };
@@ -128,18 +125,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
             progress: show_progress(),
             commit: env!("MANYLIGHTS_COMMIT").into(),
             max_error: args.max_error,
-            radii: args
-                .thresholds
-                .iter()
-                .map(|&t| RadiusRule::Threshold(t))
-                .chain(args.errors.iter().map(|&error| RadiusRule::Stochastic {
-                    error,
-                    exposure: 1.0,
-                    accumulate: 0,
-                    seeds: 4,
-                    interleave: 1,
-                }))
-                .collect(),
+            radii: candidate_ranges(args),
         },
     )?;
     let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3}"));
@@ -195,6 +181,51 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         .with_context(|| format!("report of {}", out.display()))?;
     eprintln!("report: {}", html.display());
     Ok(())
+}
+
+/// With --max-error, the light ranges tried: --thresholds' cut-offs and --errors' stochastic
+/// bounds (with --stochastic's E among them, and its --bound, --accumulate and --interleave
+/// on each).
+fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
+    let a = &args.scene;
+    let mut errors = args.errors.clone();
+    if let Some(e) = a.stochastic
+        && !errors.contains(&e)
+    {
+        errors.push(e);
+    }
+    let stochastic = match a.light_spec().radius {
+        r @ RadiusRule::Stochastic { .. } => r,
+        _ => RadiusRule::Stochastic {
+            error: 1.0,
+            bound: StochasticBound::Light,
+            exposure: 1.0,
+            accumulate: 0,
+            seeds: 4,
+            interleave: 1,
+        },
+    };
+    args.thresholds
+        .iter()
+        .map(|&t| RadiusRule::Threshold(t))
+        .chain(errors.into_iter().map(|e| match stochastic {
+            RadiusRule::Stochastic {
+                bound,
+                exposure,
+                accumulate,
+                interleave,
+                ..
+            } => RadiusRule::Stochastic {
+                error: e,
+                bound,
+                exposure,
+                accumulate,
+                seeds: 4,
+                interleave,
+            },
+            other => other,
+        }))
+        .collect()
 }
 
 /// The light range a ranked candidate was tried with, where ranges were candidates: the cell

@@ -7,6 +7,7 @@ use std::process::{Command, Output};
 mod msaa;
 mod outputs;
 mod score;
+mod stochastic;
 mod transparent;
 mod tune;
 

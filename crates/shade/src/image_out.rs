@@ -17,6 +17,66 @@ pub struct HdrImage {
     pub data: Vec<[f32; 4]>,
 }
 
+/// A running sum of same-sized images in f64, for the mean of frames accumulated (a static
+/// view under stochastic light culling).
+#[derive(Clone, Debug, Default)]
+pub struct ImageSum {
+    sum: Vec<[f64; 3]>,
+    first: Option<HdrImage>,
+    count: u32,
+}
+
+impl ImageSum {
+    /// Adds `image` (of the first image's size: a mismatch is a caller's bug and panics).
+    pub fn add(&mut self, image: &HdrImage) {
+        match &self.first {
+            None => {
+                self.sum = vec![[0.0; 3]; image.data.len()];
+                self.first = Some(image.clone());
+            }
+            Some(f) => assert_eq!(
+                (f.width, f.height),
+                (image.width, image.height),
+                "images of one sum share a size"
+            ),
+        }
+        for (a, t) in self.sum.iter_mut().zip(&image.data) {
+            for ch in 0..3 {
+                a[ch] += f64::from(t[ch]);
+            }
+        }
+        self.count += 1;
+    }
+
+    /// Images added.
+    pub fn count(&self) -> u32 {
+        self.count
+    }
+
+    /// The mean image, with the first image's alpha (coverage); `None` before any image.
+    pub fn mean(&self) -> Option<HdrImage> {
+        let first = self.first.as_ref()?;
+        let n = f64::from(self.count);
+        Some(HdrImage {
+            width: first.width,
+            height: first.height,
+            data: self
+                .sum
+                .iter()
+                .zip(&first.data)
+                .map(|(s, f)| {
+                    [
+                        (s[0] / n) as f32,
+                        (s[1] / n) as f32,
+                        (s[2] / n) as f32,
+                        f[3],
+                    ]
+                })
+                .collect(),
+        })
+    }
+}
+
 /// Errors of image output.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
