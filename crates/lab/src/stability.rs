@@ -1,7 +1,8 @@
 //! The stability suite's report: every case (an experiment of `experiments/stability/`) against
 //! every configuration (backend and strategy), marked
 //! - **fail**: false negatives not explained by a deliberate capacity, NaN or infinite pixels,
-//!   or a case that did not run;
+//!   stochastic ranges that make [`SPAN_FAIL`] of the scene's lights needed a pixel or more (the
+//!   method turned brute force: case 18), or a case that did not run;
 //! - **degraded**, with the measured cost: lights dropped by a capacity (counted), lists over
 //!   10 times longer than needed (false-positive ratio), image error visible to FLIP (mean
 //!   above 0.01), or flicker over a camera path (the image's error against the reference
@@ -19,6 +20,9 @@ use crate::{LabError, write_atomic};
 
 /// Lists longer than this many times the lights needed count as degraded.
 pub const FP_DEGRADED: f64 = 10.0;
+/// Stochastic light culling whose drawn ranges make this fraction of the scene's lights needed
+/// a pixel (the exact set's mean), or more, fails: its ranges span the scene.
+pub const SPAN_FAIL: f64 = 0.5;
 /// Mean FLIP above this counts as degraded.
 pub const FLIP_DEGRADED: f64 = 0.01;
 /// Temporal flicker (relative to the reference's peak) above this counts as degraded.
@@ -43,6 +47,18 @@ pub fn verdict(r: &Row) -> Verdict {
     }
     if fnegs > 0 && r.dropped_lights == 0 {
         return Verdict::Fail(format!("{fnegs} false negatives"));
+    }
+    // The lights a pixel needs under the drawn ranges (the exact set, not a strategy's
+    // coarser lists): ranges that span the scene make every light needed everywhere.
+    if let Some(needed) = r.lights_needed_per_pixel_mean
+        && r.radius_rule == "stochastic"
+        && r.lights > 0
+        && needed >= SPAN_FAIL * r.lights as f64
+    {
+        return Verdict::Fail(format!(
+            "stochastic ranges span the scene: {needed:.0} of {} lights needed a pixel",
+            r.lights
+        ));
     }
     let mut costs = Vec::new();
     if r.dropped_lights > 0 {
