@@ -13,7 +13,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 16] = [
+const SHIPPED: [&str; 17] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -30,6 +30,7 @@ const SHIPPED: [&str; 16] = [
     "material-variety",
     "zbin-1m",
     "cluster-cells-1m",
+    "stochastic-materials",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -173,9 +174,10 @@ fn every_documented_ron_example_parses() {
 
 /// A tiny variant of every shipped experiment (48 x 27 at most, one frame, at most 256 lights)
 /// runs end to end: every cell has a row, no false negatives anywhere, and a report. The two
-/// infinite-range experiments (156 cells, each stochastic one rendered for several seeds) run
-/// one cell in 13 and in 7 (a shard: every variant, and most radius rules, among them), and
-/// material variety one in 11, so that the suite stays within its time.
+/// infinite-range experiments (208 cells, each stochastic one rendered for several seeds) run
+/// one cell in 17 and in 7 (a shard: every variant, and most radius rules, among them),
+/// material variety one in 11 and stochastic materials one in 7, so that the suite stays
+/// within its time.
 #[test]
 fn a_tiny_variant_of_each_shipped_experiment_runs() {
     let ctx = common::gpu();
@@ -185,11 +187,14 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
         let tiny = e.tiny();
         let out = tmp.path().join(name);
         let shard = match name {
-            "infinite-range" => Some((0, 13)),
+            "infinite-range" => Some((0, 17)),
             "infinite-range-1m" => Some((0, 7)),
             // 56 cells: one in 11 from the fourth has both settings, every variant, and 5 of
             // the 7 model lists (the five mixed among them).
             "material-variety" => Some((3, 11)),
+            // 72 cells: one in 7 from the second has every setting, both bounds, one frame
+            // and sixteen accumulated, and every model list.
+            "stochastic-materials" => Some((1, 7)),
             _ => None,
         };
         let options = RunOptions { shard, ..opts() };
@@ -539,22 +544,16 @@ fn bad_ron_gives_its_location_and_writes_nothing() {
     }
 }
 
-/// The HTML report opens in headless Chromium with no console errors and every figure loaded.
-#[test]
-fn html_report_loads_in_headless_chromium() {
+/// Chromium's DOM of `page` after its scripts ran, and its log (headless, no network, a fresh
+/// profile under `tmp`).
+fn chromium_dom(page: &Path, tmp: &Path) -> (String, String) {
     let chromium = ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
         .into_iter()
         .find(|p| Path::new(p).exists())
         .unwrap_or_else(|| {
             panic!("this test needs Chromium: `apt-get install chromium` (as .ci/run does)")
         });
-    let ctx = common::gpu();
-    let (e, src, path) = shipped("quickstart");
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("run");
-    run_parsed(&ctx, &e.tiny(), &src, path.parent().unwrap(), &out, &opts()).unwrap();
-    let html = manylights_lab::report::write_report(&out).unwrap();
-    let profile = tmp.path().join("profile");
+    let profile = tmp.join("profile");
     let o = Command::new(chromium)
         .args([
             "--headless",
@@ -571,12 +570,131 @@ fn html_report_loads_in_headless_chromium() {
             "--virtual-time-budget=5000",
             &format!("--user-data-dir={}", profile.display()),
             "--dump-dom",
-            &format!("file://{}", html.display()),
+            &format!("file://{}", page.display()),
         ])
         .output()
         .unwrap();
-    let dom = String::from_utf8_lossy(&o.stdout);
-    let log = String::from_utf8_lossy(&o.stderr);
+    (
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// Every figure of every committed report (docs/reports/*/figures), laid out by Chromium: no
+/// text reaches past the figure's edges (a title cut off, a label off the canvas), and no
+/// legend holds more than 12 entries (the text inside each figure's `legend-box`).
+#[test]
+fn committed_figures_have_no_clipped_text_and_short_legends_in_chromium() {
+    let reports = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/reports");
+    let mut page = String::from("<!doctype html><html><body>\n");
+    let mut count = 0;
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(&reports)
+        .unwrap()
+        .map(|e| e.unwrap().path().join("figures"))
+        .filter(|p| p.is_dir())
+        .collect();
+    dirs.sort();
+    for dir in dirs {
+        let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "svg"))
+            .collect();
+        files.sort();
+        for f in files {
+            let svg = std::fs::read_to_string(&f).unwrap();
+            let svg = svg.find("<svg").map_or(svg.as_str(), |i| &svg[i..]);
+            let name = f.strip_prefix(&reports).unwrap().display().to_string();
+            page += &format!("<div class=\"fig\" data-name=\"{name}\">{svg}</div>\n");
+            count += 1;
+        }
+    }
+    assert!(count >= 40, "only {count} committed figures");
+    page += r#"<script>
+const out = [];
+for (const div of document.querySelectorAll('div.fig')) {
+  const svg = div.querySelector('svg');
+  const s = svg.getBoundingClientRect();
+  const texts = [...svg.querySelectorAll('text')].filter(t => t.textContent.trim() !== '');
+  const clipped = texts.filter(t => {
+    const b = t.getBoundingClientRect();
+    return b.left < s.left - 1 || b.top < s.top - 1 || b.right > s.right + 1 || b.bottom > s.bottom + 1;
+  }).map(t => t.textContent);
+  let legend = -1;
+  for (const box of svg.querySelectorAll('rect.legend-box')) {
+    const l = box.getBoundingClientRect();
+    legend = Math.max(legend, texts.filter(t => {
+      const b = t.getBoundingClientRect();
+      const x = (b.left + b.right) / 2, y = (b.top + b.bottom) / 2;
+      return x >= l.left && x <= l.right && y >= l.top && y <= l.bottom;
+    }).length);
+  }
+  out.push(encodeURIComponent(div.dataset.name) + ' ' + legend + ' ' + clipped.length + ' ' + encodeURIComponent(clipped.slice(0, 3).join(' | ')));
+}
+document.body.setAttribute('data-result', out.join(';'));
+</script></body></html>
+"#;
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("figures.html");
+    std::fs::write(&file, page).unwrap();
+    let (dom, _) = chromium_dom(&file, tmp.path());
+    let result = dom
+        .split("data-result=\"")
+        .nth(1)
+        .and_then(|s| s.split('"').next())
+        .unwrap_or_else(|| panic!("no result; DOM: {}", &dom[..dom.len().min(300)]));
+    let decode = |s: &str| {
+        let mut out = Vec::new();
+        let b = s.as_bytes();
+        let mut i = 0;
+        while i < b.len() {
+            if b[i] == b'%' && i + 2 < b.len() {
+                out.push(u8::from_str_radix(&s[i + 1..i + 3], 16).unwrap());
+                i += 3;
+            } else {
+                out.push(b[i]);
+                i += 1;
+            }
+        }
+        String::from_utf8_lossy(&out).into_owned()
+    };
+    let mut problems = Vec::new();
+    let mut seen = 0;
+    for entry in result.split(';') {
+        let parts: Vec<&str> = entry.split(' ').collect();
+        let (name, legend, clipped) = (decode(parts[0]), parts[1], parts[2]);
+        let legend: i64 = legend.parse().unwrap();
+        if legend > 12 {
+            problems.push(format!("{name}: {legend} legend entries"));
+        }
+        if legend < 1 {
+            // Every figure has a legend, marked where the figures module drew it.
+            problems.push(format!(
+                "{name}: no legend box, or nothing in it ({legend})"
+            ));
+        }
+        if clipped != "0" {
+            problems.push(format!(
+                "{name}: {clipped} texts past the edges ({})",
+                decode(parts.get(3).unwrap_or(&""))
+            ));
+        }
+        seen += 1;
+    }
+    assert_eq!(seen, count, "Chromium measured {seen} of {count} figures");
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// The HTML report opens in headless Chromium with no console errors and every figure loaded.
+#[test]
+fn html_report_loads_in_headless_chromium() {
+    let ctx = common::gpu();
+    let (e, src, path) = shipped("quickstart");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    run_parsed(&ctx, &e.tiny(), &src, path.parent().unwrap(), &out, &opts()).unwrap();
+    let html = manylights_lab::report::write_report(&out).unwrap();
+    let (dom, log) = chromium_dom(&html, tmp.path());
     assert!(
         dom.contains("data-figures=\"loaded\""),
         "not every figure loaded; DOM: {}",
@@ -655,6 +773,56 @@ fn stability_suite_has_no_failures() {
             let dim = ctx.limits.max_texture_dimension_2d;
             assert!(rows.iter().any(|r| r.width == dim) && rows.iter().any(|r| r.height == dim));
             assert!(rows.iter().any(|r| r.lights == u64::from(ctx_max)));
+        }
+        if e.name == "18-glossy-stochastic" {
+            // The lists of the default bound do not depend on the materials: under GGX (from
+            // the roughness floor) and the clear coat as long as under Blinn-Phong, for the
+            // same scene and configuration; the noise is measured for every model.
+            let per_pixel = |scene: &str, materials: &str| {
+                rows.iter()
+                    .find(|r| {
+                        r.scene == scene
+                            && r.materials == materials
+                            && r.backend == "deferred"
+                            && r.strategy == "tiled_gather"
+                    })
+                    .and_then(|r| r.lights_per_pixel_mean)
+                    .unwrap_or_else(|| panic!("{scene} {materials}: no deferred gather row"))
+            };
+            for scene in ["glossy-boxes", "atrium"] {
+                let blinn = per_pixel(scene, "blinn_phong");
+                for m in ["ggx", "clear_coat"] {
+                    let glossy = per_pixel(scene, m);
+                    assert!(
+                        glossy <= 2.0 * blinn,
+                        "{scene} {m}: {glossy} lights a pixel against Blinn-Phong's {blinn}"
+                    );
+                }
+            }
+            for r in rows.iter().filter(|r| r.backend != "naive_forward") {
+                assert!(
+                    r.noise_infinite.is_some() && r.flip_mean_infinite.is_some(),
+                    "{}: the noise is reported",
+                    r.cell
+                );
+                let needed = r
+                    .lights_needed_per_pixel_mean
+                    .expect("the exact set's size");
+                assert!(
+                    needed < 0.25 * r.lights as f64,
+                    "{}: {needed} lights needed a pixel",
+                    r.cell
+                );
+                // The rule that fails ranges spanning the scene fires where they would.
+                let mut spanning = r.clone();
+                spanning.lights_needed_per_pixel_mean = Some(r.lights as f64 * 0.6);
+                assert!(
+                    matches!(verdict(&spanning), Verdict::Fail(_)),
+                    "{}: {:?}",
+                    r.cell,
+                    verdict(&spanning)
+                );
+            }
         }
         if e.name == "05-overflow-pressure" {
             assert!(

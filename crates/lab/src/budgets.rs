@@ -3,7 +3,10 @@
 //! infinite-range reference, `flip_mean_infinite`), the fastest conservative configuration
 //! (a radius rule that cuts light off) and the fastest stochastic one (stochastic light
 //! culling) within it, by culling and shading in steady state (`gpu_ms_cull_shade`), and how
-//! they compare. A configuration with a false negative or a dropped light never counts.
+//! they compare. Stochastic culling is named twice: in one frame (what a moving view sees; the
+//! only fair comparison with a cut-off, one frame against one frame), and accumulated over K
+//! frames (a static view: the cost a frame, and the K frames' total that the image took). A
+//! configuration with a false negative or a dropped light never counts.
 
 use std::collections::BTreeMap;
 
@@ -12,12 +15,34 @@ use crate::Row;
 /// The error budgets: mean FLIP against infinite range.
 pub const BUDGETS: [f64; 3] = [0.1, 0.05, 0.02];
 
-/// The fastest row of `rows` within `budget` whose radius rule is (`stochastic`) or is not
-/// stochastic, by `gpu_ms_cull_shade`.
-pub fn fastest_within<'a>(rows: &[&'a Row], budget: f64, stochastic: bool) -> Option<&'a Row> {
+/// Which rows a finding compares.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    /// Radius rules that cut light off.
+    Conservative,
+    /// Stochastic light culling, each image one frame.
+    StochasticFrame,
+    /// Stochastic light culling, each image K >= 2 frames accumulated.
+    StochasticAccumulated,
+}
+
+impl Family {
+    fn holds(self, r: &Row) -> bool {
+        let stochastic = r.radius_rule == "stochastic";
+        let accumulated = r.accumulate.unwrap_or(1) > 1;
+        match self {
+            Family::Conservative => !stochastic,
+            Family::StochasticFrame => stochastic && !accumulated,
+            Family::StochasticAccumulated => stochastic && accumulated,
+        }
+    }
+}
+
+/// The fastest row of `rows` within `budget` of `family`, by `gpu_ms_cull_shade` (a frame's).
+pub fn fastest_within<'a>(rows: &[&'a Row], budget: f64, family: Family) -> Option<&'a Row> {
     rows.iter()
         .copied()
-        .filter(|r| (r.radius_rule == "stochastic") == stochastic)
+        .filter(|r| family.holds(r))
         .filter(|r| r.false_negatives.unwrap_or(0) == 0 && r.dropped_lights == 0)
         .filter(|r| r.flip_mean_infinite.is_some_and(|f| f <= budget))
         .filter_map(|r| Some((r.gpu_ms_cull_shade?, r)))
@@ -45,6 +70,13 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
             .iter()
             .filter_map(|r| r.flip_mean_infinite)
             .fold(f64::INFINITY, f64::min);
+        if best_error > BUDGETS[0] {
+            out.push(format!(
+                "Against infinite range at {setting} no configuration comes within mean FLIP {} (the lowest: {best_error:.3}, at the reference's exposure).",
+                BUDGETS[0]
+            ));
+            continue;
+        }
         let mut parts = Vec::new();
         for b in BUDGETS {
             let name = |r: Option<&Row>| match r {
@@ -56,18 +88,36 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
                 ),
                 None => "none".into(),
             };
-            let (c, s) = (fastest_within(rs, b, false), fastest_within(rs, b, true));
+            let c = fastest_within(rs, b, Family::Conservative);
+            let s = fastest_within(rs, b, Family::StochasticFrame);
+            let a = fastest_within(rs, b, Family::StochasticAccumulated);
             let ratio = match (
                 c.and_then(|r| r.gpu_ms_cull_shade),
                 s.and_then(|r| r.gpu_ms_cull_shade),
             ) {
                 (Some(c), Some(s)) if s > 0.0 => {
-                    format!("; stochastic takes {:.2}x the conservative time", s / c)
+                    format!(
+                        " ({:.2}x the conservative time, one frame against one)",
+                        s / c
+                    )
                 }
                 _ => String::new(),
             };
+            let static_view = match a {
+                Some(r) => {
+                    let k = r.accumulate.unwrap_or(1);
+                    let ms = r.gpu_ms_cull_shade.unwrap_or(f64::NAN);
+                    format!(
+                        "`{}` ({ms:.3} ms a frame, {:.3} ms for its {k} frames, FLIP {:.3})",
+                        r.cell,
+                        ms * f64::from(k),
+                        r.flip_mean_infinite.unwrap_or(f64::NAN)
+                    )
+                }
+                None => "none".into(),
+            };
             parts.push(format!(
-                "FLIP <= {b}: conservative {}, stochastic {}{ratio}",
+                "FLIP <= {b}: conservative {}; stochastic in one frame {}{ratio}; static view, stochastic accumulated {static_view}",
                 name(c),
                 name(s)
             ));
@@ -87,22 +137,7 @@ mod tests {
     #[test]
     fn the_fastest_within_a_budget_skips_false_negatives_and_other_rules() {
         let row = |cell: &str, rule: &str, ms: f64, flip: f64, fns: u64| {
-            // Every column the JSON requires; the rest default.
-            let json = r#"{"experiment": "e", "cell": "", "scene": "s", "lights": 1, "width": 1,
-                "height": 1, "strategy": "x", "backend": "forward", "params": "",
-                "gpu_ms_total": null, "gpu_ms_cull": null, "gpu_ms_shade": null,
-                "gpu_ms_prepass": null, "cpu_ms_encode": 0.0, "false_negatives": null,
-                "false_positive_ratio": null, "lights_per_pixel_mean": null,
-                "max_lights_per_tile": null, "dropped_lights": 0, "list_bytes": 0,
-                "gbuffer_bytes": 0, "psnr_db": null, "flip_mean": null, "max_abs_error": null,
-                "adapter": "", "driver": "", "commit": "", "gpu_ms_total_p10": null,
-                "gpu_ms_total_p90": null, "gpu_ms_cull_p10": null, "gpu_ms_cull_p90": null,
-                "gpu_ms_shade_p10": null, "gpu_ms_shade_p90": null, "gpu_ms_prepass_p10": null,
-                "gpu_ms_prepass_p90": null, "gpu_ms_raster": null, "gpu_ms_compute": null,
-                "psnr_db_infinite": null, "flip_mean_infinite": null,
-                "max_abs_error_infinite": null, "exact_stride": 1, "frames": 1, "passes": {},
-                "index": 0, "id": "", "finished_unix": 0}"#;
-            let mut r: Row = serde_json::from_str(json).unwrap();
+            let mut r = crate::results::tests::sample_row();
             r.cell = cell.into();
             r.false_negatives = Some(fns);
             r.flip_mean_infinite = Some(flip);
@@ -115,11 +150,34 @@ mod tests {
             row("slow", "threshold", 2.0, 0.04, 0),
             row("fast-but-wrong", "threshold", 0.5, 0.2, 0),
             row("stoch", "stochastic", 1.0, 0.03, 0),
+            {
+                let mut r = row("stoch-acc4", "stochastic", 0.3, 0.01, 0);
+                r.accumulate = Some(4);
+                r
+            },
         ];
         let refs: Vec<&Row> = rows.iter().collect();
-        assert_eq!(fastest_within(&refs, 0.05, false).unwrap().cell, "slow");
-        assert_eq!(fastest_within(&refs, 0.05, true).unwrap().cell, "stoch");
-        assert!(fastest_within(&refs, 0.02, true).is_none());
+        assert_eq!(
+            fastest_within(&refs, 0.05, Family::Conservative)
+                .unwrap()
+                .cell,
+            "slow"
+        );
+        assert_eq!(
+            fastest_within(&refs, 0.05, Family::StochasticFrame)
+                .unwrap()
+                .cell,
+            "stoch"
+        );
+        assert!(fastest_within(&refs, 0.02, Family::StochasticFrame).is_none());
+        // Accumulated frames are their own family: not a one-frame result, named with the
+        // K frames' total.
+        assert_eq!(
+            fastest_within(&refs, 0.05, Family::StochasticAccumulated)
+                .unwrap()
+                .cell,
+            "stoch-acc4"
+        );
         let f = findings(&rows);
         assert_eq!(f.len(), 1);
         assert!(
@@ -127,6 +185,15 @@ mod tests {
             "{}",
             f[0]
         );
-        assert!(f[0].contains("stochastic takes 0.50x"), "{}", f[0]);
+        assert!(
+            f[0].contains("stochastic in one frame `stoch` (1.000 ms, FLIP 0.030) (0.50x"),
+            "{}",
+            f[0]
+        );
+        assert!(
+            f[0].contains("`stoch-acc4` (0.300 ms a frame, 1.200 ms for its 4 frames"),
+            "{}",
+            f[0]
+        );
     }
 }

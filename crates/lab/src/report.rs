@@ -219,19 +219,33 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         path: figures.display().to_string(),
         message: e.to_string(),
     })?;
-    let mut figs: Vec<(&str, &str)> = Vec::new();
+    let mut figs: Vec<(&str, String)> = Vec::new();
     // Each figure is drawn to a temporary name and renamed, so no half-written SVG remains.
     let mut draw = |name: &'static str,
                     caption: &'static str,
                     f: &dyn Fn(&Path) -> Result<Option<crate::figures::Layout>, LabError>|
      -> Result<(), LabError> {
         let tmp = figures.join(format!(".{name}.tmp.svg"));
-        if f(&tmp)?.is_some() {
+        if let Some(layout) = f(&tmp)? {
             std::fs::rename(&tmp, figures.join(name)).map_err(|e| LabError::Io {
                 path: name.into(),
                 message: e.to_string(),
             })?;
+            // What a reader needs to name every point: the sweeps' orders, numbered points.
+            let mut caption = caption.to_owned();
+            if !layout.notes.is_empty() {
+                caption += &format!(" {}.", layout.notes.join("; "));
+            }
             figs.push((name, caption));
+        } else {
+            // A figure this run does not have: an earlier report's copy must not linger.
+            let stale = figures.join(name);
+            if stale.exists() {
+                std::fs::remove_file(&stale).map_err(|e| LabError::Io {
+                    path: stale.display().to_string(),
+                    message: e.to_string(),
+                })?;
+            }
         }
         Ok(())
     };
@@ -255,32 +269,32 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         r.gpu_ms_cull_shade
     });
     let fp: Axis<'_> = ("false-positive ratio", &|r| r.false_positive_ratio);
-    let error: Axis<'_> = ("max abs error vs reference", &|r| r.max_abs_error);
+    let error: Axis<'_> = ("mean FLIP vs reference", &|r| r.flip_mean);
     draw(
         "speed_fp.svg",
-        "Speed against list quality: lights evaluated per light needed (1.0 is exact). Black: the Pareto front.",
+        "Speed against list quality: lights evaluated per light needed (1.0 is exact). A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
         &|p| speed_accuracy(&rows, p, gpu, fp),
     )?;
     draw(
         "speed_error.svg",
-        "Speed against image error: maximum absolute error against the reference. Black: the Pareto front.",
+        "Speed against image error: mean FLIP against the brute-force reference with the same light ranges (what culling and shading lose, not the cut-off). A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
         &|p| speed_accuracy(&rows, p, gpu, error),
     )?;
     draw(
         "frame_fp.svg",
-        "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. Black: the Pareto front.",
+        "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
         &|p| speed_accuracy(&rows, p, frame, fp),
     )?;
     let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
     draw(
         "frame_infinite.svg",
-        "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade) against mean FLIP against the infinite-range reference (at the reference's exposure), conservative radius cut-offs and stochastic light culling on one chart. Black: the Pareto front.",
+        "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade, one frame; an accumulated point costs this a frame, K times it for its image) against mean FLIP against the infinite-range reference (at the reference's exposure). A panel a setting; colour: the method family (radius cut-offs, stochastic light culling in one frame, accumulated, interleaved), a line through each configuration's sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
         &|p| speed_accuracy(&rows, p, frame, flip_inf),
     )?;
     if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
         draw(
             "frame_steady_infinite.svg",
-            "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading) against mean FLIP against the infinite-range reference. Black: the Pareto front.",
+            "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading) against mean FLIP against the infinite-range reference. A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
             &|p| speed_accuracy(&rows, p, gpu, flip_inf),
         )?;
     }
@@ -484,7 +498,9 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     for (f, caption) in &figs {
         let _ = writeln!(
             html,
-            "<figure><img src=\"figures/{f}\" alt=\"{caption}\"><figcaption>{caption}</figcaption></figure>"
+            "<figure><img src=\"figures/{f}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
+            esc(caption),
+            esc(caption)
         );
     }
     if !images.is_empty() {

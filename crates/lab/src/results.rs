@@ -572,3 +572,27 @@ pub fn percentiles(v: &[f64]) -> Option<(f64, f64, f64)> {
     let at = |q: f64| s[((q * (s.len() - 1) as f64).round() as usize).min(s.len() - 1)] + 0.0;
     Some((at(0.5), at(0.1), at(0.9)))
 }
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::Row;
+
+    /// A row with every column the JSON requires, the rest at their defaults.
+    pub(crate) fn sample_row() -> Row {
+        let json = r#"{"experiment": "e", "cell": "", "scene": "s", "lights": 1, "width": 1,
+                "height": 1, "strategy": "x", "backend": "forward", "params": "",
+                "gpu_ms_total": null, "gpu_ms_cull": null, "gpu_ms_shade": null,
+                "gpu_ms_prepass": null, "cpu_ms_encode": 0.0, "false_negatives": null,
+                "false_positive_ratio": null, "lights_per_pixel_mean": null,
+                "max_lights_per_tile": null, "dropped_lights": 0, "list_bytes": 0,
+                "gbuffer_bytes": 0, "psnr_db": null, "flip_mean": null, "max_abs_error": null,
+                "adapter": "", "driver": "", "commit": "", "gpu_ms_total_p10": null,
+                "gpu_ms_total_p90": null, "gpu_ms_cull_p10": null, "gpu_ms_cull_p90": null,
+                "gpu_ms_shade_p10": null, "gpu_ms_shade_p90": null, "gpu_ms_prepass_p10": null,
+                "gpu_ms_prepass_p90": null, "gpu_ms_raster": null, "gpu_ms_compute": null,
+                "psnr_db_infinite": null, "flip_mean_infinite": null,
+                "max_abs_error_infinite": null, "exact_stride": 1, "frames": 1, "passes": {},
+                "index": 0, "id": "", "finished_unix": 0}"#;
+        serde_json::from_str(json).unwrap()
+    }
+}

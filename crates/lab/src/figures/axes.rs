@@ -47,6 +47,22 @@ impl Scale {
         }
     }
 
+    /// An axis fitted to `values`, logarithmic wherever they are all positive and span a
+    /// factor of 3 or more (speed and error axes, as papers draw them), else as [`Scale::fit`].
+    pub(super) fn fit_log(values: impl Iterator<Item = f64> + Clone) -> Scale {
+        let lo = values.clone().fold(f64::INFINITY, f64::min);
+        let hi = values.clone().fold(f64::NEG_INFINITY, f64::max);
+        if lo > 0.0 && hi / lo >= 3.0 {
+            Scale {
+                lo: lo / 1.3,
+                hi: hi * 1.3,
+                log: true,
+            }
+        } else {
+            Scale::fit(values)
+        }
+    }
+
     /// A value's coordinate on the plot (log10 of it on a logarithmic axis).
     pub(super) fn map(&self, v: f64) -> f64 {
         if self.log { v.log10() } else { v }
@@ -111,8 +127,14 @@ pub(super) fn tick_label(v: f64) -> String {
     }
 }
 
-/// A linear axis's label: at most three decimals, no trailing zeros.
+/// A linear axis's label: at most three decimals, no trailing zeros; below 0.001, one
+/// significant digit in exponent form (2e-4), so small ticks do not all read 0 (under 1e-12:
+/// a zero tick's rounding, 0).
 pub(super) fn linear_label(v: &f64) -> String {
+    if v.abs() >= 1e-12 && v.abs() < 1e-3 {
+        let s = format!("{v:.0e}");
+        return s.replace("e-0", "e-");
+    }
     let s = format!("{v:.3}");
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" {
@@ -158,6 +180,9 @@ pub(super) fn chart<'a, 'b>(
     mesh.draw().map_err(err)?;
     let grid = BLACK.mix(0.15);
     let (xr, yr) = (x.range(), y.range());
+    // The chart's coordinates are the backend's; `area`'s are its own, from its corner.
+    let (bx, by) = area.get_base_pixel();
+    let local = |(px, py): (i32, i32)| (px - bx, py - by);
     if x.log {
         let style = TextStyle::from((FONT, 12).into_font()).pos(Pos::new(HPos::Center, VPos::Top));
         for t in log_ticks(x.lo, x.hi) {
@@ -165,7 +190,7 @@ pub(super) fn chart<'a, 'b>(
             chart
                 .draw_series(LineSeries::new([(c, yr.start), (c, yr.end)], grid))
                 .map_err(err)?;
-            let (px, py) = chart.backend_coord(&(c, yr.start));
+            let (px, py) = local(chart.backend_coord(&(c, yr.start)));
             area.draw(&PathElement::new([(px, py), (px, py + 4)], BLACK))
                 .map_err(err)?;
             area.draw(&Text::new(tick_label(t), (px, py + 6), style.clone()))
@@ -180,7 +205,7 @@ pub(super) fn chart<'a, 'b>(
             chart
                 .draw_series(LineSeries::new([(xr.start, c), (xr.end, c)], grid))
                 .map_err(err)?;
-            let (px, py) = chart.backend_coord(&(xr.start, c));
+            let (px, py) = local(chart.backend_coord(&(xr.start, c)));
             area.draw(&PathElement::new([(px - 4, py), (px, py)], BLACK))
                 .map_err(err)?;
             area.draw(&Text::new(tick_label(t), (px - 6, py), style.clone()))
@@ -220,7 +245,11 @@ mod tests {
         assert_eq!(l, ["0.05", "0.1", "0.3", "2", "300", "5000", "2e5", "1e6"]);
         assert_eq!(linear_label(&2.5), "2.5");
         assert_eq!(linear_label(&100.0), "100");
-        assert_eq!(linear_label(&-0.0001), "0");
+        assert_eq!(linear_label(&-0.0001), "-1e-4");
+        assert_eq!(linear_label(&0.0002), "2e-4");
+        assert_eq!(linear_label(&0.0), "0");
+        assert_eq!(linear_label(&5.5e-17), "0");
+        assert_eq!(linear_label(&-0.0), "0");
     }
 
     #[test]

@@ -13,14 +13,20 @@ use crate::LabError;
 pub(crate) struct Layout {
     pub(crate) points: Vec<(i32, i32)>,
     pub(crate) legend: Option<(i32, i32, i32, i32)>,
+    /// Entries in the legend.
+    pub(crate) legend_entries: usize,
+    /// What the caption must add for a reader to name every point: each sweep's values in
+    /// the order its lines run, and the numbered points' cells.
+    pub(crate) notes: Vec<String>,
 }
 
 /// How a legend entry shows its series.
 #[derive(Clone, Copy)]
 pub(super) enum Mark {
     Line(RGBColor),
-    Dot(RGBColor),
     Block(RGBColor),
+    /// A marker's shape, colour and fill ([`super::panels::draw_marker`]).
+    Shape(super::panels::Shape, RGBColor, bool),
 }
 
 /// The most characters of a label in a legend or beside a bar.
@@ -60,15 +66,15 @@ pub(super) fn legend(
                     c.stroke_width(2),
                 ))
                 .map_err(err)?,
-            Mark::Dot(c) => area
-                .draw(&Circle::new((x0 + 9, y), 4, c.filled()))
-                .map_err(err)?,
             Mark::Block(c) => area
                 .draw(&Rectangle::new(
                     [(x0 + 3, y - 5), (x0 + 15, y + 5)],
                     c.filled(),
                 ))
                 .map_err(err)?,
+            Mark::Shape(shape, c, filled) => {
+                super::panels::draw_marker(area, (x0 + 9, y), 4, shape, c, filled)?
+            }
         }
         area.draw(&Text::new(clip_label(label), (x0 + 26, y), style.clone()))
             .map_err(err)?;

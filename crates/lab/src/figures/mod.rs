@@ -15,6 +15,7 @@ use crate::results::Row;
 
 mod axes;
 mod legend;
+pub(crate) mod panels;
 
 use axes::Scale;
 pub(crate) use legend::Layout;
@@ -47,6 +48,28 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(127, 127, 127),
 ];
 
+/// Writes a figure drawn into `svg` to `path`, through a temporary file and a rename, with the
+/// legend's box marked for checks that read the SVG (an invisible `rect` of class
+/// `legend-box`: tests count the text drawn inside it).
+pub(crate) fn write_svg(
+    path: &Path,
+    svg: &str,
+    legend: Option<(i32, i32, i32, i32)>,
+) -> Result<(), LabError> {
+    let mut out = svg.to_owned();
+    if let (Some((x0, y0, x1, y1)), Some(end)) = (legend, out.rfind("</svg>")) {
+        out.insert_str(
+            end,
+            &format!(
+                "<rect class=\"legend-box\" x=\"{x0}\" y=\"{y0}\" width=\"{}\" height=\"{}\" fill=\"none\" stroke=\"none\"/>\n",
+                x1 - x0,
+                y1 - y0
+            ),
+        );
+    }
+    crate::write_atomic(path, out.as_bytes())
+}
+
 /// The configuration of a row without its light count: one series of the scaling figure.
 pub(crate) fn series_key(r: &Row) -> String {
     let parts: Vec<&str> = r
@@ -71,6 +94,15 @@ pub(crate) fn time_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>
                 .push((r.lights as f64, t));
         }
     }
+    // A line needs two light counts: configurations measured at one (a setting's own count)
+    // are no line, and a report with no line has no such figure.
+    series.retain(|_, pts| {
+        pts.iter()
+            .map(|p| p.0.to_bits())
+            .collect::<std::collections::BTreeSet<_>>()
+            .len()
+            > 1
+    });
     let counts: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.lights).collect();
     if counts.len() < 2 || series.is_empty() {
         return Ok(None);
@@ -80,34 +112,39 @@ pub(crate) fn time_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>
     let labels: Vec<String> = series.keys().cloned().collect();
     let lw = legend_width(&labels);
     let height = 460.max(60 + 16 * labels.len() as u32);
-    let root = SVGBackend::new(path, (700 + lw, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let (plot, side) = root.split_horizontally(700);
-    let mut chart = axes::chart(
-        &plot,
-        "GPU time per frame against light count",
-        (x, "lights"),
-        (y, "GPU ms, median"),
-    )?;
+    let mut svg = String::new();
     let mut layout = Layout::default();
-    let mut entries = Vec::new();
-    for (i, (name, mut pts)) in series.into_iter().enumerate() {
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let pts: Vec<(f64, f64)> = pts.iter().map(|p| (x.map(p.0), y.map(p.1))).collect();
-        let c = PALETTE[i % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
-            .map_err(err)?;
-        layout
-            .points
-            .extend(pts.iter().map(|p| chart.backend_coord(p)));
-        chart
-            .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
-            .map_err(err)?;
-        entries.push((name, Mark::Line(c)));
+    {
+        let root = SVGBackend::with_string(&mut svg, (700 + lw, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let (plot, side) = root.split_horizontally(700);
+        let mut chart = axes::chart(
+            &plot,
+            "GPU time per frame against light count",
+            (x, "lights"),
+            (y, "GPU ms, median"),
+        )?;
+        let mut entries = Vec::new();
+        for (i, (name, mut pts)) in series.into_iter().enumerate() {
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            let pts: Vec<(f64, f64)> = pts.iter().map(|p| (x.map(p.0), y.map(p.1))).collect();
+            let c = PALETTE[i % PALETTE.len()];
+            chart
+                .draw_series(LineSeries::new(pts.clone(), c.stroke_width(2)))
+                .map_err(err)?;
+            layout
+                .points
+                .extend(pts.iter().map(|p| chart.backend_coord(p)));
+            chart
+                .draw_series(pts.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+                .map_err(err)?;
+            entries.push((name, Mark::Line(c)));
+        }
+        layout.legend = Some(legend(&side, &entries)?);
+        layout.legend_entries = entries.len();
+        root.present().map_err(err)?;
     }
-    layout.legend = Some(legend(&side, &entries)?);
-    root.present().map_err(err)?;
+    write_svg(path, &svg, layout.legend)?;
     Ok(Some(layout))
 }
 
@@ -172,10 +209,14 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
             .collect::<Vec<_>>(),
     );
     let height = 110 + 24 * n as u32;
-    let root = SVGBackend::new(path, (label_w + 520 + lw, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let (plot, side) = root.split_horizontally(label_w + 520);
-    let mut chart = ChartBuilder::on(&plot)
+    let mut svg = String::new();
+    let mut layout = Layout::default();
+    {
+        let root =
+            SVGBackend::with_string(&mut svg, (label_w + 520 + lw, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let (plot, side) = root.split_horizontally(label_w + 520);
+        let mut chart = ChartBuilder::on(&plot)
         .caption(
             if moving {
                 "Per-pass GPU time (median): moving the lights | geometry pass (raster) | culling | shading"
@@ -191,48 +232,51 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
         .y_label_area_size(label_w)
         .build_cartesian_2d(0.0..xmax, 0.0..n as f64)
         .map_err(err)?;
-    chart
-        .configure_mesh()
-        .disable_y_mesh()
-        .y_labels(0)
-        .bold_line_style(BLACK.mix(0.15))
-        .light_line_style(TRANSPARENT)
-        .x_label_formatter(&axes::linear_label)
-        .x_desc("GPU ms")
-        .label_style((FONT, 11))
-        .draw()
-        .map_err(err)?;
-    let mut layout = Layout::default();
-    for &k in &shown_parts {
-        let c = colours[k];
         chart
-            .draw_series(shown.iter().enumerate().map(|(i, r)| {
-                let p = parts(r);
-                let x0: f64 = p[..k].iter().sum();
-                Rectangle::new(
-                    [(x0, i as f64 + 0.15), (x0 + p[k], i as f64 + 0.85)],
-                    c.filled(),
-                )
-            }))
+            .configure_mesh()
+            .disable_y_mesh()
+            .y_labels(0)
+            .bold_line_style(BLACK.mix(0.15))
+            .light_line_style(TRANSPARENT)
+            .x_label_formatter(&axes::linear_label)
+            .x_desc("GPU ms")
+            .label_style((FONT, 11))
+            .draw()
             .map_err(err)?;
+        for &k in &shown_parts {
+            let c = colours[k];
+            chart
+                .draw_series(shown.iter().enumerate().map(|(i, r)| {
+                    let p = parts(r);
+                    let x0: f64 = p[..k].iter().sum();
+                    Rectangle::new(
+                        [(x0, i as f64 + 0.15), (x0 + p[k], i as f64 + 0.85)],
+                        c.filled(),
+                    )
+                }))
+                .map_err(err)?;
+        }
+        // Every bar named, beside it.
+        let style =
+            TextStyle::from((FONT, 11).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
+        for (i, (label, r)) in labels.iter().zip(&shown).enumerate() {
+            let (x, y) = chart.backend_coord(&(0.0, i as f64 + 0.5));
+            root.draw(&Text::new(label.clone(), (x - 6, y), style.clone()))
+                .map_err(err)?;
+            let total: f64 = parts(r).iter().sum();
+            layout
+                .points
+                .push(chart.backend_coord(&(total, i as f64 + 0.5)));
+        }
+        let entries: Vec<(String, Mark)> = shown_parts
+            .iter()
+            .map(|&k| (names[k].to_owned(), Mark::Block(colours[k])))
+            .collect();
+        layout.legend = Some(legend(&side, &entries)?);
+        layout.legend_entries = entries.len();
+        root.present().map_err(err)?;
     }
-    // Every bar named, beside it.
-    let style = TextStyle::from((FONT, 11).into_font()).pos(Pos::new(HPos::Right, VPos::Center));
-    for (i, (label, r)) in labels.iter().zip(&shown).enumerate() {
-        let (x, y) = chart.backend_coord(&(0.0, i as f64 + 0.5));
-        root.draw(&Text::new(label.clone(), (x - 6, y), style.clone()))
-            .map_err(err)?;
-        let total: f64 = parts(r).iter().sum();
-        layout
-            .points
-            .push(chart.backend_coord(&(total, i as f64 + 0.5)));
-    }
-    let entries: Vec<(String, Mark)> = shown_parts
-        .iter()
-        .map(|&k| (names[k].to_owned(), Mark::Block(colours[k])))
-        .collect();
-    layout.legend = Some(legend(&side, &entries)?);
-    root.present().map_err(err)?;
+    write_svg(path, &svg, layout.legend)?;
     Ok(Some(layout))
 }
 
@@ -252,109 +296,45 @@ fn pareto(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
 /// One axis of a scatter: its name and its value in a row.
 pub(crate) type Axis<'a> = (&'a str, &'a dyn Fn(&Row) -> Option<f64>);
 
-/// Speed against accuracy: `time` against `accuracy`, one point per cell, the configurations
-/// apart, the Pareto front in black.
+/// Speed against accuracy: `time` against `accuracy` in small multiples
+/// ([`panels`]), a panel a setting, each configuration's sweep a line, each panel's Pareto
+/// front in black.
 pub(crate) fn speed_accuracy(
     rows: &[Row],
     path: &Path,
     time: Axis<'_>,
     accuracy: Axis<'_>,
 ) -> Result<Option<Layout>, LabError> {
-    let caption = format!(
-        "Speed against accuracy: {} and {} (Pareto front in black)",
+    let title = format!(
+        "Speed against accuracy: {} against {} (black: Pareto front)",
         time.0, accuracy.0
     );
-    scatter(rows, path, &caption, time, accuracy, &series_key, true)
-}
-
-/// A scatter of `x` against `y`, one point per row that has both, coloured by `series`, with
-/// the Pareto front (smaller is better on both axes) where `front`; the axes fitted to the
-/// points, logarithmic where they span decades; the legend beside the plot.
-fn scatter(
-    rows: &[Row],
-    path: &Path,
-    caption: &str,
-    (x_name, x): Axis<'_>,
-    (y_name, y): Axis<'_>,
-    series: &dyn Fn(&Row) -> String,
-    front: bool,
-) -> Result<Option<Layout>, LabError> {
-    let pts: Vec<(f64, f64, String)> = rows
-        .iter()
-        .filter_map(|r| Some((x(r)?, y(r)?, series(r))))
-        .filter(|p| p.0.is_finite() && p.1.is_finite())
-        .collect();
-    if pts.len() < 2 {
-        return Ok(None);
-    }
-    let keys: Vec<String> = {
-        let mut k: Vec<String> = pts.iter().map(|p| p.2.clone()).collect();
-        k.sort();
-        k.dedup();
-        k
-    };
-    let xs = Scale::fit(pts.iter().map(|p| p.0));
-    let ys = Scale::fit(pts.iter().map(|p| p.1));
-    let lw = legend_width(&keys);
-    let height = 460.max(60 + 16 * keys.len() as u32);
-    let root = SVGBackend::new(path, (700 + lw, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(err)?;
-    let (plot, side) = root.split_horizontally(700);
-    let mut chart = axes::chart(&plot, caption, (xs, x_name), (ys, y_name))?;
-    let at = |p: &(f64, f64, String)| (xs.map(p.0), ys.map(p.1));
-    for (i, key) in keys.iter().enumerate() {
-        let c = PALETTE[i % PALETTE.len()];
-        chart
-            .draw_series(
-                pts.iter()
-                    .filter(|p| &p.2 == key)
-                    .map(|p| Circle::new(at(p), 4, c.filled())),
-            )
-            .map_err(err)?;
-    }
-    if front {
-        let front: Vec<(f64, f64)> = pareto(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>())
-            .into_iter()
-            .map(|p| (xs.map(p.0), ys.map(p.1)))
-            .collect();
-        chart
-            .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(2)))
-            .map_err(err)?;
-        chart
-            .draw_series(
-                front
-                    .into_iter()
-                    .map(|p| Circle::new(p, 6, BLACK.stroke_width(2))),
-            )
-            .map_err(err)?;
-    }
-    let points = pts.iter().map(|p| chart.backend_coord(&at(p))).collect();
-    let entries: Vec<(String, Mark)> = keys
-        .iter()
-        .enumerate()
-        .map(|(i, k)| (k.clone(), Mark::Dot(PALETTE[i % PALETTE.len()])))
-        .collect();
-    let legend = legend(&side, &entries)?;
-    root.present().map_err(err)?;
-    Ok(Some(Layout {
-        points,
-        legend: Some(legend),
-    }))
+    panels::draw(
+        rows,
+        path,
+        &panels::Spec {
+            title: &title,
+            x: time,
+            y: accuracy,
+            front: true,
+        },
+    )
 }
 
 /// What a loose list costs: the shading pass's time against the lights it evaluates per pixel,
-/// one point per cell, coloured by strategy (and backend, whose shading passes differ).
+/// one point per cell, in small multiples ([`panels`]).
 pub(crate) fn shade_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabError> {
-    scatter(
+    panels::draw(
         rows,
         path,
-        "Shading time against lights evaluated per pixel",
-        ("lights evaluated per pixel (mean)", &|r| {
-            r.lights_per_pixel_mean
-        }),
-        ("shading pass, GPU ms (median)", &|r| r.gpu_ms_shade),
-        &|r| format!("{}+{}", r.backend, r.strategy),
-        false,
+        &panels::Spec {
+            title: "Shading time against lights evaluated per pixel",
+            x: ("lights evaluated per pixel (mean)", &|r| {
+                r.lights_per_pixel_mean
+            }),
+            y: ("shading pass, GPU ms (median)", &|r| r.gpu_ms_shade),
+            front: false,
+        },
     )
 }
 
@@ -402,6 +382,12 @@ mod tests {
                 let Some(layout) = layout else { continue };
                 let (x0, y0, x1, y1) = layout.legend.expect("a legend");
                 assert!(!layout.points.is_empty(), "{}: {name}", dir.display());
+                assert!(
+                    layout.legend_entries <= panels::MAX_LEGEND,
+                    "{}: {name}: {} legend entries",
+                    dir.display(),
+                    layout.legend_entries
+                );
                 for &(x, y) in &layout.points {
                     let r = 6;
                     assert!(

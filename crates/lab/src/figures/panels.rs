@@ -1,0 +1,610 @@
+//! Scatter figures in small multiples, as papers draw speed against accuracy (Tokuyoshi and
+//! Harada 2016: a panel a scene, a line a method; STYLE.md, "Figures"):
+//!
+//! - a panel a setting (the cell's `setting=` part, else what varies of scene, light count and
+//!   resolution), every panel on the same axes, logarithmic where the values span a decade;
+//! - a colour a method family (cut-off thresholds, stochastic light culling in one frame,
+//!   accumulated, interleaved, ...), or, where a report has one family, a colour for each of
+//!   the few other things its cells vary (MSAA, materials, ...);
+//! - a line through each configuration's sweep in order (thresholds, error bounds), so one
+//!   configuration reads as one curve; the caption lists the sweep values in that order;
+//! - marker shape for the strategy, fill for the backend (filled: deferred; open: forward);
+//!   where one strategy ran and colours are the families, shape for the few other things the
+//!   cells vary (the material models, say);
+//! - the Pareto front of each panel in black;
+//! - one legend of at most [`MAX_LEGEND`] entries beside the panels; points that colour,
+//!   shape, fill and a line cannot tell apart carry a number, listed in the caption.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::axes::{self, Scale};
+use super::legend::{LABEL_CHARS, Mark, clip_label, legend, legend_width};
+use super::{Axis, FONT, Layout, PALETTE, err, pareto};
+use crate::LabError;
+use crate::results::Row;
+
+/// The most entries a figure's legend holds.
+pub(crate) const MAX_LEGEND: usize = 12;
+
+/// A panel's size in pixels, axes included.
+const PANEL: (u32, u32) = (420, 320);
+/// The strip above the panels that holds the figure's title.
+const TITLE_H: u32 = 34;
+
+/// A marker shape: the strategy a point's lists came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub(super) enum Shape {
+    Circle,
+    Square,
+    Diamond,
+    TriangleUp,
+    TriangleDown,
+    Cross,
+}
+
+impl Shape {
+    fn of_strategy(strategy: &str) -> Shape {
+        match strategy {
+            "tiled_gather" => Shape::Circle,
+            "tiled_scatter" => Shape::TriangleUp,
+            "depth_mask" => Shape::Square,
+            "clustered" => Shape::Diamond,
+            "zbin" => Shape::TriangleDown,
+            _ => Shape::Cross,
+        }
+    }
+
+    fn name(strategy: &str) -> String {
+        match strategy {
+            "tiled_gather" => "tiled gather".into(),
+            "tiled_scatter" => "tiled scatter".into(),
+            "depth_mask" => "2.5D depth masks".into(),
+            "clustered" => "clusters".into(),
+            "zbin" => "z-binning".into(),
+            "none" | "" => "no culling".into(),
+            s => s.replace('_', " "),
+        }
+    }
+}
+
+/// Draws a marker of `shape` centred at `(x, y)` (pixels of `area`), `r` pixels in radius,
+/// filled with `colour` or open (white inside, `colour` around).
+pub(super) fn draw_marker<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    (x, y): (i32, i32),
+    r: i32,
+    shape: Shape,
+    colour: RGBColor,
+    filled: bool,
+) -> Result<(), LabError> {
+    let pts: Vec<(i32, i32)> = match shape {
+        Shape::Circle => {
+            let fill = if filled {
+                colour.filled()
+            } else {
+                WHITE.filled()
+            };
+            area.draw(&Circle::new((x, y), r, fill)).map_err(err)?;
+            return area
+                .draw(&Circle::new((x, y), r, colour.stroke_width(2)))
+                .map_err(err);
+        }
+        Shape::Square => vec![
+            (x - r, y - r),
+            (x + r, y - r),
+            (x + r, y + r),
+            (x - r, y + r),
+        ],
+        Shape::Diamond => vec![
+            (x, y - r - 1),
+            (x + r + 1, y),
+            (x, y + r + 1),
+            (x - r - 1, y),
+        ],
+        Shape::TriangleUp => vec![(x, y - r - 1), (x + r + 1, y + r), (x - r - 1, y + r)],
+        Shape::TriangleDown => vec![(x - r - 1, y - r), (x + r + 1, y - r), (x, y + r + 1)],
+        Shape::Cross => {
+            for (a, b) in [
+                ((x - r, y - r), (x + r, y + r)),
+                ((x - r, y + r), (x + r, y - r)),
+            ] {
+                area.draw(&PathElement::new(vec![a, b], colour.stroke_width(2)))
+                    .map_err(err)?;
+            }
+            return Ok(());
+        }
+    };
+    let fill = if filled {
+        colour.filled()
+    } else {
+        WHITE.filled()
+    };
+    area.draw(&Polygon::new(pts.clone(), fill)).map_err(err)?;
+    let mut ring = pts.clone();
+    ring.push(pts[0]);
+    area.draw(&PathElement::new(ring, colour.stroke_width(2)))
+        .map_err(err)
+}
+
+/// The cell's name parts that set the radius rule: `threshold=`, `radius=` or `stochastic=`.
+fn radius_part(cell: &str) -> Option<&str> {
+    cell.split(',').find(|p| {
+        p.starts_with("threshold=") || p.starts_with("stochastic=") || p.starts_with("radius=")
+    })
+}
+
+/// A row's method family and its place in the family's sweep (the threshold, radius or error
+/// bound), from the radius part of its cell name (`crate::cells::radius_label`).
+pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
+    let Some(part) = radius_part(&r.cell) else {
+        let name = match r.radius_rule.as_str() {
+            "threshold" => "cut-off thresholds",
+            "stochastic" => "stochastic",
+            _ => "fixed radius",
+        };
+        return (name.into(), None);
+    };
+    let (kind, value) = part.split_once('=').unwrap_or((part, ""));
+    let mut pieces = value.split('/');
+    let v = pieces.next().and_then(|v| v.parse::<f64>().ok());
+    match kind {
+        "threshold" => ("cut-off thresholds".into(), v),
+        "radius" => ("fixed radii".into(), v),
+        _ => {
+            let (mut acc, mut il, mut extra) = (None, None, Vec::new());
+            for p in pieces {
+                if let Some(k) = p.strip_prefix("acc") {
+                    acc = Some(k.to_owned());
+                } else if let Some(n) = p.strip_prefix("il") {
+                    il = Some(n.to_owned());
+                } else {
+                    extra.push(p.to_owned());
+                }
+            }
+            let mut name = match (acc, il) {
+                (None, None) => "stochastic, one frame".to_owned(),
+                (Some(k), None) => format!("stochastic, {k} frames accumulated"),
+                (None, Some(n)) => format!("stochastic, {n}x{n} interleaved"),
+                (Some(k), Some(n)) => format!("stochastic, {n}x{n} interleaved, {k} frames"),
+            };
+            for e in extra {
+                name += &format!(" ({e})");
+            }
+            (name, v)
+        }
+    }
+}
+
+/// Name parts that only say which panel a cell is in, or its strategy and backend (shown by
+/// marker and fill).
+fn is_panel_or_marker_part(p: &str) -> bool {
+    [
+        "setting=",
+        "scene=",
+        "lights=",
+        "seed=",
+        "variant=",
+        "strategy=",
+        "backend=",
+    ]
+    .iter()
+    .any(|k| p.starts_with(k))
+}
+
+/// What a point is, for drawing.
+struct Pt<'r> {
+    row: &'r Row,
+    x: f64,
+    y: f64,
+    panel: usize,
+    colour: usize,
+    order: Option<f64>,
+    /// Points of one line: the same panel and cell name but for the sweep's value.
+    line: String,
+}
+
+/// A figure's title and axes; `front`: draw each panel's Pareto front (smaller is better on
+/// both axes).
+pub(crate) struct Spec<'a> {
+    pub(crate) title: &'a str,
+    pub(crate) x: Axis<'a>,
+    pub(crate) y: Axis<'a>,
+    pub(crate) front: bool,
+}
+
+/// The panels of `rows`: each row's panel index and the panels' titles.
+fn panels_of(rows: &[&Row]) -> (Vec<usize>, Vec<String>) {
+    let setting = |r: &Row| {
+        r.cell
+            .split(',')
+            .find_map(|p| p.strip_prefix("setting="))
+            .map(str::to_owned)
+    };
+    let scene = |r: &Row| {
+        r.cell
+            .split(',')
+            .find_map(|p| p.strip_prefix("scene="))
+            .map_or_else(|| r.scene.clone(), str::to_owned)
+    };
+    let lights = |r: &Row| format!("{} lights", r.lights);
+    let res = |r: &Row| format!("{}x{}", r.width, r.height);
+    let varies =
+        |f: &dyn Fn(&Row) -> String| rows.iter().map(|r| f(r)).collect::<BTreeSet<_>>().len() > 1;
+    let (vs, vl, vr) = (varies(&scene), varies(&lights), varies(&res));
+    let key = |r: &Row| -> String {
+        if let Some(s) = setting(r) {
+            return s;
+        }
+        let mut parts = Vec::new();
+        if vs {
+            parts.push(scene(r));
+        }
+        if vl {
+            parts.push(lights(r));
+        }
+        if vr {
+            parts.push(res(r));
+        }
+        parts.join(", ")
+    };
+    let mut titles: Vec<String> = Vec::new();
+    let idx = rows
+        .iter()
+        .map(|r| {
+            let k = key(r);
+            titles.iter().position(|t| *t == k).unwrap_or_else(|| {
+                titles.push(k);
+                titles.len() - 1
+            })
+        })
+        .collect();
+    (idx, titles)
+}
+
+/// Draws `spec` over `rows` into `path` (written whole, or not at all); `None` where fewer
+/// than two rows have both values.
+pub(crate) fn draw(rows: &[Row], path: &Path, spec: &Spec<'_>) -> Result<Option<Layout>, LabError> {
+    let shown: Vec<&Row> = rows
+        .iter()
+        .filter(|r| {
+            matches!(((spec.x.1)(r), (spec.y.1)(r)), (Some(x), Some(y)) if x.is_finite() && y.is_finite())
+        })
+        .collect();
+    if shown.len() < 2 {
+        return Ok(None);
+    }
+    let (panel_of, titles) = panels_of(&shown);
+    // Colours: the method families where there are several; else the few other things the
+    // cells vary; else one colour.
+    let families: Vec<(String, Option<f64>)> = shown.iter().map(|r| family(r)).collect();
+    let distinct_families: BTreeSet<&String> = families.iter().map(|f| &f.0).collect();
+    let rest = |r: &Row| -> String {
+        let radius = radius_part(&r.cell);
+        r.cell
+            .split(',')
+            .filter(|p| Some(*p) != radius && !is_panel_or_marker_part(p))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let strategies: BTreeSet<&str> = shown.iter().map(|r| r.strategy.as_str()).collect();
+    let backends: BTreeSet<bool> = shown.iter().map(|r| is_filled(r)).collect();
+    let room = MAX_LEGEND - strategies.len() - backends.len() - usize::from(spec.front);
+    let rests: BTreeSet<String> = shown.iter().map(|r| rest(r)).collect();
+    let colour_key: Vec<String> = if distinct_families.len() > 1 {
+        families.iter().map(|f| f.0.clone()).collect()
+    } else if rests.len() > 1 && rests.len() <= room.min(PALETTE.len()) {
+        shown.iter().map(|r| rest(r)).collect()
+    } else {
+        families.iter().map(|f| f.0.clone()).collect()
+    };
+    // Shapes: the strategies where there are several; else, where colours are the families,
+    // the other things the cells vary (materials, MSAA, ...) if few enough.
+    let colour_by_family = colour_key.iter().zip(&families).all(|(c, f)| *c == f.0);
+    let shape_by_rest = colour_by_family
+        && strategies.len() == 1
+        && rests.len() > 1
+        && rests.len() <= SHAPES.len()
+        && distinct_families.len() + rests.len() + backends.len() + usize::from(spec.front)
+            <= MAX_LEGEND;
+    let rest_list: Vec<&String> = rests.iter().collect();
+    let shape_of = |r: &Row| -> Shape {
+        if shape_by_rest {
+            let k = rest(r);
+            SHAPES[rest_list.iter().position(|x| **x == k).unwrap_or(0)]
+        } else {
+            Shape::of_strategy(&r.strategy)
+        }
+    };
+    let mut colours: Vec<String> = Vec::new();
+    let mut pts: Vec<Pt<'_>> = Vec::new();
+    for (i, r) in shown.iter().enumerate() {
+        let c = colours
+            .iter()
+            .position(|k| *k == colour_key[i])
+            .unwrap_or_else(|| {
+                colours.push(colour_key[i].clone());
+                colours.len() - 1
+            });
+        let line = {
+            let radius = radius_part(&r.cell);
+            let cell: Vec<&str> = r
+                .cell
+                .split(',')
+                .map(|p| if Some(p) == radius { "" } else { p })
+                .collect();
+            format!("{}|{}|{}", panel_of[i], families[i].0, cell.join(","))
+        };
+        pts.push(Pt {
+            row: r,
+            x: (spec.x.1)(r).unwrap_or(0.0),
+            y: (spec.y.1)(r).unwrap_or(0.0),
+            panel: panel_of[i],
+            colour: c,
+            order: families[i].1,
+            line,
+        });
+    }
+    let xs = Scale::fit_log(pts.iter().map(|p| p.x));
+    let ys = Scale::fit_log(pts.iter().map(|p| p.y));
+    // The legend: colours, then strategies' shapes, then backends' fills, then the front.
+    let palette = |c: usize| PALETTE[c % PALETTE.len()];
+    let mut entries: Vec<(String, Mark)> = colours
+        .iter()
+        .enumerate()
+        .map(|(c, k)| (k.clone(), Mark::Line(palette(c))))
+        .collect();
+    if shape_by_rest {
+        for (k, r) in rest_list.iter().enumerate() {
+            entries.push(((*r).clone(), Mark::Shape(SHAPES[k], GREY_MARK, true)));
+        }
+    } else {
+        for s in &strategies {
+            entries.push((
+                Shape::name(s),
+                Mark::Shape(Shape::of_strategy(s), GREY_MARK, true),
+            ));
+        }
+    }
+    for &filled in &backends {
+        let label = if filled {
+            "filled: deferred"
+        } else {
+            "open: forward (or no culling)"
+        };
+        entries.push((label.into(), Mark::Shape(Shape::Circle, GREY_MARK, filled)));
+    }
+    if spec.front {
+        entries.push(("Pareto front (per panel)".into(), Mark::Line(BLACK)));
+    }
+    // Numbers for points nothing else tells apart.
+    let mut numbered: BTreeMap<usize, usize> = BTreeMap::new();
+    {
+        let mut line_sizes: BTreeMap<&str, usize> = BTreeMap::new();
+        for p in pts.iter().filter(|p| p.order.is_some()) {
+            *line_sizes.entry(p.line.as_str()).or_default() += 1;
+        }
+        let mut seen: BTreeMap<(usize, usize, Shape, bool, String), Vec<usize>> = BTreeMap::new();
+        for (i, p) in pts.iter().enumerate() {
+            // A point on a drawn line is told apart by its place along it.
+            let line = if p.order.is_some() && line_sizes[p.line.as_str()] > 1 {
+                p.line.clone()
+            } else {
+                String::new()
+            };
+            seen.entry((p.panel, p.colour, shape_of(p.row), is_filled(p.row), line))
+                .or_default()
+                .push(i);
+        }
+        for group in seen.values().filter(|g| g.len() > 1) {
+            // A line's points are told apart by their order along it, unless two share a
+            // sweep value.
+            let on_line = group
+                .iter()
+                .all(|&i| pts[i].order.is_some() && line_sizes[pts[i].line.as_str()] > 1);
+            let orders: BTreeSet<u64> = group
+                .iter()
+                .filter_map(|&i| pts[i].order.map(f64::to_bits))
+                .collect();
+            if on_line && orders.len() == group.len() {
+                continue;
+            }
+            for &i in group {
+                let n = numbered.len() + 1;
+                numbered.insert(i, n);
+            }
+        }
+    }
+    let labels: Vec<String> = entries.iter().map(|e| e.0.clone()).collect();
+    let lw = legend_width(&labels);
+    let n = titles.len() as u32;
+    let cols = match n {
+        1..=3 => n,
+        4 => 2,
+        _ => 3,
+    };
+    let grid_rows = n.div_ceil(cols);
+    let title_w = (spec.title.chars().count() as u32) * 8 + 40;
+    let width = (cols * PANEL.0 + lw).max(title_w);
+    let legend_h = 60 + 16 * entries.len() as u32;
+    let height = (TITLE_H + grid_rows * PANEL.1).max(legend_h);
+    let mut svg = String::new();
+    let mut layout = Layout::default();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        let (head, body) = root.split_vertically(TITLE_H);
+        let style = TextStyle::from((FONT, 15).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+        head.draw(&Text::new(
+            spec.title.to_owned(),
+            (12, TITLE_H as i32 / 2),
+            style,
+        ))
+        .map_err(err)?;
+        let (plots, side) = body.split_horizontally(cols * PANEL.0);
+        let areas = plots.split_evenly((grid_rows as usize, cols as usize));
+        for (k, title) in titles.iter().enumerate() {
+            let area = &areas[k];
+            let chart = axes::chart(area, &clip_label(title), (xs, spec.x.0), (ys, spec.y.0))?;
+            let at = |p: &Pt<'_>| chart.backend_coord(&(xs.map(p.x), ys.map(p.y)));
+            // Lines first, markers over them.
+            let mut lines: BTreeMap<&str, Vec<&Pt<'_>>> = BTreeMap::new();
+            for p in pts.iter().filter(|p| p.panel == k && p.order.is_some()) {
+                lines.entry(p.line.as_str()).or_default().push(p);
+            }
+            for line in lines.values_mut().filter(|l| l.len() > 1) {
+                // From the loosest bound to the tightest: thresholds and error bounds fall.
+                line.sort_by(|a, b| b.order.unwrap_or(0.0).total_cmp(&a.order.unwrap_or(0.0)));
+                let c = palette(line[0].colour);
+                let path: Vec<(i32, i32)> = line.iter().map(|p| at(p)).collect();
+                root.draw(&PathElement::new(path, c.mix(0.7).stroke_width(1)))
+                    .map_err(err)?;
+            }
+            if spec.front {
+                let own: Vec<(f64, f64)> = pts
+                    .iter()
+                    .filter(|p| p.panel == k)
+                    .map(|p| (p.x, p.y))
+                    .collect();
+                let front: Vec<(i32, i32)> = pareto(&own)
+                    .into_iter()
+                    .map(|(x, y)| chart.backend_coord(&(xs.map(x), ys.map(y))))
+                    .collect();
+                root.draw(&PathElement::new(front.clone(), BLACK.stroke_width(2)))
+                    .map_err(err)?;
+                for p in front {
+                    root.draw(&Circle::new(p, 8, BLACK.stroke_width(1)))
+                        .map_err(err)?;
+                }
+            }
+            let number_style =
+                TextStyle::from((FONT, 10).into_font()).pos(Pos::new(HPos::Left, VPos::Bottom));
+            for (i, p) in pts.iter().enumerate().filter(|(_, p)| p.panel == k) {
+                let c = at(p);
+                draw_marker(
+                    &root,
+                    c,
+                    4,
+                    shape_of(p.row),
+                    palette(p.colour),
+                    is_filled(p.row),
+                )?;
+                if let Some(n) = numbered.get(&i) {
+                    root.draw(&Text::new(
+                        n.to_string(),
+                        (c.0 + 5, c.1 - 3),
+                        number_style.clone(),
+                    ))
+                    .map_err(err)?;
+                }
+                layout.points.push(c);
+            }
+        }
+        layout.legend = Some(legend(&side, &entries)?);
+        root.present().map_err(err)?;
+    }
+    // The sweeps' values in the order each line runs, and the numbered points.
+    let mut sweeps: BTreeMap<&str, BTreeSet<u64>> = BTreeMap::new();
+    for (p, f) in pts.iter().zip(&families) {
+        if let Some(v) = p.order {
+            sweeps.entry(f.0.as_str()).or_default().insert(v.to_bits());
+        }
+    }
+    for (family, values) in &sweeps {
+        let mut v: Vec<f64> = values.iter().map(|b| f64::from_bits(*b)).collect();
+        v.sort_by(|a, b| b.total_cmp(a));
+        let what = if family.starts_with("stochastic") {
+            "error bounds"
+        } else if family.starts_with("fixed") {
+            "radii"
+        } else {
+            "thresholds"
+        };
+        layout.notes.push(format!(
+            "{family}: {what} {} (along each line, left to right as drawn)",
+            v.iter()
+                .map(|x| format!("{x}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    for (i, n) in &numbered {
+        layout.notes.push(format!(
+            "point {n}: {}",
+            clip_to(&pts[*i].row.cell, LABEL_CHARS * 2)
+        ));
+    }
+    layout.legend_entries = entries.len();
+    super::write_svg(path, &svg, layout.legend)?;
+    Ok(Some(layout))
+}
+
+/// The shapes in the order other keys than the strategy take them.
+const SHAPES: [Shape; 6] = [
+    Shape::Circle,
+    Shape::Square,
+    Shape::Diamond,
+    Shape::TriangleUp,
+    Shape::TriangleDown,
+    Shape::Cross,
+];
+
+/// Grey: the legend's markers for shape and fill, whose colour means nothing.
+const GREY_MARK: RGBColor = RGBColor(90, 90, 90);
+
+/// Deferred backends' points are filled; forward's and naive forward's open.
+fn is_filled(r: &Row) -> bool {
+    r.backend.starts_with("deferred")
+}
+
+fn clip_to(s: &str, n: usize) -> String {
+    if s.chars().count() <= n {
+        s.to_owned()
+    } else {
+        let mut t: String = s.chars().take(n - 1).collect();
+        t.push('…');
+        t
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(cell: &str, strategy: &str, backend: &str) -> Row {
+        let mut r = crate::results::tests::sample_row();
+        r.cell = cell.into();
+        r.strategy = strategy.into();
+        r.backend = backend.into();
+        r
+    }
+
+    #[test]
+    fn families_and_sweeps_come_from_the_cell_name() {
+        let f = |cell: &str| family(&row(cell, "tiled_gather", "deferred"));
+        assert_eq!(
+            f("setting=hall,threshold=0.03,variant=x"),
+            ("cut-off thresholds".into(), Some(0.03))
+        );
+        assert_eq!(
+            f("stochastic=0.5,variant=x"),
+            ("stochastic, one frame".into(), Some(0.5))
+        );
+        assert_eq!(
+            f("stochastic=1/acc16,variant=x"),
+            ("stochastic, 16 frames accumulated".into(), Some(1.0))
+        );
+        assert_eq!(
+            f("stochastic=1/il2,variant=x"),
+            ("stochastic, 2x2 interleaved".into(), Some(1.0))
+        );
+        assert_eq!(
+            f("stochastic=1/albedo,variant=x").0,
+            "stochastic, one frame (albedo)"
+        );
+    }
+}
