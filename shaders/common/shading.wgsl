@@ -47,10 +47,17 @@ fn shade_light_at(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: ve
 // of that code's cost (docs/bench/HISTORY.md, "The lighting pass against its floor").
 override POINT_LIGHTS: bool = false;
 
+// STOCHASTIC_POINTS (with POINT_LIGHTS): the frame's lights are all point lights with
+// stochastic ranges drawn for the frame and no interleaving (FRAME_FLAG_STOCHASTIC_POINTS, set by
+// GpuScene::mark_stochastic_points): shade_point_light shades max(1 / d^2, alpha) inside the
+// drawn range, light_attenuation's stochastic arm, on the same short path.
+override STOCHASTIC_POINTS: bool = false;
+
 // Whether the frame says every light is a windowed point light (FRAME_FLAG_POINT_LIGHTS, which
 // GpuScene sets from the lights it holds, and no infinite-range falloff).
 fn point_lights_only() -> bool {
-    return (frame.flags & (FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_INFINITE_RANGE)) == FRAME_FLAG_POINT_LIGHTS;
+    let want = FRAME_FLAG_POINT_LIGHTS | select(0u, FRAME_FLAG_STOCHASTIC_POINTS, STOCHASTIC_POINTS);
+    return (frame.flags & (FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS | FRAME_FLAG_INFINITE_RANGE)) == want;
 }
 
 // A listed light the per-pixel reject kept (d < radius, or any d with the infinite-range
@@ -76,9 +83,12 @@ fn lights_checked(c: vec3<f32>) -> vec3<f32> {
 // shade_light_at for a point light with the windowed falloff and no stochastic alpha: the same
 // sum without the general model's branches and loads (its cone is 1, and a zero falloff adds
 // zero, as brdf_cos is finite).
+// With STOCHASTIC_POINTS the falloff is max(1 / d^2, alpha): the loops call it only inside the
+// drawn range (d < radius), where light_attenuation gives the same.
 fn shade_point_light(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let l = select(n, to_light / d, d > 0.0);
-    return light.color * (light.intensity * light_falloff(d, light.radius)) * brdf_cos(m, n, l, v);
+    let atten = select(light_falloff(d, light.radius), max(light_falloff_infinite(d), light.alpha), STOCHASTIC_POINTS);
+    return light.color * (light.intensity * atten) * brdf_cos(m, n, l, v);
 }
 
 // One light at `p` with the infinite-range falloff whatever the frame's flags (the compute

@@ -290,7 +290,7 @@ fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: S
             let i = light_indices[k];
             let q = vec4<f32>(lights[i].position, lights[i].radius);
             if infinite || part_box_holds(0u, q.xyz, q.w) {
-                wg_points[li] = array<vec4<f32>, 2>(q, vec4<f32>(lights[i].color, lights[i].intensity));
+                wg_points[li] = array<vec4<f32>, 2>(q, point_energy(lights[i].color, lights[i].intensity, lights[i].alpha));
                 slot = k;
             }
         }
@@ -349,13 +349,20 @@ const POINT_BATCH: u32 = 64u;
 var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
 var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, POINT_BATCH, POINT_LIGHTS)>;
 
-// The point light of slot halves q (position, radius) and e (colour, intensity) of wg_points.
+// The second half of a point light's slot in wg_points: colour and intensity; for stochastic
+// point lights (STOCHASTIC_POINTS) colour times intensity, and alpha.
+fn point_energy(color: vec3<f32>, intensity: f32, alpha: f32) -> vec4<f32> {
+    return select(vec4<f32>(color, intensity), vec4<f32>(color * intensity, alpha), STOCHASTIC_POINTS);
+}
+
+// The point light of slot halves q (position, radius) and e (point_energy) of wg_points.
 fn point_light(q: vec4<f32>, e: vec4<f32>) -> Light {
     var light: Light;
     light.position = q.xyz;
     light.radius = q.w;
     light.color = e.xyz;
-    light.intensity = e.w;
+    light.intensity = select(e.w, 1.0, STOCHASTIC_POINTS);
+    light.alpha = select(0.0, e.w, STOCHASTIC_POINTS);
     return light;
 }
 
@@ -402,7 +409,7 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         if li < n {
             let light = lights[light_indices[list.x + base + li]];
             if POINT_LIGHTS {
-                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), vec4<f32>(light.color, light.intensity));
+                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), point_energy(light.color, light.intensity, light.alpha));
             } else {
                 wg_lights[li] = light;
             }
@@ -444,10 +451,7 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                 var light: Light;
                 if POINT_LIGHTS {
                     let q = wg_points[k];
-                    light.position = q[0].xyz;
-                    light.radius = q[0].w;
-                    light.color = q[1].xyz;
-                    light.intensity = q[1].w;
+                    light = point_light(q[0], q[1]);
                 } else {
                     light = wg_lights[k];
                 }
@@ -528,7 +532,7 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         if li < n {
             let i = light_indices[list.x + base + li];
             if POINT_LIGHTS {
-                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(lights[i].position, lights[i].radius), vec4<f32>(lights[i].color, lights[i].intensity));
+                wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(lights[i].position, lights[i].radius), point_energy(lights[i].color, lights[i].intensity, lights[i].alpha));
             } else {
                 wg_lights[li] = lights[i];
             }
@@ -556,10 +560,7 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                 var light: Light;
                 if POINT_LIGHTS {
                     let q = wg_points[k];
-                    light.position = q[0].xyz;
-                    light.radius = q[0].w;
-                    light.color = q[1].xyz;
-                    light.intensity = q[1].w;
+                    light = point_light(q[0], q[1]);
                 } else {
                     light = wg_lights[k];
                 }

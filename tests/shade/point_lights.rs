@@ -152,3 +152,108 @@ fn point_light_pipelines_write_nan_over_general_lights() {
         assert_eq!(nan, covered, "{}: every covered pixel NaN", backend.name());
     }
 }
+
+/// Stochastic ranges on a scene of point lights, every light drawn and one range a light, keep
+/// the short path (`FRAME_FLAG_STOCHASTIC_POINTS`, pipelines built with `STOCHASTIC_POINTS`,
+/// which shade `max(1 / d^2, alpha)` inside the drawn range): the same image as the general
+/// model's path over the same draws, on every form of lists and every culled backend. A
+/// point-light renderer built without stochastic ranges refuses such a scene, and one built
+/// with them a scene without; interleaving, or lights left undrawn, mark the scene general.
+#[test]
+fn stochastic_point_lights_shade_as_the_general_model_does() {
+    use manylights_gpu::stochastic::StochasticRanges;
+    use manylights_scene::stochastic::StochasticParams;
+    let ctx = common::gpu();
+    let size = (70, 45);
+    let points = point_scene("atrium");
+    let upload = || GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
+    let params = StochasticParams {
+        error: 0.05,
+        exposure: 1.0,
+        scale: 1.0,
+        seed: 3,
+        interleave: 1,
+    };
+    let fast = upload();
+    let n = fast.light_count;
+    let fast_draw = StochasticRanges::new(&ctx, &fast, 0, n, &params).unwrap();
+    assert!(fast.point_lights() && fast.stochastic_points());
+    let general = upload();
+    let general_draw = StochasticRanges::new(&ctx, &general, 0, n, &params).unwrap();
+    general.mark_general_lights(&ctx);
+    assert!(!general.point_lights() && !general.stochastic_points());
+    let stochastic_renderer = Renderer::new(&ctx, &fast);
+    assert!(stochastic_renderer.point_lights() && stochastic_renderer.stochastic_points());
+    let general_renderer = Renderer::new(&ctx, &general);
+    assert!(!general_renderer.point_lights());
+    fast_draw.draw(&ctx, 2).unwrap();
+    general_draw.draw(&ctx, 2).unwrap();
+    for strategy in strategies() {
+        let a = frames(&ctx, &stochastic_renderer, &fast, &points, &strategy, size);
+        let b = frames(&ctx, &general_renderer, &general, &points, &strategy, size);
+        for (k, backend) in CULLED.into_iter().enumerate() {
+            let what = format!("{} {}", strategy.name(), backend.name());
+            assert!(a[k].peak() > 0.0, "{what}: black");
+            // The short path multiplies colour by intensity first: rounding apart.
+            let d = max_difference(&a[k], &b[k]);
+            assert!(
+                d <= 1e-5,
+                "{what}: short and general paths differ by {d:e} of the peak"
+            );
+        }
+    }
+    // Each kind of point-light renderer refuses the other kind's scene.
+    let windowed = upload();
+    let windowed_renderer = Renderer::new(&ctx, &windowed);
+    assert!(windowed_renderer.point_lights() && !windowed_renderer.stochastic_points());
+    let settings = CullSettings::for_camera(&points.camera);
+    let strategy = Strategy::tiled_gather(16);
+    for (renderer, scene) in [
+        (&windowed_renderer, &fast),
+        (&stochastic_renderer, &windowed),
+    ] {
+        let refused = renderer.render(&ctx, scene, Backend::Deferred, &strategy, &settings, size);
+        let message = refused.err().expect("refused").to_string();
+        assert!(message.contains("point lights"), "{message}");
+    }
+    // The flag picks the falloff: the same drawn lights in a scene flagged windowed are shaded
+    // with the window over the drawn ranges and no reweighting, which loses energy.
+    let drawn_lights = manylights_gpu::readback::read_buffer(
+        &ctx,
+        &fast.lights,
+        0,
+        u64::from(n) * std::mem::size_of::<GpuLight>() as u64,
+    )
+    .unwrap();
+    ctx.queue.write_buffer(&windowed.lights, 0, &drawn_lights);
+    let energy =
+        |i: &HdrImage| -> f64 { i.data.iter().map(|p| f64::from(p[0] + p[1] + p[2])).sum() };
+    let plain = frames(
+        &ctx,
+        &windowed_renderer,
+        &windowed,
+        &points,
+        &strategy,
+        size,
+    );
+    let drawn = frames(&ctx, &stochastic_renderer, &fast, &points, &strategy, size);
+    for k in 0..CULLED.len() {
+        let (w, d) = (energy(&plain[k]), energy(&drawn[k]));
+        assert!(
+            d > 1.02 * w,
+            "{}: the stochastic path's energy {d} against the window's {w}",
+            CULLED[k].name()
+        );
+    }
+    // Interleaved classes, or lights left undrawn, are the general model's.
+    let interleaved = upload();
+    let il = StochasticParams {
+        interleave: 2,
+        ..params
+    };
+    StochasticRanges::new(&ctx, &interleaved, 0, n, &il).unwrap();
+    assert!(!interleaved.point_lights() && !interleaved.stochastic_points());
+    let part = upload();
+    StochasticRanges::new(&ctx, &part, 1, n - 1, &params).unwrap();
+    assert!(!part.point_lights() && !part.stochastic_points());
+}

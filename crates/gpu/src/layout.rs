@@ -24,6 +24,12 @@ pub const FRAME_FLAG_INFINITE_RANGE: u32 = 1;
 /// must not carry it.
 pub const FRAME_FLAG_POINT_LIGHTS: u32 = 2;
 
+/// `Frame.flags`, with [`FRAME_FLAG_POINT_LIGHTS`]: the point lights carry stochastic ranges
+/// drawn for the frame, without interleaving (shaded `max(1 / d^2, alpha)` inside them). Set by
+/// [`crate::GpuScene::mark_stochastic_points`]; pipelines built with `STOCHASTIC_POINTS`
+/// check it, and those without check its absence.
+pub const FRAME_FLAG_STOCHASTIC_POINTS: u32 = 4;
+
 /// WGSL constants generated from their Rust definitions; prepended to every composed shader.
 pub fn wgsl_prelude() -> String {
     format!(
@@ -36,6 +42,7 @@ pub fn wgsl_prelude() -> String {
          const LIGHT_KIND_SPOT: u32 = {LIGHT_KIND_SPOT}u;\n\
          const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n\
          const FRAME_FLAG_POINT_LIGHTS: u32 = {FRAME_FLAG_POINT_LIGHTS}u;\n\
+         const FRAME_FLAG_STOCHASTIC_POINTS: u32 = {FRAME_FLAG_STOCHASTIC_POINTS}u;\n\
          const XI_BITS: u32 = {xi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
          const F0_DIELECTRIC: f32 = {f0:?};\n{models}",

@@ -10,7 +10,8 @@ use manylights_scene::{Camera, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::layout::{
-    FRAME_FLAG_POINT_LIGHTS, GpuFrame, GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT,
+    FRAME_FLAG_POINT_LIGHTS, FRAME_FLAG_STOCHASTIC_POINTS, GpuFrame, GpuLight, GpuMaterial,
+    GpuVertex, LIGHT_KIND_POINT,
 };
 use crate::{GpuContext, GpuError};
 
@@ -42,6 +43,9 @@ pub struct GpuScene {
     /// Whether every light is a point light with the windowed falloff (`FRAME_FLAG_POINT_LIGHTS`):
     /// as uploaded, until [`GpuScene::mark_general_lights`].
     point_lights: AtomicBool,
+    /// With `point_lights`: the point lights carry stochastic ranges without interleaving
+    /// (`FRAME_FLAG_STOCHASTIC_POINTS`), from [`GpuScene::mark_stochastic_points`].
+    stochastic_points: AtomicBool,
     /// The flags of the last [`GpuScene::set_view`], without `FRAME_FLAG_POINT_LIGHTS`.
     view_flags: AtomicU32,
     /// Layout of group 0.
@@ -220,6 +224,7 @@ impl GpuScene {
             materials: materials_buf,
             frame: frame_buf,
             point_lights: AtomicBool::new(point_lights),
+            stochastic_points: AtomicBool::new(false),
             view_flags: AtomicU32::new(0),
             layout,
             bind_group,
@@ -230,7 +235,7 @@ impl GpuScene {
     /// scene adds `FRAME_FLAG_POINT_LIGHTS` where its lights allow it), and sorts the
     /// transparent triangles back to front for the camera.
     pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
-        let flags = flags & !FRAME_FLAG_POINT_LIGHTS;
+        let flags = flags & !(FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS);
         self.view_flags.store(flags, Ordering::Relaxed);
         let frame = GpuFrame {
             flags: self.frame_flags(flags),
@@ -250,10 +255,13 @@ impl GpuScene {
 
     /// `flags` with `FRAME_FLAG_POINT_LIGHTS` where every light is a windowed point light.
     fn frame_flags(&self, flags: u32) -> u32 {
-        if self.point_lights.load(Ordering::Relaxed) {
-            flags | FRAME_FLAG_POINT_LIGHTS
-        } else {
-            flags
+        match (
+            self.point_lights.load(Ordering::Relaxed),
+            self.stochastic_points.load(Ordering::Relaxed),
+        ) {
+            (true, true) => flags | FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS,
+            (true, false) => flags | FRAME_FLAG_POINT_LIGHTS,
+            _ => flags,
         }
     }
 
@@ -268,7 +276,32 @@ impl GpuScene {
     /// with its spot cone and alpha read.
     pub fn mark_general_lights(&self, ctx: &GpuContext) {
         self.point_lights.store(false, Ordering::Relaxed);
-        let flags = self.view_flags.load(Ordering::Relaxed);
+        self.stochastic_points.store(false, Ordering::Relaxed);
+        self.write_flags(ctx);
+    }
+
+    /// Whether the frame tells shading that the point lights carry stochastic ranges without
+    /// interleaving (`FRAME_FLAG_STOCHASTIC_POINTS`, with `FRAME_FLAG_POINT_LIGHTS`).
+    pub fn stochastic_points(&self) -> bool {
+        self.stochastic_points.load(Ordering::Relaxed)
+    }
+
+    /// From now on every light carries a stochastic range and alpha drawn for each frame, one
+    /// range a light (no interleaving): a scene of windowed point lights stays on the short
+    /// path, shaded `max(1 / d^2, alpha)` inside the ranges (`FRAME_FLAG_STOCHASTIC_POINTS`);
+    /// any other scene is marked general ([`GpuScene::mark_general_lights`]).
+    pub fn mark_stochastic_points(&self, ctx: &GpuContext) {
+        if self.point_lights.load(Ordering::Relaxed) {
+            self.stochastic_points.store(true, Ordering::Relaxed);
+            self.write_flags(ctx);
+        } else {
+            self.mark_general_lights(ctx);
+        }
+    }
+
+    /// Writes the frame's flags again from the last view's and the lights' state.
+    fn write_flags(&self, ctx: &GpuContext) {
+        let flags = self.frame_flags(self.view_flags.load(Ordering::Relaxed));
         ctx.queue.write_buffer(
             &self.frame,
             std::mem::offset_of!(GpuFrame, flags) as u64,

@@ -79,8 +79,14 @@ impl StochasticRanges {
                 limit_name: "the scene's light count",
             });
         }
-        // The drawn lights carry alpha: shading must read it.
-        scene.mark_general_lights(ctx);
+        // The drawn lights carry alpha: shading must read it. Where every light of a scene of
+        // windowed point lights is drawn, one range a light, they stay on the short path
+        // (shaded max(1 / d^2, alpha) inside the range); otherwise the general model shades.
+        if params.interleave <= 1 && first == 0 && count == scene.light_count {
+            scene.mark_stochastic_points(ctx);
+        } else {
+            scene.mark_general_lights(ctx);
+        }
         let d = &ctx.device;
         let groups_needed = count.div_ceil(WORKGROUP).max(1);
         let max = ctx.limits.max_compute_workgroups_per_dimension;

@@ -9,8 +9,8 @@ use manylights_gpu::{GpuContext, GpuError, GpuScene};
 use manylights_shade::{HdrFormat, Renderer};
 
 /// What a renderer is built for: samples a pixel, glass, the opaque material models in order,
-/// windowed point lights alone, the lit image's format.
-type Key = (u32, bool, Vec<u32>, bool, HdrFormat);
+/// windowed point lights alone, stochastic ranges on them, the lit image's format.
+type Key = (u32, bool, Vec<u32>, bool, bool, HdrFormat);
 
 /// The renderers built so far in a run (the most recent [`Renderers::KEEP`]).
 #[derive(Default)]
@@ -38,6 +38,7 @@ impl Renderers {
                 .map(|&(model, _)| model)
                 .collect(),
             scene.point_lights(),
+            scene.stochastic_points(),
             hdr,
         );
         let i = match self.0.iter().position(|(k, _)| *k == key) {

@@ -195,6 +195,9 @@ pub struct Renderer {
     /// Built for windowed point lights alone (`POINT_LIGHTS`, shaders/common/shading.wgsl):
     /// the scene said so when the renderer was built ([`GpuScene::point_lights`]).
     pub(crate) point_lights: bool,
+    /// With `point_lights`: its shading pipelines were built for stochastic ranges on them
+    /// (`STOCHASTIC_POINTS`, [`GpuScene::stochastic_points`]).
+    pub(crate) stochastic_points: bool,
     pub(crate) prepass: DepthPrepass,
     /// Whether the scene has transparent surfaces.
     pub(crate) transparent: bool,
@@ -275,6 +278,13 @@ impl Renderer {
         self.point_lights
     }
 
+    /// Whether its point-light pipelines shade stochastic ranges
+    /// ([`GpuScene::stochastic_points`]); such a renderer refuses a scene without them, and a
+    /// point-light renderer without them a scene with them.
+    pub fn stochastic_points(&self) -> bool {
+        self.stochastic_points
+    }
+
     /// Samples a pixel of its frames.
     pub fn samples(&self) -> u32 {
         self.samples
@@ -297,11 +307,13 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
-        if self.point_lights && !scene.point_lights() {
+        if self.point_lights
+            && (!scene.point_lights() || self.stochastic_points != scene.stochastic_points())
+        {
             return Err(manylights_gpu::GpuError::Unsupported(
-                "a renderer built for windowed point lights cannot shade this scene's lights \
-                 (spots, or stochastic ranges drawn since): build the renderer after \
-                 StochasticRanges::new, from the scene as it will be shaded"
+                "a renderer built for point lights cannot shade this scene's lights (spots, or \
+                 stochastic ranges drawn since, or none where it was built for them): build the \
+                 renderer after StochasticRanges::new, from the scene as it will be shaded"
                     .into(),
             )
             .into());

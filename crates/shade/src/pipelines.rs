@@ -158,6 +158,9 @@ impl Renderer {
         // A POINT_LIGHTS pipeline where every light is a windowed point light (shading.wgsl).
         let point_lights = scene.point_lights();
         let point = ("POINT_LIGHTS", f64::from(u8::from(point_lights)));
+        // STOCHASTIC_POINTS: those point lights with stochastic ranges (shading.wgsl).
+        let stochastic_points = point_lights && scene.stochastic_points();
+        let stochastic = ("STOCHASTIC_POINTS", f64::from(u8::from(stochastic_points)));
         let forward_with = |entry| {
             scene
                 .opaque_models
@@ -171,7 +174,11 @@ impl Renderer {
                         Some((entry, &[target(color)])),
                         DepthTest::Equal,
                         samples,
-                        &[("MATERIAL_MODELS", f64::from(1u32 << model)), point],
+                        &[
+                            ("MATERIAL_MODELS", f64::from(1u32 << model)),
+                            point,
+                            stochastic,
+                        ],
                     )
                 })
                 .collect::<Vec<_>>()
@@ -188,7 +195,7 @@ impl Renderer {
                     Some((entry, std::slice::from_ref(&target))),
                     DepthTest::Less,
                     samples,
-                    &[point],
+                    &[point, stochastic],
                 )
             })
         };
@@ -252,12 +259,13 @@ impl Renderer {
         let models = [
             ("MATERIAL_MODELS", f64::from(scene.opaque_model_mask())),
             point,
+            stochastic,
             ("GLASS", f64::from(u8::from(glass_layer.is_some()))),
         ];
         let models = if samples > 1 {
             &models[..]
         } else {
-            &models[..2]
+            &models[..3]
         };
         let models = wgpu::PipelineCompilationOptions {
             constants: models,
@@ -310,6 +318,7 @@ impl Renderer {
             samples,
             hdr,
             point_lights,
+            stochastic_points,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
             lookup_bounds,
