@@ -121,6 +121,17 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     };
     let frame =
         manylights_gpu::layout::GpuFrame::new(&scene.camera, w, h, scene.lights.len() as u32);
+    // The exact oracle's counts of a run's lists, at every pixel.
+    let exact_counts = |out: &CullOutput| {
+        culler.exact_counts(
+            &ctx,
+            &gpu_scene,
+            &depth,
+            out,
+            frame.clip_from_world.inverse(),
+            1,
+        )
+    };
     // With --stochastic, each frame's draws culled and checked; the last frame's lists are
     // the ones shown, timed and exported.
     let mut earlier = Vec::new();
@@ -139,14 +150,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
             &settings,
             &mut GpuTimer::untimed(),
         )?;
-        let counts = culler.exact_counts(
-            &ctx,
-            &gpu_scene,
-            &depth,
-            &out,
-            frame.clip_from_world.inverse(),
-            1,
-        )?;
+        let counts = exact_counts(&out)?;
         earlier.push(metrics::from_gpu_counts(&counts, &out.bin_lengths(&ctx)?));
     }
     let out = culler.run(
@@ -171,14 +175,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         String::new()
     };
     let lengths = out.bin_lengths(&ctx)?;
-    let counts = culler.exact_counts(
-        &ctx,
-        &gpu_scene,
-        &depth,
-        &out,
-        frame.clip_from_world.inverse(),
-        1,
-    )?;
+    let counts = exact_counts(&out)?;
     let m = metrics::from_gpu_counts(&counts, &lengths);
     // Lights evaluated a pixel (with MSAA, the mean over its covered samples).
     let per_pixel: Vec<u32> = counts.iter().map(|c| c[0] / c[3].max(1)).collect();

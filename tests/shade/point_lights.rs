@@ -37,6 +37,30 @@ fn frames(
         .collect()
 }
 
+/// Every strategy's frames, each culled backend's, by the short path (`short`, a renderer and
+/// its scene) and the general one: lit, and the same within 1e-5 of the peak.
+fn same_frames(
+    ctx: &GpuContext,
+    short: (&Renderer, &GpuScene),
+    general: (&Renderer, &GpuScene),
+    s: &Scene,
+    size: (u32, u32),
+) {
+    for strategy in strategies() {
+        let a = frames(ctx, short.0, short.1, s, &strategy, size);
+        let b = frames(ctx, general.0, general.1, s, &strategy, size);
+        for (k, backend) in CULLED.into_iter().enumerate() {
+            let what = format!("{} {}", strategy.name(), backend.name());
+            assert!(a[k].peak() > 0.0, "{what}: black");
+            let d = max_difference(&a[k], &b[k]);
+            assert!(
+                d <= 1e-5,
+                "{what}: short and general paths differ by {d:e} of the peak"
+            );
+        }
+    }
+}
+
 /// The largest difference of two images' colour channels, relative to the first one's peak.
 fn max_difference(a: &HdrImage, b: &HdrImage) -> f32 {
     let d = a
@@ -87,19 +111,13 @@ fn point_lights_shade_as_the_general_model_does() {
         .expect("a point-light renderer over general lights")
         .to_string();
     assert!(message.contains("point lights"), "{message}");
-    for strategy in strategies() {
-        let a = frames(&ctx, &point_renderer, &fast, &points, &strategy, size);
-        let b = frames(&ctx, &general_renderer, &general, &points, &strategy, size);
-        for (k, backend) in CULLED.into_iter().enumerate() {
-            let what = format!("{} {}", strategy.name(), backend.name());
-            assert!(a[k].peak() > 0.0, "{what}: black");
-            let d = max_difference(&a[k], &b[k]);
-            assert!(
-                d <= 1e-5,
-                "{what}: short and general paths differ by {d:e} of the peak"
-            );
-        }
-    }
+    same_frames(
+        &ctx,
+        (&point_renderer, &fast),
+        (&general_renderer, &general),
+        &points,
+        size,
+    );
     // Spots in a flagged scene's buffer: the short path ignores their cones.
     let spot_lights: Vec<GpuLight> = spots.lights.iter().map(GpuLight::from).collect();
     ctx.queue
@@ -188,20 +206,14 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
     assert!(!general_renderer.point_lights());
     fast_draw.draw(&ctx, 2).unwrap();
     general_draw.draw(&ctx, 2).unwrap();
-    for strategy in strategies() {
-        let a = frames(&ctx, &stochastic_renderer, &fast, &points, &strategy, size);
-        let b = frames(&ctx, &general_renderer, &general, &points, &strategy, size);
-        for (k, backend) in CULLED.into_iter().enumerate() {
-            let what = format!("{} {}", strategy.name(), backend.name());
-            assert!(a[k].peak() > 0.0, "{what}: black");
-            // The short path multiplies colour by intensity first: rounding apart.
-            let d = max_difference(&a[k], &b[k]);
-            assert!(
-                d <= 1e-5,
-                "{what}: short and general paths differ by {d:e} of the peak"
-            );
-        }
-    }
+    // (The short path multiplies colour by intensity first: rounding apart.)
+    same_frames(
+        &ctx,
+        (&stochastic_renderer, &fast),
+        (&general_renderer, &general),
+        &points,
+        size,
+    );
     // Each kind of point-light renderer refuses the other kind's scene.
     let windowed = upload();
     let windowed_renderer = Renderer::new(&ctx, &windowed);

@@ -25,6 +25,7 @@ use manylights_gpu::timing::PassTiming;
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::{Camera, RadiusRule, Scene};
 use manylights_shade::accuracy::{LIT_FRACTION, compare_adapted, luminance};
+use manylights_shade::image_out::ImageSum;
 use manylights_shade::{HdrImage, Renderer};
 
 use crate::LabError;
@@ -117,20 +118,16 @@ pub(crate) fn measure(
     let k = draws.accumulate;
     let mut images = Vec::with_capacity(draws.seeds as usize);
     for s in 0..draws.seeds {
-        let mut sum = vec![[0.0f64; 3]; reference.data.len()];
+        let mut sum = ImageSum::default();
         for j in 0..k {
             draws.draw(ctx, s * k + j)?;
             gpu_scene.set_view(ctx, cam, w, h, 0);
             let o = renderer
                 .render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
                 .map_err(|e| other(&e))?;
-            for (a, t) in sum.iter_mut().zip(&o.color.data) {
-                for ch in 0..3 {
-                    a[ch] += f64::from(t[ch]);
-                }
-            }
+            sum.add(&o.color);
         }
-        images.push(mean_image(&sum, f64::from(k), reference));
+        images.push(mean_over(&sum, reference)?);
     }
     let errors: Vec<_> = images
         .iter()
@@ -140,15 +137,11 @@ pub(crate) fn measure(
     let avg = |f: &dyn Fn(&manylights_shade::accuracy::ImageError) -> f64| {
         errors.iter().map(f).sum::<f64>() / n
     };
-    let mut total = vec![[0.0f64; 3]; reference.data.len()];
+    let mut total = ImageSum::default();
     for i in &images {
-        for (a, t) in total.iter_mut().zip(&i.data) {
-            for ch in 0..3 {
-                a[ch] += f64::from(t[ch]);
-            }
-        }
+        total.add(i);
     }
-    let mean = mean_image(&total, n, reference);
+    let mean = mean_over(&total, reference)?;
     let (bias, noise, flicker_mean) = spread(&images, &mean, reference);
     Ok(Noise {
         flip_mean: avg(&|e| e.flip_mean),
@@ -161,24 +154,10 @@ pub(crate) fn measure(
     })
 }
 
-/// `sum / n` a texel, with the reference's coverage in alpha.
-fn mean_image(sum: &[[f64; 3]], n: f64, reference: &HdrImage) -> HdrImage {
-    HdrImage {
-        width: reference.width,
-        height: reference.height,
-        data: sum
-            .iter()
-            .zip(&reference.data)
-            .map(|(s, r)| {
-                [
-                    (s[0] / n) as f32,
-                    (s[1] / n) as f32,
-                    (s[2] / n) as f32,
-                    r[3],
-                ]
-            })
-            .collect(),
-    }
+/// The mean of `sum`'s images with the reference's coverage in alpha.
+fn mean_over(sum: &ImageSum, reference: &HdrImage) -> Result<HdrImage, LabError> {
+    sum.mean_over(reference)
+        .ok_or_else(|| LabError::Other("no image to average (0 seeds or frames)".into()))
 }
 
 /// The relative RMS bias (noise taken out) and standard deviation over lit pixels, and the

@@ -204,6 +204,30 @@ mod tests {
         }
     }
 
+    /// Every model at each of `values` as its roughness (GGX and the clear coat, metallic 0
+    /// and 1, the coat as rough as the base; the sheen), wrap and Blinn-Phong weight.
+    fn every_model(values: &[f32]) -> Vec<Brdf> {
+        let mut brdfs = Vec::new();
+        for &r in values {
+            for m in [0.0f32, 1.0] {
+                brdfs.push(ggx_brdf(m, r));
+                brdfs.push(Brdf::ClearCoat {
+                    metallic: m,
+                    roughness: r,
+                    coat: 1.0,
+                    coat_roughness: r,
+                });
+            }
+            brdfs.push(Brdf::Sheen {
+                roughness: r,
+                sheen: Vec3::ONE,
+            });
+            brdfs.push(Brdf::Wrap { wrap: r });
+            brdfs.push(Brdf::BlinnPhong { specular: r });
+        }
+        brdfs
+    }
+
     /// At normal incidence (n = l = v): F = F0, D = 1 / (pi alpha^2), V = 1 / 4.
     #[test]
     fn ggx_at_normal_incidence_is_the_closed_form() {
@@ -296,27 +320,7 @@ mod tests {
     /// stays finite and modest at the roughness floor, where [`rho_max`] is about 2e7.
     #[test]
     fn albedo_max_bounds_the_directional_albedo_and_stays_finite() {
-        let mut brdfs = vec![
-            Brdf::BlinnPhong { specular: 0.0 },
-            Brdf::BlinnPhong { specular: 1.0 },
-            Brdf::Wrap { wrap: 0.5 },
-        ];
-        for r in [0.3f32, 0.6, 1.0] {
-            for m in [0.0f32, 1.0] {
-                brdfs.push(ggx_brdf(m, r));
-                brdfs.push(Brdf::ClearCoat {
-                    metallic: m,
-                    roughness: r,
-                    coat: 1.0,
-                    coat_roughness: r,
-                });
-            }
-            brdfs.push(Brdf::Sheen {
-                roughness: r,
-                sheen: Vec3::ONE,
-            });
-        }
-        for brdf in &brdfs {
+        for brdf in &every_model(&[0.3, 0.6, 1.0]) {
             for base in [DVec3::splat(0.2), DVec3::ONE] {
                 let bound = albedo_max(brdf, base);
                 for theta in [0.0f64, 0.7, 1.3, 1.55] {
@@ -364,25 +368,7 @@ mod tests {
             DVec3::new(-0.6, 0.0, 0.8),
             DVec3::new(0.0, 0.6, -0.8),
         ];
-        let mut brdfs = Vec::new();
-        for r in [0.0f32, 1.0, 0.5] {
-            for m in [0.0f32, 1.0] {
-                brdfs.push(ggx_brdf(m, r));
-                brdfs.push(Brdf::ClearCoat {
-                    metallic: m,
-                    roughness: r,
-                    coat: 1.0,
-                    coat_roughness: r,
-                });
-            }
-            brdfs.push(Brdf::Sheen {
-                roughness: r,
-                sheen: Vec3::ONE,
-            });
-            brdfs.push(Brdf::Wrap { wrap: r });
-            brdfs.push(Brdf::BlinnPhong { specular: r });
-        }
-        for brdf in &brdfs {
+        for brdf in &every_model(&[0.0, 1.0, 0.5]) {
             for base in [DVec3::ZERO, DVec3::ONE] {
                 let bound = rho_max(brdf, base);
                 for &l in &dirs {

@@ -55,15 +55,26 @@ impl ImageSum {
 
     /// The mean image, with the first image's alpha (coverage); `None` before any image.
     pub fn mean(&self) -> Option<HdrImage> {
-        let first = self.first.as_ref()?;
+        self.mean_over(self.first.as_ref()?)
+    }
+
+    /// The mean image with `coverage`'s alpha (of the same size: a mismatch is a caller's bug
+    /// and panics); `None` before any image.
+    pub fn mean_over(&self, coverage: &HdrImage) -> Option<HdrImage> {
+        self.first.as_ref()?;
+        assert_eq!(
+            self.sum.len(),
+            coverage.data.len(),
+            "coverage of the sum's size"
+        );
         let n = f64::from(self.count);
         Some(HdrImage {
-            width: first.width,
-            height: first.height,
+            width: coverage.width,
+            height: coverage.height,
             data: self
                 .sum
                 .iter()
-                .zip(&first.data)
+                .zip(&coverage.data)
                 .map(|(s, f)| {
                     [
                         (s[0] / n) as f32,
