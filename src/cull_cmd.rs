@@ -4,9 +4,11 @@
 use std::path::PathBuf;
 
 use anyhow::{Result, bail};
-use manylights_cull::{CullOutput, CullSettings, Culler, Strategy, heatmap, metrics};
+use manylights_cull::metrics::{self, ListMetrics};
+use manylights_cull::{CullOutput, CullSettings, Culler, Strategy, heatmap};
 use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
+use manylights_gpu::stochastic::StochasticRanges;
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_shade::image_out::write_atomic;
@@ -79,7 +81,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
     // Stochastic ranges before any culler: they mark the lights general.
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
-    let frames = if draws.is_some() { a.frames() } else { 1 };
+    let frames = a.frames();
     let depth = depth_target_msaa(&ctx, w, h, samples);
     let mut timer = GpuTimer::new(&ctx, 64);
     let mut enc = ctx.device.create_command_encoder(&Default::default());
@@ -134,14 +136,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     };
     // With --stochastic, each frame's draws culled and checked; the last frame's lists are
     // the ones shown, timed and exported.
-    let mut earlier = Vec::new();
-    for f in 0..frames {
-        if let Some(d) = &draws {
-            d.draw(&ctx, f)?;
-        }
-        if f + 1 == frames {
-            break;
-        }
+    let earlier = earlier_frames(&ctx, draws.as_ref(), frames, || {
         let out = culler.run(
             &ctx,
             &gpu_scene,
@@ -151,8 +146,8 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
             &mut GpuTimer::untimed(),
         )?;
         let counts = exact_counts(&out)?;
-        earlier.push(metrics::from_gpu_counts(&counts, &out.bin_lengths(&ctx)?));
-    }
+        Ok(metrics::from_gpu_counts(&counts, &out.bin_lengths(&ctx)?))
+    })?;
     let out = culler.run(
         &ctx, &gpu_scene, cull_depth, &strategy, &settings, &mut timer,
     )?;
@@ -214,21 +209,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     } else {
         println!("  covered pixels          {}", m.covered_pixels);
     }
-    if frames > 1 {
-        println!(
-            "  stochastic ranges       {frames} frames drawn; the counts below are frame {}'s",
-            frames - 1
-        );
-        for (f, e) in earlier.iter().enumerate() {
-            println!(
-                "  frame {f:<4}              false negatives {}, lights per pixel {:.2}, false-positive ratio {}",
-                e.false_negatives,
-                e.lights_per_pixel_mean,
-                e.false_positive_ratio
-                    .map_or_else(|| "n/a".into(), |r| format!("{r:.3}"))
-            );
-        }
-    }
+    print_earlier(&earlier, frames);
     println!("  false negatives         {}", m.false_negatives);
     match m.false_positive_ratio {
         Some(r) => println!("  false-positive ratio    {r:.3} (lights evaluated / lights needed)"),
@@ -283,6 +264,46 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Draws the stochastic ranges of frames `0..frames` in turn (none without `draws`) and
+/// checks each but the last with `check`; the last frame's draw is left for the run shown.
+fn earlier_frames(
+    ctx: &GpuContext,
+    draws: Option<&StochasticRanges>,
+    frames: u32,
+    mut check: impl FnMut() -> Result<ListMetrics>,
+) -> Result<Vec<ListMetrics>> {
+    let mut earlier = Vec::new();
+    for f in 0..frames {
+        if let Some(d) = draws {
+            d.draw(ctx, f)?;
+        }
+        if f + 1 < frames {
+            earlier.push(check()?);
+        }
+    }
+    Ok(earlier)
+}
+
+/// The frames before the last one's counts, with `--accumulate K`.
+fn print_earlier(earlier: &[ListMetrics], frames: u32) {
+    if frames <= 1 {
+        return;
+    }
+    println!(
+        "  stochastic ranges       {frames} frames drawn; the counts below are frame {}'s",
+        frames - 1
+    );
+    for (f, e) in earlier.iter().enumerate() {
+        println!(
+            "  frame {f:<4}              false negatives {}, lights per pixel {:.2}, false-positive ratio {}",
+            e.false_negatives,
+            e.lights_per_pixel_mean,
+            e.false_positive_ratio
+                .map_or_else(|| "n/a".into(), |r| format!("{r:.3}"))
+        );
+    }
 }
 
 /// `cull --repeat N`: N runs back to back in one submission; each pass's median over them, as

@@ -421,7 +421,8 @@ impl SceneArgs {
         Ok(())
     }
 
-    /// The frames drawn with --stochastic (`--accumulate`, 1 by default and without it).
+    /// The frames drawn with --stochastic (`--accumulate`, 1 by default; always 1 without
+    /// --stochastic, which --accumulate requires).
     pub(crate) fn frames(&self) -> u32 {
         self.accumulate.unwrap_or(1).max(1)
     }

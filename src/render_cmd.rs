@@ -5,10 +5,12 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use manylights_cull::heatmap;
-use manylights_gpu::GpuScene;
+use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::RadiusRule;
 use manylights_shade::image_out::{ImageSum, write_atomic};
-use manylights_shade::{Backend, HdrFormat, ReferenceRenderer, Renderer, accuracy};
+use manylights_shade::{
+    Backend, HdrFormat, HdrImage, ReferenceFrame, ReferenceRenderer, Renderer, accuracy,
+};
 
 use crate::options::{BackendName, SceneArgs, StrategyArgs, print_timings};
 
@@ -115,7 +117,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
     // Stochastic ranges before any renderer: they mark the lights general.
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
-    let frames = if draws.is_some() { a.frames() } else { 1 };
+    let frames = a.frames();
     let draw = |f: u32| -> Result<()> {
         if let Some(d) = &draws {
             d.draw(&ctx, f)?;
@@ -134,38 +136,15 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             String::new()
         }
     );
-    if let Some(RadiusRule::Stochastic {
-        error,
-        bound,
-        interleave,
-        ..
-    }) = draws.as_ref().map(|_| a.light_spec().radius)
-    {
-        println!(
-            "  stochastic light culling: error {error} ({} bound), {frames} frame{} drawn{}{}",
-            bound.name(),
-            if frames > 1 { "s" } else { "" },
-            if frames > 1 { " and averaged" } else { "" },
-            if interleave > 1 {
-                format!(", {interleave} x {interleave} interleaved classes")
-            } else {
-                String::new()
-            }
-        );
+    if draws.is_some() {
+        print_stochastic(a, frames);
     }
     let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, samples).map_err(bad_msaa)?;
     let mut outputs: Vec<(PathBuf, image::RgbImage)> = Vec::new();
     let (name, image) = if args.backend == BackendName::Reference {
-        let mut sum = ImageSum::default();
-        let mut timings = None;
-        for f in 0..frames {
-            draw(f)?;
-            let frame = reference.render(&ctx, &gpu_scene, w, h)?;
-            sum.add(&frame.color);
-            timings = frame.timings;
-        }
-        print_timings(timings.as_deref());
-        ("reference", sum.mean().expect("at least one frame"))
+        let (mean, last) = reference_frames(&ctx, &reference, &gpu_scene, (w, h), frames, &draw)?;
+        print_timings(last.timings.as_deref());
+        ("reference", mean)
     } else {
         let backend = match args.backend {
             BackendName::Forward => Backend::Forward,
@@ -257,15 +236,8 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if args.compare {
         // The reference over the same frames' draws (the same estimate, no culling), then
         // infinite range (no draws: ranges do not enter it).
-        let mut windowed_sum = ImageSum::default();
-        let mut windowed_frame = None;
-        for f in 0..frames {
-            draw(f)?;
-            let frame = reference.render(&ctx, &gpu_scene, w, h)?;
-            windowed_sum.add(&frame.color);
-            windowed_frame = Some(frame);
-        }
-        let windowed_frame = windowed_frame.expect("at least one frame");
+        let (windowed, windowed_frame) =
+            reference_frames(&ctx, &reference, &gpu_scene, (w, h), frames, &draw)?;
         let infinite = manylights_shade::infinite::infinite_image(
             &ctx,
             (
@@ -277,7 +249,6 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             (w, h),
             Some(&windowed_frame),
         )?;
-        let windowed = windowed_sum.mean().expect("at least one frame");
         // The same cut-off at the output's exposure; infinite range at the exposure adapted to
         // its reference (accuracy::exposure_of).
         let cutoff = if draws.is_some() {
@@ -328,4 +299,53 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     }
     println!("wrote {} and {}", png.display(), exr.display());
     Ok(())
+}
+
+/// The brute-force reference over frames `0..frames`, each after `draw` drew its ranges: the
+/// frames' mean image and the last frame (its surfaces, which the infinite-range reference
+/// reads, and its timings).
+fn reference_frames(
+    ctx: &GpuContext,
+    reference: &ReferenceRenderer,
+    gpu_scene: &GpuScene,
+    (w, h): (u32, u32),
+    frames: u32,
+    draw: &dyn Fn(u32) -> Result<()>,
+) -> Result<(HdrImage, ReferenceFrame)> {
+    let mut sum = ImageSum::default();
+    let mut last = None;
+    for f in 0..frames.max(1) {
+        draw(f)?;
+        let frame = reference.render(ctx, gpu_scene, w, h)?;
+        sum.add(&frame.color);
+        last = Some(frame);
+    }
+    Ok((
+        sum.mean().expect("at least one frame"),
+        last.expect("at least one frame"),
+    ))
+}
+
+/// `--stochastic`'s settings, as a line of the output.
+fn print_stochastic(a: &SceneArgs, frames: u32) {
+    let RadiusRule::Stochastic {
+        error,
+        bound,
+        interleave,
+        ..
+    } = a.light_spec().radius
+    else {
+        return;
+    };
+    println!(
+        "  stochastic light culling: error {error} ({} bound), {frames} frame{} drawn{}{}",
+        bound.name(),
+        if frames > 1 { "s" } else { "" },
+        if frames > 1 { " and averaged" } else { "" },
+        if interleave > 1 {
+            format!(", {interleave} x {interleave} interleaved classes")
+        } else {
+            String::new()
+        }
+    );
 }

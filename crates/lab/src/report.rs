@@ -214,96 +214,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let description = crate::Experiment::parse(&exp_src, &dir.join("experiment.ron"))
         .map(|e| e.description)
         .unwrap_or_default();
-    let figures = dir.join("figures");
-    std::fs::create_dir_all(&figures).map_err(|e| LabError::Io {
-        path: figures.display().to_string(),
-        message: e.to_string(),
-    })?;
-    let mut figs: Vec<(&str, String)> = Vec::new();
-    // Each figure is drawn to a temporary name and renamed, so no half-written SVG remains.
-    let mut draw = |name: &'static str,
-                    caption: &'static str,
-                    f: &dyn Fn(&Path) -> Result<Option<crate::figures::Layout>, LabError>|
-     -> Result<(), LabError> {
-        let tmp = figures.join(format!(".{name}.tmp.svg"));
-        if let Some(layout) = f(&tmp)? {
-            std::fs::rename(&tmp, figures.join(name)).map_err(|e| LabError::Io {
-                path: name.into(),
-                message: e.to_string(),
-            })?;
-            // What a reader needs to name every point: the sweeps' orders, numbered points.
-            let mut caption = caption.to_owned();
-            if !layout.notes.is_empty() {
-                caption += &format!(" {}.", layout.notes.join("; "));
-            }
-            figs.push((name, caption));
-        } else {
-            // A figure this run does not have: an earlier report's copy must not linger.
-            let stale = figures.join(name);
-            if stale.exists() {
-                std::fs::remove_file(&stale).map_err(|e| LabError::Io {
-                    path: stale.display().to_string(),
-                    message: e.to_string(),
-                })?;
-            }
-        }
-        Ok(())
-    };
-    draw(
-        "time_vs_lights.svg",
-        "GPU time per frame against light count, one line per configuration.",
-        &|p| time_vs_lights(&rows, p),
-    )?;
-    draw(
-        "passes.svg",
-        "Per-pass GPU time of each cell: the geometry pass (raster), culling (compute) and shading.",
-        &|p| passes(&rows, p),
-    )?;
-    // The frame in steady state where every cell has it (see `summary`).
-    let gpu: Axis<'_> = if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
-        ("frame, GPU ms (steady state)", &|r| r.gpu_ms_frame_steady)
-    } else {
-        ("GPU ms (median)", &|r| r.gpu_ms_total)
-    };
-    let frame: Axis<'_> = ("culling + shading, GPU ms (steady state)", &|r| {
-        r.gpu_ms_cull_shade
-    });
-    let fp: Axis<'_> = ("false-positive ratio", &|r| r.false_positive_ratio);
-    let error: Axis<'_> = ("mean FLIP vs reference", &|r| r.flip_mean);
-    draw(
-        "speed_fp.svg",
-        "Speed against list quality: lights evaluated per light needed (1.0 is exact). A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
-        &|p| speed_accuracy(&rows, p, gpu, fp),
-    )?;
-    draw(
-        "speed_error.svg",
-        "Speed against image error: mean FLIP against the brute-force reference with the same light ranges (what culling and shading lose, not the cut-off). A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
-        &|p| speed_accuracy(&rows, p, gpu, error),
-    )?;
-    draw(
-        "frame_fp.svg",
-        "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
-        &|p| speed_accuracy(&rows, p, frame, fp),
-    )?;
-    let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
-    draw(
-        "frame_infinite.svg",
-        "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade, one frame; an accumulated point costs this a frame, K times it for its image) against mean FLIP against the infinite-range reference (at the reference's exposure). A panel a setting; colour: the method family (radius cut-offs, stochastic light culling in one frame, accumulated, interleaved), a line through each configuration's sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
-        &|p| speed_accuracy(&rows, p, frame, flip_inf),
-    )?;
-    if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
-        draw(
-            "frame_steady_infinite.svg",
-            "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading) against mean FLIP against the infinite-range reference. A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
-            &|p| speed_accuracy(&rows, p, gpu, flip_inf),
-        )?;
-    }
-    draw(
-        "shade_vs_lights.svg",
-        "What a loose list costs: the shading pass against the lights it evaluates per pixel, one point per cell.",
-        &|p| shade_vs_lights(&rows, p),
-    )?;
-
+    let figs = draw_figures(&rows, &dir.join("figures"))?;
     let name = rows[0].experiment.clone();
     // The rows say what ran each cell: a resumed run may mix commits (or machines), and the
     // setup lists each with its count (meta.json holds the last run's only).
@@ -523,6 +434,101 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let path = dir.join("report.html");
     write_atomic(&path, html.as_bytes())?;
     Ok(path)
+}
+
+/// Draws the report's figures into `figures`, each through a temporary file, and removes those
+/// this run has none of; returns each drawn figure's file name and caption.
+fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, String)>, LabError> {
+    std::fs::create_dir_all(figures).map_err(|e| LabError::Io {
+        path: figures.display().to_string(),
+        message: e.to_string(),
+    })?;
+    let mut figs: Vec<(&str, String)> = Vec::new();
+    // Each figure is drawn to a temporary name and renamed, so no half-written SVG remains.
+    let mut draw = |name: &'static str,
+                    caption: &'static str,
+                    f: &dyn Fn(&Path) -> Result<Option<crate::figures::Layout>, LabError>|
+     -> Result<(), LabError> {
+        let tmp = figures.join(format!(".{name}.tmp.svg"));
+        if let Some(layout) = f(&tmp)? {
+            std::fs::rename(&tmp, figures.join(name)).map_err(|e| LabError::Io {
+                path: name.into(),
+                message: e.to_string(),
+            })?;
+            // What a reader needs to name every point: the sweeps' orders, numbered points.
+            let mut caption = caption.to_owned();
+            if !layout.notes.is_empty() {
+                caption += &format!(" {}.", layout.notes.join("; "));
+            }
+            figs.push((name, caption));
+        } else {
+            // A figure this run does not have: an earlier report's copy must not linger.
+            let stale = figures.join(name);
+            if stale.exists() {
+                std::fs::remove_file(&stale).map_err(|e| LabError::Io {
+                    path: stale.display().to_string(),
+                    message: e.to_string(),
+                })?;
+            }
+        }
+        Ok(())
+    };
+    draw(
+        "time_vs_lights.svg",
+        "GPU time per frame against light count, one line per configuration.",
+        &|p| time_vs_lights(rows, p),
+    )?;
+    draw(
+        "passes.svg",
+        "Per-pass GPU time of each cell: the geometry pass (raster), culling (compute) and shading.",
+        &|p| passes(rows, p),
+    )?;
+    // The frame in steady state where every cell has it (see `summary`).
+    let gpu: Axis<'_> = if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
+        ("frame, GPU ms (steady state)", &|r| r.gpu_ms_frame_steady)
+    } else {
+        ("GPU ms (median)", &|r| r.gpu_ms_total)
+    };
+    let frame: Axis<'_> = ("culling + shading, GPU ms (steady state)", &|r| {
+        r.gpu_ms_cull_shade
+    });
+    let fp: Axis<'_> = ("false-positive ratio", &|r| r.false_positive_ratio);
+    let error: Axis<'_> = ("mean FLIP vs reference", &|r| r.flip_mean);
+    draw(
+        "speed_fp.svg",
+        "Speed against list quality: lights evaluated per light needed (1.0 is exact). A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+        &|p| speed_accuracy(rows, p, gpu, fp),
+    )?;
+    draw(
+        "speed_error.svg",
+        "Speed against image error: mean FLIP against the brute-force reference with the same light ranges (what culling and shading lose, not the cut-off). A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+        &|p| speed_accuracy(rows, p, gpu, error),
+    )?;
+    draw(
+        "frame_fp.svg",
+        "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+        &|p| speed_accuracy(rows, p, frame, fp),
+    )?;
+    let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
+    draw(
+        "frame_infinite.svg",
+        "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade, one frame; an accumulated point costs this a frame, K times it for its image) against mean FLIP against the infinite-range reference (at the reference's exposure). A panel a setting; colour: the method family (radius cut-offs, stochastic light culling in one frame, accumulated, interleaved), a line through each configuration's sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+        &|p| speed_accuracy(rows, p, frame, flip_inf),
+    )?;
+    if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
+        draw(
+            "frame_steady_infinite.svg",
+            "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading) against mean FLIP against the infinite-range reference. A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+            &|p| speed_accuracy(rows, p, gpu, flip_inf),
+        )?;
+    }
+    draw(
+        "shade_vs_lights.svg",
+        "What a loose list costs: the shading pass against the lights it evaluates per pixel, one point per cell.",
+        &|p| shade_vs_lights(rows, p),
+    )?;
+
+    Ok(figs)
 }
 
 #[cfg(test)]

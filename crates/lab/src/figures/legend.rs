@@ -33,10 +33,15 @@ pub(super) enum Mark {
 pub(super) const LABEL_CHARS: usize = 64;
 
 pub(super) fn clip_label(s: &str) -> String {
-    if s.chars().count() <= LABEL_CHARS {
+    clip_to(s, LABEL_CHARS)
+}
+
+/// `s` in at most `n` characters, an ellipsis ending one that was cut.
+pub(super) fn clip_to(s: &str, n: usize) -> String {
+    if s.chars().count() <= n {
         s.to_owned()
     } else {
-        let mut t: String = s.chars().take(LABEL_CHARS - 1).collect();
+        let mut t: String = s.chars().take(n - 1).collect();
         t.push('…');
         t
     }

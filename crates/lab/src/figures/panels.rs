@@ -23,7 +23,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::axes::{self, Scale};
-use super::legend::{LABEL_CHARS, Mark, clip_label, legend, legend_width};
+use super::legend::{LABEL_CHARS, Mark, clip_label, clip_to, legend, legend_width};
 use super::{Axis, FONT, Layout, PALETTE, err, pareto};
 use crate::LabError;
 use crate::results::Row;
@@ -203,9 +203,23 @@ struct Pt<'r> {
     y: f64,
     panel: usize,
     colour: usize,
+    shape: Shape,
+    /// Deferred backends' points are filled; forward's and naive forward's open.
+    filled: bool,
+    /// The method family ([`family`]) and the point's place in its sweep.
+    family: String,
     order: Option<f64>,
     /// Points of one line: the same panel and cell name but for the sweep's value.
     line: String,
+}
+
+/// What the colours and shapes of a figure's points stand for, in legend order.
+struct Keys {
+    colours: Vec<String>,
+    /// A label and shape each: the strategies', or the other things the cells vary.
+    shapes: Vec<(String, Shape)>,
+    /// Whether filled (deferred) points, open ones, or both are drawn.
+    fills: BTreeSet<bool>,
 }
 
 /// A figure's title and axes; `front`: draw each panel's Pareto front (smaller is better on
@@ -279,146 +293,9 @@ pub(crate) fn draw(rows: &[Row], path: &Path, spec: &Spec<'_>) -> Result<Option<
         return Ok(None);
     }
     let (panel_of, titles) = panels_of(&shown);
-    // Colours: the method families where there are several; else the few other things the
-    // cells vary; else one colour.
-    let families: Vec<(String, Option<f64>)> = shown.iter().map(|r| family(r)).collect();
-    let distinct_families: BTreeSet<&String> = families.iter().map(|f| &f.0).collect();
-    let rest = |r: &Row| -> String {
-        let radius = radius_part(&r.cell);
-        r.cell
-            .split(',')
-            .filter(|p| Some(*p) != radius && !is_panel_or_marker_part(p))
-            .collect::<Vec<_>>()
-            .join(",")
-    };
-    let strategies: BTreeSet<&str> = shown.iter().map(|r| r.strategy.as_str()).collect();
-    let backends: BTreeSet<bool> = shown.iter().map(|r| is_filled(r)).collect();
-    let room = MAX_LEGEND - strategies.len() - backends.len() - usize::from(spec.front);
-    let rests: BTreeSet<String> = shown.iter().map(|r| rest(r)).collect();
-    let colour_key: Vec<String> = if distinct_families.len() > 1 {
-        families.iter().map(|f| f.0.clone()).collect()
-    } else if rests.len() > 1 && rests.len() <= room.min(PALETTE.len()) {
-        shown.iter().map(|r| rest(r)).collect()
-    } else {
-        families.iter().map(|f| f.0.clone()).collect()
-    };
-    // Shapes: the strategies where there are several; else, where colours are the families,
-    // the other things the cells vary (materials, MSAA, ...) if few enough.
-    let colour_by_family = colour_key.iter().zip(&families).all(|(c, f)| *c == f.0);
-    let shape_by_rest = colour_by_family
-        && strategies.len() == 1
-        && rests.len() > 1
-        && rests.len() <= SHAPES.len()
-        && distinct_families.len() + rests.len() + backends.len() + usize::from(spec.front)
-            <= MAX_LEGEND;
-    let rest_list: Vec<&String> = rests.iter().collect();
-    let shape_of = |r: &Row| -> Shape {
-        if shape_by_rest {
-            let k = rest(r);
-            SHAPES[rest_list.iter().position(|x| **x == k).unwrap_or(0)]
-        } else {
-            Shape::of_strategy(&r.strategy)
-        }
-    };
-    let mut colours: Vec<String> = Vec::new();
-    let mut pts: Vec<Pt<'_>> = Vec::new();
-    for (i, r) in shown.iter().enumerate() {
-        let c = colours
-            .iter()
-            .position(|k| *k == colour_key[i])
-            .unwrap_or_else(|| {
-                colours.push(colour_key[i].clone());
-                colours.len() - 1
-            });
-        let line = {
-            let radius = radius_part(&r.cell);
-            let cell: Vec<&str> = r
-                .cell
-                .split(',')
-                .map(|p| if Some(p) == radius { "" } else { p })
-                .collect();
-            format!("{}|{}|{}", panel_of[i], families[i].0, cell.join(","))
-        };
-        pts.push(Pt {
-            row: r,
-            x: (spec.x.1)(r).unwrap_or(0.0),
-            y: (spec.y.1)(r).unwrap_or(0.0),
-            panel: panel_of[i],
-            colour: c,
-            order: families[i].1,
-            line,
-        });
-    }
-    let xs = Scale::fit_log(pts.iter().map(|p| p.x));
-    let ys = Scale::fit_log(pts.iter().map(|p| p.y));
-    // The legend: colours, then strategies' shapes, then backends' fills, then the front.
-    let palette = |c: usize| PALETTE[c % PALETTE.len()];
-    let mut entries: Vec<(String, Mark)> = colours
-        .iter()
-        .enumerate()
-        .map(|(c, k)| (k.clone(), Mark::Line(palette(c))))
-        .collect();
-    if shape_by_rest {
-        for (k, r) in rest_list.iter().enumerate() {
-            entries.push(((*r).clone(), Mark::Shape(SHAPES[k], GREY_MARK, true)));
-        }
-    } else {
-        for s in &strategies {
-            entries.push((
-                Shape::name(s),
-                Mark::Shape(Shape::of_strategy(s), GREY_MARK, true),
-            ));
-        }
-    }
-    for &filled in &backends {
-        let label = if filled {
-            "filled: deferred"
-        } else {
-            "open: forward (or no culling)"
-        };
-        entries.push((label.into(), Mark::Shape(Shape::Circle, GREY_MARK, filled)));
-    }
-    if spec.front {
-        entries.push(("Pareto front (per panel)".into(), Mark::Line(BLACK)));
-    }
-    // Numbers for points nothing else tells apart.
-    let mut numbered: BTreeMap<usize, usize> = BTreeMap::new();
-    {
-        let mut line_sizes: BTreeMap<&str, usize> = BTreeMap::new();
-        for p in pts.iter().filter(|p| p.order.is_some()) {
-            *line_sizes.entry(p.line.as_str()).or_default() += 1;
-        }
-        let mut seen: BTreeMap<(usize, usize, Shape, bool, String), Vec<usize>> = BTreeMap::new();
-        for (i, p) in pts.iter().enumerate() {
-            // A point on a drawn line is told apart by its place along it.
-            let line = if p.order.is_some() && line_sizes[p.line.as_str()] > 1 {
-                p.line.clone()
-            } else {
-                String::new()
-            };
-            seen.entry((p.panel, p.colour, shape_of(p.row), is_filled(p.row), line))
-                .or_default()
-                .push(i);
-        }
-        for group in seen.values().filter(|g| g.len() > 1) {
-            // A line's points are told apart by their order along it, unless two share a
-            // sweep value.
-            let on_line = group
-                .iter()
-                .all(|&i| pts[i].order.is_some() && line_sizes[pts[i].line.as_str()] > 1);
-            let orders: BTreeSet<u64> = group
-                .iter()
-                .filter_map(|&i| pts[i].order.map(f64::to_bits))
-                .collect();
-            if on_line && orders.len() == group.len() {
-                continue;
-            }
-            for &i in group {
-                let n = numbered.len() + 1;
-                numbered.insert(i, n);
-            }
-        }
-    }
+    let (pts, keys) = points(&shown, &panel_of, spec);
+    let entries = legend_entries(&keys, spec.front);
+    let numbered = numbered(&pts);
     let labels: Vec<String> = entries.iter().map(|e| e.0.clone()).collect();
     let lw = legend_width(&labels);
     let n = titles.len() as u32;
@@ -432,6 +309,10 @@ pub(crate) fn draw(rows: &[Row], path: &Path, spec: &Spec<'_>) -> Result<Option<
     let width = (cols * PANEL.0 + lw).max(title_w);
     let legend_h = 60 + 16 * entries.len() as u32;
     let height = (TITLE_H + grid_rows * PANEL.1).max(legend_h);
+    let axes = (
+        Scale::fit_log(pts.iter().map(|p| p.x)),
+        Scale::fit_log(pts.iter().map(|p| p.y)),
+    );
     let mut svg = String::new();
     let mut layout = Layout::default();
     {
@@ -448,72 +329,260 @@ pub(crate) fn draw(rows: &[Row], path: &Path, spec: &Spec<'_>) -> Result<Option<
         let (plots, side) = body.split_horizontally(cols * PANEL.0);
         let areas = plots.split_evenly((grid_rows as usize, cols as usize));
         for (k, title) in titles.iter().enumerate() {
-            let area = &areas[k];
-            let chart = axes::chart(area, &clip_label(title), (xs, spec.x.0), (ys, spec.y.0))?;
-            let at = |p: &Pt<'_>| chart.backend_coord(&(xs.map(p.x), ys.map(p.y)));
-            // Lines first, markers over them.
-            let mut lines: BTreeMap<&str, Vec<&Pt<'_>>> = BTreeMap::new();
-            for p in pts.iter().filter(|p| p.panel == k && p.order.is_some()) {
-                lines.entry(p.line.as_str()).or_default().push(p);
-            }
-            for line in lines.values_mut().filter(|l| l.len() > 1) {
-                // From the loosest bound to the tightest: thresholds and error bounds fall.
-                line.sort_by(|a, b| b.order.unwrap_or(0.0).total_cmp(&a.order.unwrap_or(0.0)));
-                let c = palette(line[0].colour);
-                let path: Vec<(i32, i32)> = line.iter().map(|p| at(p)).collect();
-                root.draw(&PathElement::new(path, c.mix(0.7).stroke_width(1)))
-                    .map_err(err)?;
-            }
-            if spec.front {
-                let own: Vec<(f64, f64)> = pts
-                    .iter()
-                    .filter(|p| p.panel == k)
-                    .map(|p| (p.x, p.y))
-                    .collect();
-                let front: Vec<(i32, i32)> = pareto(&own)
-                    .into_iter()
-                    .map(|(x, y)| chart.backend_coord(&(xs.map(x), ys.map(y))))
-                    .collect();
-                root.draw(&PathElement::new(front.clone(), BLACK.stroke_width(2)))
-                    .map_err(err)?;
-                for p in front {
-                    root.draw(&Circle::new(p, 8, BLACK.stroke_width(1)))
-                        .map_err(err)?;
-                }
-            }
-            let number_style =
-                TextStyle::from((FONT, 10).into_font()).pos(Pos::new(HPos::Left, VPos::Bottom));
-            for (i, p) in pts.iter().enumerate().filter(|(_, p)| p.panel == k) {
-                let c = at(p);
-                draw_marker(
-                    &root,
-                    c,
-                    4,
-                    shape_of(p.row),
-                    palette(p.colour),
-                    is_filled(p.row),
-                )?;
-                if let Some(n) = numbered.get(&i) {
-                    root.draw(&Text::new(
-                        n.to_string(),
-                        (c.0 + 5, c.1 - 3),
-                        number_style.clone(),
-                    ))
-                    .map_err(err)?;
-                }
-                layout.points.push(c);
-            }
+            let panel = Panel {
+                index: k,
+                title,
+                axes,
+            };
+            draw_panel(&root, &areas[k], &panel, &pts, spec, &numbered, &mut layout)?;
         }
         layout.legend = Some(legend(&side, &entries)?);
         root.present().map_err(err)?;
     }
-    // The sweeps' values in the order each line runs, and the numbered points.
-    let mut sweeps: BTreeMap<&str, BTreeSet<u64>> = BTreeMap::new();
-    for (p, f) in pts.iter().zip(&families) {
-        if let Some(v) = p.order {
-            sweeps.entry(f.0.as_str()).or_default().insert(v.to_bits());
+    layout.notes = notes(&pts, &numbered);
+    layout.legend_entries = entries.len();
+    super::write_svg(path, &svg, layout.legend)?;
+    Ok(Some(layout))
+}
+
+/// The cell name less its radius part and the parts that say its panel, strategy or backend:
+/// what else the cells vary (materials, MSAA, ...).
+fn rest(r: &Row) -> String {
+    let radius = radius_part(&r.cell);
+    r.cell
+        .split(',')
+        .filter(|p| Some(*p) != radius && !is_panel_or_marker_part(p))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// Each row's point and what its colour and shape stand for. Colours: the method families
+/// where there are several; else the few other things the cells vary; else one colour.
+/// Shapes: the strategies where there are several; else, where colours are the families, the
+/// other things the cells vary if few enough.
+fn points<'r>(shown: &[&'r Row], panel_of: &[usize], spec: &Spec<'_>) -> (Vec<Pt<'r>>, Keys) {
+    let families: Vec<(String, Option<f64>)> = shown.iter().map(|r| family(r)).collect();
+    let distinct_families: BTreeSet<&String> = families.iter().map(|f| &f.0).collect();
+    let strategies: BTreeSet<&str> = shown.iter().map(|r| r.strategy.as_str()).collect();
+    let fills: BTreeSet<bool> = shown.iter().map(|r| is_filled(r)).collect();
+    let room = MAX_LEGEND - strategies.len() - fills.len() - usize::from(spec.front);
+    let rests: Vec<String> = shown
+        .iter()
+        .map(|r| rest(r))
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    let colour_by_family =
+        distinct_families.len() > 1 || !(rests.len() > 1 && rests.len() <= room.min(PALETTE.len()));
+    let shape_by_rest = colour_by_family
+        && strategies.len() == 1
+        && rests.len() > 1
+        && rests.len() <= SHAPES.len()
+        && distinct_families.len() + rests.len() + fills.len() + usize::from(spec.front)
+            <= MAX_LEGEND;
+    let shapes: Vec<(String, Shape)> = if shape_by_rest {
+        rests.iter().cloned().zip(SHAPES).collect()
+    } else {
+        strategies
+            .iter()
+            .map(|s| (Shape::name(s), Shape::of_strategy(s)))
+            .collect()
+    };
+    let mut colours: Vec<String> = Vec::new();
+    let mut pts = Vec::with_capacity(shown.len());
+    for (i, r) in shown.iter().enumerate() {
+        let key = if colour_by_family {
+            families[i].0.clone()
+        } else {
+            rest(r)
+        };
+        let colour = colours.iter().position(|k| *k == key).unwrap_or_else(|| {
+            colours.push(key);
+            colours.len() - 1
+        });
+        let shape = if shape_by_rest {
+            let k = rest(r);
+            SHAPES[rests.iter().position(|x| *x == k).unwrap_or(0)]
+        } else {
+            Shape::of_strategy(&r.strategy)
+        };
+        let radius = radius_part(&r.cell);
+        let cell: Vec<&str> = r
+            .cell
+            .split(',')
+            .map(|p| if Some(p) == radius { "" } else { p })
+            .collect();
+        pts.push(Pt {
+            row: r,
+            x: (spec.x.1)(r).unwrap_or(0.0),
+            y: (spec.y.1)(r).unwrap_or(0.0),
+            panel: panel_of[i],
+            colour,
+            shape,
+            filled: is_filled(r),
+            line: format!("{}|{}|{}", panel_of[i], families[i].0, cell.join(",")),
+            family: families[i].0.clone(),
+            order: families[i].1,
+        });
+    }
+    (
+        pts,
+        Keys {
+            colours,
+            shapes,
+            fills,
+        },
+    )
+}
+
+/// The legend: colours, then shapes, then fills, then the front.
+fn legend_entries(keys: &Keys, front: bool) -> Vec<(String, Mark)> {
+    let mut entries: Vec<(String, Mark)> = keys
+        .colours
+        .iter()
+        .enumerate()
+        .map(|(c, k)| (k.clone(), Mark::Line(palette(c))))
+        .collect();
+    for (label, shape) in &keys.shapes {
+        entries.push((label.clone(), Mark::Shape(*shape, GREY_MARK, true)));
+    }
+    for &filled in &keys.fills {
+        let label = if filled {
+            "filled: deferred"
+        } else {
+            "open: forward (or no culling)"
+        };
+        entries.push((label.into(), Mark::Shape(Shape::Circle, GREY_MARK, filled)));
+    }
+    if front {
+        entries.push(("Pareto front (per panel)".into(), Mark::Line(BLACK)));
+    }
+    entries
+}
+
+/// The number of each point nothing else tells apart (panel, colour, shape, fill, and a place
+/// along a drawn line): point index to its number, from 1.
+fn numbered(pts: &[Pt<'_>]) -> BTreeMap<usize, usize> {
+    let mut line_sizes: BTreeMap<&str, usize> = BTreeMap::new();
+    for p in pts.iter().filter(|p| p.order.is_some()) {
+        *line_sizes.entry(p.line.as_str()).or_default() += 1;
+    }
+    let on_drawn_line = |p: &Pt<'_>| p.order.is_some() && line_sizes[p.line.as_str()] > 1;
+    let mut seen: BTreeMap<(usize, usize, Shape, bool, &str), Vec<usize>> = BTreeMap::new();
+    for (i, p) in pts.iter().enumerate() {
+        let line = if on_drawn_line(p) {
+            p.line.as_str()
+        } else {
+            ""
+        };
+        seen.entry((p.panel, p.colour, p.shape, p.filled, line))
+            .or_default()
+            .push(i);
+    }
+    let mut numbered = BTreeMap::new();
+    for group in seen.values().filter(|g| g.len() > 1) {
+        // A line's points are told apart by their order along it, unless two share a sweep
+        // value.
+        let orders: BTreeSet<u64> = group
+            .iter()
+            .filter_map(|&i| pts[i].order.map(f64::to_bits))
+            .collect();
+        if group.iter().all(|&i| on_drawn_line(&pts[i])) && orders.len() == group.len() {
+            continue;
+        }
+        for &i in group {
+            let n = numbered.len() + 1;
+            numbered.insert(i, n);
         }
     }
+    numbered
+}
+
+/// One panel: its index among the panels, its title and the axes every panel shares.
+struct Panel<'a> {
+    index: usize,
+    title: &'a str,
+    axes: (Scale, Scale),
+}
+
+/// Draws panel `panel` into `area`: its axes, its lines through each sweep, its Pareto front
+/// and its points (with their numbers), recording where the points landed in `layout`.
+fn draw_panel<'b>(
+    root: &DrawingArea<SVGBackend<'b>, Shift>,
+    area: &DrawingArea<SVGBackend<'b>, Shift>,
+    panel: &Panel<'_>,
+    pts: &[Pt<'_>],
+    spec: &Spec<'_>,
+    numbered: &BTreeMap<usize, usize>,
+    layout: &mut Layout,
+) -> Result<(), LabError> {
+    let (xs, ys) = panel.axes;
+    let k = panel.index;
+    let chart = axes::chart(
+        area,
+        &clip_label(panel.title),
+        (xs, spec.x.0),
+        (ys, spec.y.0),
+    )?;
+    let at = |x: f64, y: f64| chart.backend_coord(&(xs.map(x), ys.map(y)));
+    // Lines first, markers over them.
+    let mut lines: BTreeMap<&str, Vec<&Pt<'_>>> = BTreeMap::new();
+    for p in pts.iter().filter(|p| p.panel == k && p.order.is_some()) {
+        lines.entry(p.line.as_str()).or_default().push(p);
+    }
+    for line in lines.values_mut().filter(|l| l.len() > 1) {
+        // From the loosest bound to the tightest: thresholds and error bounds fall.
+        line.sort_by(|a, b| b.order.unwrap_or(0.0).total_cmp(&a.order.unwrap_or(0.0)));
+        let c = palette(line[0].colour);
+        let path: Vec<(i32, i32)> = line.iter().map(|p| at(p.x, p.y)).collect();
+        root.draw(&PathElement::new(path, c.mix(0.7).stroke_width(1)))
+            .map_err(err)?;
+    }
+    if spec.front {
+        let own: Vec<(f64, f64)> = pts
+            .iter()
+            .filter(|p| p.panel == k)
+            .map(|p| (p.x, p.y))
+            .collect();
+        let front: Vec<(i32, i32)> = pareto(&own).into_iter().map(|(x, y)| at(x, y)).collect();
+        root.draw(&PathElement::new(front.clone(), BLACK.stroke_width(2)))
+            .map_err(err)?;
+        for p in front {
+            root.draw(&Circle::new(p, 8, BLACK.stroke_width(1)))
+                .map_err(err)?;
+        }
+    }
+    let number_style =
+        TextStyle::from((FONT, 10).into_font()).pos(Pos::new(HPos::Left, VPos::Bottom));
+    for (i, p) in pts.iter().enumerate().filter(|(_, p)| p.panel == k) {
+        let c = at(p.x, p.y);
+        draw_marker(root, c, 4, p.shape, palette(p.colour), p.filled)?;
+        if let Some(n) = numbered.get(&i) {
+            root.draw(&Text::new(
+                n.to_string(),
+                (c.0 + 5, c.1 - 3),
+                number_style.clone(),
+            ))
+            .map_err(err)?;
+        }
+        layout.points.push(c);
+    }
+    Ok(())
+}
+
+/// What the caption must add: each family's sweep values in the order its lines run, and
+/// the numbered points' cells.
+fn notes(pts: &[Pt<'_>], numbered: &BTreeMap<usize, usize>) -> Vec<String> {
+    let mut sweeps: BTreeMap<&str, BTreeSet<u64>> = BTreeMap::new();
+    for p in pts {
+        if let Some(v) = p.order {
+            sweeps
+                .entry(p.family.as_str())
+                .or_default()
+                .insert(v.to_bits());
+        }
+    }
+    let mut notes = Vec::new();
     for (family, values) in &sweeps {
         let mut v: Vec<f64> = values.iter().map(|b| f64::from_bits(*b)).collect();
         v.sort_by(|a, b| b.total_cmp(a));
@@ -524,7 +593,7 @@ pub(crate) fn draw(rows: &[Row], path: &Path, spec: &Spec<'_>) -> Result<Option<
         } else {
             "thresholds"
         };
-        layout.notes.push(format!(
+        notes.push(format!(
             "{family}: {what} {} (along each line, left to right as drawn)",
             v.iter()
                 .map(|x| format!("{x}"))
@@ -532,15 +601,18 @@ pub(crate) fn draw(rows: &[Row], path: &Path, spec: &Spec<'_>) -> Result<Option<
                 .join(", ")
         ));
     }
-    for (i, n) in &numbered {
-        layout.notes.push(format!(
+    for (i, n) in numbered {
+        notes.push(format!(
             "point {n}: {}",
             clip_to(&pts[*i].row.cell, LABEL_CHARS * 2)
         ));
     }
-    layout.legend_entries = entries.len();
-    super::write_svg(path, &svg, layout.legend)?;
-    Ok(Some(layout))
+    notes
+}
+
+/// The colour of colour key `c`.
+fn palette(c: usize) -> RGBColor {
+    PALETTE[c % PALETTE.len()]
 }
 
 /// The shapes in the order other keys than the strategy take them.
@@ -559,16 +631,6 @@ const GREY_MARK: RGBColor = RGBColor(90, 90, 90);
 /// Deferred backends' points are filled; forward's and naive forward's open.
 fn is_filled(r: &Row) -> bool {
     r.backend.starts_with("deferred")
-}
-
-fn clip_to(s: &str, n: usize) -> String {
-    if s.chars().count() <= n {
-        s.to_owned()
-    } else {
-        let mut t: String = s.chars().take(n - 1).collect();
-        t.push('…');
-        t
-    }
 }
 
 #[cfg(test)]
