@@ -12,7 +12,7 @@ use manylights_gpu::stochastic::StochasticRanges;
 use manylights_gpu::{GpuContext, GpuOptions, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::procedural::{self, ProceduralScene};
-use manylights_scene::stochastic::{INTERLEAVE_MAX, StochasticBound};
+use manylights_scene::stochastic::{INTERLEAVE_MAX, StochasticBound, StochasticDraw};
 use manylights_scene::{LightGenerator, LightSpec, Model, RadiusRule, Scene};
 
 /// Scene, lights, resolution and adapter: shared by every subcommand.
@@ -66,6 +66,11 @@ pub(crate) struct SceneArgs {
     /// ranges, N from 1 (none) to 8.
     #[arg(long, value_name = "N", requires = "stochastic")]
     pub(crate) interleave: Option<u32>,
+    /// With --stochastic: how a frame's numbers are drawn across the lights (stratified by
+    /// default: one shifted lattice over the lights in spatial order; independent: one hash a
+    /// light, as Tokuyoshi and Harada 2016).
+    #[arg(long, value_enum, requires = "stochastic")]
+    pub(crate) draw: Option<DrawName>,
     /// Intensity of every generated light.
     #[arg(long, default_value_t = 4.0)]
     pub(crate) intensity: f32,
@@ -95,6 +100,15 @@ pub(crate) enum BoundName {
     /// The radiance a light reflects off a surface spreading the scene's largest directional
     /// albedo diffusely.
     Albedo,
+}
+
+/// `--draw`'s values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum DrawName {
+    /// One randomly shifted lattice over the lights in spatial order (the default).
+    Stratified,
+    /// One independent hash a light and frame.
+    Independent,
 }
 
 /// A finite number above 0, for clap.
@@ -396,6 +410,10 @@ impl SceneArgs {
                     accumulate: if self.frames() > 1 { self.frames() } else { 0 },
                     seeds: 1,
                     interleave: self.interleave.unwrap_or(1),
+                    draw: match self.draw {
+                        Some(DrawName::Independent) => StochasticDraw::Independent,
+                        Some(DrawName::Stratified) | None => StochasticDraw::Stratified,
+                    },
                 },
                 (None, Some(t)) => RadiusRule::Threshold(t),
                 (None, None) => RadiusRule::Fixed(self.radius),
@@ -440,12 +458,14 @@ impl SceneArgs {
             return Ok(None);
         };
         let first = scene.lights.len() as u32 - self.lights;
+        let strata = manylights_scene::stochastic::strata(&scene.lights[first as usize..]);
         Ok(Some(StochasticRanges::new(
             ctx,
             gpu_scene,
             first,
             self.lights,
             &params,
+            &strata,
         )?))
     }
 

@@ -332,13 +332,20 @@ fn print_stochastic(a: &SceneArgs, frames: u32) {
         error,
         bound,
         interleave,
+        draw,
         ..
     } = a.light_spec().radius
     else {
         return;
     };
+    // Interleaved classes draw one hash each, whatever --draw says.
+    let draws = if interleave > 1 {
+        String::new()
+    } else {
+        format!(", {} draws", draw.name())
+    };
     println!(
-        "  stochastic light culling: error {error} ({} bound), {frames} frame{} drawn{}{}",
+        "  stochastic light culling: error {error} ({} bound{draws}), {frames} frame{} drawn{}{}",
         bound.name(),
         if frames > 1 { "s" } else { "" },
         if frames > 1 { " and averaged" } else { "" },

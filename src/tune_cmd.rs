@@ -10,7 +10,7 @@ use manylights_cull::layout::DEFAULT_SLACK;
 use manylights_lab::experiment::{CameraSpec, Config, SceneSpec};
 use manylights_lab::tune::{TuneOptions, tune};
 use manylights_scene::RadiusRule;
-use manylights_scene::stochastic::StochasticBound;
+use manylights_scene::stochastic::{StochasticBound, StochasticDraw};
 use manylights_shade::Backend;
 
 use crate::options::{SceneArgs, positive_f32};
@@ -203,6 +203,7 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
             accumulate: 0,
             seeds: 4,
             interleave: 1,
+            draw: StochasticDraw::Stratified,
         },
     };
     args.thresholds
@@ -214,6 +215,7 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
                 exposure,
                 accumulate,
                 interleave,
+                draw,
                 ..
             } => RadiusRule::Stochastic {
                 error: e,
@@ -222,6 +224,7 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
                 accumulate,
                 seeds: 4,
                 interleave,
+                draw,
             },
             other => other,
         }))

@@ -144,6 +144,25 @@ struct Stochastic {
     scene: Scene,
     gpu: GpuScene,
     params: stochastic::StochasticParams,
+    /// The lights' strata (stratified draws).
+    strata: Vec<u32>,
+}
+
+impl Stochastic {
+    /// The draw pass over every light.
+    fn ranges(&self, ctx: &manylights_gpu::GpuContext) -> StochasticRanges {
+        let n = self.gpu.light_count;
+        StochasticRanges::new(ctx, &self.gpu, 0, n, &self.params, &self.strata).unwrap()
+    }
+
+    /// The same scene drawn with `draw`.
+    fn with_draw(self, draw: stochastic::StochasticDraw) -> Self {
+        let params = stochastic::StochasticParams {
+            draw,
+            ..self.params
+        };
+        Self { params, ..self }
+    }
 }
 
 fn stochastic_scene(
@@ -194,6 +213,7 @@ fn stochastic_rule(error: f32, interleave: u32) -> RadiusRule {
         accumulate: 0,
         seeds: 1,
         interleave,
+        draw: stochastic::StochasticDraw::Stratified,
     }
 }
 
@@ -212,7 +232,13 @@ fn stochastic_scene_in(
     };
     let params = spec.stochastic(&scene).unwrap();
     let gpu = GpuScene::upload(ctx, &scene, &scene.camera, w, h).unwrap();
-    Stochastic { scene, gpu, params }
+    let strata = stochastic::strata(&scene.lights);
+    Stochastic {
+        scene,
+        gpu,
+        params,
+        strata,
+    }
 }
 
 /// The GPU's draws (range, alpha and interleave word of every light, at several frames) against
@@ -222,9 +248,10 @@ fn stochastic_scene_in(
 #[test]
 fn stochastic_draws_match_their_oracle() {
     let ctx = common::gpu();
-    for interleave in [1, 3] {
-        let s = stochastic_scene(&ctx, 3000, 0.01, interleave, (16, 16));
-        let draw = StochasticRanges::new(&ctx, &s.gpu, 0, s.gpu.light_count, &s.params).unwrap();
+    use stochastic::StochasticDraw::{Independent, Stratified};
+    for (interleave, kind) in [(1, Independent), (1, Stratified), (3, Stratified)] {
+        let s = stochastic_scene(&ctx, 3000, 0.01, interleave, (16, 16)).with_draw(kind);
+        let draw = s.ranges(&ctx);
         for frame in [0, 1, 17] {
             draw.draw(&ctx, frame).unwrap();
             let bytes = manylights_gpu::readback::read_buffer(
@@ -237,8 +264,8 @@ fn stochastic_draws_match_their_oracle() {
             let gpu: &[GpuLight] = bytemuck::cast_slice(&bytes);
             let mut longest = 0.0f32;
             for (i, (g, l)) in gpu.iter().zip(&s.scene.lights).enumerate() {
-                let at = format!("interleave {interleave} frame {frame} light {i}");
-                let (want, alpha) = s.params.at_frame(l, i as u32, frame);
+                let at = format!("{kind:?}, interleave {interleave} frame {frame} light {i}");
+                let (want, alpha) = s.params.at_frame(l, i as u32, s.strata[i], frame);
                 assert_eq!(g.alpha, alpha, "{at}: alpha");
                 assert_eq!(
                     g.interleave,
@@ -290,7 +317,7 @@ fn stochastic_estimate_matches_f64() {
     let (w, h) = (32, 20);
     for interleave in [1, 2] {
         let s = stochastic_scene(&ctx, 800, 0.02, interleave, (w, h));
-        let draw = StochasticRanges::new(&ctx, &s.gpu, 0, s.gpu.light_count, &s.params).unwrap();
+        let draw = s.ranges(&ctx);
         let frame = 3;
         draw.draw(&ctx, frame).unwrap();
         let rr = ReferenceRenderer::new(&ctx, &s.gpu);
@@ -302,7 +329,7 @@ fn stochastic_estimate_matches_f64() {
                     .lights
                     .iter()
                     .enumerate()
-                    .map(|(i, l)| s.params.at_pixel(l, i as u32, frame, c))
+                    .map(|(i, l)| s.params.at_pixel(l, i as u32, s.strata[i], frame, c))
                     .unzip()
             })
             .collect();
@@ -389,7 +416,7 @@ fn stochastic_estimate_is_unbiased_by_a_z_test_that_a_biased_variant_fails() {
         .render(&ctx, &s.gpu, &surfaces)
         .unwrap();
     let frames = 256;
-    let draw = StochasticRanges::new(&ctx, &s.gpu, 0, s.gpu.light_count, &s.params).unwrap();
+    let draw = s.ranges(&ctx);
     let images = stochastic_frames(&ctx, &s, &draw, frames, (w, h));
     let (zmax, zmean, quiet) = z_stats(&images, &reference);
     println!("unbiased: max |z| {zmax:.2}, mean z {zmean:.2}, {quiet} pixels without noise");
@@ -397,9 +424,19 @@ fn stochastic_estimate_is_unbiased_by_a_z_test_that_a_biased_variant_fails() {
         zmax <= 5.0,
         "the stochastic estimate is biased: max |z| = {zmax}"
     );
+    // Independent draws (one hash a light): unbiased too.
+    let ind = stochastic_scene(&ctx, 400, 0.05, 1, (w, h))
+        .with_draw(stochastic::StochasticDraw::Independent);
+    let images = stochastic_frames(&ctx, &ind, &ind.ranges(&ctx), frames, (w, h));
+    let (zmax_ind, zmean_ind, _) = z_stats(&images, &reference);
+    println!("independent draws: max |z| {zmax_ind:.2}, mean z {zmean_ind:.2}");
+    assert!(
+        zmax_ind <= 5.0,
+        "the estimate with independent draws is biased: max |z| = {zmax_ind}"
+    );
     // Interleaved over 2 x 2 pixel classes: unbiased at every pixel too.
     let il = stochastic_scene(&ctx, 400, 0.05, 2, (w, h));
-    let draw_il = StochasticRanges::new(&ctx, &il.gpu, 0, il.gpu.light_count, &il.params).unwrap();
+    let draw_il = il.ranges(&ctx);
     let images = stochastic_frames(&ctx, &il, &draw_il, frames, (w, h));
     let (zmax_il, zmean_il, _) = z_stats(&images, &reference);
     println!("interleaved 2 x 2: max |z| {zmax_il:.2}, mean z {zmean_il:.2}");
@@ -419,7 +456,7 @@ fn stochastic_estimate_is_unbiased_by_a_z_test_that_a_biased_variant_fails() {
     let reference_g = InfiniteReference::new(&ctx, &g.gpu)
         .render(&ctx, &g.gpu, &surfaces_g)
         .unwrap();
-    let draw_g = StochasticRanges::new(&ctx, &g.gpu, 0, g.gpu.light_count, &g.params).unwrap();
+    let draw_g = g.ranges(&ctx);
     let images = stochastic_frames(&ctx, &g, &draw_g, frames, (w, h));
     let (zmax_g, zmean_g, _) = z_stats(&images, &reference_g);
     println!("GGX: max |z| {zmax_g:.2}, mean z {zmean_g:.2}");

@@ -1,7 +1,8 @@
 // lights.stochastic: stochastic light culling's ranges for one frame (Tokuyoshi and Harada
 // 2016; manylights_scene::stochastic states the estimator and is this pass's oracle). Host side:
 // manylights_gpu::stochastic. Each thread draws xi for one light of [first, first + count) from
-// the seed, the frame and the light's index, and writes the light's range 1 / sqrt(alpha * xi)
+// the seed, the frame and the light's index (or, stratified, from its stratum on one shifted
+// lattice), and writes the light's range 1 / sqrt(alpha * xi)
 // into its radius and alpha beside it; culling then runs unchanged over these spheres and
 // shading uses max(1 / d^2, alpha) inside them (light_attenuation, light.wgsl). With
 // interleaving over n x n pixel classes, each class draws its own xi from the light's key, the
@@ -25,12 +26,24 @@ struct StochasticParams {
     scale: f32,
     // n of n x n pixel classes; 1: no interleaving.
     interleave: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // 1: stratified draws, frac(u + stratum phi) over `strata` (StochasticDraw::Stratified);
+    // 0: one hash a light.
+    stratified: u32,
+    _pad: u32,
 }
 
 @group(0) @binding(0) var<uniform> stochastic: StochasticParams;
 @group(0) @binding(1) var<storage, read_write> drawn: array<Light>;
+// Each drawn light's stratum (manylights_scene::stochastic::strata), indexed from `first`.
+@group(0) @binding(2) var<storage, read> strata: array<u32>;
+
+// manylights_scene::stochastic::stratified_xi: the lattice frac(u + stratum phi) on XI_BITS
+// bits, shifted by one hash of the seed and frame.
+fn stratified_xi(stratum: u32) -> f32 {
+    let u = pcg(stochastic.frame ^ pcg(stochastic.seed)) >> (32u - XI_BITS);
+    let bits = (u + stratum * PHI_BITS) & ((1u << XI_BITS) - 1u);
+    return (f32(bits) + 0.5) / f32(1u << XI_BITS);
+}
 
 // The hash of manylights_scene::stochastic::xi and ::key.
 fn stochastic_hash(index: u32) -> u32 {
@@ -55,7 +68,11 @@ fn draw(@builtin(global_invocation_id) gid: vec3<u32>) {
     let h = stochastic_hash(index);
     let n = stochastic.interleave;
     if n <= 1u {
-        drawn[index].radius = 1.0 / sqrt(alpha * stochastic_unit(h));
+        var xi = stochastic_unit(h);
+        if stochastic.stratified != 0u {
+            xi = stratified_xi(strata[i]);
+        }
+        drawn[index].radius = 1.0 / sqrt(alpha * xi);
         drawn[index].interleave = 0u;
     } else {
         // The smallest class xi: the longest class range (StochasticParams::at_frame).

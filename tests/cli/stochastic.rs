@@ -50,6 +50,12 @@ fn bad_stochastic_options_name_the_option() {
         2,
         &["light", "albedo"],
     );
+    rejects(&["--draw", "independent"], 2, &["--stochastic"]);
+    rejects(
+        &["--stochastic", "1", "--draw", "sobol"],
+        2,
+        &["stratified", "independent"],
+    );
     rejects(
         &["--stochastic", "1", "--threshold", "0.1"],
         2,
@@ -102,7 +108,7 @@ fn render_stochastic_accumulates_frames_and_compares_against_infinite_range() {
     let sixteen = run("16", &[]);
     assert!(
         sixteen.contains(
-            "stochastic light culling: error 0.5 (light bound), 16 frames drawn and averaged"
+            "stochastic light culling: error 0.5 (light bound, stratified draws), 16 frames drawn and averaged"
         ) && sixteen.contains("errors of the mean of 16 frames"),
         "{sixteen}"
     );
@@ -136,6 +142,12 @@ fn render_stochastic_accumulates_frames_and_compares_against_infinite_range() {
         "{il}"
     );
     assert!(export.join("manifest.json").is_file(), "{il}");
+    // Independent draws, named in the output.
+    let independent = run("1", &["--draw", "independent"]);
+    assert!(
+        independent.contains("(light bound, independent draws), 1 frame drawn"),
+        "{independent}"
+    );
 }
 
 /// `cull --stochastic --accumulate K` culls and checks every frame's draws: no false negative

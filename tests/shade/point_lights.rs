@@ -191,13 +191,15 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
         scale: 1.0,
         seed: 3,
         interleave: 1,
+        draw: manylights_scene::stochastic::StochasticDraw::Stratified,
     };
+    let strata = manylights_scene::stochastic::strata(&points.lights);
     let fast = upload();
     let n = fast.light_count;
-    let fast_draw = StochasticRanges::new(&ctx, &fast, 0, n, &params).unwrap();
+    let fast_draw = StochasticRanges::new(&ctx, &fast, 0, n, &params, &strata).unwrap();
     assert!(fast.point_lights() && fast.stochastic_points());
     let general = upload();
-    let general_draw = StochasticRanges::new(&ctx, &general, 0, n, &params).unwrap();
+    let general_draw = StochasticRanges::new(&ctx, &general, 0, n, &params, &strata).unwrap();
     general.mark_general_lights(&ctx);
     assert!(!general.point_lights() && !general.stochastic_points());
     let stochastic_renderer = Renderer::new(&ctx, &fast);
@@ -263,9 +265,13 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
         interleave: 2,
         ..params
     };
-    StochasticRanges::new(&ctx, &interleaved, 0, n, &il).unwrap();
+    StochasticRanges::new(&ctx, &interleaved, 0, n, &il, &strata).unwrap();
     assert!(!interleaved.point_lights() && !interleaved.stochastic_points());
     let part = upload();
-    StochasticRanges::new(&ctx, &part, 1, n - 1, &params).unwrap();
+    StochasticRanges::new(&ctx, &part, 1, n - 1, &params, &strata[1..]).unwrap();
+    // Stratified draws need one stratum a drawn light.
+    let short = StochasticRanges::new(&ctx, &upload(), 0, n, &params, &strata[1..]);
+    let message = short.err().expect("refused").to_string();
+    assert!(message.contains("strata"), "{message}");
     assert!(!part.point_lights() && !part.stochastic_points());
 }

@@ -44,6 +44,7 @@ pub fn wgsl_prelude() -> String {
          const FRAME_FLAG_POINT_LIGHTS: u32 = {FRAME_FLAG_POINT_LIGHTS}u;\n\
          const FRAME_FLAG_STOCHASTIC_POINTS: u32 = {FRAME_FLAG_STOCHASTIC_POINTS}u;\n\
          const XI_BITS: u32 = {xi_bits}u;\n\
+         const PHI_BITS: u32 = {phi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
          const F0_DIELECTRIC: f32 = {f0:?};\n{models}",
         pi = std::f32::consts::PI,
@@ -51,6 +52,7 @@ pub fn wgsl_prelude() -> String {
         spot_eps = light::SPOT_EPS as f32,
         shininess = light::SHININESS as f32,
         xi_bits = manylights_scene::stochastic::XI_BITS,
+        phi_bits = manylights_scene::stochastic::PHI_BITS,
         min_roughness = manylights_scene::brdf::MIN_ROUGHNESS as f32,
         f0 = manylights_scene::brdf::F0_DIELECTRIC as f32,
         models = manylights_scene::Model::ALL

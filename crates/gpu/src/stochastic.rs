@@ -5,7 +5,7 @@
 //! spheres; shading reads alpha (`light_attenuation` in `shaders/common/light.wgsl`).
 
 use bytemuck::{Pod, Zeroable};
-use manylights_scene::stochastic::StochasticParams;
+use manylights_scene::stochastic::{StochasticDraw, StochasticParams};
 use wgpu::util::DeviceExt;
 
 use crate::pipeline::{self, UNIFORM, entry, storage};
@@ -49,8 +49,11 @@ pub struct GpuStochasticParams {
     pub scale: f32,
     /// n of n x n interleaved pixel classes; 1: none.
     pub interleave: u32,
+    /// 1: stratified draws over the strata buffer (`StochasticDraw::Stratified`); 0: one
+    /// hash a light.
+    pub stratified: u32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// The stochastic ranges of lights `first..first + count` of a scene's light buffer.
@@ -63,14 +66,26 @@ pub struct StochasticRanges {
 }
 
 impl StochasticRanges {
-    /// Draws for lights `first..first + count` of `scene` with `params`.
+    /// Draws for lights `first..first + count` of `scene` with `params`; `strata` holds each
+    /// drawn light's stratum (`manylights_scene::stochastic::strata` of those lights), read
+    /// by stratified draws.
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         first: u32,
         count: u32,
         params: &StochasticParams,
+        strata: &[u32],
     ) -> Result<Self, GpuError> {
+        let stratified = params.interleave <= 1 && params.draw == StochasticDraw::Stratified;
+        if stratified && strata.len() != count as usize {
+            return Err(GpuError::OverLimit {
+                what: "strata of stratified stochastic draws".into(),
+                value: strata.len() as u64,
+                limit: u64::from(count),
+                limit_name: "the drawn lights (one stratum each)",
+            });
+        }
         if u64::from(first) + u64::from(count) > u64::from(scene.light_count) {
             return Err(GpuError::OverLimit {
                 what: "lights with stochastic ranges".into(),
@@ -102,17 +117,27 @@ impl StochasticRanges {
             exposure: params.exposure,
             scale: params.scale,
             interleave: params.interleave.max(1),
-            _pad: [0; 2],
+            stratified: u32::from(stratified),
+            _pad: 0,
         };
         let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lights.stochastic"),
             contents: bytemuck::bytes_of(&host),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         });
+        let strata_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lights.stochastic strata"),
+            contents: bytemuck::cast_slice(if stratified { strata } else { &[0u32] }),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let c = wgpu::ShaderStages::COMPUTE;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lights.stochastic"),
-            entries: &[entry(0, c, UNIFORM), entry(1, c, storage(false))],
+            entries: &[
+                entry(0, c, UNIFORM),
+                entry(1, c, storage(false)),
+                entry(2, c, storage(true)),
+            ],
         });
         let module = STOCHASTIC.create(d);
         let pipeline = pipeline::compute(
@@ -125,7 +150,7 @@ impl StochasticRanges {
             d,
             "lights.stochastic",
             &layout,
-            &[&params_buf, &scene.lights],
+            &[&params_buf, &scene.lights, &strata_buf],
         );
         Ok(Self {
             params: params_buf,

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use manylights_cull::Strategy;
-use manylights_scene::stochastic::StochasticBound;
+use manylights_scene::stochastic::{StochasticBound, StochasticDraw};
 use manylights_scene::{LightGenerator, LightSpec, Model, Motion, RadiusRule};
 use manylights_shade::Backend;
 use serde::Serialize;
@@ -500,7 +500,7 @@ impl Experiment {
 }
 
 /// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`, or
-/// `stochastic=E` with `/albedo` under the albedo bound, `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel
+/// `stochastic=E` with `/albedo` under the albedo bound, `/independent` for independent draws, `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel
 /// classes and `/exposureX` where the exposure is not 1.
 pub fn radius_label(rule: &RadiusRule) -> String {
     match *rule {
@@ -512,11 +512,15 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             exposure,
             accumulate,
             interleave,
+            draw,
             ..
         } => {
             let mut s = format!("stochastic={error}");
             if bound != StochasticBound::Light {
                 s += &format!("/{}", bound.name());
+            }
+            if draw != StochasticDraw::Stratified {
+                s += &format!("/{}", draw.name());
             }
             if accumulate > 1 {
                 s += &format!("/acc{accumulate}");

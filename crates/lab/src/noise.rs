@@ -64,7 +64,8 @@ impl Draws {
             return Ok(None);
         };
         let count = (scene.lights.len() - first) as u32;
-        let ranges = StochasticRanges::new(ctx, gpu_scene, first as u32, count, &params)
+        let strata = manylights_scene::stochastic::strata(&scene.lights[first..]);
+        let ranges = StochasticRanges::new(ctx, gpu_scene, first as u32, count, &params, &strata)
             .map_err(|e| other(&e))?;
         Ok(Some(Self {
             ranges,

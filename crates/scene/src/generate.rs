@@ -6,7 +6,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
-use crate::stochastic::{StochasticBound, StochasticParams};
+use crate::stochastic::{StochasticBound, StochasticDraw, StochasticParams};
 use crate::{Light, LightKind, Motion, Scene, SceneError};
 
 /// How light positions are chosen.
@@ -69,7 +69,15 @@ pub enum RadiusRule {
         /// [`crate::stochastic::INTERLEAVE_MAX`].
         #[serde(default = "one", skip_serializing_if = "is_one")]
         interleave: u32,
+        /// How a frame's numbers are drawn across the lights: `Stratified` (the default, left
+        /// out of the serialised form) or `Independent` ([`crate::stochastic`]).
+        #[serde(default, skip_serializing_if = "is_stratified")]
+        draw: StochasticDraw,
     },
+}
+
+fn is_stratified(d: &StochasticDraw) -> bool {
+    *d == StochasticDraw::Stratified
 }
 
 fn is_light_bound(b: &StochasticBound) -> bool {
@@ -355,6 +363,7 @@ impl LightSpec {
                 bound,
                 exposure,
                 interleave,
+                draw,
                 ..
             } => Some(StochasticParams {
                 error,
@@ -362,6 +371,7 @@ impl LightSpec {
                 scale: bound.scale(&scene.materials),
                 seed: (self.seed ^ (self.seed >> 32)) as u32,
                 interleave,
+                draw,
             }),
             _ => None,
         }
@@ -474,6 +484,7 @@ mod tests {
                 accumulate,
                 seeds,
                 interleave: 1,
+                draw: StochasticDraw::Stratified,
             },
             ..LightSpec::default()
         };
@@ -485,6 +496,7 @@ mod tests {
                 accumulate: 0,
                 seeds: 4,
                 interleave,
+                draw: StochasticDraw::Stratified,
             },
             ..LightSpec::default()
         };
@@ -525,6 +537,19 @@ mod tests {
         assert!(ron::to_string(&back).unwrap().contains("bound:Albedo"));
         let e = ron::from_str::<RadiusRule>("Stochastic(error: 0.1, bound: Peak)").unwrap_err();
         assert!(e.to_string().contains("Light"), "{e}");
+        // The draw likewise: `Stratified` left out, `Independent` named.
+        assert!(!text.contains("draw"), "{text}");
+        let back: RadiusRule = ron::from_str("Stochastic(error: 0.1, draw: Independent)").unwrap();
+        assert!(matches!(
+            back,
+            RadiusRule::Stochastic {
+                draw: StochasticDraw::Independent,
+                ..
+            }
+        ));
+        assert!(ron::to_string(&back).unwrap().contains("draw:Independent"));
+        let e = ron::from_str::<RadiusRule>("Stochastic(error: 0.1, draw: Sobol)").unwrap_err();
+        assert!(e.to_string().contains("Stratified"), "{e}");
     }
 
     use super::*;

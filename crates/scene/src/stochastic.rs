@@ -35,6 +35,20 @@
 //! from `x` by at most `2^-25`, a bias below `2^-25` of one light's largest term (documented,
 //! not measurable at any error bound a report uses).
 //!
+//! Stratified draws ([`StochasticDraw::Stratified`], the default): the lights' `xi` of one frame
+//! are not independent but one randomly shifted rank-1 lattice over the lights in spatial
+//! order: light `i` with stratum `s_i` (its rank along a Morton curve through the lights'
+//! bounding box, [`strata`]) draws `xi = frac(u + s_i phi)`, `phi` the golden ratio's
+//! fraction (24 bits, [`PHI_BITS`]) and `u` one hash of the seed and frame. Each light's `xi`
+//! is still uniform, so every light's estimate and the image stay unbiased and the culled
+//! spheres keep their meaning; but neighbouring lights draw evenly spread numbers, so of the
+//! many far lights a pixel sees at similar distances almost exactly the expected fraction
+//! reaches it, instead of a binomial count. That is stratified Russian roulette over the
+//! lights (Tokuyoshi and Harada's hierarchical Russian roulette, TOG 38(4), 2019, correlates
+//! its draws over a tree of lights for the same reason). Strata come from the lights as
+//! generated; lights that move keep them (still unbiased, less stratified).
+//! [`StochasticDraw::Independent`] hashes each light and frame apart, as the 2016 paper does.
+//!
 //! Interleaved sampling (Tokuyoshi and Harada, CGF 36(4), 2017; Keller and Heidrich 2001):
 //! with `interleave: n` (n >= 2) the pixels fall into `n x n` classes by their coordinates
 //! modulo n ([`pixel_class`]), and each light draws one `xi` per class each frame
@@ -46,6 +60,7 @@
 //! The longest of `n^2` draws is about `n` times the range of one (the smallest of `n^2`
 //! uniforms has mean `1 / (n^2 + 1)`), so lists grow with `n`: interleaving trades list length
 //! for noise that a spatial filter (the eye, FLIP's contrast sensitivity, a denoiser) averages.
+//! The classes draw independent hashes whatever the [`StochasticDraw`].
 //!
 //! The same draw and ranges run on the GPU (`shaders/lights/stochastic.wgsl`, pass
 //! `lights.stochastic`); [`shade`] is the estimate in f64 that the tests hold the GPU to.
@@ -58,6 +73,10 @@ use crate::{Light, Material};
 
 /// Bits of the uniform number drawn for each light and frame.
 pub const XI_BITS: u32 = 24;
+
+/// The golden ratio's fraction `(sqrt(5) - 1) / 2` in [`XI_BITS`] bits, rounded to odd so that
+/// `s -> s PHI_BITS mod 2^24` is a permutation of the strata.
+pub const PHI_BITS: u32 = 10_368_889;
 
 /// The largest `n` of interleaved sampling over `n x n` pixel classes.
 pub const INTERLEAVE_MAX: u32 = 8;
@@ -72,6 +91,75 @@ fn unit(h: u32) -> f32 {
 /// The GPU's `stochastic_xi` computes the same bits.
 pub fn xi(seed: u32, frame: u32, index: u32) -> f32 {
     unit(pcg(index ^ pcg(frame ^ pcg(seed))))
+}
+
+/// The stratified draw of the light with stratum `stratum` at frame `frame` under seed `seed`:
+/// `frac(u + stratum phi)` on [`XI_BITS`] bits, `u` the top bits of one hash of the seed and
+/// frame. In (0, 1), never 0; uniform for every stratum. The GPU's `draw` computes the same
+/// bits.
+pub fn stratified_xi(seed: u32, frame: u32, stratum: u32) -> f32 {
+    let u = pcg(frame ^ pcg(seed)) >> (32 - XI_BITS);
+    let mask = (1u32 << XI_BITS) - 1;
+    let bits = u.wrapping_add(stratum.wrapping_mul(PHI_BITS)) & mask;
+    (bits as f32 + 0.5) / (1u32 << XI_BITS) as f32
+}
+
+/// Each light's stratum for [`StochasticDraw::Stratified`]: its rank along a Morton curve
+/// (21 bits an axis) through the bounding box of the lights' positions, ties in light order.
+/// A permutation of `0..lights.len()`.
+pub fn strata(lights: &[Light]) -> Vec<u32> {
+    let (lo, hi) = lights.iter().fold(
+        (glam::Vec3::splat(f32::MAX), glam::Vec3::splat(f32::MIN)),
+        |(lo, hi), l| (lo.min(l.position), hi.max(l.position)),
+    );
+    let cells = ((1u32 << 21) - 1) as f32;
+    let scale = cells / (hi - lo).max(glam::Vec3::splat(1e-20));
+    let mut order: Vec<(u64, u32)> = lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let q = ((l.position - lo) * scale).clamp(glam::Vec3::ZERO, glam::Vec3::splat(cells));
+            let code = spread(q.x as u64) | spread(q.y as u64) << 1 | spread(q.z as u64) << 2;
+            (code, i as u32)
+        })
+        .collect();
+    order.sort_unstable();
+    let mut ranks = vec![0u32; lights.len()];
+    for (rank, &(_, i)) in order.iter().enumerate() {
+        ranks[i as usize] = rank as u32;
+    }
+    ranks
+}
+
+/// The low 21 bits of `x` spread to every third bit.
+fn spread(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f_0000_0000_ffff;
+    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    x = (x | x << 2) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// How one frame's numbers are drawn across the lights (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum StochasticDraw {
+    /// One shifted lattice over the lights in spatial order (the default).
+    #[default]
+    Stratified,
+    /// One independent hash a light and frame (Tokuyoshi and Harada 2016).
+    Independent,
+}
+
+impl StochasticDraw {
+    /// The name in parameters and the CLI: `stratified` or `independent`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Stratified => "stratified",
+            Self::Independent => "independent",
+        }
+    }
 }
 
 /// The 24-bit key of light `index` at frame `frame` under seed `seed` from which its
@@ -144,6 +232,8 @@ pub struct StochasticParams {
     /// Interleaved sampling over `interleave x interleave` pixel classes; 1: none (every pixel
     /// shares one draw a light).
     pub interleave: u32,
+    /// How a frame's numbers are drawn across the lights (without interleaving).
+    pub draw: StochasticDraw,
 }
 
 impl StochasticParams {
@@ -163,15 +253,18 @@ impl StochasticParams {
         1.0 / (alpha * xi).sqrt()
     }
 
-    /// Light `index` (of the scene's light buffer) as culled at frame `frame`: its range for
-    /// the frame in `radius` (with interleaving, the longest of its classes' ranges), and its
-    /// alpha.
-    pub fn at_frame(&self, light: &Light, index: u32, frame: u32) -> (Light, f32) {
+    /// Light `index` (of the scene's light buffer) with stratum `stratum` ([`strata`] of the
+    /// drawn lights; unused by independent and interleaved draws) as culled at frame `frame`:
+    /// its range for the frame in `radius` (with interleaving, the longest of its classes'
+    /// ranges), and its alpha.
+    pub fn at_frame(&self, light: &Light, index: u32, stratum: u32, frame: u32) -> (Light, f32) {
         let xi = if self.interleave > 1 {
             let k = key(self.seed, frame, index);
             (0..self.interleave * self.interleave)
                 .map(|c| class_xi(k, c))
                 .fold(1.0f32, f32::min)
+        } else if self.draw == StochasticDraw::Stratified {
+            stratified_xi(self.seed, frame, stratum)
         } else {
             xi(self.seed, frame, index)
         };
@@ -190,11 +283,18 @@ impl StochasticParams {
         )
     }
 
-    /// Light `index` as shaded at frame `frame` by a pixel of class `class` (ignored without
-    /// interleaving): its class's range in `radius`, and its alpha.
-    pub fn at_pixel(&self, light: &Light, index: u32, frame: u32, class: u32) -> (Light, f32) {
+    /// Light `index` (stratum `stratum`) as shaded at frame `frame` by a pixel of class `class`
+    /// (ignored without interleaving): its class's range in `radius`, and its alpha.
+    pub fn at_pixel(
+        &self,
+        light: &Light,
+        index: u32,
+        stratum: u32,
+        frame: u32,
+        class: u32,
+    ) -> (Light, f32) {
         if self.interleave <= 1 {
-            return self.at_frame(light, index, frame);
+            return self.at_frame(light, index, stratum, frame);
         }
         self.with_xi(light, class_xi(key(self.seed, frame, index), class))
     }
@@ -264,13 +364,14 @@ mod tests {
             scale: StochasticBound::Light.scale(&[]),
             seed: 1,
             interleave: 1,
+            draw: StochasticDraw::Independent,
         };
         let alpha = params.alpha(&light);
         // 2 * 0.01 / (4 * 1 * 1): the light's own contribution.
         let expect = 0.02 / 4.0;
         assert!((f64::from(alpha) - expect).abs() < 1e-6 * expect, "{alpha}");
         for k in 0..100 {
-            let (l, _) = params.at_frame(&light, 0, k);
+            let (l, _) = params.at_frame(&light, 0, 0, k);
             let x = f64::from(xi(1, k, 0));
             let r = f64::from(l.radius);
             // At the range, 1 / r^2 = alpha * xi.
@@ -290,15 +391,22 @@ mod tests {
             scale: StochasticBound::Albedo.scale(&[m]),
             seed: 3,
             interleave: 1,
+            draw: StochasticDraw::Independent,
         };
         let (n, v) = (DVec3::Y, DVec3::Y);
-        for x in [0.0, 0.5, 2.0, 6.0] {
+        for (params, stratum, x) in [StochasticDraw::Independent, StochasticDraw::Stratified]
+            .into_iter()
+            .flat_map(|draw| {
+                [(0, 0.0), (5, 0.5), (1234, 2.0), (77_777, 6.0)]
+                    .map(|(s, x)| (StochasticParams { draw, ..params }, s, x))
+            })
+        {
             let p = DVec3::new(x, 0.0, 0.0);
             let exact = crate::light::shade(p, n, v, &m, &[light], crate::light::Range::Infinite).x;
             let frames = 20_000;
             let (mut s, mut s2) = (0.0f64, 0.0f64);
             for f in 0..frames {
-                let (l, a) = params.at_frame(&light, 0, f);
+                let (l, a) = params.at_frame(&light, 0, stratum, f);
                 let e = shade(p, n, v, &m, &[l], &[a]).x;
                 s += e;
                 s2 += e * e;
@@ -308,8 +416,96 @@ mod tests {
             let se = (var / f64::from(frames)).sqrt();
             assert!(
                 (mean - exact).abs() <= 5.0 * se + 1e-6 * exact,
-                "x = {x}: mean {mean} vs {exact} (standard error {se})"
+                "{:?}, x = {x}: mean {mean} vs {exact} (standard error {se})",
+                params.draw
             );
+        }
+    }
+
+    #[test]
+    fn strata_follow_space_and_stratified_draws_spread_evenly_over_them() {
+        // Lights along a line, listed out of order: their strata are their order along it.
+        let xs = [5.0, -3.0, 0.5, 9.0, -7.0, 2.0];
+        let lights: Vec<Light> = xs
+            .iter()
+            .map(|&x| Light::point(Vec3::new(x, 1.0, 2.0), 1.0, Vec3::ONE, 1.0))
+            .collect();
+        assert_eq!(strata(&lights), vec![4, 1, 2, 5, 0, 3]);
+        // One frame's draws over 10,000 strata: every interval [0, x) holds x of them within
+        // a few (a lattice's discrepancy), where independent draws stray by about sqrt(n x).
+        let n = 10_000u32;
+        for frame in [0, 1, 17] {
+            let mut draws: Vec<f32> = (0..n).map(|s| stratified_xi(3, frame, s)).collect();
+            draws.sort_by(f32::total_cmp);
+            let worst = draws
+                .iter()
+                .enumerate()
+                .map(|(k, &x)| (f64::from(x) * f64::from(n) - k as f64).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 5.0, "frame {frame}: discrepancy {worst} draws");
+        }
+        // Every stratum's draw is uniform over frames.
+        for stratum in [0, 1, 999, 1 << 20] {
+            let frames = 20_000;
+            let mean = (0..frames)
+                .map(|f| f64::from(stratified_xi(3, f, stratum)))
+                .sum::<f64>()
+                / f64::from(frames);
+            let bound = 5.0 / (12.0 * f64::from(frames)).sqrt();
+            assert!((mean - 0.5).abs() < bound, "stratum {stratum}: {mean}");
+        }
+    }
+
+    #[test]
+    fn stratified_draws_cut_the_variance_of_many_far_lights() {
+        // 4,000 lights in a 4 m box 20 m from the point: each reaches it with a small
+        // probability, so the independent count is binomial; the stratified one is close to
+        // its mean. The variance over frames falls by far more than half, the mean stays.
+        let mut rng = 0x9e37_79b9u32;
+        let mut unit = || {
+            rng = pcg(rng);
+            (rng >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let lights: Vec<Light> = (0..4000)
+            .map(|_| {
+                let p = Vec3::new(unit() * 4.0, unit() * 4.0, 20.0 + unit() * 4.0);
+                Light::point(p, 1.0, Vec3::ONE, 1.0)
+            })
+            .collect();
+        let strata = strata(&lights);
+        let m = Material::new(Vec3::splat(0.5), 0.0);
+        let (p, n, v) = (DVec3::new(2.0, 2.0, 0.0), DVec3::Z, DVec3::Z);
+        let exact = crate::light::shade(p, n, v, &m, &lights, crate::light::Range::Infinite).x;
+        let stats = |draw| {
+            let params = StochasticParams {
+                error: 0.05,
+                exposure: 1.0,
+                scale: 1.0,
+                seed: 11,
+                interleave: 1,
+                draw,
+            };
+            let frames = 400;
+            let (mut s, mut s2) = (0.0, 0.0);
+            for f in 0..frames {
+                let (drawn, alphas): (Vec<Light>, Vec<f32>) = lights
+                    .iter()
+                    .zip(&strata)
+                    .enumerate()
+                    .map(|(i, (l, &st))| params.at_frame(l, i as u32, st, f))
+                    .unzip();
+                let e = shade(p, n, v, &m, &drawn, &alphas).x;
+                s += e;
+                s2 += e * e;
+            }
+            let mean = s / f64::from(frames);
+            (mean, s2 / f64::from(frames) - mean * mean)
+        };
+        let (mean_i, var_i) = stats(StochasticDraw::Independent);
+        let (mean_s, var_s) = stats(StochasticDraw::Stratified);
+        assert!(var_s < 0.25 * var_i, "variance {var_s} stratified vs {var_i}");
+        for mean in [mean_i, mean_s] {
+            assert!((mean / exact - 1.0).abs() < 0.05, "mean {mean} vs {exact}");
         }
     }
 
@@ -322,13 +518,14 @@ mod tests {
             scale: StochasticBound::Light.scale(&[]),
             seed: 9,
             interleave: 3,
+            draw: StochasticDraw::Stratified,
         };
         assert_eq!(pixel_class(4, 5, 3), 1 + 3 * 2);
         let (mut mean, mut n) = (0.0f64, 0);
         for frame in 0..200 {
-            let (culled, _) = params.at_frame(&light, 7, frame);
+            let (culled, _) = params.at_frame(&light, 7, 0, frame);
             let ranges: Vec<f32> = (0..9)
-                .map(|c| params.at_pixel(&light, 7, frame, c).0.radius)
+                .map(|c| params.at_pixel(&light, 7, 0, frame, c).0.radius)
                 .collect();
             let longest = ranges.iter().copied().fold(0.0f32, f32::max);
             assert_eq!(culled.radius, longest, "frame {frame}: the culled sphere");
@@ -354,8 +551,8 @@ mod tests {
         };
         assert_eq!(plain.interleave_word(7, 0), 0);
         assert_eq!(
-            plain.at_pixel(&light, 7, 0, 5),
-            plain.at_frame(&light, 7, 0)
+            plain.at_pixel(&light, 7, 0, 0, 5),
+            plain.at_frame(&light, 7, 0, 0)
         );
     }
 }
