@@ -13,7 +13,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 18] = [
+const SHIPPED: [&str; 19] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -32,6 +32,7 @@ const SHIPPED: [&str; 18] = [
     "cluster-cells-1m",
     "stochastic-materials",
     "infinite-range-halls",
+    "referee-bevy",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {

@@ -1,11 +1,17 @@
 //! Bevy's CPU light clusters for a manylights export, in the format `manylights score` reads
 //! (docs/EXPERIMENTS.md, "Scoring another engine's lists").
 //!
-//! Usage: `manylights-bevy-referee EXPORT OUT [--xyz X,Y,Z]`. EXPORT is a directory written by
+//! Usage: `manylights-bevy-referee EXPORT OUT [--xyz X,Y,Z | --total N --z-slices N]
+//! [--first-slice-depth D] [--far-z max-light-range|F]`. EXPORT is a directory written by
 //! `manylights cull --export` (or `render --export`, or `export: true`); OUT receives
-//! `grid.json`, `offsets.npy` and `indices.npy`. Without `--xyz` Bevy's default grid
-//! (`ClusterConfig::FixedZ`: 4,096 clusters, 24 slices, the first 5 m deep, the far bound from
-//! the previous frame's farthest light); with it, a fixed X x Y x Z grid of the same slicing.
+//! `grid.json`, `offsets.npy` and `indices.npy`. By default Bevy's default grid
+//! (`ClusterConfig::FixedZ`: 4,096 clusters, 24 slices, dynamic resizing); `--total` and
+//! `--z-slices` change its counts, `--xyz` makes it a fixed X x Y x Z grid. Bevy's own knobs of
+//! the slicing (`ClusterZConfig`) for either: `--first-slice-depth` (5 m by default) and
+//! `--far-z` (`max-light-range`, the default, `ClusterFarZMode::MaxClusterableObjectRange`: the
+//! previous frame's farthest light; `camera`, a constant at the export's far plane; or a
+//! constant depth in metres). `grid.json`'s `source`
+//! names every setting.
 //!
 //! Bevy runs headless: a plain ECS `App` with the task pool, assets, transforms and
 //! `LightPlugin`, CPU clustering (`GlobalClusterSettings::gpu_clustering: None`), a `Camera3d`
@@ -33,7 +39,10 @@ use bevy_camera::{
 };
 use bevy_ecs::entity::Entity;
 use bevy_image::Image;
-use bevy_light::cluster::{ClusterConfig, ClusterableObjects, Clusters, GlobalClusterSettings};
+use bevy_light::cluster::{
+    ClusterConfig, ClusterFarZMode, ClusterZConfig, ClusterableObjects, Clusters,
+    GlobalClusterSettings,
+};
 use bevy_light::{LightPlugin, PointLight, SpotLight};
 use bevy_math::{Mat4, UVec2, UVec3, Vec3};
 use bevy_transform::TransformPlugin;
@@ -120,41 +129,163 @@ fn projection(clip_from_view: &Mat4) -> Result<PerspectiveProjection> {
 struct Args {
     export: PathBuf,
     out: PathBuf,
+    /// A fixed X x Y x Z grid (`ClusterConfig::XYZ`); otherwise `FixedZ` of `total` clusters
+    /// over `z_slices` slices.
     xyz: Option<UVec3>,
+    total: u32,
+    z_slices: u32,
+    z_config: ClusterZConfig,
+    /// `--far-z camera`: the last slice ends at the export's far plane.
+    far_camera: bool,
+}
+
+const USAGE: &str = "usage: manylights-bevy-referee EXPORT OUT [--xyz X,Y,Z | --total N --z-slices N] \
+                     [--first-slice-depth D] [--far-z max-light-range|camera|F]";
+
+/// A number of `T` for `option`, or an error naming the option, the value and what it accepts.
+fn number<T: std::str::FromStr + PartialOrd + Copy>(
+    option: &str,
+    value: &str,
+    ok: impl Fn(T) -> bool,
+    accepted: &str,
+) -> Result<T> {
+    match value.trim().parse::<T>() {
+        Ok(v) if ok(v) => Ok(v),
+        _ => Err(format!("{option} {value}: expected {accepted}")),
+    }
+}
+
+fn args_from(a: &[String]) -> Result<Args> {
+    let (mut pos, mut xyz) = (Vec::new(), None);
+    let (mut total, mut z_slices) = (None, None);
+    let mut z_config = ClusterZConfig::default();
+    let mut far_camera = false;
+    let mut it = a.iter();
+    while let Some(s) = it.next() {
+        let mut value = || {
+            it.next()
+                .ok_or_else(|| format!("{s}: a value is missing; {USAGE}"))
+        };
+        match s.as_str() {
+            "--xyz" => {
+                let v = value()?;
+                let n: Vec<u32> = v
+                    .split(',')
+                    .map(|x| x.trim().parse::<u32>())
+                    .collect::<std::result::Result<_, _>>()
+                    .map_err(|_| format!("--xyz {v}: expected three counts, X,Y,Z"))?;
+                if n.len() != 3 || n.contains(&0) {
+                    return Err(format!("--xyz {v}: expected three counts >= 1, X,Y,Z"));
+                }
+                xyz = Some(UVec3::new(n[0], n[1], n[2]));
+            }
+            "--total" => {
+                total = Some(number(
+                    s,
+                    value()?,
+                    |n: u32| n >= 1,
+                    "a cluster count >= 1",
+                )?);
+            }
+            "--z-slices" => {
+                z_slices = Some(number(s, value()?, |n: u32| n >= 1, "a slice count >= 1")?);
+            }
+            "--first-slice-depth" => {
+                z_config.first_slice_depth = number(
+                    s,
+                    value()?,
+                    |d: f32| d.is_finite() && d > 0.0,
+                    "a finite depth > 0 (metres)",
+                )?;
+            }
+            "--far-z" => {
+                let v = value()?;
+                far_camera = v == "camera";
+                z_config.far_z_mode = match v.as_str() {
+                    "max-light-range" => ClusterFarZMode::MaxClusterableObjectRange,
+                    // Set to the export's far plane once it is read.
+                    "camera" => ClusterFarZMode::Constant(f32::INFINITY),
+                    _ => ClusterFarZMode::Constant(number(
+                        s,
+                        v,
+                        |d: f32| d.is_finite() && d > 0.0,
+                        "max-light-range, camera (the export's far plane) or a finite depth > 0 (metres)",
+                    )?),
+                };
+            }
+            o if o.starts_with("--") => return Err(format!("unknown option {o}; {USAGE}")),
+            _ => pos.push(PathBuf::from(s)),
+        }
+    }
+    if xyz.is_some() && (total.is_some() || z_slices.is_some()) {
+        return Err(format!(
+            "--xyz fixes every count: --total and --z-slices are for Bevy's FixedZ grid; {USAGE}"
+        ));
+    }
+    let [export, out] = <[PathBuf; 2]>::try_from(pos).map_err(|_| USAGE.to_string())?;
+    Ok(Args {
+        export,
+        out,
+        xyz,
+        total: total.unwrap_or(4096),
+        z_slices: z_slices.unwrap_or(24),
+        z_config,
+        far_camera,
+    })
 }
 
 fn args() -> Result<Args> {
-    let usage = "usage: manylights-bevy-referee EXPORT OUT [--xyz X,Y,Z]";
-    let a: Vec<String> = std::env::args().skip(1).collect();
-    let (mut pos, mut xyz) = (Vec::new(), None);
-    let mut it = a.iter();
-    while let Some(s) = it.next() {
-        if s == "--xyz" {
-            let v = it.next().ok_or(usage)?;
-            let n: Vec<u32> = v
-                .split(',')
-                .map(|x| x.trim().parse::<u32>())
-                .collect::<std::result::Result<_, _>>()
-                .map_err(|_| format!("--xyz {v}: expected three counts, X,Y,Z"))?;
-            if n.len() != 3 || n.contains(&0) {
-                return Err(format!("--xyz {v}: expected three counts >= 1, X,Y,Z"));
-            }
-            xyz = Some(UVec3::new(n[0], n[1], n[2]));
-        } else {
-            pos.push(PathBuf::from(s));
-        }
+    args_from(&std::env::args().skip(1).collect::<Vec<_>>())
+}
+
+/// The cluster configuration `args` ask for, and its description for `grid.json`'s source.
+fn config(args: &Args) -> (ClusterConfig, String) {
+    let z = &args.z_config;
+    let far = match z.far_z_mode {
+        ClusterFarZMode::MaxClusterableObjectRange => "MaxClusterableObjectRange".to_string(),
+        ClusterFarZMode::Constant(f) => format!("Constant({f})"),
+    };
+    let z_text = format!(
+        "first_slice_depth {}, far_z_mode {far}",
+        z.first_slice_depth
+    );
+    match args.xyz {
+        Some(dimensions) => (
+            ClusterConfig::XYZ {
+                dimensions,
+                z_config: *z,
+                dynamic_resizing: false,
+            },
+            format!(
+                "ClusterConfig::XYZ {} x {} x {}, {z_text}",
+                dimensions.x, dimensions.y, dimensions.z
+            ),
+        ),
+        None => (
+            ClusterConfig::FixedZ {
+                total: args.total,
+                z_slices: args.z_slices,
+                z_config: *z,
+                dynamic_resizing: true,
+            },
+            format!(
+                "ClusterConfig::FixedZ {} clusters, {} slices, {z_text}",
+                args.total, args.z_slices
+            ),
+        ),
     }
-    let [export, out] = <[PathBuf; 2]>::try_from(pos).map_err(|_| usage.to_string())?;
-    Ok(Args { export, out, xyz })
 }
 
 fn run() -> Result<()> {
-    let args = args()?;
-    let dir = &args.export;
+    let mut args = args()?;
+    let dir = &args.export.clone();
     let (shape, _) = read::<f32>(dir, "depth.npy")?;
     let (h, w) = (shape[0] as u32, shape[1] as u32);
     let view_from_world = matrix(dir, "view_from_world.npy")?;
     let projection = projection(&matrix(dir, "clip_from_view.npy")?)?;
+    if args.far_camera {
+        args.z_config.far_z_mode = ClusterFarZMode::Constant(projection.far);
+    }
     let lights = lights(dir)?;
 
     let mut app = App::new();
@@ -187,14 +318,7 @@ fn run() -> Result<()> {
         },
         ..Default::default()
     };
-    let config = match args.xyz {
-        None => ClusterConfig::default(),
-        Some(dimensions) => ClusterConfig::XYZ {
-            dimensions,
-            z_config: Default::default(),
-            dynamic_resizing: false,
-        },
-    };
+    let (config, described) = config(&args);
     let view = app
         .world_mut()
         .spawn((
@@ -277,10 +401,7 @@ fn run() -> Result<()> {
     write(&args.out.join("indices.npy"), &indices)?;
     let grid = serde_json::json!({
         "format": "manylights-lists/1",
-        "source": format!("bevy_light 0.20.1, CPU clustering, {}", match args.xyz {
-            None => "ClusterConfig::default() (FixedZ: 4096 clusters, 24 slices)".to_string(),
-            Some(v) => format!("ClusterConfig::XYZ {} x {} x {}", v.x, v.y, v.z),
-        }),
+        "source": format!("bevy_light 0.20.1, CPU clustering, {described}"),
         "width": w,
         "height": h,
         "dims": [d.x, d.y, d.z],
@@ -322,6 +443,86 @@ fn main() -> std::process::ExitCode {
 mod tests {
     use super::*;
 
+    fn parse(a: &[&str]) -> Result<Args> {
+        args_from(&a.iter().map(|s| s.to_string()).collect::<Vec<_>>())
+    }
+
+    /// Bevy's knobs parse into its configuration, named in the source; bad values name the
+    /// option and what it accepts.
+    #[test]
+    fn the_knobs_become_bevys_configuration() {
+        let a = parse(&["e", "o"]).unwrap();
+        let (c, text) = config(&a);
+        assert!(matches!(
+            c,
+            ClusterConfig::FixedZ {
+                total: 4096,
+                z_slices: 24,
+                dynamic_resizing: true,
+                ..
+            }
+        ));
+        assert_eq!(
+            text,
+            "ClusterConfig::FixedZ 4096 clusters, 24 slices, first_slice_depth 5, far_z_mode MaxClusterableObjectRange"
+        );
+        let a = parse(&[
+            "e",
+            "o",
+            "--z-slices",
+            "48",
+            "--first-slice-depth",
+            "0.5",
+            "--far-z",
+            "60",
+        ])
+        .unwrap();
+        let (c, text) = config(&a);
+        let ClusterConfig::FixedZ {
+            z_slices, z_config, ..
+        } = c
+        else {
+            panic!("{c:?}")
+        };
+        assert_eq!((z_slices, z_config.first_slice_depth), (48, 0.5));
+        assert!(matches!(z_config.far_z_mode, ClusterFarZMode::Constant(f) if f == 60.0));
+        assert!(
+            text.contains("48 slices, first_slice_depth 0.5, far_z_mode Constant(60)"),
+            "{text}"
+        );
+        assert!(parse(&["e", "o", "--far-z", "camera"]).unwrap().far_camera);
+        let a = parse(&["e", "o", "--xyz", "20,12,32", "--first-slice-depth", "1"]).unwrap();
+        assert!(
+            config(&a)
+                .1
+                .starts_with("ClusterConfig::XYZ 20 x 12 x 32, first_slice_depth 1,")
+        );
+        for (bad, says) in [
+            (
+                &["e", "o", "--z-slices", "0"][..],
+                "--z-slices 0: expected a slice count >= 1",
+            ),
+            (
+                &["e", "o", "--first-slice-depth", "-1"],
+                "--first-slice-depth -1: expected a finite depth",
+            ),
+            (
+                &["e", "o", "--far-z", "far"],
+                "--far-z far: expected max-light-range, camera (the export's far plane) or",
+            ),
+            (
+                &["e", "o", "--xyz", "4,4,4", "--total", "64"],
+                "--xyz fixes every count",
+            ),
+            (&["e", "o", "--total"], "--total: a value is missing"),
+            (&["e", "o", "--tiles", "4"], "unknown option --tiles"),
+            (&["e"], "usage:"),
+        ] {
+            let e = parse(bad).err().expect("refused");
+            assert!(e.contains(says), "{bad:?}: {e}");
+        }
+    }
+
     /// The export's projection (glam's right-handed, depth in [0, 1]) gives back its field of
     /// view, aspect and planes, and Bevy's matrix of them maps the near plane to NDC z 1.
     #[test]
@@ -356,6 +557,10 @@ mod tests {
             "reversed z: the near plane at 1"
         );
         // An orthographic matrix keeps w = 1.
-        assert!(projection(&Mat4::IDENTITY).unwrap_err().contains("orthographic"));
+        assert!(
+            projection(&Mat4::IDENTITY)
+                .unwrap_err()
+                .contains("orthographic")
+        );
     }
 }
