@@ -503,7 +503,10 @@ mod tests {
         };
         let (mean_i, var_i) = stats(StochasticDraw::Independent);
         let (mean_s, var_s) = stats(StochasticDraw::Stratified);
-        assert!(var_s < 0.25 * var_i, "variance {var_s} stratified vs {var_i}");
+        assert!(
+            var_s < 0.25 * var_i,
+            "variance {var_s} stratified vs {var_i}"
+        );
         for mean in [mean_i, mean_s] {
             assert!((mean / exact - 1.0).abs() < 0.05, "mean {mean} vs {exact}");
         }
