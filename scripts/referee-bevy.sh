@@ -80,9 +80,6 @@ for setting in sorted(os.listdir(out)):
         if not os.path.isfile(f):
             continue
         s = json.load(open(f))
-        lists = os.path.join(out, setting, source, "lists")
-        if not os.path.isdir(lists):
-            lists = None
         rows.append({
             "setting": setting, "source": source, "grid": s["source"],
             "false_negatives": s["false_negatives"],
@@ -91,6 +88,7 @@ for setting in sorted(os.listdir(out)):
             "lights_per_pixel": round(s["lights_per_pixel_mean"], 2),
             "needed_per_pixel": round(s["lights_needed_per_pixel_mean"], 2),
             "longest_list": s["max_lights_per_cell"], "cells": s["cells"],
+            "list_kib": round(s["list_bytes"] / 1024, 1),
         })
 keys = list(rows[0].keys())
 with open(os.path.join(out, "scores.csv"), "w", newline="") as f:

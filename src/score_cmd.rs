@@ -69,8 +69,11 @@ pub(crate) fn run_score(args: &ScoreArgs) -> Result<()> {
         .false_positive_ratio
         .map_or("-".to_string(), |r| format!("{r:.3}"));
     println!(
-        "lights evaluated per light needed: {ratio}; lights per pixel {:.2} (needed {:.2}); longest list {}",
-        m.lights_per_pixel_mean, m.lights_needed_per_pixel_mean, m.max_lights_per_bin
+        "lights evaluated per light needed: {ratio}; lights per pixel {:.2} (needed {:.2}); longest list {}; lists {:.1} KiB",
+        m.lights_per_pixel_mean,
+        m.lights_needed_per_pixel_mean,
+        m.max_lights_per_bin,
+        lists.bytes() as f64 / 1024.0
     );
     let shown: Vec<String> = files
         .iter()

@@ -195,9 +195,16 @@ fn score_reproduces_our_lists_and_finds_planted_errors_where_they_are() {
         "evaluated",
         "needed",
         "max_lights_per_cell",
+        "list_bytes",
     ] {
         assert_eq!(s3[k], s[k], "{k} through the light-id map");
     }
+    // The lists' size: 4 bytes an entry and an offset.
+    assert_eq!(
+        s["list_bytes"].as_u64().unwrap(),
+        4 * (indices.len() + offsets.len()) as u64,
+        "list_bytes"
+    );
     // Bad lists: an id past the lights, the wrong dtype, a grid for another image.
     let bad = tmp.path().join("bad");
     let mut idx = indices.clone();

@@ -202,6 +202,12 @@ impl Lists {
         })
     }
 
+    /// The lists' size in the scoring format: 4 bytes an entry and 4 bytes a cell's offset
+    /// (`indices.npy` and `offsets.npy` as 32-bit words; an engine may pack its own tighter).
+    pub fn bytes(&self) -> u64 {
+        4 * (self.indices.len() as u64 + self.offsets.len() as u64)
+    }
+
     /// Cell `c`'s lights, sorted.
     fn sorted(&self, c: u64) -> Vec<u32> {
         let (a, b) = (self.offsets[c as usize], self.offsets[c as usize + 1]);
@@ -270,6 +276,7 @@ impl Score {
             "lights_per_pixel_mean": m.lights_per_pixel_mean,
             "lights_needed_per_pixel_mean": m.lights_needed_per_pixel_mean,
             "max_lights_per_cell": m.max_lights_per_bin,
+            "list_bytes": lists.bytes(),
         });
         serde_json::to_string_pretty(&v).expect("JSON of numbers and strings")
     }
