@@ -276,6 +276,53 @@ fn config(args: &Args) -> (ClusterConfig, String) {
     }
 }
 
+/// Spawns the export's lights as Bevy's point and spot lights, all visible; returns each
+/// entity's index among the export's lights.
+fn spawn_lights(app: &mut App, lights: &[ExportLight]) -> HashMap<Entity, u32> {
+    let mut index: HashMap<Entity, u32> = HashMap::new();
+    for (i, l) in lights.iter().enumerate() {
+        let at = Transform::from_translation(l.position);
+        let e = match l.spot {
+            None => app
+                .world_mut()
+                .spawn((
+                    PointLight {
+                        range: l.radius,
+                        radius: 0.0,
+                        shadow_maps_enabled: false,
+                        ..Default::default()
+                    },
+                    at,
+                    ViewVisibility::VISIBLE,
+                ))
+                .id(),
+            Some((axis, cos_inner, cos_outer)) => {
+                let up = if axis.normalize().dot(Vec3::Y).abs() > 0.99 {
+                    Vec3::X
+                } else {
+                    Vec3::Y
+                };
+                app.world_mut()
+                    .spawn((
+                        SpotLight {
+                            range: l.radius,
+                            radius: 0.0,
+                            inner_angle: cos_inner.clamp(-1.0, 1.0).acos(),
+                            outer_angle: cos_outer.clamp(-1.0, 1.0).acos(),
+                            shadow_maps_enabled: false,
+                            ..Default::default()
+                        },
+                        at.looking_to(axis, up),
+                        ViewVisibility::VISIBLE,
+                    ))
+                    .id()
+            }
+        };
+        index.insert(e, i as u32);
+    }
+    index
+}
+
 fn run() -> Result<()> {
     let mut args = args()?;
     let dir = &args.export.clone();
@@ -329,47 +376,7 @@ fn run() -> Result<()> {
             config,
         ))
         .id();
-    let mut index: HashMap<Entity, u32> = HashMap::new();
-    for (i, l) in lights.iter().enumerate() {
-        let at = Transform::from_translation(l.position);
-        let e = match l.spot {
-            None => app
-                .world_mut()
-                .spawn((
-                    PointLight {
-                        range: l.radius,
-                        radius: 0.0,
-                        shadow_maps_enabled: false,
-                        ..Default::default()
-                    },
-                    at,
-                    ViewVisibility::VISIBLE,
-                ))
-                .id(),
-            Some((axis, cos_inner, cos_outer)) => {
-                let up = if axis.normalize().dot(Vec3::Y).abs() > 0.99 {
-                    Vec3::X
-                } else {
-                    Vec3::Y
-                };
-                app.world_mut()
-                    .spawn((
-                        SpotLight {
-                            range: l.radius,
-                            radius: 0.0,
-                            inner_angle: cos_inner.clamp(-1.0, 1.0).acos(),
-                            outer_angle: cos_outer.clamp(-1.0, 1.0).acos(),
-                            shadow_maps_enabled: false,
-                            ..Default::default()
-                        },
-                        at.looking_to(axis, up),
-                        ViewVisibility::VISIBLE,
-                    ))
-                    .id()
-            }
-        };
-        index.insert(e, i as u32);
-    }
+    let index = spawn_lights(&mut app, &lights);
     // Two frames: the second slices to the first's farthest light.
     app.update();
     app.update();
