@@ -20,6 +20,11 @@ pub(crate) struct RunArgs {
     /// machines; join the outputs with `manylights merge`.
     #[arg(long, value_parser = parse_shard)]
     pub(crate) shard: Option<(usize, usize)>,
+    /// Start no cell after this many seconds (a cell already started runs to its end); the
+    /// cells left are reported, and running again with the same --out resumes them. For batch
+    /// systems' wall-time limits and for sweeps whose slowest cells would not finish.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_time_limit)]
+    pub(crate) time_limit: Option<f64>,
     /// Do not write the report at the end.
     #[arg(long)]
     pub(crate) no_report: bool,
@@ -42,6 +47,13 @@ pub(crate) struct MergeArgs {
 pub(crate) struct ReportArgs {
     /// A run directory.
     pub(crate) dir: PathBuf,
+}
+
+pub(crate) fn parse_time_limit(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}`: need a positive number of seconds")),
+    }
 }
 
 pub(crate) fn parse_shard(s: &str) -> Result<(usize, usize), String> {
@@ -92,7 +104,10 @@ pub(crate) fn run_suite(args: &RunArgs) -> Result<()> {
     let opts = manylights_lab::runner::RunOptions {
         shard: args.shard,
         max_cells: None,
-        deadline: None,
+        // One deadline for the whole suite: the cases after it start no cell.
+        deadline: args
+            .time_limit
+            .map(|t| std::time::Instant::now() + std::time::Duration::from_secs_f64(t)),
         progress: show_progress(),
         commit: env!("MANYLIGHTS_COMMIT").to_string(),
     };
@@ -196,7 +211,9 @@ pub(crate) fn run_experiment(args: &RunArgs) -> Result<()> {
     let opts = manylights_lab::runner::RunOptions {
         shard: args.shard,
         max_cells: None,
-        deadline: None,
+        deadline: args
+            .time_limit
+            .map(|t| std::time::Instant::now() + std::time::Duration::from_secs_f64(t)),
         progress: show_progress(),
         commit: env!("MANYLIGHTS_COMMIT").to_string(),
     };
@@ -208,7 +225,13 @@ pub(crate) fn run_experiment(args: &RunArgs) -> Result<()> {
         s.rows.len(),
         out.join("results.csv").display()
     );
-    if !args.no_report {
+    let left = s.in_shard - s.ran - s.skipped;
+    if left > 0 {
+        eprintln!(
+            "{left} cells not run (--time-limit reached); run the same command again to resume them"
+        );
+    }
+    if !args.no_report && !s.rows.is_empty() {
         let html = manylights_lab::report::write_report(&out)?;
         eprintln!(
             "report: {} and {}",

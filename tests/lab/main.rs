@@ -443,6 +443,14 @@ fn resumed_and_sharded_runs_equal_a_clean_run() {
         (2, 2),
         "the interrupted run persisted its finished cells"
     );
+    // The interrupted run's report names the cells it has not run.
+    manylights_lab::report::write_report(&resumed_dir).unwrap();
+    let md = std::fs::read_to_string(resumed_dir.join("report.md")).unwrap();
+    // (The report reads the experiment file, `e`; `tiny` shrinks its cells, not their number.)
+    let missing = &e.cells()[2..];
+    let line = format!("- cells: 2 of {} ({} not run: ", clean.len(), missing.len());
+    assert!(md.contains(&line), "{line} not in the report");
+    assert!(missing.iter().all(|c| md.contains(&c.name)));
     std::fs::write(resumed_dir.join("cells").join(".tmpXYZ123"), b"{\"half\": ").unwrap();
     let second = run_parsed(&ctx, &tiny, &src, base, &resumed_dir, &opts()).unwrap();
     assert_eq!((second.ran, second.skipped), (clean.len() - 2, 2));
@@ -470,6 +478,13 @@ fn resumed_and_sharded_runs_equal_a_clean_run() {
             s.rows.iter().all(|r| r.index % 2 == i),
             "shard {i} ran a cell of another shard"
         );
+        // A finished shard misses none of its own cells.
+        manylights_lab::report::write_report(dir).unwrap();
+        let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+        assert!(
+            md.contains(&format!("- cells: {}\n", s.rows.len())),
+            "shard {i}'s report counts cells it was not given"
+        );
     }
     let inputs: Vec<&Path> = shards.iter().map(PathBuf::as_path).collect();
     let merged = manylights_lab::results::merge(&inputs, &tmp.path().join("merged")).unwrap();
@@ -489,6 +504,47 @@ fn manylights(args: &[&str]) -> std::process::Output {
         .env("XDG_RUNTIME_DIR", std::env::temp_dir())
         .output()
         .unwrap()
+}
+
+/// `run --time-limit`: no cell starts after the limit, the cells left are counted with how to
+/// resume them, and a bad limit names the option.
+#[test]
+fn time_limit_leaves_the_cells_after_it_for_a_resumed_run() {
+    common::gpu();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let exp = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quickstart.ron");
+    let cells = manylights_lab::Experiment::load(&exp)
+        .unwrap()
+        .0
+        .cells()
+        .len();
+    let o = manylights(&[
+        "run",
+        exp.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--time-limit",
+        "0.000001",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(&format!("{cells} cells not run (--time-limit reached); run the same command again to resume them")),
+        "{err}"
+    );
+    assert!(!out.join("report.md").exists(), "a report of no cells");
+    for bad in ["0", "-3", "soon"] {
+        let limit = format!("--time-limit={bad}");
+        let o = manylights(&["run", exp.to_str().unwrap(), &limit]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success()
+                && err.contains("--time-limit")
+                && err.contains("positive number of seconds"),
+            "{bad}: {err}"
+        );
+    }
 }
 
 /// Bad experiment files: an error with the file, line and column, exit code 1, and no output.

@@ -200,6 +200,40 @@ fn summary(rows: &[Row]) -> Vec<String> {
     out
 }
 
+/// The names of the experiment's cells that the run in `dir` should hold but has no row for
+/// (a run stopped by `--time-limit` or killed; a shard's directory expects its own cells only).
+fn cells_not_run(exp: &crate::Experiment, dir: &Path, rows: &[Row]) -> Vec<String> {
+    let shard = std::fs::read_to_string(dir.join("meta.json"))
+        .ok()
+        .and_then(|m| serde_json::from_str::<serde_json::Value>(&m).ok())
+        .and_then(|m| m.get("shard")?.as_str().map(str::to_owned))
+        .and_then(|s| {
+            let (i, n) = s.split_once('/')?;
+            Some((i.parse::<usize>().ok()?, n.parse::<usize>().ok()?))
+        });
+    // By index: the runner refuses a run directory of another experiment file.
+    let done: std::collections::BTreeSet<usize> = rows.iter().map(|r| r.index).collect();
+    exp.cells()
+        .into_iter()
+        .filter(|c| shard.is_none_or(|(i, n)| c.index % n == i))
+        .filter(|c| !done.contains(&c.index))
+        .map(|c| c.name)
+        .collect()
+}
+
+/// The setup's cell count, naming the cells not run.
+fn cells_line(done: usize, not_run: &[String]) -> String {
+    if not_run.is_empty() {
+        return done.to_string();
+    }
+    format!(
+        "{done} of {} ({} not run: {})",
+        done + not_run.len(),
+        not_run.len(),
+        not_run.join("; ")
+    )
+}
+
 /// Writes `report.md`, `report.html` and `figures/` for the run in `dir`; returns the HTML path.
 pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     register_font();
@@ -211,9 +245,14 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         )));
     }
     let exp_src = std::fs::read_to_string(dir.join("experiment.ron")).unwrap_or_default();
-    let description = crate::Experiment::parse(&exp_src, &dir.join("experiment.ron"))
-        .map(|e| e.description)
+    let exp = crate::Experiment::parse(&exp_src, &dir.join("experiment.ron")).ok();
+    let description = exp
+        .as_ref()
+        .map(|e| e.description.clone())
         .unwrap_or_default();
+    let not_run = exp
+        .as_ref()
+        .map_or_else(Vec::new, |e| cells_not_run(e, dir, &rows));
     let figs = draw_figures(&rows, &dir.join("figures"))?;
     let name = rows[0].experiment.clone();
     // The rows say what ran each cell: a resumed run may mix commits (or machines), and the
@@ -316,7 +355,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         md,
         "## Setup\n\n- adapter: {adapter}\n- driver: {driver}\n- commit: {commit}\n- finished: {}\n- cells: {}\n",
         utc(date),
-        rows.len()
+        cells_line(rows.len(), &not_run)
     );
     let _ = writeln!(
         md,
@@ -379,7 +418,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         esc(&driver),
         esc(&commit),
         utc(date),
-        rows.len()
+        esc(&cells_line(rows.len(), &not_run))
     );
     let _ = write!(
         html,
