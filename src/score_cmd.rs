@@ -6,7 +6,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 use manylights_cull::heatmap;
-use manylights_lab::score::{Frame, Lists, score};
+use manylights_lab::score::on_grid::cluster_on_grid;
+use manylights_lab::score::{Frame, Grid, Lists, score};
 use manylights_shade::image_out::write_atomic;
 
 #[derive(clap::Args, Debug)]
@@ -23,11 +24,24 @@ pub(crate) struct ScoreArgs {
     /// need (false_negatives.npy, extra.npy) and their heatmaps are written.
     #[arg(long, value_name = "DIR", default_value = "out/score")]
     pub(crate) out: PathBuf,
+    /// Score this workbench's cluster test on the grid of LISTS/grid.json instead of the lists
+    /// there: each cell's lights by the sphere (a spot's capped cone) against the cell's side
+    /// planes and depth slice and the box of its frustum, in f64 (docs/EXPERIMENTS.md). The
+    /// lists are written to OUT/lists in the same format.
+    #[arg(long)]
+    pub(crate) cluster_on_grid: bool,
 }
 
 pub(crate) fn run_score(args: &ScoreArgs) -> Result<()> {
     let frame = Frame::from_export(&args.export)?;
-    let lists = Lists::load(&args.lists, frame.width, frame.height, frame.lights.len())?;
+    let lists = if args.cluster_on_grid {
+        let grid = Grid::load(&args.lists.join("grid.json"), frame.width, frame.height)?;
+        let lists = cluster_on_grid(&frame, &grid);
+        lists.write(&args.out.join("lists"))?;
+        lists
+    } else {
+        Lists::load(&args.lists, frame.width, frame.height, frame.lights.len())?
+    };
     let s = score(&frame, &lists);
     let m = &s.metrics;
     let (w, h) = (frame.width, frame.height);

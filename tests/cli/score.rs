@@ -416,3 +416,52 @@ fn bevys_committed_lists_score_with_the_false_negative_where_its_tiles_and_looku
         "the light is in the tile's cell, not the shader's"
     );
 }
+
+/// `--cluster-on-grid`: this workbench's cluster test on Bevy's default grid of the fixture
+/// misses nothing where Bevy's lists miss one pair, and its lists, written in the scoring
+/// format, score the same when read back.
+#[test]
+fn our_cluster_test_on_bevys_grid_misses_nothing_and_reads_back() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bevy");
+    let export = root.join("export");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ours");
+    let stdout = succeeds(
+        &[
+            "score",
+            "--export",
+            export.to_str().unwrap(),
+            "--lists",
+            root.join("default").to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--cluster-on-grid",
+        ],
+        "score --cluster-on-grid",
+    );
+    assert!(
+        stdout.contains("manylights cluster test on the grid of: bevy"),
+        "{stdout}"
+    );
+    let ours: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("score.json")).unwrap()).unwrap();
+    assert_eq!(ours["false_negatives"], 0, "{ours}");
+    let bevy = score(&export, &root.join("default"), &tmp.path().join("bevy"));
+    assert_eq!(
+        ours["lights_needed_per_pixel_mean"], bevy["lights_needed_per_pixel_mean"],
+        "the same frame"
+    );
+    let again = score(&export, &out.join("lists"), &tmp.path().join("again"));
+    for k in [
+        "false_negatives",
+        "false_positive_ratio",
+        "max_lights_per_cell",
+        "list_bytes",
+    ] {
+        assert_eq!(ours[k], again[k], "{k}: {ours} against {again}");
+    }
+    println!(
+        "evaluated per needed: ours {} against Bevy's {}",
+        ours["false_positive_ratio"], bevy["false_positive_ratio"]
+    );
+}

@@ -8,6 +8,7 @@
 
 pub mod grid;
 pub(crate) mod npy;
+pub mod on_grid;
 
 use std::path::Path;
 
@@ -200,6 +201,38 @@ impl Lists {
             offsets,
             indices,
         })
+    }
+
+    /// Writes the lists in the scoring format into `dir` (`grid.json`, `offsets.npy` as
+    /// uint32, `indices.npy`), each file whole or not at all; returns the files.
+    pub fn write(&self, dir: &Path) -> Result<Vec<std::path::PathBuf>, LabError> {
+        std::fs::create_dir_all(dir).map_err(|e| LabError::Io {
+            path: dir.display().to_string(),
+            message: e.to_string(),
+        })?;
+        let (g, o, i) = (
+            dir.join("grid.json"),
+            dir.join("offsets.npy"),
+            dir.join("indices.npy"),
+        );
+        let too_many = |path: &Path| LabError::Io {
+            path: path.display().to_string(),
+            message: format!("{} entries do not fit uint32 offsets", self.indices.len()),
+        };
+        let offsets: Vec<u32> = self
+            .offsets
+            .iter()
+            .map(|&v| u32::try_from(v).map_err(|_| too_many(&o)))
+            .collect::<Result<_, _>>()?;
+        crate::write_atomic(
+            &g,
+            serde_json::to_string_pretty(&self.grid)
+                .expect("a grid serialises")
+                .as_bytes(),
+        )?;
+        npy::write_u32(&o, &[offsets.len() as u64], &offsets)?;
+        npy::write_u32(&i, &[self.indices.len() as u64], &self.indices)?;
+        Ok(vec![g, o, i])
     }
 
     /// The lists' size in the scoring format: 4 bytes an entry and 4 bytes a cell's offset
