@@ -18,7 +18,9 @@
 # bound at the previous frame's farthest light); Bevy's fixed XYZ grid of 32 px and 32 slices
 # (the size of this workbench's best cluster grid at 1080p); Bevy's knobs one at a time: the
 # first slice 0.5, 1 and 2 m deep, 12 and 48 z slices, the far bound at the camera's far plane;
-# and this workbench's lists for each variant of the experiment.
+# this workbench's cluster test on the default and the XYZ grid's cells (`score
+# --cluster-on-grid`); and this workbench's lists for each variant of the experiment. Then
+# scripts/referee_misses.py classifies every false negative (OUT/misses.csv, misses.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUN=${1:-out/referee-bevy/run}
@@ -27,6 +29,7 @@ M=${MANYLIGHTS:-target/release/manylights}
 REF=${BEVY_REFEREE:-referees/bevy/target/release/manylights-bevy-referee}
 EXPERIMENT=${EXPERIMENT:-experiments/referee-bevy.ron}
 command -v python3 >/dev/null || { echo "error: python3 is needed to list the run's cells" >&2; exit 1; }
+python3 -c "import numpy" 2>/dev/null || { echo "error: numpy is needed to classify the misses (pip install numpy)" >&2; exit 1; }
 [ -x "$M" ] || cargo build --release
 [ -x "$REF" ] || cargo build --release --manifest-path referees/bevy/Cargo.toml
 "$M" run "$EXPERIMENT" --out "$RUN"
@@ -38,10 +41,10 @@ for r in json.load(open(sys.argv[1])):
     parts = dict(p.split("=", 1) for p in r["cell"].split(","))
     print(parts["setting"], parts["variant"], r["id"], r["width"], r["height"], sep="\t")
 PY
-score() { # setting source export lists
+score() { # setting source export lists [score's options]
     local dir="$OUT/$1/$2"
     mkdir -p "$dir"
-    "$M" score --export "$3" --lists "$4" --out "$dir" > "$dir/score.txt"
+    "$M" score --export "$3" --lists "$4" --out "$dir" "${@:5}" > "$dir/score.txt"
     echo "$1 $2: $(grep -m1 'false negatives' "$dir/score.txt")"
 }
 declare -A seen
@@ -67,6 +70,10 @@ bevy-z-12 --z-slices 12
 bevy-z-48 --z-slices 48
 bevy-far-camera --far-z camera
 SOURCES
+    # This workbench's cluster test on exactly Bevy's cells: the grid's cost apart from the test's.
+    for grid in bevy-default bevy-xyz-32px-32; do
+        score "$setting" "manylights-on-$grid" "$export_dir" "$OUT/$setting/$grid/lists" --cluster-on-grid
+    done
 done < "$OUT/cells.tsv"
 python3 - "$OUT" <<'PY'
 import csv, json, os, sys
@@ -100,3 +107,4 @@ with open(os.path.join(out, "scores.md"), "w") as f:
         f.write("| " + " | ".join(str(r[k]) for k in cols) + " |\n")
 print(f"{len(rows)} scores: {out}/scores.csv, {out}/scores.md")
 PY
+python3 scripts/referee_misses.py "$OUT" "$RUN"
