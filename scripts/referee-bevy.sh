@@ -21,6 +21,7 @@
 # this workbench's cluster test on the default and the XYZ grid's cells (`score
 # --cluster-on-grid`); and this workbench's lists for each variant of the experiment. Then
 # scripts/referee_misses.py classifies every false negative (OUT/misses.csv, misses.md).
+# `manylights score-chart` draws the scores (OUT/figures/scores.svg).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 RUN=${1:-out/referee-bevy/run}
@@ -107,4 +108,5 @@ with open(os.path.join(out, "scores.md"), "w") as f:
         f.write("| " + " | ".join(str(r[k]) for k in cols) + " |\n")
 print(f"{len(rows)} scores: {out}/scores.csv, {out}/scores.md")
 PY
+"$M" score-chart "$OUT"
 python3 scripts/referee_misses.py "$OUT" "$RUN"

@@ -18,7 +18,7 @@ use clap::{Parser, Subcommand};
 use cull_cmd::{CullArgs, cull};
 use lab_cmds::{MergeArgs, ReportArgs, RunArgs, report, run_experiment};
 use render_cmd::{RenderArgs, render};
-use score_cmd::{ScoreArgs, run_score};
+use score_cmd::{ScoreArgs, ScoreChartArgs, run_score, score_chart};
 use tune_cmd::{TuneArgs, run_tune};
 
 /// Light-culling research workbench: culling strategies and shading backends on wgpu,
@@ -101,6 +101,11 @@ enum Command {
     /// evaluated per light needed, lights per pixel, the longest list (docs/EXPERIMENTS.md,
     /// "Scoring another engine's lists").
     Score(ScoreArgs),
+    /// Chart a referee's scores: DIR/scores.csv (one row a setting and list source, as
+    /// scripts/referee-bevy.sh writes it) drawn as DIR/figures/scores.svg, lights evaluated per
+    /// light needed against the lists' memory, a panel a setting, sources that miss lights
+    /// ringed in red.
+    ScoreChart(ScoreChartArgs),
 }
 
 /// Mesa's implicit Vulkan layer `VK_LAYER_MESA_device_select` connects to a Wayland display while
@@ -149,6 +154,7 @@ fn main() -> std::process::ExitCode {
         Command::Report(args) => report(&args.dir),
         Command::Tune(args) => run_tune(args),
         Command::Score(args) => run_score(args),
+        Command::ScoreChart(args) => score_chart(&args.dir),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

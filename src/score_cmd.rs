@@ -97,3 +97,15 @@ pub(crate) fn run_score(args: &ScoreArgs) -> Result<()> {
     println!("wrote {}", shown.join(", "));
     Ok(())
 }
+
+#[derive(clap::Args, Debug)]
+pub(crate) struct ScoreChartArgs {
+    /// A directory holding scores.csv.
+    pub(crate) dir: PathBuf,
+}
+
+pub(crate) fn score_chart(dir: &std::path::Path) -> Result<()> {
+    let path = manylights_lab::score::chart(dir)?;
+    println!("chart: {}", path.display());
+    Ok(())
+}

@@ -465,3 +465,35 @@ fn our_cluster_test_on_bevys_grid_misses_nothing_and_reads_back() {
         ours["false_positive_ratio"], bevy["false_positive_ratio"]
     );
 }
+
+/// `score-chart`: a referee's scores.csv drawn as figures/scores.svg, a panel a setting, the
+/// sources that miss lights ringed; a file without a needed column is an error naming it.
+#[test]
+fn score_chart_draws_every_setting_and_names_a_missing_column() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("scores.csv"),
+        "setting,source,grid,false_negatives,pixels_with_false_negatives,evaluated_per_needed,lights_per_pixel,needed_per_pixel,longest_list,cells,list_kib\n\
+         a,bevy-default,\"bevy, default\",3,3,2.5,10,4,20,100,50.5\n\
+         a,bevy-z-12,bevy,0,0,2.7,10,4,20,100,40\n\
+         a,manylights-on-bevy-default,ours,0,0,2.2,9,4,18,100,48\n\
+         b,bevy-default,bevy,0,0,4.0,10,2.5,20,100,70\n\
+         b,manylights-gather16,ours,0,0,1.3,3,2.5,9,300,120\n",
+    )
+    .unwrap();
+    let out = succeeds(&["score-chart", dir.to_str().unwrap()], "score-chart");
+    assert!(out.contains("scores.svg"), "{out}");
+    let svg = std::fs::read_to_string(dir.join("figures/scores.svg")).unwrap();
+    for text in ["the engine", "red ring", "\na\n", "\nb\n", "1 z-12", "gather16"] {
+        assert!(svg.contains(text), "`{text}` not in the chart");
+    }
+    assert_eq!(svg.matches("legend-box").count(), 1);
+    std::fs::write(dir.join("scores.csv"), "setting,source,false_negatives\na,b,0\n").unwrap();
+    let o = manylights(&["score-chart", dir.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("scores.csv") && err.contains("evaluated_per_needed"),
+        "{err}"
+    );
+}

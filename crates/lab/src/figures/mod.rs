@@ -16,6 +16,7 @@ use crate::results::Row;
 mod axes;
 mod legend;
 pub(crate) mod panels;
+pub(crate) mod scores;
 
 use axes::Scale;
 pub(crate) use legend::Layout;

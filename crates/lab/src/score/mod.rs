@@ -10,6 +10,21 @@ pub mod grid;
 pub(crate) mod npy;
 pub mod on_grid;
 
+/// Draws `dir/scores.csv` (one row a setting and list source, as scripts/referee-bevy.sh
+/// writes it) as `dir/figures/scores.svg`: lights evaluated per light needed against the
+/// lists' memory, a panel a setting, a red ring around sources that miss lights. Returns the
+/// figure's path.
+pub fn chart(dir: &Path) -> Result<std::path::PathBuf, LabError> {
+    let rows = crate::figures::scores::read(&dir.join("scores.csv"))?;
+    let out = dir.join("figures").join("scores.svg");
+    std::fs::create_dir_all(dir.join("figures")).map_err(|e| LabError::Io {
+        path: dir.join("figures").display().to_string(),
+        message: e.to_string(),
+    })?;
+    crate::figures::scores::draw(&rows, &out)?;
+    Ok(out)
+}
+
 use std::path::Path;
 
 use glam::{DMat4, DVec3, DVec4, Vec3};
