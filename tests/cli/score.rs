@@ -485,11 +485,22 @@ fn score_chart_draws_every_setting_and_names_a_missing_column() {
     let out = succeeds(&["score-chart", dir.to_str().unwrap()], "score-chart");
     assert!(out.contains("scores.svg"), "{out}");
     let svg = std::fs::read_to_string(dir.join("figures/scores.svg")).unwrap();
-    for text in ["the engine", "red ring", "\na\n", "\nb\n", "1 z-12", "gather16"] {
+    for text in [
+        "the engine",
+        "red ring",
+        "\na\n",
+        "\nb\n",
+        "1 z-12",
+        "gather16",
+    ] {
         assert!(svg.contains(text), "`{text}` not in the chart");
     }
     assert_eq!(svg.matches("legend-box").count(), 1);
-    std::fs::write(dir.join("scores.csv"), "setting,source,false_negatives\na,b,0\n").unwrap();
+    std::fs::write(
+        dir.join("scores.csv"),
+        "setting,source,false_negatives\na,b,0\n",
+    )
+    .unwrap();
     let o = manylights(&["score-chart", dir.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

@@ -262,6 +262,57 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let commit = distinct(rows.iter().map(|r| r.commit.as_str()));
     let date = rows.iter().map(|r| r.finished_unix).max().unwrap_or(0);
     let findings = summary(&rows);
+    let (head, table) = results_table(&rows);
+    let images: Vec<&Row> = rows
+        .iter()
+        .filter(|r| {
+            dir.join("images")
+                .join(format!("{}_render.png", r.id))
+                .exists()
+        })
+        .take(12)
+        .collect();
+
+    let page = Page {
+        name: &name,
+        description: &description,
+        adapter: &adapter,
+        driver: &driver,
+        commit: &commit,
+        date,
+        cells: cells_line(rows.len(), &not_run),
+        exp_src: &exp_src,
+        findings: &findings,
+        head: &head,
+        table: &table,
+        figs: &figs,
+        images: &images,
+    };
+    write_atomic(&dir.join("report.md"), markdown(&page).as_bytes())?;
+    let path = dir.join("report.html");
+    write_atomic(&path, html(&page).as_bytes())?;
+    Ok(path)
+}
+
+/// What the report's two pages say.
+struct Page<'a> {
+    name: &'a str,
+    description: &'a str,
+    adapter: &'a str,
+    driver: &'a str,
+    commit: &'a str,
+    date: u64,
+    cells: String,
+    exp_src: &'a str,
+    findings: &'a [String],
+    head: &'a [&'static str],
+    table: &'a [Vec<String>],
+    figs: &'a [(&'a str, String)],
+    images: &'a [&'a Row],
+}
+
+/// The results table's header and rows (the moving lights' columns where cells moved them).
+fn results_table(rows: &[Row]) -> (Vec<&'static str>, Vec<Vec<String>>) {
     // Moving lights' update columns, in reports of runs that have them.
     let moving = rows
         .iter()
@@ -338,24 +389,34 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
             row
         })
         .collect();
-    let images: Vec<&Row> = rows
-        .iter()
-        .filter(|r| {
-            dir.join("images")
-                .join(format!("{}_render.png", r.id))
-                .exists()
-        })
-        .take(12)
-        .collect();
+    (head, table)
+}
 
+/// `report.md`.
+fn markdown(p: &Page<'_>) -> String {
+    let Page {
+        name,
+        description,
+        adapter,
+        driver,
+        commit,
+        date,
+        cells,
+        exp_src,
+        findings,
+        head,
+        table,
+        figs,
+        images,
+    } = p;
     // Markdown.
     let mut md = String::new();
     let _ = writeln!(md, "# {name}\n\n{description}\n");
     let _ = writeln!(
         md,
         "## Setup\n\n- adapter: {adapter}\n- driver: {driver}\n- commit: {commit}\n- finished: {}\n- cells: {}\n",
-        utc(date),
-        cells_line(rows.len(), &not_run)
+        utc(*date),
+        cells
     );
     let _ = writeln!(
         md,
@@ -363,7 +424,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     );
     let _ = writeln!(md, "```ron\n{}\n```\n", exp_src.trim_end());
     let _ = writeln!(md, "## Findings\n");
-    for f in &findings {
+    for f in findings.iter() {
         let _ = writeln!(md, "- {f}");
     }
     let _ = writeln!(
@@ -372,7 +433,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         head.join(" | "),
         head.iter().map(|_| "---").collect::<Vec<_>>().join("|")
     );
-    for row in &table {
+    for row in table.iter() {
         let _ = writeln!(
             md,
             "| {} |",
@@ -383,12 +444,12 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         );
     }
     let _ = writeln!(md, "\n## Figures\n");
-    for (f, caption) in &figs {
+    for (f, caption) in figs.iter() {
         let _ = writeln!(md, "![{caption}](figures/{f})\n\n{caption}\n");
     }
     if !images.is_empty() {
         let _ = writeln!(md, "## Renders and lights-per-pixel heatmaps\n");
-        for r in &images {
+        for r in images.iter() {
             let _ = writeln!(
                 md,
                 "`{}`\n\n![render](images/{}_render.png) ![lights per pixel](images/{}_heat.png)\n",
@@ -396,8 +457,26 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
             );
         }
     }
-    write_atomic(&dir.join("report.md"), md.as_bytes())?;
+    md
+}
 
+/// `report.html`.
+fn html(p: &Page<'_>) -> String {
+    let Page {
+        name,
+        description,
+        adapter,
+        driver,
+        commit,
+        date,
+        cells,
+        exp_src,
+        findings,
+        head,
+        table,
+        figs,
+        images,
+    } = p;
     // HTML.
     let esc = |s: &str| {
         s.replace('&', "&amp;")
@@ -408,24 +487,24 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let _ = write!(
         html,
         "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title>\n<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}.table{{overflow-x:auto;max-width:100%;border:1px solid #ddd}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}}th{{position:sticky;top:0;background:#f6f6f6;white-space:normal}}td:nth-child(5){{white-space:normal;min-width:16em;text-align:left}}td:first-child,th:first-child{{text-align:left;position:sticky;left:0;background:#fff;z-index:1}}pre{{background:#f6f6f6;padding:1em;overflow:auto;white-space:pre-wrap}}img{{max-width:100%}}</style></head><body>\n<h1>{0}</h1>\n<p>{1}</p>\n",
-        esc(&name),
-        esc(&description)
+        esc(name),
+        esc(description)
     );
     let _ = writeln!(
         html,
         "<h2>Setup</h2><ul><li>adapter: {}</li><li>driver: {}</li><li>commit: {}</li><li>finished: {}</li><li>cells: {}</li></ul>",
-        esc(&adapter),
-        esc(&driver),
-        esc(&commit),
-        utc(date),
-        esc(&cells_line(rows.len(), &not_run))
+        esc(adapter),
+        esc(driver),
+        esc(commit),
+        utc(*date),
+        esc(cells)
     );
     let _ = write!(
         html,
         "<pre>{}</pre>\n<h2>Findings</h2><ul>",
         esc(exp_src.trim_end())
     );
-    for f in &findings {
+    for f in findings.iter() {
         let _ = write!(html, "<li>{}</li>", esc(f).replace('`', ""));
     }
     let _ = write!(
@@ -435,7 +514,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
             .map(|h| format!("<th>{h}</th>"))
             .collect::<String>()
     );
-    for row in &table {
+    for row in table.iter() {
         let _ = writeln!(
             html,
             "<tr>{}</tr>",
@@ -445,7 +524,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         );
     }
     let _ = write!(html, "</table></div>\n<h2>Figures</h2>\n");
-    for (f, caption) in &figs {
+    for (f, caption) in figs.iter() {
         let _ = writeln!(
             html,
             "<figure><img src=\"figures/{f}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
@@ -455,7 +534,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     }
     if !images.is_empty() {
         let _ = writeln!(html, "<h2>Renders and lights-per-pixel heatmaps</h2>");
-        for r in &images {
+        for r in images.iter() {
             let _ = writeln!(
                 html,
                 "<p>{}</p><img src=\"images/{}_render.png\" alt=\"render\"> <img src=\"images/{}_heat.png\" alt=\"lights per pixel\">",
@@ -470,9 +549,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         html,
         "<script>window.addEventListener('load',function(){{var i=Array.from(document.images);document.body.setAttribute('data-figures',i.every(function(x){{return x.complete&&x.naturalWidth>0}})?'loaded':'missing');document.body.setAttribute('data-figure-count',String(i.length));}});</script>\n</body></html>\n"
     );
-    let path = dir.join("report.html");
-    write_atomic(&path, html.as_bytes())?;
-    Ok(path)
+    html
 }
 
 /// Draws the report's figures into `figures`, each through a temporary file, and removes those
