@@ -394,46 +394,34 @@ fn results_table(rows: &[Row]) -> (Vec<&'static str>, Vec<Vec<String>>) {
 
 /// `report.md`.
 fn markdown(p: &Page<'_>) -> String {
-    let Page {
-        name,
-        description,
-        adapter,
-        driver,
-        commit,
-        date,
-        cells,
-        exp_src,
-        findings,
-        head,
-        table,
-        figs,
-        images,
-    } = p;
     // Markdown.
     let mut md = String::new();
-    let _ = writeln!(md, "# {name}\n\n{description}\n");
+    let _ = writeln!(md, "# {}\n\n{}\n", p.name, p.description);
     let _ = writeln!(
         md,
-        "## Setup\n\n- adapter: {adapter}\n- driver: {driver}\n- commit: {commit}\n- finished: {}\n- cells: {}\n",
-        utc(*date),
-        cells
+        "## Setup\n\n- adapter: {}\n- driver: {}\n- commit: {}\n- finished: {}\n- cells: {}\n",
+        p.adapter,
+        p.driver,
+        p.commit,
+        utc(p.date),
+        p.cells
     );
     let _ = writeln!(
         md,
         "GPU times are medians over each cell's measured frames (timestamp queries), with p10 and p90 in the results. Accuracy is against the brute-force reference with the same falloff (PSNR, FLIP: the implementation check) and against the infinite-range reference, the light as it is (FLIP inf at the reference's exposure, energy inf: the signed mean relative error over lit pixels); list metrics against the exact per-pixel oracle.\n"
     );
-    let _ = writeln!(md, "```ron\n{}\n```\n", exp_src.trim_end());
+    let _ = writeln!(md, "```ron\n{}\n```\n", p.exp_src.trim_end());
     let _ = writeln!(md, "## Findings\n");
-    for f in findings.iter() {
+    for f in p.findings.iter() {
         let _ = writeln!(md, "- {f}");
     }
     let _ = writeln!(
         md,
         "\n## Results\n\n| {} |\n|{}|",
-        head.join(" | "),
-        head.iter().map(|_| "---").collect::<Vec<_>>().join("|")
+        p.head.join(" | "),
+        p.head.iter().map(|_| "---").collect::<Vec<_>>().join("|")
     );
-    for row in table.iter() {
+    for row in p.table.iter() {
         let _ = writeln!(
             md,
             "| {} |",
@@ -444,12 +432,12 @@ fn markdown(p: &Page<'_>) -> String {
         );
     }
     let _ = writeln!(md, "\n## Figures\n");
-    for (f, caption) in figs.iter() {
+    for (f, caption) in p.figs.iter() {
         let _ = writeln!(md, "![{caption}](figures/{f})\n\n{caption}\n");
     }
-    if !images.is_empty() {
+    if !p.images.is_empty() {
         let _ = writeln!(md, "## Renders and lights-per-pixel heatmaps\n");
-        for r in images.iter() {
+        for r in p.images.iter() {
             let _ = writeln!(
                 md,
                 "`{}`\n\n![render](images/{}_render.png) ![lights per pixel](images/{}_heat.png)\n",
@@ -462,21 +450,6 @@ fn markdown(p: &Page<'_>) -> String {
 
 /// `report.html`.
 fn html(p: &Page<'_>) -> String {
-    let Page {
-        name,
-        description,
-        adapter,
-        driver,
-        commit,
-        date,
-        cells,
-        exp_src,
-        findings,
-        head,
-        table,
-        figs,
-        images,
-    } = p;
     // HTML.
     let esc = |s: &str| {
         s.replace('&', "&amp;")
@@ -487,34 +460,35 @@ fn html(p: &Page<'_>) -> String {
     let _ = write!(
         html,
         "<!doctype html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{0}</title>\n<style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}}.table{{overflow-x:auto;max-width:100%;border:1px solid #ddd}}table{{border-collapse:collapse;font-size:12px}}td,th{{border:1px solid #ccc;padding:2px 6px;text-align:right;white-space:nowrap}}th{{position:sticky;top:0;background:#f6f6f6;white-space:normal}}td:nth-child(5){{white-space:normal;min-width:16em;text-align:left}}td:first-child,th:first-child{{text-align:left;position:sticky;left:0;background:#fff;z-index:1}}pre{{background:#f6f6f6;padding:1em;overflow:auto;white-space:pre-wrap}}img{{max-width:100%}}</style></head><body>\n<h1>{0}</h1>\n<p>{1}</p>\n",
-        esc(name),
-        esc(description)
+        esc(p.name),
+        esc(p.description)
     );
     let _ = writeln!(
         html,
         "<h2>Setup</h2><ul><li>adapter: {}</li><li>driver: {}</li><li>commit: {}</li><li>finished: {}</li><li>cells: {}</li></ul>",
-        esc(adapter),
-        esc(driver),
-        esc(commit),
-        utc(*date),
-        esc(cells)
+        esc(p.adapter),
+        esc(p.driver),
+        esc(p.commit),
+        utc(p.date),
+        esc(&p.cells)
     );
     let _ = write!(
         html,
         "<pre>{}</pre>\n<h2>Findings</h2><ul>",
-        esc(exp_src.trim_end())
+        esc(p.exp_src.trim_end())
     );
-    for f in findings.iter() {
+    for f in p.findings.iter() {
         let _ = write!(html, "<li>{}</li>", esc(f).replace('`', ""));
     }
     let _ = write!(
         html,
         "</ul>\n<h2>Results</h2><div class=\"table\"><table><tr>{}</tr>\n",
-        head.iter()
+        p.head
+            .iter()
             .map(|h| format!("<th>{h}</th>"))
             .collect::<String>()
     );
-    for row in table.iter() {
+    for row in p.table.iter() {
         let _ = writeln!(
             html,
             "<tr>{}</tr>",
@@ -524,7 +498,7 @@ fn html(p: &Page<'_>) -> String {
         );
     }
     let _ = write!(html, "</table></div>\n<h2>Figures</h2>\n");
-    for (f, caption) in figs.iter() {
+    for (f, caption) in p.figs.iter() {
         let _ = writeln!(
             html,
             "<figure><img src=\"figures/{f}\" alt=\"{}\"><figcaption>{}</figcaption></figure>",
@@ -532,9 +506,9 @@ fn html(p: &Page<'_>) -> String {
             esc(caption)
         );
     }
-    if !images.is_empty() {
+    if !p.images.is_empty() {
         let _ = writeln!(html, "<h2>Renders and lights-per-pixel heatmaps</h2>");
-        for r in images.iter() {
+        for r in p.images.iter() {
             let _ = writeln!(
                 html,
                 "<p>{}</p><img src=\"images/{}_render.png\" alt=\"render\"> <img src=\"images/{}_heat.png\" alt=\"lights per pixel\">",

@@ -219,7 +219,7 @@ impl Grid {
 
     /// The cell (index into the offsets) of pixel `(px, py)` at view depth `d`.
     pub fn cell(&self, px: u32, py: u32, d: f64) -> u64 {
-        let [nx, ny, nz] = self.dims.map(u64::from);
+        let [nx, ny, _] = self.dims.map(u64::from);
         let (x, y) = match self.screen {
             ScreenMapping::Tiles {
                 tile_size: [tw, th],
@@ -230,11 +230,45 @@ impl Grid {
                 ((2 * u64::from(py) + 1) * ny) / (2 * u64::from(self.height)),
             ),
         };
-        let z = u64::from(self.slice(d));
+        self.index(x, y, u64::from(self.slice(d)))
+    }
+
+    /// The index into the offsets of cell `(x, y, z)`, in the grid's order.
+    pub fn index(&self, x: u64, y: u64, z: u64) -> u64 {
+        let [nx, ny, nz] = self.dims.map(u64::from);
         match self.order {
             CellOrder::XFastest => (z * ny + y) * nx + x,
             CellOrder::ZFastest => (y * nx + x) * nz + z,
         }
+    }
+
+    /// The view depths slice `k` covers, as [`Grid::slice`] maps them: from the eye for the
+    /// first slice, open-ended for the last (the lookup clamps).
+    pub fn slice_span(&self, k: u32) -> (f64, f64) {
+        let z = self.dims[2];
+        let (lo, hi) = match self.slicing {
+            Slicing::None => (0.0, f64::INFINITY),
+            Slicing::Linear { near, far } => {
+                let step = (far - near) / f64::from(z);
+                (near + step * f64::from(k), near + step * f64::from(k + 1))
+            }
+            Slicing::Exponential { near, far } => (
+                near * (far / near).powf(f64::from(k) / f64::from(z)),
+                near * (far / near).powf(f64::from(k + 1) / f64::from(z)),
+            ),
+            Slicing::NearSlice { near, far } => {
+                let e = |j: u32| near * (far / near).powf(f64::from(j) / f64::from(z - 1));
+                if k == 0 {
+                    (0.0, near)
+                } else {
+                    (e(k - 1), e(k))
+                }
+            }
+        };
+        (
+            if k == 0 { 0.0 } else { lo },
+            if k + 1 == z { f64::INFINITY } else { hi },
+        )
     }
 }
 

@@ -13,7 +13,7 @@
 
 use glam::{DMat4, DVec3, DVec4};
 
-use super::grid::{CellOrder, Grid, ScreenMapping, Slicing};
+use super::grid::{Grid, ScreenMapping};
 use super::{Frame, LightShape, Lists};
 
 /// Relative slack on every comparison, far above f64's rounding of the frame's numbers.
@@ -106,34 +106,6 @@ fn ndc_span(grid: &Grid, k: usize, i: u32) -> (f64, f64) {
     }
 }
 
-/// Slice `k`'s view depths: from the eye for the first, open-ended for the last.
-fn slice_span(grid: &Grid, k: u32) -> (f64, f64) {
-    let z = grid.dims[2];
-    let (lo, hi) = match grid.slicing {
-        Slicing::None => (0.0, f64::INFINITY),
-        Slicing::Linear { near, far } => {
-            let step = (far - near) / f64::from(z);
-            (near + step * f64::from(k), near + step * f64::from(k + 1))
-        }
-        Slicing::Exponential { near, far } => (
-            near * (far / near).powf(f64::from(k) / f64::from(z)),
-            near * (far / near).powf(f64::from(k + 1) / f64::from(z)),
-        ),
-        Slicing::NearSlice { near, far } => {
-            if k == 0 {
-                (0.0, near)
-            } else {
-                let e = |j: u32| near * (far / near).powf(f64::from(j) / f64::from(z - 1));
-                (e(k - 1), e(k))
-            }
-        }
-    };
-    (
-        if k == 0 { 0.0 } else { lo },
-        if k + 1 == z { f64::INFINITY } else { hi },
-    )
-}
-
 /// The view-space corners' box of the cell whose side planes pass through NDC `xs` and `ys`,
 /// between view depths `d0` and `d1` (finite); for a perspective or an orthographic camera.
 fn cell_box(
@@ -178,7 +150,19 @@ pub fn cluster_on_grid(frame: &Frame, grid: &Grid) -> Lists {
             .collect()
     };
     let (cols, rows) = (spans(0, nx), spans(1, ny));
-    let slices: Vec<(f64, f64)> = (0..nz).map(|k| slice_span(grid, k)).collect();
+    let slices: Vec<(f64, f64)> = (0..nz).map(|k| grid.slice_span(k)).collect();
+    // Each bounded cell's frustum box, once for the grid (slice-major, rows, columns).
+    let mut boxes: Vec<Option<(DVec3, DVec3)>> = Vec::with_capacity(grid.cells() as usize);
+    for &(d0, d1) in &slices {
+        for r in &rows {
+            for c in &cols {
+                boxes.push(
+                    d1.is_finite()
+                        .then(|| cell_box(&view_from_clip, c.0, r.0, (d0, d1))),
+                );
+            }
+        }
+    }
     let mut cells: Vec<Vec<u32>> = vec![Vec::new(); grid.cells() as usize];
     for (i, l) in frame.lights.iter().enumerate() {
         let l = ViewLight::new(&frame.view_from_world, l);
@@ -188,7 +172,7 @@ pub fn cluster_on_grid(frame: &Frame, grid: &Grid) -> Lists {
         let y_in: Vec<u32> = (0..ny)
             .filter(|&y| !l.outside(rows[y as usize].1) && !l.outside(rows[y as usize].2))
             .collect();
-        for (z, &(d0, d1)) in slices.iter().enumerate() {
+        for (z, &(d0, d1)) in (0u32..).zip(&slices) {
             // View depth d = -z: d >= d0 is (0, 0, -1) . p - d0 >= 0, d <= d1 the other side.
             if l.outside(DVec4::new(0.0, 0.0, -1.0, -d0))
                 || (d1.is_finite() && l.outside(DVec4::new(0.0, 0.0, 1.0, d1)))
@@ -197,20 +181,11 @@ pub fn cluster_on_grid(frame: &Frame, grid: &Grid) -> Lists {
             }
             for &y in &y_in {
                 for &x in &x_in {
-                    if d1.is_finite() {
-                        let (xs, ys) = (cols[x as usize].0, rows[y as usize].0);
-                        let (lo, hi) = cell_box(&view_from_clip, xs, ys, (d0, d1));
-                        if !l.meets_box(lo, hi) {
-                            continue;
-                        }
+                    let b = ((z * ny + y) * nx + x) as usize;
+                    if boxes[b].is_some_and(|(lo, hi)| !l.meets_box(lo, hi)) {
+                        continue;
                     }
-                    let z = z as u64;
-                    let (x, y) = (u64::from(x), u64::from(y));
-                    let (cx, cy, cz) = (u64::from(nx), u64::from(ny), u64::from(nz));
-                    let c = match grid.order {
-                        CellOrder::XFastest => (z * cy + y) * cx + x,
-                        CellOrder::ZFastest => (y * cx + x) * cz + z,
-                    };
+                    let c = grid.index(u64::from(x), u64::from(y), u64::from(z));
                     cells[c as usize].push(i as u32);
                 }
             }
@@ -235,6 +210,7 @@ pub fn cluster_on_grid(frame: &Frame, grid: &Grid) -> Lists {
 
 #[cfg(test)]
 mod tests {
+    use super::super::grid::{CellOrder, Slicing};
     use super::*;
     use glam::Vec3;
 
