@@ -63,56 +63,13 @@ pub(crate) enum HdrName {
 }
 
 pub(crate) fn render(args: &RenderArgs) -> Result<()> {
-    if !(args.exposure.is_finite() && args.exposure > 0.0) {
-        bail!("invalid --exposure {}: a finite value > 0", args.exposure);
-    }
-    if args.export.is_some()
-        && matches!(
-            args.backend,
-            BackendName::Reference | BackendName::NaiveForward
-        )
-    {
-        bail!(
-            "--export needs lists: use --backend forward, deferred or deferred-stored-position \
-             (--backend {} culls nothing)",
-            clap::ValueEnum::to_possible_value(&args.backend)
-                .map_or_else(String::new, |v| v.get_name().to_owned())
-        );
-    }
+    validate(args)?;
     let samples = args.msaa;
-    if args.hdr == HdrName::F16 && args.backend == BackendName::Reference {
-        bail!(
-            "--hdr f16 with --backend reference: the reference keeps 32 bits (a backend, such \
-             as --backend deferred, or --hdr f32)"
-        );
-    }
-    let hdr = match args.hdr {
-        HdrName::F32 => HdrFormat::F32,
-        HdrName::F16 => HdrFormat::F16,
-    };
-    if args.scene.glass && args.export.is_some() {
-        bail!(
-            "--export with --glass: exports hold one depth a pixel, not glass; export without --glass"
-        );
-    }
-    if samples > 1 && args.export.is_some() {
-        bail!(
-            "--export with --msaa {samples}: exports hold one depth a pixel; export without --msaa"
-        );
-    }
-    if samples > 1 && args.backend == BackendName::DeferredStoredPosition {
-        bail!(
-            "invalid --msaa {samples} with --backend deferred-stored-position: the stored \
-             position takes no MSAA (use --backend deferred, forward, naive-forward or \
-             reference, or --msaa 1)"
-        );
-    }
     let a = &args.scene;
     let scene = a.build()?;
     let strategy = args.cull.strategy()?;
     let settings = args.cull.settings(&scene.camera)?;
     let ctx = a.gpu()?;
-    let bad_msaa = |e| anyhow::anyhow!("invalid --msaa {samples}: {e}");
     let (w, h) = (a.width, a.height);
     let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
     // Stochastic ranges before any renderer: they mark the lights general.
@@ -139,27 +96,150 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     if draws.is_some() {
         print_stochastic(a, frames);
     }
-    let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, samples).map_err(bad_msaa)?;
+    let run = Run {
+        args,
+        ctx: &ctx,
+        scene: &scene,
+        gpu_scene: &gpu_scene,
+        strategy: &strategy,
+        settings: &settings,
+        frames,
+        draw: &draw,
+        stochastic: draws.is_some(),
+    };
+    let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, samples)
+        .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
     let mut outputs: Vec<(PathBuf, image::RgbImage)> = Vec::new();
     let (name, image) = if args.backend == BackendName::Reference {
         let (mean, last) = reference_frames(&ctx, &reference, &gpu_scene, (w, h), frames, &draw)?;
         print_timings(last.timings.as_deref());
         ("reference", mean)
     } else {
+        let (name, image, heat) = run.backend(&dir)?;
+        outputs.push(heat);
+        (name, image)
+    };
+    let bad = image.non_finite_count();
+    if bad > 0 {
+        bail!("the render holds {bad} NaN/Inf pixels; nothing was written");
+    }
+    if args.compare {
+        if let Some(flip) = run.compare(&reference, &image)? {
+            outputs.push((dir.join(format!("flip_{name}.png")), flip));
+        }
+    }
+    let png = dir.join(format!("{name}.png"));
+    let exr = dir.join(format!("{name}.exr"));
+    image.write_exr(&exr)?;
+    image.write_png(&png, args.exposure)?;
+    for (path, img) in &outputs {
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        })?;
+        println!("wrote {}", path.display());
+    }
+    println!("wrote {} and {}", png.display(), exr.display());
+    Ok(())
+}
+
+/// What every stage of a `render` run reads.
+struct Run<'a> {
+    args: &'a RenderArgs,
+    ctx: &'a GpuContext,
+    scene: &'a manylights_scene::Scene,
+    gpu_scene: &'a GpuScene,
+    strategy: &'a manylights_cull::Strategy,
+    settings: &'a manylights_cull::CullSettings,
+    frames: u32,
+    draw: &'a dyn Fn(u32) -> Result<()>,
+    stochastic: bool,
+}
+
+/// The options that cannot go together, refused before any work.
+fn validate(args: &RenderArgs) -> Result<()> {
+    if !(args.exposure.is_finite() && args.exposure > 0.0) {
+        bail!("invalid --exposure {}: a finite value > 0", args.exposure);
+    }
+    if args.export.is_some()
+        && matches!(
+            args.backend,
+            BackendName::Reference | BackendName::NaiveForward
+        )
+    {
+        bail!(
+            "--export needs lists: use --backend forward, deferred or deferred-stored-position \
+             (--backend {} culls nothing)",
+            clap::ValueEnum::to_possible_value(&args.backend)
+                .map_or_else(String::new, |v| v.get_name().to_owned())
+        );
+    }
+    if args.hdr == HdrName::F16 && args.backend == BackendName::Reference {
+        bail!(
+            "--hdr f16 with --backend reference: the reference keeps 32 bits (a backend, such \
+             as --backend deferred, or --hdr f32)"
+        );
+    }
+    if args.scene.glass && args.export.is_some() {
+        bail!(
+            "--export with --glass: exports hold one depth a pixel, not glass; export without --glass"
+        );
+    }
+    if args.msaa > 1 && args.export.is_some() {
+        bail!(
+            "--export with --msaa {}: exports hold one depth a pixel; export without --msaa",
+            args.msaa
+        );
+    }
+    if args.msaa > 1 && args.backend == BackendName::DeferredStoredPosition {
+        bail!(
+            "invalid --msaa {} with --backend deferred-stored-position: the stored \
+             position takes no MSAA (use --backend deferred, forward, naive-forward or \
+             reference, or --msaa 1)",
+            args.msaa
+        );
+    }
+    Ok(())
+}
+
+impl Run<'_> {
+    /// The backend's frames over the strategy: their mean image, its name, and the
+    /// lights-per-pixel heatmap of the last frame (whose lists, counts and exports are
+    /// printed and written).
+    fn backend(
+        &self,
+        dir: &std::path::Path,
+    ) -> Result<(&'static str, HdrImage, (PathBuf, image::RgbImage))> {
+        let (args, ctx, scene, gpu_scene, frames, draw) = (
+            self.args,
+            self.ctx,
+            self.scene,
+            self.gpu_scene,
+            self.frames,
+            self.draw,
+        );
+        let (w, h) = (args.scene.width, args.scene.height);
+        let samples = args.msaa;
+        let (strategy, settings) = (self.strategy, self.settings);
+        let hdr = match args.hdr {
+            HdrName::F32 => HdrFormat::F32,
+            HdrName::F16 => HdrFormat::F16,
+        };
         let backend = match args.backend {
             BackendName::Forward => Backend::Forward,
             BackendName::Deferred => Backend::Deferred,
             BackendName::DeferredStoredPosition => Backend::DeferredStoredPosition,
             BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
-        let renderer = Renderer::with_format(&ctx, &gpu_scene, samples, hdr).map_err(bad_msaa)?;
+        let renderer = Renderer::with_format(ctx, gpu_scene, samples, hdr)
+            .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
         // With --accumulate, the frames' mean; lists, counts and exports are the last
         // frame's (whose ranges the lights hold afterwards).
         let mut sum = ImageSum::default();
         let mut last = None;
         for f in 0..frames {
             draw(f)?;
-            let out = renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))?;
+            let out = renderer.render(ctx, gpu_scene, backend, strategy, settings, (w, h))?;
             sum.add(&out.color);
             last = Some(out);
         }
@@ -177,7 +257,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         let per_pixel: Vec<u32> = match &out.lists {
             Some(lists) => renderer
                 .culler
-                .lights_per_pixel(&ctx, &gpu_scene, &out.depth, lists)?,
+                .lights_per_pixel(ctx, gpu_scene, &out.depth, lists)?,
             None => out
                 .color
                 .data
@@ -214,9 +294,9 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 scene.lights.len() as u32,
             );
             let files = manylights_lab::export::export_run(
-                &ctx,
+                ctx,
                 &renderer.culler,
-                &gpu_scene,
+                gpu_scene,
                 &out.depth,
                 lists,
                 &frame,
@@ -226,32 +306,47 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
             println!("exported {} files to {}", files.len(), export.display());
         }
         let heat = dir.join(format!("heatmap_lights_per_pixel_{}.png", backend.name()));
-        outputs.push((heat, heatmap::pixels(&per_pixel, w, h, max)));
-        (backend.name(), sum.mean().expect("at least one frame"))
-    };
-    let bad = image.non_finite_count();
-    if bad > 0 {
-        bail!("the render holds {bad} NaN/Inf pixels; nothing was written");
+        Ok((
+            backend.name(),
+            sum.mean().expect("at least one frame"),
+            (heat, heatmap::pixels(&per_pixel, w, h, max)),
+        ))
     }
-    if args.compare {
+
+    /// `--compare`: the errors against the reference over the same draws and against
+    /// infinite range, printed; with `--flip-map`, FLIP's map against the reference.
+    fn compare(
+        &self,
+        reference: &ReferenceRenderer,
+        image: &HdrImage,
+    ) -> Result<Option<image::RgbImage>> {
+        let (args, ctx, scene, gpu_scene, frames, draw) = (
+            self.args,
+            self.ctx,
+            self.scene,
+            self.gpu_scene,
+            self.frames,
+            self.draw,
+        );
+        let (w, h) = (args.scene.width, args.scene.height);
         // The reference over the same frames' draws (the same estimate, no culling), then
         // infinite range (no draws: ranges do not enter it).
         let (windowed, windowed_frame) =
-            reference_frames(&ctx, &reference, &gpu_scene, (w, h), frames, &draw)?;
+            reference_frames(ctx, reference, gpu_scene, (w, h), frames, draw)?;
         let infinite = manylights_shade::infinite::infinite_image(
-            &ctx,
+            ctx,
             (
-                &reference,
-                &manylights_shade::InfiniteReference::new(&ctx, &gpu_scene),
+                reference,
+                &manylights_shade::InfiniteReference::new(ctx, gpu_scene),
             ),
-            &gpu_scene,
+            gpu_scene,
             &scene.camera,
             (w, h),
             Some(&windowed_frame),
         )?;
-        // The same cut-off at the output's exposure; infinite range at the exposure adapted to
-        // its reference (accuracy::exposure_of).
-        let cutoff = if draws.is_some() {
+        // The same cut-off at the output's exposure; infinite range at the exposure adapted
+        // to its reference (accuracy::exposure_of).
+        let cutoff = if self.stochastic {
             "reference (same draws)"
         } else {
             "reference"
@@ -267,7 +362,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 accuracy::exposure_of(&infinite),
             ),
         ] {
-            let e = accuracy::compare(&image, r, exposure);
+            let e = accuracy::compare(image, r, exposure);
             println!(
                 "  vs {label:<25} max abs {:.3e} ({:.2e} of peak), RMSE {:.3e}, PSNR {:.2} dB, mean FLIP {:.5} (exposure {:.3}), energy {:+.4}",
                 e.max_abs_error,
@@ -279,26 +374,10 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
                 e.energy_error
             );
         }
-        if args.flip_map {
-            outputs.push((
-                dir.join(format!("flip_{name}.png")),
-                accuracy::flip_map(&image, &windowed, args.exposure),
-            ));
-        }
+        Ok(args
+            .flip_map
+            .then(|| accuracy::flip_map(image, &windowed, args.exposure)))
     }
-    let png = dir.join(format!("{name}.png"));
-    let exr = dir.join(format!("{name}.exr"));
-    image.write_exr(&exr)?;
-    image.write_png(&png, args.exposure)?;
-    for (path, img) in &outputs {
-        write_atomic(path, |f| {
-            img.write_to(f, image::ImageFormat::Png)
-                .map_err(|e| e.to_string())
-        })?;
-        println!("wrote {}", path.display());
-    }
-    println!("wrote {} and {}", png.display(), exr.display());
-    Ok(())
 }
 
 /// The brute-force reference over frames `0..frames`, each after `draw` drew its ranges: the

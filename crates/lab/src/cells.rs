@@ -260,7 +260,6 @@ impl Experiment {
 
     /// The cells, in sweep order.
     pub fn cells(&self) -> Vec<Cell> {
-        type Apply = Box<dyn Fn(&mut Config) -> String>;
         let s = &self.sweep;
         let mut axes: Vec<Vec<Apply>> = Vec::new();
         macro_rules! axis {
@@ -276,27 +275,7 @@ impl Experiment {
                 }
             };
         }
-        axis!(s.settings, |c: &mut Config, v: Setting| {
-            if let Some(scene) = v.scene {
-                c.scene = scene;
-            }
-            if let Some(lights) = v.lights {
-                c.lights = lights;
-            }
-            if let Some(camera) = v.camera {
-                c.camera = camera;
-            }
-            if let Some(r) = v.resolution {
-                c.resolution = r;
-            }
-            if let Some(s) = v.exact_stride {
-                c.exact_stride = s;
-            }
-            if let Some(b) = v.cutoff_reference {
-                c.cutoff_reference = b;
-            }
-            format!("setting={}", v.label)
-        });
+        axis!(s.settings, apply_setting);
         axis!(s.scene, |c: &mut Config, v: SceneSpec| {
             c.scene = v;
             format!("scene={}", c.scene.label())
@@ -322,8 +301,6 @@ impl Experiment {
             c.lights.radius = v;
             radius_label(&v)
         });
-        let mut cam_i = 0usize;
-        let _ = &mut cam_i;
         axis!(s.camera, |c: &mut Config, v: CameraSpec| {
             let label = match &v {
                 CameraSpec::Default => "default".to_string(),
@@ -388,69 +365,8 @@ impl Experiment {
                 v.map_or("none".into(), |x| format!("{x:?}").to_lowercase())
             )
         });
-        axis!(s.variants, |c: &mut Config, v: Variant| {
-            if let Some(st) = v.strategy {
-                c.strategy = st;
-            }
-            if let Some(b) = v.backend {
-                c.backend = b;
-            }
-            if v.capacity.is_some() {
-                c.capacity = v.capacity;
-            }
-            if v.mask_budget.is_some() {
-                c.mask_budget = v.mask_budget;
-            }
-            if let Some(b) = v.tile_boxes {
-                c.tile_boxes = b;
-            }
-            if let Some(m) = v.motion {
-                c.lights.motion = m;
-            }
-            if let Some(u) = v.light_update {
-                c.light_update = u;
-            }
-            if let Some(n) = v.msaa {
-                c.msaa = n;
-            }
-            let auto = format!(
-                "{}+{}",
-                c.backend.name(),
-                if c.backend == Backend::NaiveForward {
-                    "none".into()
-                } else {
-                    strategy_label(&c.strategy)
-                }
-            );
-            format!("variant={}", v.label.unwrap_or(auto))
-        });
-        let mut cells = vec![(self.config.clone(), Vec::<String>::new())];
-        for axis in &axes {
-            let mut next = Vec::with_capacity(cells.len() * axis.len());
-            for (cfg, names) in &cells {
-                for apply in axis {
-                    let mut c = cfg.clone();
-                    let label = apply(&mut c);
-                    let mut n = names.clone();
-                    n.push(label);
-                    next.push((c, n));
-                }
-            }
-            cells = next;
-        }
-        cells
-            .into_iter()
-            .enumerate()
-            .map(|(index, (config, names))| Cell {
-                index,
-                name: if names.is_empty() {
-                    "base".into()
-                } else {
-                    names.join(",")
-                },
-                config,
-            })
-            .collect()
+        axis!(s.variants, apply_variant);
+        product(&self.config, &axes)
     }
 
     /// A tiny variant for tests: at most 48 x 27 pixels, one frame, no warm-up, at most 256
@@ -534,4 +450,101 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             s
         }
     }
+}
+
+/// One value of a sweep axis: applies it to a configuration and returns its name part.
+type Apply = Box<dyn Fn(&mut Config) -> String>;
+
+/// A setting of the sweep applied to `c`: what it sets, and its name part.
+fn apply_setting(c: &mut Config, v: Setting) -> String {
+    if let Some(scene) = v.scene {
+        c.scene = scene;
+    }
+    if let Some(lights) = v.lights {
+        c.lights = lights;
+    }
+    if let Some(camera) = v.camera {
+        c.camera = camera;
+    }
+    if let Some(r) = v.resolution {
+        c.resolution = r;
+    }
+    if let Some(s) = v.exact_stride {
+        c.exact_stride = s;
+    }
+    if let Some(b) = v.cutoff_reference {
+        c.cutoff_reference = b;
+    }
+    format!("setting={}", v.label)
+}
+
+/// A variant of the sweep applied to `c`: what it sets, and its name part (its label, or
+/// backend+strategy).
+fn apply_variant(c: &mut Config, v: Variant) -> String {
+    if let Some(st) = v.strategy {
+        c.strategy = st;
+    }
+    if let Some(b) = v.backend {
+        c.backend = b;
+    }
+    if v.capacity.is_some() {
+        c.capacity = v.capacity;
+    }
+    if v.mask_budget.is_some() {
+        c.mask_budget = v.mask_budget;
+    }
+    if let Some(b) = v.tile_boxes {
+        c.tile_boxes = b;
+    }
+    if let Some(m) = v.motion {
+        c.lights.motion = m;
+    }
+    if let Some(u) = v.light_update {
+        c.light_update = u;
+    }
+    if let Some(n) = v.msaa {
+        c.msaa = n;
+    }
+    let auto = format!(
+        "{}+{}",
+        c.backend.name(),
+        if c.backend == Backend::NaiveForward {
+            "none".into()
+        } else {
+            strategy_label(&c.strategy)
+        }
+    );
+    format!("variant={}", v.label.unwrap_or(auto))
+}
+
+/// Every combination of the axes' values over `base`, in sweep order (the last axis fastest),
+/// each named by its values' name parts.
+fn product(base: &Config, axes: &[Vec<Apply>]) -> Vec<Cell> {
+    let mut cells = vec![(base.clone(), Vec::<String>::new())];
+    for axis in axes {
+        let mut next = Vec::with_capacity(cells.len() * axis.len());
+        for (cfg, names) in &cells {
+            for apply in axis {
+                let mut c = cfg.clone();
+                let label = apply(&mut c);
+                let mut n = names.clone();
+                n.push(label);
+                next.push((c, n));
+            }
+        }
+        cells = next;
+    }
+    cells
+        .into_iter()
+        .enumerate()
+        .map(|(index, (config, names))| Cell {
+            index,
+            name: if names.is_empty() {
+                "base".into()
+            } else {
+                names.join(",")
+            },
+            config,
+        })
+        .collect()
 }
