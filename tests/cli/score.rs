@@ -417,6 +417,33 @@ fn bevys_committed_lists_score_with_the_false_negative_where_its_tiles_and_looku
     );
 }
 
+/// Bevy's GPU clusterer's lists of the fixture (tests/fixtures/bevy/gpu, made by
+/// referees/bevy-gpu on lavapipe): on the same grid as its CPU clusterer's default lists, they
+/// miss nothing, hold the spot the CPU clusterer misses in the cell the shader reads, and
+/// evaluate fewer lights per light needed.
+#[test]
+fn bevys_gpu_clusterer_on_the_default_grid_misses_nothing() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/bevy");
+    let export = root.join("export");
+    let tmp = tempfile::tempdir().unwrap();
+    let gpu = score(&export, &root.join("gpu"), &tmp.path().join("gpu"));
+    let cpu = score(&export, &root.join("default"), &tmp.path().join("cpu"));
+    assert_eq!(gpu["false_negatives"], 0, "{gpu}");
+    assert_eq!(cpu["false_negatives"], 1, "{cpu}");
+    let ratio = |s: &serde_json::Value| s["false_positive_ratio"].as_f64().unwrap();
+    assert!(ratio(&gpu) < ratio(&cpu), "{gpu} {cpu}");
+    let grid = |name: &str| -> serde_json::Value {
+        serde_json::from_slice(&std::fs::read(root.join(name).join("grid.json")).unwrap()).unwrap()
+    };
+    let (g, c) = (grid("gpu"), grid("default"));
+    assert_eq!((&g["dims"], &g["slicing"]), (&c["dims"], &c["slicing"]));
+    let offsets: Vec<u32> = read_npy(&root.join("gpu/offsets.npy"));
+    let indices: Vec<u32> = read_npy(&root.join("gpu/indices.npy"));
+    // Spot 240 at pixel (97, 47): slice 21, the shader's cell (11, 5) (see the test above).
+    let cell = (5 * 17 + 11) * 24 + 21;
+    assert!(indices[offsets[cell] as usize..offsets[cell + 1] as usize].contains(&240));
+}
+
 /// `--cluster-on-grid`: this workbench's cluster test on Bevy's default grid of the fixture
 /// misses nothing where Bevy's lists miss one pair, and its lists, written in the scoring
 /// format, score the same when read back.
