@@ -494,7 +494,8 @@ fn our_cluster_test_on_bevys_grid_misses_nothing_and_reads_back() {
 }
 
 /// `score-chart`: a referee's scores.csv drawn as figures/scores.svg, a panel a setting, the
-/// sources that miss lights ringed; a file without a needed column is an error naming it.
+/// sources that miss lights ringed, an engine's GPU clusterer in a colour of its own and its
+/// knobs numbered with the others; a file without a needed column is an error naming it.
 #[test]
 fn score_chart_draws_every_setting_and_names_a_missing_column() {
     let tmp = tempfile::tempdir().unwrap();
@@ -505,6 +506,8 @@ fn score_chart_draws_every_setting_and_names_a_missing_column() {
          a,bevy-default,\"bevy, default\",3,3,2.5,10,4,20,100,50.5\n\
          a,bevy-z-12,bevy,0,0,2.7,10,4,20,100,40\n\
          a,manylights-on-bevy-default,ours,0,0,2.2,9,4,18,100,48\n\
+         a,bevy-gpu-default,\"bevy, GPU\",0,0,2.3,9,4,18,100,49\n\
+         a,bevy-gpu-first-slice-1,\"bevy, GPU\",0,0,1.9,8,4,16,100,45\n\
          b,bevy-default,bevy,0,0,4.0,10,2.5,20,100,70\n\
          b,manylights-gather16,ours,0,0,1.3,3,2.5,9,300,120\n",
     )
@@ -518,6 +521,8 @@ fn score_chart_draws_every_setting_and_names_a_missing_column() {
         "\na\n",
         "\nb\n",
         "1 z-12",
+        "2 first-slice-1",
+        "GPU clusterer",
         "gather16",
     ] {
         assert!(svg.contains(text), "`{text}` not in the chart");

@@ -1,7 +1,8 @@
 //! The referee's chart (`manylights score-chart`): every list source of every setting, lights
 //! evaluated per light needed against the lists' memory, in small multiples (a panel a
 //! setting, the same rules as the speed-accuracy charts): colour for who made the lists (the
-//! engine, this workbench's cluster test on the engine's cells, this workbench's strategies),
+//! engine, its second (GPU) clusterer, this workbench's cluster test on the engine's cells, this
+//! workbench's strategies),
 //! shape for the grid, a short label beside each point, a red ring around a source that misses
 //! lights.
 
@@ -91,15 +92,23 @@ fn split_csv(line: &str) -> Vec<String> {
     out
 }
 
-/// Who made a source's lists: its colour and legend name.
+/// Who made a source's lists: its colour and legend name. Sources are named
+/// `manylights-on-GRID`, `manylights-STRATEGY`, `ENGINE-gpu-GRID` or `ENGINE-GRID`.
 fn maker(source: &str) -> (usize, &'static str) {
     if source.starts_with("manylights-on-") {
         (2, "this workbench's cluster test on the engine's cells")
     } else if source.starts_with("manylights-") {
         (1, "this workbench's strategies")
+    } else if source.split('-').nth(1) == Some("gpu") {
+        (3, "the engine's GPU clusterer")
     } else {
         (0, "the engine")
     }
+}
+
+/// Whether `maker`'s colour is an engine's clusterer (its knobs are numbered in the caption).
+fn is_engine(colour: usize) -> bool {
+    colour == 0 || colour == 3
 }
 
 /// A source's grid: its marker and legend name; `label`: the short text beside the point.
@@ -108,6 +117,8 @@ fn grid_of(source: &str) -> (Shape, &'static str, String) {
         .trim_start_matches("manylights-on-")
         .trim_start_matches("manylights-");
     let tail = s.split_once('-').map_or(s, |(_, t)| t);
+    // An engine's second clusterer: ENGINE-gpu-GRID.
+    let tail = tail.strip_prefix("gpu-").unwrap_or(tail);
     if tail == "default" {
         (Shape::Square, "the engine's default grid", "default".into())
     } else if tail.starts_with("xyz") {
@@ -176,7 +187,7 @@ pub(crate) fn draw(rows: &[ScoreRow], path: &Path) -> Result<Layout, LabError> {
     let mut knobs: Vec<String> = Vec::new();
     for r in &shown {
         let (shape, _, text) = grid_of(&r.source);
-        if shape == Shape::TriangleUp && maker(&r.source).0 == 0 && !knobs.contains(&text) {
+        if shape == Shape::TriangleUp && is_engine(maker(&r.source).0) && !knobs.contains(&text) {
             knobs.push(text);
         }
     }
@@ -239,7 +250,7 @@ pub(crate) fn draw(rows: &[ScoreRow], path: &Path) -> Result<Layout, LabError> {
                 }
                 draw_marker(area, (lx, ly), 5, shape, PALETTE[c], true)?;
                 let text = match knobs.iter().position(|k| *k == text) {
-                    Some(i) if c == 0 => (i + 1).to_string(),
+                    Some(i) if is_engine(c) => (i + 1).to_string(),
                     // This workbench's test on the engine's cells: colour and shape say it.
                     _ if c == 2 => String::new(),
                     _ => text,
