@@ -32,7 +32,7 @@ use bevy::ecs::entity::Entity;
 use bevy::light::cluster::{ClusterConfig, ClusterFarZMode, Clusters, GlobalClusterSettings};
 use bevy::math::UVec2;
 use bevy::render::pipelined_rendering::PipelinedRenderingPlugin;
-use bevy::render::renderer::RenderDevice;
+use bevy::render::renderer::{RenderAdapterInfo, RenderDevice};
 use bevy::render::view::Msaa;
 use bevy::render::{RenderApp, RenderPlugin};
 use bevy::transform::components::Transform;
@@ -186,12 +186,13 @@ fn run() -> Result<()> {
         ))
         .id();
     let index = spawn_lights(app.world_mut(), &export.lights);
-    let device = app
-        .sub_app(RenderApp)
-        .world()
-        .resource::<RenderDevice>()
-        .wgpu_device()
-        .clone();
+    let render_world = app.sub_app(RenderApp).world();
+    let device = render_world.resource::<RenderDevice>().wgpu_device().clone();
+    let info: &wgpu::AdapterInfo = render_world.resource::<RenderAdapterInfo>();
+    println!(
+        "adapter: {} ({:?}, {} {})",
+        info.name, info.backend, info.driver, info.driver_info
+    );
 
     let mut frames: Vec<Frame> = Vec::new();
     for frame in 1..=opts.frames {
