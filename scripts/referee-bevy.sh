@@ -16,7 +16,8 @@
 # built if missing), BEVY_GPU_REFEREE (the GPU clusterer's adapter; default
 # referees/bevy-gpu/target/release/manylights-bevy-gpu-referee, built if missing),
 # MANYLIGHTS_ADAPTER (the GPU that renders the frames; Bevy picks its own), JOBS (settings
-# scored at a time; default 1).
+# scored at a time; default 1), RESUME=1 (keep the lists and scores a stopped run finished; by
+# default every source is made and scored again).
 #
 # List sources: Bevy's default grid (FixedZ, 4,096 clusters, 24 slices, first slice 5 m, far
 # bound at the previous frame's farthest light); Bevy's fixed XYZ grid of 32 px and 32 slices
@@ -54,6 +55,7 @@ for r in json.load(open(sys.argv[1])):
 PY
 score() { # setting source export lists [score's options]
     local dir="$OUT/$1/$2"
+    [ "${RESUME:-0}" = 1 ] && [ -f "$dir/score.json" ] && return
     mkdir -p "$dir"
     "$M" score --export "$3" --lists "$4" --out "$dir" "${@:5}" > "$dir/score.txt"
     echo "$1 $2: $(grep -m1 'false negatives' "$dir/score.txt")"
@@ -64,6 +66,11 @@ setting_sources() { # setting export_dir width height
     xyz="$(( ($3 + 31) / 32 )),$(( ($4 + 31) / 32 )),32"
     while read -r source clusterer args; do
         lists="$OUT/$setting/$source/lists"
+        # The adapters write grid.json last.
+        if [ "${RESUME:-0}" = 1 ] && [ -f "$lists/grid.json" ]; then
+            [ "$clusterer" = gpu-log ] || score "$setting" "$source" "$export_dir" "$lists"
+            continue
+        fi
         adapter=$REF
         [ "$clusterer" = cpu ] || adapter=$GPU_REF
         # shellcheck disable=SC2086
