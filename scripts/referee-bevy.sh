@@ -15,8 +15,8 @@
 # BEVY_REFEREE (the adapter; default referees/bevy/target/release/manylights-bevy-referee,
 # built if missing), BEVY_GPU_REFEREE (the GPU clusterer's adapter; default
 # referees/bevy-gpu/target/release/manylights-bevy-gpu-referee, built if missing),
-# MANYLIGHTS_ADAPTER (the GPU that renders the frames; Bevy picks its own), JOBS (settings
-# scored at a time; default 1), RESUME=1 (keep the lists and scores a stopped run finished; by
+# MANYLIGHTS_ADAPTER (the GPU that renders the frames; Bevy picks its own), JOBS (lists
+# and scores made at a time; default 1), RESUME=1 (keep the lists and scores a stopped run finished; by
 # default every source is made and scored again).
 #
 # List sources: Bevy's default grid (FixedZ, 4,096 clusters, 24 slices, first slice 5 m, far
@@ -60,23 +60,40 @@ score() { # setting source export lists [score's options]
     "$M" score --export "$3" --lists "$4" --out "$dir" "${@:5}" > "$dir/score.txt"
     echo "$1 $2: $(grep -m1 'false negatives' "$dir/score.txt")"
 }
-# One setting's frame handed to every source below, and scored.
-setting_sources() { # setting export_dir width height
-    local setting=$1 export_dir=$2 xyz lists adapter
-    xyz="$(( ($3 + 31) / 32 )),$(( ($4 + 31) / 32 )),32"
-    while read -r source clusterer args; do
-        lists="$OUT/$setting/$source/lists"
-        # The adapters write grid.json last.
-        if [ "${RESUME:-0}" = 1 ] && [ -f "$lists/grid.json" ]; then
-            [ "$clusterer" = gpu-log ] || score "$setting" "$source" "$export_dir" "$lists"
-            continue
-        fi
-        adapter=$REF
-        [ "$clusterer" = cpu ] || adapter=$GPU_REF
-        # shellcheck disable=SC2086
-        "$adapter" "$export_dir" "$lists" $args > "$OUT/$setting/$source.adapter.txt" 2>&1 \
+# One source's lists of a setting's frame, scored; on Bevy's default and XYZ grids also this
+# workbench's cluster test on exactly those cells (the grid's cost apart from the test's).
+source_lists() { # setting export_dir source clusterer [adapter options]
+    local setting=$1 export_dir=$2 source=$3 clusterer=$4 adapter=$REF
+    local lists="$OUT/$setting/$source/lists"
+    [ "$clusterer" = cpu ] || adapter=$GPU_REF
+    # The adapters write grid.json last.
+    if [ "${RESUME:-0}" != 1 ] || [ ! -f "$lists/grid.json" ]; then
+        "$adapter" "$export_dir" "$lists" "${@:5}" > "$OUT/$setting/$source.adapter.txt" 2>&1 \
             || { cat "$OUT/$setting/$source.adapter.txt" >&2; exit 1; }
-        [ "$clusterer" = gpu-log ] || score "$setting" "$source" "$export_dir" "$lists"
+    fi
+    [ "$clusterer" = gpu-log ] && return
+    score "$setting" "$source" "$export_dir" "$lists"
+    case $source in
+        bevy-default | bevy-xyz-32px-32)
+            score "$setting" "manylights-on-$source" "$export_dir" "$lists" --cluster-on-grid ;;
+    esac
+}
+# JOBS lists and scores at a time (each in the background; a failure stops the script).
+JOBS=${JOBS:-1}
+throttle() { while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do wait -n; done; }
+declare -A seen
+while IFS=$'\t' read -r setting variant id w h; do
+    export_dir="$RUN/cells/$id"
+    throttle
+    score "$setting" "manylights-$variant" "$export_dir" "$export_dir/lists" < /dev/null &
+    [ -n "${seen[$setting]:-}" ] && continue
+    seen[$setting]=1
+    mkdir -p "$OUT/$setting"
+    xyz="$(( (w + 31) / 32 )),$(( (h + 31) / 32 )),32"
+    while read -r source clusterer args; do
+        throttle
+        # shellcheck disable=SC2086
+        source_lists "$setting" "$export_dir" "$source" "$clusterer" $args < /dev/null &
     done <<SOURCES
 bevy-default cpu
 bevy-xyz-32px-32 cpu --xyz $xyz
@@ -96,22 +113,6 @@ bevy-gpu-z-48 gpu --z-slices 48
 bevy-gpu-far-camera gpu --far-z camera
 bevy-gpu-initial-capacities gpu-log --z-slice-capacity 1024 --index-capacity 65536
 SOURCES
-    # This workbench's cluster test on exactly Bevy's cells: the grid's cost apart from the test's.
-    for grid in bevy-default bevy-xyz-32px-32; do
-        score "$setting" "manylights-on-$grid" "$export_dir" "$OUT/$setting/$grid/lists" --cluster-on-grid
-    done
-}
-# JOBS settings at a time (each in the background; a failure stops the script).
-JOBS=${JOBS:-1}
-declare -A seen
-while IFS=$'\t' read -r setting variant id w h; do
-    export_dir="$RUN/cells/$id"
-    score "$setting" "manylights-$variant" "$export_dir" "$export_dir/lists" < /dev/null
-    [ -n "${seen[$setting]:-}" ] && continue
-    seen[$setting]=1
-    mkdir -p "$OUT/$setting"
-    while [ "$(jobs -rp | wc -l)" -ge "$JOBS" ]; do wait -n; done
-    setting_sources "$setting" "$export_dir" "$w" "$h" < /dev/null &
 done < "$OUT/cells.tsv"
 for job in $(jobs -p); do wait "$job"; done
 python3 - "$OUT" <<'PY'
