@@ -8,11 +8,18 @@ use manylights_bevy_referee::Result;
 const CLUSTER_WORDS: usize = 8;
 
 /// One frame's lists: each cluster's lights (the export's indices, ascending).
+#[cfg_attr(test, derive(Clone))]
 pub struct Frame {
     pub dims: UVec3,
     pub near: f32,
     pub far: f32,
     pub lists: Vec<Vec<u32>>,
+    /// Whether Bevy's next frame slices to the same far bound (set by the caller): under
+    /// `ClusterFarZMode::MaxClusterableObjectRange` Bevy takes it from the farthest light it
+    /// read back from an earlier frame, which lags the lights by two frames.
+    pub steady_far: bool,
+    /// The export's lights in Bevy's light buffer (Bevy leaves out those it finds invisible).
+    pub held: usize,
     /// Entries the counts ask for (lights only).
     pub entries: u64,
     /// The index list buffer's length.
@@ -23,7 +30,8 @@ pub struct Frame {
 
 impl Frame {
     pub fn same_lists(&self, other: &Frame) -> bool {
-        (self.dims, self.near, self.far) == (other.dims, other.near, other.far)
+        (self.dims, self.near, self.far, self.held)
+            == (other.dims, other.near, other.far, other.held)
             && self.lists == other.lists
     }
 
@@ -92,6 +100,8 @@ pub fn lists_of(
         near: clusters.near,
         far: clusters.far,
         lists,
+        held: ids.iter().flatten().count(),
+        steady_far: false,
         entries,
         capacity: indices.len() as u64,
         dropped,

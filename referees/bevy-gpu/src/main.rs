@@ -13,7 +13,10 @@
 //! raster pass) makes the lists; with `cpu` Bevy's CPU clusterer does, and the same readback
 //! checks this adapter against `referees/bevy`.
 //!
-//! The lists are read back every frame (readback.rs). Frames run until three in a row give the
+//! The lists are read back every frame (readback.rs). Frames run until three in a row, with the
+//! same lights in Bevy's light buffer and some (Bevy extracts them a few frames after they are
+//! spawned, and leaves out those it finds invisible) and the far bound Bevy's next frame will
+//! slice to (it reads the farthest light back from the GPU two frames late), give the
 //! same lists with nothing dropped (at most `--frames`, 16 by default), as an application's
 //! steady state; each frame's entries and drops are printed. Bevy sizes its GPU lists from the
 //! previous frames (`GlobalClusterGpuSettings`): entries past the index list's capacity are
@@ -128,9 +131,25 @@ fn bevy_app(capture: &Capture) -> App {
 /// (the export fixture's lists do, at frames 3 to 5); three alike cannot.
 const SETTLED: usize = 3;
 
+/// The far bound Bevy's next frame slices to (bevy_light 0.20.1, `assign_objects_to_clusters`;
+/// 1,000 m, its `DEFAULT_FAR_DEPTH`, before any readback). At Bevy's first frames it reads back
+/// no light, and the far bound falls to the first slice's depth: a grid of no depth, whose
+/// lists are empty, three frames alike in the export's deep view.
+fn next_far(mode: ClusterFarZMode, clusters: &Clusters) -> f32 {
+    let far = match mode {
+        ClusterFarZMode::MaxClusterableObjectRange => {
+            clusters.last_frame_farthest_z.unwrap_or(1000.0)
+        }
+        ClusterFarZMode::Constant(far) => far,
+    };
+    far.max(clusters.near)
+}
+
 fn settled(frames: &[Frame]) -> bool {
     frames.len() >= SETTLED
         && frames[frames.len() - 1].dropped == 0
+        && frames[frames.len() - 1].held > 0
+        && frames[frames.len() - 1].steady_far
         && frames[frames.len() - SETTLED..]
             .windows(2)
             .all(|w| w[0].same_lists(&w[1]))
@@ -144,6 +163,7 @@ fn run() -> Result<()> {
         args.z_config.far_z_mode = ClusterFarZMode::Constant(export.projection.far);
     }
     let (config, described) = config(&args);
+    let far_mode = args.z_config.far_z_mode;
     let z_slices = match config {
         ClusterConfig::XYZ { dimensions, .. } => dimensions.z,
         ClusterConfig::FixedZ { z_slices, .. } => z_slices,
@@ -187,7 +207,10 @@ fn run() -> Result<()> {
         .id();
     let index = spawn_lights(app.world_mut(), &export.lights);
     let render_world = app.sub_app(RenderApp).world();
-    let device = render_world.resource::<RenderDevice>().wgpu_device().clone();
+    let device = render_world
+        .resource::<RenderDevice>()
+        .wgpu_device()
+        .clone();
     let info: &wgpu::AdapterInfo = render_world.resource::<RenderAdapterInfo>();
     println!(
         "adapter: {} ({:?}, {} {})",
@@ -195,6 +218,7 @@ fn run() -> Result<()> {
     );
 
     let mut frames: Vec<Frame> = Vec::new();
+    let (mut settled_at, mut lights_from) = (None, None);
     for frame in 1..=opts.frames {
         app.update();
         let Some(captured) = capture.0.lock().unwrap().take() else {
@@ -212,26 +236,39 @@ fn run() -> Result<()> {
             .world()
             .get::<Clusters>(camera)
             .ok_or("the camera has no Clusters: LightPlugin did not run")?;
-        let f = lists_of(&counts, &indices, &ids, clusters)?;
+        let mut f = lists_of(&counts, &indices, &ids, clusters)?;
+        f.steady_far = next_far(far_mode, clusters) == clusters.far;
+        let held = f.held;
         println!(
-            "frame {frame}: {} x {} x {} clusters, slices [0, {}) then to {}, {} entries, \
-             index list capacity {}, {} dropped",
-            f.dims.x, f.dims.y, f.dims.z, f.near, f.far, f.entries, f.capacity, f.dropped
+            "frame {frame}: Bevy holds {held} of {} lights, {} x {} x {} clusters, slices \
+             [0, {}) then to {}, {} entries, index list capacity {}, {} dropped",
+            export.lights.len(),
+            f.dims.x,
+            f.dims.y,
+            f.dims.z,
+            f.near,
+            f.far,
+            f.entries,
+            f.capacity,
+            f.dropped
         );
+        if held > 0 {
+            lights_from.get_or_insert(frame);
+        }
         frames.push(f);
         if settled(&frames) {
+            settled_at = Some(frame);
             break;
         }
     }
-    if !settled(&frames) {
+    let (Some(settled_at), Some(lights_from)) = (settled_at, lights_from) else {
         return Err(format!(
-            "Bevy's lists did not settle within {} frames ({SETTLED} frames alike, nothing \
-             dropped); --frames runs more",
+            "Bevy's lists did not settle within {} frames ({SETTLED} frames alike, the same \
+             lights in Bevy's buffer and some, nothing dropped); --frames runs more",
             opts.frames
         ));
-    }
-    let n = frames.len();
-    let last = &frames[n - 1];
+    };
+    let last = &frames[frames.len() - 1];
     let (offsets, indices) = last.csr();
     let source = match opts.clustering {
         Clustering::Gpu => format!("bevy_pbr 0.20.1, GPU clustering, {described}"),
@@ -242,10 +279,14 @@ fn run() -> Result<()> {
     write_lists(
         &args.out, &source, &export, last.dims, last.near, last.far, &offsets, &indices,
     )?;
-    let first = &frames[0];
+    let first = frames
+        .iter()
+        .find(|f| f.held > 0)
+        .expect("a frame with lights");
     println!(
         "bevy ({:?} clustering): {} x {} x {} clusters, slices [0, {}) then to {}; {} lights, \
-         {} entries; settled at frame {} (the first frame's lists had {} entries, {} dropped)",
+         {} entries; settled at frame {settled_at}; lights in Bevy's buffer from frame \
+         {lights_from} (whose lists had {} entries, {} dropped)",
         opts.clustering,
         last.dims.x,
         last.dims.y,
@@ -254,7 +295,6 @@ fn run() -> Result<()> {
         last.far,
         export.lights.len(),
         indices.len(),
-        n,
         first.entries - first.dropped,
         first.dropped
     );
@@ -274,6 +314,39 @@ fn main() -> std::process::ExitCode {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bevy::math::UVec3;
+
+    fn frame(far: f32, entries: u32, held: usize, steady_far: bool, dropped: u64) -> Frame {
+        Frame {
+            dims: UVec3::new(2, 1, 3),
+            near: 5.0,
+            far,
+            lists: vec![vec![0; entries as usize]; 6],
+            held,
+            steady_far,
+            entries: u64::from(entries) * 6,
+            capacity: 1 << 16,
+            dropped,
+        }
+    }
+
+    /// Three frames alike are a steady state only with lights in Bevy's buffer, nothing
+    /// dropped, and the far bound Bevy's next frame keeps: the empty lists of Bevy's first
+    /// frames (no lights yet, or a far bound fallen to the first slice) are not.
+    #[test]
+    fn settling_needs_three_frames_alike_with_lights_and_a_steady_far_bound() {
+        let empty = frame(5.0, 0, 10, false, 0);
+        let real = frame(24.0, 3, 10, true, 0);
+        assert!(settled(&[real.clone(), real.clone(), real.clone()]));
+        assert!(!settled(&[real.clone(), real.clone()]));
+        assert!(!settled(&[empty.clone(), empty.clone(), empty]));
+        let none = frame(24.0, 0, 0, true, 0);
+        assert!(!settled(&[none.clone(), none.clone(), none]));
+        let dropped = frame(24.0, 3, 10, true, 7);
+        assert!(!settled(&[real.clone(), real.clone(), dropped]));
+        let other = frame(24.0, 2, 10, true, 0);
+        assert!(!settled(&[other, real.clone(), real]));
+    }
 
     #[test]
     fn the_options_are_this_adapters_and_the_rest_are_the_grids() {
