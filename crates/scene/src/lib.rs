@@ -13,6 +13,7 @@ pub mod camera;
 pub mod error;
 pub mod generate;
 pub mod gltf_import;
+pub mod hierarchy;
 pub mod light;
 pub mod material;
 pub mod mesh;

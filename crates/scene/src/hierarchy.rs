@@ -1,0 +1,346 @@
+//! The lighting grid hierarchy (C. Yuksel and C. Yuksel, "Lighting Grid Hierarchy for
+//! Self-illuminating Explosions", TOG 36(4), 2017; D. Lin and C. Yuksel, "Real-Time Rendering
+//! with Lighting Grid Hierarchy", I3D 2019), in f64: the oracle of the hierarchy light model
+//! (issue 48). A shading point takes the lights near it as they are and far ones from coarse
+//! aggregates, so every light it evaluates is a sphere of bounded range and the estimate is
+//! deterministic, with a bias that shrinks as `alpha` grows.
+//!
+//! Levels, with `h` the spacing and `r_l = alpha h 2^l`:
+//! - level 0 is the point lights themselves;
+//! - level `l >= 1` holds lights on the grid of spacing `h 2^(l-1)`, with nodes at integer
+//!   multiples of it in world space (so the grids nest and a light that moves changes only its
+//!   own nodes). Every point light spreads its power (colour x intensity) to the 8 nodes of the
+//!   cell it lies in with trilinear weights; a node's light sits at the mean of the positions
+//!   it gathered, weighted by trilinear weight times power (the sum of the power's channels),
+//!   and carries the weighted sum of their powers. As in the authors' implementation
+//!   (cyCodeBase, `cyLightingGrid.h`), every level gathers from the point lights themselves,
+//!   not from the level below; the position is power-weighted as issue 48 states (the
+//!   implementation weights by the trilinear weight alone: the same for lights of equal power).
+//! - levels are added until one holds at most `top_lights` lights: that is the last level.
+//!
+//! Blending (the implementation's, a partition of unity over the levels at every distance `d`
+//! from a level's light): level 0 has weight 1 up to `r_0`, falling linearly to 0 at `2 r_0`;
+//! a middle level `l` rises linearly from 0 at `r_(l-1)` to 1 at `r_l` and falls to 0 at
+//! `2 r_l = r_(l+1)`; the last level rises from `r_(l-1)` to `r_l` and stays 1 beyond. So a
+//! level's light is a sphere of range `2 r_l` (the last level's unbounded) that contributes
+//! nothing inside `r_(l-1)`; adjacent levels' weights sum to 1, so a single light, which every
+//! level places at its own position with its whole power, is exact at every distance.
+//!
+//! Spot lights are not aggregated: they stay as they are, with their cones, at every distance
+//! (weight 1 at every level's band; what a spot-heavy scene costs is theirs).
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+
+use crate::light::{Light, LightKind};
+
+/// The hierarchy's parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HierarchyParams {
+    /// The accuracy parameter: level `l`'s band ends at `2 alpha h 2^l`. At least 1.
+    pub alpha: f64,
+    /// The finest grid's spacing `h`, metres.
+    pub spacing: f64,
+    /// The last level holds at most this many lights.
+    pub top_lights: usize,
+}
+
+/// A light of a level: its position and its power (colour x intensity).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelLight {
+    /// Where it is: a point light's position, or an aggregate's power-weighted mean.
+    pub position: DVec3,
+    /// Its power: a point light's colour x intensity, or the weighted sum of those gathered.
+    pub power: DVec3,
+}
+
+/// The hierarchy of a set of lights.
+#[derive(Clone, Debug)]
+pub struct Hierarchy {
+    /// What it was built with.
+    pub params: HierarchyParams,
+    /// `levels[0]`: the point lights; `levels[l]`: the aggregates on the grid of spacing
+    /// `h 2^(l-1)`, in the order of their nodes (z, then y, then x, ascending).
+    pub levels: Vec<Vec<LevelLight>>,
+    /// The spot lights, as they are.
+    pub spots: Vec<Light>,
+}
+
+/// Levels at most (a level's grid doubles its spacing, so 2^24 h spans any scene).
+const MAX_LEVELS: usize = 24;
+
+fn power(light: &Light) -> DVec3 {
+    light.color.as_dvec3() * f64::from(light.intensity)
+}
+
+/// One level's lights: every point light spread over the 8 nodes of its cell of `spacing`.
+fn level(points: &[LevelLight], spacing: f64) -> Vec<LevelLight> {
+    // Per node: the weights' sum (trilinear x power), the weighted position and the power.
+    let mut nodes: BTreeMap<(i64, i64, i64), (f64, DVec3, DVec3)> = BTreeMap::new();
+    for l in points {
+        let u = l.position / spacing;
+        let base = u.floor();
+        let f = u - base;
+        let scalar = l.power.x + l.power.y + l.power.z;
+        for corner in 0..8 {
+            let pick = |bit: usize, t: f64| if corner & bit != 0 { t } else { 1.0 - t };
+            let w = pick(1, f.x) * pick(2, f.y) * pick(4, f.z);
+            if w == 0.0 {
+                continue;
+            }
+            let key = (
+                base.z as i64 + i64::from(corner & 4 != 0),
+                base.y as i64 + i64::from(corner & 2 != 0),
+                base.x as i64 + i64::from(corner & 1 != 0),
+            );
+            let n = nodes.entry(key).or_insert((0.0, DVec3::ZERO, DVec3::ZERO));
+            n.0 += w * scalar;
+            n.1 += w * scalar * l.position;
+            n.2 += w * l.power;
+        }
+    }
+    nodes
+        .into_values()
+        .filter(|(weight, _, _)| *weight > 0.0)
+        .map(|(weight, position, power)| LevelLight {
+            position: position / weight,
+            power,
+        })
+        .collect()
+}
+
+impl Hierarchy {
+    /// The hierarchy of `lights` (their point lights aggregated, their spots kept).
+    pub fn build(lights: &[Light], params: HierarchyParams) -> Hierarchy {
+        let points: Vec<LevelLight> = lights
+            .iter()
+            .filter(|l| matches!(l.kind, LightKind::Point))
+            .map(|l| LevelLight {
+                position: l.position.as_dvec3(),
+                power: power(l),
+            })
+            .collect();
+        let spots = lights
+            .iter()
+            .filter(|l| matches!(l.kind, LightKind::Spot { .. }))
+            .copied()
+            .collect();
+        let mut levels = vec![points];
+        while levels.last().unwrap().len() > params.top_lights && levels.len() < MAX_LEVELS {
+            let spacing = params.spacing * f64::from(1u32 << (levels.len() - 1));
+            levels.push(level(&levels[0], spacing));
+        }
+        Hierarchy {
+            params,
+            levels,
+            spots,
+        }
+    }
+
+    /// `r_l = alpha h 2^l`.
+    pub fn r(&self, level: usize) -> f64 {
+        self.params.alpha * self.params.spacing * f64::from(1u32 << level)
+    }
+
+    /// Level `level`'s weight at distance `d` from one of its lights.
+    pub fn band(&self, level: usize, d: f64) -> f64 {
+        let last = self.levels.len() - 1;
+        if last == 0 {
+            return 1.0;
+        }
+        let r = self.r(level);
+        let rising = if level == 0 {
+            1.0
+        } else {
+            let r_min = self.r(level - 1);
+            if d <= r_min {
+                return 0.0;
+            }
+            ((d - r_min) / r_min).min(1.0)
+        };
+        let falling = if level == last {
+            1.0
+        } else {
+            (2.0 - d / r).clamp(0.0, 1.0)
+        };
+        rising.min(falling)
+    }
+
+    /// The sphere of level `level`'s lights: what they reach (`None`: unbounded, the last
+    /// level) and the distance inside which they contribute nothing.
+    pub fn sphere(&self, level: usize) -> (Option<f64>, f64) {
+        let last = self.levels.len() - 1;
+        let outer = (level < last).then(|| 2.0 * self.r(level));
+        let inner = if level == 0 { 0.0 } else { self.r(level - 1) };
+        (outer, inner)
+    }
+
+    /// The hierarchy's estimate at `x` of `sum f(light, d) power`, over every level's light
+    /// with its weight (`f` the falloff and whatever the shading multiplies in), and the spots
+    /// as they are (`spot` evaluates one).
+    pub fn estimate(
+        &self,
+        x: DVec3,
+        f: impl Fn(&LevelLight, f64) -> DVec3,
+        spot: impl Fn(&Light) -> DVec3,
+    ) -> DVec3 {
+        let mut sum = DVec3::ZERO;
+        for (level, lights) in self.levels.iter().enumerate() {
+            for l in lights {
+                let d = x.distance(l.position);
+                let w = self.band(level, d);
+                if w > 0.0 {
+                    sum += w * f(l, d);
+                }
+            }
+        }
+        sum + self.spots.iter().map(spot).sum::<DVec3>()
+    }
+
+    /// Each level's total power.
+    pub fn level_power(&self) -> Vec<DVec3> {
+        self.levels
+            .iter()
+            .map(|l| l.iter().map(|l| l.power).sum())
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::light::falloff_infinite;
+    use glam::Vec3;
+
+    fn rng(seed: u64) -> impl FnMut() -> f64 {
+        let mut s = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    fn lights(n: usize, extent: f64, seed: u64) -> Vec<Light> {
+        let mut r = rng(seed);
+        (0..n)
+            .map(|_| {
+                let p = Vec3::new(
+                    (r() * extent) as f32,
+                    (r() * extent * 0.3) as f32,
+                    (r() * extent) as f32,
+                );
+                let c = Vec3::new(0.2 + r() as f32, 0.2 + r() as f32, 0.2 + r() as f32);
+                Light::point(p, 1.0, c, (0.5 + 2.0 * r()) as f32)
+            })
+            .collect()
+    }
+
+    fn params(alpha: f64) -> HierarchyParams {
+        HierarchyParams {
+            alpha,
+            spacing: 0.5,
+            top_lights: 16,
+        }
+    }
+
+    /// The infinite-range sum of the lights' power times the inverse-square falloff.
+    fn exact(lights: &[Light], x: DVec3) -> DVec3 {
+        lights
+            .iter()
+            .map(|l| power(l) * falloff_infinite(x.distance(l.position.as_dvec3())))
+            .sum()
+    }
+
+    fn estimate(h: &Hierarchy, x: DVec3) -> DVec3 {
+        h.estimate(x, |l, d| l.power * falloff_infinite(d), |_| DVec3::ZERO)
+    }
+
+    #[test]
+    fn every_level_holds_the_lights_whole_power() {
+        let ls = lights(3000, 60.0, 1);
+        let h = Hierarchy::build(&ls, params(2.0));
+        assert!(h.levels.len() >= 4, "{} levels", h.levels.len());
+        assert!(h.levels.last().unwrap().len() <= 16);
+        let total: DVec3 = ls.iter().map(power).sum();
+        for (l, p) in h.level_power().iter().enumerate() {
+            assert!(
+                (*p - total).abs().max_element() < 1e-9 * total.max_element(),
+                "level {l}"
+            );
+        }
+        // Coarser grids hold fewer lights (the finest may hold more than the point lights:
+        // up to 8 nodes a light where the spacing is small against their spread).
+        for w in h.levels[1..].windows(2) {
+            assert!(w[1].len() < w[0].len());
+        }
+    }
+
+    #[test]
+    fn the_blending_weights_sum_to_one_at_every_distance() {
+        let h = Hierarchy::build(&lights(3000, 60.0, 2), params(1.5));
+        let n = h.levels.len();
+        for k in 0..20_000 {
+            let d = k as f64 * 0.01;
+            let sum: f64 = (0..n).map(|l| h.band(l, d)).sum();
+            assert!((sum - 1.0).abs() < 1e-12, "d {d}: {sum}");
+            for l in 0..n {
+                let (outer, inner) = h.sphere(l);
+                if outer.is_some_and(|o| d >= o) || (l > 0 && d <= inner) {
+                    assert_eq!(h.band(l, d), 0.0, "level {l} at {d} outside its sphere");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_single_light_is_exact_at_every_distance() {
+        for p in [Vec3::new(0.3, 1.7, -2.2), Vec3::new(100.25, -3.0, 7.5)] {
+            let ls = [Light::point(p, 1.0, Vec3::new(1.0, 0.5, 0.25), 3.0)];
+            // No level is few enough: every level there is.
+            let h = Hierarchy::build(
+                &ls,
+                HierarchyParams {
+                    top_lights: 0,
+                    ..params(1.0)
+                },
+            );
+            assert_eq!(h.levels.len(), MAX_LEVELS);
+            for k in 0..400 {
+                let d = 0.05 * 1.03f64.powi(k);
+                let x = p.as_dvec3() + DVec3::new(0.6, -0.48, 0.64) * d;
+                let (e, got) = (exact(&ls, x), estimate(&h, x));
+                assert!(
+                    (got - e).abs().max_element() <= 1e-9 * e.max_element(),
+                    "at {d}: {got} against {e}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_error_falls_as_alpha_grows() {
+        let ls = lights(2000, 40.0, 4);
+        let mut r = rng(5);
+        let xs: Vec<DVec3> = (0..300)
+            .map(|_| DVec3::new(r() * 40.0, r() * 12.0, r() * 40.0))
+            .collect();
+        let error = |alpha: f64| {
+            let h = Hierarchy::build(&ls, params(alpha));
+            xs.iter()
+                .map(|&x| {
+                    let (e, got) = (exact(&ls, x), estimate(&h, x));
+                    ((got - e).abs() / e).element_sum() / 3.0
+                })
+                .sum::<f64>()
+                / xs.len() as f64
+        };
+        let errors: Vec<f64> = [1.0, 2.0, 4.0, 8.0, 16.0].map(error).to_vec();
+        for w in errors.windows(2) {
+            assert!(w[1] < w[0], "{errors:?}");
+        }
+        assert!(errors[4] < 1e-4 && errors[0] > 1e-3, "{errors:?}");
+    }
+}
