@@ -33,7 +33,8 @@ use std::collections::BTreeMap;
 
 use glam::DVec3;
 
-use crate::light::{Light, LightKind};
+use crate::Material;
+use crate::light::{Light, LightKind, falloff_infinite, shade_with};
 
 /// The hierarchy's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -143,7 +144,7 @@ impl Hierarchy {
         self.params.alpha * self.params.spacing * f64::from(1u32 << level)
     }
 
-    /// Level `level`'s weight at distance `d` from one of its lights.
+    /// Level `level`'s weight at distance `d` from one of its lights (as its [`Band`] has it).
     pub fn band(&self, level: usize, d: f64) -> f64 {
         let last = self.levels.len() - 1;
         if last == 0 {
@@ -205,6 +206,95 @@ impl Hierarchy {
             .map(|l| l.iter().map(|l| l.power).sum())
             .collect()
     }
+}
+
+/// A flattened light's band: its weight at distance `d` is
+/// `min(rising, falling)`, rising from 0 at `inner` to 1 at `r` (1 throughout where `inner` is
+/// 0: level 0) and falling from 1 at `r` to 0 at `2 r` (1 throughout where `r` is infinite: the
+/// last level, and the spots).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Band {
+    /// Where the weight starts to rise (0: it is 1 from the light out).
+    pub inner: f64,
+    /// Where it is 1; it falls to 0 at twice this (infinite: it never falls).
+    pub r: f64,
+}
+
+impl Band {
+    /// The weight at distance `d`.
+    pub fn weight(&self, d: f64) -> f64 {
+        let rising = if self.inner == 0.0 {
+            1.0
+        } else if d <= self.inner {
+            return 0.0;
+        } else {
+            ((d - self.inner) / self.inner).min(1.0)
+        };
+        rising.min((2.0 - d / self.r).clamp(0.0, 1.0))
+    }
+
+    /// What the band reaches: `2 r` (infinite for the last level and the spots).
+    pub fn outer(&self) -> f64 {
+        2.0 * self.r
+    }
+}
+
+impl Hierarchy {
+    /// Every light of every level and every spot as a light of the scene model, each with its
+    /// band: point lights of colour `power` and intensity 1 whose radius is the band's reach
+    /// (`f32::MAX` where it is unbounded), then the spots as they are (radius `f32::MAX`).
+    pub fn flatten(&self) -> (Vec<Light>, Vec<Band>) {
+        let last = self.levels.len() - 1;
+        let mut lights = Vec::new();
+        let mut bands = Vec::new();
+        for (level, ls) in self.levels.iter().enumerate() {
+            let band = Band {
+                inner: if level == 0 { 0.0 } else { self.r(level - 1) },
+                r: if level == last {
+                    f64::INFINITY
+                } else {
+                    self.r(level)
+                },
+            };
+            for l in ls {
+                lights.push(Light::point(
+                    l.position.as_vec3(),
+                    (band.outer() as f32).min(f32::MAX),
+                    l.power.as_vec3(),
+                    1.0,
+                ));
+                bands.push(band);
+            }
+        }
+        for s in &self.spots {
+            lights.push(Light {
+                radius: f32::MAX,
+                ..*s
+            });
+            bands.push(Band {
+                inner: 0.0,
+                r: f64::INFINITY,
+            });
+        }
+        (lights, bands)
+    }
+}
+
+/// Outgoing radiance at `p` (unit normal `n`, towards the unit direction `v`) under the
+/// hierarchy's estimate, in f64: the shading model of [`crate::light::shade`] over the
+/// flattened lights, each light's falloff `1 / d^2` times its band's weight. The statement every
+/// strategy and backend shading the hierarchy is tested against.
+pub fn shade(
+    p: DVec3,
+    n: DVec3,
+    v: DVec3,
+    material: &Material,
+    lights: &[Light],
+    bands: &[Band],
+) -> DVec3 {
+    shade_with(p, n, v, material, lights, |k, _, d| {
+        bands[k].weight(d) * falloff_infinite(d)
+    })
 }
 
 #[cfg(test)]
@@ -317,6 +407,84 @@ mod tests {
                     "at {d}: {got} against {e}"
                 );
             }
+        }
+    }
+
+    /// The flattened lights shade what the estimate sums, band for band, and their bands are
+    /// the levels'; a scene of one point light and one spot shades as the lights do at
+    /// infinite range.
+    #[test]
+    fn the_flattened_lights_shade_the_estimate() {
+        use crate::light::{Range, shade as shade_lights};
+        let ls = lights(1500, 30.0, 6);
+        let h = Hierarchy::build(&ls, params(2.0));
+        let (flat, bands) = h.flatten();
+        assert_eq!(flat.len(), h.levels.iter().map(Vec::len).sum::<usize>());
+        let mut k = 0;
+        for (level, l) in h.levels.iter().enumerate() {
+            for _ in l {
+                for d in [0.0, 0.7, 1.3, 2.9, 6.1, 13.0, 40.0] {
+                    assert_eq!(bands[k].weight(d), h.band(level, d), "level {level} at {d}");
+                }
+                let (outer, _) = h.sphere(level);
+                assert_eq!(outer.unwrap_or(f64::INFINITY), bands[k].outer());
+                k += 1;
+            }
+        }
+        let material = Material::new(Vec3::new(0.7, 0.6, 0.5), 0.3);
+        let mut r = rng(7);
+        for _ in 0..50 {
+            let p = DVec3::new(r() * 30.0, 0.0, r() * 30.0);
+            let (n, v) = (DVec3::Y, DVec3::new(0.0, 0.8, 0.6));
+            let lambert = shade(p, n, v, &material, &flat, &bands);
+            let sum = h.estimate(
+                p,
+                |l, d| {
+                    let to = (l.position - p) / d;
+                    l.power
+                        * falloff_infinite(d)
+                        * crate::brdf::brdf_cos(
+                            &material.brdf,
+                            material.base_color.as_dvec3(),
+                            n,
+                            to,
+                            v,
+                        )
+                },
+                |_| DVec3::ZERO,
+            ) + material.emissive.as_dvec3();
+            // The flattened lights are the scene model's, in f32.
+            assert!(
+                (lambert - sum).abs().max_element() <= 1e-5 * sum.max_element(),
+                "{lambert} against {sum}"
+            );
+        }
+        let mut two = vec![Light::point(Vec3::new(1.0, 2.0, 3.0), 1.0, Vec3::ONE, 2.0)];
+        two.push(Light {
+            kind: LightKind::Spot {
+                direction: Vec3::NEG_Y,
+                inner_angle: 0.3,
+                outer_angle: 0.6,
+            },
+            ..Light::point(Vec3::new(4.0, 3.0, 1.0), 1.0, Vec3::ONE, 5.0)
+        });
+        let h = Hierarchy::build(
+            &two,
+            HierarchyParams {
+                top_lights: 0,
+                ..params(1.0)
+            },
+        );
+        let (flat, bands) = h.flatten();
+        for x in [0.5, 3.0, 9.0, 27.0, 81.0] {
+            let p = DVec3::new(x, 0.0, 2.0);
+            let (n, v) = (DVec3::Y, DVec3::Y);
+            let want = shade_lights(p, n, v, &material, &two, Range::Infinite);
+            let got = shade(p, n, v, &material, &flat, &bands);
+            assert!(
+                (got - want).abs().max_element() <= 1e-9 * want.max_element(),
+                "{x}"
+            );
         }
     }
 
