@@ -15,11 +15,13 @@ struct Light {
     cos_outer: f32,
     // Stochastic light culling's alpha (manylights_scene::stochastic): above 0, the light is
     // shaded with max(1 / d^2, alpha) inside its radius, the range drawn for this frame
-    // (lights.stochastic); 0, the windowed falloff.
+    // (lights.stochastic); 0, the windowed falloff; below 0, a light of the lighting grid
+    // hierarchy (manylights_scene::hierarchy::Band), -alpha its band's r (light_band).
     alpha: f32,
     // Interleaved stochastic ranges (manylights_scene::stochastic): 0 none; otherwise
     // n << 24 | key, and a pixel of class c of n x n evaluates the light out to its class's
-    // range (light_range), within `radius`, the longest of the classes' ranges.
+    // range (light_range), within `radius`, the longest of the classes' ranges. With alpha < 0,
+    // the bits of the band's inner distance.
     interleave: u32,
 }
 
@@ -72,15 +74,35 @@ fn light_falloff_infinite(d: f32) -> f32 {
     return 1.0 / max(d * d, D_MIN * D_MIN);
 }
 
-// The falloff a light is shaded with: the windowed one or, for stochastic light culling
+// The falloff a light is shaded with: a hierarchy light's band times 1 / d^2 (alpha < 0), the
+// windowed one or, for stochastic light culling
 // (alpha > 0), max(1 / d^2, alpha) inside the range drawn for the frame (light_range): 1 / d^2
 // divided by the probability min(d^-2 / alpha, 1) that the light reaches d, an unbiased
 // estimate of the infinite-range falloff (manylights_scene::stochastic).
 fn light_attenuation(light: Light, d: f32) -> f32 {
+    if light.alpha < 0.0 {
+        return light_band(light, d) * light_falloff_infinite(d);
+    }
     if light.alpha > 0.0 {
         return select(0.0, max(light_falloff_infinite(d), light.alpha), d < light_range(light));
     }
     return light_falloff(d, light.radius);
+}
+
+// A hierarchy light's band weight at distance d (manylights_scene::hierarchy::Band::weight):
+// rising from 0 at `inner` to 1 at r (1 throughout where inner is 0), falling to 0 at 2 r (1
+// throughout where r is infinite).
+fn light_band(light: Light, d: f32) -> f32 {
+    let inner = bitcast<f32>(light.interleave);
+    let r = -light.alpha;
+    var rising = 1.0;
+    if inner > 0.0 {
+        if d <= inner {
+            return 0.0;
+        }
+        rising = min((d - inner) / inner, 1.0);
+    }
+    return min(rising, clamp(2.0 - d / r, 0.0, 1.0));
 }
 
 // Spot cone factor; exactly zero at and outside the outer cone.

@@ -6,6 +6,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3, Vec4};
+use manylights_scene::hierarchy::Band;
 use manylights_scene::{Camera, Light, LightKind, Material, light};
 
 /// `Light.kind` of a point light.
@@ -137,13 +138,28 @@ pub struct GpuLight {
     /// Cosine of the outer half-angle.
     pub cos_outer: f32,
     /// Stochastic light culling's alpha (`manylights_scene::stochastic`), written each frame
-    /// by `lights.stochastic` with the range in `radius`; 0: the windowed falloff.
+    /// by `lights.stochastic` with the range in `radius`; 0: the windowed falloff. Below 0: a
+    /// light of the lighting grid hierarchy ([`GpuLight::with_band`]), `-alpha` its band's `r`.
     pub alpha: f32,
     /// Interleaved stochastic ranges: 0 none, otherwise `n << 24 | key`
-    /// (`StochasticParams::interleave_word`), written by `lights.stochastic`.
+    /// (`StochasticParams::interleave_word`), written by `lights.stochastic`. For a hierarchy
+    /// light (`alpha < 0`) the bits of its band's `inner`.
     pub interleave: u32,
 }
 const _: () = assert!(size_of::<GpuLight>() == 64);
+
+impl GpuLight {
+    /// The light shaded with its hierarchy band (`manylights_scene::hierarchy::Band`): the
+    /// infinite-range falloff times the band's weight, within `radius`, its reach. An unbounded
+    /// band (`r` infinite) is `alpha = -inf`.
+    pub fn with_band(self, band: &Band) -> Self {
+        Self {
+            alpha: -(band.r as f32),
+            interleave: (band.inner as f32).to_bits(),
+            ..self
+        }
+    }
+}
 
 impl From<&Light> for GpuLight {
     fn from(l: &Light) -> Self {

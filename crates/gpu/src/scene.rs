@@ -6,7 +6,8 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use bytemuck::cast_slice;
 use glam::Vec3;
-use manylights_scene::{Camera, Scene};
+use manylights_scene::hierarchy::Band;
+use manylights_scene::{Camera, Light, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::layout::{
@@ -278,6 +279,28 @@ impl GpuScene {
         self.point_lights.store(false, Ordering::Relaxed);
         self.stochastic_points.store(false, Ordering::Relaxed);
         self.write_flags(ctx);
+    }
+
+    /// Uploads `lights` again (the scene's, the same count) with their hierarchy bands
+    /// (`manylights_scene::hierarchy`, one a light: [`GpuLight::with_band`]), and marks the
+    /// lights general. Panics unless there are as many lights and bands as the scene has lights.
+    pub fn set_light_bands(&self, ctx: &GpuContext, lights: &[Light], bands: &[Band]) {
+        assert!(
+            lights.len() == self.light_count as usize && bands.len() == lights.len(),
+            "{} lights and {} bands for a scene of {} lights",
+            lights.len(),
+            bands.len(),
+            self.light_count
+        );
+        let gpu: Vec<GpuLight> = lights
+            .iter()
+            .zip(bands)
+            .map(|(l, b)| GpuLight::from(l).with_band(b))
+            .collect();
+        if !gpu.is_empty() {
+            ctx.queue.write_buffer(&self.lights, 0, cast_slice(&gpu));
+        }
+        self.mark_general_lights(ctx);
     }
 
     /// Whether the frame tells shading that the point lights carry stochastic ranges without
