@@ -54,7 +54,7 @@ fn hierarchy_lights_shade_as_their_oracle() {
         },
     );
     assert!(hier.levels.len() >= 4, "{} levels", hier.levels.len());
-    let (flat, bands) = hier.flatten();
+    let (flat, bands) = hier.flatten(hierarchy::reach(&original));
     let scene = Scene {
         lights: flat.clone(),
         ..original.clone()

@@ -3,6 +3,7 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+mod hierarchy;
 mod msaa;
 mod stochastic;
 

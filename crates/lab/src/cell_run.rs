@@ -9,7 +9,8 @@ use manylights_cull::{CullSettings, heatmap};
 use manylights_gpu::timing::{PassKind, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
-use manylights_scene::{Camera, Scene};
+use manylights_scene::hierarchy::{self, Band, Hierarchy, HierarchyParams};
+use manylights_scene::{Camera, Motion, RadiusRule, Scene};
 use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer};
 
 use crate::dynamic::Movers;
@@ -60,6 +61,41 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
     Ok((scene, own))
 }
 
+/// The last level of a cell's lighting grid hierarchy holds at most this many lights.
+const HIERARCHY_TOP_LIGHTS: usize = 64;
+
+/// With `radius: Hierarchy`, the lights the cell shades in place of the scene's: every level of
+/// the lighting grid hierarchy of its lights, built on the host, with their bands
+/// (`manylights_scene::hierarchy`); none otherwise.
+fn hierarchy_lights(c: &Config, scene: &Scene) -> Result<Option<(Scene, Vec<Band>)>, LabError> {
+    let RadiusRule::Hierarchy { alpha, spacing } = c.lights.radius else {
+        return Ok(None);
+    };
+    if c.lights.motion != Motion::Static {
+        return Err(LabError::Other(format!(
+            "lights.radius = Hierarchy with lights.motion = {:?}: the hierarchy is built once on \
+             the host for now, so its lights cannot move; use motion: Static",
+            c.lights.motion
+        )));
+    }
+    let h = Hierarchy::build(
+        &scene.lights,
+        HierarchyParams {
+            alpha: alpha.into(),
+            spacing: spacing.into(),
+            top_lights: HIERARCHY_TOP_LIGHTS,
+        },
+    );
+    let (lights, bands) = h.flatten(hierarchy::reach(scene));
+    Ok(Some((
+        Scene {
+            lights,
+            ..scene.clone()
+        },
+        bands,
+    )))
+}
+
 /// The material models of the scene's surfaces, by id, their names joined by `+`.
 fn frame_models(scene: &Scene) -> String {
     let models: std::collections::BTreeSet<manylights_scene::Model> = scene
@@ -95,6 +131,9 @@ pub(crate) fn run_cell(
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let name = cell.name.as_str();
     let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
+    let hier = stage(name, "hierarchy built", || hierarchy_lights(c, &scene))?;
+    // The lights the cell shades: the scene's, or its hierarchy's in their place.
+    let shaded = hier.as_ref().map_or(&scene, |(s, _)| s);
     let poses: Vec<Camera> = match &c.camera {
         CameraSpec::Default => vec![scene.camera],
         CameraSpec::Pose(p) => vec![p.camera()],
@@ -103,9 +142,19 @@ pub(crate) fn run_cell(
     let (w, h) = c.resolution;
     ctx.check_resolution(w, h).map_err(|e| other(&e))?;
     let gpu_scene = stage(name, "scene uploaded", || {
-        GpuScene::upload(ctx, &scene, &poses[0], w, h)
+        GpuScene::upload(ctx, shaded, &poses[0], w, h)
     })
     .map_err(|e| other(&e))?;
+    if let Some((s, bands)) = &hier {
+        gpu_scene.set_light_bands(ctx, &s.lights, bands);
+    }
+    // With a hierarchy, the lights as they are, for the infinite-range reference.
+    let as_they_are = match (&hier, c.accuracy) {
+        (Some(_), true) => {
+            Some(GpuScene::upload(ctx, &scene, &poses[0], w, h).map_err(|e| other(&e))?)
+        }
+        _ => None,
+    };
     // Stochastic ranges first: they make the lights general, which the renderer is built for.
     let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let renderer = stage(name, "pipelines built", || {
@@ -171,7 +220,7 @@ pub(crate) fn run_cell(
     }
     // Metrics and accuracy at every pose (a path's poses are all checked), images at the first;
     // with moving lights, at every measured frame, the lights where that frame had them.
-    let light_count = scene.lights.len() as u64;
+    let light_count = shaded.lights.len() as u64;
     let reference = c
         .accuracy
         .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
@@ -186,6 +235,7 @@ pub(crate) fn run_cell(
             cache: movers
                 .is_none()
                 .then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
+            lights_as_they_are: as_they_are.as_ref(),
         }),
         _ => None,
     };

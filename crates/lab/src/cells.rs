@@ -415,13 +415,15 @@ impl Experiment {
     }
 }
 
-/// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`, or
+/// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`,
+/// `hierarchy=A/hH` (alpha A, spacing H), or
 /// `stochastic=E` with `/albedo` under the albedo bound, `/independent` for independent draws, `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel
 /// classes and `/exposureX` where the exposure is not 1.
 pub fn radius_label(rule: &RadiusRule) -> String {
     match *rule {
         RadiusRule::Fixed(r) => format!("radius={r}"),
         RadiusRule::Threshold(t) => format!("threshold={t}"),
+        RadiusRule::Hierarchy { alpha, spacing } => format!("hierarchy={alpha}/h{spacing}"),
         RadiusRule::Stochastic {
             error,
             bound,

@@ -262,6 +262,9 @@ pub(crate) struct References<'a> {
     pub(crate) rr: &'a ReferenceRenderer,
     pub(crate) inf: &'a InfiniteReference,
     pub(crate) cache: Option<(&'a std::path::Path, u64)>,
+    /// The scene of the lights as they are, where the cell shades others in their place (the
+    /// lighting grid hierarchy's): the infinite-range reference is theirs.
+    pub(crate) lights_as_they_are: Option<&'a GpuScene>,
 }
 
 impl References<'_> {
@@ -287,8 +290,14 @@ impl References<'_> {
                 return Ok((img, true));
             }
         }
-        let img = infinite_image(ctx, (self.rr, self.inf), gpu_scene, cam, size, windowed)
-            .map_err(|e| LabError::Other(e.to_string()))?;
+        let img = match self.lights_as_they_are {
+            Some(scene) => {
+                scene.set_view(ctx, cam, size.0, size.1, 0);
+                infinite_image(ctx, (self.rr, self.inf), scene, cam, size, windowed)
+            }
+            None => infinite_image(ctx, (self.rr, self.inf), gpu_scene, cam, size, windowed),
+        }
+        .map_err(|e| LabError::Other(e.to_string()))?;
         if let Some((dir, key)) = &key {
             cache::save(dir, key, &img)?;
         }

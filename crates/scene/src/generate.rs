@@ -74,6 +74,16 @@ pub enum RadiusRule {
         #[serde(default, skip_serializing_if = "is_stratified")]
         draw: StochasticDraw,
     },
+    /// The lighting grid hierarchy ([`crate::hierarchy`]): the point lights near a shading
+    /// point as they are, far ones from aggregates on nested grids, every light a sphere of
+    /// bounded range; deterministic, with a bias that shrinks as `alpha` grows. The generated
+    /// radius is level 0's reach, `2 alpha spacing`.
+    Hierarchy {
+        /// The accuracy parameter, >= 1: level `l`'s lights reach `2 alpha spacing 2^l`.
+        alpha: f32,
+        /// The finest grid's spacing, metres, > 0.
+        spacing: f32,
+    },
 }
 
 fn is_stratified(d: &StochasticDraw) -> bool {
@@ -101,13 +111,14 @@ fn four() -> u32 {
 }
 
 impl RadiusRule {
-    /// The name of the rule in cell names and result columns: `fixed`, `threshold` or
-    /// `stochastic`.
+    /// The name of the rule in cell names and result columns: `fixed`, `threshold`,
+    /// `stochastic` or `hierarchy`.
     pub fn kind(&self) -> &'static str {
         match self {
             Self::Fixed(_) => "fixed",
             Self::Threshold(_) => "threshold",
             Self::Stochastic { .. } => "stochastic",
+            Self::Hierarchy { .. } => "hierarchy",
         }
     }
 }
@@ -181,6 +192,22 @@ impl LightSpec {
                     t,
                     "a finite cut-off threshold > 0",
                 ));
+            }
+            RadiusRule::Hierarchy { alpha, spacing } => {
+                if !(alpha.is_finite() && alpha >= 1.0) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.alpha",
+                        alpha,
+                        "a finite accuracy parameter >= 1",
+                    ));
+                }
+                if !(spacing.is_finite() && spacing > 0.0) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.spacing",
+                        spacing,
+                        "a finite grid spacing > 0 (metres)",
+                    ));
+                }
             }
             RadiusRule::Stochastic {
                 error,
@@ -318,6 +345,7 @@ impl LightSpec {
                         (self.intensity * color.max_element() / t).sqrt().max(1e-3)
                     }
                     RadiusRule::Stochastic { .. } => 0.0,
+                    RadiusRule::Hierarchy { alpha, spacing } => 2.0 * alpha * spacing,
                 };
                 let kind = if rng.random::<f32>() < self.spot_fraction {
                     // Mostly downward axes, tilted up to 60 degrees.

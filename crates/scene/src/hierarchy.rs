@@ -16,6 +16,9 @@
 //!   (cyCodeBase, `cyLightingGrid.h`), every level gathers from the point lights themselves,
 //!   not from the level below; the position is power-weighted as issue 48 states (the
 //!   implementation weights by the trilinear weight alone: the same for lights of equal power).
+//! - the finest grid kept is the first, from the given spacing up by doublings, that holds at
+//!   most a quarter as many lights as there are point lights (the implementation skips finer
+//!   ones the same way), and `h` is its spacing;
 //! - levels are added until one holds at most `top_lights` lights: that is the last level.
 //!
 //! Blending (the implementation's, a partition of unity over the levels at every distance `d`
@@ -41,7 +44,8 @@ use crate::light::{Light, LightKind, falloff_infinite, shade_with};
 pub struct HierarchyParams {
     /// The accuracy parameter: level `l`'s band ends at `2 alpha h 2^l`. At least 1.
     pub alpha: f64,
-    /// The finest grid's spacing `h`, metres.
+    /// The finest grid's spacing `h`, metres, at least: it doubles while the grid would hold
+    /// more than a quarter as many lights as there are point lights.
     pub spacing: f64,
     /// The last level holds at most this many lights.
     pub top_lights: usize,
@@ -61,6 +65,9 @@ pub struct LevelLight {
 pub struct Hierarchy {
     /// What it was built with.
     pub params: HierarchyParams,
+    /// The finest grid's spacing: `params.spacing`, doubled while the grid held more than a
+    /// quarter as many lights as there are point lights.
+    pub h: f64,
     /// `levels[0]`: the point lights; `levels[l]`: the aggregates on the grid of spacing
     /// `h 2^(l-1)`, in the order of their nodes (z, then y, then x, ascending).
     pub levels: Vec<Vec<LevelLight>>,
@@ -127,21 +134,39 @@ impl Hierarchy {
             .filter(|l| matches!(l.kind, LightKind::Spot { .. }))
             .copied()
             .collect();
+        // The finest grid kept is the first with at most a quarter as many lights as there
+        // are point lights, as the authors' implementation skips finer ones: `h` doubles until
+        // then (or until a grid is the last level's).
+        let mut h = params.spacing;
+        let mut first = level(&points, h);
+        let mut doublings = 0;
+        while first.len() > points.len() / 4
+            && first.len() > params.top_lights
+            && doublings < MAX_LEVELS
+        {
+            h *= 2.0;
+            doublings += 1;
+            first = level(&points, h);
+        }
         let mut levels = vec![points];
+        if levels[0].len() > params.top_lights {
+            levels.push(first);
+        }
         while levels.last().unwrap().len() > params.top_lights && levels.len() < MAX_LEVELS {
-            let spacing = params.spacing * f64::from(1u32 << (levels.len() - 1));
+            let spacing = h * f64::from(1u32 << (levels.len() - 1));
             levels.push(level(&levels[0], spacing));
         }
         Hierarchy {
             params,
+            h,
             levels,
             spots,
         }
     }
 
-    /// `r_l = alpha h 2^l`.
+    /// `r_l = alpha h 2^l`, `h` the finest grid's spacing ([`Hierarchy::h`]).
     pub fn r(&self, level: usize) -> f64 {
-        self.params.alpha * self.params.spacing * f64::from(1u32 << level)
+        self.params.alpha * self.h * f64::from(1u32 << level)
     }
 
     /// Level `level`'s weight at distance `d` from one of its lights (as its [`Band`] has it).
@@ -241,9 +266,11 @@ impl Band {
 
 impl Hierarchy {
     /// Every light of every level and every spot as a light of the scene model, each with its
-    /// band: point lights of colour `power` and intensity 1 whose radius is the band's reach
-    /// (`f32::MAX` where it is unbounded), then the spots as they are (radius `f32::MAX`).
-    pub fn flatten(&self) -> (Vec<Light>, Vec<Band>) {
+    /// band: point lights of colour `power` and intensity 1 whose radius is the band's reach,
+    /// at most `reach`, then the spots as they are with radius `reach`. `reach` is where no
+    /// surface lies farther from any light ([`reach`]): an unbounded band ends there with
+    /// nothing lost, and every radius stays finite for culling.
+    pub fn flatten(&self, reach: f32) -> (Vec<Light>, Vec<Band>) {
         let last = self.levels.len() - 1;
         let mut lights = Vec::new();
         let mut bands = Vec::new();
@@ -259,7 +286,7 @@ impl Hierarchy {
             for l in ls {
                 lights.push(Light::point(
                     l.position.as_vec3(),
-                    (band.outer() as f32).min(f32::MAX),
+                    (band.outer() as f32).min(reach),
                     l.power.as_vec3(),
                     1.0,
                 ));
@@ -268,7 +295,7 @@ impl Hierarchy {
         }
         for s in &self.spots {
             lights.push(Light {
-                radius: f32::MAX,
+                radius: reach,
                 ..*s
             });
             bands.push(Band {
@@ -278,6 +305,17 @@ impl Hierarchy {
         }
         (lights, bands)
     }
+}
+
+/// A distance no surface point of `scene` lies from any of its lights or any aggregate of them
+/// (which lie in the lights' convex hull): the diagonal of the box around its geometry and
+/// lights, with a margin.
+pub fn reach(scene: &crate::Scene) -> f32 {
+    let b = scene
+        .lights
+        .iter()
+        .fold(scene.bounds(), |b, l| b.union_point(l.position));
+    (b.max - b.min).length() * 1.01 + 1.0
 }
 
 /// Outgoing radiance at `p` (unit normal `n`, towards the unit direction `v`) under the
@@ -418,7 +456,7 @@ mod tests {
         use crate::light::{Range, shade as shade_lights};
         let ls = lights(1500, 30.0, 6);
         let h = Hierarchy::build(&ls, params(2.0));
-        let (flat, bands) = h.flatten();
+        let (flat, bands) = h.flatten(1e6);
         assert_eq!(flat.len(), h.levels.iter().map(Vec::len).sum::<usize>());
         let mut k = 0;
         for (level, l) in h.levels.iter().enumerate() {
@@ -475,7 +513,7 @@ mod tests {
                 ..params(1.0)
             },
         );
-        let (flat, bands) = h.flatten();
+        let (flat, bands) = h.flatten(1e6);
         for x in [0.5, 3.0, 9.0, 27.0, 81.0] {
             let p = DVec3::new(x, 0.0, 2.0);
             let (n, v) = (DVec3::Y, DVec3::Y);
