@@ -1,6 +1,6 @@
 //! The lighting grid hierarchy in experiments (`radius: Hierarchy(alpha, spacing)`, issue 48):
 //! every strategy and backend over the hierarchy's lights (every level's, with its band, and
-//! the spots), end to end, with zero false negatives against the bands' spheres, each image
+//! the spots), on surfaces of all five material models at once, end to end, with zero false negatives against the bands' spheres, each image
 //! equal to the brute-force reference of the same hierarchy, and the error against infinite
 //! range falling as alpha grows; moving lights are refused with the reason.
 
@@ -19,6 +19,7 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
         config: Config(
             scene: Atrium(bays: 2),
             lights: (generator: Uniform, count: 400, seed: 4, intensity: 2.0, spot_fraction: 0.1),
+            materials: [BlinnPhong, Ggx, Sheen, ClearCoat, Wrap],
             resolution: (64, 40),
             frames: 1,
             warmup: 0,
@@ -42,6 +43,7 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
         let cell = &r.cell;
         assert_eq!(r.radius_rule, "hierarchy", "{cell}");
         assert!(cell.contains("hierarchy="), "{cell}");
+        assert_eq!(r.materials.split('+').count(), 5, "{cell}: {}", r.materials);
         assert!(
             r.lights > 400,
             "{cell}: {} lights, the levels' besides",
