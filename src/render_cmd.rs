@@ -210,14 +210,15 @@ impl Run<'_> {
         &self,
         dir: &std::path::Path,
     ) -> Result<(&'static str, HdrImage, (PathBuf, image::RgbImage))> {
-        let (args, ctx, scene, gpu_scene, frames, draw) = (
-            self.args,
-            self.ctx,
-            self.scene,
-            self.gpu_scene,
-            self.frames,
-            self.draw,
-        );
+        let Run {
+            args,
+            ctx,
+            scene,
+            gpu_scene,
+            frames,
+            draw,
+            ..
+        } = *self;
         let (w, h) = (args.scene.width, args.scene.height);
         let samples = args.msaa;
         let (strategy, settings) = (self.strategy, self.settings);
@@ -320,14 +321,15 @@ impl Run<'_> {
         reference: &ReferenceRenderer,
         image: &HdrImage,
     ) -> Result<Option<image::RgbImage>> {
-        let (args, ctx, scene, gpu_scene, frames, draw) = (
-            self.args,
-            self.ctx,
-            self.scene,
-            self.gpu_scene,
-            self.frames,
-            self.draw,
-        );
+        let Run {
+            args,
+            ctx,
+            scene,
+            gpu_scene,
+            frames,
+            draw,
+            ..
+        } = *self;
         let (w, h) = (args.scene.width, args.scene.height);
         // The reference over the same frames' draws (the same estimate, no culling), then
         // infinite range (no draws: ranges do not enter it).

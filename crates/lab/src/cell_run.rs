@@ -117,6 +117,115 @@ fn ns_per_light_eval(passes: &[(String, f64)], evaluated: f64) -> Option<f64> {
     (ms > 0.0 && evaluated > 0.0).then(|| ms * 1e6 / evaluated)
 }
 
+/// A cell's scene on the GPU: the scene, the lights it shades, its camera poses.
+struct CellScene {
+    scene: Scene,
+    /// How many lights the scene has of its own (before the generated ones).
+    own_lights: usize,
+    /// How many lights the cell shades: the scene's, or its hierarchy's in their place.
+    shaded_lights: usize,
+    poses: Vec<Camera>,
+    gpu_scene: GpuScene,
+    /// With a hierarchy and accuracy measured, the lights as they are, for the infinite-range
+    /// reference.
+    as_they_are: Option<GpuScene>,
+}
+
+impl CellScene {
+    fn upload(ctx: &GpuContext, c: &Config, base: &Path, name: &str) -> Result<Self, LabError> {
+        let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+        let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
+        let hier = stage(name, "hierarchy built", || hierarchy_lights(c, &scene))?;
+        let shaded = hier.as_ref().map_or(&scene, |(s, _)| s);
+        let poses: Vec<Camera> = match &c.camera {
+            CameraSpec::Default => vec![scene.camera],
+            CameraSpec::Pose(p) => vec![p.camera()],
+            CameraSpec::Path(ps) => ps.iter().map(|p| p.camera()).collect(),
+        };
+        let (w, h) = c.resolution;
+        ctx.check_resolution(w, h).map_err(|e| other(&e))?;
+        let gpu_scene = stage(name, "scene uploaded", || {
+            GpuScene::upload(ctx, shaded, &poses[0], w, h)
+        })
+        .map_err(|e| other(&e))?;
+        if let Some((s, bands)) = &hier {
+            gpu_scene.set_light_bands(ctx, &s.lights, bands);
+        }
+        let as_they_are = match (&hier, c.accuracy) {
+            (Some(_), true) => {
+                Some(GpuScene::upload(ctx, &scene, &poses[0], w, h).map_err(|e| other(&e))?)
+            }
+            _ => None,
+        };
+        Ok(CellScene {
+            shaded_lights: shaded.lights.len(),
+            scene,
+            own_lights,
+            poses,
+            gpu_scene,
+            as_they_are,
+        })
+    }
+}
+
+/// A cell's measured frames as median and 10th and 90th percentile milliseconds: the whole,
+/// each category and kind of pass, and each pass by label.
+struct Timings {
+    total: Option<(f64, f64, f64)>,
+    cull: Option<(f64, f64, f64)>,
+    shade: Option<(f64, f64, f64)>,
+    prepass: Option<(f64, f64, f64)>,
+    /// Where the update was timed (an upload's copy is not where the device cannot write
+    /// timestamps between passes): never a made-up 0.
+    light_update: Option<(f64, f64, f64)>,
+    raster: Option<(f64, f64, f64)>,
+    compute: Option<(f64, f64, f64)>,
+    passes: std::collections::BTreeMap<String, f64>,
+}
+
+impl Timings {
+    /// Of `frames`, each a frame's passes; all `None` (and no passes) unless `timed`.
+    fn of(frames: &[Vec<PassTiming>], timed: bool) -> Timings {
+        let series = |pick: &dyn Fn(&PassTiming) -> bool| -> Vec<f64> {
+            frames
+                .iter()
+                .map(|t| t.iter().filter(|p| pick(p)).map(|p| p.ms).sum())
+                .collect()
+        };
+        let stats = |v: Vec<f64>| if timed { percentiles(&v) } else { None };
+        let of_category = |name: &str| stats(series(&|p| category(&p.label) == name));
+        let updates_timed = frames
+            .iter()
+            .any(|t| t.iter().any(|p| category(&p.label) == "light_update"));
+        let mut passes = std::collections::BTreeMap::new();
+        if timed {
+            let labels: BTreeSet<String> = frames
+                .iter()
+                .flat_map(|t| t.iter().map(|p| p.label.clone()))
+                .collect();
+            for l in labels {
+                if let Some((m, _, _)) = percentiles(&series(&|p| p.label == l)) {
+                    passes.insert(l, m);
+                }
+            }
+        }
+        Timings {
+            total: stats(series(&|_| true)),
+            cull: of_category("cull"),
+            shade: of_category("shade"),
+            prepass: of_category("prepass"),
+            light_update: if updates_timed {
+                of_category("light_update")
+            } else {
+                None
+            },
+            raster: stats(series(&|p| p.kind == PassKind::Raster)),
+            compute: stats(series(&|p| p.kind == PassKind::Compute)),
+            passes,
+        }
+    }
+}
+
 pub(crate) fn run_cell(
     ctx: &GpuContext,
     exp: &Experiment,
@@ -130,31 +239,15 @@ pub(crate) fn run_cell(
     let id = cell.id();
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let name = cell.name.as_str();
-    let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
-    let hier = stage(name, "hierarchy built", || hierarchy_lights(c, &scene))?;
-    // The lights the cell shades: the scene's, or its hierarchy's in their place.
-    let shaded = hier.as_ref().map_or(&scene, |(s, _)| s);
-    let poses: Vec<Camera> = match &c.camera {
-        CameraSpec::Default => vec![scene.camera],
-        CameraSpec::Pose(p) => vec![p.camera()],
-        CameraSpec::Path(ps) => ps.iter().map(|p| p.camera()).collect(),
-    };
+    let CellScene {
+        scene,
+        own_lights,
+        shaded_lights,
+        poses,
+        gpu_scene,
+        as_they_are,
+    } = CellScene::upload(ctx, c, base, name)?;
     let (w, h) = c.resolution;
-    ctx.check_resolution(w, h).map_err(|e| other(&e))?;
-    let gpu_scene = stage(name, "scene uploaded", || {
-        GpuScene::upload(ctx, shaded, &poses[0], w, h)
-    })
-    .map_err(|e| other(&e))?;
-    if let Some((s, bands)) = &hier {
-        gpu_scene.set_light_bands(ctx, &s.lights, bands);
-    }
-    // With a hierarchy, the lights as they are, for the infinite-range reference.
-    let as_they_are = match (&hier, c.accuracy) {
-        (Some(_), true) => {
-            Some(GpuScene::upload(ctx, &scene, &poses[0], w, h).map_err(|e| other(&e))?)
-        }
-        _ => None,
-    };
     // Stochastic ranges first: they make the lights general, which the renderer is built for.
     let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let renderer = stage(name, "pipelines built", || {
@@ -220,7 +313,7 @@ pub(crate) fn run_cell(
     }
     // Metrics and accuracy at every pose (a path's poses are all checked), images at the first;
     // with moving lights, at every measured frame, the lights where that frame had them.
-    let light_count = shaded.lights.len() as u64;
+    let light_count = shaded_lights as u64;
     let reference = c
         .accuracy
         .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
@@ -336,41 +429,16 @@ pub(crate) fn run_cell(
     }
     let (list_bytes, gbuffer_bytes) = (first.list_bytes, first.gbuffer_bytes);
 
-    let series = |pick: &dyn Fn(&PassTiming) -> bool| -> Vec<f64> {
-        frames
-            .iter()
-            .map(|t| t.iter().filter(|p| pick(p)).map(|p| p.ms).sum())
-            .collect()
-    };
-    let stats = |v: Vec<f64>| if timed { percentiles(&v) } else { None };
-    let total = stats(series(&|_| true));
-    let cull = stats(series(&|p| category(&p.label) == "cull"));
-    let shade = stats(series(&|p| category(&p.label) == "shade"));
-    let prepass = stats(series(&|p| category(&p.label) == "prepass"));
-    // Where the update was timed (an upload's copy is not where the device cannot write
-    // timestamps between passes): never a made-up 0.
-    let updates_timed = frames
-        .iter()
-        .any(|t| t.iter().any(|p| category(&p.label) == "light_update"));
-    let light_update = if updates_timed {
-        stats(series(&|p| category(&p.label) == "light_update"))
-    } else {
-        None
-    };
-    let raster = stats(series(&|p| p.kind == PassKind::Raster));
-    let compute = stats(series(&|p| p.kind == PassKind::Compute));
-    let mut passes = std::collections::BTreeMap::new();
-    if timed {
-        let labels: BTreeSet<String> = frames
-            .iter()
-            .flat_map(|t| t.iter().map(|p| p.label.clone()))
-            .collect();
-        for l in labels {
-            if let Some((m, _, _)) = percentiles(&series(&|p| p.label == l)) {
-                passes.insert(l, m);
-            }
-        }
-    }
+    let Timings {
+        total,
+        cull,
+        shade,
+        prepass,
+        light_update,
+        raster,
+        compute,
+        passes,
+    } = Timings::of(&frames, timed);
     let med = |s: Option<(f64, f64, f64)>| s.map(|x| x.0);
     let p10 = |s: Option<(f64, f64, f64)>| s.map(|x| x.1);
     let p90 = |s: Option<(f64, f64, f64)>| s.map(|x| x.2);

@@ -302,13 +302,7 @@ fn run() -> Result<()> {
 }
 
 fn main() -> std::process::ExitCode {
-    match run() {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::ExitCode::FAILURE
-        }
-    }
+    manylights_bevy_referee::exit(run())
 }
 
 #[cfg(test)]

@@ -296,6 +296,17 @@ pub fn spawn_lights(world: &mut World, lights: &[ExportLight]) -> HashMap<Entity
     index
 }
 
+/// An adapter's exit: success, or the error on stderr and failure.
+pub fn exit(result: Result<()>) -> std::process::ExitCode {
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
 /// What the adapters read of an export: the image size, the camera and the lights.
 pub struct Export {
     pub width: u32,
