@@ -493,9 +493,10 @@ fn our_cluster_test_on_bevys_grid_misses_nothing_and_reads_back() {
     );
 }
 
-/// `score-chart`: a referee's scores.csv drawn as figures/scores.svg, a panel a setting, the
-/// sources that miss lights ringed, an engine's GPU clusterer in a colour of its own and its
-/// knobs numbered with the others; a file without a needed column is an error naming it.
+/// `score-chart`: a referee's scores.csv drawn as figures/scores.svg, a panel a setting (two,
+/// CPU and GPU clusterer, where an engine's GPU clusterer is scored), the sources that miss
+/// lights ringed, an engine's GPU clusterer in a colour of its own and its knobs numbered with
+/// the others; a file without a needed column is an error naming it.
 #[test]
 fn score_chart_draws_every_setting_and_names_a_missing_column() {
     let tmp = tempfile::tempdir().unwrap();
@@ -518,8 +519,9 @@ fn score_chart_draws_every_setting_and_names_a_missing_column() {
     for text in [
         "the engine",
         "red ring",
-        "\na\n",
-        "\nb\n",
+        "\na: CPU clusterer\n",
+        "\na: GPU clusterer\n",
+        "\nb: CPU clusterer\n",
         "1 z-12",
         "2 first-slice-1",
         "GPU clusterer",
@@ -528,6 +530,17 @@ fn score_chart_draws_every_setting_and_names_a_missing_column() {
         assert!(svg.contains(text), "`{text}` not in the chart");
     }
     assert_eq!(svg.matches("legend-box").count(), 1);
+    // Without a GPU clusterer: a panel a setting, titled by the setting alone.
+    std::fs::write(
+        dir.join("scores.csv"),
+        "setting,source,grid,false_negatives,pixels_with_false_negatives,evaluated_per_needed,lights_per_pixel,needed_per_pixel,longest_list,cells,list_kib\n\
+         a,bevy-default,bevy,3,3,2.5,10,4,20,100,50.5\n\
+         b,manylights-gather16,ours,0,0,1.3,3,2.5,9,300,120\n",
+    )
+    .unwrap();
+    succeeds(&["score-chart", dir.to_str().unwrap()], "score-chart");
+    let svg = std::fs::read_to_string(dir.join("figures/scores.svg")).unwrap();
+    assert!(svg.contains("\na\n") && svg.contains("\nb\n") && !svg.contains("CPU clusterer"));
     std::fs::write(
         dir.join("scores.csv"),
         "setting,source,false_negatives\na,b,0\n",

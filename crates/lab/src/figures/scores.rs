@@ -4,7 +4,9 @@
 //! engine, its second (GPU) clusterer, this workbench's cluster test on the engine's cells, this
 //! workbench's strategies),
 //! shape for the grid, a short label beside each point, a red ring around a source that misses
-//! lights.
+//! lights. Where an engine's GPU clusterer is scored too, each setting is a row of two panels,
+//! the CPU clusterer's sources and the GPU clusterer's, each beside this workbench's strategies
+//! on the same axes: the two clusterers' knobs lie close together and would crowd one panel.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -100,7 +102,7 @@ fn maker(source: &str) -> (usize, &'static str) {
     } else if source.starts_with("manylights-") {
         (1, "this workbench's strategies")
     } else if source.split('-').nth(1) == Some("gpu") {
-        (3, "the engine's GPU clusterer")
+        (4, "the engine's GPU clusterer")
     } else {
         (0, "the engine")
     }
@@ -108,7 +110,30 @@ fn maker(source: &str) -> (usize, &'static str) {
 
 /// Whether `maker`'s colour is an engine's clusterer (its knobs are numbered in the caption).
 fn is_engine(colour: usize) -> bool {
-    colour == 0 || colour == 3
+    colour == 0 || colour == 4
+}
+
+/// The panels, in order: (title, setting, which clusterer: None for all sources, Some(gpu)
+/// for one engine clusterer's sources beside this workbench's).
+fn panels<'a>(settings: &[&'a str], paired: bool) -> Vec<(String, &'a str, Option<bool>)> {
+    let mut out = Vec::new();
+    for s in settings {
+        if paired {
+            out.push((format!("{s}: CPU clusterer"), *s, Some(false)));
+            out.push((format!("{s}: GPU clusterer"), *s, Some(true)));
+        } else {
+            out.push(((*s).to_string(), *s, None));
+        }
+    }
+    out
+}
+
+/// Whether a source is drawn in a panel of `clusterer` (see `panels`).
+fn in_panel(source: &str, clusterer: Option<bool>) -> bool {
+    match (clusterer, maker(source).0) {
+        (None, _) | (_, 1) => true,
+        (Some(gpu), c) => gpu == (c == 4),
+    }
 }
 
 /// A source's grid: its marker and legend name; `label`: the short text beside the point.
@@ -201,10 +226,13 @@ pub(crate) fn draw(rows: &[ScoreRow], path: &Path) -> Result<Layout, LabError> {
     });
     let labels: Vec<String> = entries.iter().map(|e| e.0.clone()).collect();
     let lw = legend_width(&labels);
-    let rows_n = (settings.len() as u32).div_ceil(COLUMNS);
+    let paired = makers.contains_key(&4);
+    let panels = panels(&settings, paired);
+    let columns = if paired { 2 } else { COLUMNS };
+    let rows_n = (panels.len() as u32).div_ceil(columns);
     let caption_h = if caption.is_some() { CAPTION_H } else { 0 };
     let (w, h) = (
-        PANEL.0 * COLUMNS + lw,
+        PANEL.0 * columns + lw,
         TITLE_H + PANEL.1 * rows_n + caption_h,
     );
     let mut svg = String::new();
@@ -225,20 +253,23 @@ pub(crate) fn draw(rows: &[ScoreRow], path: &Path) -> Result<Layout, LabError> {
                 .draw(&Text::new(c.as_str(), (10, 8), (FONT, 12).into_font()))
                 .map_err(err)?;
         }
-        let (plots, side) = body.split_horizontally(PANEL.0 * COLUMNS);
-        let areas = plots.split_evenly((rows_n as usize, COLUMNS as usize));
-        for (k, setting) in settings.iter().enumerate() {
+        let (plots, side) = body.split_horizontally(PANEL.0 * columns);
+        let areas = plots.split_evenly((rows_n as usize, columns as usize));
+        for (k, (title, setting, clusterer)) in panels.iter().enumerate() {
             let area = &areas[k];
             let chart = axes::chart(
                 area,
-                setting,
+                title,
                 (x, "lists, KiB"),
                 (y, "lights evaluated / needed"),
             )?;
             let (bx, by) = area.get_base_pixel();
             let label =
                 TextStyle::from((FONT, 10).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
-            for r in shown.iter().filter(|r| r.setting == *setting) {
+            for r in shown
+                .iter()
+                .filter(|r| r.setting == *setting && in_panel(&r.source, *clusterer))
+            {
                 let (px, py) =
                     chart.backend_coord(&(x.map(r.list_kib), y.map(r.evaluated_per_needed)));
                 let (lx, ly) = (px - bx, py - by);
