@@ -96,3 +96,163 @@ fn hierarchy_lights_shade_as_their_oracle() {
         "the hierarchy's estimate is the lights' own everywhere"
     );
 }
+
+/// The lights a GPU build wrote for level `level` of `plan`: the live ones (power and reach).
+fn built_level(
+    lights: &[manylights_gpu::layout::GpuLight],
+    plan: &manylights_gpu::hierarchy::HierarchyPlan,
+    level: usize,
+) -> Vec<(DVec3, DVec3)> {
+    let (first, n) = plan.level_range(level);
+    lights[first as usize..(first + n) as usize]
+        .iter()
+        .filter(|l| l.intensity > 0.0 && l.radius > 0.0)
+        .map(|l| (l.position.as_dvec3(), (l.color * l.intensity).as_dvec3()))
+        .collect()
+}
+
+/// `built` against the oracle's level: the same total power (to 1e-5), and every light of
+/// either that carries at least 1e-6 of it matched in the other at its position (to 1e-4 of the
+/// spacing) with its power (to 1e-5 of the total). Nodes that gather a vanishing weight (a
+/// light's far corners at a coarse grid: 1e-12 of a light) are left out: f32 sums hold them to a
+/// few bits, or as nothing, and they light nothing.
+fn same_level(
+    built: &[(DVec3, DVec3)],
+    oracle: &[hierarchy::LevelLight],
+    spacing: f64,
+    what: &str,
+) {
+    let total: f64 = oracle.iter().map(|l| l.power.element_sum()).sum();
+    let built_total: f64 = built.iter().map(|l| l.1.element_sum()).sum();
+    assert!(
+        (built_total - total).abs() < 1e-5 * total,
+        "{what}: power {built_total} against {total}"
+    );
+    let oracle: Vec<(DVec3, DVec3)> = oracle.iter().map(|l| (l.position, l.power)).collect();
+    for (from, to, dir) in [
+        (built, &oracle[..], "built"),
+        (&oracle[..], built, "oracle"),
+    ] {
+        for (position, power) in from.iter().filter(|l| l.1.element_sum() >= 1e-6 * total) {
+            let (p, q) = to
+                .iter()
+                .min_by(|a, b| a.0.distance(*position).total_cmp(&b.0.distance(*position)))
+                .unwrap();
+            assert!(
+                p.distance(*position) < 1e-4 * spacing,
+                "{what}: {dir} light at {position} ({power}), nearest {p}"
+            );
+            assert!(
+                (*q - *power).abs().max_element() < 1e-5 * total,
+                "{what}: {dir} power {power} against {q}"
+            );
+        }
+    }
+}
+
+/// The hierarchy built on the GPU (`manylights_gpu::hierarchy`) is its oracle's
+/// (`Hierarchy::build_fixed` with the plan's shape): every level's lights, positions and powers,
+/// the point lights and spots with their bands; and again after every light has moved, in the
+/// same buffers, with nothing dropped.
+#[test]
+fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
+    use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
+    use manylights_gpu::layout::GpuLight;
+    let ctx = common::gpu();
+    let original = atrium(1500, 0.2);
+    let params = HierarchyParams {
+        alpha: 2.0,
+        spacing: 0.75,
+        top_lights: 16,
+    };
+    let b = original
+        .lights
+        .iter()
+        .fold(original.bounds(), |b, l| b.union_point(l.position));
+    let margin = glam::Vec3::splat(2.0);
+    let reach = hierarchy::reach(&original);
+    let (plan, _) = HierarchyPlan::new(
+        &original.lights,
+        params,
+        (b.min - margin, b.max + margin),
+        reach,
+        2.0,
+    )
+    .unwrap();
+    assert!(plan.levels >= 4, "{} levels", plan.levels);
+    let shaded = Scene {
+        lights: plan.placeholder(&original.lights),
+        ..original.clone()
+    };
+    let camera = original.camera;
+    let gpu_scene = GpuScene::upload(&ctx, &shaded, &camera, 32, 32).unwrap();
+    let build = GpuHierarchy::new(&ctx, plan.clone(), &original.lights, &gpu_scene).unwrap();
+    let moved: Vec<manylights_scene::Light> = original
+        .lights
+        .iter()
+        .enumerate()
+        .map(|(i, l)| manylights_scene::Light {
+            position: l.position
+                + glam::Vec3::new((i % 7) as f32 * 0.2 - 0.6, 0.5, (i % 3) as f32 * -0.4),
+            ..*l
+        })
+        .collect();
+    for (what, lights) in [("at home", &original.lights), ("moved", &moved)] {
+        let gpu: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+        ctx.queue
+            .write_buffer(build.source(), 0, bytemuck::cast_slice(&gpu));
+        build.build(&ctx).unwrap();
+        let bytes = manylights_gpu::readback::read_buffer(
+            &ctx,
+            &gpu_scene.lights,
+            0,
+            plan.shaded_count() * 64,
+        )
+        .unwrap();
+        let out: &[GpuLight] = bytemuck::cast_slice(&bytes);
+        let oracle = Hierarchy::build_fixed(lights, params, plan.h, plan.levels);
+        let (flat, bands) = oracle.flatten(reach);
+        // Level 0 and the spots: the lights themselves, with their bands.
+        let points = oracle.levels[0].len();
+        for (k, (l, band)) in flat.iter().zip(&bands).take(points).enumerate() {
+            let want = GpuLight::from(l).with_band(band);
+            assert_eq!(out[k].position, want.position, "{what}: point {k}");
+            assert_eq!((out[k].radius, out[k].alpha), (want.radius, want.alpha));
+            assert!(
+                (out[k].color - want.color).abs().max_element() < 1e-6 * want.color.max_element()
+            );
+        }
+        let spots = &out[out.len() - oracle.spots.len()..];
+        for (s, (l, band)) in spots.iter().zip(
+            flat.iter()
+                .zip(&bands)
+                .skip(flat.len() - oracle.spots.len()),
+        ) {
+            let want = GpuLight::from(l).with_band(band);
+            assert_eq!(
+                bytemuck::bytes_of(s),
+                bytemuck::bytes_of(&want),
+                "{what}: spot"
+            );
+        }
+        for level in 1..plan.levels {
+            let spacing = plan.h * f64::from(1u32 << (level - 1));
+            same_level(
+                &built_level(out, &plan, level),
+                &oracle.levels[level],
+                spacing,
+                &format!("{what}: level {level}"),
+            );
+            // Every light of the level carries its band.
+            let (first, _) = plan.level_range(level);
+            let want = bands[flat.len()
+                - oracle.spots.len()
+                - oracle.levels[level..].iter().map(Vec::len).sum::<usize>()];
+            assert_eq!(
+                -out[first as usize].alpha, want.r as f32,
+                "{what}: level {level}'s band"
+            );
+        }
+        assert_eq!(build.dropped(&ctx).unwrap(), (0, 0), "{what}");
+    }
+}

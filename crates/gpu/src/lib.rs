@@ -9,6 +9,7 @@
 //! Depends on the scene crate and wgpu; knows nothing of culling strategies or backends.
 
 pub mod context;
+pub mod hierarchy;
 pub mod layout;
 pub mod lookup_bounds;
 pub mod motion;

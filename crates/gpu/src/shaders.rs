@@ -296,6 +296,7 @@ pub const SHADERS: &[ShaderDef] = &[
     crate::lookup_bounds::BOUNDS,
     crate::motion::MOTION,
     crate::stochastic::STOCHASTIC,
+    crate::hierarchy::HIERARCHY,
 ];
 
 #[cfg(test)]

@@ -9,17 +9,24 @@
 //! - level 0 is the point lights themselves;
 //! - level `l >= 1` holds lights on the grid of spacing `h 2^(l-1)`, with nodes at integer
 //!   multiples of it in world space (so the grids nest and a light that moves changes only its
-//!   own nodes). Every point light spreads its power (colour x intensity) to the 8 nodes of the
-//!   cell it lies in with trilinear weights; a node's light sits at the mean of the positions
-//!   it gathered, weighted by trilinear weight times power (the sum of the power's channels),
-//!   and carries the weighted sum of their powers. As in the authors' implementation
-//!   (cyCodeBase, `cyLightingGrid.h`), every level gathers from the point lights themselves,
-//!   not from the level below; the position is power-weighted as issue 48 states (the
-//!   implementation weights by the trilinear weight alone: the same for lights of equal power).
+//!   own nodes). Every light of level `l - 1` spreads its power (colour x intensity) to the 8
+//!   nodes of the cell it lies in with trilinear weights; a node's light sits at the mean of the
+//!   positions it gathered, weighted by trilinear weight times power (the sum of the power's
+//!   channels), and carries the weighted sum of their powers. Each level is formed from the
+//!   level below, as the papers describe it (the authors' implementation, cyCodeBase
+//!   `cyLightingGrid.h`, gathers every level from the point lights, and weights positions by
+//!   the trilinear weight alone): a level's work is its own lights, so the GPU build
+//!   (`manylights_gpu::hierarchy`) costs the point lights once and a third of them more.
 //! - the finest grid kept is the first, from the given spacing up by doublings, that holds at
 //!   most a quarter as many lights as there are point lights (the implementation skips finer
 //!   ones the same way), and `h` is its spacing;
-//! - levels are added until one holds at most `top_lights` lights: that is the last level.
+//! - levels are added until one holds at most `top_lights` lights, or the next would hold no
+//!   fewer (a grid much coarser than the lights' spread keeps the 8 to 27 nodes around them):
+//!   that is the last level.
+//!
+//! [`Hierarchy::build`] chooses `h` and the number of levels from the lights;
+//! [`Hierarchy::build_fixed`] takes them, as the GPU build does every frame with those of the
+//! first frame (so moving lights keep the hierarchy's shape).
 //!
 //! Blending (the implementation's, a partition of unity over the levels at every distance `d`
 //! from a level's light): level 0 has weight 1 up to `r_0`, falling linearly to 0 at `2 r_0`;
@@ -82,7 +89,26 @@ fn power(light: &Light) -> DVec3 {
     light.color.as_dvec3() * f64::from(light.intensity)
 }
 
-/// One level's lights: every point light spread over the 8 nodes of its cell of `spacing`.
+/// The point lights as level 0's lights, and the spots as they are.
+fn split(lights: &[Light]) -> (Vec<LevelLight>, Vec<Light>) {
+    let points = lights
+        .iter()
+        .filter(|l| matches!(l.kind, LightKind::Point))
+        .map(|l| LevelLight {
+            position: l.position.as_dvec3(),
+            power: power(l),
+        })
+        .collect();
+    let spots = lights
+        .iter()
+        .filter(|l| matches!(l.kind, LightKind::Spot { .. }))
+        .copied()
+        .collect();
+    (points, spots)
+}
+
+/// One level's lights: every light of the level below spread over the 8 nodes of its cell of
+/// `spacing`, in the order of their nodes (z, then y, then x).
 fn level(points: &[LevelLight], spacing: f64) -> Vec<LevelLight> {
     // Per node: the weights' sum (trilinear x power), the weighted position and the power.
     let mut nodes: BTreeMap<(i64, i64, i64), (f64, DVec3, DVec3)> = BTreeMap::new();
@@ -121,19 +147,7 @@ fn level(points: &[LevelLight], spacing: f64) -> Vec<LevelLight> {
 impl Hierarchy {
     /// The hierarchy of `lights` (their point lights aggregated, their spots kept).
     pub fn build(lights: &[Light], params: HierarchyParams) -> Hierarchy {
-        let points: Vec<LevelLight> = lights
-            .iter()
-            .filter(|l| matches!(l.kind, LightKind::Point))
-            .map(|l| LevelLight {
-                position: l.position.as_dvec3(),
-                power: power(l),
-            })
-            .collect();
-        let spots = lights
-            .iter()
-            .filter(|l| matches!(l.kind, LightKind::Spot { .. }))
-            .copied()
-            .collect();
+        let (points, spots) = split(lights);
         // The finest grid kept is the first with at most a quarter as many lights as there
         // are point lights, as the authors' implementation skips finer ones: `h` doubles until
         // then (or until a grid is the last level's).
@@ -154,12 +168,41 @@ impl Hierarchy {
         }
         while levels.last().unwrap().len() > params.top_lights && levels.len() < MAX_LEVELS {
             let spacing = h * f64::from(1u32 << (levels.len() - 1));
-            levels.push(level(&levels[0], spacing));
+            let next = level(levels.last().unwrap(), spacing);
+            // Grids coarser than the lights' spread stop shrinking (the lights' cells around a
+            // grid line keep their 8 to 27 nodes): the level before is the last.
+            if next.len() >= levels.last().unwrap().len() && levels.len() > 1 {
+                break;
+            }
+            levels.push(next);
         }
         Hierarchy {
             params,
             h,
             levels,
+            spots,
+        }
+    }
+
+    /// The hierarchy of `lights` with the finest spacing `h` and `levels` levels (the point
+    /// lights and `levels - 1` grids) given, as [`Hierarchy::build`] chose them for other
+    /// lights: the GPU build's oracle, whose shape is fixed at its first frame.
+    pub fn build_fixed(
+        lights: &[Light],
+        params: HierarchyParams,
+        h: f64,
+        levels: usize,
+    ) -> Hierarchy {
+        let (points, spots) = split(lights);
+        let mut all = vec![points];
+        while all.len() < levels.clamp(1, MAX_LEVELS) {
+            let spacing = h * f64::from(1u32 << (all.len() - 1));
+            all.push(level(all.last().unwrap(), spacing));
+        }
+        Hierarchy {
+            params,
+            h,
+            levels: all,
             spots,
         }
     }
@@ -406,6 +449,29 @@ mod tests {
         }
     }
 
+    /// The fixed-shape build (the GPU's oracle) with `build`'s spacing and levels is `build`;
+    /// with moved lights it keeps the shape and still holds the whole power at every level.
+    #[test]
+    fn a_fixed_shape_build_is_the_build_and_keeps_its_shape() {
+        let ls = lights(2000, 40.0, 5);
+        let h = Hierarchy::build(&ls, params(2.0));
+        let f = Hierarchy::build_fixed(&ls, h.params, h.h, h.levels.len());
+        assert_eq!(f.levels, h.levels);
+        let moved: Vec<Light> = ls
+            .iter()
+            .map(|l| Light {
+                position: l.position + glam::Vec3::new(3.0, -1.0, 0.5),
+                ..*l
+            })
+            .collect();
+        let m = Hierarchy::build_fixed(&moved, h.params, h.h, h.levels.len());
+        assert_eq!(m.levels.len(), h.levels.len());
+        let total: DVec3 = ls.iter().map(power).sum();
+        for p in m.level_power() {
+            assert!((p - total).abs().max_element() < 1e-9 * total.max_element());
+        }
+    }
+
     #[test]
     fn the_blending_weights_sum_to_one_at_every_distance() {
         let h = Hierarchy::build(&lights(3000, 60.0, 2), params(1.5));
@@ -427,14 +493,9 @@ mod tests {
     fn a_single_light_is_exact_at_every_distance() {
         for p in [Vec3::new(0.3, 1.7, -2.2), Vec3::new(100.25, -3.0, 7.5)] {
             let ls = [Light::point(p, 1.0, Vec3::new(1.0, 0.5, 0.25), 3.0)];
-            // No level is few enough: every level there is.
-            let h = Hierarchy::build(
-                &ls,
-                HierarchyParams {
-                    top_lights: 0,
-                    ..params(1.0)
-                },
-            );
+            // Every level there may be.
+            let pr = params(1.0);
+            let h = Hierarchy::build_fixed(&ls, pr, pr.spacing, MAX_LEVELS);
             assert_eq!(h.levels.len(), MAX_LEVELS);
             for k in 0..400 {
                 let d = 0.05 * 1.03f64.powi(k);

@@ -1,0 +1,234 @@
+// The lighting grid hierarchy built on the GPU every frame: the WGSL twin of
+// manylights_scene::hierarchy::Hierarchy::build_fixed (see its module docs for the levels and
+// bands; that module is the oracle of this pass). Host side: manylights_gpu::hierarchy.
+//
+// One dispatch a level, in order:
+// - `points` (mode 0): a thread a source light. A point light is written to the shaded lights
+//   as level 0's light (colour x intensity, its band); a spot as it is (radius `reach`, a band
+//   that never falls). A point light is spread into level 1's grid (`splat`).
+// - `finalize` (mode 1): a thread a slot of level l's hash table. A node's sums become its
+//   light (power, power-weighted position), written to the shaded lights with level l's band;
+//   an empty slot becomes a dead light (no power, radius 0, at `far`). It is spread into level
+//   l + 1's grid unless l is the last level.
+// A grid's nodes are keyed by their index in the level's box of nodes (plus 1; 0 is an empty
+// slot) in an open-addressing hash table of 16 words a slot: the key, then six 64-bit sums kept
+// as two 32-bit words each (WGSL has no float atomics): power r, g, b, and the power-weighted
+// offset of the position from the node in units of the spacing, x, y, z, all scaled by `scale`
+// (2^52 over the lights' total power: the sums fit 63 bits, and each term keeps an f32's 24
+// bits). The counters count splats dropped: a node outside its level's box, a table full.
+
+struct Step {
+    // mode (0 points, 1 finalize), items (source lights or slots), threads a dispatch row,
+    // splat (1: spread into the next level)
+    a: vec4<u32>,
+    // first slot read (finalize), first shaded light written (finalize), first slot of the
+    // next level, the next level's slot count
+    b: vec4<u32>,
+    // this level's band r (inf: it never falls), its band's inner distance, reach, scale
+    c: vec4<f32>,
+    // the next level's grid: its box's first node (xyz), spacing (w, as bits)
+    d: vec4<i32>,
+    // the next level's box of nodes: its size (xyz)
+    e: vec4<u32>,
+    // this level's grid (finalize): its box's first node (xyz), spacing (w, as bits)
+    g: vec4<i32>,
+    // this level's box of nodes (xyz)
+    h: vec4<u32>,
+    // where dead lights sit (xyz); w: infinity (a spot's band never falls)
+    far: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> step: Step;
+@group(0) @binding(1) var<storage, read> source: array<Light>;
+// The shaded light each source light becomes (points pass).
+@group(0) @binding(2) var<storage, read> target_index: array<u32>;
+@group(0) @binding(3) var<storage, read_write> shaded: array<Light>;
+@group(0) @binding(4) var<storage, read_write> slots: array<atomic<u32>>;
+// [nodes outside their level's box, splats into a full table]
+@group(0) @binding(5) var<storage, read_write> dropped: array<atomic<u32>, 2>;
+
+const SLOT_WORDS: u32 = 16u;
+const TWO32: f32 = 4294967296.0;
+const MAX_PROBES: u32 = 256u;
+
+// Adds a non-negative term to the 64-bit sum at word i (low word, then high).
+fn add64(i: u32, v: f32) {
+    let hi = floor(v / TWO32);
+    let lo = u32(v - hi * TWO32);
+    let old = atomicAdd(&slots[i], lo);
+    let carry = select(0u, 1u, old + lo < old);
+    let high = u32(hi) + carry;
+    if high != 0u {
+        atomicAdd(&slots[i + 1u], high);
+    }
+}
+
+// Adds a signed term to the 64-bit two's complement sum at word i.
+fn add64_signed(i: u32, v: f32) {
+    if v >= 0.0 {
+        add64(i, v);
+        return;
+    }
+    let m = -v;
+    let hi = floor(m / TWO32);
+    let lo = u32(m - hi * TWO32);
+    let lo_n = ~lo + 1u;
+    let hi_n = ~u32(hi) + select(0u, 1u, lo == 0u);
+    let old = atomicAdd(&slots[i], lo_n);
+    let carry = select(0u, 1u, old + lo_n < old);
+    atomicAdd(&slots[i + 1u], hi_n + carry);
+}
+
+fn read64(i: u32) -> f32 {
+    return f32(atomicLoad(&slots[i + 1u])) * TWO32 + f32(atomicLoad(&slots[i]));
+}
+
+fn read64_signed(i: u32) -> f32 {
+    let lo = atomicLoad(&slots[i]);
+    let hi = atomicLoad(&slots[i + 1u]);
+    if hi < 0x80000000u {
+        return f32(hi) * TWO32 + f32(lo);
+    }
+    let lo_m = ~lo + 1u;
+    let hi_m = ~hi + select(0u, 1u, lo == 0u);
+    return -(f32(hi_m) * TWO32 + f32(lo_m));
+}
+
+// The slot of `key` in the next level's table (inserting it), or none.
+fn slot_of(key: u32) -> i32 {
+    let count = step.b.w;
+    var probe = (key * 2654435769u) ^ (key >> 15u);
+    probe = probe % count;
+    var tries = 0u;
+    loop {
+        if tries >= min(count, MAX_PROBES) {
+            return -1;
+        }
+        let at = step.b.z + probe;
+        let r = atomicCompareExchangeWeak(&slots[at * SLOT_WORDS], 0u, key);
+        if r.exchanged || r.old_value == key {
+            return i32(at);
+        }
+        if r.old_value != 0u {
+            probe = (probe + 1u) % count;
+            tries += 1u;
+        }
+        // A weak exchange that failed on an empty slot is tried again.
+    }
+    return -1;
+}
+
+// Spreads a light's power over the 8 nodes of its cell of the next level's grid.
+fn splat(position: vec3<f32>, power: vec3<f32>) {
+    let spacing = bitcast<f32>(step.d.w);
+    let u = position / spacing;
+    let base = floor(u);
+    let f = u - base;
+    let origin = step.d.xyz;
+    let dims = step.e.xyz;
+    for (var corner = 0u; corner < 8u; corner++) {
+        let bit = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u);
+        let t = select(1.0 - f, f, bit == vec3<u32>(1u));
+        let w = t.x * t.y * t.z;
+        if w == 0.0 {
+            continue;
+        }
+        let node = vec3<i32>(base) + vec3<i32>(bit);
+        let rel = node - origin;
+        if any(rel < vec3<i32>(0)) || any(vec3<u32>(rel) >= dims) {
+            atomicAdd(&dropped[0], 1u);
+            continue;
+        }
+        let r = vec3<u32>(rel);
+        let key = (r.z * dims.y + r.y) * dims.x + r.x + 1u;
+        let at = slot_of(key);
+        if at < 0 {
+            atomicAdd(&dropped[1], 1u);
+            continue;
+        }
+        let c = w * power * step.c.w;
+        let cs = c.r + c.g + c.b;
+        let o = u - vec3<f32>(node);
+        let i = u32(at) * SLOT_WORDS;
+        add64(i + 1u, c.r);
+        add64(i + 3u, c.g);
+        add64(i + 5u, c.b);
+        add64_signed(i + 7u, cs * o.x);
+        add64_signed(i + 9u, cs * o.y);
+        add64_signed(i + 11u, cs * o.z);
+    }
+}
+
+// A point light of a level: `power` at `position`, shaded with the level's band.
+fn level_light(position: vec3<f32>, power: vec3<f32>) -> Light {
+    var l: Light;
+    l.position = position;
+    l.radius = min(2.0 * step.c.x, step.c.z);
+    l.color = power;
+    l.intensity = 1.0;
+    l.direction = vec3<f32>(0.0);
+    l.kind = LIGHT_KIND_POINT;
+    l.cos_inner = 1.0;
+    l.cos_outer = -1.0;
+    l.alpha = -step.c.x;
+    l.interleave = bitcast<u32>(step.c.y);
+    return l;
+}
+
+fn item(id: vec3<u32>) -> u32 {
+    return id.y * step.a.z + id.x;
+}
+
+@compute @workgroup_size(256)
+fn points(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = item(id);
+    if i >= step.a.y {
+        return;
+    }
+    let l = source[i];
+    if l.kind == LIGHT_KIND_SPOT {
+        var s = l;
+        s.radius = step.c.z;
+        s.alpha = -step.far.w;
+        s.interleave = 0u;
+        shaded[target_index[i]] = s;
+        return;
+    }
+    let power = l.color * l.intensity;
+    shaded[target_index[i]] = level_light(l.position, power);
+    if step.a.w == 1u {
+        splat(l.position, power);
+    }
+}
+
+@compute @workgroup_size(256)
+fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = item(id);
+    if t >= step.a.y {
+        return;
+    }
+    let at = step.b.x + t;
+    let i = at * SLOT_WORDS;
+    let key = atomicLoad(&slots[i]);
+    let p = vec3<f32>(read64(i + 1u), read64(i + 3u), read64(i + 5u));
+    let weight = p.r + p.g + p.b;
+    if key == 0u || weight <= 0.0 {
+        var dead = level_light(step.far.xyz, vec3<f32>(0.0));
+        dead.radius = 0.0;
+        dead.intensity = 0.0;
+        shaded[step.b.y + t] = dead;
+        return;
+    }
+    let dims = step.h.xyz;
+    let k = key - 1u;
+    let node = step.g.xyz
+        + vec3<i32>(vec3<u32>(k % dims.x, (k / dims.x) % dims.y, k / (dims.x * dims.y)));
+    let offset = vec3<f32>(read64_signed(i + 7u), read64_signed(i + 9u), read64_signed(i + 11u))
+        / weight;
+    let position = (vec3<f32>(node) + offset) * bitcast<f32>(step.g.w);
+    let power = p / step.c.w;
+    shaded[step.b.y + t] = level_light(position, power);
+    if step.a.w == 1u {
+        splat(position, power);
+    }
+}
