@@ -90,12 +90,25 @@ impl LightMotion {
         first: u32,
         motion: Motion,
     ) -> Result<Self, GpuError> {
+        Self::on_buffer(ctx, &scene.lights, scene.light_count, lights, first, motion)
+    }
+
+    /// [`LightMotion::new`] for a buffer of `light_count` lights other than a scene's (the
+    /// lights a hierarchy is built from, `crate::hierarchy::GpuHierarchy::source`).
+    pub fn on_buffer(
+        ctx: &GpuContext,
+        buffer: &wgpu::Buffer,
+        light_count: u32,
+        lights: &[Light],
+        first: u32,
+        motion: Motion,
+    ) -> Result<Self, GpuError> {
         let count = lights.len() as u32;
-        if u64::from(first) + u64::from(count) > u64::from(scene.light_count) {
+        if u64::from(first) + u64::from(count) > u64::from(light_count) {
             return Err(GpuError::OverLimit {
                 what: "moving lights".into(),
                 value: u64::from(first) + u64::from(count),
-                limit: u64::from(scene.light_count),
+                limit: u64::from(light_count),
                 limit_name: "the scene's light count",
             });
         }
@@ -150,7 +163,7 @@ impl LightMotion {
             d,
             "lights.animate",
             &layout,
-            &[&params_buf, &home_buf, &scene.lights],
+            &[&params_buf, &home_buf, buffer],
         );
         Ok(Self {
             motion,
@@ -160,7 +173,7 @@ impl LightMotion {
             pipeline,
             group,
             groups,
-            lights: scene.lights.clone(),
+            lights: buffer.clone(),
             staging: None,
             host: Vec::new(),
         })

@@ -6,14 +6,14 @@ use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
 use manylights_cull::{CullSettings, heatmap};
+use manylights_gpu::hierarchy::GpuHierarchy;
 use manylights_gpu::timing::{PassKind, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
-use manylights_scene::hierarchy::{self, Band, Hierarchy, HierarchyParams};
-use manylights_scene::{Camera, Motion, RadiusRule, Scene};
+use manylights_scene::{Camera, Scene};
 use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer};
 
-use crate::dynamic::Movers;
+use crate::dynamic::{Movers, hierarchy_plan};
 use crate::evaluate::{PoseEval, References, evaluate, temporal_stability};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
 use crate::noise::{Draws, Noise, measure};
@@ -61,41 +61,6 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
     Ok((scene, own))
 }
 
-/// The last level of a cell's lighting grid hierarchy holds at most this many lights.
-const HIERARCHY_TOP_LIGHTS: usize = 64;
-
-/// With `radius: Hierarchy`, the lights the cell shades in place of the scene's: every level of
-/// the lighting grid hierarchy of its lights, built on the host, with their bands
-/// (`manylights_scene::hierarchy`); none otherwise.
-fn hierarchy_lights(c: &Config, scene: &Scene) -> Result<Option<(Scene, Vec<Band>)>, LabError> {
-    let RadiusRule::Hierarchy { alpha, spacing } = c.lights.radius else {
-        return Ok(None);
-    };
-    if c.lights.motion != Motion::Static {
-        return Err(LabError::Other(format!(
-            "lights.radius = Hierarchy with lights.motion = {:?}: the hierarchy is built once on \
-             the host for now, so its lights cannot move; use motion: Static",
-            c.lights.motion
-        )));
-    }
-    let h = Hierarchy::build(
-        &scene.lights,
-        HierarchyParams {
-            alpha: alpha.into(),
-            spacing: spacing.into(),
-            top_lights: HIERARCHY_TOP_LIGHTS,
-        },
-    );
-    let (lights, bands) = h.flatten(hierarchy::reach(scene));
-    Ok(Some((
-        Scene {
-            lights,
-            ..scene.clone()
-        },
-        bands,
-    )))
-}
-
 /// The material models of the scene's surfaces, by id, their names joined by `+`.
 fn frame_models(scene: &Scene) -> String {
     let models: std::collections::BTreeSet<manylights_scene::Model> = scene
@@ -129,14 +94,16 @@ struct CellScene {
     /// With a hierarchy and accuracy measured, the lights as they are, for the infinite-range
     /// reference.
     as_they_are: Option<GpuScene>,
+    /// With `radius: Hierarchy`, its build, which fills `gpu_scene`'s lights each frame.
+    hierarchy: Option<GpuHierarchy>,
 }
 
 impl CellScene {
     fn upload(ctx: &GpuContext, c: &Config, base: &Path, name: &str) -> Result<Self, LabError> {
         let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
         let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
-        let hier = stage(name, "hierarchy built", || hierarchy_lights(c, &scene))?;
-        let shaded = hier.as_ref().map_or(&scene, |(s, _)| s);
+        let hier = stage(name, "hierarchy planned", || hierarchy_plan(c, &scene))?;
+        let shaded = hier.as_ref().map_or(&scene, |(_, s)| s);
         let poses: Vec<Camera> = match &c.camera {
             CameraSpec::Default => vec![scene.camera],
             CameraSpec::Pose(p) => vec![p.camera()],
@@ -148,22 +115,25 @@ impl CellScene {
             GpuScene::upload(ctx, shaded, &poses[0], w, h)
         })
         .map_err(|e| other(&e))?;
-        if let Some((s, bands)) = &hier {
-            gpu_scene.set_light_bands(ctx, &s.lights, bands);
-        }
         let as_they_are = match (&hier, c.accuracy) {
             (Some(_), true) => {
                 Some(GpuScene::upload(ctx, &scene, &poses[0], w, h).map_err(|e| other(&e))?)
             }
             _ => None,
         };
+        let shaded_lights = shaded.lights.len();
+        let hierarchy = hier
+            .map(|(plan, _)| GpuHierarchy::new(ctx, plan, &scene.lights, &gpu_scene))
+            .transpose()
+            .map_err(|e| other(&e))?;
         Ok(CellScene {
-            shaded_lights: shaded.lights.len(),
+            shaded_lights,
             scene,
             own_lights,
             poses,
             gpu_scene,
             as_they_are,
+            hierarchy,
         })
     }
 }
@@ -246,6 +216,7 @@ pub(crate) fn run_cell(
         poses,
         gpu_scene,
         as_they_are,
+        hierarchy,
     } = CellScene::upload(ctx, c, base, name)?;
     let (w, h) = c.resolution;
     // Stochastic ranges first: they make the lights general, which the renderer is built for.
@@ -261,7 +232,14 @@ pub(crate) fn run_cell(
         tile_boxes: c.tile_boxes,
         ..CullSettings::for_camera(cam)
     };
-    let mut movers = Movers::new(ctx, c, &gpu_scene, &scene, own_lights)?;
+    let mut movers = Movers::new(
+        ctx,
+        c,
+        (&gpu_scene, &scene, own_lights),
+        hierarchy,
+        as_they_are.as_ref(),
+    )?;
+    let moving = movers.as_ref().is_some_and(Movers::moving);
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
     let mut encode = Vec::new();
     let mut uploads = Vec::new();
@@ -325,14 +303,12 @@ pub(crate) fn run_cell(
         (Some(rr), Some(inf)) => Some(References {
             rr,
             inf,
-            cache: movers
-                .is_none()
-                .then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
+            cache: (!moving).then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
             lights_as_they_are: as_they_are.as_ref(),
         }),
         _ => None,
     };
-    let checks: Vec<(usize, Option<u32>)> = if movers.is_some() {
+    let checks: Vec<(usize, Option<u32>)> = if moving {
         (c.warmup..c.warmup + c.frames)
             .map(|f| (f as usize % poses.len(), Some(f)))
             .collect()
@@ -369,11 +345,14 @@ pub(crate) fn run_cell(
                 .as_deref(),
         )?);
     }
+    if let Some(m) = &movers {
+        m.check(ctx)?;
+    }
     let first = &evals[0];
     save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
     // Stochastic cells: each seed's image against infinite range (static lights only).
-    let noise: Option<Noise> = match (&draws, &first.infinite, &movers) {
-        (Some(d), Some(inf), None) => Some(stage(name, "seeds measured", || {
+    let noise: Option<Noise> = match (&draws, &first.infinite) {
+        (Some(d), Some(inf)) if !moving => Some(stage(name, "seeds measured", || {
             measure(
                 ctx,
                 renderer,

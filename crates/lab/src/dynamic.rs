@@ -1,55 +1,168 @@
-//! Moving lights in a run: a cell whose `lights.motion` is not `Static` moves its generated
-//! lights before every frame it renders, by the GPU animation pass or by a host upload
-//! (`light_update`), both from `manylights_gpu::motion`. The frame index drives the motion, so
+//! Lights that change each frame in a run: a cell whose `lights.motion` is not `Static` moves
+//! its generated lights before every frame it renders, by the GPU animation pass or by a host
+//! upload (`light_update`), both from `manylights_gpu::motion`; a cell with `radius:
+//! Hierarchy` builds the lighting grid hierarchy of its lights on the GPU before every frame
+//! (`manylights_gpu::hierarchy`, after the lights moved). The frame index drives the motion, so
 //! a rerun moves the lights the same way; the evaluation of every measured frame (the exact
 //! oracle, accuracy) sees the lights where that frame had them.
 
+use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
 use manylights_gpu::motion::{LightMotion, UpdateCost};
 use manylights_gpu::{GpuContext, GpuScene};
-use manylights_scene::Scene;
+use manylights_scene::hierarchy::{self, HierarchyParams};
+use manylights_scene::{RadiusRule, Scene};
 
 use crate::LabError;
 use crate::experiment::{Config, LightUpdate};
 
-/// The moving lights of a cell and how they reach the GPU.
+/// The last level of a cell's lighting grid hierarchy holds at most this many lights.
+pub(crate) const HIERARCHY_TOP_LIGHTS: usize = 64;
+
+fn other(e: impl std::fmt::Display) -> LabError {
+    LabError::Other(e.to_string())
+}
+
+/// With `radius: Hierarchy`, the plan of the cell's lighting grid hierarchy and the scene it
+/// shades: the scene's geometry with the plan's layout of lights in place of its own (points,
+/// every level's table slots, spots), which the GPU build fills each frame; none otherwise.
+pub(crate) fn hierarchy_plan(
+    c: &Config,
+    scene: &Scene,
+) -> Result<Option<(HierarchyPlan, Scene)>, LabError> {
+    let RadiusRule::Hierarchy { alpha, spacing } = c.lights.radius else {
+        return Ok(None);
+    };
+    let moving = !c.lights.motion.is_static();
+    // A moving light goes at most its radius from home (manylights_scene::motion): the grids'
+    // boxes and the unbounded bands' reach cover that too.
+    let margin = 1.0
+        + if moving {
+            scene.lights.iter().map(|l| l.radius).fold(0.0, f32::max)
+        } else {
+            0.0
+        };
+    let b = scene
+        .lights
+        .iter()
+        .fold(scene.bounds(), |b, l| b.union_point(l.position));
+    let (plan, _) = HierarchyPlan::new(
+        &scene.lights,
+        HierarchyParams {
+            alpha: alpha.into(),
+            spacing: spacing.into(),
+            top_lights: HIERARCHY_TOP_LIGHTS,
+        },
+        (b.min - margin, b.max + margin),
+        hierarchy::reach(scene) + 2.0 * (margin - 1.0),
+        if moving { 2.0 } else { 1.25 },
+    )
+    .map_err(other)?;
+    let shaded = Scene {
+        lights: plan.placeholder(&scene.lights),
+        ..scene.clone()
+    };
+    Ok(Some((plan, shaded)))
+}
+
+/// The lights of a cell that change each frame, and how.
 pub(crate) struct Movers {
-    motion: LightMotion,
+    motion: Option<LightMotion>,
     update: LightUpdate,
+    hierarchy: Option<GpuHierarchy>,
+    /// With a hierarchy of moving lights: the light buffer of the lights as they are (the
+    /// infinite-range reference's scene), where they are copied after each move.
+    as_they_are: Option<wgpu::Buffer>,
 }
 
 impl Movers {
-    /// The movers of `scene` (uploaded as `gpu_scene`), whose lights from `first` on are the
-    /// generated ones; `None` where they do not move.
+    /// The movers of `scene` (uploaded as `gpu_scene`, or as `hierarchy`'s lights), whose
+    /// lights from `first` on are the generated ones; `None` where nothing changes.
     pub(crate) fn new(
         ctx: &GpuContext,
         c: &Config,
-        gpu_scene: &GpuScene,
-        scene: &Scene,
-        first: usize,
+        (gpu_scene, scene, first): (&GpuScene, &Scene, usize),
+        hierarchy: Option<GpuHierarchy>,
+        as_they_are: Option<&GpuScene>,
     ) -> Result<Option<Self>, LabError> {
-        if c.lights.motion.is_static() || first >= scene.lights.len() {
+        let motion = if c.lights.motion.is_static() || first >= scene.lights.len() {
+            None
+        } else {
+            let moving = &scene.lights[first..];
+            Some(
+                match &hierarchy {
+                    Some(h) => LightMotion::on_buffer(
+                        ctx,
+                        h.source(),
+                        scene.lights.len() as u32,
+                        moving,
+                        first as u32,
+                        c.lights.motion,
+                    ),
+                    None => LightMotion::new(ctx, gpu_scene, moving, first as u32, c.lights.motion),
+                }
+                .map_err(other)?,
+            )
+        };
+        if motion.is_none() && hierarchy.is_none() {
             return Ok(None);
         }
-        let motion = LightMotion::new(
-            ctx,
-            gpu_scene,
-            &scene.lights[first..],
-            first as u32,
-            c.lights.motion,
-        )
-        .map_err(|e| LabError::Other(e.to_string()))?;
         Ok(Some(Self {
+            as_they_are: motion
+                .as_ref()
+                .and(hierarchy.as_ref())
+                .and(as_they_are)
+                .map(|s| s.lights.clone()),
             motion,
             update: c.light_update,
+            hierarchy,
         }))
     }
 
-    /// Moves the lights to where they are at frame `frame`.
+    /// Whether lights move (a hierarchy of static lights is built each frame all the same).
+    pub(crate) fn moving(&self) -> bool {
+        self.motion.is_some()
+    }
+
+    /// Moves the lights to where they are at frame `frame`, then builds the hierarchy.
     pub(crate) fn update(&mut self, ctx: &GpuContext, frame: u32) -> Result<UpdateCost, LabError> {
-        match self.update {
-            LightUpdate::Gpu => self.motion.animate(ctx, frame),
-            LightUpdate::Upload => self.motion.upload(ctx, frame),
+        let mut cost = match (&mut self.motion, self.update) {
+            (Some(m), LightUpdate::Gpu) => m.animate(ctx, frame).map_err(other)?,
+            (Some(m), LightUpdate::Upload) => m.upload(ctx, frame).map_err(other)?,
+            (None, _) => UpdateCost::default(),
+        };
+        if let Some(h) = &self.hierarchy {
+            if let Some(t) = h.build(ctx).map_err(other)? {
+                cost.gpu.get_or_insert_with(Vec::new).extend(t);
+            }
+            if let Some(to) = &self.as_they_are {
+                let mut e = ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("lights.as_they_are"),
+                    });
+                e.copy_buffer_to_buffer(h.source(), 0, to, 0, h.source().size().min(to.size()));
+                ctx.submit_and_wait(e, "lights.as_they_are")
+                    .map_err(other)?;
+            }
         }
-        .map_err(|e| LabError::Other(e.to_string()))
+        Ok(cost)
+    }
+
+    /// An error where the hierarchy dropped a splat (a node outside its level's box, or a full
+    /// table): its estimate would have lost power.
+    pub(crate) fn check(&self, ctx: &GpuContext) -> Result<(), LabError> {
+        let Some(h) = &self.hierarchy else {
+            return Ok(());
+        };
+        let (outside, full) = h.dropped(ctx).map_err(other)?;
+        if outside + full > 0 {
+            return Err(LabError::Other(format!(
+                "the lighting grid hierarchy dropped {outside} splats outside its grids' boxes \
+                 and {full} into full tables (its shape is planned from the first frame's \
+                 lights, with room for moving lights to go their radius from home): a larger \
+                 spacing needs fewer nodes"
+            )));
+        }
+        Ok(())
     }
 }
