@@ -115,6 +115,12 @@ fn a_hierarchy_of_moving_lights_is_built_each_frame() {
         let tolerance = if r.backend == "deferred" { 1e-3 } else { 1e-6 };
         let flip = r.flip_mean.expect("the same hierarchy's reference");
         assert!(flip <= tolerance, "{cell}: mean FLIP {flip}");
+        // The build is timed as its own passes wherever the frame is.
+        assert_eq!(
+            r.gpu_ms_hierarchy.is_some(),
+            r.gpu_ms_total.is_some(),
+            "{cell}"
+        );
         let inf = r.flip_mean_infinite.expect("the lights as they are");
         assert!(
             inf > 0.0 && inf < 0.2,

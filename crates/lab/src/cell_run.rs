@@ -150,6 +150,8 @@ struct Timings {
     light_update: Option<(f64, f64, f64)>,
     raster: Option<(f64, f64, f64)>,
     compute: Option<(f64, f64, f64)>,
+    /// The lighting grid hierarchy's build (`lights.hierarchy.*`), where it ran and was timed.
+    hierarchy: Option<(f64, f64, f64)>,
     passes: std::collections::BTreeMap<String, f64>,
 }
 
@@ -191,6 +193,11 @@ impl Timings {
             },
             raster: stats(series(&|p| p.kind == PassKind::Raster)),
             compute: stats(series(&|p| p.kind == PassKind::Compute)),
+            hierarchy: frames
+                .iter()
+                .any(|t| t.iter().any(|p| p.label.starts_with("lights.hierarchy.")))
+                .then(|| stats(series(&|p| p.label.starts_with("lights.hierarchy."))))
+                .flatten(),
             passes,
         }
     }
@@ -416,6 +423,7 @@ pub(crate) fn run_cell(
         light_update,
         raster,
         compute,
+        hierarchy: hierarchy_ms,
         passes,
     } = Timings::of(&frames, timed);
     let med = |s: Option<(f64, f64, f64)>| s.map(|x| x.0);
@@ -508,6 +516,7 @@ pub(crate) fn run_cell(
         reference_infinite_cached: first.infinite_cached,
         materials: frame_models(&scene),
         covered_pixels: Some(first.covered),
+        gpu_ms_hierarchy: med(hierarchy_ms),
         ns_per_light_eval: ns_per_light_eval(
             &first.steady_passes,
             if c.backend == Backend::NaiveForward {

@@ -246,6 +246,11 @@ pub struct Row {
     /// passes were not timed apart.
     #[serde(default)]
     pub ns_per_light_eval: Option<f64>,
+    /// `radius: Hierarchy`: the median GPU time of a frame's build of the lighting grid
+    /// hierarchy (the `lights.hierarchy.*` passes), ms; part of `gpu_ms_light_update` and
+    /// `gpu_ms_total`, not of the steady-state culling and shading. Empty otherwise.
+    #[serde(default)]
+    pub gpu_ms_hierarchy: Option<f64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s and
@@ -370,6 +375,7 @@ pub const COLUMNS: &[&str] = &[
     "materials",
     "covered_pixels",
     "ns_per_light_eval",
+    "gpu_ms_hierarchy",
 ];
 
 fn one() -> u32 {
