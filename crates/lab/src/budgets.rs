@@ -2,7 +2,8 @@
 //! resolution, samples) and each error budget of [`BUDGETS`] (mean FLIP against the
 //! infinite-range reference, `flip_mean_infinite`), the fastest conservative configuration
 //! (a radius rule that cuts light off) and the fastest stochastic one (stochastic light
-//! culling) within it, by culling and shading in steady state (`gpu_ms_cull_shade`), and how
+//! culling) within it, and the fastest lighting grid hierarchy where the setting has one, by
+//! culling and shading in steady state (`gpu_ms_cull_shade`), and how
 //! they compare. Stochastic culling is named twice: in one frame (what a moving view sees; the
 //! only fair comparison with a cut-off, one frame against one frame), and accumulated over K
 //! frames (a static view: the cost a frame, and the K frames' total that the image took). A
@@ -24,14 +25,18 @@ pub enum Family {
     StochasticFrame,
     /// Stochastic light culling, each image K >= 2 frames accumulated.
     StochasticAccumulated,
+    /// The lighting grid hierarchy (`radius: Hierarchy`): far lights from aggregates.
+    Hierarchy,
 }
 
 impl Family {
     fn holds(self, r: &Row) -> bool {
         let stochastic = r.radius_rule == "stochastic";
+        let hierarchy = r.radius_rule == "hierarchy";
         let accumulated = r.accumulate.unwrap_or(1) > 1;
         match self {
-            Family::Conservative => !stochastic,
+            Family::Conservative => !stochastic && !hierarchy,
+            Family::Hierarchy => hierarchy,
             Family::StochasticFrame => stochastic && !accumulated,
             Family::StochasticAccumulated => stochastic && accumulated,
         }
@@ -52,15 +57,24 @@ pub fn fastest_within<'a>(rows: &[&'a Row], budget: f64, family: Family) -> Opti
 
 /// The findings lines (none where no row was measured against infinite range).
 pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
-    let mut settings: BTreeMap<(String, u64, u32, u32, u32), Vec<&Row>> = BTreeMap::new();
+    // A setting is its `setting=` label where the cell has one (a hierarchy's cells count the
+    // lights they shade, which differ with alpha and spacing), else its light count.
+    let mut settings: BTreeMap<(String, String, u32, u32, u32), Vec<&Row>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.flip_mean_infinite.is_some()) {
+        let label = r
+            .cell
+            .split(',')
+            .find_map(|p| p.strip_prefix("setting="))
+            .map_or_else(|| format!("{:020}", r.lights), str::to_owned);
         settings
-            .entry((r.scene.clone(), r.lights, r.width, r.height, r.msaa))
+            .entry((r.scene.clone(), label, r.width, r.height, r.msaa))
             .or_default()
             .push(r);
     }
     let mut out = Vec::new();
-    for ((scene, lights, w, h, msaa), rs) in &settings {
+    for ((scene, _, w, h, msaa), rs) in &settings {
+        let lights = rs.iter().map(|r| r.lights).min().unwrap_or(0);
+        let lights = &lights;
         let setting = if *msaa > 1 {
             format!("{scene}, {lights} lights, {w}x{h}, {msaa} samples")
         } else {
@@ -91,6 +105,14 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
             let c = fastest_within(rs, b, Family::Conservative);
             let s = fastest_within(rs, b, Family::StochasticFrame);
             let a = fastest_within(rs, b, Family::StochasticAccumulated);
+            let hierarchy = if rs.iter().any(|r| Family::Hierarchy.holds(r)) {
+                format!(
+                    "; lighting grid hierarchy {}",
+                    name(fastest_within(rs, b, Family::Hierarchy))
+                )
+            } else {
+                String::new()
+            };
             let ratio = match (
                 c.and_then(|r| r.gpu_ms_cull_shade),
                 s.and_then(|r| r.gpu_ms_cull_shade),
@@ -117,7 +139,7 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
                 None => "none".into(),
             };
             parts.push(format!(
-                "FLIP <= {b}: conservative {}; stochastic in one frame {}{ratio}; static view, stochastic accumulated {static_view}",
+                "FLIP <= {b}: conservative {}; stochastic in one frame {}{ratio}; static view, stochastic accumulated {static_view}{hierarchy}",
                 name(c),
                 name(s)
             ));
@@ -192,6 +214,30 @@ mod tests {
         );
         assert!(
             f[0].contains("`stoch-acc4` (0.300 ms a frame, 1.200 ms for its 4 frames"),
+            "{}",
+            f[0]
+        );
+        assert!(!f[0].contains("hierarchy"), "{}", f[0]);
+        // The hierarchy is its own family, never a cut-off; its cells count the lights they
+        // shade, so a setting's label groups them with the rest.
+        let mut rows = rows.to_vec();
+        for r in &mut rows {
+            r.cell = format!("setting=hall,{}", r.cell);
+        }
+        let mut h = row("setting=hall,hierarchy=1/h0.25", "hierarchy", 0.2, 0.04, 0);
+        h.lights += 1000;
+        rows.push(h);
+        let refs: Vec<&Row> = rows.iter().collect();
+        assert_eq!(
+            fastest_within(&refs, 0.05, Family::Conservative)
+                .unwrap()
+                .cell,
+            "setting=hall,slow"
+        );
+        let f = findings(&rows);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert!(
+            f[0].contains("lighting grid hierarchy `setting=hall,hierarchy=1/h0.25` (0.200 ms"),
             "{}",
             f[0]
         );

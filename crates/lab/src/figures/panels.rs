@@ -131,10 +131,13 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
         .map_err(err)
 }
 
-/// The cell's name parts that set the radius rule: `threshold=`, `radius=` or `stochastic=`.
+/// The cell's name parts that set the radius rule: `threshold=`, `radius=`, `stochastic=` or
+/// `hierarchy=`.
 fn radius_part(cell: &str) -> Option<&str> {
     cell.split(',').find(|p| {
-        p.starts_with("threshold=") || p.starts_with("stochastic=") || p.starts_with("radius=")
+        ["threshold=", "stochastic=", "radius=", "hierarchy="]
+            .iter()
+            .any(|k| p.starts_with(k))
     })
 }
 
@@ -145,6 +148,7 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
         let name = match r.radius_rule.as_str() {
             "threshold" => "cut-off thresholds",
             "stochastic" => "stochastic",
+            "hierarchy" => "lighting grid hierarchy",
             _ => "fixed radius",
         };
         return (name.into(), None);
@@ -155,6 +159,15 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
     match kind {
         "threshold" => ("cut-off thresholds".into(), v),
         "radius" => ("fixed radii".into(), v),
+        // `hierarchy=A/hH`: a family a finest spacing, swept over alpha.
+        "hierarchy" => {
+            let h = pieces.next().and_then(|p| p.strip_prefix('h'));
+            let name = match h {
+                Some(h) => format!("lighting grid hierarchy, spacing {h} m"),
+                None => "lighting grid hierarchy".into(),
+            };
+            (name, v)
+        }
         _ => {
             let (mut acc, mut il, mut extra) = (None, None, Vec::new());
             for p in pieces {
@@ -667,6 +680,10 @@ mod tests {
         assert_eq!(
             f("stochastic=1/albedo,variant=x").0,
             "stochastic, one frame (albedo)"
+        );
+        assert_eq!(
+            f("setting=hall,hierarchy=2/h0.25,variant=x"),
+            ("lighting grid hierarchy, spacing 0.25 m".into(), Some(2.0))
         );
     }
 }
