@@ -31,6 +31,8 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
                 (label: "forward-zbin", backend: Forward, strategy: ZBin(tile_size: 8)),
                 (label: "deferred-clusters", backend: Deferred, strategy: Clustered(tile_size: 16, slices: 16)),
                 (label: "deferred-gather", backend: Deferred, strategy: TiledGather(tile_size: 8)),
+                (label: "forward-scatter", backend: Forward, strategy: TiledScatter(tile_size: 8)),
+                (label: "deferred-depthmask", backend: Deferred, strategy: DepthMask(tile_size: 8)),
                 (label: "naive", backend: NaiveForward),
             ],
         ),
@@ -38,7 +40,7 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
     let e = Experiment::parse(src, Path::new("hierarchy.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
-    assert_eq!(s.rows.len(), 10);
+    assert_eq!(s.rows.len(), 14);
     for r in &s.rows {
         let cell = &r.cell;
         assert_eq!(r.radius_rule, "hierarchy", "{cell}");
