@@ -1,9 +1,13 @@
-//! The orchestration: [`Culler`] builds every strategy's and building block's pipelines once, and
+//! The orchestration: [`Culler`] builds every strategy's and building block's pipelines once
+//! (tiled scatter's, the clusters' and z-binning's at their first run), and
 //! a run checks its inputs, computes the parameters and hands them to the strategy's module
 //! ([`crate::strategies`]), which records its plan through [`crate::frame::execute`].
 
 use manylights_gpu::pipeline::{self, UNIFORM, depth_texture, storage};
 use manylights_gpu::timing::GpuTimer;
+use std::sync::OnceLock;
+
+use manylights_gpu::shaders::ShaderDef;
 use manylights_gpu::{GpuContext, GpuScene};
 
 use crate::blocks::lists::Lists;
@@ -108,9 +112,17 @@ pub struct Culler {
     pub(crate) tile_masks: TileMasks,
     pub(crate) lists: Lists,
     pub(crate) gather: tiled_gather::Pipelines,
-    pub(crate) scatter: tiled_scatter::Pipelines,
-    pub(crate) clustered: clustered::Pipelines,
-    pub(crate) zbin: zbin::Pipelines,
+    /// Built at the strategy's first run ([`Culler::scatter`], [`Culler::clustered`],
+    /// [`Culler::zbin`]): the clusters' pipelines are half of all culling's, and a renderer
+    /// that never runs a strategy need not build it (on a software rasteriser building every
+    /// pipeline took 3 s, 2 of them the clusters').
+    scatter: OnceLock<tiled_scatter::Pipelines>,
+    clustered: OnceLock<clustered::Pipelines>,
+    zbin: OnceLock<zbin::Pipelines>,
+    /// What the pipelines built at first use are built over.
+    device: wgpu::Device,
+    scene_layout: wgpu::BindGroupLayout,
+    input: DepthInput,
     pub(crate) per_pixel: PerPixel,
     scan: Scan,
     pub(crate) sort: RadixSort,
@@ -128,7 +140,8 @@ fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
 }
 
 impl Culler {
-    /// Builds every pipeline for scenes laid out as [`GpuScene`].
+    /// Builds the pipelines for scenes laid out as [`GpuScene`] (tiled scatter's, the
+    /// clusters' and z-binning's at their strategy's first run).
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         Self::with_subgroups(ctx, scene, true)
     }
@@ -210,9 +223,12 @@ impl Culler {
             tile_masks: TileMasks::new(d, &gather),
             lists: Lists::new(d, &gather),
             gather: tiled_gather::Pipelines::new(d, &gather),
-            scatter: tiled_scatter::Pipelines::new(d, &program(&TILED_SCATTER)),
-            clustered: clustered::Pipelines::new(d, &program(&CLUSTERED)),
-            zbin: zbin::Pipelines::new(d, &program(&ZBIN), &program(&ZBIN_SCATTER)),
+            scatter: OnceLock::new(),
+            clustered: OnceLock::new(),
+            zbin: OnceLock::new(),
+            device: d.clone(),
+            scene_layout: scene.layout.clone(),
+            input,
             per_pixel: PerPixel::new(d, samples, &scene.layout, &lists_layout),
             layout,
             samples,
@@ -236,6 +252,41 @@ impl Culler {
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),
         }
+    }
+
+    /// A program of `def` over this culler's depth input and layouts.
+    fn program(&self, def: &ShaderDef) -> Program {
+        Program::new(
+            &self.device,
+            def,
+            self.input,
+            &self.scene_layout,
+            &self.layout,
+        )
+    }
+
+    /// Tiled scatter's pipelines, built at their first use.
+    pub(crate) fn scatter(&self) -> &tiled_scatter::Pipelines {
+        self.scatter.get_or_init(|| {
+            tiled_scatter::Pipelines::new(&self.device, &self.program(&TILED_SCATTER))
+        })
+    }
+
+    /// The clusters' pipelines, built at their first use.
+    pub(crate) fn clustered(&self) -> &clustered::Pipelines {
+        self.clustered
+            .get_or_init(|| clustered::Pipelines::new(&self.device, &self.program(&CLUSTERED)))
+    }
+
+    /// Z-binning's pipelines, built at their first use.
+    pub(crate) fn zbin(&self) -> &zbin::Pipelines {
+        self.zbin.get_or_init(|| {
+            zbin::Pipelines::new(
+                &self.device,
+                &self.program(&ZBIN),
+                &self.program(&ZBIN_SCATTER),
+            )
+        })
     }
 
     /// Runs `strategy` over the depth buffer `depth` of `scene` (whose frame uniform is set for

@@ -15,8 +15,8 @@
 //!   tile masks, tile lines, list finalisation; the exclusive scan; the radix sort);
 //! - [`record`]: passes as data and the one recorder that encodes, labels and times them;
 //!   `frame` runs a plan once (sized exactly between two submissions) or back to back;
-//! - [`Culler`]: builds every pipeline once and runs a strategy; [`CullOutput`] is what a run
-//!   leaves on the GPU;
+//! - [`Culler`]: builds every pipeline once (a strategy's own at its first run) and runs a
+//!   strategy; [`CullOutput`] is what a run leaves on the GPU;
 //! - [`cpu`]: the CPU oracle of every pass; [`metrics`]: the exact per-pixel oracle and list
 //!   metrics; [`per_pixel`]: the per-pixel list consumers on the GPU; [`geometry`]: the
 //!   culling geometry both sides share; [`layout`]: host mirrors of the WGSL structs and shared

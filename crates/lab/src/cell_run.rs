@@ -17,7 +17,7 @@ use crate::dynamic::{Movers, hierarchy_plan};
 use crate::evaluate::{PoseEval, References, evaluate, temporal_stability};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment, params_label};
 use crate::noise::{Draws, Noise, measure};
-use crate::renderers::Renderers;
+use crate::renderers::{ReferenceFrames, Renderers};
 use crate::results::{Row, percentiles};
 use crate::runner::{category, now, stage};
 use crate::{LabError, write_atomic};
@@ -209,7 +209,7 @@ pub(crate) fn run_cell(
     cell: &Cell,
     (base, out): (&Path, &Path),
     commit: &str,
-    renderers: &mut Renderers,
+    (renderers, kept_frames): (&mut Renderers, &ReferenceFrames),
 ) -> Result<Row, LabError> {
     let resolved = cell.config.at_limits(ctx);
     let c = &resolved;
@@ -311,6 +311,7 @@ pub(crate) fn run_cell(
             rr,
             inf,
             cache: (!moving).then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
+            frames: (!moving).then_some(kept_frames),
             lights_as_they_are: as_they_are.as_ref(),
         }),
         _ => None,

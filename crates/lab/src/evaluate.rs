@@ -16,6 +16,7 @@ use manylights_shade::{Backend, HdrImage, InfiniteReference, ReferenceRenderer, 
 
 use crate::LabError;
 use crate::experiment::Config;
+use crate::renderers::ReferenceFrames;
 use crate::runner::{category, stage};
 use crate::steady::{steady_cull, steady_cull_shade, steady_geometry};
 
@@ -213,8 +214,11 @@ pub(crate) fn evaluate(
     let (mut infinite, mut infinite_cached) = (None, None);
     if let Some(refs) = reference {
         let windowed = if c.cutoff_reference {
-            let r = stage(pose, "reference rendered", || {
-                refs.rr.render(ctx, gpu_scene, w, h)
+            let r = stage(pose, "reference rendered", || match refs.frames {
+                Some(kept) => kept.get_or(ReferenceFrames::key(c, cam).as_deref(), || {
+                    refs.rr.render(ctx, gpu_scene, w, h)
+                }),
+                None => refs.rr.render(ctx, gpu_scene, w, h),
             })
             .map_err(|e| other(&e))?;
             acc = Some(compare(&o.color, &r.color, 1.0));
@@ -262,6 +266,9 @@ pub(crate) struct References<'a> {
     pub(crate) rr: &'a ReferenceRenderer,
     pub(crate) inf: &'a InfiniteReference,
     pub(crate) cache: Option<(&'a std::path::Path, u64)>,
+    /// The run's brute-force reference frames, which the cells of one view share (none for
+    /// moving lights).
+    pub(crate) frames: Option<&'a ReferenceFrames>,
     /// The scene of the lights as they are, where the cell shades others in their place (the
     /// lighting grid hierarchy's): the infinite-range reference is theirs.
     pub(crate) lights_as_they_are: Option<&'a GpuScene>,

@@ -3,10 +3,14 @@
 //! cell's 2.3). A renderer's pipelines depend only on the sample count, the lit image's format,
 //! whether the scene has transparent surfaces, its opaque surfaces' material models and whether
 //! its lights are all windowed point lights: bind group layouts of equal entries are one layout
-//! to wgpu, so a renderer serves every scene laid out alike.
+//! to wgpu, so a renderer serves every scene laid out alike. Also the brute-force reference
+//! frames of the latest views ([`ReferenceFrames`]).
 
 use manylights_gpu::{GpuContext, GpuError, GpuScene};
-use manylights_shade::{HdrFormat, Renderer};
+use manylights_scene::Camera;
+use manylights_shade::{HdrFormat, ReferenceFrame, Renderer};
+
+use crate::experiment::Config;
 
 /// What a renderer is built for: samples a pixel, glass, the opaque material models in order,
 /// windowed point lights alone, stochastic ranges on them, the lit image's format.
@@ -53,5 +57,144 @@ impl Renderers {
             }
         };
         Ok(&self.0[i].1)
+    }
+}
+
+/// The brute-force (windowed) reference frames of a run's recent views, kept from cell to cell:
+/// the cells of a sweep over strategies and backends share their scene, lights and view, and
+/// so their reference, which on a software rasteriser costs more than the cell itself.
+///
+/// A frame is kept under [`ReferenceFrames::key`]: the cell's configuration less what does not
+/// reach the reference (strategy, backend, the culler's budgets, frame counts, the oracle's
+/// stride, export) and the camera. Cells of moving lights do not use it (their lights differ
+/// from frame to frame).
+#[derive(Default)]
+pub(crate) struct ReferenceFrames(std::cell::RefCell<Vec<(String, ReferenceFrame)>>);
+
+impl ReferenceFrames {
+    /// The most frames kept (a camera path's poses, or the views of a few scenes).
+    const KEEP: usize = 4;
+
+    /// The key of a cell's reference of `camera` (none where it cannot be written).
+    pub fn key(c: &Config, camera: &Camera) -> Option<String> {
+        let neutral = Config {
+            strategy: manylights_cull::Strategy::tiled_gather(16),
+            backend: manylights_shade::Backend::Forward,
+            capacity: None,
+            mask_budget: None,
+            tile_boxes: false,
+            slack: 0.0,
+            frames: 1,
+            warmup: 0,
+            exact_stride: 1,
+            export: false,
+            ..c.clone()
+        };
+        Some(format!(
+            "{}\n{}",
+            ron::to_string(&neutral).ok()?,
+            serde_json::to_string(camera).ok()?
+        ))
+    }
+
+    /// The frame kept under `key`, or `render`'s (then kept).
+    pub fn get_or<E>(
+        &self,
+        key: Option<&str>,
+        render: impl FnOnce() -> Result<ReferenceFrame, E>,
+    ) -> Result<ReferenceFrame, E> {
+        let Some(key) = key else {
+            return render();
+        };
+        if let Some((_, f)) = self.0.borrow().iter().find(|(k, _)| k == key) {
+            return Ok(f.clone());
+        }
+        let frame = render()?;
+        let mut kept = self.0.borrow_mut();
+        if kept.len() == Self::KEEP {
+            kept.remove(0);
+        }
+        kept.push((key.to_string(), frame.clone()));
+        Ok(frame)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::ReferenceFrames;
+    use crate::Experiment;
+
+    /// Cells that differ only in strategy, backend and the culler's budgets share their
+    /// reference; cells of other lights or another view do not.
+    #[test]
+    fn cells_of_one_view_and_light_set_share_a_reference() {
+        let src = r#"Experiment(
+            name: "t",
+            config: Config(scene: Atrium(), lights: (count: 64), resolution: (16, 8)),
+            sweep: (
+                light_count: [64, 128],
+                variants: [
+                    (label: "a", backend: Forward, strategy: TiledGather(tile_size: 16)),
+                    (label: "b", backend: Deferred, strategy: ZBin(tile_size: 8, bins: 16), capacity: Some(64)),
+                ],
+            ),
+        )"#;
+        let e = Experiment::parse(src, Path::new("t.ron")).unwrap();
+        let cells = e.cells();
+        assert_eq!(cells.len(), 4);
+        let cam = manylights_scene::Camera::perspective(
+            glam::Vec3::new(0.0, 1.0, 5.0),
+            glam::Vec3::ZERO,
+            60.0,
+            0.1,
+            50.0,
+        );
+        let key = |i: usize| ReferenceFrames::key(&cells[i].config, &cam).unwrap();
+        let by_count = |n: u32| {
+            (0..4)
+                .filter(|&i| cells[i].config.lights.count == n)
+                .map(key)
+                .collect::<Vec<_>>()
+        };
+        let (small, big) = (by_count(64), by_count(128));
+        assert_eq!(small.len(), 2);
+        assert_eq!(small[0], small[1]);
+        assert_eq!(big[0], big[1]);
+        assert_ne!(small[0], big[0]);
+        let moved = manylights_scene::Camera {
+            position: cam.position + glam::Vec3::X,
+            ..cam
+        };
+        assert_ne!(
+            small[0],
+            ReferenceFrames::key(&cells[0].config, &moved).unwrap()
+        );
+        // A frame is rendered once a key, and kept.
+        let frames = ReferenceFrames::default();
+        let mut rendered = 0;
+        for k in [&small[0], &small[1], &big[0], &small[0]] {
+            let _ = frames.get_or(Some(k), || {
+                rendered += 1;
+                Ok::<_, ()>(blank())
+            });
+        }
+        assert_eq!(rendered, 2);
+    }
+
+    fn blank() -> manylights_shade::ReferenceFrame {
+        let img = manylights_shade::HdrImage {
+            width: 1,
+            height: 1,
+            data: vec![[0.0; 4]],
+        };
+        manylights_shade::ReferenceFrame {
+            color: img.clone(),
+            position: img.clone(),
+            normal: img,
+            depth: vec![1.0],
+            timings: None,
+        }
     }
 }

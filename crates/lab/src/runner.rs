@@ -18,7 +18,7 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 use manylights_gpu::GpuContext;
 
 use crate::experiment::{Cell, Experiment};
-use crate::renderers::Renderers;
+use crate::renderers::{ReferenceFrames, Renderers};
 use crate::results::{Row, load_cells, save_cell, write_results};
 use crate::{LabError, write_atomic};
 
@@ -140,6 +140,7 @@ pub fn run_parsed(
     bar.set_position(skipped as u64);
     let mut ran = 0;
     let mut renderers = Renderers::default();
+    let frames = ReferenceFrames::default();
     for cell in todo {
         if opts.max_cells.is_some_and(|m| ran >= m)
             || opts.deadline.is_some_and(|d| Instant::now() >= d)
@@ -147,13 +148,19 @@ pub fn run_parsed(
             break;
         }
         bar.set_message(cell.name.clone());
-        let row =
-            crate::cell_run::run_cell(ctx, exp, cell, (base, out), &opts.commit, &mut renderers)
-                .map_err(|e| LabError::Cell {
-                    index: cell.index,
-                    name: cell.name.clone(),
-                    message: e.to_string(),
-                })?;
+        let row = crate::cell_run::run_cell(
+            ctx,
+            exp,
+            cell,
+            (base, out),
+            &opts.commit,
+            (&mut renderers, &frames),
+        )
+        .map_err(|e| LabError::Cell {
+            index: cell.index,
+            name: cell.name.clone(),
+            message: e.to_string(),
+        })?;
         save_cell(out, &row)?;
         ran += 1;
         bar.inc(1);

@@ -127,7 +127,7 @@ impl Plan for MasksPlan<'_> {
         steps.push(c.tile_depth.pass(&f.params, &self.group_a, Rows::Blocks));
         steps.push(Step::pass(
             "cull.tiled_scatter.count",
-            &c.scatter.masks,
+            &c.scatter().masks,
             &self.group_a,
             (self.groups, 1),
             &[
@@ -229,7 +229,7 @@ impl Plan for PairsPlan<'_> {
         steps.push(c.tile_depth.pass(&f.params, &self.group_a, Rows::None));
         steps.push(Step::pass(
             "cull.tiled_scatter.count",
-            &c.scatter.count,
+            &c.scatter().count,
             &self.group_a,
             self.light_groups,
             &[Buf::TileDepth, Buf::Lights],
@@ -291,7 +291,7 @@ impl Plan for PairsPlan<'_> {
         vec![
             Step::pass(
                 "cull.tiled_scatter.pairs",
-                &c.scatter.pairs,
+                &c.scatter().pairs,
                 &s.group_pairs,
                 self.light_groups,
                 &[Buf::TileDepth, Buf::Lights, Buf::Offsets],
@@ -307,7 +307,7 @@ impl Plan for PairsPlan<'_> {
             },
             Step::pass(
                 "cull.tiled_scatter.ranges",
-                &c.scatter.ranges,
+                &c.scatter().ranges,
                 s.group_sorted(),
                 groups_2d(s.n.div_ceil(64), GROUPS_X),
                 &[Buf::PairKeys, Buf::Offsets],
@@ -315,7 +315,7 @@ impl Plan for PairsPlan<'_> {
             ),
             Step::pass(
                 "cull.finalize",
-                &c.scatter.finalize,
+                &c.scatter().finalize,
                 s.group_sorted(),
                 crate::blocks::lists::bin_groups(f),
                 &[Buf::Ranges, Buf::Cursors],

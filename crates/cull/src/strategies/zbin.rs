@@ -191,7 +191,7 @@ impl Plan for ZBinPlan<'_> {
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
         let (f, c) = (self.f, self.r.culler);
         let p = &f.params;
-        let z = &c.zbin;
+        let z = c.zbin();
         let mut steps = vec![
             f.clear_ranges(),
             c.tile_depth.pass(p, &self.group_lists, Rows::Rects),

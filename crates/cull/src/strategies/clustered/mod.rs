@@ -245,7 +245,7 @@ impl<'a> ClusterPlan<'a> {
 impl Plan for ClusterPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
         let (f, c) = (self.f, self.r.culler);
-        let g = &c.clustered;
+        let g = c.clustered();
         if self.by_tiles {
             // Every cluster's count is stored and every range finalized: only the stats need
             // clearing, and with the cursor not those (its passes zero the words they use).
@@ -391,7 +391,7 @@ impl Plan for ClusterPlan<'_> {
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
         let (_, group) = self.sized.as_ref().expect("sized before the fill");
         let (f, c) = (self.f, self.r.culler);
-        let g = &c.clustered;
+        let g = c.clustered();
         if self.by_tiles {
             // It writes every range: no cull.finalize.
             let (pipeline, reads, writes): (_, &[Buf], &[Buf]) = if self.cursor {
