@@ -40,8 +40,8 @@ pub(crate) struct TuneArgs {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) exact_stride: u32,
     /// Rank only configurations within this mean FLIP of the infinite-range reference (the
-    /// light with no cut-off): light ranges become candidates too (--thresholds, --errors),
-    /// each scored against that reference.
+    /// light with no cut-off): light ranges become candidates too (--thresholds, --errors,
+    /// --alphas), each scored against that reference.
     #[arg(long, value_parser = positive_f64)]
     pub(crate) max_error: Option<f64>,
     /// With --max-error: the thresholds whose radius cut-offs are tried
@@ -52,6 +52,21 @@ pub(crate) struct TuneArgs {
     /// E, which joins them; --bound, --accumulate and --interleave apply to each).
     #[arg(long, value_delimiter = ',', default_values_t = [4.0, 1.0, 0.25], value_parser = positive_f32)]
     pub(crate) errors: Vec<f32>,
+    /// With --max-error: the accuracy parameters (alpha, at least 1) of the lighting grid
+    /// hierarchy tried, each with --spacing (`radius: Hierarchy(alpha, spacing)`).
+    #[arg(long, value_delimiter = ',', default_values_t = [1.0, 2.0], value_parser = alpha)]
+    pub(crate) alphas: Vec<f32>,
+    /// With --max-error: the hierarchy's finest grid spacing in metres, at least (it doubles
+    /// while the grid would hold more than a quarter as many nodes as there are lights).
+    #[arg(long, default_value_t = 0.25, value_parser = positive_f32)]
+    pub(crate) spacing: f32,
+}
+
+fn alpha(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
+        _ => Err(format!("`{s}`: a finite accuracy parameter of at least 1")),
+    }
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {
@@ -138,7 +153,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
             "{:>4}  {:<64} {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9}",
             i + 1,
             format!("{} ({}){}", r.strategy, r.params, range_of(r)),
-            ms(r.gpu_ms_cull_shade),
+            ms(manylights_lab::tune::cost(r)),
             ms(r.gpu_ms_cull_steady),
             r.lights_per_pixel_mean
                 .map_or("-".into(), |v| format!("{v:.1}")),
@@ -151,7 +166,12 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         );
     }
     for (r, why) in &report.rejected {
-        println!("rejected: {} ({}): {why}", r.strategy, r.params);
+        println!(
+            "rejected: {} ({}){}: {why}",
+            r.strategy,
+            r.params,
+            range_of(r)
+        );
     }
     for (s, why) in &report.left_out {
         println!("left out: {s:?}: {why}");
@@ -166,11 +186,17 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     }
     let best = &report.ranked[0];
     println!(
-        "best: {} + {} ({}): {} ms of culling and shading",
+        "best: {} + {} ({}){}: {} ms of culling and shading{}",
         best.backend,
         best.strategy,
         best.params,
-        ms(best.gpu_ms_cull_shade)
+        range_of(best),
+        ms(manylights_lab::tune::cost(best)),
+        if best.gpu_ms_hierarchy.is_some() {
+            " with the hierarchy's build"
+        } else {
+            ""
+        }
     );
     println!(
         "wrote {} (reproduce it with `manylights run {}`)",
@@ -183,9 +209,9 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     Ok(())
 }
 
-/// With --max-error, the light ranges tried: --thresholds' cut-offs and --errors' stochastic
+/// With --max-error, the light ranges tried: --thresholds' cut-offs, --errors' stochastic
 /// bounds (with --stochastic's E among them, and its --bound, --accumulate and --interleave
-/// on each).
+/// on each) and --alphas' lighting grid hierarchies (with --spacing).
 fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
     let a = &args.scene;
     let mut errors = args.errors.clone();
@@ -228,17 +254,23 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
             },
             other => other,
         }))
+        .chain(args.alphas.iter().map(|&alpha| RadiusRule::Hierarchy {
+            alpha,
+            spacing: args.spacing,
+        }))
         .collect()
 }
 
 /// The light range a ranked candidate was tried with, where ranges were candidates: the cell
-/// name's radius part (` threshold=0.1`, ` stochastic=1`), else nothing.
+/// name's radius part (` threshold=0.1`, ` stochastic=1`, ` hierarchy=1/h0.25`), else nothing.
 fn range_of(r: &manylights_lab::Row) -> String {
     r.cell
         .split(',')
         .next()
         .filter(|p| {
-            p.starts_with("threshold=") || p.starts_with("stochastic=") || p.starts_with("radius=")
+            ["threshold=", "stochastic=", "radius=", "hierarchy="]
+                .iter()
+                .any(|k| p.starts_with(k))
         })
         .map_or(String::new(), |p| format!(" {p}"))
 }

@@ -221,6 +221,8 @@ fn tune_takes_stochastic_ranges() {
             "1",
             "--errors",
             "0.5",
+            "--alphas",
+            "1",
             "--stochastic",
             "2",
             "--accumulate",

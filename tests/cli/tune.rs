@@ -69,8 +69,9 @@ fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
 
 /// `tune --max-error F`: light ranges are candidates too, every candidate is scored against
 /// the infinite-range reference, and only those within mean FLIP F are ranked; the best is
-/// written with its radius rule. A budget none reaches is an error naming the lowest error; a
-/// budget that is not a positive number is a usage error.
+/// written with its radius rule; the lighting grid hierarchy is among them (--alphas). A budget
+/// none reaches is an error naming the lowest error; a budget that is not a positive number is
+/// a usage error.
 #[test]
 fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
     let tmp = tempfile::tempdir().unwrap();
@@ -79,7 +80,7 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
         "--scene",
         "atrium",
         "--lights",
-        "48",
+        "96",
         "--width",
         "48",
         "--height",
@@ -91,6 +92,10 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
         "--thresholds",
         "1",
         "--errors",
+        "0.5",
+        "--alphas",
+        "1",
+        "--spacing",
         "0.5",
     ];
     let mut args = vec!["tune", "--out", out.to_str().unwrap(), "--max-error", "0.6"];
@@ -118,7 +123,30 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
     let rows = manylights_lab::results::load_rows(&out).unwrap();
     let best = rows.iter().find(|r| r.id == e.cells()[0].id()).unwrap();
     assert!(best.flip_mean_infinite.unwrap() <= 0.6);
-    assert_eq!(best.radius_rule, "stochastic", "{stdout}");
+    assert!(
+        ["stochastic", "hierarchy"].contains(&best.radius_rule.as_str()),
+        "{stdout}"
+    );
+    // The lighting grid hierarchy is a candidate with every strategy, built on the GPU and
+    // scored against infinite range, its build counted in its time.
+    let hier: Vec<_> = rows
+        .iter()
+        .filter(|r| r.radius_rule == "hierarchy")
+        .collect();
+    assert_eq!(
+        hier.len(),
+        rows.len() / 3,
+        "one candidate in three is the hierarchy's: {stdout}"
+    );
+    for r in &hier {
+        assert!(r.gpu_ms_hierarchy.is_some_and(|t| t > 0.0), "{}", r.cell);
+        assert!(r.flip_mean_infinite.is_some(), "{}", r.cell);
+        assert_eq!(r.false_negatives, Some(0), "{}", r.cell);
+    }
+    assert!(
+        stdout.lines().any(|l| l.contains(" hierarchy=1/h0.5")),
+        "{stdout}"
+    );
     // None within a budget no candidate reaches (the same cells, resumed).
     let mut args = vec![
         "tune",

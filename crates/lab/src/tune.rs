@@ -8,8 +8,9 @@
 //! reproduces. A time budget stops starting candidates; those left are reported as untried.
 //!
 //! With an error budget ([`TuneOptions::max_error`]) the light ranges are candidates too
-//! ([`TuneOptions::radii`]: radius cut-offs from thresholds and stochastic light culling's
-//! error bounds), every candidate is scored against the infinite-range reference (computed
+//! ([`TuneOptions::radii`]: radius cut-offs from thresholds, stochastic light culling's
+//! error bounds and the lighting grid hierarchy's alphas, its build counted in its time:
+//! [`cost`]), every candidate is scored against the infinite-range reference (computed
 //! once and cached in the output folder), and only those within the budget of mean FLIP
 //! against it (`flip_mean_infinite`) are ranked: the fastest configuration that is accurate
 //! enough against the light as it is.
@@ -24,6 +25,14 @@ use crate::experiment::{Config, Experiment, Sweep, Variant};
 use crate::results::Row;
 use crate::runner::{RunOptions, run_parsed};
 use crate::{LabError, write_atomic};
+
+/// What a candidate is ranked by, ms: culling and the shading pass that reads the lists, back
+/// to back (`gpu_ms_cull_shade`), and, with the lighting grid hierarchy, its build each frame
+/// (`gpu_ms_hierarchy`), which the frame pays too.
+pub fn cost(r: &Row) -> Option<f64> {
+    r.gpu_ms_cull_shade
+        .map(|t| t + r.gpu_ms_hierarchy.unwrap_or(0.0))
+}
 
 /// How to tune.
 #[derive(Clone, Debug)]
@@ -171,7 +180,7 @@ pub fn tune(
             // The budget is left out: the same cells serve any budget, so a rerun with another
             // one in the same folder ranks them again without running anything.
             Some(_) => format!(
-                "manylights tune --max-error: every strategy and parameter candidate with every light range (radius cut-offs and stochastic light culling) and the {} backend, scored against the infinite-range reference; those within the error budget ranked by culling and shading together (gpu_ms_cull_shade).",
+                "manylights tune --max-error: every strategy and parameter candidate with every light range (radius cut-offs, stochastic light culling and the lighting grid hierarchy) and the {} backend, scored against the infinite-range reference; those within the error budget ranked by culling and shading together (gpu_ms_cull_shade).",
                 base.backend.name()
             ),
         },
@@ -211,7 +220,7 @@ pub fn tune(
             Some(why) => rejected.push((r, why)),
         }
     }
-    let time = |r: &Row| r.gpu_ms_cull_shade.unwrap_or(f64::INFINITY);
+    let time = |r: &Row| cost(r).unwrap_or(f64::INFINITY);
     ranked.sort_by(|a, b| time(a).total_cmp(&time(b)));
     let best = ranked.first().ok_or_else(|| {
         let closest = rejected
@@ -221,7 +230,7 @@ pub fn tune(
         let error = match (opts.max_error, closest) {
             (Some(f), Some(c)) => format!(
                 "; the lowest mean FLIP against infinite range was {c:.4}, against --max-error {f}: \
-                 raise it, or try longer ranges (--thresholds, --errors)"
+                 raise it, or try longer ranges (--thresholds, --errors, --alphas)"
             ),
             _ => String::new(),
         };
@@ -241,13 +250,18 @@ pub fn tune(
     let best_exp = Experiment {
         name: "tuned".into(),
         description: format!(
-            "The fastest conservative configuration manylights tune found on {} ({} + {}, {}, {}: {:.3} ms of culling and shading{}).",
+            "The fastest conservative configuration manylights tune found on {} ({} + {}, {}, {}: {:.3} ms of culling and shading{}{}).",
             best.adapter,
             best.backend,
             best.strategy,
             best.params,
             cell.config.lights.radius.kind(),
-            best.gpu_ms_cull_shade.unwrap_or(f64::NAN),
+            cost(best).unwrap_or(f64::NAN),
+            if best.gpu_ms_hierarchy.is_some() {
+                " with the hierarchy's build"
+            } else {
+                ""
+            },
             match (opts.max_error, best.flip_mean_infinite) {
                 (Some(b), Some(f)) =>
                     format!(", mean FLIP {f:.4} against infinite range within {b}"),
