@@ -193,8 +193,9 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
         let out = tmp.path().join(name);
         let shard = match name {
             "infinite-range" => Some((0, 17)),
-            // 13 cells: a cut-off, stochastic in one frame with either draw, interleaved.
-            "infinite-range-1m" => Some((0, 4)),
+            // 15 cells: every other one has cut-offs, stochastic in one frame with either draw,
+            // accumulated and interleaved, and the hierarchy.
+            "infinite-range-1m" => Some((0, 2)),
             // 56 cells: one in 11 from the fourth has both settings, every variant, and 5 of
             // the 7 model lists (the five mixed among them).
             "material-variety" => Some((3, 11)),

@@ -447,7 +447,7 @@ fn ordered_strategies_render_bit_identical_frames() {
             let runs: Vec<_> = (0..2)
                 .map(|_| {
                     let out = renderer
-                        .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
+                        .render(&ctx, gpu_scene, backend, &strategy, &settings, (w, h))
                         .unwrap();
                     let lists = out.lists.as_ref().unwrap().read(&ctx).unwrap();
                     (out.color.data, lists)
