@@ -214,11 +214,8 @@ pub(crate) fn evaluate(
     let (mut infinite, mut infinite_cached) = (None, None);
     if let Some(refs) = reference {
         let windowed = if c.cutoff_reference {
-            let r = stage(pose, "reference rendered", || match refs.frames {
-                Some(kept) => kept.get_or(ReferenceFrames::key(c, cam).as_deref(), || {
-                    refs.rr.render(ctx, gpu_scene, w, h)
-                }),
-                None => refs.rr.render(ctx, gpu_scene, w, h),
+            let r = stage(pose, "reference rendered", || {
+                refs.windowed(ctx, gpu_scene, c, cam)
             })
             .map_err(|e| other(&e))?;
             acc = Some(compare(&o.color, &r.color, 1.0));
@@ -275,6 +272,23 @@ pub(crate) struct References<'a> {
 }
 
 impl References<'_> {
+    /// The brute-force reference frame of the view, from the run's kept frames where a cell of
+    /// the same view rendered it.
+    pub(crate) fn windowed(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        c: &Config,
+        cam: &Camera,
+    ) -> Result<manylights_shade::ReferenceFrame, manylights_gpu::GpuError> {
+        let (w, h) = c.resolution;
+        let render = || self.rr.render(ctx, gpu_scene, w, h);
+        match self.frames {
+            Some(kept) => kept.get_or(ReferenceFrames::key(c, cam).as_deref(), render),
+            None => render(),
+        }
+    }
+
     /// The infinite-range image of the view, from the cache where it holds it under the same
     /// key, and whether it did.
     pub(crate) fn infinite(
