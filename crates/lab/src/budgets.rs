@@ -43,29 +43,47 @@ impl Family {
     }
 }
 
-/// The fastest row of `rows` within `budget` of `family`, by `gpu_ms_cull_shade` (a frame's).
+/// The fastest row of `rows` within `budget` of `family`, by a frame's culling and shading
+/// (`gpu_ms_cull_shade`) and, for the hierarchy, its build (`crate::tune::cost`).
 pub fn fastest_within<'a>(rows: &[&'a Row], budget: f64, family: Family) -> Option<&'a Row> {
     rows.iter()
         .copied()
         .filter(|r| family.holds(r))
         .filter(|r| r.false_negatives.unwrap_or(0) == 0 && r.dropped_lights == 0)
         .filter(|r| r.flip_mean_infinite.is_some_and(|f| f <= budget))
-        .filter_map(|r| Some((r.gpu_ms_cull_shade?, r)))
+        .filter_map(|r| Some((crate::tune::cost(r)?, r)))
         .min_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, r)| r)
 }
 
+/// A finding's name of a row: its cell, time and error (with the hierarchy's build apart).
+fn name(r: Option<&Row>) -> String {
+    let Some(r) = r else {
+        return "none".into();
+    };
+    let ms = r.gpu_ms_cull_shade.unwrap_or(f64::NAN);
+    let time = match r.gpu_ms_hierarchy {
+        Some(b) => format!("{ms:.3} ms + {b:.3} ms build"),
+        None => format!("{ms:.3} ms"),
+    };
+    format!(
+        "`{}` ({time}, FLIP {:.3})",
+        r.cell,
+        r.flip_mean_infinite.unwrap_or(f64::NAN)
+    )
+}
+
 /// The findings lines (none where no row was measured against infinite range).
 pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
-    // A setting is its `setting=` label where the cell has one (a hierarchy's cells count the
-    // lights they shade, which differ with alpha and spacing), else its light count.
+    // A setting is its `setting=` label where the cell has one, else its light count (the
+    // scene's: a hierarchy's cells count the nodes they shade, `Row::setting_lights`).
     let mut settings: BTreeMap<(String, String, u32, u32, u32), Vec<&Row>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.flip_mean_infinite.is_some()) {
         let label = r
             .cell
             .split(',')
             .find_map(|p| p.strip_prefix("setting="))
-            .map_or_else(|| format!("{:020}", r.lights), str::to_owned);
+            .map_or_else(|| format!("{:020}", r.setting_lights()), str::to_owned);
         settings
             .entry((r.scene.clone(), label, r.width, r.height, r.msaa))
             .or_default()
@@ -73,7 +91,7 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
     }
     let mut out = Vec::new();
     for ((scene, _, w, h, msaa), rs) in &settings {
-        let lights = rs.iter().map(|r| r.lights).min().unwrap_or(0);
+        let lights = rs.iter().map(|r| r.setting_lights()).min().unwrap_or(0);
         let lights = &lights;
         let setting = if *msaa > 1 {
             format!("{scene}, {lights} lights, {w}x{h}, {msaa} samples")
@@ -93,26 +111,28 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
         }
         let mut parts = Vec::new();
         for b in BUDGETS {
-            let name = |r: Option<&Row>| match r {
-                Some(r) => format!(
-                    "`{}` ({:.3} ms, FLIP {:.3})",
-                    r.cell,
-                    r.gpu_ms_cull_shade.unwrap_or(f64::NAN),
-                    r.flip_mean_infinite.unwrap_or(f64::NAN)
-                ),
-                None => "none".into(),
-            };
             let c = fastest_within(rs, b, Family::Conservative);
             let s = fastest_within(rs, b, Family::StochasticFrame);
             let a = fastest_within(rs, b, Family::StochasticAccumulated);
+            let l = fastest_within(rs, b, Family::Hierarchy);
             let hierarchy = if rs.iter().any(|r| Family::Hierarchy.holds(r)) {
-                format!(
-                    "; lighting grid hierarchy {}",
-                    name(fastest_within(rs, b, Family::Hierarchy))
-                )
+                format!("; lighting grid hierarchy {}", name(l))
             } else {
                 String::new()
             };
+            // One frame against one frame: the family a moving view is fastest with.
+            let fastest = [
+                (c, "cut-offs"),
+                (s, "stochastic culling"),
+                (l, "the lighting grid hierarchy"),
+            ]
+            .into_iter()
+            .filter_map(|(r, f)| Some((crate::tune::cost(r?)?, f)))
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map_or_else(
+                || "none in one frame".to_owned(),
+                |(_, f)| format!("fastest in one frame: {f}"),
+            );
             let ratio = match (
                 c.and_then(|r| r.gpu_ms_cull_shade),
                 s.and_then(|r| r.gpu_ms_cull_shade),
@@ -139,13 +159,18 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
                 None => "none".into(),
             };
             parts.push(format!(
-                "FLIP <= {b}: conservative {}; stochastic in one frame {}{ratio}; static view, stochastic accumulated {static_view}{hierarchy}",
+                "FLIP <= {b}: {fastest}; conservative {}; stochastic in one frame {}{ratio}; static view, stochastic accumulated {static_view}{hierarchy}",
                 name(c),
                 name(s)
             ));
         }
+        let build = if rs.iter().any(|r| Family::Hierarchy.holds(r)) {
+            ", with the hierarchy's build, `gpu_ms_hierarchy`"
+        } else {
+            ""
+        };
         out.push(format!(
-            "Against infinite range at {setting} (mean FLIP at the reference's exposure; the fastest by culling + shading, `gpu_ms_cull_shade`; lowest error reached {best_error:.3}): {}.",
+            "Against infinite range at {setting} (mean FLIP at the reference's exposure; the fastest by culling + shading, `gpu_ms_cull_shade`{build}; lowest error reached {best_error:.3}): {}.",
             parts.join("; ")
         ));
     }
@@ -203,7 +228,9 @@ mod tests {
         let f = findings(&rows);
         assert_eq!(f.len(), 1);
         assert!(
-            f[0].contains("FLIP <= 0.05: conservative `slow`"),
+            f[0].contains(
+                "FLIP <= 0.05: fastest in one frame: stochastic culling; conservative `slow`"
+            ),
             "{}",
             f[0]
         );
@@ -241,5 +268,57 @@ mod tests {
             "{}",
             f[0]
         );
+        assert!(
+            f[0].contains("FLIP <= 0.05: fastest in one frame: the lighting grid hierarchy;"),
+            "{}",
+            f[0]
+        );
+        // Its build counts: 0.2 + 1.0 ms is slower than the stochastic frame's 1.0 ms.
+        rows.last_mut().unwrap().gpu_ms_hierarchy = Some(1.0);
+        let f = findings(&rows);
+        assert!(
+            f[0].contains("FLIP <= 0.05: fastest in one frame: stochastic culling;"),
+            "{}",
+            f[0]
+        );
+        assert!(
+            f[0].contains("(0.200 ms + 1.000 ms build, FLIP 0.040)"),
+            "{}",
+            f[0]
+        );
+        assert!(
+            f[0].contains("FLIP <= 0.02: none in one frame;"),
+            "{}",
+            f[0]
+        );
+    }
+
+    #[test]
+    fn a_hierarchy_without_a_setting_label_joins_its_scenes_setting() {
+        let row = |cell: &str, rule: &str, lights: u64| {
+            let mut r = crate::results::tests::sample_row();
+            r.cell = cell.into();
+            r.lights = lights;
+            r.false_negatives = Some(0);
+            r.flip_mean_infinite = Some(0.04);
+            r.radius_rule = rule.into();
+            r.gpu_ms_cull_shade = Some(1.0);
+            r
+        };
+        // Rows of a run before `scene_lights`: the backfill finds the scene's count.
+        let mut rows = vec![
+            row("threshold=1", "threshold", 1000),
+            row("hierarchy=1/h0.25", "hierarchy", 1234),
+        ];
+        crate::results::backfill_scene_lights(&mut rows);
+        assert_eq!(rows[1].scene_lights, Some(1000));
+        assert_eq!(rows[1].setting_lights(), 1000);
+        let f = findings(&rows);
+        assert_eq!(f.len(), 1, "{f:?}");
+        assert!(f[0].contains("1000 lights"), "{}", f[0]);
+        // A row that says its scene's count keeps it.
+        rows[1].scene_lights = Some(999);
+        crate::results::backfill_scene_lights(&mut rows);
+        assert_eq!(rows[1].setting_lights(), 999);
     }
 }

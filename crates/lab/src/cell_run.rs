@@ -518,6 +518,7 @@ pub(crate) fn run_cell(
         materials: frame_models(&scene),
         covered_pixels: Some(first.covered),
         gpu_ms_hierarchy: med(hierarchy_ms),
+        scene_lights: (c.lights.radius.kind() == "hierarchy").then_some(scene.lights.len() as u64),
         ns_per_light_eval: ns_per_light_eval(
             &first.steady_passes,
             if c.backend == Backend::NaiveForward {

@@ -98,7 +98,7 @@ fn summary(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     let mut by_lights: BTreeMap<u64, Vec<&Row>> = BTreeMap::new();
     for r in rows {
-        by_lights.entry(r.lights).or_default().push(r);
+        by_lights.entry(r.setting_lights()).or_default().push(r);
     }
     let mut prev: Option<String> = None;
     for (n, rs) in &by_lights {
@@ -237,7 +237,7 @@ fn cells_line(done: usize, not_run: &[String]) -> String {
 /// Writes `report.md`, `report.html` and `figures/` for the run in `dir`; returns the HTML path.
 pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     register_font();
-    let rows = load_rows(dir)?;
+    let mut rows = load_rows(dir)?;
     if rows.is_empty() {
         return Err(LabError::Other(format!(
             "{}: no finished cells to report on (run the experiment first)",
@@ -250,6 +250,10 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         .as_ref()
         .map(|e| e.description.clone())
         .unwrap_or_default();
+    if let Some(e) = &exp {
+        in_experiment_order(e, &mut rows);
+    }
+    crate::results::backfill_scene_lights(&mut rows);
     let not_run = exp
         .as_ref()
         .map_or_else(Vec::new, |e| cells_not_run(e, dir, &rows));
@@ -292,6 +296,21 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let path = dir.join("report.html");
     write_atomic(&path, html(&page).as_bytes())?;
     Ok(path)
+}
+
+/// The rows in the experiment file's order: a cell's index is its place in the file's sweep
+/// (a cell run from another file of the same configurations, such as a part of the sweep
+/// moved to a run of its own, keeps its id, not its index). Rows of no cell of the file keep
+/// theirs.
+fn in_experiment_order(exp: &crate::Experiment, rows: &mut [Row]) {
+    let index: BTreeMap<String, usize> =
+        exp.cells().into_iter().map(|c| (c.id(), c.index)).collect();
+    for r in rows.iter_mut() {
+        if let Some(i) = index.get(&r.id) {
+            r.index = *i;
+        }
+    }
+    rows.sort_by_key(|r| r.index);
 }
 
 /// What the report's two pages say.
@@ -536,7 +555,7 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
     let mut figs: Vec<(&str, String)> = Vec::new();
     // Each figure is drawn to a temporary name and renamed, so no half-written SVG remains.
     let mut draw = |name: &'static str,
-                    caption: &'static str,
+                    caption: &str,
                     f: &dyn Fn(&Path) -> Result<Option<crate::figures::Layout>, LabError>|
      -> Result<(), LabError> {
         let tmp = figures.join(format!(".{name}.tmp.svg"));
@@ -600,16 +619,38 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
         &|p| speed_accuracy(rows, p, frame, fp),
     )?;
     let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
+    // A hierarchy's frame builds it too: its points carry the build (`gpu_ms_hierarchy`).
+    let hierarchy = rows.iter().any(|r| r.gpu_ms_hierarchy.is_some());
+    let (frame_cost, built, with_build): (Axis<'_>, _, _) = if hierarchy {
+        (
+            (
+                "culling + shading (+ hierarchy build), GPU ms (steady state)",
+                &crate::tune::cost,
+            ),
+            " and, for the lighting grid hierarchy, its build each frame (gpu_ms_hierarchy)",
+            " plus, for the lighting grid hierarchy, its build (gpu_ms_hierarchy)",
+        )
+    } else {
+        (frame, "", "")
+    };
     draw(
         "frame_infinite.svg",
-        "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade, one frame; an accumulated point costs this a frame, K times it for its image) against mean FLIP against the infinite-range reference (at the reference's exposure). A panel a setting; colour: the method family (radius cut-offs, stochastic light culling in one frame, accumulated, interleaved), a line through each configuration's sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
-        &|p| speed_accuracy(rows, p, frame, flip_inf),
+        &format!(
+            "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade, one frame; an accumulated point costs this a frame, K times it for its image){built} against mean FLIP against the infinite-range reference (at the reference's exposure). A panel a setting; colour: the method family (radius cut-offs, stochastic light culling in one frame, accumulated, interleaved, the hierarchy), a line through each configuration's sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front."
+        ),
+        &|p| speed_accuracy(rows, p, frame_cost, flip_inf),
     )?;
     if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
+        let whole: Axis<'_> = ("frame, GPU ms (steady state)", &|r| {
+            r.gpu_ms_frame_steady
+                .map(|t| t + r.gpu_ms_hierarchy.unwrap_or(0.0))
+        });
         draw(
             "frame_steady_infinite.svg",
-            "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading) against mean FLIP against the infinite-range reference. A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
-            &|p| speed_accuracy(rows, p, gpu, flip_inf),
+            &format!(
+                "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading){with_build} against mean FLIP against the infinite-range reference. A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front."
+            ),
+            &|p| speed_accuracy(rows, p, whole, flip_inf),
         )?;
     }
     draw(
@@ -637,5 +678,42 @@ mod tests {
         assert_eq!(distinct(["a", "a"]), "a");
         assert_eq!(distinct(["b", "a", "b"]), "b (2 cells), a (1 cell)");
         assert_eq!(distinct([]), "");
+    }
+
+    #[test]
+    fn rows_take_their_place_in_the_experiment_file() {
+        let exp = crate::Experiment::parse(
+            r#"Experiment(name: "e", config: Config(scene: Atrium(), lights: (count: 64), resolution: (16, 8)), sweep: (radius: [Threshold(1.0), Threshold(0.1), Threshold(0.01)]))"#,
+            Path::new("e.ron"),
+        )
+        .unwrap();
+        let cells = exp.cells();
+        // Rows run from other files: right ids, wrong indices; and one of no cell of the file.
+        let mut rows: Vec<Row> = cells
+            .iter()
+            .rev()
+            .enumerate()
+            .map(|(i, c)| {
+                let mut r = crate::results::tests::sample_row();
+                r.id = c.id();
+                r.cell = c.name.clone();
+                r.index = i;
+                r
+            })
+            .collect();
+        let mut stray = crate::results::tests::sample_row();
+        stray.id = "elsewhere".into();
+        stray.index = 7;
+        rows.push(stray);
+        in_experiment_order(&exp, &mut rows);
+        let names: Vec<&str> = rows.iter().map(|r| r.cell.as_str()).collect();
+        assert_eq!(
+            names[..3],
+            ["threshold=1", "threshold=0.1", "threshold=0.01"]
+        );
+        assert_eq!(
+            rows.iter().map(|r| r.index).collect::<Vec<_>>(),
+            [0, 1, 2, 7]
+        );
     }
 }

@@ -251,6 +251,11 @@ pub struct Row {
     /// `gpu_ms_total`, not of the steady-state culling and shading. Empty otherwise.
     #[serde(default)]
     pub gpu_ms_hierarchy: Option<f64>,
+    /// The scene's lights where the cell shades others in their place (`radius: Hierarchy`,
+    /// whose nodes of every level `lights` counts); empty otherwise. A report's settings
+    /// group cells by `Row::setting_lights`.
+    #[serde(default)]
+    pub scene_lights: Option<u64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s and
@@ -264,6 +269,43 @@ pub struct Row {
     pub id: String,
     /// UTC time the cell finished (seconds since 1970).
     pub finished_unix: u64,
+}
+
+impl Row {
+    /// The lights of the setting the cell belongs to: the scene's (`scene_lights`) where the
+    /// cell shades a hierarchy's nodes in their place, else `lights`.
+    pub fn setting_lights(&self) -> u64 {
+        self.scene_lights.unwrap_or(self.lights)
+    }
+}
+
+/// Rows written before `scene_lights` existed: a hierarchy's row takes the light count of a
+/// row of another light range whose cell name is the same once the range's part is left out
+/// (`setting=hall,hierarchy=1/h0.25,variant=v` and `setting=hall,threshold=1,variant=v`).
+pub fn backfill_scene_lights(rows: &mut [Row]) {
+    fn without_range(cell: &str) -> String {
+        cell.split(',')
+            .filter(|p| {
+                !["threshold=", "stochastic=", "radius=", "hierarchy="]
+                    .iter()
+                    .any(|k| p.starts_with(k))
+            })
+            .collect::<Vec<_>>()
+            .join(",")
+    }
+    let known: BTreeMap<(String, String), u64> = rows
+        .iter()
+        .filter(|r| r.radius_rule != "hierarchy")
+        .map(|r| ((r.scene.clone(), without_range(&r.cell)), r.lights))
+        .collect();
+    for r in rows
+        .iter_mut()
+        .filter(|r| r.radius_rule == "hierarchy" && r.scene_lights.is_none())
+    {
+        r.scene_lights = known
+            .get(&(r.scene.clone(), without_range(&r.cell)))
+            .copied();
+    }
 }
 
 /// JSON has no infinity: an infinite PSNR (identical images) is written as the string "inf",
@@ -376,6 +418,7 @@ pub const COLUMNS: &[&str] = &[
     "covered_pixels",
     "ns_per_light_eval",
     "gpu_ms_hierarchy",
+    "scene_lights",
 ];
 
 fn one() -> u32 {

@@ -92,7 +92,7 @@ pub(crate) fn time_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>
             series
                 .entry(series_key(r))
                 .or_default()
-                .push((r.lights as f64, t));
+                .push((r.setting_lights() as f64, t));
         }
     }
     // A line needs two light counts: configurations measured at one (a setting's own count)
@@ -104,7 +104,7 @@ pub(crate) fn time_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>
             .len()
             > 1
     });
-    let counts: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.lights).collect();
+    let counts: std::collections::BTreeSet<u64> = rows.iter().map(|r| r.setting_lights()).collect();
     if counts.len() < 2 || series.is_empty() {
         return Ok(None);
     }

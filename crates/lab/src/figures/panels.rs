@@ -258,7 +258,7 @@ fn panels_of(rows: &[&Row]) -> (Vec<usize>, Vec<String>) {
             .find_map(|p| p.strip_prefix("scene="))
             .map_or_else(|| r.scene.clone(), str::to_owned)
     };
-    let lights = |r: &Row| format!("{} lights", r.lights);
+    let lights = |r: &Row| format!("{} lights", r.setting_lights());
     let res = |r: &Row| format!("{}x{}", r.width, r.height);
     let varies =
         |f: &dyn Fn(&Row) -> String| rows.iter().map(|r| f(r)).collect::<BTreeSet<_>>().len() > 1;
@@ -544,8 +544,16 @@ fn draw_panel<'b>(
         lines.entry(p.line.as_str()).or_default().push(p);
     }
     for line in lines.values_mut().filter(|l| l.len() > 1) {
-        // From the loosest bound to the tightest: thresholds and error bounds fall.
-        line.sort_by(|a, b| b.order.unwrap_or(0.0).total_cmp(&a.order.unwrap_or(0.0)));
+        // From the loosest bound to the tightest: thresholds and error bounds fall, alpha rises.
+        let rising = grows_tighter(&line[0].family);
+        line.sort_by(|a, b| {
+            let (a, b) = (a.order.unwrap_or(0.0), b.order.unwrap_or(0.0));
+            if rising {
+                a.total_cmp(&b)
+            } else {
+                b.total_cmp(&a)
+            }
+        });
         let c = palette(line[0].colour);
         let path: Vec<(i32, i32)> = line.iter().map(|p| at(p.x, p.y)).collect();
         root.draw(&PathElement::new(path, c.mix(0.7).stroke_width(1)))
@@ -598,11 +606,17 @@ fn notes(pts: &[Pt<'_>], numbered: &BTreeMap<usize, usize>) -> Vec<String> {
     let mut notes = Vec::new();
     for (family, values) in &sweeps {
         let mut v: Vec<f64> = values.iter().map(|b| f64::from_bits(*b)).collect();
-        v.sort_by(|a, b| b.total_cmp(a));
+        if grows_tighter(family) {
+            v.sort_by(f64::total_cmp);
+        } else {
+            v.sort_by(|a, b| b.total_cmp(a));
+        }
         let what = if family.starts_with("stochastic") {
             "error bounds"
         } else if family.starts_with("fixed") {
             "radii"
+        } else if grows_tighter(family) {
+            "alpha"
         } else {
             "thresholds"
         };
@@ -621,6 +635,12 @@ fn notes(pts: &[Pt<'_>], numbered: &BTreeMap<usize, usize>) -> Vec<String> {
         ));
     }
     notes
+}
+
+/// Whether a family's sweep value grows as its error falls: the hierarchy's alpha and a fixed
+/// radius (a threshold or an error bound shrinks instead).
+fn grows_tighter(family: &str) -> bool {
+    family.starts_with("lighting grid hierarchy") || family.starts_with("fixed")
 }
 
 /// The colour of colour key `c`.
