@@ -78,7 +78,10 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         );
     }
     let (w, h) = (a.width, a.height);
-    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
+    // With --hierarchy, its lights in place of the scene's, built on the GPU.
+    let crate::hierarchy_opt::Shaded {
+        scene, gpu_scene, ..
+    } = a.upload(&ctx, scene)?;
     // Stochastic ranges before any culler: they mark the lights general.
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();

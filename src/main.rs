@@ -5,6 +5,7 @@
 //! (unknown option, unparsable number, value outside an option's range).
 
 mod cull_cmd;
+mod hierarchy_opt;
 mod lab_cmds;
 mod options;
 mod render_cmd;

@@ -54,6 +54,18 @@ pub(crate) struct SceneArgs {
     /// reflected radiance with --bound albedo (docs/EXPERIMENTS.md).
     #[arg(long, value_name = "E", conflicts_with = "threshold", value_parser = positive_f32)]
     pub(crate) stochastic: Option<f32>,
+    /// The lighting grid hierarchy (Yuksel and Yuksel 2017; Lin and Yuksel 2019) instead of a
+    /// cut-off: near lights as they are, far ones from aggregates on nested grids, each level's
+    /// light a sphere of bounded range with its band; deterministic, its bias shrinking as
+    /// ALPHA (at least 1) grows. Built once on the GPU before the frame; the lists and images
+    /// are the hierarchy's, and render --compare also scores against infinite range.
+    #[arg(long, value_name = "ALPHA", conflicts_with_all = ["threshold", "stochastic"], value_parser = crate::hierarchy_opt::alpha)]
+    pub(crate) hierarchy: Option<f32>,
+    /// The lighting grid hierarchy's finest grid spacing in metres, at least (it doubles while
+    /// the grid would hold more than a quarter as many nodes as there are lights; default
+    /// 0.25): with --hierarchy, and tune's --alphas.
+    #[arg(long, value_name = "H", value_parser = positive_f32)]
+    pub(crate) spacing: Option<f32>,
     /// With --stochastic: what E bounds.
     #[arg(long, value_enum, requires = "stochastic")]
     pub(crate) bound: Option<BoundName>,
@@ -375,7 +387,7 @@ impl SceneArgs {
         scene.assign_models(&self.models()?);
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
-            "invalid light options (--radius, --threshold, --stochastic, --intensity, --spot-fraction)",
+            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --intensity, --spot-fraction)",
         )?;
         scene.lights.extend(generated);
         scene
@@ -416,7 +428,9 @@ impl SceneArgs {
                     },
                 },
                 (None, Some(t)) => RadiusRule::Threshold(t),
-                (None, None) => RadiusRule::Fixed(self.radius),
+                (None, None) => self
+                    .hierarchy_rule()
+                    .unwrap_or(RadiusRule::Fixed(self.radius)),
             },
             intensity: self.intensity,
             spot_fraction: self.spot_fraction,

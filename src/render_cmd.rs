@@ -71,7 +71,12 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     let settings = args.cull.settings(&scene.camera)?;
     let ctx = a.gpu()?;
     let (w, h) = (a.width, a.height);
-    let gpu_scene = GpuScene::upload(&ctx, &scene, &scene.camera, w, h)?;
+    // With --hierarchy, its lights in place of the scene's, built on the GPU.
+    let crate::hierarchy_opt::Shaded {
+        scene,
+        gpu_scene,
+        as_they_are,
+    } = a.upload(&ctx, scene)?;
     // Stochastic ranges before any renderer: they mark the lights general.
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();
@@ -101,6 +106,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         ctx: &ctx,
         scene: &scene,
         gpu_scene: &gpu_scene,
+        infinite_scene: as_they_are.as_ref().unwrap_or(&gpu_scene),
         strategy: &strategy,
         settings: &settings,
         frames,
@@ -149,6 +155,9 @@ struct Run<'a> {
     ctx: &'a GpuContext,
     scene: &'a manylights_scene::Scene,
     gpu_scene: &'a GpuScene,
+    /// The lights as they are (with --hierarchy, not the shaded ones): the infinite-range
+    /// reference's.
+    infinite_scene: &'a GpuScene,
     strategy: &'a manylights_cull::Strategy,
     settings: &'a manylights_cull::CullSettings,
     frames: u32,
@@ -326,6 +335,7 @@ impl Run<'_> {
             ctx,
             scene,
             gpu_scene,
+            infinite_scene,
             frames,
             draw,
             ..
@@ -339,9 +349,9 @@ impl Run<'_> {
             ctx,
             (
                 reference,
-                &manylights_shade::InfiniteReference::new(ctx, gpu_scene),
+                &manylights_shade::InfiniteReference::new(ctx, infinite_scene),
             ),
-            gpu_scene,
+            infinite_scene,
             &scene.camera,
             (w, h),
             Some(&windowed_frame),
@@ -350,6 +360,8 @@ impl Run<'_> {
         // to its reference (accuracy::exposure_of).
         let cutoff = if self.stochastic {
             "reference (same draws)"
+        } else if args.scene.hierarchy.is_some() {
+            "reference (same hierarchy)"
         } else {
             "reference"
         };

@@ -53,20 +53,10 @@ pub(crate) struct TuneArgs {
     #[arg(long, value_delimiter = ',', default_values_t = [4.0, 1.0, 0.25], value_parser = positive_f32)]
     pub(crate) errors: Vec<f32>,
     /// With --max-error: the accuracy parameters (alpha, at least 1) of the lighting grid
-    /// hierarchy tried, each with --spacing (`radius: Hierarchy(alpha, spacing)`).
-    #[arg(long, value_delimiter = ',', default_values_t = [1.0, 2.0], value_parser = alpha)]
+    /// hierarchy tried, each with --spacing (`radius: Hierarchy(alpha, spacing)`; --hierarchy's
+    /// alpha joins them).
+    #[arg(long, value_delimiter = ',', default_values_t = [1.0, 2.0], value_parser = crate::hierarchy_opt::alpha)]
     pub(crate) alphas: Vec<f32>,
-    /// With --max-error: the hierarchy's finest grid spacing in metres, at least (it doubles
-    /// while the grid would hold more than a quarter as many nodes as there are lights).
-    #[arg(long, default_value_t = 0.25, value_parser = positive_f32)]
-    pub(crate) spacing: f32,
-}
-
-fn alpha(s: &str) -> Result<f32, String> {
-    match s.parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
-        _ => Err(format!("`{s}`: a finite accuracy parameter of at least 1")),
-    }
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {
@@ -220,6 +210,12 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
     {
         errors.push(e);
     }
+    let mut alphas = args.alphas.clone();
+    if let Some(alpha) = a.hierarchy
+        && !alphas.contains(&alpha)
+    {
+        alphas.push(alpha);
+    }
     let stochastic = match a.light_spec().radius {
         r @ RadiusRule::Stochastic { .. } => r,
         _ => RadiusRule::Stochastic {
@@ -254,9 +250,9 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
             },
             other => other,
         }))
-        .chain(args.alphas.iter().map(|&alpha| RadiusRule::Hierarchy {
+        .chain(alphas.into_iter().map(|alpha| RadiusRule::Hierarchy {
             alpha,
-            spacing: args.spacing,
+            spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
         }))
         .collect()
 }

@@ -4,6 +4,7 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
+mod hierarchy;
 mod msaa;
 mod outputs;
 mod score;

@@ -14,7 +14,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use manylights_scene::hierarchy::{Hierarchy, HierarchyParams};
-use manylights_scene::{Light, LightKind};
+use manylights_scene::{Light, LightKind, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::layout::GpuLight;
@@ -178,6 +178,35 @@ impl HierarchyPlan {
             r(level)
         };
         (outer, if level == 0 { 0.0 } else { r(level - 1) })
+    }
+
+    /// The plan for `scene`'s lights and the scene to upload in their place: its geometry with
+    /// [`HierarchyPlan::placeholder`]'s lights, which the build fills. `moving`: the farthest
+    /// any light goes from where it is now (0 where none moves); the grids' boxes, the
+    /// unbounded bands' reach and the tables' room cover that too. The last level holds at
+    /// most `params.top_lights` lights.
+    pub fn for_scene(
+        scene: &Scene,
+        params: HierarchyParams,
+        moving: f32,
+    ) -> Result<(Self, Scene), GpuError> {
+        let margin = 1.0 + moving.max(0.0);
+        let b = scene
+            .lights
+            .iter()
+            .fold(scene.bounds(), |b, l| b.union_point(l.position));
+        let (plan, _) = Self::new(
+            &scene.lights,
+            params,
+            (b.min - margin, b.max + margin),
+            manylights_scene::hierarchy::reach(scene) + 2.0 * (margin - 1.0),
+            if moving > 0.0 { 2.0 } else { 1.25 },
+        )?;
+        let shaded = Scene {
+            lights: plan.placeholder(&scene.lights),
+            ..scene.clone()
+        };
+        Ok((plan, shaded))
     }
 
     /// Lights to upload as the shaded scene's before the first build: dead point lights in

@@ -15,9 +15,6 @@ use manylights_scene::{RadiusRule, Scene};
 use crate::LabError;
 use crate::experiment::{Config, LightUpdate};
 
-/// The last level of a cell's lighting grid hierarchy holds at most this many lights.
-pub(crate) const HIERARCHY_TOP_LIGHTS: usize = 64;
-
 fn other(e: impl std::fmt::Display) -> LabError {
     LabError::Other(e.to_string())
 }
@@ -32,36 +29,20 @@ pub(crate) fn hierarchy_plan(
     let RadiusRule::Hierarchy { alpha, spacing } = c.lights.radius else {
         return Ok(None);
     };
-    let moving = !c.lights.motion.is_static();
-    // A moving light goes at most its radius from home (manylights_scene::motion): the grids'
-    // boxes and the unbounded bands' reach cover that too.
-    let margin = 1.0
-        + if moving {
-            scene.lights.iter().map(|l| l.radius).fold(0.0, f32::max)
-        } else {
-            0.0
-        };
-    let b = scene
-        .lights
-        .iter()
-        .fold(scene.bounds(), |b, l| b.union_point(l.position));
-    let (plan, _) = HierarchyPlan::new(
-        &scene.lights,
-        HierarchyParams {
-            alpha: alpha.into(),
-            spacing: spacing.into(),
-            top_lights: HIERARCHY_TOP_LIGHTS,
-        },
-        (b.min - margin, b.max + margin),
-        hierarchy::reach(scene) + 2.0 * (margin - 1.0),
-        if moving { 2.0 } else { 1.25 },
-    )
-    .map_err(other)?;
-    let shaded = Scene {
-        lights: plan.placeholder(&scene.lights),
-        ..scene.clone()
+    // A moving light goes at most its radius from home (manylights_scene::motion).
+    let moving = if c.lights.motion.is_static() {
+        0.0
+    } else {
+        scene.lights.iter().map(|l| l.radius).fold(0.0, f32::max)
     };
-    Ok(Some((plan, shaded)))
+    let params = HierarchyParams {
+        alpha: alpha.into(),
+        spacing: spacing.into(),
+        top_lights: hierarchy::TOP_LIGHTS,
+    };
+    HierarchyPlan::for_scene(scene, params, moving)
+        .map(Some)
+        .map_err(other)
 }
 
 /// The lights of a cell that change each frame, and how.

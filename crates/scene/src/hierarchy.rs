@@ -46,6 +46,10 @@ use glam::DVec3;
 use crate::Material;
 use crate::light::{Light, LightKind, falloff_infinite, shade_with};
 
+/// The most lights the last level holds by default: what the experiments' and the command
+/// line's hierarchies are built with.
+pub const TOP_LIGHTS: usize = 64;
+
 /// The hierarchy's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HierarchyParams {

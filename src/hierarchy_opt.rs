@@ -1,0 +1,91 @@
+//! `--hierarchy` on `render` and `cull`: the scene's lights shaded through the lighting grid
+//! hierarchy (`radius: Hierarchy` in experiments), built once on the GPU before the frame
+//! (`manylights_gpu::hierarchy`), and the lights as they are kept for the infinite-range
+//! reference.
+
+use anyhow::{Result, bail};
+use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
+use manylights_gpu::{GpuContext, GpuScene};
+use manylights_scene::hierarchy::HierarchyParams;
+use manylights_scene::{RadiusRule, Scene};
+
+use crate::options::SceneArgs;
+
+/// A scene on the GPU as it is shaded.
+pub(crate) struct Shaded {
+    /// The scene as shaded: with --hierarchy its geometry and the hierarchy's lights (every
+    /// level's, each with its band), else the scene as built.
+    pub(crate) scene: Scene,
+    pub(crate) gpu_scene: GpuScene,
+    /// With --hierarchy: the scene's lights as they are, the infinite-range reference's.
+    pub(crate) as_they_are: Option<GpuScene>,
+}
+
+impl SceneArgs {
+    /// `--hierarchy ALPHA` with `--spacing H` (0.25 m by default) as a radius rule.
+    pub(crate) fn hierarchy_rule(&self) -> Option<RadiusRule> {
+        self.hierarchy.map(|alpha| RadiusRule::Hierarchy {
+            alpha,
+            spacing: self.spacing.unwrap_or(DEFAULT_SPACING),
+        })
+    }
+
+    /// `scene` uploaded at its camera: with --hierarchy, the hierarchy of its lights planned,
+    /// built on the GPU and checked (a splat that found no room is an error), and what it is
+    /// printed.
+    pub(crate) fn upload(&self, ctx: &GpuContext, scene: Scene) -> Result<Shaded> {
+        let (w, h) = (self.width, self.height);
+        if let (Some(h), None) = (self.spacing, self.hierarchy) {
+            bail!("--spacing {h} without --hierarchy: the spacing is the hierarchy's grid's");
+        }
+        let Some(RadiusRule::Hierarchy { alpha, spacing }) = self.hierarchy_rule() else {
+            let gpu_scene = GpuScene::upload(ctx, &scene, &scene.camera, w, h)?;
+            return Ok(Shaded {
+                scene,
+                gpu_scene,
+                as_they_are: None,
+            });
+        };
+        let params = HierarchyParams {
+            alpha: alpha.into(),
+            spacing: spacing.into(),
+            top_lights: manylights_scene::hierarchy::TOP_LIGHTS,
+        };
+        let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, 0.0)?;
+        let (levels, h_used, points, spots) = (plan.levels, plan.h, plan.points, plan.spots);
+        let gpu_scene = GpuScene::upload(ctx, &shaded, &scene.camera, w, h)?;
+        let build = GpuHierarchy::new(ctx, plan, &scene.lights, &gpu_scene)?;
+        let timings = build.build(ctx)?;
+        let (outside, full) = build.dropped(ctx)?;
+        if outside + full > 0 {
+            bail!(
+                "--hierarchy: the build dropped {outside} splats outside its grids' boxes and \
+                 {full} into full tables; a larger --spacing needs fewer nodes"
+            );
+        }
+        let ms: Option<f64> = timings.map(|t| t.iter().map(|p| p.ms).sum());
+        println!(
+            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}",
+            shaded.lights.len(),
+            scene.lights.len(),
+            ms.map_or_else(String::new, |ms| format!(", built in {ms:.3} ms"))
+        );
+        let as_they_are = GpuScene::upload(ctx, &scene, &scene.camera, w, h)?;
+        Ok(Shaded {
+            scene: shaded,
+            gpu_scene,
+            as_they_are: Some(as_they_are),
+        })
+    }
+}
+
+/// `--spacing`'s default, metres (the experiments' and `tune`'s).
+pub(crate) const DEFAULT_SPACING: f32 = 0.25;
+
+/// `--hierarchy`'s parser: a finite alpha of at least 1.
+pub(crate) fn alpha(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
+        _ => Err(format!("`{s}`: a finite accuracy parameter of at least 1")),
+    }
+}

@@ -1,0 +1,142 @@
+//! The lighting grid hierarchy from the command line: `--hierarchy ALPHA` with `--spacing H`
+//! on `render` (with `--compare`) and `cull`, and their bad values.
+
+use super::*;
+
+/// The number after `key` on the first line of `stdout` that holds `line`.
+fn number_after(stdout: &str, line: &str, key: &str) -> f64 {
+    let l = stdout
+        .lines()
+        .find(|l| l.contains(line))
+        .unwrap_or_else(|| panic!("no `{line}` line in:\n{stdout}"));
+    l.split(key)
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.trim_end_matches(',').parse().ok())
+        .unwrap_or_else(|| panic!("no `{key}` in {l}"))
+}
+
+/// Bad values name the option and what it accepts.
+#[test]
+fn bad_hierarchy_options_name_the_option() {
+    for bad in ["0.5", "0", "nan", "inf"] {
+        rejects(
+            &["--hierarchy", bad],
+            2,
+            &["--hierarchy", "a finite accuracy parameter of at least 1"],
+        );
+    }
+    rejects(
+        &["--hierarchy", "1", "--threshold", "0.1"],
+        2,
+        &["--threshold", "cannot be used with"],
+    );
+    rejects(
+        &["--hierarchy", "1", "--stochastic", "1"],
+        2,
+        &["cannot be used with"],
+    );
+    rejects(
+        &["--hierarchy", "1", "--spacing", "0"],
+        2,
+        &["--spacing", "a finite number above 0"],
+    );
+    rejects(
+        &["--spacing", "0.5"],
+        1,
+        &["--spacing 0.5 without --hierarchy"],
+    );
+    rejects_cmd("cull", &["--spacing", "0.5"], 1, &["without --hierarchy"]);
+}
+
+/// `render --hierarchy`: forward and deferred shade the hierarchy's lights as the brute-force
+/// reference of the same hierarchy does, and a larger alpha comes nearer infinite range.
+#[test]
+fn render_hierarchy_matches_its_reference_and_nears_infinite_range() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = |alpha: &str, backend: &str| {
+        let out = tmp.path().join(format!("r{alpha}{backend}"));
+        let stdout = succeeds(
+            &[
+                "render",
+                "--scene",
+                "atrium",
+                "--lights",
+                "600",
+                "--intensity",
+                "1",
+                "--generator",
+                "uniform",
+                "--hierarchy",
+                alpha,
+                "--spacing",
+                "0.25",
+                "--backend",
+                backend,
+                "--width",
+                "48",
+                "--height",
+                "32",
+                "--compare",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            backend,
+        );
+        assert!(
+            stdout.contains(&format!(
+                "lighting grid hierarchy: alpha {alpha}, finest spacing"
+            )),
+            "{stdout}"
+        );
+        // More than the point lights: at least one level of aggregates.
+        let levels = number_after(&stdout, "lighting grid hierarchy", "m, ");
+        assert!(levels >= 2.0, "{stdout}");
+        let psnr = number_after(&stdout, "vs reference (same hierarchy)", "PSNR");
+        assert!(psnr > 60.0, "{stdout}");
+        number_after(&stdout, "vs infinite-range reference", "RMSE")
+    };
+    let coarse = run("1", "forward");
+    let fine = run("3", "deferred");
+    assert!(
+        fine < coarse,
+        "RMSE against infinite range: alpha 1 {coarse}, alpha 3 {fine}"
+    );
+}
+
+/// `cull --hierarchy`: every level's lights, culled by each strategy, with no false negative
+/// against their bands (cull fails on one).
+#[test]
+fn cull_hierarchy_has_no_false_negatives() {
+    let tmp = tempfile::tempdir().unwrap();
+    for strategy in ["tiled-scatter", "depth-mask", "clustered", "zbin"] {
+        let out = tmp.path().join(strategy);
+        let stdout = succeeds(
+            &[
+                "cull",
+                "--scene",
+                "atrium",
+                "--lights",
+                "600",
+                "--generator",
+                "uniform",
+                "--hierarchy",
+                "1",
+                "--strategy",
+                strategy,
+                "--width",
+                "48",
+                "--height",
+                "32",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            strategy,
+        );
+        assert!(stdout.contains("false negatives         0"), "{stdout}");
+        assert!(
+            stdout.contains("lighting grid hierarchy: alpha 1,"),
+            "{stdout}"
+        );
+    }
+}
