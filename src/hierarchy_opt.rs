@@ -27,6 +27,7 @@ impl SceneArgs {
         self.hierarchy.map(|alpha| RadiusRule::Hierarchy {
             alpha,
             spacing: self.spacing.unwrap_or(DEFAULT_SPACING),
+            sample_from: self.sample_from,
         })
     }
 
@@ -38,7 +39,12 @@ impl SceneArgs {
         if let (Some(h), None) = (self.spacing, self.hierarchy) {
             bail!("--spacing {h} without --hierarchy: the spacing is the hierarchy's grid's");
         }
-        let Some(RadiusRule::Hierarchy { alpha, spacing }) = self.hierarchy_rule() else {
+        let Some(RadiusRule::Hierarchy {
+            alpha,
+            spacing,
+            sample_from,
+        }) = self.hierarchy_rule()
+        else {
             let gpu_scene = GpuScene::upload(ctx, &scene, &scene.camera, w, h)?;
             return Ok(Shaded {
                 scene,
@@ -50,6 +56,7 @@ impl SceneArgs {
             alpha: alpha.into(),
             spacing: spacing.into(),
             top_lights: manylights_scene::hierarchy::TOP_LIGHTS,
+            sample_from: sample_from.map(|l| l as usize),
         };
         let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, 0.0)?;
         let (levels, h_used, points, spots) = (plan.levels, plan.h, plan.points, plan.spots);
@@ -65,9 +72,10 @@ impl SceneArgs {
         }
         let ms: Option<f64> = timings.map(|t| t.iter().map(|p| p.ms).sum());
         println!(
-            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}",
+            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{}",
             shaded.lights.len(),
             scene.lights.len(),
+            sample_from.map_or_else(String::new, |l| format!(", bands sampled from level {l}")),
             ms.map_or_else(String::new, |ms| format!(", built in {ms:.3} ms"))
         );
         let as_they_are = GpuScene::upload(ctx, &scene, &scene.camera, w, h)?;

@@ -66,6 +66,11 @@ pub(crate) struct SceneArgs {
     /// 0.25): with --hierarchy, and tune's --alphas.
     #[arg(long, value_name = "H", value_parser = positive_f32)]
     pub(crate) spacing: Option<f32>,
+    /// With --hierarchy: stochastic band selection from level L on (0: every level; 1: the
+    /// aggregates): each of those lights draws its band, weight 1 inside it, unbiased against
+    /// the hierarchy, with shorter lists and noise.
+    #[arg(long, value_name = "L", requires = "hierarchy")]
+    pub(crate) sample_from: Option<u32>,
     /// With --stochastic: what E bounds.
     #[arg(long, value_enum, requires = "stochastic")]
     pub(crate) bound: Option<BoundName>,

@@ -253,6 +253,7 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
         .chain(alphas.into_iter().map(|alpha| RadiusRule::Hierarchy {
             alpha,
             spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
+            sample_from: None,
         }))
         .collect()
 }

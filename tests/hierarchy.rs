@@ -51,6 +51,7 @@ fn hierarchy_lights_shade_as_their_oracle() {
             alpha: 2.0,
             spacing: 0.75,
             top_lights: 16,
+            sample_from: None,
         },
     );
     assert!(hier.levels.len() >= 4, "{} levels", hier.levels.len());
@@ -164,6 +165,7 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
         alpha: 2.0,
         spacing: 0.75,
         top_lights: 16,
+        sample_from: None,
     };
     let b = original
         .lights
@@ -255,4 +257,88 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
         }
         assert_eq!(build.dropped(&ctx).unwrap(), (0, 0), "{what}");
     }
+}
+
+/// Sampled bands on the GPU (`sample_from`): every live light of the sampled levels carries
+/// its soft band drawn with `band_xi(seed, its index)` (`Band::sampled`), the reach cut to
+/// match; the levels below keep their soft bands; a new seed draws anew.
+#[test]
+fn the_gpu_build_samples_the_bands_it_is_asked_to() {
+    use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
+    use manylights_gpu::layout::{GpuLight, HARD_BAND};
+    let ctx = common::gpu();
+    let original = atrium(600, 0.0);
+    let params = HierarchyParams {
+        alpha: 1.5,
+        spacing: 0.5,
+        top_lights: 16,
+        sample_from: Some(1),
+    };
+    let (plan, shaded) = HierarchyPlan::for_scene(&original, params, 0.0).unwrap();
+    assert!(plan.levels >= 3, "{} levels", plan.levels);
+    let gpu_scene = GpuScene::upload(&ctx, &shaded, &original.camera, 32, 32).unwrap();
+    let build = GpuHierarchy::new(&ctx, plan.clone(), &original.lights, &gpu_scene).unwrap();
+    let read = |seed: u32| -> Vec<GpuLight> {
+        build.set_seed(&ctx, seed);
+        build.build(&ctx).unwrap();
+        let bytes = manylights_gpu::readback::read_buffer(
+            &ctx,
+            &gpu_scene.lights,
+            0,
+            plan.shaded_count() * 64,
+        )
+        .unwrap();
+        bytemuck::cast_slice(&bytes).to_vec()
+    };
+    let (a, b) = (read(3), read(4));
+    let r = |l: usize| params.alpha * plan.h * f64::from(1u32 << l);
+    let mut checked = 0;
+    for level in 0..plan.levels {
+        let (first, count) = plan.level_range(level);
+        let soft = hierarchy::Band::new(
+            if level == 0 { 0.0 } else { r(level - 1) },
+            if level + 1 == plan.levels {
+                f64::INFINITY
+            } else {
+                r(level)
+            },
+        );
+        for i in first..first + count {
+            let l = &a[i as usize];
+            if l.intensity == 0.0 {
+                continue; // a dead slot
+            }
+            if level == 0 {
+                assert_eq!(l.interleave & HARD_BAND, 0, "level 0 light {i} stays soft");
+                continue;
+            }
+            let want = soft.sampled(hierarchy::band_xi(3, i));
+            let from = f32::from_bits(l.interleave & !HARD_BAND);
+            assert_ne!(l.interleave & HARD_BAND, 0, "light {i} of level {level}");
+            assert!(
+                (f64::from(from) - want.inner).abs() <= 1e-5 * want.inner.max(1.0),
+                "light {i}: from {from}, want {}",
+                want.inner
+            );
+            assert!(
+                (f64::from(-l.alpha) - want.r).abs() <= 1e-5 * want.r.max(1.0)
+                    || (l.alpha.is_infinite() && want.r.is_infinite()),
+                "light {i}: to {}, want {}",
+                -l.alpha,
+                want.r
+            );
+            assert_eq!(
+                l.radius,
+                (want.r as f32).min(plan.reach),
+                "light {i}'s reach"
+            );
+            assert_ne!(
+                l.interleave, b[i as usize].interleave,
+                "light {i}: seed 4 draws anew"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 20, "{checked} sampled lights");
+    assert_eq!(build.dropped(&ctx).unwrap(), (0, 0));
 }

@@ -91,10 +91,15 @@ fn light_attenuation(light: Light, d: f32) -> f32 {
 
 // A hierarchy light's band weight at distance d (manylights_scene::hierarchy::Band::weight):
 // rising from 0 at `inner` to 1 at r (1 throughout where inner is 0), falling to 0 at 2 r (1
-// throughout where r is infinite).
+// throughout where r is infinite); a sampled band (the top bit of `interleave`, HARD_BAND) is
+// 1 between inner and r and 0 elsewhere.
 fn light_band(light: Light, d: f32) -> f32 {
-    let inner = bitcast<f32>(light.interleave);
     let r = -light.alpha;
+    if (light.interleave & 0x80000000u) != 0u {
+        let start = bitcast<f32>(light.interleave & 0x7fffffffu);
+        return select(0.0, 1.0, d > start && d < r);
+    }
+    let inner = bitcast<f32>(light.interleave);
     var rising = 1.0;
     if inner > 0.0 {
         if d <= inner {

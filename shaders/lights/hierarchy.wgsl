@@ -36,6 +36,8 @@ struct Step {
     h: vec4<u32>,
     // where dead lights sit (xyz); w: infinity (a spot's band never falls)
     far: vec4<f32>,
+    // the frame's seed, 1 where this level's bands are sampled (band_xi, sampled_light)
+    s: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> step: Step;
@@ -175,6 +177,29 @@ fn level_light(position: vec3<f32>, power: vec3<f32>) -> Light {
     return l;
 }
 
+// The draw in (0, 1) of the shaded light at `index` this frame
+// (manylights_scene::hierarchy::band_xi).
+fn band_xi(index: u32) -> f32 {
+    return stochastic_unit(pcg(index ^ pcg(step.s.x)));
+}
+
+// A level's light as the shaded light at `index`: with its band sampled where the level's are
+// (manylights_scene::hierarchy::Band::sampled: weight 1 between inner (1 + xi) and
+// r (2 - xi), the reach cut to match).
+fn sampled_light(l_in: Light, index: u32) -> Light {
+    var l = l_in;
+    if step.s.y == 1u {
+        let xi = band_xi(index);
+        let r = -l.alpha;
+        // The last level's r is infinite, and so is its end.
+        let to = r * (2.0 - xi);
+        l.radius = min(to, step.c.z);
+        l.alpha = -to;
+        l.interleave = bitcast<u32>(step.c.y * (1.0 + xi)) | 0x80000000u;
+    }
+    return l;
+}
+
 fn item(id: vec3<u32>) -> u32 {
     return id.y * step.a.z + id.x;
 }
@@ -195,7 +220,7 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let power = l.color * l.intensity;
-    shaded[target_index[i]] = level_light(l.position, power);
+    shaded[target_index[i]] = sampled_light(level_light(l.position, power), target_index[i]);
     if step.a.w == 1u {
         splat(l.position, power);
     }
@@ -227,7 +252,7 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
         / weight;
     let position = (vec3<f32>(node) + offset) * bitcast<f32>(step.g.w);
     let power = p / step.c.w;
-    shaded[step.b.y + t] = level_light(position, power);
+    shaded[step.b.y + t] = sampled_light(level_light(position, power), step.b.y + t);
     if step.a.w == 1u {
         splat(position, power);
     }

@@ -47,42 +47,43 @@ fn bad_hierarchy_options_name_the_option() {
         &["--spacing 0.5 without --hierarchy"],
     );
     rejects_cmd("cull", &["--spacing", "0.5"], 1, &["without --hierarchy"]);
+    rejects(&["--sample-from", "1"], 2, &["--hierarchy"]);
 }
 
 /// `render --hierarchy`: forward and deferred shade the hierarchy's lights as the brute-force
-/// reference of the same hierarchy does, and a larger alpha comes nearer infinite range.
+/// reference of the same hierarchy does, and a larger alpha comes nearer infinite range; with
+/// sampled bands too.
 #[test]
 fn render_hierarchy_matches_its_reference_and_nears_infinite_range() {
     let tmp = tempfile::tempdir().unwrap();
-    let run = |alpha: &str, backend: &str| {
-        let out = tmp.path().join(format!("r{alpha}{backend}"));
-        let stdout = succeeds(
-            &[
-                "render",
-                "--scene",
-                "atrium",
-                "--lights",
-                "600",
-                "--intensity",
-                "1",
-                "--generator",
-                "uniform",
-                "--hierarchy",
-                alpha,
-                "--spacing",
-                "0.25",
-                "--backend",
-                backend,
-                "--width",
-                "48",
-                "--height",
-                "32",
-                "--compare",
-                "--out",
-                out.to_str().unwrap(),
-            ],
+    let run = |alpha: &str, backend: &str, extra: &[&str]| {
+        let out = tmp.path().join(format!("r{alpha}{backend}{}", extra.len()));
+        let mut args = vec![
+            "render",
+            "--scene",
+            "atrium",
+            "--lights",
+            "600",
+            "--intensity",
+            "1",
+            "--generator",
+            "uniform",
+            "--hierarchy",
+            alpha,
+            "--spacing",
+            "0.25",
+            "--backend",
             backend,
-        );
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--compare",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let stdout = succeeds(&args, backend);
         assert!(
             stdout.contains(&format!(
                 "lighting grid hierarchy: alpha {alpha}, finest spacing"
@@ -94,14 +95,20 @@ fn render_hierarchy_matches_its_reference_and_nears_infinite_range() {
         assert!(levels >= 2.0, "{stdout}");
         let psnr = number_after(&stdout, "vs reference (same hierarchy)", "PSNR");
         assert!(psnr > 60.0, "{stdout}");
-        number_after(&stdout, "vs infinite-range reference", "RMSE")
+        (
+            number_after(&stdout, "vs infinite-range reference", "RMSE"),
+            stdout,
+        )
     };
-    let coarse = run("1", "forward");
-    let fine = run("3", "deferred");
+    let (coarse, _) = run("1", "forward", &[]);
+    let (fine, _) = run("3", "deferred", &[]);
     assert!(
         fine < coarse,
         "RMSE against infinite range: alpha 1 {coarse}, alpha 3 {fine}"
     );
+    // Sampled bands: the backend still equals the reference over the same draws.
+    let (_, sampled) = run("1", "deferred", &["--sample-from", "0"]);
+    assert!(sampled.contains("bands sampled from level 0"), "{sampled}");
 }
 
 /// `cull --hierarchy`: every level's lights, culled by each strategy, with no false negative

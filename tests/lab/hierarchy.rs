@@ -130,3 +130,60 @@ fn a_hierarchy_of_moving_lights_is_built_each_frame() {
         );
     }
 }
+
+/// Stochastic band selection (`sample_from`): each strategy and backend equals the brute-force
+/// reference of the same frame's draws, with no false negatives against the drawn bands, and
+/// evaluates fewer lights a pixel than the hierarchy with every band as it is (a few percent
+/// here, where most bands reach past this small scene).
+#[test]
+fn sampled_bands_match_their_reference_with_shorter_lists() {
+    let ctx = common::gpu();
+    let src = r#"Experiment(
+        name: "hierarchy-sampled",
+        config: Config(
+            scene: Atrium(bays: 2),
+            lights: (generator: Uniform, count: 400, seed: 4, intensity: 2.0),
+            resolution: (64, 40),
+            frames: 1,
+            warmup: 0,
+        ),
+        sweep: (
+            radius: [Hierarchy(alpha: 2.0, spacing: 0.25), Hierarchy(alpha: 2.0, spacing: 0.25, sample_from: 0)],
+            variants: [
+                (label: "deferred-gather", backend: Deferred, strategy: TiledGather(tile_size: 8)),
+                (label: "forward-clusters", backend: Forward, strategy: Clustered(tile_size: 16, slices: 16)),
+                (label: "deferred-zbin", backend: Deferred, strategy: ZBin(tile_size: 8)),
+            ],
+        ),
+    )"#;
+    let e = Experiment::parse(src, Path::new("hierarchy-sampled.ron")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
+    assert_eq!(s.rows.len(), 6);
+    for r in &s.rows {
+        let cell = &r.cell;
+        assert_eq!(r.false_negatives.unwrap_or(0), 0, "{cell}: false negatives");
+        let flip = r.flip_mean.expect("the same hierarchy's reference");
+        let tolerance = if r.backend == "deferred" { 1e-3 } else { 2e-4 };
+        assert!(
+            flip <= tolerance,
+            "{cell}: mean FLIP {flip} against its reference"
+        );
+        assert!(r.flip_mean_infinite.is_some_and(f64::is_finite), "{cell}");
+    }
+    for v in ["deferred-gather", "forward-clusters", "deferred-zbin"] {
+        let lpp = |sampled: bool| {
+            s.rows
+                .iter()
+                .find(|r| r.cell.contains(v) && r.cell.contains("/s0") == sampled)
+                .and_then(|r| r.lights_per_pixel_mean)
+                .unwrap()
+        };
+        assert!(
+            lpp(true) < lpp(false),
+            "{v}: {} lights a pixel sampled, {} as they are",
+            lpp(true),
+            lpp(false)
+        );
+    }
+}

@@ -54,6 +54,8 @@ pub struct Step {
     pub h: [u32; 4],
     /// Where dead lights sit; w: infinity.
     pub far: [f32; 4],
+    /// The frame's seed, 1 where this level's bands are sampled, unused, unused.
+    pub s: [u32; 4],
 }
 
 /// A level's grid: its spacing and the box of nodes its table keys.
@@ -271,6 +273,12 @@ impl HierarchyPlan {
                     g,
                     h,
                     far,
+                    s: [
+                        0,
+                        u32::from(self.params.sample_from.is_some_and(|f| l >= f)),
+                        0,
+                        0,
+                    ],
                 }
             })
             .collect()
@@ -285,6 +293,8 @@ pub struct GpuHierarchy {
     slots: wgpu::Buffer,
     dropped: wgpu::Buffer,
     passes: Vec<(bool, wgpu::BindGroup, (u32, u32))>,
+    /// Each pass's parameters (`Step`), whose seed [`GpuHierarchy::set_seed`] writes.
+    steps: Vec<wgpu::Buffer>,
     points: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
 }
@@ -377,18 +387,23 @@ impl GpuHierarchy {
             (n.min(max), n.div_ceil(max))
         };
         let sources = lights.len() as u32;
+        let mut steps = Vec::new();
         let passes = plan
             .steps(sources, |items| grid(items).0 * WORKGROUP)
             .into_iter()
             .map(|s| {
-                let params =
-                    pipeline::uniform_buffer(d, "lights.hierarchy", bytemuck::bytes_of(&s));
+                let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("lights.hierarchy.step"),
+                    contents: bytemuck::bytes_of(&s),
+                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                });
                 let group = pipeline::buffers_group(
                     d,
                     "lights.hierarchy",
                     &layout,
                     &[&params, &source, &target, &shaded.lights, &slots, &dropped],
                 );
+                steps.push(params);
                 (s.a[0] == 1, group, grid(s.a[1]))
             })
             .collect();
@@ -399,9 +414,20 @@ impl GpuHierarchy {
             slots,
             dropped,
             passes,
+            steps,
             points,
             finalize,
         })
+    }
+
+    /// The seed of the next builds' draws (`HierarchyParams::sample_from`: the sampled
+    /// levels' bands; `manylights_scene::hierarchy::band_xi`): a frame's index, so that each
+    /// frame draws afresh. No effect without sampled levels.
+    pub fn set_seed(&self, ctx: &GpuContext, seed: u32) {
+        let at = std::mem::offset_of!(Step, s) as u64;
+        for b in &self.steps {
+            ctx.queue.write_buffer(b, at, &seed.to_le_bytes());
+        }
     }
 
     /// The lights the hierarchy is built from, as `GpuLight`s in the scene's order: what a

@@ -148,14 +148,19 @@ pub struct GpuLight {
 }
 const _: () = assert!(size_of::<GpuLight>() == 64);
 
+/// The bit of a hierarchy light's `interleave` that marks its band sampled (`light_band`).
+pub const HARD_BAND: u32 = 0x8000_0000;
+
 impl GpuLight {
     /// The light shaded with its hierarchy band (`manylights_scene::hierarchy::Band`): the
     /// infinite-range falloff times the band's weight, within `radius`, its reach. An unbounded
     /// band (`r` infinite) is `alpha = -inf`.
+    /// A sampled band (`band.hard`, weight 1 between `inner` and `r`) sets the top bit of
+    /// `interleave` (an inner distance is never negative), which `light_band` reads.
     pub fn with_band(self, band: &Band) -> Self {
         Self {
             alpha: -(band.r as f32),
-            interleave: (band.inner as f32).to_bits(),
+            interleave: (band.inner as f32).to_bits() | if band.hard { HARD_BAND } else { 0 },
             ..self
         }
     }

@@ -423,7 +423,16 @@ pub fn radius_label(rule: &RadiusRule) -> String {
     match *rule {
         RadiusRule::Fixed(r) => format!("radius={r}"),
         RadiusRule::Threshold(t) => format!("threshold={t}"),
-        RadiusRule::Hierarchy { alpha, spacing } => format!("hierarchy={alpha}/h{spacing}"),
+        RadiusRule::Hierarchy {
+            alpha,
+            spacing,
+            sample_from: None,
+        } => format!("hierarchy={alpha}/h{spacing}"),
+        RadiusRule::Hierarchy {
+            alpha,
+            spacing,
+            sample_from: Some(l),
+        } => format!("hierarchy={alpha}/h{spacing}/s{l}"),
         RadiusRule::Stochastic {
             error,
             bound,

@@ -26,7 +26,12 @@ pub(crate) fn hierarchy_plan(
     c: &Config,
     scene: &Scene,
 ) -> Result<Option<(HierarchyPlan, Scene)>, LabError> {
-    let RadiusRule::Hierarchy { alpha, spacing } = c.lights.radius else {
+    let RadiusRule::Hierarchy {
+        alpha,
+        spacing,
+        sample_from,
+    } = c.lights.radius
+    else {
         return Ok(None);
     };
     // A moving light goes at most its radius from home (manylights_scene::motion).
@@ -39,6 +44,7 @@ pub(crate) fn hierarchy_plan(
         alpha: alpha.into(),
         spacing: spacing.into(),
         top_lights: hierarchy::TOP_LIGHTS,
+        sample_from: sample_from.map(|l| l as usize),
     };
     HierarchyPlan::for_scene(scene, params, moving)
         .map(Some)
@@ -112,6 +118,8 @@ impl Movers {
             (None, _) => UpdateCost::default(),
         };
         if let Some(h) = &self.hierarchy {
+            // Sampled bands draw afresh each frame.
+            h.set_seed(ctx, frame);
             if let Some(t) = h.build(ctx).map_err(other)? {
                 cost.gpu.get_or_insert_with(Vec::new).extend(t);
             }

@@ -83,6 +83,11 @@ pub enum RadiusRule {
         alpha: f32,
         /// The finest grid's spacing, metres, > 0.
         spacing: f32,
+        /// Stochastic band selection from this level on (`HierarchyParams::sample_from`):
+        /// those levels' lights draw their bands each frame, unbiased, with shorter lists.
+        /// Absent: none.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        sample_from: Option<u32>,
     },
 }
 
@@ -193,7 +198,7 @@ impl LightSpec {
                     "a finite cut-off threshold > 0",
                 ));
             }
-            RadiusRule::Hierarchy { alpha, spacing } => {
+            RadiusRule::Hierarchy { alpha, spacing, .. } => {
                 if !(alpha.is_finite() && alpha >= 1.0) {
                     return Err(SceneError::invalid(
                         "lights.radius.alpha",
@@ -345,7 +350,7 @@ impl LightSpec {
                         (self.intensity * color.max_element() / t).sqrt().max(1e-3)
                     }
                     RadiusRule::Stochastic { .. } => 0.0,
-                    RadiusRule::Hierarchy { alpha, spacing } => 2.0 * alpha * spacing,
+                    RadiusRule::Hierarchy { alpha, spacing, .. } => 2.0 * alpha * spacing,
                 };
                 let kind = if rng.random::<f32>() < self.spot_fraction {
                     // Mostly downward axes, tilted up to 60 degrees.

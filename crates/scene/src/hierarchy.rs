@@ -60,6 +60,11 @@ pub struct HierarchyParams {
     pub spacing: f64,
     /// The last level holds at most this many lights.
     pub top_lights: usize,
+    /// Stochastic band selection from this level on (issue 48, item 4): each of these levels'
+    /// lights draws its band afresh each frame ([`Band::sampled`]), weight 1 inside it, so the
+    /// estimate is the hierarchy's on average and its lists shorter. `None`: every band as it
+    /// is. Spots are never sampled.
+    pub sample_from: Option<usize>,
 }
 
 /// A light of a level: its position and its power (colour x intensity).
@@ -281,20 +286,66 @@ impl Hierarchy {
 }
 
 /// A flattened light's band: its weight at distance `d` is
-/// `min(rising, falling)`, rising from 0 at `inner` to 1 at `r` (1 throughout where `inner` is
-/// 0: level 0) and falling from 1 at `r` to 0 at `2 r` (1 throughout where `r` is infinite: the
-/// last level, and the spots).
+/// `min(rising, falling)`, rising from 0 at `inner` to 1 at `2 inner` (1 throughout where
+/// `inner` is 0: level 0) and falling from 1 at `r` to 0 at `2 r` (1 throughout where `r` is
+/// infinite: the last level, and the spots); a middle level's `2 inner` is its `r`. A sampled
+/// band (`hard`, [`Band::sampled`]) is 1 for `inner < d < r` and 0 elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Band {
     /// Where the weight starts to rise (0: it is 1 from the light out).
     pub inner: f64,
-    /// Where it is 1; it falls to 0 at twice this (infinite: it never falls).
+    /// Where it is 1; it falls to 0 at twice this (infinite: it never falls). A hard band's
+    /// end.
     pub r: f64,
+    /// A sampled band: weight 1 between `inner` and `r`.
+    pub hard: bool,
+}
+
+/// The draw in (0, 1) of the shaded light at `index` in the frame of `seed`: PCG's hash of the
+/// index mixed with the seed's, its top bits (`shaders/lights/hierarchy.wgsl`'s `band_xi`).
+pub fn band_xi(seed: u32, index: u32) -> f64 {
+    let h = crate::motion::pcg(index ^ crate::motion::pcg(seed));
+    f64::from(crate::stochastic::unit(h))
 }
 
 impl Band {
+    /// A soft band (`hard` false) from `inner` and `r`.
+    pub fn new(inner: f64, r: f64) -> Self {
+        Self {
+            inner,
+            r,
+            hard: false,
+        }
+    }
+
+    /// The band drawn with `xi` in (0, 1): weight 1 for `inner (1 + xi) < d < r (2 - xi)`, 0
+    /// elsewhere (from 0 where `inner` is 0; unbounded where `r` is infinite). The same `xi`
+    /// cuts both edges, so the probability over `xi` that it holds `d` is
+    /// `min(rising, falling)`, the soft band's weight: unbiased. A hard band stays as it is.
+    pub fn sampled(&self, xi: f64) -> Self {
+        if self.hard {
+            return *self;
+        }
+        Self {
+            inner: self.inner * (1.0 + xi),
+            r: if self.r.is_infinite() {
+                f64::INFINITY
+            } else {
+                self.r * (2.0 - xi)
+            },
+            hard: true,
+        }
+    }
+
     /// The weight at distance `d`.
     pub fn weight(&self, d: f64) -> f64 {
+        if self.hard {
+            return if d > self.inner && d < self.r {
+                1.0
+            } else {
+                0.0
+            };
+        }
         let rising = if self.inner == 0.0 {
             1.0
         } else if d <= self.inner {
@@ -305,9 +356,10 @@ impl Band {
         rising.min((2.0 - d / self.r).clamp(0.0, 1.0))
     }
 
-    /// What the band reaches: `2 r` (infinite for the last level and the spots).
+    /// What the band reaches: `2 r` (infinite for the last level and the spots; a hard
+    /// band's `r`).
     pub fn outer(&self) -> f64 {
-        2.0 * self.r
+        if self.hard { self.r } else { 2.0 * self.r }
     }
 }
 
@@ -322,14 +374,14 @@ impl Hierarchy {
         let mut lights = Vec::new();
         let mut bands = Vec::new();
         for (level, ls) in self.levels.iter().enumerate() {
-            let band = Band {
-                inner: if level == 0 { 0.0 } else { self.r(level - 1) },
-                r: if level == last {
+            let band = Band::new(
+                if level == 0 { 0.0 } else { self.r(level - 1) },
+                if level == last {
                     f64::INFINITY
                 } else {
                     self.r(level)
                 },
-            };
+            );
             for l in ls {
                 lights.push(Light::point(
                     l.position.as_vec3(),
@@ -345,10 +397,7 @@ impl Hierarchy {
                 radius: reach,
                 ..*s
             });
-            bands.push(Band {
-                inner: 0.0,
-                r: f64::INFINITY,
-            });
+            bands.push(Band::new(0.0, f64::INFINITY));
         }
         (lights, bands)
     }
@@ -418,6 +467,7 @@ mod tests {
             alpha,
             spacing: 0.5,
             top_lights: 16,
+            sample_from: None,
         }
     }
 
@@ -575,6 +625,7 @@ mod tests {
             &two,
             HierarchyParams {
                 top_lights: 0,
+                sample_from: None,
                 ..params(1.0)
             },
         );
@@ -613,5 +664,39 @@ mod tests {
             assert!(w[1] < w[0], "{errors:?}");
         }
         assert!(errors[4] < 1e-4 && errors[0] > 1e-3, "{errors:?}");
+    }
+
+    /// A sampled band holds `d` with the soft band's weight as its probability over the draw
+    /// (the mean over a fine lattice of draws), for level 0's, a middle level's and the last
+    /// level's bands; its reach is at most the soft band's; the draws spread over (0, 1).
+    #[test]
+    fn sampled_bands_are_unbiased() {
+        let n = 20_000;
+        for band in [
+            Band::new(0.0, 2.0),
+            Band::new(1.0, 2.0),
+            Band::new(4.0, f64::INFINITY),
+        ] {
+            for i in 0..200 {
+                let d = f64::from(i) * 0.05 + 0.013;
+                let mean = (0..n)
+                    .map(|k| band.sampled((f64::from(k) + 0.5) / f64::from(n)).weight(d))
+                    .sum::<f64>()
+                    / f64::from(n);
+                assert!(
+                    (mean - band.weight(d)).abs() < 1e-3,
+                    "{band:?} at {d}: mean {mean}, weight {}",
+                    band.weight(d)
+                );
+                let s = band.sampled(0.3);
+                assert!(s.hard && s.outer() <= band.outer());
+                assert_eq!(s.sampled(0.9), s);
+            }
+        }
+        let xis: Vec<f64> = (0..4096).map(|i| band_xi(7, i)).collect();
+        assert!(xis.iter().all(|&x| x > 0.0 && x < 1.0));
+        let mean = xis.iter().sum::<f64>() / xis.len() as f64;
+        assert!((mean - 0.5).abs() < 0.02, "{mean}");
+        assert_ne!(band_xi(7, 3), band_xi(8, 3));
     }
 }

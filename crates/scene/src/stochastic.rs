@@ -83,7 +83,7 @@ pub const INTERLEAVE_MAX: u32 = 8;
 
 /// The uniform number in (0, 1) of a 32-bit hash: its top [`XI_BITS`] bits, at the midpoint
 /// of their step.
-fn unit(h: u32) -> f32 {
+pub(crate) fn unit(h: u32) -> f32 {
     ((h >> (32 - XI_BITS)) as f32 + 0.5) / (1u32 << XI_BITS) as f32
 }
 

@@ -162,10 +162,13 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
         // `hierarchy=A/hH`: a family a finest spacing, swept over alpha.
         "hierarchy" => {
             let h = pieces.next().and_then(|p| p.strip_prefix('h'));
-            let name = match h {
+            let mut name = match h {
                 Some(h) => format!("lighting grid hierarchy, spacing {h} m"),
                 None => "lighting grid hierarchy".into(),
             };
+            if let Some(l) = pieces.next().and_then(|p| p.strip_prefix('s')) {
+                name += &format!(", bands sampled from level {l}");
+            }
             (name, v)
         }
         _ => {
