@@ -32,6 +32,19 @@ pub(crate) fn succeeds(args: &[&str], what: &str) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
 
+/// The number after `key` on the first line of `stdout` that holds `line`.
+pub(crate) fn number_after(stdout: &str, line: &str, key: &str) -> f64 {
+    let l = stdout
+        .lines()
+        .find(|l| l.contains(line))
+        .unwrap_or_else(|| panic!("no `{line}` line in:\n{stdout}"));
+    l.split(key)
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.trim_end_matches(',').parse().ok())
+        .unwrap_or_else(|| panic!("no `{key}` in {l}"))
+}
+
 /// The PSNR of `render --compare`'s line against the reference, from its output.
 pub(crate) fn psnr_vs_reference(stdout: &str) -> f64 {
     let line = stdout

@@ -4,19 +4,6 @@
 
 use super::*;
 
-/// The number after `key` on the first line of `stdout` that holds `line`.
-fn number_after(stdout: &str, line: &str, key: &str) -> f64 {
-    let l = stdout
-        .lines()
-        .find(|l| l.contains(line))
-        .unwrap_or_else(|| panic!("no `{line}` line in:\n{stdout}"));
-    l.split(key)
-        .nth(1)
-        .and_then(|s| s.split_whitespace().next())
-        .and_then(|s| s.trim_end_matches(',').parse().ok())
-        .unwrap_or_else(|| panic!("no `{key}` in {l}"))
-}
-
 /// Bad values name the option and what it accepts; the options that need --stochastic say so.
 #[test]
 fn bad_stochastic_options_name_the_option() {
