@@ -89,6 +89,9 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
             .or_default()
             .push(r);
     }
+    // In the rows' order (the experiment's), not the labels'.
+    let mut settings: Vec<_> = settings.into_iter().collect();
+    settings.sort_by_key(|(_, rs)| rs.iter().map(|r| r.index).min());
     let mut out = Vec::new();
     for ((scene, _, w, h, msaa), rs) in &settings {
         let lights = rs.iter().map(|r| r.setting_lights()).min().unwrap_or(0);
