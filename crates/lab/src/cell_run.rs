@@ -247,6 +247,13 @@ pub(crate) fn run_cell(
         as_they_are.as_ref(),
     )?;
     let moving = movers.as_ref().is_some_and(Movers::moving);
+    let sampled = matches!(
+        c.lights.radius,
+        manylights_scene::RadiusRule::Hierarchy {
+            sample_from: Some(_),
+            ..
+        }
+    );
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
     let mut encode = Vec::new();
     let mut uploads = Vec::new();
@@ -311,7 +318,9 @@ pub(crate) fn run_cell(
             rr,
             inf,
             cache: (!moving).then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
-            frames: (!moving).then_some(kept_frames),
+            // Kept frames hold one build's lights: not for lights that move or bands drawn
+            // each frame (how many frames the steady-state warm-up builds depends on time).
+            frames: (!moving && !sampled).then_some(kept_frames),
             lights_as_they_are: as_they_are.as_ref(),
         }),
         _ => None,
