@@ -265,7 +265,7 @@ fn range_of(r: &manylights_lab::Row) -> String {
         .split(',')
         .next()
         .filter(|p| {
-            ["threshold=", "stochastic=", "radius=", "hierarchy="]
+            manylights_lab::RADIUS_PREFIXES
                 .iter()
                 .any(|k| p.starts_with(k))
         })

@@ -415,6 +415,9 @@ impl Experiment {
     }
 }
 
+/// How the part of a cell's name that [`radius_label`] writes begins, one prefix a rule.
+pub const RADIUS_PREFIXES: [&str; 4] = ["threshold=", "stochastic=", "radius=", "hierarchy="];
+
 /// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`,
 /// `hierarchy=A/hH` (alpha A, spacing H), or
 /// `stochastic=E` with `/albedo` under the albedo bound, `/independent` for independent draws, `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel

@@ -28,6 +28,7 @@ pub mod stability;
 pub mod steady;
 pub mod tune;
 
+pub use cells::RADIUS_PREFIXES;
 pub use experiment::{Cell, Config, Experiment};
 pub use results::Row;
 

@@ -251,7 +251,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         .map(|e| e.description.clone())
         .unwrap_or_default();
     if let Some(e) = &exp {
-        in_experiment_order(e, &mut rows);
+        crate::results::in_experiment_order(e, &mut rows);
     }
     crate::results::backfill_scene_lights(&mut rows);
     let not_run = exp
@@ -296,21 +296,6 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let path = dir.join("report.html");
     write_atomic(&path, html(&page).as_bytes())?;
     Ok(path)
-}
-
-/// The rows in the experiment file's order: a cell's index is its place in the file's sweep
-/// (a cell run from another file of the same configurations, such as a part of the sweep
-/// moved to a run of its own, keeps its id, not its index). Rows of no cell of the file keep
-/// theirs.
-fn in_experiment_order(exp: &crate::Experiment, rows: &mut [Row]) {
-    let index: BTreeMap<String, usize> =
-        exp.cells().into_iter().map(|c| (c.id(), c.index)).collect();
-    for r in rows.iter_mut() {
-        if let Some(i) = index.get(&r.id) {
-            r.index = *i;
-        }
-    }
-    rows.sort_by_key(|r| r.index);
 }
 
 /// What the report's two pages say.
@@ -678,42 +663,5 @@ mod tests {
         assert_eq!(distinct(["a", "a"]), "a");
         assert_eq!(distinct(["b", "a", "b"]), "b (2 cells), a (1 cell)");
         assert_eq!(distinct([]), "");
-    }
-
-    #[test]
-    fn rows_take_their_place_in_the_experiment_file() {
-        let exp = crate::Experiment::parse(
-            r#"Experiment(name: "e", config: Config(scene: Atrium(), lights: (count: 64), resolution: (16, 8)), sweep: (radius: [Threshold(1.0), Threshold(0.1), Threshold(0.01)]))"#,
-            Path::new("e.ron"),
-        )
-        .unwrap();
-        let cells = exp.cells();
-        // Rows run from other files: right ids, wrong indices; and one of no cell of the file.
-        let mut rows: Vec<Row> = cells
-            .iter()
-            .rev()
-            .enumerate()
-            .map(|(i, c)| {
-                let mut r = crate::results::tests::sample_row();
-                r.id = c.id();
-                r.cell = c.name.clone();
-                r.index = i;
-                r
-            })
-            .collect();
-        let mut stray = crate::results::tests::sample_row();
-        stray.id = "elsewhere".into();
-        stray.index = 7;
-        rows.push(stray);
-        in_experiment_order(&exp, &mut rows);
-        let names: Vec<&str> = rows.iter().map(|r| r.cell.as_str()).collect();
-        assert_eq!(
-            names[..3],
-            ["threshold=1", "threshold=0.1", "threshold=0.01"]
-        );
-        assert_eq!(
-            rows.iter().map(|r| r.index).collect::<Vec<_>>(),
-            [0, 1, 2, 7]
-        );
     }
 }

@@ -286,7 +286,7 @@ pub fn backfill_scene_lights(rows: &mut [Row]) {
     fn without_range(cell: &str) -> String {
         cell.split(',')
             .filter(|p| {
-                !["threshold=", "stochastic=", "radius=", "hierarchy="]
+                !crate::cells::RADIUS_PREFIXES
                     .iter()
                     .any(|k| p.starts_with(k))
             })
@@ -306,6 +306,21 @@ pub fn backfill_scene_lights(rows: &mut [Row]) {
             .get(&(r.scene.clone(), without_range(&r.cell)))
             .copied();
     }
+}
+
+/// The rows in the experiment file's order: a cell's index is its place in the file's sweep
+/// (a cell run from another file of the same configurations, such as a part of the sweep
+/// moved to a run of its own, keeps its id, not its index). Rows of no cell of the file keep
+/// theirs.
+pub fn in_experiment_order(exp: &crate::Experiment, rows: &mut [Row]) {
+    let index: BTreeMap<String, usize> =
+        exp.cells().into_iter().map(|c| (c.id(), c.index)).collect();
+    for r in rows.iter_mut() {
+        if let Some(i) = index.get(&r.id) {
+            r.index = *i;
+        }
+    }
+    rows.sort_by_key(|r| r.index);
 }
 
 /// JSON has no infinity: an infinite PSNR (identical images) is written as the string "inf",
@@ -624,7 +639,7 @@ pub fn percentiles(v: &[f64]) -> Option<(f64, f64, f64)> {
 
 #[cfg(test)]
 pub(crate) mod tests {
-    use super::Row;
+    use super::{Path, Row, in_experiment_order};
 
     /// A row with every column the JSON requires, the rest at their defaults.
     pub(crate) fn sample_row() -> Row {
@@ -643,5 +658,42 @@ pub(crate) mod tests {
                 "max_abs_error_infinite": null, "exact_stride": 1, "frames": 1, "passes": {},
                 "index": 0, "id": "", "finished_unix": 0}"#;
         serde_json::from_str(json).unwrap()
+    }
+
+    #[test]
+    fn rows_take_their_place_in_the_experiment_file() {
+        let exp = crate::Experiment::parse(
+            r#"Experiment(name: "e", config: Config(scene: Atrium(), lights: (count: 64), resolution: (16, 8)), sweep: (radius: [Threshold(1.0), Threshold(0.1), Threshold(0.01)]))"#,
+            Path::new("e.ron"),
+        )
+        .unwrap();
+        let cells = exp.cells();
+        // Rows run from other files: right ids, wrong indices; and one of no cell of the file.
+        let mut rows: Vec<Row> = cells
+            .iter()
+            .rev()
+            .enumerate()
+            .map(|(i, c)| {
+                let mut r = sample_row();
+                r.id = c.id();
+                r.cell = c.name.clone();
+                r.index = i;
+                r
+            })
+            .collect();
+        let mut stray = sample_row();
+        stray.id = "elsewhere".into();
+        stray.index = 7;
+        rows.push(stray);
+        in_experiment_order(&exp, &mut rows);
+        let names: Vec<&str> = rows.iter().map(|r| r.cell.as_str()).collect();
+        assert_eq!(
+            names[..3],
+            ["threshold=1", "threshold=0.1", "threshold=0.01"]
+        );
+        assert_eq!(
+            rows.iter().map(|r| r.index).collect::<Vec<_>>(),
+            [0, 1, 2, 7]
+        );
     }
 }

@@ -135,7 +135,7 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
 /// `hierarchy=`.
 fn radius_part(cell: &str) -> Option<&str> {
     cell.split(',').find(|p| {
-        ["threshold=", "stochastic=", "radius=", "hierarchy="]
+        crate::cells::RADIUS_PREFIXES
             .iter()
             .any(|k| p.starts_with(k))
     })
