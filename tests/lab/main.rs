@@ -14,7 +14,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 20] = [
+const SHIPPED: [&str; 22] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -35,6 +35,8 @@ const SHIPPED: [&str; 20] = [
     "infinite-range-halls",
     "referee-bevy",
     "hierarchy-goals",
+    "hierarchy-sampled",
+    "hierarchy-sampled-1m",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {

@@ -167,7 +167,7 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
                 None => "lighting grid hierarchy".into(),
             };
             if let Some(l) = pieces.next().and_then(|p| p.strip_prefix('s')) {
-                name += &format!(", bands sampled from level {l}");
+                name += &format!(", sampled from level {l}");
             }
             (name, v)
         }
@@ -708,5 +708,12 @@ mod tests {
             f("setting=hall,hierarchy=2/h0.25,variant=x"),
             ("lighting grid hierarchy, spacing 0.25 m".into(), Some(2.0))
         );
+        // Within a legend's LABEL_CHARS, so that sampled families stay apart.
+        let (sampled, _) = f("setting=hall,hierarchy=2/h0.25/s1,variant=x");
+        assert_eq!(
+            sampled,
+            "lighting grid hierarchy, spacing 0.25 m, sampled from level 1"
+        );
+        assert!(sampled.chars().count() <= crate::figures::legend::LABEL_CHARS);
     }
 }
