@@ -189,6 +189,8 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
     let camera = original.camera;
     let gpu_scene = GpuScene::upload(&ctx, &shaded, &camera, 32, 32).unwrap();
     let build = GpuHierarchy::new(&ctx, plan.clone(), &original.lights, &gpu_scene).unwrap();
+    // Spots among the lights: every light takes the general path.
+    assert!(!gpu_scene.point_lights() && !gpu_scene.band_points());
     let moved: Vec<manylights_scene::Light> = original
         .lights
         .iter()
@@ -278,6 +280,9 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     assert!(plan.levels >= 3, "{} levels", plan.levels);
     let gpu_scene = GpuScene::upload(&ctx, &shaded, &original.camera, 32, 32).unwrap();
     let build = GpuHierarchy::new(&ctx, plan.clone(), &original.lights, &gpu_scene).unwrap();
+    // Point lights alone: the hierarchy's lights take the band points' short path.
+    assert!(gpu_scene.point_lights() && gpu_scene.band_points());
+    assert!(!gpu_scene.stochastic_points());
     let read = |seed: u32| -> Vec<GpuLight> {
         build.set_seed(&ctx, seed);
         build.build(&ctx).unwrap();

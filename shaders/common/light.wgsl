@@ -95,8 +95,8 @@ fn light_attenuation(light: Light, d: f32) -> f32 {
 // 1 between inner and r and 0 elsewhere.
 fn light_band(light: Light, d: f32) -> f32 {
     let r = -light.alpha;
-    if (light.interleave & 0x80000000u) != 0u {
-        let start = bitcast<f32>(light.interleave & 0x7fffffffu);
+    if (light.interleave & HARD_BAND) != 0u {
+        let start = bitcast<f32>(light.interleave & ~HARD_BAND);
         return select(0.0, 1.0, d > start && d < r);
     }
     let inner = bitcast<f32>(light.interleave);

@@ -53,11 +53,19 @@ override POINT_LIGHTS: bool = false;
 // drawn range, light_attenuation's stochastic arm, on the same short path.
 override STOCHASTIC_POINTS: bool = false;
 
+// BAND_POINTS (with POINT_LIGHTS): the frame's lights are all the lighting grid hierarchy's point
+// lights (FRAME_FLAG_BAND_POINTS, set by GpuScene::mark_band_points): shade_point_light shades
+// each with its band times 1 / d^2 (light_band: -alpha its r, interleave its inner and
+// HARD_BAND), light_attenuation's hierarchy arm, on the same short path.
+override BAND_POINTS: bool = false;
+
 // Whether the frame says every light is a windowed point light (FRAME_FLAG_POINT_LIGHTS, which
 // GpuScene sets from the lights it holds, and no infinite-range falloff).
 fn point_lights_only() -> bool {
-    let want = FRAME_FLAG_POINT_LIGHTS | select(0u, FRAME_FLAG_STOCHASTIC_POINTS, STOCHASTIC_POINTS);
-    return (frame.flags & (FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS | FRAME_FLAG_INFINITE_RANGE)) == want;
+    let want = FRAME_FLAG_POINT_LIGHTS | select(0u, FRAME_FLAG_STOCHASTIC_POINTS, STOCHASTIC_POINTS)
+        | select(0u, FRAME_FLAG_BAND_POINTS, BAND_POINTS);
+    let kinds = FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS | FRAME_FLAG_BAND_POINTS;
+    return (frame.flags & (kinds | FRAME_FLAG_INFINITE_RANGE)) == want;
 }
 
 // A listed light the per-pixel reject kept (d < radius, or any d with the infinite-range
@@ -84,10 +92,14 @@ fn lights_checked(c: vec3<f32>) -> vec3<f32> {
 // sum without the general model's branches and loads (its cone is 1, and a zero falloff adds
 // zero, as brdf_cos is finite).
 // With STOCHASTIC_POINTS the falloff is max(1 / d^2, alpha): the loops call it only inside the
-// drawn range (d < radius), where light_attenuation gives the same.
+// drawn range (d < radius), where light_attenuation gives the same. With BAND_POINTS it is the
+// band's weight times 1 / d^2, light_attenuation's own arithmetic.
 fn shade_point_light(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let l = select(n, to_light / d, d > 0.0);
-    let atten = select(light_falloff(d, light.radius), max(light_falloff_infinite(d), light.alpha), STOCHASTIC_POINTS);
+    var atten = select(light_falloff(d, light.radius), max(light_falloff_infinite(d), light.alpha), STOCHASTIC_POINTS);
+    if BAND_POINTS {
+        atten = light_band(light, d) * light_falloff_infinite(d);
+    }
     return light.color * (light.intensity * atten) * brdf_cos(m, n, l, v);
 }
 

@@ -195,7 +195,7 @@ fn sampled_light(l_in: Light, index: u32) -> Light {
         let to = r * (2.0 - xi);
         l.radius = min(to, step.c.z);
         l.alpha = -to;
-        l.interleave = bitcast<u32>(step.c.y * (1.0 + xi)) | 0x80000000u;
+        l.interleave = bitcast<u32>(step.c.y * (1.0 + xi)) | HARD_BAND;
     }
     return l;
 }

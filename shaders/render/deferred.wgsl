@@ -291,6 +291,9 @@ fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: S
             let q = vec4<f32>(lights[i].position, lights[i].radius);
             if infinite || part_box_holds(0u, q.xyz, q.w) {
                 wg_points[li] = array<vec4<f32>, 2>(q, point_energy(lights[i].color, lights[i].intensity, lights[i].alpha));
+                if BAND_POINTS {
+                    wg_bands[li] = lights[i].interleave;
+                }
                 slot = k;
             }
         }
@@ -312,7 +315,7 @@ fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: S
                 continue;
             }
             let q = wg_points[j];
-            let light = point_light(q[0], q[1]);
+            let light = point_light(q[0], q[1], slot_band(j));
             let to_light = light.position - s.p;
             let d = length(to_light);
             if !infinite && d >= light.radius {
@@ -348,21 +351,36 @@ const TILE_GROUP_LIGHTS: u32 = 32u;
 const POINT_BATCH: u32 = 64u;
 var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
 var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, POINT_BATCH, POINT_LIGHTS)>;
+// With BAND_POINTS, each slot's band beside it: the light's `interleave` (its inner distance and
+// HARD_BAND); its r is in the slot's alpha (point_energy).
+var<workgroup> wg_bands: array<u32, select(1u, POINT_BATCH, BAND_POINTS)>;
 
 // The second half of a point light's slot in wg_points: colour and intensity; for stochastic
-// point lights (STOCHASTIC_POINTS) colour times intensity, and alpha.
+// point lights (STOCHASTIC_POINTS) and the hierarchy's (BAND_POINTS) colour times intensity, and
+// alpha.
 fn point_energy(color: vec3<f32>, intensity: f32, alpha: f32) -> vec4<f32> {
-    return select(vec4<f32>(color, intensity), vec4<f32>(color * intensity, alpha), STOCHASTIC_POINTS);
+    return select(vec4<f32>(color, intensity), vec4<f32>(color * intensity, alpha), STOCHASTIC_POINTS || BAND_POINTS);
 }
 
-// The point light of slot halves q (position, radius) and e (point_energy) of wg_points.
-fn point_light(q: vec4<f32>, e: vec4<f32>) -> Light {
+// The band of slot k of wg_points (BAND_POINTS; otherwise 0, unread).
+fn slot_band(k: u32) -> u32 {
+    if BAND_POINTS {
+        return wg_bands[k];
+    }
+    return 0u;
+}
+
+// The point light of slot halves q (position, radius) and e (point_energy) of wg_points, with
+// its band's bits (slot_band).
+fn point_light(q: vec4<f32>, e: vec4<f32>, band: u32) -> Light {
+    let premultiplied = STOCHASTIC_POINTS || BAND_POINTS;
     var light: Light;
     light.position = q.xyz;
     light.radius = q.w;
     light.color = e.xyz;
-    light.intensity = select(e.w, 1.0, STOCHASTIC_POINTS);
-    light.alpha = select(0.0, e.w, STOCHASTIC_POINTS);
+    light.intensity = select(e.w, 1.0, premultiplied);
+    light.alpha = select(0.0, e.w, premultiplied);
+    light.interleave = band;
     return light;
 }
 
@@ -410,6 +428,9 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             let light = lights[light_indices[list.x + base + li]];
             if POINT_LIGHTS {
                 wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), point_energy(light.color, light.intensity, light.alpha));
+                if BAND_POINTS {
+                    wg_bands[li] = light.interleave;
+                }
             } else {
                 wg_lights[li] = light;
             }
@@ -434,16 +455,16 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                     let d = vec4<f32>(length(t0), length(t1), length(t2), length(t3));
                     let keep = vec4<bool>(infinite) | !(d >= vec4<f32>(q[0].w, q[1].w, q[2].w, q[3].w));
                     if keep.x {
-                        c += shade_listed(point_light(q[0], wg_points[k][1]), t0, d.x, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[0], wg_points[k][1], slot_band(k)), t0, d.x, s.n, s.v, s.m);
                     }
                     if keep.y {
-                        c += shade_listed(point_light(q[1], wg_points[k + 1u][1]), t1, d.y, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[1], wg_points[k + 1u][1], slot_band(k + 1u)), t1, d.y, s.n, s.v, s.m);
                     }
                     if keep.z {
-                        c += shade_listed(point_light(q[2], wg_points[k + 2u][1]), t2, d.z, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[2], wg_points[k + 2u][1], slot_band(k + 2u)), t2, d.z, s.n, s.v, s.m);
                     }
                     if keep.w {
-                        c += shade_listed(point_light(q[3], wg_points[k + 3u][1]), t3, d.w, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[3], wg_points[k + 3u][1], slot_band(k + 3u)), t3, d.w, s.n, s.v, s.m);
                     }
                 }
             }
@@ -451,7 +472,7 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                 var light: Light;
                 if POINT_LIGHTS {
                     let q = wg_points[k];
-                    light = point_light(q[0], q[1]);
+                    light = point_light(q[0], q[1], slot_band(k));
                 } else {
                     light = wg_lights[k];
                 }
@@ -533,6 +554,9 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             let i = light_indices[list.x + base + li];
             if POINT_LIGHTS {
                 wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(lights[i].position, lights[i].radius), point_energy(lights[i].color, lights[i].intensity, lights[i].alpha));
+                if BAND_POINTS {
+                    wg_bands[li] = lights[i].interleave;
+                }
             } else {
                 wg_lights[li] = lights[i];
             }
@@ -560,7 +584,7 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                 var light: Light;
                 if POINT_LIGHTS {
                     let q = wg_points[k];
-                    light = point_light(q[0], q[1]);
+                    light = point_light(q[0], q[1], slot_band(k));
                 } else {
                     light = wg_lights[k];
                 }

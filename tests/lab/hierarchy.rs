@@ -187,3 +187,49 @@ fn sampled_bands_match_their_reference_with_shorter_lists() {
         );
     }
 }
+
+/// Point lights alone: the hierarchy's lights shade on the band points' short path
+/// (`BAND_POINTS`: 36 bytes a light in workgroup memory, four rejects at a time) in the loops
+/// over lists that have one (deferred's tiles, clusters and bins, forward's), with MSAA too,
+/// each equal to the brute-force reference of the same hierarchy (which shades every light on
+/// the general path) with no false negatives.
+#[test]
+fn band_points_match_their_reference_on_every_path() {
+    let ctx = common::gpu();
+    let src = r#"Experiment(
+        name: "hierarchy-band-points",
+        config: Config(
+            scene: Atrium(bays: 2),
+            lights: (generator: Uniform, count: 1100, seed: 7, intensity: 2.0,
+                radius: Hierarchy(alpha: 1.5, spacing: 0.25)),
+            materials: [BlinnPhong, Ggx],
+            resolution: (64, 40),
+            frames: 1,
+            warmup: 0,
+        ),
+        sweep: (
+            variants: [
+                (label: "deferred-clusters", backend: Deferred, strategy: Clustered(tile_size: 16, slices: 16)),
+                (label: "deferred-zbin", backend: Deferred, strategy: ZBin(tile_size: 8)),
+                (label: "deferred-scatter", backend: Deferred, strategy: TiledScatter(tile_size: 16)),
+                (label: "forward-gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
+                (label: "forward-clusters-msaa", backend: Forward, strategy: Clustered(tile_size: 16, slices: 16), msaa: 4),
+            ],
+        ),
+    )"#;
+    let e = Experiment::parse(src, Path::new("band-points.ron")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
+    assert_eq!(s.rows.len(), 5);
+    for r in &s.rows {
+        let cell = &r.cell;
+        assert_eq!(r.false_negatives.unwrap_or(0), 0, "{cell}: false negatives");
+        assert_eq!(r.nonfinite_pixels, 0, "{cell}: a pipeline for other lights");
+        let flip = r.flip_mean.expect("the same hierarchy's reference");
+        let tolerance = if r.backend == "deferred" { 1e-3 } else { 1e-6 };
+        assert!(
+            flip <= tolerance,
+            "{cell}: mean FLIP {flip} against its reference"
+        );
+    }
+}

@@ -407,7 +407,8 @@ impl GpuHierarchy {
                 (s.a[0] == 1, group, grid(s.a[1]))
             })
             .collect();
-        shaded.mark_general_lights(ctx);
+        // Point lights and aggregates shade on the short path unless a spot is among them.
+        shaded.mark_band_points(ctx);
         Ok(Self {
             plan,
             source,

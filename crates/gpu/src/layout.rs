@@ -31,6 +31,12 @@ pub const FRAME_FLAG_POINT_LIGHTS: u32 = 2;
 /// check it, and those without check its absence.
 pub const FRAME_FLAG_STOCHASTIC_POINTS: u32 = 4;
 
+/// `Frame.flags`, with [`FRAME_FLAG_POINT_LIGHTS`]: the point lights are the lighting grid
+/// hierarchy's, each shaded with its band times `1 / d^2` ([`GpuLight::with_band`]; no spot among
+/// them). Set by [`crate::GpuScene::mark_band_points`]; pipelines built with `BAND_POINTS`
+/// check it, and those without check its absence.
+pub const FRAME_FLAG_BAND_POINTS: u32 = 8;
+
 /// WGSL constants generated from their Rust definitions; prepended to every composed shader.
 pub fn wgsl_prelude() -> String {
     format!(
@@ -44,6 +50,8 @@ pub fn wgsl_prelude() -> String {
          const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n\
          const FRAME_FLAG_POINT_LIGHTS: u32 = {FRAME_FLAG_POINT_LIGHTS}u;\n\
          const FRAME_FLAG_STOCHASTIC_POINTS: u32 = {FRAME_FLAG_STOCHASTIC_POINTS}u;\n\
+         const FRAME_FLAG_BAND_POINTS: u32 = {FRAME_FLAG_BAND_POINTS}u;\n\
+         const HARD_BAND: u32 = {HARD_BAND}u;\n\
          const XI_BITS: u32 = {xi_bits}u;\n\
          const PHI_BITS: u32 = {phi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\

@@ -11,8 +11,8 @@ use manylights_scene::{Camera, Light, Scene};
 use wgpu::util::DeviceExt;
 
 use crate::layout::{
-    FRAME_FLAG_POINT_LIGHTS, FRAME_FLAG_STOCHASTIC_POINTS, GpuFrame, GpuLight, GpuMaterial,
-    GpuVertex, LIGHT_KIND_POINT,
+    FRAME_FLAG_BAND_POINTS, FRAME_FLAG_POINT_LIGHTS, FRAME_FLAG_STOCHASTIC_POINTS, GpuFrame,
+    GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT,
 };
 use crate::{GpuContext, GpuError};
 
@@ -47,6 +47,9 @@ pub struct GpuScene {
     /// With `point_lights`: the point lights carry stochastic ranges without interleaving
     /// (`FRAME_FLAG_STOCHASTIC_POINTS`), from [`GpuScene::mark_stochastic_points`].
     stochastic_points: AtomicBool,
+    /// With `point_lights`: the point lights are the lighting grid hierarchy's, shaded with
+    /// their bands (`FRAME_FLAG_BAND_POINTS`), from [`GpuScene::mark_band_points`].
+    band_points: AtomicBool,
     /// The flags of the last [`GpuScene::set_view`], without `FRAME_FLAG_POINT_LIGHTS`.
     view_flags: AtomicU32,
     /// Layout of group 0.
@@ -226,6 +229,7 @@ impl GpuScene {
             frame: frame_buf,
             point_lights: AtomicBool::new(point_lights),
             stochastic_points: AtomicBool::new(false),
+            band_points: AtomicBool::new(false),
             view_flags: AtomicU32::new(0),
             layout,
             bind_group,
@@ -236,7 +240,8 @@ impl GpuScene {
     /// scene adds `FRAME_FLAG_POINT_LIGHTS` where its lights allow it), and sorts the
     /// transparent triangles back to front for the camera.
     pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
-        let flags = flags & !(FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS);
+        let flags = flags
+            & !(FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS | FRAME_FLAG_BAND_POINTS);
         self.view_flags.store(flags, Ordering::Relaxed);
         let frame = GpuFrame {
             flags: self.frame_flags(flags),
@@ -254,16 +259,20 @@ impl GpuScene {
         }
     }
 
-    /// `flags` with `FRAME_FLAG_POINT_LIGHTS` where every light is a windowed point light.
+    /// `flags` with `FRAME_FLAG_POINT_LIGHTS` where every light is a point light on the short
+    /// path, and with the flag of its kind (stochastic ranges, hierarchy bands).
     fn frame_flags(&self, flags: u32) -> u32 {
-        match (
-            self.point_lights.load(Ordering::Relaxed),
-            self.stochastic_points.load(Ordering::Relaxed),
-        ) {
-            (true, true) => flags | FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS,
-            (true, false) => flags | FRAME_FLAG_POINT_LIGHTS,
-            _ => flags,
+        if !self.point_lights.load(Ordering::Relaxed) {
+            return flags;
         }
+        let kind = if self.stochastic_points.load(Ordering::Relaxed) {
+            FRAME_FLAG_STOCHASTIC_POINTS
+        } else if self.band_points.load(Ordering::Relaxed) {
+            FRAME_FLAG_BAND_POINTS
+        } else {
+            0
+        };
+        flags | FRAME_FLAG_POINT_LIGHTS | kind
     }
 
     /// Whether the frame tells shading that every light is a windowed point light
@@ -278,12 +287,34 @@ impl GpuScene {
     pub fn mark_general_lights(&self, ctx: &GpuContext) {
         self.point_lights.store(false, Ordering::Relaxed);
         self.stochastic_points.store(false, Ordering::Relaxed);
+        self.band_points.store(false, Ordering::Relaxed);
         self.write_flags(ctx);
     }
 
+    /// Whether the frame tells shading that the point lights are the lighting grid hierarchy's,
+    /// each with its band (`FRAME_FLAG_BAND_POINTS`, with `FRAME_FLAG_POINT_LIGHTS`).
+    pub fn band_points(&self) -> bool {
+        self.band_points.load(Ordering::Relaxed)
+    }
+
+    /// From now on every light carries a hierarchy band ([`GpuLight::with_band`], written on
+    /// the GPU by `lights.hierarchy` or by [`GpuScene::set_light_bands`]): a scene of point lights
+    /// stays on the short path, shaded with the band times `1 / d^2`
+    /// (`FRAME_FLAG_BAND_POINTS`); any other scene (spots among the lights) is marked general
+    /// ([`GpuScene::mark_general_lights`]).
+    pub fn mark_band_points(&self, ctx: &GpuContext) {
+        if self.point_lights.load(Ordering::Relaxed) {
+            self.stochastic_points.store(false, Ordering::Relaxed);
+            self.band_points.store(true, Ordering::Relaxed);
+            self.write_flags(ctx);
+        } else {
+            self.mark_general_lights(ctx);
+        }
+    }
+
     /// Uploads `lights` again (the scene's, the same count) with their hierarchy bands
-    /// (`manylights_scene::hierarchy`, one a light: [`GpuLight::with_band`]), and marks the
-    /// lights general. Panics unless there are as many lights and bands as the scene has lights.
+    /// (`manylights_scene::hierarchy`, one a light: [`GpuLight::with_band`]), and marks them
+    /// band points ([`GpuScene::mark_band_points`]: general where a spot is among them). Panics unless there are as many lights and bands as the scene has lights.
     pub fn set_light_bands(&self, ctx: &GpuContext, lights: &[Light], bands: &[Band]) {
         assert!(
             lights.len() == self.light_count as usize && bands.len() == lights.len(),
@@ -300,7 +331,7 @@ impl GpuScene {
         if !gpu.is_empty() {
             ctx.queue.write_buffer(&self.lights, 0, cast_slice(&gpu));
         }
-        self.mark_general_lights(ctx);
+        self.mark_band_points(ctx);
     }
 
     /// Whether the frame tells shading that the point lights carry stochastic ranges without
@@ -315,6 +346,7 @@ impl GpuScene {
     /// any other scene is marked general ([`GpuScene::mark_general_lights`]).
     pub fn mark_stochastic_points(&self, ctx: &GpuContext) {
         if self.point_lights.load(Ordering::Relaxed) {
+            self.band_points.store(false, Ordering::Relaxed);
             self.stochastic_points.store(true, Ordering::Relaxed);
             self.write_flags(ctx);
         } else {

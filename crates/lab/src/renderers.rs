@@ -13,8 +13,9 @@ use manylights_shade::{HdrFormat, ReferenceFrame, Renderer};
 use crate::experiment::Config;
 
 /// What a renderer is built for: samples a pixel, glass, the opaque material models in order,
-/// windowed point lights alone, stochastic ranges on them, the lit image's format.
-type Key = (u32, bool, Vec<u32>, bool, bool, HdrFormat);
+/// windowed point lights alone, stochastic ranges on them, hierarchy bands on them, the lit
+/// image's format.
+type Key = (u32, bool, Vec<u32>, bool, bool, bool, HdrFormat);
 
 /// The renderers built so far in a run (the most recent [`Renderers::KEEP`]).
 #[derive(Default)]
@@ -43,6 +44,7 @@ impl Renderers {
                 .collect(),
             scene.point_lights(),
             scene.stochastic_points(),
+            scene.band_points(),
             hdr,
         );
         let i = match self.0.iter().position(|(k, _)| *k == key) {

@@ -198,6 +198,9 @@ pub struct Renderer {
     /// With `point_lights`: its shading pipelines were built for stochastic ranges on them
     /// (`STOCHASTIC_POINTS`, [`GpuScene::stochastic_points`]).
     pub(crate) stochastic_points: bool,
+    /// With `point_lights`: built for the lighting grid hierarchy's bands on them
+    /// (`BAND_POINTS`, [`GpuScene::band_points`]).
+    pub(crate) band_points: bool,
     pub(crate) prepass: DepthPrepass,
     /// Whether the scene has transparent surfaces.
     pub(crate) transparent: bool,
@@ -285,6 +288,13 @@ impl Renderer {
         self.stochastic_points
     }
 
+    /// Whether its point-light pipelines shade the lighting grid hierarchy's bands
+    /// ([`GpuScene::band_points`]); such a renderer refuses a scene without them, and a
+    /// point-light renderer without them a scene with them.
+    pub fn band_points(&self) -> bool {
+        self.band_points
+    }
+
     /// Samples a pixel of its frames.
     pub fn samples(&self) -> u32 {
         self.samples
@@ -308,12 +318,15 @@ impl Renderer {
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
         if self.point_lights
-            && (!scene.point_lights() || self.stochastic_points != scene.stochastic_points())
+            && (!scene.point_lights()
+                || self.stochastic_points != scene.stochastic_points()
+                || self.band_points != scene.band_points())
         {
             return Err(manylights_gpu::GpuError::Unsupported(
                 "a renderer built for point lights cannot shade this scene's lights (spots, or \
-                 stochastic ranges drawn since, or none where it was built for them): build the \
-                 renderer after StochasticRanges::new, from the scene as it will be shaded"
+                 stochastic ranges or hierarchy bands given since, or none where it was built \
+                 for them): build the renderer after StochasticRanges::new or GpuHierarchy::new, \
+                 from the scene as it will be shaded"
                     .into(),
             )
             .into());

@@ -161,6 +161,9 @@ impl Renderer {
         // STOCHASTIC_POINTS: those point lights with stochastic ranges (shading.wgsl).
         let stochastic_points = point_lights && scene.stochastic_points();
         let stochastic = ("STOCHASTIC_POINTS", f64::from(u8::from(stochastic_points)));
+        // BAND_POINTS: those point lights the lighting grid hierarchy's, with bands.
+        let band_points = point_lights && scene.band_points();
+        let band = ("BAND_POINTS", f64::from(u8::from(band_points)));
         let forward_with = |entry| {
             scene
                 .opaque_models
@@ -178,6 +181,7 @@ impl Renderer {
                             ("MATERIAL_MODELS", f64::from(1u32 << model)),
                             point,
                             stochastic,
+                            band,
                         ],
                     )
                 })
@@ -195,7 +199,7 @@ impl Renderer {
                     Some((entry, std::slice::from_ref(&target))),
                     DepthTest::Less,
                     samples,
-                    &[point, stochastic],
+                    &[point, stochastic, band],
                 )
             })
         };
@@ -260,12 +264,13 @@ impl Renderer {
             ("MATERIAL_MODELS", f64::from(scene.opaque_model_mask())),
             point,
             stochastic,
+            band,
             ("GLASS", f64::from(u8::from(glass_layer.is_some()))),
         ];
         let models = if samples > 1 {
             &models[..]
         } else {
-            &models[..3]
+            &models[..4]
         };
         let models = wgpu::PipelineCompilationOptions {
             constants: models,
@@ -319,6 +324,7 @@ impl Renderer {
             hdr,
             point_lights,
             stochastic_points,
+            band_points,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
             lookup_bounds,
