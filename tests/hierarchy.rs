@@ -261,9 +261,11 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
     }
 }
 
-/// Sampled bands on the GPU (`sample_from`): every live light of the sampled levels carries
-/// its soft band drawn with `band_xi(seed, its index)` (`Band::sampled`), the reach cut to
-/// match; the levels below keep their soft bands; a new seed draws anew.
+/// Sampled bands on the GPU (`sample_from`): every live aggregate of the sampled levels carries
+/// its soft band drawn with `band_xi(seed, node_draw(level, its node's key))`
+/// (`Band::sampled`), the reach cut to match; the levels below keep their soft bands; the same
+/// frame built again draws the same band for each node wherever its slot; a new seed draws
+/// anew.
 #[test]
 fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
@@ -283,7 +285,8 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     // Point lights alone: the hierarchy's lights take the band points' short path.
     assert!(gpu_scene.point_lights() && gpu_scene.band_points());
     assert!(!gpu_scene.stochastic_points());
-    let read = |seed: u32| -> Vec<GpuLight> {
+    // A build's shaded lights and its hash table's slot keys.
+    let read = |seed: u32| -> (Vec<GpuLight>, Vec<u32>) {
         build.set_seed(&ctx, seed);
         build.build(&ctx).unwrap();
         let bytes = manylights_gpu::readback::read_buffer(
@@ -293,10 +296,23 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
             plan.shaded_count() * 64,
         )
         .unwrap();
-        bytemuck::cast_slice(&bytes).to_vec()
+        let lights = bytemuck::cast_slice(&bytes).to_vec();
+        (lights, build.slot_keys(&ctx).unwrap())
     };
-    let (a, b) = (read(3), read(4));
+    // Seed 3, seed 4, and seed 3 again.
+    let (a, keys_a) = read(3);
+    let (b, keys_b) = read(4);
+    let (c, keys_c) = read(3);
     let r = |l: usize| params.alpha * plan.h * f64::from(1u32 << l);
+    // The shaded light of `level` whose node is `key` in a build of those keys.
+    let find = |keys: &[u32], level: usize, key: u32| {
+        let (first, count) = plan.level_range(level);
+        let slots = (first - plan.points) as usize..(first - plan.points + count) as usize;
+        keys[slots.clone()]
+            .iter()
+            .position(|&k| k == key)
+            .map(|t| first as usize + t)
+    };
     let mut checked = 0;
     for level in 0..plan.levels {
         let (first, count) = plan.level_range(level);
@@ -317,7 +333,10 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
                 assert_eq!(l.interleave & HARD_BAND, 0, "level 0 light {i} stays soft");
                 continue;
             }
-            let want = soft.sampled(hierarchy::band_xi(3, i));
+            let key = keys_a[(i - plan.points) as usize];
+            assert_ne!(key, 0, "light {i}: a live aggregate's slot has its node");
+            let id = hierarchy::node_draw(level as u32, key);
+            let want = soft.sampled(hierarchy::band_xi(3, id));
             let from = f32::from_bits(l.interleave & !HARD_BAND);
             assert_ne!(l.interleave & HARD_BAND, 0, "light {i} of level {level}");
             assert!(
@@ -337,8 +356,17 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
                 (want.r as f32).min(plan.reach),
                 "light {i}'s reach"
             );
+            // The same frame built again draws the same band for the same node, wherever
+            // its slot; seed 4 draws anew.
+            let again = find(&keys_c, level, key).expect("the node in the same frame's build");
+            assert_eq!(
+                (c[again].interleave, c[again].alpha, c[again].radius),
+                (l.interleave, l.alpha, l.radius),
+                "light {i}: the same frame's draw"
+            );
+            let other = find(&keys_b, level, key).expect("the node in seed 4's build");
             assert_ne!(
-                l.interleave, b[i as usize].interleave,
+                b[other].interleave, l.interleave,
                 "light {i}: seed 4 draws anew"
             );
             checked += 1;

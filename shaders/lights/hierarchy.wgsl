@@ -36,7 +36,8 @@ struct Step {
     h: vec4<u32>,
     // where dead lights sit (xyz); w: infinity (a spot's band never falls)
     far: vec4<f32>,
-    // the frame's seed, 1 where this level's bands are sampled (band_xi, sampled_light)
+    // the frame's seed, 1 where this level's bands are sampled (band_xi, sampled_light), the
+    // level (node_draw)
     s: vec4<u32>,
 }
 
@@ -177,19 +178,26 @@ fn level_light(position: vec3<f32>, power: vec3<f32>) -> Light {
     return l;
 }
 
-// The draw in (0, 1) of the shaded light at `index` this frame
-// (manylights_scene::hierarchy::band_xi).
-fn band_xi(index: u32) -> f32 {
-    return stochastic_unit(pcg(index ^ pcg(step.s.x)));
+// The draw in (0, 1) of the light whose draw is `id` this frame
+// (manylights_scene::hierarchy::band_xi): a point light's id is its shaded index, an
+// aggregate's its node's (node_draw), so a frame's draws do not hang on the order in which the
+// build's threads took the hash table's slots.
+fn band_xi(id: u32) -> f32 {
+    return stochastic_unit(pcg(id ^ pcg(step.s.x)));
 }
 
-// A level's light as the shaded light at `index`: with its band sampled where the level's are
+// The draw id of level step.s.z's node of key `key` (manylights_scene::hierarchy::node_draw).
+fn node_draw(key: u32) -> u32 {
+    return pcg(key ^ pcg(step.s.z));
+}
+
+// A level's light of draw id `id` (band_xi): with its band sampled where the level's are
 // (manylights_scene::hierarchy::Band::sampled: weight 1 between inner (1 + xi) and
 // r (2 - xi), the reach cut to match).
-fn sampled_light(l_in: Light, index: u32) -> Light {
+fn sampled_light(l_in: Light, id: u32) -> Light {
     var l = l_in;
     if step.s.y == 1u {
-        let xi = band_xi(index);
+        let xi = band_xi(id);
         let r = -l.alpha;
         // The last level's r is infinite, and so is its end.
         let to = r * (2.0 - xi);
@@ -252,7 +260,7 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
         / weight;
     let position = (vec3<f32>(node) + offset) * bitcast<f32>(step.g.w);
     let power = p / step.c.w;
-    shaded[step.b.y + t] = sampled_light(level_light(position, power), step.b.y + t);
+    shaded[step.b.y + t] = sampled_light(level_light(position, power), node_draw(key));
     if step.a.w == 1u {
         splat(position, power);
     }

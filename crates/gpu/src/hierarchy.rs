@@ -54,7 +54,7 @@ pub struct Step {
     pub h: [u32; 4],
     /// Where dead lights sit; w: infinity.
     pub far: [f32; 4],
-    /// The frame's seed, 1 where this level's bands are sampled, unused, unused.
+    /// The frame's seed, 1 where this level's bands are sampled, the level, unused.
     pub s: [u32; 4],
 }
 
@@ -276,7 +276,7 @@ impl HierarchyPlan {
                     s: [
                         0,
                         u32::from(self.params.sample_from.is_some_and(|f| l >= f)),
-                        0,
+                        l as u32,
                         0,
                     ],
                 }
@@ -354,7 +354,9 @@ impl GpuHierarchy {
         let slots = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lights.hierarchy.slots"),
             size: slot_bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_DST
+                | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
         let dropped = d.create_buffer(&wgpu::BufferDescriptor {
@@ -463,6 +465,17 @@ impl GpuHierarchy {
         timer.resolve(&mut encoder);
         ctx.submit_and_wait(encoder, "lights.hierarchy")?;
         timer.read(ctx)
+    }
+
+    /// The key of every hash-table slot after the last build, level 1's slots first (a level's
+    /// `t`-th slot is its `t`-th shaded light, [`HierarchyPlan::level_range`]): 0 for an empty
+    /// slot, else 1 plus the node's index in its level's box. What a sampled aggregate's band is
+    /// drawn from (`manylights_scene::hierarchy::node_draw`).
+    pub fn slot_keys(&self, ctx: &GpuContext) -> Result<Vec<u32>, GpuError> {
+        let slots: u64 = self.plan.slots.iter().map(|&s| u64::from(s)).sum();
+        let b = crate::readback::read_buffer(ctx, &self.slots, 0, slots * SLOT_WORDS * 4)?;
+        let w: &[u32] = bytemuck::cast_slice(&b);
+        Ok(w.iter().step_by(SLOT_WORDS as usize).copied().collect())
     }
 
     /// Splats dropped since the build was made: (nodes outside their level's box, splats into

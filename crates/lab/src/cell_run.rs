@@ -318,9 +318,9 @@ pub(crate) fn run_cell(
             rr,
             inf,
             cache: (!moving).then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
-            // Kept frames hold one build's lights: not for lights that move or bands drawn
-            // each frame (how many frames the steady-state warm-up builds depends on time).
-            frames: (!moving && !sampled).then_some(kept_frames),
+            // Kept frames hold one build's lights: not for lights that move. Sampled bands are
+            // drawn for frame 0 before the checks (below), the same draws in every build.
+            frames: (!moving).then_some(kept_frames),
             lights_as_they_are: as_they_are.as_ref(),
         }),
         _ => None,
@@ -332,6 +332,11 @@ pub(crate) fn run_cell(
     } else {
         (0..poses.len()).map(|k| (k, None)).collect()
     };
+    if let (true, false, Some(m)) = (sampled, moving, &mut movers) {
+        // Static lights with sampled bands: every check sees frame 0's draws (the timed frames
+        // drew their own, as many as the steady-state warm-up took).
+        m.update(ctx, 0)?;
+    }
     let mut evals = Vec::with_capacity(checks.len());
     for (k, &(p, frame)) in checks.iter().enumerate() {
         let cam = &poses[p];

@@ -301,11 +301,19 @@ pub struct Band {
     pub hard: bool,
 }
 
-/// The draw in (0, 1) of the shaded light at `index` in the frame of `seed`: PCG's hash of the
-/// index mixed with the seed's, its top bits (`shaders/lights/hierarchy.wgsl`'s `band_xi`).
-pub fn band_xi(seed: u32, index: u32) -> f64 {
-    let h = crate::motion::pcg(index ^ crate::motion::pcg(seed));
+/// The draw in (0, 1) of the light of draw id `id` in the frame of `seed`: PCG's hash of the id
+/// mixed with the seed's, its top bits (`shaders/lights/hierarchy.wgsl`'s `band_xi`). A point
+/// light's id is its index among the shaded lights, an aggregate's [`node_draw`] of its node:
+/// so a frame's draws are the same in every build of it.
+pub fn band_xi(seed: u32, id: u32) -> f64 {
+    let h = crate::motion::pcg(id ^ crate::motion::pcg(seed));
     f64::from(crate::stochastic::unit(h))
+}
+
+/// The draw id of the aggregate of level `level` at the node of key `key` (1 plus the node's
+/// index in its level's box of nodes, as the GPU build's hash table keys it).
+pub fn node_draw(level: u32, key: u32) -> u32 {
+    crate::motion::pcg(key ^ crate::motion::pcg(level))
 }
 
 impl Band {
