@@ -14,6 +14,7 @@ use crate::LabError;
 use crate::results::Row;
 
 mod axes;
+mod families;
 mod legend;
 pub(crate) mod panels;
 pub(crate) mod scores;

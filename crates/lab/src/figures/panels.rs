@@ -23,6 +23,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::axes::{self, Scale};
+use super::families::{family, grows_tighter, radius_part};
 use super::legend::{LABEL_CHARS, Mark, clip_label, clip_to, legend, legend_width};
 use super::{Axis, FONT, Layout, PALETTE, err, pareto};
 use crate::LabError;
@@ -129,71 +130,6 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
     ring.push(pts[0]);
     area.draw(&PathElement::new(ring, colour.stroke_width(2)))
         .map_err(err)
-}
-
-/// The cell's name parts that set the radius rule: `threshold=`, `radius=`, `stochastic=` or
-/// `hierarchy=`.
-fn radius_part(cell: &str) -> Option<&str> {
-    cell.split(',').find(|p| {
-        crate::cells::RADIUS_PREFIXES
-            .iter()
-            .any(|k| p.starts_with(k))
-    })
-}
-
-/// A row's method family and its place in the family's sweep (the threshold, radius or error
-/// bound), from the radius part of its cell name (`crate::cells::radius_label`).
-pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
-    let Some(part) = radius_part(&r.cell) else {
-        let name = match r.radius_rule.as_str() {
-            "threshold" => "cut-off thresholds",
-            "stochastic" => "stochastic",
-            "hierarchy" => "lighting grid hierarchy",
-            _ => "fixed radius",
-        };
-        return (name.into(), None);
-    };
-    let (kind, value) = part.split_once('=').unwrap_or((part, ""));
-    let mut pieces = value.split('/');
-    let v = pieces.next().and_then(|v| v.parse::<f64>().ok());
-    match kind {
-        "threshold" => ("cut-off thresholds".into(), v),
-        "radius" => ("fixed radii".into(), v),
-        // `hierarchy=A/hH`: a family a finest spacing, swept over alpha.
-        "hierarchy" => {
-            let h = pieces.next().and_then(|p| p.strip_prefix('h'));
-            let mut name = match h {
-                Some(h) => format!("lighting grid hierarchy, spacing {h} m"),
-                None => "lighting grid hierarchy".into(),
-            };
-            if let Some(l) = pieces.next().and_then(|p| p.strip_prefix('s')) {
-                name += &format!(", sampled from level {l}");
-            }
-            (name, v)
-        }
-        _ => {
-            let (mut acc, mut il, mut extra) = (None, None, Vec::new());
-            for p in pieces {
-                if let Some(k) = p.strip_prefix("acc") {
-                    acc = Some(k.to_owned());
-                } else if let Some(n) = p.strip_prefix("il") {
-                    il = Some(n.to_owned());
-                } else {
-                    extra.push(p.to_owned());
-                }
-            }
-            let mut name = match (acc, il) {
-                (None, None) => "stochastic, one frame".to_owned(),
-                (Some(k), None) => format!("stochastic, {k} frames accumulated"),
-                (None, Some(n)) => format!("stochastic, {n}x{n} interleaved"),
-                (Some(k), Some(n)) => format!("stochastic, {n}x{n} interleaved, {k} frames"),
-            };
-            for e in extra {
-                name += &format!(" ({e})");
-            }
-            (name, v)
-        }
-    }
 }
 
 /// Name parts that only say which panel a cell is in, or its strategy and backend (shown by
@@ -640,12 +576,6 @@ fn notes(pts: &[Pt<'_>], numbered: &BTreeMap<usize, usize>) -> Vec<String> {
     notes
 }
 
-/// Whether a family's sweep value grows as its error falls: the hierarchy's alpha and a fixed
-/// radius (a threshold or an error bound shrinks instead).
-fn grows_tighter(family: &str) -> bool {
-    family.starts_with("lighting grid hierarchy") || family.starts_with("fixed")
-}
-
 /// The colour of colour key `c`.
 fn palette(c: usize) -> RGBColor {
     PALETTE[c % PALETTE.len()]
@@ -667,53 +597,4 @@ const GREY_MARK: RGBColor = RGBColor(90, 90, 90);
 /// Deferred backends' points are filled; forward's and naive forward's open.
 fn is_filled(r: &Row) -> bool {
     r.backend.starts_with("deferred")
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn row(cell: &str, strategy: &str, backend: &str) -> Row {
-        let mut r = crate::results::tests::sample_row();
-        r.cell = cell.into();
-        r.strategy = strategy.into();
-        r.backend = backend.into();
-        r
-    }
-
-    #[test]
-    fn families_and_sweeps_come_from_the_cell_name() {
-        let f = |cell: &str| family(&row(cell, "tiled_gather", "deferred"));
-        assert_eq!(
-            f("setting=hall,threshold=0.03,variant=x"),
-            ("cut-off thresholds".into(), Some(0.03))
-        );
-        assert_eq!(
-            f("stochastic=0.5,variant=x"),
-            ("stochastic, one frame".into(), Some(0.5))
-        );
-        assert_eq!(
-            f("stochastic=1/acc16,variant=x"),
-            ("stochastic, 16 frames accumulated".into(), Some(1.0))
-        );
-        assert_eq!(
-            f("stochastic=1/il2,variant=x"),
-            ("stochastic, 2x2 interleaved".into(), Some(1.0))
-        );
-        assert_eq!(
-            f("stochastic=1/albedo,variant=x").0,
-            "stochastic, one frame (albedo)"
-        );
-        assert_eq!(
-            f("setting=hall,hierarchy=2/h0.25,variant=x"),
-            ("lighting grid hierarchy, spacing 0.25 m".into(), Some(2.0))
-        );
-        // Within a legend's LABEL_CHARS, so that sampled families stay apart.
-        let (sampled, _) = f("setting=hall,hierarchy=2/h0.25/s1,variant=x");
-        assert_eq!(
-            sampled,
-            "lighting grid hierarchy, spacing 0.25 m, sampled from level 1"
-        );
-        assert!(sampled.chars().count() <= crate::figures::legend::LABEL_CHARS);
-    }
 }
