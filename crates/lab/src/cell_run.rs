@@ -11,7 +11,7 @@ use manylights_gpu::timing::{PassKind, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::{Camera, Scene};
-use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer};
+use manylights_shade::{Backend, InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::dynamic::{Movers, hierarchy_plan};
 use crate::evaluate::{PoseEval, References, evaluate, temporal_stability};
@@ -254,55 +254,20 @@ pub(crate) fn run_cell(
             ..
         }
     );
-    let mut frames: Vec<Vec<PassTiming>> = Vec::new();
-    let mut encode = Vec::new();
-    let mut uploads = Vec::new();
-    let mut timed = true;
-    for f in 0..(c.warmup + c.frames) as usize {
-        let cam = &poses[f % poses.len()];
-        // Moving lights move first, as a frame of an application would move them.
-        let update = match &mut movers {
-            Some(m) => Some(stage(name, &format!("frame {f} lights moved"), || {
-                m.update(ctx, f as u32)
-            })?),
-            None => None,
-        };
-        // Stochastic ranges are drawn afresh each frame, timed with it.
-        let drawn = match &draws {
-            Some(d) => d.draw(ctx, f as u32)?,
-            None => None,
-        };
-        gpu_scene.set_view(ctx, cam, w, h, 0);
-        ctx.take_encode_ms();
-        let o = stage(name, &format!("frame {f} rendered"), || {
-            renderer.render(
-                ctx,
-                &gpu_scene,
-                c.backend,
-                &c.strategy,
-                &settings(cam),
-                (w, h),
-            )
-        })
-        .map_err(|e| other(&e))?;
-        let enc = ctx.take_encode_ms();
-        if f >= c.warmup as usize {
-            match o.timings {
-                Some(mut t) => {
-                    if let Some(g) = drawn {
-                        t.splice(0..0, g);
-                    }
-                    if let Some(g) = update.as_ref().and_then(|u| u.gpu.clone()) {
-                        t.splice(0..0, g);
-                    }
-                    frames.push(t);
-                }
-                None => timed = false,
-            }
-            encode.push(enc);
-            uploads.extend(update.and_then(|u| u.host_ms));
-        }
-    }
+    let Measured {
+        frames,
+        encode,
+        uploads,
+        timed,
+    } = render_frames(
+        ctx,
+        c,
+        name,
+        &poses,
+        (&gpu_scene, renderer),
+        (draws.as_ref(), &mut movers),
+        &settings,
+    )?;
     // Metrics and accuracy at every pose (a path's poses are all checked), images at the first;
     // with moving lights, at every measured frame, the lights where that frame had them.
     let light_count = shaded_lights as u64;
@@ -389,45 +354,7 @@ pub(crate) fn run_cell(
         _ => None,
     };
     let temporal = temporal_stability(&evals);
-    // The worst pose of each measure.
-    let max_u64 = |f: &dyn Fn(&PoseEval) -> Option<u64>| evals.iter().filter_map(f).max();
-    let max_f64 =
-        |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::max);
-    let min_f64 =
-        |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::min);
-    let false_negatives = evals
-        .iter()
-        .map(|e| e.metrics.as_ref().map(|m| m.false_negatives))
-        .try_fold(0u64, |a, f| f.map(|f| a + f));
-    let fp_ratio = max_f64(&|e| e.metrics.as_ref().and_then(|m| m.false_positive_ratio));
-    let max_per_bin = max_u64(&|e| e.metrics.as_ref().map(|m| u64::from(m.max_lights_per_bin)));
-    let per_pixel_mean = max_f64(&|e| Some(e.lights_per_pixel_mean));
-    let dropped = max_u64(&|e| Some(e.dropped)).unwrap_or(0);
-    let nonfinite = max_u64(&|e| Some(e.nonfinite)).unwrap_or(0);
-    let (psnr, flip, max_abs) = (
-        min_f64(&|e| e.acc.map(|a| a.psnr_db)),
-        max_f64(&|e| e.acc.map(|a| a.flip_mean)),
-        max_f64(&|e| e.acc.map(|a| a.max_abs_error)),
-    );
-    let (psnr_inf, mut flip_inf, max_abs_inf) = (
-        min_f64(&|e| e.acc_inf.map(|a| a.psnr_db)),
-        max_f64(&|e| e.acc_inf.map(|a| a.flip_mean)),
-        max_f64(&|e| e.acc_inf.map(|a| a.max_abs_error)),
-    );
-    let mut rmse_inf = max_f64(&|e| e.acc_inf.map(|a| a.rmse));
-    // The energy error of the pose farthest from zero.
-    let mut energy_inf = evals
-        .iter()
-        .filter_map(|e| e.acc_inf.map(|a| a.energy_error))
-        .reduce(|a, b| if b.abs() > a.abs() { b } else { a });
-    let mut exposure_inf = first.acc_inf.map(|a| f64::from(a.exposure));
-    if let Some(n) = &noise {
-        // A stochastic cell's image error is its seeds' mean.
-        flip_inf = Some(n.flip_mean);
-        rmse_inf = Some(n.rmse);
-        energy_inf = Some(n.energy_error);
-        exposure_inf = Some(n.exposure);
-    }
+    let worst = Worst::of(&evals, noise.as_ref());
     let (list_bytes, gbuffer_bytes) = (first.list_bytes, first.gbuffer_bytes);
 
     let Timings {
@@ -463,11 +390,11 @@ pub(crate) fn run_cell(
         gpu_ms_shade: med(shade),
         gpu_ms_prepass: med(prepass),
         cpu_ms_encode: percentiles(&encode).map_or(0.0, |x| x.0),
-        false_negatives,
-        false_positive_ratio: fp_ratio,
-        lights_per_pixel_mean: per_pixel_mean,
-        max_lights_per_tile: max_per_bin,
-        dropped_lights: dropped,
+        false_negatives: worst.false_negatives,
+        false_positive_ratio: worst.fp_ratio,
+        lights_per_pixel_mean: worst.per_pixel_mean,
+        max_lights_per_tile: worst.max_per_bin,
+        dropped_lights: worst.dropped,
         list_bytes,
         gbuffer_bytes,
         msaa: c.msaa,
@@ -486,9 +413,9 @@ pub(crate) fn run_cell(
             _ => None,
         },
         msaa_target_bytes: first.msaa_target_bytes,
-        psnr_db: psnr,
-        flip_mean: flip,
-        max_abs_error: max_abs,
+        psnr_db: worst.psnr,
+        flip_mean: worst.flip,
+        max_abs_error: worst.max_abs,
         adapter: ctx.info.name.clone(),
         driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info)
             .trim()
@@ -504,12 +431,12 @@ pub(crate) fn run_cell(
         gpu_ms_prepass_p90: p90(prepass),
         gpu_ms_raster: med(raster),
         gpu_ms_compute: med(compute),
-        psnr_db_infinite: psnr_inf,
-        flip_mean_infinite: flip_inf,
-        max_abs_error_infinite: max_abs_inf,
+        psnr_db_infinite: worst.psnr_inf,
+        flip_mean_infinite: worst.flip_inf,
+        max_abs_error_infinite: worst.max_abs_inf,
         exact_stride: c.exact_stride,
         frames: c.frames,
-        nonfinite_pixels: nonfinite,
+        nonfinite_pixels: worst.nonfinite,
         poses: checks.len() as u32,
         temporal_change: temporal.map(|t| t.0),
         temporal_change_reference: temporal.map(|t| t.1),
@@ -520,9 +447,9 @@ pub(crate) fn run_cell(
         gpu_ms_cull_shade: first.steady_frame.map(|s| s.0),
         gpu_ms_cull_shade_span: first.steady_frame.and_then(|s| s.1),
         radius_rule: c.lights.radius.kind().into(),
-        exposure_infinite: exposure_inf,
-        rmse_infinite: rmse_inf,
-        energy_error_infinite: energy_inf,
+        exposure_infinite: worst.exposure_inf,
+        rmse_infinite: worst.rmse_inf,
+        energy_error_infinite: worst.energy_inf,
         seeds: draws.as_ref().map(|d| d.seeds),
         accumulate: draws.as_ref().map(|d| d.accumulate),
         bias_infinite: noise.and_then(|n| n.bias),
@@ -541,9 +468,7 @@ pub(crate) fn run_cell(
                 first.lights_per_pixel_mean
             } * first.covered as f64,
         ),
-        lights_needed_per_pixel_mean: max_f64(&|e| {
-            e.metrics.as_ref().map(|m| m.lights_needed_per_pixel_mean)
-        }),
+        lights_needed_per_pixel_mean: worst.needed_per_pixel_mean,
         gpu_ms_light_update: med(light_update),
         cpu_ms_upload: percentiles(&uploads).map(|x| x.0),
         passes,
@@ -551,6 +476,172 @@ pub(crate) fn run_cell(
         id,
         finished_unix: now(),
     })
+}
+
+/// A cell's measured frames: each one's passes (the lights' move and draws first), the host's
+/// encode times, the lights' upload times; `timed` false where the device has no timestamps.
+struct Measured {
+    frames: Vec<Vec<PassTiming>>,
+    encode: Vec<f64>,
+    uploads: Vec<f64>,
+    timed: bool,
+}
+
+/// Renders a cell's warm-up and measured frames, a pose each in turn, as an application's
+/// frames go: the lights moved (and the hierarchy built) first, stochastic ranges drawn, then
+/// the frame.
+fn render_frames(
+    ctx: &GpuContext,
+    c: &Config,
+    name: &str,
+    poses: &[Camera],
+    (gpu_scene, renderer): (&GpuScene, &Renderer),
+    (draws, movers): (Option<&Draws>, &mut Option<Movers>),
+    settings: &dyn Fn(&Camera) -> CullSettings,
+) -> Result<Measured, LabError> {
+    let (w, h) = c.resolution;
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let mut frames: Vec<Vec<PassTiming>> = Vec::new();
+    let mut encode = Vec::new();
+    let mut uploads = Vec::new();
+    let mut timed = true;
+    for f in 0..(c.warmup + c.frames) as usize {
+        let cam = &poses[f % poses.len()];
+        // Moving lights move first, as a frame of an application would move them.
+        let update = match movers {
+            Some(m) => Some(stage(name, &format!("frame {f} lights moved"), || {
+                m.update(ctx, f as u32)
+            })?),
+            None => None,
+        };
+        // Stochastic ranges are drawn afresh each frame, timed with it.
+        let drawn = match draws {
+            Some(d) => d.draw(ctx, f as u32)?,
+            None => None,
+        };
+        gpu_scene.set_view(ctx, cam, w, h, 0);
+        ctx.take_encode_ms();
+        let o = stage(name, &format!("frame {f} rendered"), || {
+            renderer.render(
+                ctx,
+                gpu_scene,
+                c.backend,
+                &c.strategy,
+                &settings(cam),
+                (w, h),
+            )
+        })
+        .map_err(|e| other(&e))?;
+        let enc = ctx.take_encode_ms();
+        if f >= c.warmup as usize {
+            match o.timings {
+                Some(mut t) => {
+                    if let Some(g) = drawn {
+                        t.splice(0..0, g);
+                    }
+                    if let Some(g) = update.as_ref().and_then(|u| u.gpu.clone()) {
+                        t.splice(0..0, g);
+                    }
+                    frames.push(t);
+                }
+                None => timed = false,
+            }
+            encode.push(enc);
+            uploads.extend(update.and_then(|u| u.host_ms));
+        }
+    }
+    Ok(Measured {
+        frames,
+        encode,
+        uploads,
+        timed,
+    })
+}
+
+/// The worst of each measure over a cell's checked poses (a stochastic cell's image error
+/// against infinite range: its seeds' mean).
+struct Worst {
+    false_negatives: Option<u64>,
+    fp_ratio: Option<f64>,
+    max_per_bin: Option<u64>,
+    per_pixel_mean: Option<f64>,
+    needed_per_pixel_mean: Option<f64>,
+    dropped: u64,
+    nonfinite: u64,
+    psnr: Option<f64>,
+    flip: Option<f64>,
+    max_abs: Option<f64>,
+    psnr_inf: Option<f64>,
+    flip_inf: Option<f64>,
+    max_abs_inf: Option<f64>,
+    rmse_inf: Option<f64>,
+    energy_inf: Option<f64>,
+    exposure_inf: Option<f64>,
+}
+
+impl Worst {
+    fn of(evals: &[PoseEval], noise: Option<&Noise>) -> Worst {
+        let first = &evals[0];
+        // The worst pose of each measure.
+        let max_u64 = |f: &dyn Fn(&PoseEval) -> Option<u64>| evals.iter().filter_map(f).max();
+        let max_f64 =
+            |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::max);
+        let min_f64 =
+            |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::min);
+        let false_negatives = evals
+            .iter()
+            .map(|e| e.metrics.as_ref().map(|m| m.false_negatives))
+            .try_fold(0u64, |a, f| f.map(|f| a + f));
+        let fp_ratio = max_f64(&|e| e.metrics.as_ref().and_then(|m| m.false_positive_ratio));
+        let max_per_bin = max_u64(&|e| e.metrics.as_ref().map(|m| u64::from(m.max_lights_per_bin)));
+        let per_pixel_mean = max_f64(&|e| Some(e.lights_per_pixel_mean));
+        let dropped = max_u64(&|e| Some(e.dropped)).unwrap_or(0);
+        let nonfinite = max_u64(&|e| Some(e.nonfinite)).unwrap_or(0);
+        let (psnr, flip, max_abs) = (
+            min_f64(&|e| e.acc.map(|a| a.psnr_db)),
+            max_f64(&|e| e.acc.map(|a| a.flip_mean)),
+            max_f64(&|e| e.acc.map(|a| a.max_abs_error)),
+        );
+        let (psnr_inf, mut flip_inf, max_abs_inf) = (
+            min_f64(&|e| e.acc_inf.map(|a| a.psnr_db)),
+            max_f64(&|e| e.acc_inf.map(|a| a.flip_mean)),
+            max_f64(&|e| e.acc_inf.map(|a| a.max_abs_error)),
+        );
+        let mut rmse_inf = max_f64(&|e| e.acc_inf.map(|a| a.rmse));
+        // The energy error of the pose farthest from zero.
+        let mut energy_inf = evals
+            .iter()
+            .filter_map(|e| e.acc_inf.map(|a| a.energy_error))
+            .reduce(|a, b| if b.abs() > a.abs() { b } else { a });
+        let mut exposure_inf = first.acc_inf.map(|a| f64::from(a.exposure));
+        if let Some(n) = noise {
+            // A stochastic cell's image error is its seeds' mean.
+            flip_inf = Some(n.flip_mean);
+            rmse_inf = Some(n.rmse);
+            energy_inf = Some(n.energy_error);
+            exposure_inf = Some(n.exposure);
+        }
+        let needed_per_pixel_mean =
+            max_f64(&|e| e.metrics.as_ref().map(|m| m.lights_needed_per_pixel_mean));
+        Worst {
+            false_negatives,
+            fp_ratio,
+            max_per_bin,
+            per_pixel_mean,
+            needed_per_pixel_mean,
+            dropped,
+            nonfinite,
+            psnr,
+            flip,
+            max_abs,
+            psnr_inf,
+            flip_inf,
+            max_abs_inf,
+            rmse_inf,
+            energy_inf,
+            exposure_inf,
+        }
+    }
 }
 
 /// The render and the lights-per-pixel heatmap, at most 480 pixels wide, for the report.
