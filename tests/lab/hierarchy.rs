@@ -200,7 +200,7 @@ fn band_points_match_their_reference_on_every_path() {
         name: "hierarchy-band-points",
         config: Config(
             scene: Atrium(bays: 2),
-            lights: (generator: Uniform, count: 1100, seed: 7, intensity: 2.0,
+            lights: (generator: Uniform, count: 500, seed: 7, intensity: 2.0,
                 radius: Hierarchy(alpha: 1.5, spacing: 0.25)),
             materials: [BlinnPhong, Ggx],
             resolution: (64, 40),

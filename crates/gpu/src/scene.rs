@@ -303,18 +303,13 @@ impl GpuScene {
     /// (`FRAME_FLAG_BAND_POINTS`); any other scene (spots among the lights) is marked general
     /// ([`GpuScene::mark_general_lights`]).
     pub fn mark_band_points(&self, ctx: &GpuContext) {
-        if self.point_lights.load(Ordering::Relaxed) {
-            self.stochastic_points.store(false, Ordering::Relaxed);
-            self.band_points.store(true, Ordering::Relaxed);
-            self.write_flags(ctx);
-        } else {
-            self.mark_general_lights(ctx);
-        }
+        self.mark_point_kind(ctx, false, true);
     }
 
     /// Uploads `lights` again (the scene's, the same count) with their hierarchy bands
     /// (`manylights_scene::hierarchy`, one a light: [`GpuLight::with_band`]), and marks them
-    /// band points ([`GpuScene::mark_band_points`]: general where a spot is among them). Panics unless there are as many lights and bands as the scene has lights.
+    /// band points ([`GpuScene::mark_band_points`]: general where a spot is among them).
+    /// Panics unless there are as many lights and bands as the scene has lights.
     pub fn set_light_bands(&self, ctx: &GpuContext, lights: &[Light], bands: &[Band]) {
         assert!(
             lights.len() == self.light_count as usize && bands.len() == lights.len(),
@@ -345,9 +340,15 @@ impl GpuScene {
     /// path, shaded `max(1 / d^2, alpha)` inside the ranges (`FRAME_FLAG_STOCHASTIC_POINTS`);
     /// any other scene is marked general ([`GpuScene::mark_general_lights`]).
     pub fn mark_stochastic_points(&self, ctx: &GpuContext) {
+        self.mark_point_kind(ctx, true, false);
+    }
+
+    /// Point lights stay on the short path with stochastic ranges or bands (at most one of the
+    /// two); any other lights are marked general.
+    fn mark_point_kind(&self, ctx: &GpuContext, stochastic: bool, band: bool) {
         if self.point_lights.load(Ordering::Relaxed) {
-            self.band_points.store(false, Ordering::Relaxed);
-            self.stochastic_points.store(true, Ordering::Relaxed);
+            self.stochastic_points.store(stochastic, Ordering::Relaxed);
+            self.band_points.store(band, Ordering::Relaxed);
             self.write_flags(ctx);
         } else {
             self.mark_general_lights(ctx);
