@@ -44,18 +44,51 @@ pub struct GpuScene {
     /// Whether every light is a point light with the windowed falloff (`FRAME_FLAG_POINT_LIGHTS`):
     /// as uploaded, until [`GpuScene::mark_general_lights`].
     point_lights: AtomicBool,
-    /// With `point_lights`: the point lights carry stochastic ranges without interleaving
-    /// (`FRAME_FLAG_STOCHASTIC_POINTS`), from [`GpuScene::mark_stochastic_points`].
-    stochastic_points: AtomicBool,
-    /// With `point_lights`: the point lights are the lighting grid hierarchy's, shaded with
-    /// their bands (`FRAME_FLAG_BAND_POINTS`), from [`GpuScene::mark_band_points`].
-    band_points: AtomicBool,
+    /// With `point_lights`, the flag of their kind on the short path: 0 (windowed),
+    /// `FRAME_FLAG_STOCHASTIC_POINTS` (stochastic ranges without interleaving, from
+    /// [`GpuScene::mark_stochastic_points`]) or `FRAME_FLAG_BAND_POINTS` (the lighting grid
+    /// hierarchy's, with bands, from [`GpuScene::mark_band_points`]).
+    point_kind: AtomicU32,
     /// The flags of the last [`GpuScene::set_view`], without `FRAME_FLAG_POINT_LIGHTS`.
     view_flags: AtomicU32,
     /// Layout of group 0.
     pub layout: wgpu::BindGroupLayout,
     /// Group 0.
     pub bind_group: wgpu::BindGroup,
+}
+
+/// The layout of group 0, which every pass binds: the frame uniform, the lights and the
+/// materials, seen by every stage.
+fn group0_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let vis =
+        wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
+    let storage = |binding| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: vis,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene.group0"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: vis,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+            storage(1),
+            storage(2),
+        ],
+    })
 }
 
 impl GpuScene {
@@ -180,35 +213,7 @@ impl GpuScene {
             bytemuck::bytes_of(&frame),
             wgpu::BufferUsages::UNIFORM | copy,
         );
-        let vis =
-            wgpu::ShaderStages::VERTEX | wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE;
-        let storage = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: vis,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene.group0"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: vis,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: None,
-                    },
-                    count: None,
-                },
-                storage(1),
-                storage(2),
-            ],
-        });
+        let layout = group0_layout(d);
         let bind_group = crate::pipeline::buffers_group(
             d,
             "scene.group0",
@@ -228,8 +233,7 @@ impl GpuScene {
             materials: materials_buf,
             frame: frame_buf,
             point_lights: AtomicBool::new(point_lights),
-            stochastic_points: AtomicBool::new(false),
-            band_points: AtomicBool::new(false),
+            point_kind: AtomicU32::new(0),
             view_flags: AtomicU32::new(0),
             layout,
             bind_group,
@@ -265,14 +269,7 @@ impl GpuScene {
         if !self.point_lights.load(Ordering::Relaxed) {
             return flags;
         }
-        let kind = if self.stochastic_points.load(Ordering::Relaxed) {
-            FRAME_FLAG_STOCHASTIC_POINTS
-        } else if self.band_points.load(Ordering::Relaxed) {
-            FRAME_FLAG_BAND_POINTS
-        } else {
-            0
-        };
-        flags | FRAME_FLAG_POINT_LIGHTS | kind
+        flags | FRAME_FLAG_POINT_LIGHTS | self.point_kind.load(Ordering::Relaxed)
     }
 
     /// Whether the frame tells shading that every light is a windowed point light
@@ -286,15 +283,14 @@ impl GpuScene {
     /// with its spot cone and alpha read.
     pub fn mark_general_lights(&self, ctx: &GpuContext) {
         self.point_lights.store(false, Ordering::Relaxed);
-        self.stochastic_points.store(false, Ordering::Relaxed);
-        self.band_points.store(false, Ordering::Relaxed);
+        self.point_kind.store(0, Ordering::Relaxed);
         self.write_flags(ctx);
     }
 
     /// Whether the frame tells shading that the point lights are the lighting grid hierarchy's,
     /// each with its band (`FRAME_FLAG_BAND_POINTS`, with `FRAME_FLAG_POINT_LIGHTS`).
     pub fn band_points(&self) -> bool {
-        self.band_points.load(Ordering::Relaxed)
+        self.point_kind.load(Ordering::Relaxed) == FRAME_FLAG_BAND_POINTS
     }
 
     /// From now on every light carries a hierarchy band ([`GpuLight::with_band`], written on
@@ -303,7 +299,7 @@ impl GpuScene {
     /// (`FRAME_FLAG_BAND_POINTS`); any other scene (spots among the lights) is marked general
     /// ([`GpuScene::mark_general_lights`]).
     pub fn mark_band_points(&self, ctx: &GpuContext) {
-        self.mark_point_kind(ctx, false, true);
+        self.mark_point_kind(ctx, FRAME_FLAG_BAND_POINTS);
     }
 
     /// Uploads `lights` again (the scene's, the same count) with their hierarchy bands
@@ -332,7 +328,7 @@ impl GpuScene {
     /// Whether the frame tells shading that the point lights carry stochastic ranges without
     /// interleaving (`FRAME_FLAG_STOCHASTIC_POINTS`, with `FRAME_FLAG_POINT_LIGHTS`).
     pub fn stochastic_points(&self) -> bool {
-        self.stochastic_points.load(Ordering::Relaxed)
+        self.point_kind.load(Ordering::Relaxed) == FRAME_FLAG_STOCHASTIC_POINTS
     }
 
     /// From now on every light carries a stochastic range and alpha drawn for each frame, one
@@ -340,15 +336,14 @@ impl GpuScene {
     /// path, shaded `max(1 / d^2, alpha)` inside the ranges (`FRAME_FLAG_STOCHASTIC_POINTS`);
     /// any other scene is marked general ([`GpuScene::mark_general_lights`]).
     pub fn mark_stochastic_points(&self, ctx: &GpuContext) {
-        self.mark_point_kind(ctx, true, false);
+        self.mark_point_kind(ctx, FRAME_FLAG_STOCHASTIC_POINTS);
     }
 
-    /// Point lights stay on the short path with stochastic ranges or bands (at most one of the
-    /// two); any other lights are marked general.
-    fn mark_point_kind(&self, ctx: &GpuContext, stochastic: bool, band: bool) {
+    /// Point lights stay on the short path as `kind` (a `FRAME_FLAG_*_POINTS` flag); any other
+    /// lights are marked general.
+    fn mark_point_kind(&self, ctx: &GpuContext, kind: u32) {
         if self.point_lights.load(Ordering::Relaxed) {
-            self.stochastic_points.store(stochastic, Ordering::Relaxed);
-            self.band_points.store(band, Ordering::Relaxed);
+            self.point_kind.store(kind, Ordering::Relaxed);
             self.write_flags(ctx);
         } else {
             self.mark_general_lights(ctx);
