@@ -576,6 +576,7 @@ fn shade(c: &mut Criterion) {
             "shade.forward",
             "shade.deferred",
             "shade.naive",
+            "shade.visibility",
         ] {
             let used = match backend {
                 Backend::Forward => ["prepass.depth", "shade.forward"].contains(&pass),
@@ -583,6 +584,7 @@ fn shade(c: &mut Criterion) {
                     ["shade.gbuffer", "shade.deferred"].contains(&pass)
                 }
                 Backend::NaiveForward => ["prepass.depth", "shade.naive"].contains(&pass),
+                Backend::Visibility => ["shade.visibility", "shade.deferred"].contains(&pass),
             };
             if used {
                 let mut g = c.benchmark_group(pass);

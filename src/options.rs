@@ -275,6 +275,9 @@ pub(crate) enum BackendName {
     DeferredStoredPosition,
     /// Every light at every fragment, no culling.
     NaiveForward,
+    /// Visibility buffer: depth and triangle ids, culling, compute lighting that interpolates
+    /// each pixel's triangle.
+    Visibility,
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]

@@ -239,6 +239,7 @@ impl Run<'_> {
             BackendName::Forward => Backend::Forward,
             BackendName::Deferred => Backend::Deferred,
             BackendName::DeferredStoredPosition => Backend::DeferredStoredPosition,
+            BackendName::Visibility => Backend::Visibility,
             BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
         let renderer = Renderer::with_format(ctx, gpu_scene, samples, hdr)

@@ -33,10 +33,11 @@ use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::accuracy::{ImageError, compare};
 use manylights_shade::{Backend, HdrImage, ReferenceRenderer, Renderer, ShadeOutput};
 
-const CULLED: [Backend; 3] = [
+const CULLED: [Backend; 4] = [
     Backend::Forward,
     Backend::Deferred,
     Backend::DeferredStoredPosition,
+    Backend::Visibility,
 ];
 
 fn scene(name: &str) -> Scene {
@@ -86,7 +87,7 @@ fn strategies() -> [Strategy; 6] {
 }
 
 fn tolerance(backend: Backend) -> f64 {
-    if backend == Backend::Deferred {
+    if matches!(backend, Backend::Deferred | Backend::Visibility) {
         5e-3
     } else {
         1e-4
@@ -156,6 +157,7 @@ fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
     let raster: &[&str] = match backend {
         Backend::Forward => &["prepass.depth", "shade.forward"],
         Backend::Deferred | Backend::DeferredStoredPosition => &["shade.gbuffer"],
+        Backend::Visibility => &["shade.visibility"],
         Backend::NaiveForward => &["prepass.depth", "shade.naive"],
     };
     for name in raster {
@@ -165,7 +167,7 @@ fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
             "{what}: no raster pass {name} in {t:?}"
         );
     }
-    if matches!(backend, Backend::Deferred | Backend::DeferredStoredPosition) {
+    if backend.lights_in_compute() {
         assert!(
             t.iter()
                 .any(|p| p.label == "shade.deferred" && p.kind == PassKind::Compute),
@@ -195,7 +197,7 @@ fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
 #[test]
 fn every_strategy_and_backend_matches_the_reference() {
     let ctx = common::gpu();
-    let mut worst = [0.0f64; 3];
+    let mut worst = [0.0f64; 4];
     for name in ["atrium", "pillars"] {
         let s = scene(name);
         for (w, h) in [(64, 48), (70, 45)] {
@@ -230,6 +232,7 @@ fn every_strategy_and_backend_matches_the_reference() {
                     let per_pixel = match backend {
                         Backend::Deferred => 24,
                         Backend::DeferredStoredPosition => 40,
+                        Backend::Visibility => 8,
                         _ => 0,
                     };
                     assert_eq!(
@@ -239,7 +242,11 @@ fn every_strategy_and_backend_matches_the_reference() {
                     );
                     images.push(out.color);
                 }
-                for (k, backend) in [(1, Backend::Deferred), (2, Backend::DeferredStoredPosition)] {
+                for (k, backend) in [
+                    (1, Backend::Deferred),
+                    (2, Backend::DeferredStoredPosition),
+                    (3, Backend::Visibility),
+                ] {
                     let e = compare(&images[k], &images[0], 1.0);
                     assert!(
                         within_tolerance(&e, backend),
@@ -252,8 +259,8 @@ fn every_strategy_and_backend_matches_the_reference() {
         }
     }
     println!(
-        "worst max abs error of the peak: forward {:.2e}, deferred {:.2e}, deferred_stored_position {:.2e}",
-        worst[0], worst[1], worst[2]
+        "worst max abs error of the peak: forward {:.2e}, deferred {:.2e}, deferred_stored_position {:.2e}, visibility {:.2e}",
+        worst[0], worst[1], worst[2], worst[3]
     );
 }
 

@@ -80,6 +80,9 @@ pub struct Negotiated {
     pub subgroups: bool,
     /// Smallest and largest subgroup size the adapter reports.
     pub subgroup_size: (u32, u32),
+    /// `@builtin(primitive_index)` in fragment shaders (`PRIMITIVE_INDEX`; on Vulkan the
+    /// `geometryShader` feature): the visibility buffer's triangle ids.
+    pub primitive_index: bool,
 }
 
 /// A headless wgpu device and what was negotiated for it.
@@ -199,6 +202,8 @@ impl GpuContext {
             wgpu::Features::SUBGROUP,
             // Sample counts other than 1 and 4 (MSAA 2 and 8) where the adapter has them.
             wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES,
+            // The visibility buffer's triangle ids.
+            wgpu::Features::PRIMITIVE_INDEX,
         ] {
             if offered.contains(f) {
                 required |= f;
@@ -239,6 +244,7 @@ impl GpuContext {
             ),
             subgroups: required.contains(wgpu::Features::SUBGROUP),
             subgroup_size: (info.subgroup_min_size, info.subgroup_max_size),
+            primitive_index: required.contains(wgpu::Features::PRIMITIVE_INDEX),
         };
         let loop_limit = is_llvmpipe(&info).then_some(LLVMPIPE_LOOP_LIMIT);
         Ok(Self {

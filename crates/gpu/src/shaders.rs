@@ -144,6 +144,7 @@ impl ShaderDef {
 
     /// The WGSL text of `files` after the prelude, each taken from `dir` where it exists there.
     fn compose_files(&self, files: &[ShaderFile], dir: Option<&Path>) -> Result<String, String> {
+        let mut enables = String::new();
         let mut s = wgsl_prelude();
         for c in self.consts {
             match c {
@@ -155,20 +156,19 @@ impl ShaderDef {
             let replaced = dir.map(|d| d.join(f.path)).filter(|p| p.is_file());
             s.push_str("\n// ---- shaders/");
             s.push_str(f.path);
-            match replaced {
+            let text = match replaced {
                 Some(p) => {
-                    let text =
-                        std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?;
                     s.push_str(&format!(" (replaced by {}) ----\n", p.display()));
-                    s.push_str(&text);
+                    std::fs::read_to_string(&p).map_err(|e| format!("{}: {e}", p.display()))?
                 }
                 None => {
                     s.push_str(" ----\n");
-                    s.push_str(f.source);
+                    f.source.to_owned()
                 }
-            }
+            };
+            s.push_str(&hoist_enables(&text, &mut enables));
         }
-        Ok(s)
+        Ok(enables + &s)
     }
 
     /// Compiles the shader on `device`, with the files of `MANYLIGHTS_SHADER_DIR` where it is
@@ -253,6 +253,24 @@ impl ShaderDef {
             Err(e) => panic!("{e}"),
         }
     }
+}
+
+/// `text` with its enable directives (`enable primitive_index;`) commented out, each appended
+/// to `enables` (once): a directive comes before every declaration, so a file's is put before
+/// the composed text.
+fn hoist_enables(text: &str, enables: &mut String) -> String {
+    let mut out = String::with_capacity(text.len());
+    for line in text.split_inclusive('\n') {
+        if line.starts_with("enable ") {
+            if !enables.contains(line.trim_end()) {
+                enables.push_str(line.trim_end());
+                enables.push('\n');
+            }
+            out.push_str("// (before the prelude) ");
+        }
+        out.push_str(line);
+    }
+    out
 }
 
 /// The loop over a pixel's depth samples, as every shader writes it (its body reads sample

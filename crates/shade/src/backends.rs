@@ -20,14 +20,19 @@ use manylights_gpu::{GpuContext, GpuScene, readback};
 use serde::{Deserialize, Serialize};
 
 use crate::HdrImage;
+use crate::pipelines::Surfaces;
 pub use crate::pipelines::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
 use crate::shade_pass::{ShadePass, Targets};
 
 pub(crate) const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub(crate) const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 pub(crate) const GB_POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The visibility buffer's triangle ids.
+pub(crate) const VISIBILITY_ID: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
 /// G-buffer bytes per pixel: normal and view depth (16), material index (4), depth (4).
 pub const GBUFFER_BYTES_PER_PIXEL: u64 = 24;
+/// Visibility buffer bytes per pixel (a sample with MSAA): triangle id (4), depth (4).
+pub const VISIBILITY_BYTES_PER_PIXEL: u64 = 8;
 
 /// A shading backend.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -43,6 +48,11 @@ pub enum Backend {
     DeferredStoredPosition,
     /// Every light at every fragment, no culling (baseline).
     NaiveForward,
+    /// The visibility buffer (Burns and Hunt 2013): a raster pass writes depth and each
+    /// pixel's triangle id, culling reads that depth, and deferred's lighting passes fetch each
+    /// pixel's triangle and interpolate its position, normal and material at the pixel
+    /// (`VISIBILITY` in shaders/render/deferred.wgsl). Needs `PRIMITIVE_INDEX`.
+    Visibility,
 }
 
 impl Backend {
@@ -53,16 +63,27 @@ impl Backend {
             Self::Deferred => "deferred",
             Self::DeferredStoredPosition => "deferred_stored_position",
             Self::NaiveForward => "naive_forward",
+            Self::Visibility => "visibility",
         }
     }
 
     /// Every backend.
-    pub const ALL: [Backend; 4] = [
+    pub const ALL: [Backend; 5] = [
         Self::Forward,
         Self::Deferred,
         Self::DeferredStoredPosition,
         Self::NaiveForward,
+        Self::Visibility,
     ];
+
+    /// Whether its shading is a compute pass over a buffer of the frame's surfaces (a
+    /// G-buffer or a visibility buffer) rather than a raster pass.
+    pub fn lights_in_compute(self) -> bool {
+        matches!(
+            self,
+            Self::Deferred | Self::DeferredStoredPosition | Self::Visibility
+        )
+    }
 }
 
 /// The format of the lit (HDR) image a [`Renderer`] shades into and reads back: 32-bit floats
@@ -207,38 +228,13 @@ pub struct Renderer {
     /// MSAA or transparent surfaces: the depth culling reads, where lists are looked up off
     /// the depth buffer's samples.
     pub(crate) lookup_bounds: Option<LookupBounds>,
-    pub(crate) forward: Vec<wgpu::RenderPipeline>,
-    /// `shade.forward` over z-binning's lists.
-    pub(crate) forward_zbin: Vec<wgpu::RenderPipeline>,
-    /// `shade.forward_transparent` over transparent surfaces, blended (a list a bin, and
-    /// z-binning's); forward's, and deferred's after its lighting.
-    pub(crate) forward_transparent: [wgpu::RenderPipeline; 2],
-    pub(crate) naive: wgpu::RenderPipeline,
-    /// Deferred with MSAA over transparent surfaces: `shade.forward_transparent` into a layer
-    /// of their own ([`Loads::GlassLayer`]), which the lighting composites.
-    pub(crate) glass_layer: Option<[wgpu::RenderPipeline; 2]>,
-    /// `shade.naive` over transparent surfaces, blended.
-    pub(crate) naive_transparent: wgpu::RenderPipeline,
-    pub(crate) gbuffer: wgpu::RenderPipeline,
-    pub(crate) gbuffer_stored: wgpu::RenderPipeline,
-    pub(crate) deferred: wgpu::ComputePipeline,
-    pub(crate) deferred_stored: wgpu::ComputePipeline,
-    /// `shade.deferred` over z-binning's lists (rebuilt and stored position; then the same in
-    /// rounds, `shade_zbin_rounds_group`, for a point-light pipeline with at least
-    /// `ZBIN_ROUNDS_MIN_LIGHTS` lights; with MSAA four times the one pipeline).
-    pub(crate) deferred_zbin: [wgpu::ComputePipeline; 4],
-    /// `shade.deferred` over a list a tile of a multiple of 8 pixels (rebuilt and stored).
-    pub(crate) deferred_tiles: [wgpu::ComputePipeline; 2],
-    /// `shade.deferred` over a list a cluster, a workgroup's slices' lists one after another
-    /// (`ListForm::Clusters`; rebuilt and stored).
-    pub(crate) deferred_clusters: [wgpu::ComputePipeline; 2],
-    pub(crate) forward_lists: wgpu::BindGroupLayout,
-    pub(crate) deferred_lists: wgpu::BindGroupLayout,
-    pub(crate) deferred_gbuffer: wgpu::BindGroupLayout,
+    /// Every backend's pipelines, built at their first use.
+    pub(crate) pipelines: crate::pipelines::Pipelines,
 }
 
 impl Renderer {
-    /// Builds every pipeline for scenes laid out as [`GpuScene`].
+    /// A renderer for scenes laid out as [`GpuScene`] (each backend's pipelines built at its
+    /// first frame).
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
         Self::build(ctx, scene, 1, HdrFormat::F32)
     }
@@ -295,6 +291,25 @@ impl Renderer {
         self.band_points
     }
 
+    /// Whether the visibility backend can render `scene` here: triangle ids need
+    /// `PRIMITIVE_INDEX`, and its lighting binds the scene's indices (as it does the vertices,
+    /// which `GpuScene::upload` checks) as one storage binding.
+    fn check_visibility(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+    ) -> Result<(), manylights_gpu::GpuError> {
+        if !ctx.features.primitive_index {
+            return Err(manylights_gpu::GpuError::Unsupported(format!(
+                "backend visibility needs `@builtin(primitive_index)` (wgpu feature \
+                 PRIMITIVE_INDEX; on Vulkan the geometryShader feature), which adapter {} does \
+                 not offer: use backend deferred or forward there",
+                ctx.info.name
+            )));
+        }
+        ctx.check_storage("index buffer bytes", scene.indices.size())
+    }
+
     /// Samples a pixel of its frames.
     pub fn samples(&self) -> u32 {
         self.samples
@@ -340,6 +355,18 @@ impl Renderer {
             ))
             .into());
         }
+        if backend == Backend::Visibility {
+            self.check_visibility(ctx, scene)?;
+        }
+        if self.samples > 1 && backend == Backend::Visibility {
+            return Err(manylights_gpu::GpuError::Unsupported(format!(
+                "backend visibility with MSAA ({} samples): not built yet; MSAA renders with \
+                 forward, deferred and naive_forward",
+                self.samples
+            ))
+            .into());
+        }
+        self.pipelines.prepare(backend, self.transparent);
         let targets = Targets::new(ctx, self, backend, (width, height));
         let mut timer = GpuTimer::new(ctx, 64);
         let mut enc = ctx.encoder("shade");
@@ -358,13 +385,13 @@ impl Renderer {
             }
             None
         } else {
-            let deferred = backend != Backend::Forward;
+            let deferred = backend.lights_in_compute();
             ctx.submit_and_wait(
                 enc,
-                if deferred {
-                    "G-buffer"
-                } else {
-                    "depth prepass"
+                match backend {
+                    Backend::Forward => "depth prepass",
+                    Backend::Visibility => "visibility buffer",
+                    _ => "G-buffer",
                 },
             )?;
             let lists = self.culler.run(
@@ -421,20 +448,16 @@ impl Renderer {
                     _ => self.prepass.encode(enc, scene, &targets.depth_view, timer),
                 }
             }
-            Backend::Deferred | Backend::DeferredStoredPosition => {
-                let stored = backend == Backend::DeferredStoredPosition;
+            Backend::Deferred | Backend::DeferredStoredPosition | Backend::Visibility => {
+                let surfaces = Surfaces::of(backend);
                 self.raster_pass(
                     enc,
                     timer,
-                    "shade.gbuffer",
-                    std::slice::from_ref(if stored {
-                        &self.gbuffer_stored
-                    } else {
-                        &self.gbuffer
-                    }),
+                    surfaces.pass_name(),
+                    std::slice::from_ref(&self.pipelines.deferred(surfaces).gbuffer),
                     scene,
                     &targets
-                        .gbuffer_targets(stored)
+                        .gbuffer_targets(backend)
                         .into_iter()
                         .map(|v| (v, None))
                         .collect::<Vec<_>>(),
@@ -481,7 +504,7 @@ impl Renderer {
             enc,
             timer,
             "shade.naive",
-            std::slice::from_ref(&self.naive),
+            std::slice::from_ref(&self.pipelines.naive().opaque),
             scene,
             &[targets.color_attachment(!transparent)],
             &targets.depth_view,
@@ -493,7 +516,7 @@ impl Renderer {
                 enc,
                 timer,
                 "shade.naive_transparent",
-                std::slice::from_ref(&self.naive_transparent),
+                std::slice::from_ref(&self.pipelines.naive().transparent),
                 scene,
                 &[targets.color_attachment(true)],
                 &targets.depth_view,

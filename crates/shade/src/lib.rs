@@ -28,4 +28,5 @@ pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     pipelines::GBUFFER,
     pipelines::DEFERRED,
     pipelines::DEFERRED_MSAA,
+    pipelines::VISIBILITY,
 ];

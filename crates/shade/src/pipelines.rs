@@ -8,8 +8,11 @@ use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
 use manylights_gpu::{GpuContext, GpuScene, shader_file};
+use std::sync::OnceLock;
 
-use crate::backends::{GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer};
+use crate::backends::{
+    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer, VISIBILITY_ID,
+};
 
 /// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
 pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
@@ -44,6 +47,14 @@ pub const GBUFFER: ShaderDef = ShaderDef {
         shader_file!("render/gbuffer.wgsl"),
     ],
 };
+/// `shade.visibility`: the visibility buffer's raster pass (the shared vertex stage and a
+/// fragment writing the triangle id).
+pub const VISIBILITY: ShaderDef = ShaderDef {
+    name: "shade.visibility",
+    consts: &[],
+    files: &[FRAME, VERTEX, shader_file!("render/visibility.wgsl")],
+};
+
 /// `shade.deferred`.
 pub const DEFERRED: ShaderDef = ShaderDef {
     name: "shade.deferred",
@@ -117,17 +128,16 @@ impl Renderer {
             pipeline::depth_texture(samples),
         ));
         let deferred_lists = layout("shade.deferred.lists", &entries);
+        let float = || {
+            texture(
+                wgpu::TextureSampleType::Float { filterable: false },
+                samples,
+            )
+        };
         let deferred_gbuffer = layout(
             "shade.deferred.gbuffer",
             &[
-                pipeline::entry(
-                    0,
-                    compute,
-                    texture(
-                        wgpu::TextureSampleType::Float { filterable: false },
-                        samples,
-                    ),
-                ),
+                pipeline::entry(0, compute, float()),
                 pipeline::entry(1, compute, texture(wgpu::TextureSampleType::Uint, samples)),
                 pipeline::entry(
                     2,
@@ -139,181 +149,45 @@ impl Renderer {
                     },
                 ),
                 // The stored position; with MSAA, the glass layer lighting composites.
-                pipeline::entry(
-                    3,
-                    compute,
-                    texture(
-                        wgpu::TextureSampleType::Float { filterable: false },
-                        samples,
-                    ),
-                ),
+                pipeline::entry(3, compute, float()),
+                // The scene's vertices and indices, which the visibility buffer's lighting
+                // interpolates.
+                pipeline::entry(4, compute, pipeline::storage(true)),
+                pipeline::entry(5, compute, pipeline::storage(true)),
             ],
         );
-        use pipeline::{DepthTest, raster, raster_msaa, raster_with, target};
-        let fwd = FORWARD.create_samples(d, samples);
-        let gb = GBUFFER.create(d);
-        let g0 = &scene.layout;
-        // Forward: a pipeline a material model of the opaque triangles, each shading its model
-        // alone (MATERIAL_MODELS, brdf.wgsl), drawn a model at a time.
         // A POINT_LIGHTS pipeline where every light is a windowed point light (shading.wgsl).
         let point_lights = scene.point_lights();
-        let point = ("POINT_LIGHTS", f64::from(u8::from(point_lights)));
         // STOCHASTIC_POINTS: those point lights with stochastic ranges (shading.wgsl).
         let stochastic_points = point_lights && scene.stochastic_points();
-        let stochastic = ("STOCHASTIC_POINTS", f64::from(u8::from(stochastic_points)));
         // BAND_POINTS: those point lights the lighting grid hierarchy's, with bands.
         let band_points = point_lights && scene.band_points();
-        let band = ("BAND_POINTS", f64::from(u8::from(band_points)));
-        let forward_with = |entry| {
-            scene
-                .opaque_models
-                .iter()
-                .map(|&(model, _)| {
-                    raster_with(
-                        d,
-                        "shade.forward",
-                        &fwd,
-                        &[g0, &forward_lists],
-                        Some((entry, &[target(color)])),
-                        DepthTest::Equal,
-                        samples,
-                        &[
-                            ("MATERIAL_MODELS", f64::from(1u32 << model)),
-                            point,
-                            stochastic,
-                            band,
-                        ],
-                    )
-                })
-                .collect::<Vec<_>>()
-        };
-        let forward = forward_with("fs_forward");
-        let forward_zbin = forward_with("fs_forward_zbin");
-        let transparent_with = |target: Option<wgpu::ColorTargetState>| {
-            ["fs_forward_transparent", "fs_forward_transparent_zbin"].map(|entry| {
-                raster_with(
-                    d,
-                    "shade.forward_transparent",
-                    &fwd,
-                    &[g0, &forward_lists],
-                    Some((entry, std::slice::from_ref(&target))),
-                    DepthTest::Less,
-                    samples,
-                    &[point, stochastic, band],
-                )
-            })
-        };
-        let forward_transparent = transparent_with(pipeline::blended_target(color));
         let transparent = scene.has_transparent();
-        let glass_layer =
-            (samples > 1 && transparent).then(|| transparent_with(pipeline::layer_target(color)));
-        let naive = raster_msaa(
-            d,
-            "shade.naive",
-            &fwd,
-            &[g0],
-            Some(("fs_naive", &[target(color)])),
-            DepthTest::Equal,
-            samples,
-        );
-        let naive_transparent = raster_msaa(
-            d,
-            "shade.naive_transparent",
-            &fwd,
-            &[g0],
-            Some(("fs_naive_transparent", &[pipeline::blended_target(color)])),
-            DepthTest::Less,
-            samples,
-        );
-        let gbuffer = raster_msaa(
-            d,
-            "shade.gbuffer",
-            &gb,
-            &[g0],
-            Some((
-                "fs_gbuffer",
-                &[target(GB_NORMAL_DEPTH), target(GB_MATERIAL)],
-            )),
-            DepthTest::WriteLess,
-            samples,
-        );
-        let gbuffer_stored = raster(
-            d,
-            "shade.gbuffer",
-            &gb,
-            &[g0],
-            Some((
-                "fs_gbuffer_stored",
-                &[
-                    target(GB_NORMAL_DEPTH),
-                    target(GB_MATERIAL),
-                    target(GB_POSITION),
-                ],
-            )),
-            DepthTest::WriteLess,
-        );
-        let def_layout = pipeline::layout(
-            d,
-            "shade.deferred",
-            &[g0, &deferred_lists, &deferred_gbuffer],
-        );
-        // Deferred: one lighting pass over every model of the opaque triangles, branching on
-        // each pixel's.
-        // With MSAA, GLASS: the lighting composites the glass layer over each sample.
-        let models = [
-            ("MATERIAL_MODELS", f64::from(scene.opaque_model_mask())),
-            point,
-            stochastic,
-            band,
-            ("GLASS", f64::from(u8::from(glass_layer.is_some()))),
-        ];
-        let models = if samples > 1 {
-            &models[..]
-        } else {
-            &models[..4]
-        };
-        let models = wgpu::PipelineCompilationOptions {
-            constants: models,
-            ..Default::default()
-        };
-        let compute = |def: &wgpu::ShaderModule, entry| {
-            pipeline::compute_with(d, def, &def_layout, entry, &models)
-        };
-        // With MSAA, one pass for the lists a bin (a tile's or a cluster's too) and one for
-        // z-binning's, the position rebuilt; the stored position takes no MSAA (`render` says
-        // so).
-        let (deferred, deferred_stored, deferred_zbin, deferred_tiles, deferred_clusters) =
-            if samples > 1 {
-                let def = DEFERRED_MSAA.create_edited(d, samples, &|s| hdr_storage(s, hdr));
-                let bins = compute(&def, "deferred_shade_msaa");
-                let zbin = compute(&def, "deferred_shade_msaa_zbin");
-                (
-                    bins.clone(),
-                    bins.clone(),
-                    [zbin.clone(), zbin.clone(), zbin.clone(), zbin],
-                    [bins.clone(), bins.clone()],
-                    [bins.clone(), bins],
-                )
-            } else {
-                let def = DEFERRED.create_edited(d, 1, &|s| hdr_storage(s, hdr));
-                (
-                    compute(&def, "deferred_shade"),
-                    compute(&def, "deferred_shade_stored"),
-                    [
-                        "deferred_shade_zbin",
-                        "deferred_shade_stored_zbin",
-                        "deferred_shade_zbin_rounds",
-                        "deferred_shade_stored_zbin_rounds",
-                    ]
-                    .map(|entry| compute(&def, entry)),
-                    ["deferred_shade_tiles", "deferred_shade_stored_tiles"]
-                        .map(|entry| compute(&def, entry)),
-                    ["deferred_shade_clusters", "deferred_shade_stored_clusters"]
-                        .map(|entry| compute(&def, entry)),
-                )
-            };
         let lookup_bounds =
             (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
+        let pipelines = Pipelines {
+            device: d.clone(),
+            scene_layout: scene.layout.clone(),
+            samples,
+            hdr,
+            opaque_models: scene.opaque_models.iter().map(|&(m, _)| m).collect(),
+            opaque_model_mask: scene.opaque_model_mask(),
+            lights: [
+                ("POINT_LIGHTS", f64::from(u8::from(point_lights))),
+                ("STOCHASTIC_POINTS", f64::from(u8::from(stochastic_points))),
+                ("BAND_POINTS", f64::from(u8::from(band_points))),
+            ],
+            glass_layer: samples > 1 && transparent,
+            forward_lists,
+            deferred_lists,
+            deferred_gbuffer,
+            forward_module: OnceLock::new(),
+            deferred_module: OnceLock::new(),
+            forward: OnceLock::new(),
+            glass: OnceLock::new(),
+            naive: OnceLock::new(),
+            deferred: Default::default(),
+        };
         Self {
             culler: if lookup_bounds.is_some() {
                 Culler::with_bounds(ctx, scene, samples)
@@ -328,22 +202,358 @@ impl Renderer {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
             lookup_bounds,
-            glass_layer,
-            forward,
-            forward_zbin,
-            forward_transparent,
-            naive,
-            naive_transparent,
+            pipelines,
+        }
+    }
+}
+
+/// Forward's pipelines over the opaque triangles: a pipeline a material model, each shading its
+/// model alone (`MATERIAL_MODELS`, brdf.wgsl), drawn a model at a time.
+pub(crate) struct Forward {
+    /// Over a list a bin (a tile's, a cluster's).
+    pub bins: Vec<wgpu::RenderPipeline>,
+    /// Over z-binning's lists.
+    pub zbin: Vec<wgpu::RenderPipeline>,
+}
+
+/// `shade.forward_transparent` over transparent surfaces (a list a bin, and z-binning's).
+pub(crate) struct Glass {
+    /// Blended into the colour target: forward's, and deferred's after its lighting.
+    pub blended: [wgpu::RenderPipeline; 2],
+    /// Deferred with MSAA: into a layer of their own ([`crate::backends::Loads::GlassLayer`]),
+    /// which the lighting composites.
+    pub layer: Option<[wgpu::RenderPipeline; 2]>,
+}
+
+/// Naive forward: `shade.naive`, and `shade.naive_transparent` blended over it.
+pub(crate) struct Naive {
+    pub opaque: wgpu::RenderPipeline,
+    pub transparent: wgpu::RenderPipeline,
+}
+
+/// What deferred lighting reads a pixel's surface from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Surfaces {
+    /// A G-buffer, the position rebuilt from its view depth.
+    Rebuilt,
+    /// A G-buffer with the position stored (no MSAA).
+    Stored,
+    /// A visibility buffer: each pixel's triangle, interpolated at the pixel.
+    Visibility,
+}
+
+impl Surfaces {
+    /// Those of `backend` (one whose lights are shaded in compute).
+    pub fn of(backend: Backend) -> Self {
+        match backend {
+            Backend::DeferredStoredPosition => Self::Stored,
+            Backend::Visibility => Self::Visibility,
+            _ => Self::Rebuilt,
+        }
+    }
+
+    /// The raster pass that writes them.
+    pub fn pass_name(self) -> &'static str {
+        match self {
+            Self::Rebuilt | Self::Stored => "shade.gbuffer",
+            Self::Visibility => "shade.visibility",
+        }
+    }
+}
+
+/// A deferred backend's G-buffer (or visibility buffer) pass and lighting passes, a pass a form
+/// of lists.
+pub(crate) struct Deferred {
+    /// The raster pass: `shade.gbuffer` or `shade.visibility`.
+    pub gbuffer: wgpu::RenderPipeline,
+    /// Over a list a bin.
+    pub bins: wgpu::ComputePipeline,
+    /// Over z-binning's lists; then the same in rounds (`shade_zbin_rounds_group`, for a
+    /// point-light pipeline with at least `ZBIN_ROUNDS_MIN_LIGHTS` lights; with MSAA twice the
+    /// one pipeline).
+    pub zbin: [wgpu::ComputePipeline; 2],
+    /// Over a list a tile of a multiple of 8 pixels.
+    pub tiles: wgpu::ComputePipeline,
+    /// Over a list a cluster, a workgroup's slices' lists one after another
+    /// (`ListForm::Clusters`).
+    pub clusters: wgpu::ComputePipeline,
+}
+
+/// Every backend's pipelines, each family built at its first use: a renderer that never draws
+/// a backend need not compile it (on lavapipe a renderer's every pipeline took 1.96 s to
+/// build, most tests draw one or two backends).
+pub(crate) struct Pipelines {
+    device: wgpu::Device,
+    scene_layout: wgpu::BindGroupLayout,
+    samples: u32,
+    hdr: HdrFormat,
+    /// The material model of each of the scene's opaque draws (`GpuScene::opaque_models`).
+    opaque_models: Vec<u32>,
+    opaque_model_mask: u32,
+    /// `POINT_LIGHTS`, `STOCHASTIC_POINTS` and `BAND_POINTS`, as the renderer was built for.
+    lights: [(&'static str, f64); 3],
+    /// With MSAA over transparent surfaces: deferred composites them from a layer of their own.
+    glass_layer: bool,
+    pub forward_lists: wgpu::BindGroupLayout,
+    pub deferred_lists: wgpu::BindGroupLayout,
+    pub deferred_gbuffer: wgpu::BindGroupLayout,
+    forward_module: OnceLock<wgpu::ShaderModule>,
+    deferred_module: OnceLock<wgpu::ShaderModule>,
+    forward: OnceLock<Forward>,
+    glass: OnceLock<Glass>,
+    naive: OnceLock<Naive>,
+    /// By [`Surfaces`], in its order.
+    deferred: [OnceLock<Deferred>; 3],
+}
+
+impl Pipelines {
+    /// Builds what a frame of `backend` draws with, where not built yet: before a frame's
+    /// encoder opens, so that its recording time holds no compiling.
+    pub fn prepare(&self, backend: Backend, transparent: bool) {
+        match backend {
+            Backend::Forward => {
+                self.forward();
+            }
+            Backend::Deferred | Backend::DeferredStoredPosition | Backend::Visibility => {
+                self.deferred(Surfaces::of(backend));
+            }
+            Backend::NaiveForward => {
+                self.naive();
+                return;
+            }
+        }
+        if transparent {
+            self.glass();
+        }
+    }
+
+    fn color(&self) -> wgpu::TextureFormat {
+        self.hdr.texture_format()
+    }
+
+    fn forward_module(&self) -> &wgpu::ShaderModule {
+        self.forward_module
+            .get_or_init(|| FORWARD.create_samples(&self.device, self.samples))
+    }
+
+    /// A forward raster pipeline over the lists, of `entry` into `targets`.
+    fn forward_raster(
+        &self,
+        label: &str,
+        entry: &str,
+        targets: &[Option<wgpu::ColorTargetState>],
+        depth: pipeline::DepthTest,
+        constants: &[(&str, f64)],
+    ) -> wgpu::RenderPipeline {
+        pipeline::raster_with(
+            &self.device,
+            label,
+            self.forward_module(),
+            &[&self.scene_layout, &self.forward_lists],
+            Some((entry, targets)),
+            depth,
+            self.samples,
+            constants,
+        )
+    }
+
+    pub fn forward(&self) -> &Forward {
+        self.forward.get_or_init(|| {
+            let by_model = |entry| {
+                self.opaque_models
+                    .iter()
+                    .map(|&model| {
+                        let mut constants = vec![("MATERIAL_MODELS", f64::from(1u32 << model))];
+                        constants.extend(self.lights);
+                        self.forward_raster(
+                            "shade.forward",
+                            entry,
+                            &[pipeline::target(self.color())],
+                            pipeline::DepthTest::Equal,
+                            &constants,
+                        )
+                    })
+                    .collect()
+            };
+            Forward {
+                bins: by_model("fs_forward"),
+                zbin: by_model("fs_forward_zbin"),
+            }
+        })
+    }
+
+    pub fn glass(&self) -> &Glass {
+        self.glass.get_or_init(|| {
+            let with = |target: Option<wgpu::ColorTargetState>| {
+                ["fs_forward_transparent", "fs_forward_transparent_zbin"].map(|entry| {
+                    self.forward_raster(
+                        "shade.forward_transparent",
+                        entry,
+                        std::slice::from_ref(&target),
+                        pipeline::DepthTest::Less,
+                        &self.lights,
+                    )
+                })
+            };
+            Glass {
+                blended: with(pipeline::blended_target(self.color())),
+                layer: self
+                    .glass_layer
+                    .then(|| with(pipeline::layer_target(self.color()))),
+            }
+        })
+    }
+
+    pub fn naive(&self) -> &Naive {
+        self.naive.get_or_init(|| {
+            let raster = |label, entry, target, depth| {
+                pipeline::raster_msaa(
+                    &self.device,
+                    label,
+                    self.forward_module(),
+                    &[&self.scene_layout],
+                    Some((entry, &[target])),
+                    depth,
+                    self.samples,
+                )
+            };
+            Naive {
+                opaque: raster(
+                    "shade.naive",
+                    "fs_naive",
+                    pipeline::target(self.color()),
+                    pipeline::DepthTest::Equal,
+                ),
+                transparent: raster(
+                    "shade.naive_transparent",
+                    "fs_naive_transparent",
+                    pipeline::blended_target(self.color()),
+                    pipeline::DepthTest::Less,
+                ),
+            }
+        })
+    }
+
+    /// The deferred lighting module (with MSAA, `DEFERRED_MSAA`).
+    fn deferred_module(&self) -> &wgpu::ShaderModule {
+        self.deferred_module.get_or_init(|| {
+            let def = if self.samples > 1 {
+                &DEFERRED_MSAA
+            } else {
+                &DEFERRED
+            };
+            def.create_edited(&self.device, self.samples, &|s| hdr_storage(s, self.hdr))
+        })
+    }
+
+    /// A deferred backend's pipelines over `surfaces` (a stored position takes no MSAA:
+    /// `Renderer::render` says so).
+    pub fn deferred(&self, surfaces: Surfaces) -> &Deferred {
+        self.deferred[surfaces as usize].get_or_init(|| self.build_deferred(surfaces))
+    }
+
+    /// The raster pass that writes `surfaces`.
+    fn surfaces_pass(&self, surfaces: Surfaces) -> wgpu::RenderPipeline {
+        let d = &self.device;
+        let g0 = &self.scene_layout;
+        let depth = pipeline::DepthTest::WriteLess;
+        match surfaces {
+            Surfaces::Rebuilt => pipeline::raster_msaa(
+                d,
+                "shade.gbuffer",
+                &GBUFFER.create(d),
+                &[g0],
+                Some((
+                    "fs_gbuffer",
+                    &[
+                        pipeline::target(GB_NORMAL_DEPTH),
+                        pipeline::target(GB_MATERIAL),
+                    ],
+                )),
+                depth,
+                self.samples,
+            ),
+            Surfaces::Stored => pipeline::raster(
+                d,
+                "shade.gbuffer",
+                &GBUFFER.create(d),
+                &[g0],
+                Some((
+                    "fs_gbuffer_stored",
+                    &[
+                        pipeline::target(GB_NORMAL_DEPTH),
+                        pipeline::target(GB_MATERIAL),
+                        pipeline::target(GB_POSITION),
+                    ],
+                )),
+                depth,
+            ),
+            Surfaces::Visibility => pipeline::raster_msaa(
+                d,
+                "shade.visibility",
+                &VISIBILITY.create(d),
+                &[g0],
+                Some(("fs_visibility", &[pipeline::target(VISIBILITY_ID)])),
+                depth,
+                self.samples,
+            ),
+        }
+    }
+
+    fn build_deferred(&self, surfaces: Surfaces) -> Deferred {
+        let d = &self.device;
+        let g0 = &self.scene_layout;
+        let gbuffer = self.surfaces_pass(surfaces);
+        let layout = pipeline::layout(
+            d,
+            "shade.deferred",
+            &[g0, &self.deferred_lists, &self.deferred_gbuffer],
+        );
+        // One lighting pass over every model of the opaque triangles, branching on each
+        // pixel's. With MSAA, GLASS: the lighting composites the glass layer over each sample.
+        let mut constants = vec![("MATERIAL_MODELS", f64::from(self.opaque_model_mask))];
+        constants.extend(self.lights);
+        if self.samples > 1 {
+            constants.push(("GLASS", f64::from(u8::from(self.glass_layer))));
+        } else {
+            constants.push((
+                "VISIBILITY",
+                f64::from(u8::from(surfaces == Surfaces::Visibility)),
+            ));
+        }
+        let options = wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        };
+        let module = self.deferred_module();
+        let compute = |entry: &str| pipeline::compute_with(d, module, &layout, entry, &options);
+        if self.samples > 1 {
+            // One pass for the lists a bin (a tile's or a cluster's too) and one for z-binning's,
+            // the position rebuilt.
+            let bins = compute("deferred_shade_msaa");
+            let zbin = compute("deferred_shade_msaa_zbin");
+            return Deferred {
+                gbuffer,
+                tiles: bins.clone(),
+                clusters: bins.clone(),
+                bins,
+                zbin: [zbin.clone(), zbin],
+            };
+        }
+        let s = if surfaces == Surfaces::Stored {
+            "_stored"
+        } else {
+            ""
+        };
+        Deferred {
             gbuffer,
-            gbuffer_stored,
-            deferred,
-            deferred_stored,
-            deferred_zbin,
-            deferred_tiles,
-            deferred_clusters,
-            forward_lists,
-            deferred_lists,
-            deferred_gbuffer,
+            bins: compute(&format!("deferred_shade{s}")),
+            zbin: [
+                compute(&format!("deferred_shade{s}_zbin")),
+                compute(&format!("deferred_shade{s}_zbin_rounds")),
+            ],
+            tiles: compute(&format!("deferred_shade{s}_tiles")),
+            clusters: compute(&format!("deferred_shade{s}_clusters")),
         }
     }
 }

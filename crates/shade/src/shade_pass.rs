@@ -12,9 +12,11 @@ use manylights_gpu::prepass::depth_target_msaa;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
 
+use crate::pipelines::Surfaces;
+
 use crate::backends::{
     Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, GBUFFER_BYTES_PER_PIXEL, HdrFormat, Loads,
-    Renderer,
+    Renderer, VISIBILITY_BYTES_PER_PIXEL, VISIBILITY_ID,
 };
 
 /// The textures of one frame of a backend.
@@ -65,7 +67,8 @@ impl Targets {
                 | wgpu::TextureUsages::COPY_SRC,
         );
         let stored = backend == Backend::DeferredStoredPosition;
-        let deferred = stored || backend == Backend::Deferred;
+        let visibility = backend == Backend::Visibility;
+        let deferred = backend.lights_in_compute();
         // Deferred lighting writes the image itself: with MSAA a multisampled colour target
         // only for the glass, drawn into it first and composited sample by sample by the
         // lighting pass (which reads it).
@@ -115,13 +118,34 @@ impl Targets {
                 )
                 .create_view(&Default::default()),
             };
+            if visibility {
+                // The triangle ids in the material's place, and a 1 x 1 stand-in for the
+                // normal and view depth.
+                let stand_in = pipeline::texture_2d_msaa(
+                    d,
+                    "visibility.no_normal_depth",
+                    (1, 1),
+                    GB_NORMAL_DEPTH,
+                    usage,
+                    samples,
+                );
+                return [
+                    stand_in.create_view(&Default::default()),
+                    ms("visibility.ids", VISIBILITY_ID),
+                    third,
+                ];
+            }
             [
                 ms("gbuffer.normal_depth", GB_NORMAL_DEPTH),
                 ms("gbuffer.material", GB_MATERIAL),
                 third,
             ]
         });
-        let per_pixel = GBUFFER_BYTES_PER_PIXEL + if stored { 16 } else { 0 };
+        let per_pixel = match backend {
+            Backend::Visibility => VISIBILITY_BYTES_PER_PIXEL,
+            Backend::DeferredStoredPosition => GBUFFER_BYTES_PER_PIXEL + 16,
+            _ => GBUFFER_BYTES_PER_PIXEL,
+        };
         let gbuffer_bytes = if deferred {
             u64::from(width) * u64::from(height) * per_pixel * u64::from(samples)
         } else {
@@ -183,11 +207,15 @@ impl Targets {
         }
     }
 
-    /// The G-buffer pass's colour targets (the stored position only where it is stored).
-    pub(crate) fn gbuffer_targets(&self, stored: bool) -> Vec<&wgpu::TextureView> {
+    /// The colour targets of the raster pass of `backend` (deferred: the G-buffer, the stored
+    /// position only where it is stored; visibility: the triangle ids).
+    pub(crate) fn gbuffer_targets(&self, backend: Backend) -> Vec<&wgpu::TextureView> {
         let views = self.gbuffer.as_ref().expect("a deferred backend's targets");
-        let n = if stored { 3 } else { 2 };
-        views.iter().take(n).collect()
+        match backend {
+            Backend::Visibility => vec![&views[1]],
+            Backend::DeferredStoredPosition => views.iter().collect(),
+            _ => views.iter().take(2).collect(),
+        }
     }
 }
 
@@ -220,12 +248,14 @@ impl<'a> ShadePass<'a> {
             pipeline::group(
                 &ctx.device,
                 "shade.deferred.gbuffer",
-                &renderer.deferred_gbuffer,
+                &renderer.pipelines.deferred_gbuffer,
                 &[
                     wgpu::BindingResource::TextureView(&views[0]),
                     wgpu::BindingResource::TextureView(&views[1]),
                     wgpu::BindingResource::TextureView(&targets.color_view),
                     wgpu::BindingResource::TextureView(&views[2]),
+                    scene.vertices.as_entire_binding(),
+                    scene.indices.as_entire_binding(),
                 ],
             )
         });
@@ -256,10 +286,11 @@ impl ShadePass<'_> {
     ) {
         let r = self.renderer;
         let zbin = usize::from(self.form == ListForm::ZBin);
-        let (pipeline, target, loads) = match (layer, &self.targets.color_msaa, &r.glass_layer) {
-            (true, Some(msaa), Some(glass)) => (&glass[zbin], (msaa, None), Loads::GlassLayer),
+        let glass = r.pipelines.glass();
+        let (pipeline, target, loads) = match (layer, &self.targets.color_msaa, &glass.layer) {
+            (true, Some(msaa), Some(layer)) => (&layer[zbin], (msaa, None), Loads::GlassLayer),
             _ => (
-                &r.forward_transparent[zbin],
+                &glass.blended[zbin],
                 self.targets.color_attachment(true),
                 Loads::Transparent,
             ),
@@ -292,7 +323,7 @@ impl ListPass for ShadePass<'_> {
             self.forward_lists = Some(pipeline::group(
                 &ctx.device,
                 "shade.forward_transparent.lists",
-                &self.renderer.forward_lists,
+                &self.renderer.pipelines.forward_lists,
                 &resources,
             ));
         }
@@ -306,9 +337,9 @@ impl ListPass for ShadePass<'_> {
                     ..Default::default()
                 });
             resources.push(wgpu::BindingResource::TextureView(&depth_only));
-            &self.renderer.deferred_lists
+            &self.renderer.pipelines.deferred_lists
         } else {
-            &self.renderer.forward_lists
+            &self.renderer.pipelines.forward_lists
         };
         self.lists = Some(pipeline::group(
             &ctx.device,
@@ -330,8 +361,10 @@ impl ListPass for ShadePass<'_> {
                     timer,
                     "shade.forward",
                     match self.form {
-                        ListForm::Bins | ListForm::Tiles | ListForm::Clusters => &r.forward,
-                        ListForm::ZBin => &r.forward_zbin,
+                        ListForm::Bins | ListForm::Tiles | ListForm::Clusters => {
+                            &r.pipelines.forward().bins
+                        }
+                        ListForm::ZBin => &r.pipelines.forward().zbin,
                     },
                     self.scene,
                     &[self.targets.color_attachment(!transparent)],
@@ -353,21 +386,21 @@ impl ListPass for ShadePass<'_> {
                 if let (true, Some(forward_lists)) = (layer, glass) {
                     self.transparent_pass(enc, timer, forward_lists, true);
                 }
+                let lighting = r.pipelines.deferred(Surfaces::of(self.backend));
                 pipeline::dispatch(
                     enc,
                     timer,
                     "shade.deferred",
-                    match (self.form, self.backend == Backend::DeferredStoredPosition) {
-                        (ListForm::Bins, false) => &r.deferred,
-                        (ListForm::Bins, true) => &r.deferred_stored,
-                        (ListForm::ZBin, stored) => {
+                    match self.form {
+                        ListForm::Bins => &lighting.bins,
+                        ListForm::ZBin => {
                             // In rounds with many point lights (`ZBIN_ROUNDS_MIN_LIGHTS`).
                             let rounds =
                                 r.point_lights && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
-                            &r.deferred_zbin[usize::from(stored) + 2 * usize::from(rounds)]
+                            &lighting.zbin[usize::from(rounds)]
                         }
-                        (ListForm::Tiles, stored) => &r.deferred_tiles[usize::from(stored)],
-                        (ListForm::Clusters, stored) => &r.deferred_clusters[usize::from(stored)],
+                        ListForm::Tiles => &lighting.tiles,
+                        ListForm::Clusters => &lighting.clusters,
                     },
                     &[&self.scene.bind_group, lists, gbuffer],
                     (w.div_ceil(8), h.div_ceil(8)),
