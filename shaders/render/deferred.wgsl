@@ -6,15 +6,6 @@
 @group(2) @binding(2) var out_color: texture_storage_2d<rgba32float, write>;
 // The stored world position (deferred_stored_position; a 1 x 1 placeholder otherwise).
 @group(2) @binding(3) var gb_position: texture_2d<f32>;
-// The scene's vertices (GpuVertex: position, normal, material; 7 words each) and indices, which
-// the visibility buffer's lighting interpolates (bound, unread, for the G-buffer's).
-@group(2) @binding(4) var<storage, read> vis_vertices: array<u32>;
-@group(2) @binding(5) var<storage, read> vis_indices: array<u32>;
-
-// VISIBILITY: lighting over a visibility buffer (visibility.wgsl) in place of a G-buffer:
-// `gb_material` holds each pixel's triangle id (its index plus one, 0 for none), and a pixel's
-// surface is its triangle's, interpolated at the pixel's ray (`visibility_surface`).
-override VISIBILITY: bool = false;
 
 // An entry point for each form of lists (list_shading.wgsl): `zbin` is a constant of each.
 @compute @workgroup_size(8, 8)
@@ -75,15 +66,6 @@ fn deferred_shade_zbin_rounds(@builtin(global_invocation_id) id: vec3<u32>, @bui
 fn deferred_shade_stored_zbin_rounds(@builtin(global_invocation_id) id: vec3<u32>, @builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     shading_pixel = id.xy;
     shade_zbin_rounds_group(id.xy, wg.xy, li, true);
-}
-
-// A covered pixel's surface point (rebuilt from the view depth, or stored), normal, view
-// direction and material.
-struct Surface {
-    p: vec3<f32>,
-    n: vec3<f32>,
-    v: vec3<f32>,
-    m: Material,
 }
 
 // A pixel's depth and G-buffer texels, loaded together: one memory round trip, not the depth's
@@ -690,38 +672,3 @@ fn shade_cluster_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool
     }
 }
 
-// Vertex i's position, normal and material (GpuVertex).
-fn vis_position(i: u32) -> vec3<f32> {
-    return bitcast<vec3<f32>>(vec3<u32>(vis_vertices[7u * i], vis_vertices[7u * i + 1u], vis_vertices[7u * i + 2u]));
-}
-
-fn vis_normal(i: u32) -> vec3<f32> {
-    return bitcast<vec3<f32>>(vec3<u32>(vis_vertices[7u * i + 3u], vis_vertices[7u * i + 4u], vis_vertices[7u * i + 5u]));
-}
-
-// The surface of triangle `tri` seen through the point `ndc` of the image: the point where the
-// pixel's ray meets the triangle's plane (Moller and Trumbore 1997), the normal interpolated
-// there with the same barycentrics (what the rasteriser's perspective-correct interpolation
-// computes at the pixel centre) and turned towards the viewer, and the material of its first
-// vertex (the provoking vertex, whose flat attribute the G-buffer pass writes). The ray runs
-// through the view-space points at z = -1 and -2, for either projection.
-fn visibility_surface(ndc: vec2<f32>, tri: u32) -> Surface {
-    let i0 = vis_indices[3u * tri];
-    let i1 = vis_indices[3u * tri + 1u];
-    let i2 = vis_indices[3u * tri + 2u];
-    let p0 = vis_position(i0);
-    let e1 = vis_position(i1) - p0;
-    let e2 = vis_position(i2) - p0;
-    let o = (frame.world_from_view * vec4<f32>(view_point(ndc, -1.0), 1.0)).xyz;
-    let d = (frame.world_from_view * vec4<f32>(view_point(ndc, -2.0), 1.0)).xyz - o;
-    let q = cross(d, e2);
-    let inv = 1.0 / dot(e1, q);
-    let s = o - p0;
-    let b1 = dot(s, q) * inv;
-    let r = cross(s, e1);
-    let b2 = dot(d, r) * inv;
-    let p = p0 + b1 * e1 + b2 * e2;
-    let v = view_dir(p);
-    let n = normalize((1.0 - b1 - b2) * vis_normal(i0) + b1 * vis_normal(i1) + b2 * vis_normal(i2));
-    return Surface(p, facing_normal(n, v), v, materials[vis_vertices[7u * i0 + 6u]]);
-}

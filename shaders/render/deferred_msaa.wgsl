@@ -12,6 +12,8 @@
 // of their own (each sample: their contribution in rgb, their transmittance in alpha), and each
 // sample's colour is composited under it before the average, as the reference blends the glass
 // over each sample.
+// With VISIBILITY (surface.wgsl), each distinct triangle of a pixel's samples is lit once
+// (shade_triangles_msaa).
 @group(2) @binding(0) var gb_normal_depth: texture_multisampled_2d<f32>;
 @group(2) @binding(1) var gb_material: texture_multisampled_2d<u32>;
 @group(2) @binding(2) var out_color: texture_storage_2d<rgba32float, write>;
@@ -58,18 +60,31 @@ fn ndc_depth(view_z: f32) -> f32 {
     return (m[2][2] * view_z + m[3][2]) / (m[2][3] * view_z + m[3][3]);
 }
 
-// The lights of the pixel's list at NDC depth z, shaded at p.
-fn shade_point(pixel: vec2<u32>, z: f32, p: vec3<f32>, n: vec3<f32>, material: u32, zbin: bool) -> vec3<f32> {
-    let v = view_dir(p);
-    let m = materials[material];
+// The lights of the pixel's list at NDC depth z, shaded at s.
+fn shade_point(pixel: vec2<u32>, z: f32, s: Surface, zbin: bool) -> vec3<f32> {
     if zbin {
-        return shade_zbin(zbin_cell(pixel, z), p, n, v, m);
+        return shade_zbin(zbin_cell(pixel, z), s.p, s.n, s.v, s.m);
     }
-    return shade_list(light_list(pixel, z), p, n, v, m);
+    return shade_list(light_list(pixel, z), s.p, s.n, s.v, s.m);
+}
+
+// A G-buffer sample's surface: at p, with the sample's normal and material.
+fn gbuffer_surface(p: vec3<f32>, pixel: vec2<u32>, k: u32) -> Surface {
+    let v = view_dir(p);
+    return Surface(p, textureLoad(gb_normal_depth, pixel, k).xyz, v, materials[textureLoad(gb_material, pixel, k).x]);
+}
+
+// The NDC depth of world point p.
+fn world_ndc_depth(p: vec3<f32>) -> f32 {
+    return ndc_depth((frame.view_from_world * vec4<f32>(p, 1.0)).z);
 }
 
 fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
     if any(pixel >= vec2<u32>(frame.viewport.xy)) {
+        return;
+    }
+    if VISIBILITY {
+        shade_triangles_msaa(pixel, zbin);
         return;
     }
     let g0 = textureLoad(gb_normal_depth, pixel, 0);
@@ -91,7 +106,7 @@ fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
     if !edge && covered == DEPTH_SAMPLES {
         let q = view_point(screen_ndc(vec2<f32>(pixel) + 0.5), g0.w);
         let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
-        var c = vec4<f32>(shade_point(pixel, ndc_depth(g0.w), p, g0.xyz, m0, zbin), 1.0);
+        var c = vec4<f32>(shade_point(pixel, ndc_depth(g0.w), gbuffer_surface(p, pixel, 0u), zbin), 1.0);
         if GLASS {
             c = all_under_glass(pixel, c);
         }
@@ -105,13 +120,57 @@ fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
         if z < 1.0 {
             let q = view_point(screen_ndc(vec2<f32>(pixel) + sample_position(k)), -linear_depth(z));
             let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
-            let g = textureLoad(gb_normal_depth, pixel, k);
-            ck = vec4<f32>(shade_point(pixel, z, p, g.xyz, textureLoad(gb_material, pixel, k).x, zbin), 1.0);
+            ck = vec4<f32>(shade_point(pixel, z, gbuffer_surface(p, pixel, k), zbin), 1.0);
         }
         if GLASS {
             ck = under_glass(pixel, k, ck);
         }
         c += ck;
+    }
+    textureStore(out_color, pixel, c / f32(DEPTH_SAMPLES));
+}
+
+// A visibility buffer's pixel: each distinct triangle among its samples' ids lit once, as a
+// multisampled raster pass shades a fragment once, at the mean of the positions of the samples
+// it covers (on the triangle, which is convex; the pixel centre where it covers them all),
+// looked up at that point's depth held within its samples' (the culling bounds cover those),
+// and weighted by its samples (each under the glass with GLASS).
+fn shade_triangles_msaa(pixel: vec2<u32>, zbin: bool) {
+    var c = vec4<f32>(0.0);
+    var done = 0u;
+    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
+        if (done & (1u << k)) != 0u {
+            continue;
+        }
+        let id = textureLoad(gb_material, pixel, k).x;
+        var mine = 0u;
+        var at = vec2<f32>(0.0);
+        var z_range = vec2<f32>(1.0, 0.0);
+        for (var j = k; j < DEPTH_SAMPLES; j++) {
+            if textureLoad(gb_material, pixel, j).x == id {
+                mine |= 1u << j;
+                at += sample_position(j);
+                let z = textureLoad(depth_tex, pixel, j);
+                z_range = vec2<f32>(min(z_range.x, z), max(z_range.y, z));
+            }
+        }
+        done |= mine;
+        let n = countOneBits(mine);
+        var ck = vec4<f32>(0.0);
+        if id != 0u {
+            let s = visibility_surface(screen_ndc(vec2<f32>(pixel) + at / f32(n)), id - 1u);
+            let z = clamp(world_ndc_depth(s.p), z_range.x, z_range.y);
+            ck = vec4<f32>(shade_point(pixel, z, s, zbin), 1.0);
+        }
+        if GLASS {
+            for (var j = k; j < DEPTH_SAMPLES; j++) {
+                if (mine & (1u << j)) != 0u {
+                    c += under_glass(pixel, j, ck);
+                }
+            }
+        } else {
+            c += ck * f32(n);
+        }
     }
     textureStore(out_color, pixel, c / f32(DEPTH_SAMPLES));
 }

@@ -47,6 +47,7 @@ fn every_material_model_and_backend_matches_the_reference() {
                 Backend::Forward,
                 Backend::Deferred,
                 Backend::DeferredStoredPosition,
+                Backend::Visibility,
             ] {
                 let what = format!("{models:?} {} {}", strategy.name(), backend.name());
                 let out = renderer
@@ -164,7 +165,12 @@ fn material_edges_render_finite_pixels() {
     assert!(reference.peak() > 0.0);
     let renderer = Renderer::new(&ctx, &gpu_scene);
     let settings = CullSettings::for_camera(&camera);
-    for backend in [Backend::Forward, Backend::Deferred, Backend::NaiveForward] {
+    for backend in [
+        Backend::Forward,
+        Backend::Deferred,
+        Backend::NaiveForward,
+        Backend::Visibility,
+    ] {
         let out = renderer
             .render(
                 &ctx,

@@ -18,7 +18,12 @@ fn geometry_back_to_back_repeats_the_frames_geometry() {
     for samples in [1, 4] {
         let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
         let renderer = Renderer::with_samples(&ctx, &gpu_scene, samples).unwrap();
-        for backend in [Backend::Forward, Backend::Deferred, Backend::NaiveForward] {
+        for backend in [
+            Backend::Forward,
+            Backend::Deferred,
+            Backend::NaiveForward,
+            Backend::Visibility,
+        ] {
             let what = format!("{samples}x {}", backend.name());
             let out = renderer
                 .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
@@ -34,6 +39,7 @@ fn geometry_back_to_back_repeats_the_frames_geometry() {
                     backend == Backend::NaiveForward
                         || l.starts_with("prepass.")
                         || l == "shade.gbuffer"
+                        || l == "shade.visibility"
                 })
                 .collect();
             assert!(

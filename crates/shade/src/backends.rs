@@ -358,14 +358,6 @@ impl Renderer {
         if backend == Backend::Visibility {
             self.check_visibility(ctx, scene)?;
         }
-        if self.samples > 1 && backend == Backend::Visibility {
-            return Err(manylights_gpu::GpuError::Unsupported(format!(
-                "backend visibility with MSAA ({} samples): not built yet; MSAA renders with \
-                 forward, deferred and naive_forward",
-                self.samples
-            ))
-            .into());
-        }
         self.pipelines.prepare(backend, self.transparent);
         let targets = Targets::new(ctx, self, backend, (width, height));
         let mut timer = GpuTimer::new(ctx, 64);

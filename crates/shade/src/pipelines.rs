@@ -16,6 +16,8 @@ use crate::backends::{
 
 /// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
 pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
+/// The surface deferred lighting shades, from a G-buffer or a visibility buffer.
+pub const SURFACE: ShaderFile = shader_file!("render/surface.wgsl");
 /// `shade.forward` and `shade.naive`.
 pub const FORWARD: ShaderDef = ShaderDef {
     name: "shade.forward",
@@ -68,6 +70,7 @@ pub const DEFERRED: ShaderDef = ShaderDef {
         GEOMETRY,
         LOOKUP,
         LIST_SHADING,
+        SURFACE,
         shader_file!("render/deferred.wgsl"),
     ],
 };
@@ -86,6 +89,7 @@ pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
         GEOMETRY,
         LOOKUP,
         LIST_SHADING,
+        SURFACE,
         shader_file!("render/deferred_msaa.wgsl"),
     ],
 };
@@ -513,13 +517,12 @@ impl Pipelines {
         // pixel's. With MSAA, GLASS: the lighting composites the glass layer over each sample.
         let mut constants = vec![("MATERIAL_MODELS", f64::from(self.opaque_model_mask))];
         constants.extend(self.lights);
+        constants.push((
+            "VISIBILITY",
+            f64::from(u8::from(surfaces == Surfaces::Visibility)),
+        ));
         if self.samples > 1 {
             constants.push(("GLASS", f64::from(u8::from(self.glass_layer))));
-        } else {
-            constants.push((
-                "VISIBILITY",
-                f64::from(u8::from(surfaces == Surfaces::Visibility)),
-            ));
         }
         let options = wgpu::PipelineCompilationOptions {
             constants: &constants,
