@@ -24,6 +24,7 @@ mod msaa;
 mod point_lights;
 mod steady;
 mod transparent;
+mod visibility;
 
 use manylights_cull::{CullSettings, Slicing, Strategy};
 use manylights_gpu::timing::{GpuTimer, PassKind};

@@ -177,7 +177,7 @@ pub struct ShadeOutput {
     /// The backend that rendered it.
     pub backend: Backend,
     /// Its textures, for [`Renderer::shade_pass`].
-    targets: Targets,
+    pub(crate) targets: Targets,
 }
 
 impl ShadeOutput {

@@ -1,7 +1,8 @@
 //! Shading for manylights.
 //!
 //! Owns: the brute-force reference renderer ([`reference`]), the accuracy reference of every
-//! strategy and backend, and the infinite-range reference as a compute pass ([`infinite`]); the shading backends ([`backends`]: forward, deferred, naive forward)
+//! strategy and backend, and the infinite-range reference as a compute pass ([`infinite`]); the shading backends ([`backends`]: forward, deferred, naive forward, visibility; the
+//! visibility buffer's CPU oracle in [`visibility`])
 //! over any culling strategy; image error metrics ([`accuracy`]: max abs error, RMSE, PSNR,
 //! FLIP); and HDR images with their output to EXR and tonemapped PNG ([`image_out`]).
 //! Depends on the scene, GPU and culling crates.
@@ -13,6 +14,7 @@ pub mod infinite;
 pub mod pipelines;
 pub mod reference;
 pub mod shade_pass;
+pub mod visibility;
 
 pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput};
 pub use image_out::HdrImage;

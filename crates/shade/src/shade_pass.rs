@@ -93,8 +93,15 @@ impl Targets {
             .as_ref()
             .map(|b| b.targets(ctx, (width, height), &depth, backend == Backend::Forward));
         let gbuffer = deferred.then(|| {
-            let usage =
-                wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+            // Read back by the visibility buffer's oracle (`crate::visibility`) at one sample.
+            let copy = if samples == 1 {
+                wgpu::TextureUsages::COPY_SRC
+            } else {
+                wgpu::TextureUsages::empty()
+            };
+            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | copy;
             let (pw, ph) = if stored { (width, height) } else { (1, 1) };
             let ms = |label, format| {
                 pipeline::texture_2d_msaa(d, label, (width, height), format, usage, samples)
