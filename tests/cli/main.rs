@@ -450,7 +450,7 @@ fn cull_rejects_bad_parameters() {
 fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("r");
-    for backend in ["forward", "deferred", "naive-forward"] {
+    for backend in ["forward", "deferred", "naive-forward", "visibility"] {
         let stdout = succeeds(
             &[
                 "render",
