@@ -84,12 +84,12 @@ def main():
             rows[b["group_id"][6:]] = {"frame": v}
     for fid, (b, v) in gpu.items():
         g = b["group_id"]
-        if g in ("prepass.depth", "shade.gbuffer"):
+        if g in ("prepass.depth", "shade.gbuffer", "shade.visibility"):
             rows[b["function_id"]]["geometry"] = v
         elif g in ("shade.forward", "shade.deferred", "shade.naive"):
             rows[b["function_id"]]["shade"] = v
             rows[b["function_id"]]["kind"] = "compute" if g == "shade.deferred" else "raster"
-    for k in ["forward", "deferred", "deferred_stored_position", "naive_forward"]:
+    for k in ["forward", "deferred", "deferred_stored_position", "naive_forward", "visibility"]:
         r = rows.get(k)
         if r:
             p(f"| {k} | {ms(r['frame'])} | {ms(r.get('geometry', 0))} | {ms(r.get('shade', 0))} | {r.get('kind', '')} |")

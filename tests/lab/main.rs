@@ -14,7 +14,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 22] = [
+const SHIPPED: [&str; 23] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -37,6 +37,7 @@ const SHIPPED: [&str; 22] = [
     "hierarchy-goals",
     "hierarchy-sampled",
     "hierarchy-sampled-1m",
+    "visibility-frame",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {

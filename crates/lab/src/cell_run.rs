@@ -71,12 +71,12 @@ fn frame_models(scene: &Scene) -> String {
     crate::cells::models_label(&models.into_iter().collect::<Vec<_>>())
 }
 
-/// The shading passes' steady-state time (`shade.*` but the G-buffer) per light evaluated, ns;
+/// The shading passes' steady-state time (`shade.*` but the G-buffer or visibility buffer) per light evaluated, ns;
 /// none where they were not timed apart or nothing was evaluated.
 fn ns_per_light_eval(passes: &[(String, f64)], evaluated: f64) -> Option<f64> {
     let ms: f64 = passes
         .iter()
-        .filter(|(label, _)| label.starts_with("shade.") && label != "shade.gbuffer")
+        .filter(|(label, _)| label.starts_with("shade.") && !crate::runner::is_surfaces_pass(label))
         .map(|(_, ms)| ms)
         .sum();
     (ms > 0.0 && evaluated > 0.0).then(|| ms * 1e6 / evaluated)

@@ -10,7 +10,8 @@ use crate::results::Row;
 /// MSAA and glass, where cells ran at several sample counts or with transparent surfaces: for
 /// each (glass, strategy, sample count), forward against deferred (the frame, what it is spent
 /// on, the memory of the multisampled targets, the error against the reference at that count),
-/// and what going from one sample to several cost each.
+/// and what going from one sample to several cost each; the visibility buffer beside them where
+/// it ran.
 pub(crate) fn msaa_summary(rows: &[Row]) -> Vec<String> {
     let mut out = Vec::new();
     if !rows.iter().any(|r| r.msaa > 1 || r.transparent) {
@@ -95,6 +96,19 @@ pub(crate) fn msaa_summary(rows: &[Row]) -> Vec<String> {
                         ""
                     },
                 ));
+                if let Some(v) = find("visibility", s, n, glass)
+                    && let (Some(vt), vg, vs) = time(v)
+                {
+                    out.push(format!(
+                        "The visibility buffer there: {vt:.2} ms a frame ({:.2}x deferred's; visibility buffer and bounds {} ms, culling and lighting {} ms), its targets {:.0} MiB (the buffer {:.0} MiB), mean FLIP {} against the reference.",
+                        vt / dt,
+                        fmt_opt(vg, 2),
+                        fmt_opt(vs, 2),
+                        mib(v.msaa_target_bytes.max(v.gbuffer_bytes)),
+                        mib(v.gbuffer_bytes),
+                        fmt_opt(v.flip_mean, 4),
+                    ));
+                }
             }
         }
     }

@@ -3,8 +3,8 @@
 //!
 //! The columns named by the experiments issue are a public contract: keep them, add new ones
 //! after them, never rename. GPU times are medians over the measured frames, with p10 and p90
-//! beside them; `gpu_ms_prepass` counts `prepass.*` and `shade.gbuffer` (the geometry pass of
-//! either backend, and with MSAA forward `prepass.depth_bounds`), `gpu_ms_cull` every `cull.*`, `scan.*` and `sort.*` pass, `gpu_ms_shade`
+//! beside them; `gpu_ms_prepass` counts `prepass.*`, `shade.gbuffer` and `shade.visibility` (the
+//! geometry pass of each backend, and with MSAA forward `prepass.depth_bounds`), `gpu_ms_cull` every `cull.*`, `scan.*` and `sort.*` pass, `gpu_ms_shade`
 //! every other `shade.*` pass. Values that were not measured are empty in the CSV and null in
 //! the JSON.
 

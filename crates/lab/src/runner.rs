@@ -199,8 +199,14 @@ pub(crate) fn now() -> u64 {
 }
 
 /// Pass category for the result columns.
+/// Whether `label` is a deferred backend's raster pass (`shade.gbuffer`, `shade.visibility`):
+/// geometry, as a depth prepass is.
+pub(crate) fn is_surfaces_pass(label: &str) -> bool {
+    label == "shade.gbuffer" || label == "shade.visibility"
+}
+
 pub(crate) fn category(label: &str) -> &'static str {
-    if label.starts_with("prepass.") || label == "shade.gbuffer" {
+    if label.starts_with("prepass.") || is_surfaces_pass(label) {
         "prepass"
     } else if label.starts_with("cull.") || label.starts_with("scan.") || label.starts_with("sort.")
     {
