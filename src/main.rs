@@ -92,8 +92,9 @@ enum Command {
     Report(ReportArgs),
     /// Find the fastest conservative configuration for a scene, light set and resolution on
     /// this device: try every strategy with several tile sizes (and cluster grids), reject any
-    /// with a false negative, rank the rest by culling and shading together
-    /// (gpu_ms_cull_shade), print the table, and write the best as an experiment file
+    /// with a false negative, rank the rest by the whole frame in steady state
+    /// (gpu_ms_frame_steady; --rank cull-shade: culling and shading together,
+    /// gpu_ms_cull_shade), print the table, and write the best as an experiment file
     /// (OUT/best.ron) with the candidates' results and report in OUT (default out/tune).
     Tune(TuneArgs),
     /// Score another program's light lists (an engine's clusters or tiles, written as

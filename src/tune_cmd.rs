@@ -8,7 +8,7 @@ use anyhow::{Context, Result};
 use clap::ValueEnum;
 use manylights_cull::layout::DEFAULT_SLACK;
 use manylights_lab::experiment::{CameraSpec, Config, SceneSpec};
-use manylights_lab::tune::{TuneOptions, tune};
+use manylights_lab::tune::{Rank, TuneOptions, tune};
 use manylights_scene::RadiusRule;
 use manylights_scene::stochastic::{StochasticBound, StochasticDraw};
 use manylights_shade::Backend;
@@ -24,6 +24,10 @@ pub(crate) struct TuneArgs {
     /// The shading backend the lists are for.
     #[arg(long, value_enum, default_value_t = TuneBackend::Deferred)]
     pub(crate) backend: TuneBackend,
+    /// What candidates are ranked by: the whole frame in steady state (raster pass, culling and
+    /// shading: what users pay), or culling and shading alone (for culling studies).
+    #[arg(long, value_enum, default_value_t = TuneRank::Frame)]
+    pub(crate) rank: TuneRank,
     /// Start no candidate after this many seconds (those left are listed as untried); a rerun
     /// with the same options and --out resumes where it stopped.
     #[arg(long, default_value_t = 600)]
@@ -72,6 +76,16 @@ pub(crate) enum TuneBackend {
     Forward,
     /// Deferred: G-buffer, culling, compute lighting over the lists.
     Deferred,
+    /// Visibility buffer: depth and triangle ids, culling, compute lighting over the lists.
+    Visibility,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum TuneRank {
+    /// The whole frame in steady state (gpu_ms_frame_steady).
+    Frame,
+    /// Culling and shading together (gpu_ms_cull_shade).
+    CullShade,
 }
 
 pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
@@ -89,6 +103,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         backend: match args.backend {
             TuneBackend::Forward => Backend::Forward,
             TuneBackend::Deferred => Backend::Deferred,
+            TuneBackend::Visibility => Backend::Visibility,
         },
         capacity: None,
         mask_budget: None,
@@ -121,6 +136,10 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         manylights_lab::tune::candidates().len() * ranges,
         args.budget_s
     );
+    let rank = match args.rank {
+        TuneRank::Frame => Rank::Frame,
+        TuneRank::CullShade => Rank::CullShade,
+    };
     let report = tune(
         &ctx,
         &base,
@@ -131,18 +150,28 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
             commit: env!("MANYLIGHTS_COMMIT").into(),
             max_error: args.max_error,
             radii: candidate_ranges(args),
+            rank,
         },
     )?;
     let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3}"));
     println!(
-        "{:>4}  {:<64} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9}",
-        "rank", "strategy", "cull+shade", "cull", "lights/px", "needed", "per need", "FLIP inf"
+        "{:>4}  {:<64} {:>11} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9}",
+        "rank",
+        "strategy",
+        "frame",
+        "cull+shade",
+        "cull",
+        "lights/px",
+        "needed",
+        "per need",
+        "FLIP inf"
     );
     for (i, r) in report.ranked.iter().enumerate() {
         println!(
-            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9}",
+            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9}",
             i + 1,
             format!("{} ({}){}", r.strategy, r.params, range_of(r)),
+            ms(Rank::Frame.time(r)),
             ms(manylights_lab::tune::cost(r)),
             ms(r.gpu_ms_cull_steady),
             r.lights_per_pixel_mean
@@ -176,12 +205,13 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     }
     let best = &report.ranked[0];
     println!(
-        "best: {} + {} ({}){}: {} ms of culling and shading{}",
+        "best: {} + {} ({}){}: {} ms, {}{}",
         best.backend,
         best.strategy,
         best.params,
         range_of(best),
-        ms(manylights_lab::tune::cost(best)),
+        ms(rank.time(best)),
+        rank.describe(),
         if best.gpu_ms_hierarchy.is_some() {
             " with the hierarchy's build"
         } else {

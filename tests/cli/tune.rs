@@ -2,8 +2,9 @@
 
 use super::*;
 
-/// `tune` tries every candidate on this device, ranks the conservative ones by culling and
-/// shading together, and writes the best as an experiment file that `run` reproduces; a budget
+/// `tune` tries every candidate on this device, ranks the conservative ones by the whole frame
+/// in steady state (with `--rank cull-shade` by culling and shading together, the same cells
+/// ranked again), and writes the best as an experiment file that `run` reproduces; a budget
 /// that leaves no candidate is an error that says so.
 #[test]
 fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
@@ -30,16 +31,38 @@ fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
         "{stdout}"
     );
     assert!(!stdout.contains("untried"), "{stdout}");
-    // Ranked by the culling-and-shading time, fastest first.
-    let times: Vec<f64> = ranked
-        .iter()
-        .map(|l| {
-            let at = l.find(" ms").unwrap();
-            l[..at].split_whitespace().last().unwrap().parse().unwrap()
-        })
-        .collect();
-    assert!(times.windows(2).all(|w| w[0] <= w[1]), "{stdout}");
-    assert!(stdout.contains("best: deferred + "), "{stdout}");
+    // Ranked by the frame (the first time), fastest first; with --rank cull-shade by culling
+    // and shading (the second).
+    let times = |stdout: &str, column: usize| -> Vec<f64> {
+        stdout
+            .lines()
+            .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+            .map(|l| {
+                let parts: Vec<&str> = l.split(" ms").collect();
+                parts[column]
+                    .split_whitespace()
+                    .last()
+                    .unwrap()
+                    .parse()
+                    .unwrap()
+            })
+            .collect()
+    };
+    let frames = times(&stdout, 0);
+    assert!(frames.windows(2).all(|w| w[0] <= w[1]), "{stdout}");
+    assert!(
+        stdout.contains("best: deferred + ") && stdout.contains("gpu_ms_frame_steady"),
+        "{stdout}"
+    );
+    let mut again_args = args.clone();
+    again_args.extend_from_slice(&["--rank", "cull-shade"]);
+    let o = manylights(&again_args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let by_cull = String::from_utf8_lossy(&o.stdout).into_owned();
+    let cull_shade = times(&by_cull, 1);
+    assert_eq!(cull_shade.len(), frames.len(), "{by_cull}");
+    assert!(cull_shade.windows(2).all(|w| w[0] <= w[1]), "{by_cull}");
+    assert!(by_cull.contains("gpu_ms_cull_shade"), "{by_cull}");
     let best = out.join("best.ron");
     let (e, _) = manylights_lab::Experiment::load(&best).unwrap();
     assert_eq!(e.cells().len(), 1);

@@ -2,8 +2,10 @@
 //! one scene, light set, camera and resolution, every culling strategy is tried with several
 //! parameters ([`candidates`]) on this device, as the cells of one experiment (so they are
 //! measured, persisted and resumed as any experiment's are); a configuration with a false
-//! negative or a dropped light is rejected; the rest are ranked by `gpu_ms_cull_shade` (culling
-//! and the shading pass that reads the lists, back to back: the frame, not the culling pass).
+//! negative or a dropped light is rejected; the rest are ranked by the whole frame in steady
+//! state (`gpu_ms_frame_steady`: the raster pass, culling and the shading pass that reads the
+//! lists, each back to back), or with [`Rank::CullShade`] by culling and shading alone
+//! (`gpu_ms_cull_shade`, for culling studies).
 //! The best is written as an experiment file of its own (`best.ron`) that `manylights run`
 //! reproduces. A time budget stops starting candidates; those left are reported as untried.
 //!
@@ -26,12 +28,43 @@ use crate::results::Row;
 use crate::runner::{RunOptions, run_parsed};
 use crate::{LabError, write_atomic};
 
-/// What a candidate is ranked by, ms: culling and the shading pass that reads the lists, back
-/// to back (`gpu_ms_cull_shade`), and, with the lighting grid hierarchy, its build each frame
-/// (`gpu_ms_hierarchy`), which the frame pays too.
+/// What a culling study ranks a candidate by, ms: culling and the shading pass that reads the
+/// lists, back to back (`gpu_ms_cull_shade`), and, with the lighting grid hierarchy, its build
+/// each frame (`gpu_ms_hierarchy`), which the frame pays too.
 pub fn cost(r: &Row) -> Option<f64> {
     r.gpu_ms_cull_shade
         .map(|t| t + r.gpu_ms_hierarchy.unwrap_or(0.0))
+}
+
+/// What `tune` ranks candidates by.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Rank {
+    /// The whole frame in steady state (`gpu_ms_frame_steady`: the raster pass, culling and
+    /// shading), and the hierarchy's build: what users pay (the default).
+    #[default]
+    Frame,
+    /// Culling and shading alone ([`cost`]), for culling studies.
+    CullShade,
+}
+
+impl Rank {
+    /// A row's time by this rank, ms.
+    pub fn time(self, r: &Row) -> Option<f64> {
+        match self {
+            Self::Frame => r
+                .gpu_ms_frame_steady
+                .map(|t| t + r.gpu_ms_hierarchy.unwrap_or(0.0)),
+            Self::CullShade => cost(r),
+        }
+    }
+
+    /// What it ranks by, in words, with its column.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Frame => "the whole frame in steady state (gpu_ms_frame_steady)",
+            Self::CullShade => "culling and shading together (gpu_ms_cull_shade)",
+        }
+    }
 }
 
 /// How to tune.
@@ -47,6 +80,8 @@ pub struct TuneOptions {
     pub max_error: Option<f64>,
     /// With `max_error`, the radius rules tried with every strategy (none: the base's alone).
     pub radii: Vec<manylights_scene::RadiusRule>,
+    /// What candidates are ranked by.
+    pub rank: Rank,
 }
 
 /// What tuning found.
@@ -173,15 +208,16 @@ pub fn tune(
     let exp = Experiment {
         name: "tune".into(),
         description: match opts.max_error {
+            // Nor what they are ranked by (`--rank`): the same cells serve either.
             None => format!(
-                "manylights tune: every strategy and parameter candidate with the {} backend, ranked by culling and shading together (gpu_ms_cull_shade).",
-                base.backend.name()
+                "manylights tune: every strategy and parameter candidate with the {} backend, ranked by the whole frame in steady state (gpu_ms_frame_steady) or by culling and shading together (gpu_ms_cull_shade).",
+                base.backend.name(),
             ),
             // The budget is left out: the same cells serve any budget, so a rerun with another
             // one in the same folder ranks them again without running anything.
             Some(_) => format!(
-                "manylights tune --max-error: every strategy and parameter candidate with every light range (radius cut-offs, stochastic light culling and the lighting grid hierarchy) and the {} backend, scored against the infinite-range reference; those within the error budget ranked by culling and shading together (gpu_ms_cull_shade).",
-                base.backend.name()
+                "manylights tune --max-error: every strategy and parameter candidate with every light range (radius cut-offs, stochastic light culling and the lighting grid hierarchy) and the {} backend, scored against the infinite-range reference; those within the error budget ranked by the whole frame in steady state (gpu_ms_frame_steady) or by culling and shading together (gpu_ms_cull_shade).",
+                base.backend.name(),
             ),
         },
         config,
@@ -215,12 +251,12 @@ pub fn tune(
         .collect();
     let (mut ranked, mut rejected) = (Vec::new(), Vec::new());
     for r in run.rows {
-        match why_not(&r, opts.max_error) {
+        match why_not(&r, opts.max_error, opts.rank) {
             None => ranked.push(r),
             Some(why) => rejected.push((r, why)),
         }
     }
-    let time = |r: &Row| cost(r).unwrap_or(f64::INFINITY);
+    let time = |r: &Row| opts.rank.time(r).unwrap_or(f64::INFINITY);
     ranked.sort_by(|a, b| time(a).total_cmp(&time(b)));
     let best = ranked.first().ok_or_else(|| {
         let closest = rejected
@@ -250,13 +286,14 @@ pub fn tune(
     let best_exp = Experiment {
         name: "tuned".into(),
         description: format!(
-            "The fastest conservative configuration manylights tune found on {} ({} + {}, {}, {}: {:.3} ms of culling and shading{}{}).",
+            "The fastest conservative configuration manylights tune found on {} ({} + {}, {}, {}: {:.3} ms, {}{}{}).",
             best.adapter,
             best.backend,
             best.strategy,
             best.params,
             cell.config.lights.radius.kind(),
-            cost(best).unwrap_or(f64::NAN),
+            opts.rank.time(best).unwrap_or(f64::NAN),
+            opts.rank.describe(),
             if best.gpu_ms_hierarchy.is_some() {
                 " with the hierarchy's build"
             } else {
@@ -285,7 +322,7 @@ pub fn tune(
 /// Why a finished candidate cannot be the answer: a false negative, a dropped light, no time
 /// for culling and shading (no timestamps, or naive forward), or with an error budget an error
 /// against infinite range above it.
-fn why_not(r: &Row, max_error: Option<f64>) -> Option<String> {
+fn why_not(r: &Row, max_error: Option<f64>, rank: Rank) -> Option<String> {
     match r.false_negatives {
         Some(0) => {}
         Some(n) => return Some(format!("{n} false negatives")),
@@ -294,8 +331,11 @@ fn why_not(r: &Row, max_error: Option<f64>) -> Option<String> {
     if r.dropped_lights > 0 {
         return Some(format!("{} dropped lights", r.dropped_lights));
     }
-    if r.gpu_ms_cull_shade.is_none() {
-        return Some("no culling-and-shading time (no timestamp queries?)".into());
+    if rank.time(r).is_none() {
+        return Some(format!(
+            "no time for {} (no timestamp queries?)",
+            rank.describe()
+        ));
     }
     if let Some(budget) = max_error {
         match r.flip_mean_infinite {
