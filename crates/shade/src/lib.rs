@@ -11,6 +11,7 @@ pub mod accuracy;
 pub mod backends;
 pub mod image_out;
 pub mod infinite;
+pub mod kinds;
 pub mod pipelines;
 pub mod reference;
 pub mod shade_pass;

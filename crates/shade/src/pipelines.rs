@@ -72,6 +72,7 @@ pub const DEFERRED: ShaderDef = ShaderDef {
         LIST_SHADING,
         SURFACE,
         shader_file!("render/deferred.wgsl"),
+        shader_file!("render/deferred_zbin.wgsl"),
     ],
 };
 

@@ -1,0 +1,138 @@
+//! What a frame is rendered as: the shading backend ([`Backend`]), the lit image's format
+//! ([`HdrFormat`]), and the formats and bytes of the buffers a deferred backend's raster pass
+//! writes.
+
+use serde::{Deserialize, Serialize};
+
+use crate::HdrImage;
+
+pub(crate) const GB_NORMAL_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub(crate) const GB_MATERIAL: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+pub(crate) const GB_POSITION: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+/// The visibility buffer's triangle ids.
+pub(crate) const VISIBILITY_ID: wgpu::TextureFormat = wgpu::TextureFormat::R32Uint;
+/// G-buffer bytes per pixel: normal and view depth (16), material index (4), depth (4).
+pub const GBUFFER_BYTES_PER_PIXEL: u64 = 24;
+/// Visibility buffer bytes per pixel (a sample with MSAA): triangle id (4), depth (4).
+pub const VISIBILITY_BYTES_PER_PIXEL: u64 = 8;
+
+/// A shading backend.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Backend {
+    /// Forward+: depth prepass, culling, forward shading over the lists.
+    Forward,
+    /// Deferred: G-buffer, culling, a compute lighting pass over the lists; the position is
+    /// rebuilt from the G-buffer's view depth and the pixel centre.
+    Deferred,
+    /// Deferred with the interpolated world position stored in the G-buffer (16 bytes more a
+    /// pixel): agrees with forward shading to rounding on any GPU. Comparing it with `deferred`
+    /// measures what rebuilding the position costs.
+    DeferredStoredPosition,
+    /// Every light at every fragment, no culling (baseline).
+    NaiveForward,
+    /// The visibility buffer (Burns and Hunt 2013): a raster pass writes depth and each
+    /// pixel's triangle id, culling reads that depth, and deferred's lighting passes fetch each
+    /// pixel's triangle and interpolate its position, normal and material at the pixel
+    /// (`VISIBILITY` in shaders/render/deferred.wgsl). Needs `PRIMITIVE_INDEX`.
+    Visibility,
+}
+
+impl Backend {
+    /// The backend's name (result column value).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Forward => "forward",
+            Self::Deferred => "deferred",
+            Self::DeferredStoredPosition => "deferred_stored_position",
+            Self::NaiveForward => "naive_forward",
+            Self::Visibility => "visibility",
+        }
+    }
+
+    /// Every backend.
+    pub const ALL: [Backend; 5] = [
+        Self::Forward,
+        Self::Deferred,
+        Self::DeferredStoredPosition,
+        Self::NaiveForward,
+        Self::Visibility,
+    ];
+
+    /// Whether its shading is a compute pass over a buffer of the frame's surfaces (a
+    /// G-buffer or a visibility buffer) rather than a raster pass.
+    pub fn lights_in_compute(self) -> bool {
+        matches!(
+            self,
+            Self::Deferred | Self::DeferredStoredPosition | Self::Visibility
+        )
+    }
+}
+
+/// The format of the lit (HDR) image a [`crate::Renderer`] shades into and reads back: 32-bit floats
+/// (the default: the image as shading computed it), or 16-bit floats, as engines' HDR targets
+/// commonly are (half the bytes the lighting pass writes; each channel rounded to 11
+/// significant bits, to nearest or towards zero as Vulkan allows, a relative error of at most
+/// 2^-10, and a channel past 65,504 becomes infinite, counted as a non-finite pixel in the
+/// results). The reference renderers keep 32 bits,
+/// so accuracy against them carries the rounding.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum HdrFormat {
+    /// `Rgba32Float`.
+    #[default]
+    F32,
+    /// `Rgba16Float`.
+    F16,
+}
+
+impl HdrFormat {
+    /// The texture format.
+    pub fn texture_format(self) -> wgpu::TextureFormat {
+        match self {
+            Self::F32 => wgpu::TextureFormat::Rgba32Float,
+            Self::F16 => wgpu::TextureFormat::Rgba16Float,
+        }
+    }
+
+    /// Bytes a texel.
+    pub fn texel_bytes(self) -> u64 {
+        match self {
+            Self::F32 => 16,
+            Self::F16 => 8,
+        }
+    }
+
+    /// Its name in experiment files' cell parameters: `f32` or `f16`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::F32 => "f32",
+            Self::F16 => "f16",
+        }
+    }
+
+    /// The WGSL storage texel format of the lighting pass's image (`rgba32float`, `rgba16float`).
+    pub(crate) fn wgsl(self) -> &'static str {
+        match self {
+            Self::F32 => "rgba32float",
+            Self::F16 => "rgba16float",
+        }
+    }
+
+    /// The image from tightly packed texels of this format, as f32.
+    pub fn image(self, width: u32, height: u32, bytes: &[u8]) -> HdrImage {
+        match self {
+            Self::F32 => HdrImage::from_bytes(width, height, bytes),
+            Self::F16 => HdrImage {
+                width,
+                height,
+                data: bytes
+                    .chunks_exact(8)
+                    .map(|t| {
+                        std::array::from_fn(|c| {
+                            half::f16::from_le_bytes([t[2 * c], t[2 * c + 1]]).to_f32()
+                        })
+                    })
+                    .collect(),
+            },
+        }
+    }
+}
