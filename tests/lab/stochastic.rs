@@ -71,6 +71,14 @@ fn interleaved_stochastic_cells_match_their_reference_with_no_false_negatives() 
             r.flip_mean_infinite.is_some() && r.noise_infinite.is_some(),
             "{cell}"
         );
+        // What each backend moves a pixel (`Backend::bytes_per_pixel`, 32-bit lit image).
+        let bytes = (r.bytes_written_per_pixel, r.bytes_read_per_pixel);
+        let expected = match r.backend.as_str() {
+            "deferred" => (40, 24),
+            "visibility" => (24, 104),
+            _ => (20, 4),
+        };
+        assert_eq!(bytes, (Some(expected.0), Some(expected.1)), "{cell}");
     }
     let named = |label: &str| s.rows.iter().filter(|r| r.cell.contains(label)).count();
     assert_eq!(

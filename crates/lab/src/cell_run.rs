@@ -460,6 +460,8 @@ pub(crate) fn run_cell(
         covered_pixels: Some(first.covered),
         gpu_ms_hierarchy: med(hierarchy_ms),
         scene_lights: (c.lights.radius.kind() == "hierarchy").then_some(scene.lights.len() as u64),
+        bytes_written_per_pixel: Some(c.backend.bytes_per_pixel(c.msaa, c.hdr).0),
+        bytes_read_per_pixel: Some(c.backend.bytes_per_pixel(c.msaa, c.hdr).1),
         ns_per_light_eval: ns_per_light_eval(
             &first.steady_passes,
             if c.backend == Backend::NaiveForward {

@@ -256,6 +256,16 @@ pub struct Row {
     /// group cells by `Row::setting_lights`.
     #[serde(default)]
     pub scene_lights: Option<u64>,
+    /// Bytes a pixel of the opaque frame written by its raster pass and its shading (depth,
+    /// G-buffer or visibility buffer, and the lit image, at every sample):
+    /// `manylights_shade::Backend::bytes_per_pixel`, a model, not a measurement. Empty in rows
+    /// written before it.
+    #[serde(default)]
+    pub bytes_written_per_pixel: Option<u64>,
+    /// Bytes a pixel the shading reads of what the raster pass wrote (and the visibility
+    /// buffer's triangle fetch), as `bytes_written_per_pixel` models it.
+    #[serde(default)]
+    pub bytes_read_per_pixel: Option<u64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s and
@@ -434,6 +444,8 @@ pub const COLUMNS: &[&str] = &[
     "ns_per_light_eval",
     "gpu_ms_hierarchy",
     "scene_lights",
+    "bytes_written_per_pixel",
+    "bytes_read_per_pixel",
 ];
 
 fn one() -> u32 {

@@ -15,6 +15,9 @@ pub(crate) const VISIBILITY_ID: wgpu::TextureFormat = wgpu::TextureFormat::R32Ui
 pub const GBUFFER_BYTES_PER_PIXEL: u64 = 24;
 /// Visibility buffer bytes per pixel (a sample with MSAA): triangle id (4), depth (4).
 pub const VISIBILITY_BYTES_PER_PIXEL: u64 = 8;
+/// What the visibility buffer's lighting fetches of a triangle: three u32 indices and three
+/// 28-byte vertices (`GpuVertex`).
+pub const VISIBILITY_TRIANGLE_BYTES: u64 = 3 * 4 + 3 * 28;
 
 /// A shading backend.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -57,6 +60,35 @@ impl Backend {
         Self::NaiveForward,
         Self::Visibility,
     ];
+
+    /// The bytes a pixel of an opaque frame moves between its raster pass and its shading
+    /// (written, read), with `samples` samples a pixel and a lit image of `hdr`: the depth and
+    /// surface buffers the raster pass writes and the shading reads, and the lit image it
+    /// writes (with MSAA the multisampled colour target and the resolved image). The visibility
+    /// buffer also reads a triangle a distinct id (its three indices and three vertices, 96
+    /// bytes; counted once a pixel, as at one sample, or where a pixel's samples share one
+    /// triangle). Lists, the scene's lights, glass and lookup bounds are not counted
+    /// (`list_bytes`, `msaa_target_bytes` have them). A model of what the passes must move,
+    /// not a measurement.
+    pub fn bytes_per_pixel(self, samples: u32, hdr: HdrFormat) -> (u64, u64) {
+        let s = u64::from(samples);
+        let colour = hdr.texel_bytes();
+        // Forward's colour target a sample, and its resolve into the image.
+        let raster_colour = s * colour + if samples > 1 { colour } else { 0 };
+        match self {
+            // Depth in the prepass; the shading pass tests it and writes colour.
+            Self::Forward | Self::NaiveForward => (s * 4 + raster_colour, s * 4),
+            Self::Deferred => (
+                s * GBUFFER_BYTES_PER_PIXEL + colour,
+                s * GBUFFER_BYTES_PER_PIXEL,
+            ),
+            Self::DeferredStoredPosition => (s * 40 + colour, s * 40),
+            Self::Visibility => (
+                s * VISIBILITY_BYTES_PER_PIXEL + colour,
+                s * VISIBILITY_BYTES_PER_PIXEL + VISIBILITY_TRIANGLE_BYTES,
+            ),
+        }
+    }
 
     /// Whether its shading is a compute pass over a buffer of the frame's surfaces (a
     /// G-buffer or a visibility buffer) rather than a raster pass.
@@ -134,5 +166,32 @@ impl HdrFormat {
                     .collect(),
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bytes_a_pixel_follow_the_buffers() {
+        let f32 = HdrFormat::F32;
+        assert_eq!(Backend::Forward.bytes_per_pixel(1, f32), (20, 4));
+        assert_eq!(Backend::Forward.bytes_per_pixel(4, f32), (16 + 64 + 16, 16));
+        assert_eq!(Backend::Deferred.bytes_per_pixel(1, f32), (40, 24));
+        assert_eq!(
+            Backend::Deferred.bytes_per_pixel(4, HdrFormat::F16),
+            (104, 96)
+        );
+        assert_eq!(
+            Backend::DeferredStoredPosition.bytes_per_pixel(1, f32),
+            (56, 40)
+        );
+        assert_eq!(Backend::Visibility.bytes_per_pixel(1, f32), (24, 104));
+        assert_eq!(Backend::Visibility.bytes_per_pixel(4, f32), (48, 128));
+        assert_eq!(
+            VISIBILITY_TRIANGLE_BYTES,
+            3 * 4 + 3 * std::mem::size_of::<manylights_gpu::layout::GpuVertex>() as u64
+        );
     }
 }
