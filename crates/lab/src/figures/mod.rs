@@ -150,7 +150,22 @@ pub(crate) fn time_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>
     Ok(Some(layout))
 }
 
-/// The cells' per-pass GPU times as stacked bars, each bar named beside it.
+/// Where the bars of `totals` are cut: at five times the median where the longest is longer,
+/// else at the longest.
+fn bar_cut(totals: &[f64]) -> f64 {
+    let max = totals.iter().copied().fold(0.0, f64::max);
+    let mut sorted = totals.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    if median > 0.0 && max > 5.0 * median {
+        5.0 * median
+    } else {
+        max
+    }
+}
+
+/// The cells' per-pass GPU times as stacked bars, each bar named beside it and its total at its
+/// end; bars past five times the median are cut there.
 pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabError> {
     let shown: Vec<&Row> = rows
         .iter()
@@ -186,17 +201,17 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
     };
     // Moving lights' update, where a row has one, as a fourth part before the others.
     let moving = shown.iter().any(|r| r.gpu_ms_light_update.is_some());
-    let xmax = shown
-        .iter()
-        .map(|r| parts(r).iter().sum::<f64>())
-        .fold(0.0, f64::max)
-        .max(1e-6)
-        * 1.05;
+    // Bars far longer than the others (forward at a million lights beside a visibility buffer
+    // at 3,000) are cut at five times the median bar, so that the rest stay readable; every
+    // bar's total is written at its end.
+    let totals: Vec<f64> = shown.iter().map(|r| parts(r).iter().sum()).collect();
+    let cut = bar_cut(&totals);
+    let xmax = cut.max(1e-6) * 1.18;
     let n = shown.len();
     let labels: Vec<String> = shown.iter().map(|r| clip_label(&r.cell)).collect();
     let names = [
         "moving the lights (lights.animate / lights.upload)",
-        "geometry (prepass / G-buffer, lookup bounds)",
+        "geometry (prepass / G-buffer / visibility buffer, lookup bounds)",
         "culling (compute)",
         "shading",
     ];
@@ -250,12 +265,22 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
             chart
                 .draw_series(shown.iter().enumerate().map(|(i, r)| {
                     let p = parts(r);
-                    let x0: f64 = p[..k].iter().sum();
-                    Rectangle::new(
-                        [(x0, i as f64 + 0.15), (x0 + p[k], i as f64 + 0.85)],
-                        c.filled(),
-                    )
+                    let x0: f64 = p[..k].iter().sum::<f64>().min(cut);
+                    let x1 = (x0 + p[k]).min(cut);
+                    Rectangle::new([(x0, i as f64 + 0.15), (x1, i as f64 + 0.85)], c.filled())
                 }))
+                .map_err(err)?;
+        }
+        // Each bar's total at its end (a cut bar's marked as cut).
+        let value = TextStyle::from((FONT, 10).into_font()).pos(Pos::new(HPos::Left, VPos::Center));
+        for (i, &total) in totals.iter().enumerate() {
+            let (x, y) = chart.backend_coord(&(total.min(cut), i as f64 + 0.5));
+            let text = format!(
+                "{} ms{}",
+                axes::linear_label(&total),
+                if total > cut { ", cut" } else { "" }
+            );
+            root.draw(&Text::new(text, (x + 3, y), value.clone()))
                 .map_err(err)?;
         }
         // Every bar named, beside it.
@@ -265,7 +290,7 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
             let (x, y) = chart.backend_coord(&(0.0, i as f64 + 0.5));
             root.draw(&Text::new(label.clone(), (x - 6, y), style.clone()))
                 .map_err(err)?;
-            let total: f64 = parts(r).iter().sum();
+            let total: f64 = parts(r).iter().sum::<f64>().min(cut);
             layout
                 .points
                 .push(chart.backend_coord(&(total, i as f64 + 0.5)));
@@ -343,6 +368,13 @@ pub(crate) fn shade_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn bars_far_past_the_median_are_cut() {
+        assert_eq!(bar_cut(&[1.0, 2.0, 3.0]), 3.0);
+        assert_eq!(bar_cut(&[0.6, 1.0, 1.4, 2.6, 114.8]), 7.0);
+        assert_eq!(bar_cut(&[]), 0.0);
+    }
 
     /// Every figure of every committed report (docs/reports/*), drawn again: no data point
     /// (a marker's centre, a bar's end, with a marker's radius) lies inside its legend's box,
