@@ -385,7 +385,8 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
                  msaa,msaa_target_bytes,transparent,gpu_ms_geometry_steady,gpu_ms_frame_steady,\
                  radius_rule,exposure_infinite,rmse_infinite,energy_error_infinite,seeds,accumulate,\
                  bias_infinite,noise_infinite,temporal_flicker_mean,reference_infinite_cached,\
-                 materials,covered_pixels,ns_per_light_eval,gpu_ms_hierarchy,scene_lights"
+                 materials,covered_pixels,ns_per_light_eval,gpu_ms_hierarchy,scene_lights,\
+                 bytes_written_per_pixel,bytes_read_per_pixel"
     ));
 }
 

@@ -122,8 +122,8 @@ pub(crate) fn msaa_summary(rows: &[Row]) -> Vec<String> {
 }
 
 /// Material variety, where cells ran with several `materials` values: for each setting (scene,
-/// lights, resolution) and strategy, forward against deferred in steady state at each list of
-/// models (in the order of their counts), where deferred's advantage turns if it does; what
+/// lights, resolution) and strategy, forward against deferred (and the visibility buffer
+/// where it ran) in steady state at each list of models (in the order of their counts), where deferred's advantage turns if it does; what
 /// mixing costs each backend (a mixed frame's shading pass against the mean of its models'
 /// passes alone); and each model's shading time per light evaluated from the cells that shade
 /// it alone.
@@ -164,7 +164,13 @@ pub(crate) fn materials_summary(rows: &[Row]) -> Vec<String> {
             let (Some(f), Some(d)) = (frame("forward", m), frame("deferred", m)) else {
                 continue;
             };
-            parts.push(format!("{m} {f:.3} against {d:.3} ms ({:.2}x)", f / d));
+            let visibility = frame("visibility", m).map_or(String::new(), |v| {
+                format!(", visibility {v:.3} ms ({:.2}x deferred's)", v / d)
+            });
+            parts.push(format!(
+                "{m} {f:.3} against {d:.3} ms ({:.2}x){visibility}",
+                f / d
+            ));
             let n = m.matches('+').count() + 1;
             if n > 1 && f <= d && turns.is_none() {
                 turns = Some(n);
@@ -185,7 +191,7 @@ pub(crate) fn materials_summary(rows: &[Row]) -> Vec<String> {
         let shade = |backend: &str, m: &str| row(backend, m).and_then(shade_ms);
         let mut mixing = Vec::new();
         for m in lists.iter().filter(|m| m.contains('+')) {
-            for backend in ["forward", "deferred"] {
+            for backend in ["forward", "deferred", "visibility"] {
                 let alone: Option<Vec<f64>> = m.split('+').map(|one| shade(backend, one)).collect();
                 if let (Some(mixed), Some(alone)) = (shade(backend, m), alone) {
                     let mean = alone.iter().sum::<f64>() / alone.len() as f64;
@@ -206,11 +212,16 @@ pub(crate) fn materials_summary(rows: &[Row]) -> Vec<String> {
                     .and_then(|r| r.ns_per_light_eval)
                     .map_or("-".to_owned(), |ns| format!("{:.1}", ns * 1e3))
             };
-            costs.push(format!("{m} {} and {}", ps("forward"), ps("deferred")));
+            costs.push(format!(
+                "{m} {}, {} and {}",
+                ps("forward"),
+                ps("deferred"),
+                ps("visibility")
+            ));
         }
         if !costs.is_empty() {
             out.push(format!(
-                "Shading time per light evaluated (ps, forward and deferred; `ns_per_light_eval` times 1,000), {scene}, {strategy}, each model alone: {}.",
+                "Shading time per light evaluated (ps, forward, deferred and the visibility buffer; `ns_per_light_eval` times 1,000, - where not run), {scene}, {strategy}, each model alone: {}.",
                 costs.join("; ")
             ));
         }
