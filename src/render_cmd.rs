@@ -44,7 +44,7 @@ pub(crate) struct RenderArgs {
     /// and naive forward shade each fragment once and resolve; the tiles' and clusters' depth
     /// bounds cover every sample; the reference renders at the same count. Deferred lights a
     /// multisampled G-buffer once a pixel, and each sample apart at edges (the stored position
-    /// takes no MSAA).
+    /// takes no MSAA); the visibility buffer lights each distinct triangle of an edge pixel once.
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub(crate) msaa: u32,
     /// The backend's lit image: f32 (32-bit floats), or f16 (16-bit floats, as engines' HDR
@@ -291,7 +291,11 @@ impl Run<'_> {
             println!("  dropped lights          {}", lists.dropped);
         }
         if out.gbuffer_bytes > 0 {
-            println!("  G-buffer bytes          {}", out.gbuffer_bytes);
+            if out.backend == Backend::Visibility {
+                println!("  visibility buffer bytes {}", out.gbuffer_bytes);
+            } else {
+                println!("  G-buffer bytes          {}", out.gbuffer_bytes);
+            }
         }
         let covered = out.color.data.iter().filter(|c| c[3] > 0.0).count().max(1);
         let max = per_pixel.iter().copied().max().unwrap_or(0).max(1);

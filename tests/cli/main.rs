@@ -479,6 +479,10 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
                 && stdout.contains("mean FLIP"),
             "{stdout}"
         );
+        assert!(
+            (backend != "visibility") || stdout.contains("visibility buffer bytes"),
+            "{stdout}"
+        );
         let name = backend.replace('-', "_");
         for file in [
             format!("{name}.png"),
