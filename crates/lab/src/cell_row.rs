@@ -1,0 +1,355 @@
+//! A cell's result row from what its poses and frames measured (`cell_row`): the timed frames'
+//! medians by category (`Timings`), the worst pose's metrics (`Worst`), and the columns derived
+//! from them.
+
+use std::collections::BTreeSet;
+
+use manylights_gpu::GpuContext;
+use manylights_gpu::timing::{PassKind, PassTiming};
+use manylights_scene::Scene;
+use manylights_shade::Backend;
+
+use crate::evaluate::{PoseEval, temporal_stability};
+use crate::experiment::{Cell, Config, Experiment, params_label};
+use crate::noise::{Draws, Noise};
+use crate::results::{Row, percentiles};
+use crate::runner::{category, now};
+
+/// The material models of the scene's surfaces, by id, their names joined by `+`.
+fn frame_models(scene: &Scene) -> String {
+    let models: std::collections::BTreeSet<manylights_scene::Model> = scene
+        .primitives
+        .iter()
+        .map(|p| scene.materials[p.material as usize].brdf.model())
+        .collect();
+    crate::cells::models_label(&models.into_iter().collect::<Vec<_>>())
+}
+
+/// The shading passes' steady-state time (`shade.*` but the G-buffer or visibility buffer) per light evaluated, ns;
+/// none where they were not timed apart or nothing was evaluated.
+fn ns_per_light_eval(passes: &[(String, f64)], evaluated: f64) -> Option<f64> {
+    let ms: f64 = passes
+        .iter()
+        .filter(|(label, _)| label.starts_with("shade.") && !crate::runner::is_surfaces_pass(label))
+        .map(|(_, ms)| ms)
+        .sum();
+    (ms > 0.0 && evaluated > 0.0).then(|| ms * 1e6 / evaluated)
+}
+
+/// What a cell's row is made of: its configuration, its scene, what each pose measured and the
+/// timed frames.
+pub(crate) struct RowParts<'a> {
+    pub(crate) exp: &'a Experiment,
+    pub(crate) cell: &'a Cell,
+    pub(crate) c: &'a Config,
+    pub(crate) ctx: &'a GpuContext,
+    pub(crate) commit: &'a str,
+    pub(crate) scene: &'a Scene,
+    pub(crate) transparent: bool,
+    pub(crate) light_count: u64,
+    pub(crate) evals: &'a [PoseEval],
+    /// Poses (or measured frames of moving lights) checked.
+    pub(crate) poses: u32,
+    pub(crate) draws: Option<&'a Draws>,
+    pub(crate) noise: Option<Noise>,
+    /// Each timed frame's passes, the encode and upload times, whether they were timed.
+    pub(crate) measured: (&'a [Vec<PassTiming>], &'a [f64], &'a [f64], bool),
+}
+
+/// The result row of a cell from what it measured.
+pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
+    let RowParts {
+        exp,
+        cell,
+        c,
+        ctx,
+        commit,
+        scene,
+        transparent,
+        light_count,
+        evals,
+        poses,
+        draws,
+        noise,
+        measured: (frames, encode, uploads, timed),
+    } = parts;
+    let id = cell.id();
+    let (w, h) = c.resolution;
+    let first = &evals[0];
+    let temporal = temporal_stability(evals);
+    let worst = Worst::of(evals, noise.as_ref());
+    let (list_bytes, gbuffer_bytes) = (first.list_bytes, first.gbuffer_bytes);
+
+    let Timings {
+        total,
+        cull,
+        shade,
+        prepass,
+        light_update,
+        raster,
+        compute,
+        hierarchy: hierarchy_ms,
+        passes,
+    } = Timings::of(frames, timed);
+    let med = |s: Option<(f64, f64, f64)>| s.map(|x| x.0);
+    let p10 = |s: Option<(f64, f64, f64)>| s.map(|x| x.1);
+    let p90 = |s: Option<(f64, f64, f64)>| s.map(|x| x.2);
+    Row {
+        experiment: exp.name.clone(),
+        cell: cell.name.clone(),
+        scene: c.scene.name(),
+        lights: light_count,
+        width: w,
+        height: h,
+        strategy: if c.backend == Backend::NaiveForward {
+            "none".into()
+        } else {
+            c.strategy.name().into()
+        },
+        backend: c.backend.name().into(),
+        params: params_label(c),
+        gpu_ms_total: med(total),
+        gpu_ms_cull: med(cull),
+        gpu_ms_shade: med(shade),
+        gpu_ms_prepass: med(prepass),
+        cpu_ms_encode: percentiles(encode).map_or(0.0, |x| x.0),
+        false_negatives: worst.false_negatives,
+        false_positive_ratio: worst.fp_ratio,
+        lights_per_pixel_mean: worst.per_pixel_mean,
+        max_lights_per_tile: worst.max_per_bin,
+        dropped_lights: worst.dropped,
+        list_bytes,
+        gbuffer_bytes,
+        msaa: c.msaa,
+        transparent,
+        passes_steady: first.steady_passes.iter().fold(
+            std::collections::BTreeMap::new(),
+            |mut m, (label, ms)| {
+                *m.entry(label.clone()).or_insert(0.0) += ms;
+                m
+            },
+        ),
+        gpu_ms_geometry_steady: first.steady_geometry,
+        gpu_ms_frame_steady: match (c.backend, first.steady_geometry, first.steady_frame) {
+            (Backend::NaiveForward, g, _) => g,
+            (_, Some(g), Some(f)) => Some(g + f.0),
+            _ => None,
+        },
+        msaa_target_bytes: first.msaa_target_bytes,
+        psnr_db: worst.psnr,
+        flip_mean: worst.flip,
+        max_abs_error: worst.max_abs,
+        adapter: ctx.info.name.clone(),
+        driver: format!("{} {}", ctx.info.driver, ctx.info.driver_info)
+            .trim()
+            .to_string(),
+        commit: commit.to_string(),
+        gpu_ms_total_p10: p10(total),
+        gpu_ms_total_p90: p90(total),
+        gpu_ms_cull_p10: p10(cull),
+        gpu_ms_cull_p90: p90(cull),
+        gpu_ms_shade_p10: p10(shade),
+        gpu_ms_shade_p90: p90(shade),
+        gpu_ms_prepass_p10: p10(prepass),
+        gpu_ms_prepass_p90: p90(prepass),
+        gpu_ms_raster: med(raster),
+        gpu_ms_compute: med(compute),
+        psnr_db_infinite: worst.psnr_inf,
+        flip_mean_infinite: worst.flip_inf,
+        max_abs_error_infinite: worst.max_abs_inf,
+        exact_stride: c.exact_stride,
+        frames: c.frames,
+        nonfinite_pixels: worst.nonfinite,
+        poses,
+        temporal_change: temporal.map(|t| t.0),
+        temporal_change_reference: temporal.map(|t| t.1),
+        temporal_flicker: temporal.map(|t| t.2),
+        tile_masks: first.tile_masks,
+        gpu_ms_cull_steady: first.steady.map(|s| s.0),
+        gpu_ms_cull_span: first.steady.and_then(|s| s.1),
+        gpu_ms_cull_shade: first.steady_frame.map(|s| s.0),
+        gpu_ms_cull_shade_span: first.steady_frame.and_then(|s| s.1),
+        radius_rule: c.lights.radius.kind().into(),
+        exposure_infinite: worst.exposure_inf,
+        rmse_infinite: worst.rmse_inf,
+        energy_error_infinite: worst.energy_inf,
+        seeds: draws.map(|d| d.seeds),
+        accumulate: draws.map(|d| d.accumulate),
+        bias_infinite: noise.and_then(|n| n.bias),
+        noise_infinite: noise.and_then(|n| n.noise),
+        temporal_flicker_mean: noise.and_then(|n| n.flicker_mean),
+        reference_infinite_cached: first.infinite_cached,
+        materials: frame_models(scene),
+        covered_pixels: Some(first.covered),
+        gpu_ms_hierarchy: med(hierarchy_ms),
+        scene_lights: (c.lights.radius.kind() == "hierarchy").then_some(scene.lights.len() as u64),
+        bytes_written_per_pixel: Some(c.backend.bytes_per_pixel(c.msaa, c.hdr).0),
+        bytes_read_per_pixel: Some(c.backend.bytes_per_pixel(c.msaa, c.hdr).1),
+        ns_per_light_eval: ns_per_light_eval(
+            &first.steady_passes,
+            if c.backend == Backend::NaiveForward {
+                light_count as f64
+            } else {
+                first.lights_per_pixel_mean
+            } * first.covered as f64,
+        ),
+        lights_needed_per_pixel_mean: worst.needed_per_pixel_mean,
+        gpu_ms_light_update: med(light_update),
+        cpu_ms_upload: percentiles(uploads).map(|x| x.0),
+        passes,
+        index: cell.index,
+        id,
+        finished_unix: now(),
+    }
+}
+
+/// A cell's measured frames as median and 10th and 90th percentile milliseconds: the whole,
+/// each category and kind of pass, and each pass by label.
+struct Timings {
+    total: Option<(f64, f64, f64)>,
+    cull: Option<(f64, f64, f64)>,
+    shade: Option<(f64, f64, f64)>,
+    prepass: Option<(f64, f64, f64)>,
+    /// Where the update was timed (an upload's copy is not where the device cannot write
+    /// timestamps between passes): never a made-up 0.
+    light_update: Option<(f64, f64, f64)>,
+    raster: Option<(f64, f64, f64)>,
+    compute: Option<(f64, f64, f64)>,
+    /// The lighting grid hierarchy's build (`lights.hierarchy.*`), where it ran and was timed.
+    hierarchy: Option<(f64, f64, f64)>,
+    passes: std::collections::BTreeMap<String, f64>,
+}
+
+impl Timings {
+    /// Of `frames`, each a frame's passes; all `None` (and no passes) unless `timed`.
+    fn of(frames: &[Vec<PassTiming>], timed: bool) -> Timings {
+        let series = |pick: &dyn Fn(&PassTiming) -> bool| -> Vec<f64> {
+            frames
+                .iter()
+                .map(|t| t.iter().filter(|p| pick(p)).map(|p| p.ms).sum())
+                .collect()
+        };
+        let stats = |v: Vec<f64>| if timed { percentiles(&v) } else { None };
+        let of_category = |name: &str| stats(series(&|p| category(&p.label) == name));
+        let updates_timed = frames
+            .iter()
+            .any(|t| t.iter().any(|p| category(&p.label) == "light_update"));
+        let mut passes = std::collections::BTreeMap::new();
+        if timed {
+            let labels: BTreeSet<String> = frames
+                .iter()
+                .flat_map(|t| t.iter().map(|p| p.label.clone()))
+                .collect();
+            for l in labels {
+                if let Some((m, _, _)) = percentiles(&series(&|p| p.label == l)) {
+                    passes.insert(l, m);
+                }
+            }
+        }
+        Timings {
+            total: stats(series(&|_| true)),
+            cull: of_category("cull"),
+            shade: of_category("shade"),
+            prepass: of_category("prepass"),
+            light_update: if updates_timed {
+                of_category("light_update")
+            } else {
+                None
+            },
+            raster: stats(series(&|p| p.kind == PassKind::Raster)),
+            compute: stats(series(&|p| p.kind == PassKind::Compute)),
+            hierarchy: frames
+                .iter()
+                .any(|t| t.iter().any(|p| p.label.starts_with("lights.hierarchy.")))
+                .then(|| stats(series(&|p| p.label.starts_with("lights.hierarchy."))))
+                .flatten(),
+            passes,
+        }
+    }
+}
+
+/// The worst of each measure over a cell's checked poses (a stochastic cell's image error
+/// against infinite range: its seeds' mean).
+struct Worst {
+    false_negatives: Option<u64>,
+    fp_ratio: Option<f64>,
+    max_per_bin: Option<u64>,
+    per_pixel_mean: Option<f64>,
+    needed_per_pixel_mean: Option<f64>,
+    dropped: u64,
+    nonfinite: u64,
+    psnr: Option<f64>,
+    flip: Option<f64>,
+    max_abs: Option<f64>,
+    psnr_inf: Option<f64>,
+    flip_inf: Option<f64>,
+    max_abs_inf: Option<f64>,
+    rmse_inf: Option<f64>,
+    energy_inf: Option<f64>,
+    exposure_inf: Option<f64>,
+}
+
+impl Worst {
+    fn of(evals: &[PoseEval], noise: Option<&Noise>) -> Worst {
+        let first = &evals[0];
+        // The worst pose of each measure.
+        let max_u64 = |f: &dyn Fn(&PoseEval) -> Option<u64>| evals.iter().filter_map(f).max();
+        let max_f64 =
+            |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::max);
+        let min_f64 =
+            |f: &dyn Fn(&PoseEval) -> Option<f64>| evals.iter().filter_map(f).reduce(f64::min);
+        let false_negatives = evals
+            .iter()
+            .map(|e| e.metrics.as_ref().map(|m| m.false_negatives))
+            .try_fold(0u64, |a, f| f.map(|f| a + f));
+        let fp_ratio = max_f64(&|e| e.metrics.as_ref().and_then(|m| m.false_positive_ratio));
+        let max_per_bin = max_u64(&|e| e.metrics.as_ref().map(|m| u64::from(m.max_lights_per_bin)));
+        let per_pixel_mean = max_f64(&|e| Some(e.lights_per_pixel_mean));
+        let dropped = max_u64(&|e| Some(e.dropped)).unwrap_or(0);
+        let nonfinite = max_u64(&|e| Some(e.nonfinite)).unwrap_or(0);
+        let (psnr, flip, max_abs) = (
+            min_f64(&|e| e.acc.map(|a| a.psnr_db)),
+            max_f64(&|e| e.acc.map(|a| a.flip_mean)),
+            max_f64(&|e| e.acc.map(|a| a.max_abs_error)),
+        );
+        let (psnr_inf, mut flip_inf, max_abs_inf) = (
+            min_f64(&|e| e.acc_inf.map(|a| a.psnr_db)),
+            max_f64(&|e| e.acc_inf.map(|a| a.flip_mean)),
+            max_f64(&|e| e.acc_inf.map(|a| a.max_abs_error)),
+        );
+        let mut rmse_inf = max_f64(&|e| e.acc_inf.map(|a| a.rmse));
+        // The energy error of the pose farthest from zero.
+        let mut energy_inf = evals
+            .iter()
+            .filter_map(|e| e.acc_inf.map(|a| a.energy_error))
+            .reduce(|a, b| if b.abs() > a.abs() { b } else { a });
+        let mut exposure_inf = first.acc_inf.map(|a| f64::from(a.exposure));
+        if let Some(n) = noise {
+            // A stochastic cell's image error is its seeds' mean.
+            flip_inf = Some(n.flip_mean);
+            rmse_inf = Some(n.rmse);
+            energy_inf = Some(n.energy_error);
+            exposure_inf = Some(n.exposure);
+        }
+        let needed_per_pixel_mean =
+            max_f64(&|e| e.metrics.as_ref().map(|m| m.lights_needed_per_pixel_mean));
+        Worst {
+            false_negatives,
+            fp_ratio,
+            max_per_bin,
+            per_pixel_mean,
+            needed_per_pixel_mean,
+            dropped,
+            nonfinite,
+            psnr,
+            flip,
+            max_abs,
+            psnr_inf,
+            flip_inf,
+            max_abs_inf,
+            rmse_inf,
+            energy_inf,
+            exposure_inf,
+        }
+    }
+}
