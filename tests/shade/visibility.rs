@@ -135,3 +135,34 @@ fn visibility_without_primitive_index_is_an_error() {
         )
         .unwrap();
 }
+
+/// The visibility buffer's lighting binds the scene's index buffer as one storage buffer: where
+/// it is larger than the device's binding limit, `render` says so, naming the limit (here the
+/// limit is lowered after the upload, as a device with a small one would have it).
+#[test]
+fn an_index_buffer_past_the_binding_limit_is_an_error() {
+    let mut ctx = common::gpu();
+    let s = scene("pillars");
+    let (w, h) = (32, 24);
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    let renderer = Renderer::new(&ctx, &gpu_scene);
+    let settings = CullSettings::for_camera(&s.camera);
+    let strategy = Strategy::tiled_gather(16);
+    ctx.limits.max_storage_buffer_binding_size = gpu_scene.indices.size() - 4;
+    let err = renderer
+        .render(
+            &ctx,
+            &gpu_scene,
+            Backend::Visibility,
+            &strategy,
+            &settings,
+            (w, h),
+        )
+        .err()
+        .expect("an index buffer past the limit")
+        .to_string();
+    assert!(
+        err.contains("index buffer bytes") && err.contains("max_storage_buffer_binding_size"),
+        "{err}"
+    );
+}
