@@ -336,5 +336,78 @@ fn cull_shade(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, cull_shade);
+/// The visibility pass of the Forward+ configuration, the hall at 5,000 lights and the atrium at
+/// a million lights, each frame timed as one span (`frame.visibility/<setting>_raster`: the
+/// hardware pass, `shade.visibility`; `_compute`: `manylights_shade::vis_compute`, its clears
+/// included), back to back in one submission: what issue 49's item 4 weighs.
+fn visibility(c: &mut Criterion) {
+    use manylights_shade::vis_compute::ComputeVisibility;
+    let ctx = gpu();
+    let mut g = c.benchmark_group("frame.visibility");
+    configure(&mut g);
+    let all = settings();
+    for name in [
+        "harada2012_gather8",
+        "cis5650_5k_gather",
+        "atrium_1m_clustered32x32",
+    ] {
+        let Some(s) = all.iter().find(|s| s.name == name) else {
+            continue;
+        };
+        let (w, h) = s.size;
+        let gs = GpuScene::upload(&ctx, &s.scene, &s.scene.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gs);
+        let settings = CullSettings::for_camera(&s.scene.camera);
+        let out = renderer
+            .render(
+                &ctx,
+                &gs,
+                Backend::Visibility,
+                &s.strategy,
+                &settings,
+                (w, h),
+            )
+            .unwrap();
+        let cv = ComputeVisibility::new(&ctx, &gs).unwrap();
+        let targets = cv.targets(&ctx, &gs, (w, h));
+        let timed = |runs: u64, compute: bool| -> f64 {
+            let mut timer = GpuTimer::spans(&ctx, runs as u32).expect("timestamps between passes");
+            if compute {
+                let mut enc = ctx.encoder("bench.visibility_compute");
+                for _ in 0..runs {
+                    timer.span_begin(&mut enc, "visibility_compute");
+                    cv.encode(&mut enc, &mut timer, &gs, &targets);
+                }
+                timer.span_end(&mut enc);
+                timer.resolve(&mut enc);
+                ctx.submit_and_wait(enc, "bench visibility compute")
+                    .unwrap();
+            } else {
+                renderer
+                    .geometry_repeated(&ctx, &gs, &out, runs as u32, &mut timer)
+                    .unwrap();
+            }
+            let t = timer.read(&ctx).unwrap().expect("timestamps");
+            t.iter().map(|p| p.ms).sum::<f64>()
+        };
+        for (kind, compute) in [("raster", false), ("compute", true)] {
+            let id = BenchmarkId::new(format!("{name}_{kind}"), format!("{w}x{h}"));
+            g.bench_function(id, |b| {
+                b.iter_custom(|iters| {
+                    let mut total = 0.0;
+                    let mut left = iters;
+                    while left > 0 {
+                        let runs = left.min(64);
+                        total += timed(runs, compute);
+                        left -= runs;
+                    }
+                    Duration::from_secs_f64(total * 1e-3)
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, cull_shade, visibility);
 criterion_main!(benches);

@@ -83,6 +83,9 @@ pub struct Negotiated {
     /// `@builtin(primitive_index)` in fragment shaders (`PRIMITIVE_INDEX`; on Vulkan the
     /// `geometryShader` feature): the visibility buffer's triangle ids.
     pub primitive_index: bool,
+    /// 64-bit integers and their atomic min and max on storage buffers (`SHADER_INT64`,
+    /// `SHADER_INT64_ATOMIC_MIN_MAX`): the compute visibility pass.
+    pub int64_atomics: bool,
 }
 
 /// A headless wgpu device and what was negotiated for it.
@@ -204,6 +207,9 @@ impl GpuContext {
             wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES,
             // The visibility buffer's triangle ids.
             wgpu::Features::PRIMITIVE_INDEX,
+            // The compute visibility pass's keys.
+            wgpu::Features::SHADER_INT64,
+            wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
         ] {
             if offered.contains(f) {
                 required |= f;
@@ -245,6 +251,9 @@ impl GpuContext {
             subgroups: required.contains(wgpu::Features::SUBGROUP),
             subgroup_size: (info.subgroup_min_size, info.subgroup_max_size),
             primitive_index: required.contains(wgpu::Features::PRIMITIVE_INDEX),
+            int64_atomics: required.contains(
+                wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+            ),
         };
         let loop_limit = is_llvmpipe(&info).then_some(LLVMPIPE_LOOP_LIMIT);
         Ok(Self {

@@ -15,6 +15,7 @@ pub mod kinds;
 pub mod pipelines;
 pub mod reference;
 pub mod shade_pass;
+pub mod vis_compute;
 pub mod visibility;
 
 pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput};
@@ -32,4 +33,6 @@ pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     pipelines::DEFERRED,
     pipelines::DEFERRED_MSAA,
     pipelines::VISIBILITY,
+    vis_compute::VISIBILITY_COMPUTE,
+    vis_compute::VISIBILITY_RESOLVE,
 ];

@@ -1,0 +1,273 @@
+//! The visibility pass rasterised in compute (issue 49's item 4; a building block, not yet a
+//! backend's pass): `shade.visibility_compute` keeps each pixel's nearest opaque triangle in a
+//! 64-bit key by atomic max (a thread a triangle, clipped against the near plane; large ones a
+//! workgroup a 32 x 32 block), and `shade.visibility_resolve` writes the ids (as
+//! `shade.visibility` does: the triangle's index plus one, 0 for none) and NDC depths. It needs
+//! 64-bit atomic max on storage buffers (`SHADER_INT64_ATOMIC_MIN_MAX`; lavapipe and NVIDIA
+//! have it). Tested against the hardware pass's ids and depths (tests/shade/visibility.rs).
+
+use manylights_gpu::pipeline::{self, UNIFORM, storage};
+use manylights_gpu::shader_file;
+use manylights_gpu::shaders::FRAME;
+use manylights_gpu::shaders::ShaderDef;
+use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::{GpuContext, GpuError, GpuScene, readback};
+
+/// `shade.visibility_compute`.
+pub const VISIBILITY_COMPUTE: ShaderDef = ShaderDef {
+    name: "shade.visibility_compute",
+    consts: &[],
+    files: &[FRAME, shader_file!("render/visibility_compute.wgsl")],
+};
+
+/// `shade.visibility_resolve`.
+pub const VISIBILITY_RESOLVE: ShaderDef = ShaderDef {
+    name: "shade.visibility_resolve",
+    consts: &[],
+    files: &[FRAME, shader_file!("render/visibility_resolve.wgsl")],
+};
+
+/// Queue entries for large triangles' 32 x 32 blocks; past them blocks are dropped and counted.
+pub const QUEUE_CAPACITY: u32 = 1 << 20;
+/// Workgroups of the blocks' pass, each taking every this-many-th entry.
+const BLOCK_GROUPS: u32 = 2048;
+
+/// The pipelines of the compute visibility pass.
+pub struct ComputeVisibility {
+    layout: wgpu::BindGroupLayout,
+    resolve_layout: wgpu::BindGroupLayout,
+    triangles: wgpu::ComputePipeline,
+    blocks: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
+}
+
+/// A frame's compute visibility buffers.
+pub struct ComputeTargets {
+    size: (u32, u32),
+    keys: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    resolve_group: wgpu::BindGroup,
+    /// Each pixel's triangle id (`R32Uint`).
+    pub ids: wgpu::Texture,
+    /// Each pixel's NDC depth (`R32Float`, 1 where nothing is drawn).
+    pub depth: wgpu::Texture,
+}
+
+/// What the compute visibility pass wrote, read back: ids and depths a pixel (rows from the top)
+/// and the large triangles' blocks dropped past the queue (0 unless the queue overflowed).
+pub struct ComputeFrame {
+    /// Triangle ids (index plus one, 0 for none).
+    pub ids: Vec<u32>,
+    /// NDC depths (1 for none).
+    pub depth: Vec<f32>,
+    /// Large triangles' blocks dropped past the queue.
+    pub dropped_blocks: u32,
+}
+
+impl ComputeVisibility {
+    /// The pipelines for scenes laid out as `scene`; an error where the device lacks 64-bit
+    /// atomic max.
+    pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self, GpuError> {
+        if !ctx.features.int64_atomics {
+            return Err(GpuError::Unsupported(format!(
+                "the compute visibility pass needs 64-bit atomic max on storage buffers (wgpu \
+                 feature SHADER_INT64_ATOMIC_MIN_MAX), which adapter {} does not offer",
+                ctx.info.name
+            )));
+        }
+        let d = &ctx.device;
+        let c = wgpu::ShaderStages::COMPUTE;
+        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade.visibility_compute"),
+            entries: &[
+                pipeline::entry(0, c, storage(true)),
+                pipeline::entry(1, c, storage(true)),
+                pipeline::entry(2, c, storage(false)),
+                pipeline::entry(3, c, storage(false)),
+                pipeline::entry(4, c, storage(false)),
+                pipeline::entry(5, c, UNIFORM),
+            ],
+        });
+        let storage_texture = |format| wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        };
+        let resolve_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade.visibility_resolve"),
+            entries: &[
+                pipeline::entry(0, c, storage(true)),
+                pipeline::entry(1, c, storage_texture(wgpu::TextureFormat::R32Uint)),
+                pipeline::entry(2, c, storage_texture(wgpu::TextureFormat::R32Float)),
+            ],
+        });
+        let module = VISIBILITY_COMPUTE.create(d);
+        let pl = pipeline::layout(d, "shade.visibility_compute", &[&scene.layout, &layout]);
+        let resolve_module = VISIBILITY_RESOLVE.create(d);
+        let rpl = pipeline::layout(
+            d,
+            "shade.visibility_resolve",
+            &[&scene.layout, &resolve_layout],
+        );
+        Ok(Self {
+            triangles: pipeline::compute(d, &module, &pl, "vis_triangles"),
+            blocks: pipeline::compute(d, &module, &pl, "vis_blocks"),
+            resolve: pipeline::compute(d, &resolve_module, &rpl, "vis_resolve"),
+            layout,
+            resolve_layout,
+        })
+    }
+
+    /// Buffers for a `width` x `height` frame of `scene`.
+    pub fn targets(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        (w, h): (u32, u32),
+    ) -> ComputeTargets {
+        let d = &ctx.device;
+        let buf = |label, size: u64, usage| {
+            d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let rw = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC;
+        let keys = buf(
+            "visibility_compute.keys",
+            u64::from(w) * u64::from(h) * 8,
+            rw,
+        );
+        let counts = buf("visibility_compute.counts", 8, rw);
+        let queue = buf(
+            "visibility_compute.queue",
+            u64::from(QUEUE_CAPACITY) * 16,
+            rw,
+        );
+        let params = pipeline::uniform_buffer(
+            d,
+            "visibility_compute.params",
+            bytemuck::cast_slice(&[
+                scene.opaque_index_count / 3,
+                QUEUE_CAPACITY,
+                BLOCK_GROUPS,
+                0,
+            ]),
+        );
+        let group = pipeline::group(
+            d,
+            "shade.visibility_compute",
+            &self.layout,
+            &[
+                scene.vertices.as_entire_binding(),
+                scene.indices.as_entire_binding(),
+                keys.as_entire_binding(),
+                counts.as_entire_binding(),
+                queue.as_entire_binding(),
+                params.as_entire_binding(),
+            ],
+        );
+        let usage = wgpu::TextureUsages::STORAGE_BINDING
+            | wgpu::TextureUsages::TEXTURE_BINDING
+            | wgpu::TextureUsages::COPY_SRC;
+        let ids = pipeline::texture_2d(
+            d,
+            "visibility_compute.ids",
+            (w, h),
+            wgpu::TextureFormat::R32Uint,
+            usage,
+        );
+        let depth = pipeline::texture_2d(
+            d,
+            "visibility_compute.depth",
+            (w, h),
+            wgpu::TextureFormat::R32Float,
+            usage,
+        );
+        let resolve_group = pipeline::group(
+            d,
+            "shade.visibility_resolve",
+            &self.resolve_layout,
+            &[
+                keys.as_entire_binding(),
+                wgpu::BindingResource::TextureView(&ids.create_view(&Default::default())),
+                wgpu::BindingResource::TextureView(&depth.create_view(&Default::default())),
+            ],
+        );
+        ComputeTargets {
+            size: (w, h),
+            keys,
+            counts,
+            group,
+            resolve_group,
+            ids,
+            depth,
+        }
+    }
+
+    /// Encodes the pass over `t` (the scene's frame uniform set for its size): clears, the
+    /// triangles, the large ones' blocks, the resolve; timed as `shade.visibility_compute.*`.
+    pub fn encode(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scene: &GpuScene,
+        t: &ComputeTargets,
+    ) {
+        enc.clear_buffer(&t.keys, 0, None);
+        enc.clear_buffer(&t.counts, 0, None);
+        let triangles = scene.opaque_index_count / 3;
+        let g = [&scene.bind_group, &t.group];
+        pipeline::dispatch(
+            enc,
+            timer,
+            "shade.visibility_compute.triangles",
+            &self.triangles,
+            &g,
+            (triangles.div_ceil(64).max(1), 1),
+        );
+        pipeline::dispatch(
+            enc,
+            timer,
+            "shade.visibility_compute.blocks",
+            &self.blocks,
+            &g,
+            (BLOCK_GROUPS, 1),
+        );
+        let (w, h) = t.size;
+        pipeline::dispatch(
+            enc,
+            timer,
+            "shade.visibility_compute.resolve",
+            &self.resolve,
+            &[&scene.bind_group, &t.resolve_group],
+            (w.div_ceil(8), h.div_ceil(8)),
+        );
+    }
+
+    /// One frame of the pass, read back.
+    pub fn run(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        t: &ComputeTargets,
+    ) -> Result<ComputeFrame, GpuError> {
+        let mut enc = ctx.encoder("visibility_compute");
+        self.encode(&mut enc, &mut GpuTimer::untimed(), scene, t);
+        ctx.submit_and_wait(enc, "compute visibility")?;
+        let ids = readback::read_texture(ctx, &t.ids, wgpu::TextureAspect::All)?;
+        let depth = readback::read_texture(ctx, &t.depth, wgpu::TextureAspect::All)?;
+        let counts = readback::read_buffer(ctx, &t.counts, 0, 8)?;
+        let counts: &[u32] = bytemuck::cast_slice(&counts);
+        Ok(ComputeFrame {
+            ids: bytemuck::cast_slice(&ids).to_vec(),
+            depth: bytemuck::cast_slice(&depth).to_vec(),
+            dropped_blocks: counts[1],
+        })
+    }
+}
