@@ -370,6 +370,20 @@ fn visibility(c: &mut Criterion) {
             .unwrap();
         let cv = ComputeVisibility::new(&ctx, &gs).unwrap();
         let targets = cv.targets(&ctx, &gs, (w, h));
+        if std::env::var("MANYLIGHTS_BENCH_PASSES").is_ok_and(|v| v != "0") {
+            // Each pass of a few frames, printed: where the compute pass's time goes.
+            let mut timer = GpuTimer::new(&ctx, 64);
+            let mut enc = ctx.encoder("bench.visibility_compute.passes");
+            for _ in 0..4 {
+                cv.encode(&mut enc, &mut timer, &gs, &targets);
+            }
+            timer.resolve(&mut enc);
+            ctx.submit_and_wait(enc, "bench visibility compute passes")
+                .unwrap();
+            for p in timer.read(&ctx).unwrap().expect("timestamps") {
+                eprintln!("{name} {w}x{h} {} {:.1} us", p.label, p.ms * 1e3);
+            }
+        }
         let timed = |runs: u64, compute: bool| -> f64 {
             let mut timer = GpuTimer::spans(&ctx, runs as u32).expect("timestamps between passes");
             if compute {
