@@ -3,7 +3,8 @@
 // into a 64-bit key a pixel, (0xffffffff - depth bits) << 32 | id, by atomicMax: the nearest
 // depth wins, equal depths the larger id (deterministic); 0, the clear value, is no triangle.
 // A thread a triangle clips it against the near plane (at most two triangles), rasterises a
-// small one itself and hands a large one to vis_blocks as 32 x 32-pixel blocks. Coverage: pixel
+// small one itself and queues a large one, set up, for vis_blocks, whose workgroups share out
+// its 32 x 32-pixel blocks. Coverage: pixel
 // centres inside the edges, ties by the top-left rule, in f32 on unsnapped vertices (the
 // hardware snaps them to 1/256 pixel, so edge pixels may differ). Depth: NDC z interpolated
 // linearly in screen space, as the hardware's.
@@ -11,10 +12,12 @@
 @group(1) @binding(0) var<storage, read> vc_vertices: array<u32>;
 @group(1) @binding(1) var<storage, read> vc_indices: array<u32>;
 @group(1) @binding(2) var<storage, read_write> vc_keys: array<atomic<u64>>;
-// (count of blocks, blocks dropped past the queue); the queue: (triangle * 2 + part, block x, block y).
+// (large triangles queued, unused); the queue: four vec4 an entry, each vertex's screen
+// position and depth (w: the doubled area, the id's bits, 0), then its rectangle in blocks
+// (x0, y0, width, height, as bits). Two entries a triangle at most: it cannot overflow.
 @group(1) @binding(3) var<storage, read_write> vc_queue_count: array<atomic<u32>, 2>;
-@group(1) @binding(4) var<storage, read_write> vc_queue: array<vec4<u32>>;
-// x: opaque triangles; y: queue capacity; z: blocks' workgroups.
+@group(1) @binding(4) var<storage, read_write> vc_queue: array<vec4<f32>>;
+// x: opaque triangles; y: queue capacity (entries); z: blocks' workgroups.
 @group(1) @binding(5) var<uniform> vc_params: vec4<u32>;
 
 const VC_BLOCK: u32 = 32u;
@@ -164,40 +167,73 @@ fn vis_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             continue;
         }
-        // The blocks of its rectangle, to vis_blocks.
+        // Set up once, for vis_blocks.
         let b0 = r.xy / VC_BLOCK;
         let b1 = (r.zw + VC_BLOCK - 1u) / VC_BLOCK;
-        let n = (b1.x - b0.x) * (b1.y - b0.y);
-        let first = atomicAdd(&vc_queue_count[0], n);
-        for (var k = 0u; k < n; k++) {
-            let e = first + k;
-            if e >= vc_params.y {
-                atomicAdd(&vc_queue_count[1], 1u);
+        let e = atomicAdd(&vc_queue_count[0], 1u);
+        if e >= vc_params.y {
+            atomicAdd(&vc_queue_count[1], 1u);
+            continue;
+        }
+        vc_queue[4u * e] = vec4<f32>(s.p[0], area);
+        vc_queue[4u * e + 1u] = vec4<f32>(s.p[1], bitcast<f32>(t + 1u));
+        vc_queue[4u * e + 2u] = vec4<f32>(s.p[2], 0.0);
+        vc_queue[4u * e + 3u] = bitcast<vec4<f32>>(vec4<u32>(b0, b1 - b0));
+    }
+}
+
+// The queued triangles' blocks shared out over vc_params.z workgroups: each workgroup walks
+// every entry and takes its blocks k = (workgroup - entry) mod G, G apart, skipping those that
+// lie outside an edge; each of its 256 threads tests four of a block's 1,024 pixels.
+@compute @workgroup_size(256)
+fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let count = min(atomicLoad(&vc_queue_count[0]), vc_params.y);
+    let groups = vc_params.z;
+    for (var e = 0u; e < count; e++) {
+        let rect = bitcast<vec4<u32>>(vc_queue[4u * e + 3u]);
+        let n = rect.z * rect.w;
+        var k = (wg.x + groups - e % groups) % groups;
+        if k >= n {
+            continue;
+        }
+        let q0 = vc_queue[4u * e];
+        let q1 = vc_queue[4u * e + 1u];
+        var s: ScreenTri;
+        s.p[0] = q0.xyz;
+        s.p[1] = q1.xyz;
+        s.p[2] = vc_queue[4u * e + 2u].xyz;
+        s.valid = true;
+        let area = q0.w;
+        let id = bitcast<u32>(q1.w);
+        let r = vc_rect(s);
+        for (; k < n; k += groups) {
+            let block = rect.xy + vec2<u32>(k % rect.z, k / rect.z);
+            let lo = vec2<f32>(block * VC_BLOCK) + 0.5;
+            let hi = lo + f32(VC_BLOCK - 1u);
+            if vc_block_outside(s, lo, hi) {
                 continue;
             }
-            let bw = b1.x - b0.x;
-            vc_queue[e] = vec4<u32>(t * 2u + part, b0.x + k % bw, b0.y + k / bw, 0u);
+            for (var j = li; j < VC_BLOCK * VC_BLOCK; j += 256u) {
+                let x = block.x * VC_BLOCK + j % VC_BLOCK;
+                let y = block.y * VC_BLOCK + j / VC_BLOCK;
+                if x >= r.x && x < r.z && y >= r.y && y < r.w {
+                    vc_pixel(s, area, x, y, id);
+                }
+            }
         }
     }
 }
 
-// A workgroup a block at a time over the queue (vc_params.z workgroups, each taking every
-// vc_params.z-th entry): each of its 256 threads tests four of the block's 1,024 pixels.
-@compute @workgroup_size(256)
-fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let count = min(atomicLoad(&vc_queue_count[0]), vc_params.y);
-    for (var e = wg.x; e < count; e += vc_params.z) {
-        let q = vc_queue[e];
-        let t = q.x / 2u;
-        let s = vc_wound(vc_part(vc_clip(t), q.x % 2u));
-        let area = vc_edge(s.p[0].xy, s.p[1].xy, s.p[2].xy);
-        let r = vc_rect(s);
-        for (var k = li; k < VC_BLOCK * VC_BLOCK; k += 256u) {
-            let x = q.y * VC_BLOCK + k % VC_BLOCK;
-            let y = q.z * VC_BLOCK + k / VC_BLOCK;
-            if x >= r.x && x < r.z && y >= r.y && y < r.w {
-                vc_pixel(s, area, x, y, t + 1u);
-            }
+// Whether every pixel centre of the rectangle lo..hi lies strictly outside one of s's edges (a
+// block to skip: the edge function is below 0 at all four corners).
+fn vc_block_outside(s: ScreenTri, lo: vec2<f32>, hi: vec2<f32>) -> bool {
+    for (var i = 0u; i < 3u; i++) {
+        let a = s.p[(i + 1u) % 3u].xy;
+        let b = s.p[(i + 2u) % 3u].xy;
+        let m = max(max(vc_edge(a, b, lo), vc_edge(a, b, hi)), max(vc_edge(a, b, vec2<f32>(lo.x, hi.y)), vc_edge(a, b, vec2<f32>(hi.x, lo.y))));
+        if m < 0.0 {
+            return true;
         }
     }
+    return false;
 }

@@ -173,7 +173,7 @@ fn an_index_buffer_past_the_binding_limit_is_an_error() {
 /// unsnapped ones differ; measured 99.4-100%), the same NDC depth to 1e-3 where they agree
 /// (measured: 1.3e-5 on `pillars`, 3.7e-4 on `atrium`, whose triangles cut by the near plane
 /// project far off the screen, where f32 edge functions lose bits), and no large triangle's
-/// block dropped; at 320 x 180 large triangles take the blocks' path.
+/// triangle dropped; at 320 x 180 large triangles take the blocks' path.
 #[test]
 fn the_compute_visibility_pass_matches_the_hardware_pass() {
     use manylights_shade::vis_compute::ComputeVisibility;
@@ -206,7 +206,7 @@ fn the_compute_visibility_pass_matches_the_hardware_pass() {
             let cv = ComputeVisibility::new(&ctx, &gpu_scene).unwrap();
             let t = cv.targets(&ctx, &gpu_scene, (w, h));
             let f = cv.run(&ctx, &gpu_scene, &t).unwrap();
-            assert_eq!(f.dropped_blocks, 0, "{what}");
+            assert_eq!(f.dropped, 0, "{what}");
             let n = ids.len();
             let same = (0..n).filter(|&k| ids[k] == f.ids[k]).count();
             assert!(same * 100 >= n * 99, "{what}: {same} of {n} ids agree");

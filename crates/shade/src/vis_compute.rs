@@ -1,7 +1,7 @@
 //! The visibility pass rasterised in compute (issue 49's item 4; a building block, not yet a
 //! backend's pass): `shade.visibility_compute` keeps each pixel's nearest opaque triangle in a
-//! 64-bit key by atomic max (a thread a triangle, clipped against the near plane; large ones a
-//! workgroup a 32 x 32 block), and `shade.visibility_resolve` writes the ids (as
+//! 64-bit key by atomic max (a thread a triangle, clipped against the near plane; large ones
+//! set up once and their 32 x 32 blocks shared out over the workgroups), and `shade.visibility_resolve` writes the ids (as
 //! `shade.visibility` does: the triangle's index plus one, 0 for none) and NDC depths. It needs
 //! 64-bit atomic max on storage buffers (`SHADER_INT64_ATOMIC_MIN_MAX`; lavapipe and NVIDIA
 //! have it). Tested against the hardware pass's ids and depths (tests/shade/visibility.rs).
@@ -27,8 +27,6 @@ pub const VISIBILITY_RESOLVE: ShaderDef = ShaderDef {
     files: &[FRAME, shader_file!("render/visibility_resolve.wgsl")],
 };
 
-/// Queue entries for large triangles' 32 x 32 blocks; past them blocks are dropped and counted.
-pub const QUEUE_CAPACITY: u32 = 1 << 20;
 /// Workgroups of the blocks' pass, each taking every this-many-th entry.
 const BLOCK_GROUPS: u32 = 2048;
 
@@ -55,14 +53,14 @@ pub struct ComputeTargets {
 }
 
 /// What the compute visibility pass wrote, read back: ids and depths a pixel (rows from the top)
-/// and the large triangles' blocks dropped past the queue (0 unless the queue overflowed).
+/// and the large triangles dropped past the queue (none: it holds both parts of every triangle).
 pub struct ComputeFrame {
     /// Triangle ids (index plus one, 0 for none).
     pub ids: Vec<u32>,
     /// NDC depths (1 for none).
     pub depth: Vec<f32>,
-    /// Large triangles' blocks dropped past the queue.
-    pub dropped_blocks: u32,
+    /// Large triangles dropped past the queue.
+    pub dropped: u32,
 }
 
 impl ComputeVisibility {
@@ -144,20 +142,13 @@ impl ComputeVisibility {
             rw,
         );
         let counts = buf("visibility_compute.counts", 8, rw);
-        let queue = buf(
-            "visibility_compute.queue",
-            u64::from(QUEUE_CAPACITY) * 16,
-            rw,
-        );
+        // Two entries a triangle (its near-plane parts) of 64 bytes: the queue cannot overflow.
+        let capacity = 2 * (scene.opaque_index_count / 3).max(1);
+        let queue = buf("visibility_compute.queue", u64::from(capacity) * 64, rw);
         let params = pipeline::uniform_buffer(
             d,
             "visibility_compute.params",
-            bytemuck::cast_slice(&[
-                scene.opaque_index_count / 3,
-                QUEUE_CAPACITY,
-                BLOCK_GROUPS,
-                0,
-            ]),
+            bytemuck::cast_slice(&[scene.opaque_index_count / 3, capacity, BLOCK_GROUPS, 0]),
         );
         let group = pipeline::group(
             d,
@@ -267,7 +258,7 @@ impl ComputeVisibility {
         Ok(ComputeFrame {
             ids: bytemuck::cast_slice(&ids).to_vec(),
             depth: bytemuck::cast_slice(&depth).to_vec(),
-            dropped_blocks: counts[1],
+            dropped: counts[1],
         })
     }
 }
