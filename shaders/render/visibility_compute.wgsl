@@ -3,8 +3,8 @@
 // into a 64-bit key a pixel, (0xffffffff - depth bits) << 32 | id, by atomicMax: the nearest
 // depth wins, equal depths the larger id (deterministic); 0, the clear value, is no triangle.
 // A thread a triangle clips it against the near plane (at most two triangles), rasterises a
-// small one itself and queues a large one, set up, for vis_blocks, whose workgroups share out
-// its 32 x 32-pixel blocks. Coverage: pixel
+// small one itself and queues a large one, set up; vis_scan numbers the queued triangles'
+// 32 x 32-pixel blocks and vis_blocks takes them a workgroup a block. Coverage: pixel
 // centres inside the edges, ties by the top-left rule, in f32 on unsnapped vertices (the
 // hardware snaps them to 1/256 pixel, so edge pixels may differ). Depth: NDC z interpolated
 // linearly in screen space, as the hardware's.
@@ -19,6 +19,9 @@
 @group(1) @binding(4) var<storage, read_write> vc_queue: array<vec4<f32>>;
 // x: opaque triangles; y: queue capacity (entries); z: blocks' workgroups.
 @group(1) @binding(5) var<uniform> vc_params: vec4<u32>;
+// The queued triangles' first block each in one numbering of all their blocks (vis_scan), and
+// after the last entry the blocks' count.
+@group(1) @binding(6) var<storage, read_write> vc_first: array<u32>;
 
 const VC_BLOCK: u32 = 32u;
 // Larger bounding boxes (pixels) go to the blocks.
@@ -182,20 +185,69 @@ fn vis_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 }
 
-// The queued triangles' blocks shared out over vc_params.z workgroups: each workgroup walks
-// every entry and takes its blocks k = (workgroup - entry) mod G, G apart, skipping those that
-// lie outside an edge; each of its 256 threads tests four of a block's 1,024 pixels.
+var<workgroup> wg_sums: array<u32, 256>;
+
+// The entry's blocks.
+fn vc_blocks_of(e: u32) -> u32 {
+    let rect = bitcast<vec4<u32>>(vc_queue[4u * e + 3u]);
+    return rect.z * rect.w;
+}
+
+// One workgroup numbers the queued triangles' blocks: each thread sums a run of entries, the
+// workgroup scans the sums, and each thread writes its entries' first blocks.
+@compute @workgroup_size(256)
+fn vis_scan(@builtin(local_invocation_index) li: u32) {
+    let count = min(atomicLoad(&vc_queue_count[0]), vc_params.y);
+    let run = (count + 255u) / 256u;
+    let start = min(li * run, count);
+    let end = min(start + run, count);
+    var sum = 0u;
+    for (var e = start; e < end; e++) {
+        sum += vc_blocks_of(e);
+    }
+    wg_sums[li] = sum;
+    workgroupBarrier();
+    for (var d = 1u; d < 256u; d *= 2u) {
+        var add = 0u;
+        if li >= d {
+            add = wg_sums[li - d];
+        }
+        workgroupBarrier();
+        wg_sums[li] += add;
+        workgroupBarrier();
+    }
+    var first = wg_sums[li] - sum;
+    for (var e = start; e < end; e++) {
+        vc_first[e] = first;
+        first += vc_blocks_of(e);
+    }
+    if li == 255u {
+        vc_first[count] = wg_sums[255];
+    }
+}
+
+// Every queued triangle's blocks, a block at a time over vc_params.z workgroups (block b the
+// (b - first)-th of the entry whose first block is the last at or before b, found by bisection);
+// blocks outside an edge are skipped; each of the 256 threads tests four of a block's 1,024
+// pixels.
 @compute @workgroup_size(256)
 fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let count = min(atomicLoad(&vc_queue_count[0]), vc_params.y);
-    let groups = vc_params.z;
-    for (var e = 0u; e < count; e++) {
-        let rect = bitcast<vec4<u32>>(vc_queue[4u * e + 3u]);
-        let n = rect.z * rect.w;
-        var k = (wg.x + groups - e % groups) % groups;
-        if k >= n {
-            continue;
+    let total = vc_first[count];
+    for (var b = wg.x; b < total; b += vc_params.z) {
+        var lo = 0u;
+        var hi = count;
+        while hi - lo > 1u {
+            let mid = (lo + hi) / 2u;
+            if vc_first[mid] <= b {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
+        let e = lo;
+        let rect = bitcast<vec4<u32>>(vc_queue[4u * e + 3u]);
+        let k = b - vc_first[e];
         let q0 = vc_queue[4u * e];
         let q1 = vc_queue[4u * e + 1u];
         var s: ScreenTri;
@@ -203,22 +255,18 @@ fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_in
         s.p[1] = q1.xyz;
         s.p[2] = vc_queue[4u * e + 2u].xyz;
         s.valid = true;
-        let area = q0.w;
-        let id = bitcast<u32>(q1.w);
+        let block = rect.xy + vec2<u32>(k % rect.z, k / rect.z);
+        let corner = vec2<f32>(block * VC_BLOCK) + 0.5;
+        if vc_block_outside(s, corner, corner + f32(VC_BLOCK - 1u)) {
+            continue;
+        }
         let r = vc_rect(s);
-        for (; k < n; k += groups) {
-            let block = rect.xy + vec2<u32>(k % rect.z, k / rect.z);
-            let lo = vec2<f32>(block * VC_BLOCK) + 0.5;
-            let hi = lo + f32(VC_BLOCK - 1u);
-            if vc_block_outside(s, lo, hi) {
-                continue;
-            }
-            for (var j = li; j < VC_BLOCK * VC_BLOCK; j += 256u) {
-                let x = block.x * VC_BLOCK + j % VC_BLOCK;
-                let y = block.y * VC_BLOCK + j / VC_BLOCK;
-                if x >= r.x && x < r.z && y >= r.y && y < r.w {
-                    vc_pixel(s, area, x, y, id);
-                }
+        let id = bitcast<u32>(q1.w);
+        for (var j = li; j < VC_BLOCK * VC_BLOCK; j += 256u) {
+            let x = block.x * VC_BLOCK + j % VC_BLOCK;
+            let y = block.y * VC_BLOCK + j / VC_BLOCK;
+            if x >= r.x && x < r.z && y >= r.y && y < r.w {
+                vc_pixel(s, q0.w, x, y, id);
             }
         }
     }

@@ -1,7 +1,8 @@
 //! The visibility pass rasterised in compute (issue 49's item 4; a building block, not yet a
 //! backend's pass): `shade.visibility_compute` keeps each pixel's nearest opaque triangle in a
 //! 64-bit key by atomic max (a thread a triangle, clipped against the near plane; large ones
-//! set up once and their 32 x 32 blocks shared out over the workgroups), and `shade.visibility_resolve` writes the ids (as
+//! set up once, their 32 x 32 blocks numbered by one workgroup's scan and taken a workgroup a
+//! block), and `shade.visibility_resolve` writes the ids (as
 //! `shade.visibility` does: the triangle's index plus one, 0 for none) and NDC depths. It needs
 //! 64-bit atomic max on storage buffers (`SHADER_INT64_ATOMIC_MIN_MAX`; lavapipe and NVIDIA
 //! have it). Tested against the hardware pass's ids and depths (tests/shade/visibility.rs).
@@ -35,6 +36,7 @@ pub struct ComputeVisibility {
     layout: wgpu::BindGroupLayout,
     resolve_layout: wgpu::BindGroupLayout,
     triangles: wgpu::ComputePipeline,
+    scan: wgpu::ComputePipeline,
     blocks: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
 }
@@ -85,6 +87,7 @@ impl ComputeVisibility {
                 pipeline::entry(3, c, storage(false)),
                 pipeline::entry(4, c, storage(false)),
                 pipeline::entry(5, c, UNIFORM),
+                pipeline::entry(6, c, storage(false)),
             ],
         });
         let storage_texture = |format| wgpu::BindingType::StorageTexture {
@@ -110,6 +113,7 @@ impl ComputeVisibility {
         );
         Ok(Self {
             triangles: pipeline::compute(d, &module, &pl, "vis_triangles"),
+            scan: pipeline::compute(d, &module, &pl, "vis_scan"),
             blocks: pipeline::compute(d, &module, &pl, "vis_blocks"),
             resolve: pipeline::compute(d, &resolve_module, &rpl, "vis_resolve"),
             layout,
@@ -145,6 +149,7 @@ impl ComputeVisibility {
         // Two entries a triangle (its near-plane parts) of 64 bytes: the queue cannot overflow.
         let capacity = 2 * (scene.opaque_index_count / 3).max(1);
         let queue = buf("visibility_compute.queue", u64::from(capacity) * 64, rw);
+        let first = buf("visibility_compute.first", u64::from(capacity + 1) * 4, rw);
         let params = pipeline::uniform_buffer(
             d,
             "visibility_compute.params",
@@ -161,6 +166,7 @@ impl ComputeVisibility {
                 counts.as_entire_binding(),
                 queue.as_entire_binding(),
                 params.as_entire_binding(),
+                first.as_entire_binding(),
             ],
         );
         let usage = wgpu::TextureUsages::STORAGE_BINDING
@@ -221,6 +227,14 @@ impl ComputeVisibility {
             &self.triangles,
             &g,
             (triangles.div_ceil(64).max(1), 1),
+        );
+        pipeline::dispatch(
+            enc,
+            timer,
+            "shade.visibility_compute.scan",
+            &self.scan,
+            &g,
+            (1, 1),
         );
         pipeline::dispatch(
             enc,
