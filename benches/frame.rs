@@ -341,7 +341,7 @@ fn cull_shade(c: &mut Criterion) {
 /// hardware pass, `shade.visibility`; `_compute`: `manylights_shade::vis_compute`, its clears
 /// included), back to back in one submission: what issue 49's item 4 weighs.
 fn visibility(c: &mut Criterion) {
-    use manylights_shade::vis_compute::ComputeVisibility;
+    use manylights_shade::vis_compute::{ComputeVisibility, Tiling};
     let ctx = gpu();
     let mut g = c.benchmark_group("frame.visibility");
     configure(&mut g);
@@ -368,56 +368,72 @@ fn visibility(c: &mut Criterion) {
                 (w, h),
             )
             .unwrap();
-        let cv = ComputeVisibility::new(&ctx, &gs).unwrap();
-        let targets = cv.targets(&ctx, &gs, (w, h));
-        if std::env::var("MANYLIGHTS_BENCH_PASSES").is_ok_and(|v| v != "0") {
-            // Each pass of a few frames, printed: where the compute pass's time goes.
-            let mut timer = GpuTimer::new(&ctx, 64);
-            let mut enc = ctx.encoder("bench.visibility_compute.passes");
-            for _ in 0..4 {
-                cv.encode(&mut enc, &mut timer, &gs, &targets);
-            }
-            timer.resolve(&mut enc);
-            ctx.submit_and_wait(enc, "bench visibility compute passes")
-                .unwrap();
-            for p in timer.read(&ctx).unwrap().expect("timestamps") {
-                eprintln!("{name} {w}x{h} {} {:.1} us", p.label, p.ms * 1e3);
-            }
-        }
-        let timed = |runs: u64, compute: bool| -> f64 {
-            let mut timer = GpuTimer::spans(&ctx, runs as u32).expect("timestamps between passes");
-            if compute {
-                let mut enc = ctx.encoder("bench.visibility_compute");
-                for _ in 0..runs {
-                    timer.span_begin(&mut enc, "visibility_compute");
+        let tilings = [(32, 256), (16, 64), (16, 16), (8, 16)];
+        for (block, small) in tilings {
+            let cv = ComputeVisibility::with_tiling(&ctx, &gs, Tiling { block, small }).unwrap();
+            let targets = cv.targets(&ctx, &gs, (w, h));
+            if std::env::var("MANYLIGHTS_BENCH_PASSES").is_ok_and(|v| v != "0") {
+                // Each pass of a few frames, printed: where the compute pass's time goes.
+                let mut timer = GpuTimer::new(&ctx, 64);
+                let mut enc = ctx.encoder("bench.visibility_compute.passes");
+                for _ in 0..4 {
                     cv.encode(&mut enc, &mut timer, &gs, &targets);
                 }
-                timer.span_end(&mut enc);
                 timer.resolve(&mut enc);
-                ctx.submit_and_wait(enc, "bench visibility compute")
+                ctx.submit_and_wait(enc, "bench visibility compute passes")
                     .unwrap();
-            } else {
-                renderer
-                    .geometry_repeated(&ctx, &gs, &out, runs as u32, &mut timer)
-                    .unwrap();
+                for p in timer.read(&ctx).unwrap().expect("timestamps") {
+                    eprintln!(
+                        "{name} {w}x{h} b{block} s{small} {} {:.1} us",
+                        p.label,
+                        p.ms * 1e3
+                    );
+                }
             }
-            let t = timer.read(&ctx).unwrap().expect("timestamps");
-            t.iter().map(|p| p.ms).sum::<f64>()
-        };
-        for (kind, compute) in [("raster", false), ("compute", true)] {
-            let id = BenchmarkId::new(format!("{name}_{kind}"), format!("{w}x{h}"));
-            g.bench_function(id, |b| {
-                b.iter_custom(|iters| {
-                    let mut total = 0.0;
-                    let mut left = iters;
-                    while left > 0 {
-                        let runs = left.min(64);
-                        total += timed(runs, compute);
-                        left -= runs;
+            let timed = |runs: u64, compute: bool| -> f64 {
+                let mut timer =
+                    GpuTimer::spans(&ctx, runs as u32).expect("timestamps between passes");
+                if compute {
+                    let mut enc = ctx.encoder("bench.visibility_compute");
+                    for _ in 0..runs {
+                        timer.span_begin(&mut enc, "visibility_compute");
+                        cv.encode(&mut enc, &mut timer, &gs, &targets);
                     }
-                    Duration::from_secs_f64(total * 1e-3)
-                })
-            });
+                    timer.span_end(&mut enc);
+                    timer.resolve(&mut enc);
+                    ctx.submit_and_wait(enc, "bench visibility compute")
+                        .unwrap();
+                } else {
+                    renderer
+                        .geometry_repeated(&ctx, &gs, &out, runs as u32, &mut timer)
+                        .unwrap();
+                }
+                let t = timer.read(&ctx).unwrap().expect("timestamps");
+                t.iter().map(|p| p.ms).sum::<f64>()
+            };
+            for (kind, compute) in [("raster", false), ("compute", true)] {
+                if !compute && (block, small) != tilings[0] {
+                    continue;
+                }
+                let kind = if compute {
+                    format!("compute_b{block}_s{small}")
+                } else {
+                    kind.to_owned()
+                };
+                let id = BenchmarkId::new(format!("{name}_{kind}"), format!("{w}x{h}"));
+                g.bench_function(id, |b| {
+                    b.iter_custom(|iters| {
+                        let mut total = 0.0;
+                        let mut left = iters;
+                        while left > 0 {
+                            let runs = left.min(64);
+                            total += timed(runs, compute);
+                            left -= runs;
+                        }
+                        Duration::from_secs_f64(total * 1e-3)
+                    })
+                });
+            }
         }
     }
     g.finish();

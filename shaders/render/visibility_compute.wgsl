@@ -23,9 +23,9 @@
 // after the last entry the blocks' count.
 @group(1) @binding(6) var<storage, read_write> vc_first: array<u32>;
 
-const VC_BLOCK: u32 = 32u;
+override VC_BLOCK: u32 = 32u;
 // Larger bounding boxes (pixels) go to the blocks.
-const VC_SMALL: u32 = 256u;
+override VC_SMALL: u32 = 256u;
 
 struct ScreenTri {
     // xy: pixel coordinates (y down), z: NDC depth, for each vertex.

@@ -173,10 +173,11 @@ fn an_index_buffer_past_the_binding_limit_is_an_error() {
 /// unsnapped ones differ; measured 99.4-100%), the same NDC depth to 1e-3 where they agree
 /// (measured: 1.3e-5 on `pillars`, 3.7e-4 on `atrium`, whose triangles cut by the near plane
 /// project far off the screen, where f32 edge functions lose bits), and no large triangle's
-/// triangle dropped; at 320 x 180 large triangles take the blocks' path.
+/// triangle dropped; at 320 x 180 large triangles take the blocks' path; another tiling (8-pixel
+/// blocks, 16-pixel small triangles) gives the same frame.
 #[test]
 fn the_compute_visibility_pass_matches_the_hardware_pass() {
-    use manylights_shade::vis_compute::ComputeVisibility;
+    use manylights_shade::vis_compute::{ComputeVisibility, Tiling};
     let ctx = common::gpu();
     for name in ["atrium", "pillars"] {
         let s = scene(name);
@@ -206,6 +207,23 @@ fn the_compute_visibility_pass_matches_the_hardware_pass() {
             let cv = ComputeVisibility::new(&ctx, &gpu_scene).unwrap();
             let t = cv.targets(&ctx, &gpu_scene, (w, h));
             let f = cv.run(&ctx, &gpu_scene, &t).unwrap();
+            // Other tilings give the same frame (they share out the same keys).
+            let other = ComputeVisibility::with_tiling(
+                &ctx,
+                &gpu_scene,
+                Tiling {
+                    block: 8,
+                    small: 16,
+                },
+            )
+            .unwrap();
+            let o = other
+                .run(&ctx, &gpu_scene, &other.targets(&ctx, &gpu_scene, (w, h)))
+                .unwrap();
+            assert!(
+                o.ids == f.ids && o.depth == f.depth,
+                "{what}: another tiling's frame differs"
+            );
             assert_eq!(f.dropped, 0, "{what}");
             let n = ids.len();
             let same = (0..n).filter(|&k| ids[k] == f.ids[k]).count();

@@ -31,6 +31,24 @@ pub const VISIBILITY_RESOLVE: ShaderDef = ShaderDef {
 /// Workgroups of the blocks' pass, each taking every this-many-th entry.
 const BLOCK_GROUPS: u32 = 2048;
 
+/// How the compute visibility pass shares out its triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tiling {
+    /// A large triangle's blocks' side, pixels (a workgroup a block).
+    pub block: u32,
+    /// The largest bounding box, pixels, that a triangle's own thread rasterises.
+    pub small: u32,
+}
+
+impl Default for Tiling {
+    fn default() -> Self {
+        Self {
+            block: 32,
+            small: 256,
+        }
+    }
+}
+
 /// The pipelines of the compute visibility pass.
 pub struct ComputeVisibility {
     layout: wgpu::BindGroupLayout,
@@ -69,6 +87,15 @@ impl ComputeVisibility {
     /// The pipelines for scenes laid out as `scene`; an error where the device lacks 64-bit
     /// atomic max.
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Result<Self, GpuError> {
+        Self::with_tiling(ctx, scene, Tiling::default())
+    }
+
+    /// [`ComputeVisibility::new`] with the blocks and the small triangles' bound of `tiling`.
+    pub fn with_tiling(
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        tiling: Tiling,
+    ) -> Result<Self, GpuError> {
         if !ctx.features.int64_atomics {
             return Err(GpuError::Unsupported(format!(
                 "the compute visibility pass needs 64-bit atomic max on storage buffers (wgpu \
@@ -111,10 +138,19 @@ impl ComputeVisibility {
             "shade.visibility_resolve",
             &[&scene.layout, &resolve_layout],
         );
+        let constants = [
+            ("VC_BLOCK", f64::from(tiling.block)),
+            ("VC_SMALL", f64::from(tiling.small)),
+        ];
+        let options = wgpu::PipelineCompilationOptions {
+            constants: &constants,
+            ..Default::default()
+        };
+        let compute = |entry| pipeline::compute_with(d, &module, &pl, entry, &options);
         Ok(Self {
-            triangles: pipeline::compute(d, &module, &pl, "vis_triangles"),
-            scan: pipeline::compute(d, &module, &pl, "vis_scan"),
-            blocks: pipeline::compute(d, &module, &pl, "vis_blocks"),
+            triangles: compute("vis_triangles"),
+            scan: compute("vis_scan"),
+            blocks: compute("vis_blocks"),
             resolve: pipeline::compute(d, &resolve_module, &rpl, "vis_resolve"),
             layout,
             resolve_layout,
