@@ -368,7 +368,7 @@ fn visibility(c: &mut Criterion) {
                 (w, h),
             )
             .unwrap();
-        let tilings = [(32, 256), (16, 64), (16, 16), (8, 16)];
+        let tilings = [(64, 256), (32, 256), (64, 1024), (128, 1024)];
         for (block, small) in tilings {
             let cv = ComputeVisibility::with_tiling(&ctx, &gs, Tiling { block, small }).unwrap();
             let targets = cv.targets(&ctx, &gs, (w, h));

@@ -4,7 +4,7 @@
 // depth wins, equal depths the larger id (deterministic); 0, the clear value, is no triangle.
 // A thread a triangle clips it against the near plane (at most two triangles), rasterises a
 // small one itself and queues a large one, set up; vis_scan numbers the queued triangles'
-// 32 x 32-pixel blocks and vis_blocks takes them a workgroup a block. Coverage: pixel
+// VC_BLOCK-pixel square blocks and vis_blocks takes them a workgroup a block. Coverage: pixel
 // centres inside the edges, ties by the top-left rule, in f32 on unsnapped vertices (the
 // hardware snaps them to 1/256 pixel, so edge pixels may differ). Depth: NDC z interpolated
 // linearly in screen space, as the hardware's.
@@ -23,7 +23,7 @@
 // after the last entry the blocks' count.
 @group(1) @binding(6) var<storage, read_write> vc_first: array<u32>;
 
-override VC_BLOCK: u32 = 32u;
+override VC_BLOCK: u32 = 64u;
 // Larger bounding boxes (pixels) go to the blocks.
 override VC_SMALL: u32 = 256u;
 
@@ -228,8 +228,7 @@ fn vis_scan(@builtin(local_invocation_index) li: u32) {
 
 // Every queued triangle's blocks, a block at a time over vc_params.z workgroups (block b the
 // (b - first)-th of the entry whose first block is the last at or before b, found by bisection);
-// blocks outside an edge are skipped; each of the 256 threads tests four of a block's 1,024
-// pixels.
+// blocks outside an edge are skipped; each of the 256 threads tests VC_BLOCK^2 / 256 of its pixels.
 @compute @workgroup_size(256)
 fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let count = min(atomicLoad(&vc_queue_count[0]), vc_params.y);
