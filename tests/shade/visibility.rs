@@ -92,6 +92,33 @@ fn triangle_ids_give_the_rasterised_surface() {
     );
 }
 
+/// A small frame of `name` (32 x 24): its scene on the GPU and a renderer for it.
+fn small_frame(ctx: &manylights_gpu::GpuContext, name: &str) -> (GpuScene, Renderer, CullSettings) {
+    let s = scene(name);
+    let gpu_scene = GpuScene::upload(ctx, &s, &s.camera, 32, 24).unwrap();
+    let renderer = Renderer::new(ctx, &gpu_scene);
+    (gpu_scene, renderer, CullSettings::for_camera(&s.camera))
+}
+
+/// `backend`'s frame of `small_frame`, or its error in words.
+fn small_render(
+    ctx: &manylights_gpu::GpuContext,
+    (gpu_scene, renderer, settings): &(GpuScene, Renderer, CullSettings),
+    backend: Backend,
+) -> Result<(), String> {
+    renderer
+        .render(
+            ctx,
+            gpu_scene,
+            backend,
+            &Strategy::tiled_gather(16),
+            settings,
+            (32, 24),
+        )
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
 /// Where the device lacks `@builtin(primitive_index)`, the visibility backend is an error that
 /// names the feature and the adapter, and the other backends still render.
 #[test]
@@ -102,38 +129,14 @@ fn visibility_without_primitive_index_is_an_error() {
         "lavapipe and NVIDIA offer PRIMITIVE_INDEX: the visibility backend's tests need it"
     );
     ctx.features.primitive_index = false;
-    let s = scene("atrium");
-    let (w, h) = (32, 24);
-    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    let renderer = Renderer::new(&ctx, &gpu_scene);
-    let settings = CullSettings::for_camera(&s.camera);
-    let strategy = Strategy::tiled_gather(16);
-    let err = renderer
-        .render(
-            &ctx,
-            &gpu_scene,
-            Backend::Visibility,
-            &strategy,
-            &settings,
-            (w, h),
-        )
-        .err()
-        .expect("visibility without PRIMITIVE_INDEX")
-        .to_string();
+    let frame = small_frame(&ctx, "atrium");
+    let err = small_render(&ctx, &frame, Backend::Visibility)
+        .expect_err("visibility without PRIMITIVE_INDEX");
     assert!(
         err.contains("PRIMITIVE_INDEX") && err.contains(&ctx.info.name),
         "{err}"
     );
-    renderer
-        .render(
-            &ctx,
-            &gpu_scene,
-            Backend::Deferred,
-            &strategy,
-            &settings,
-            (w, h),
-        )
-        .unwrap();
+    small_render(&ctx, &frame, Backend::Deferred).unwrap();
 }
 
 /// The visibility buffer's lighting binds the scene's index buffer as one storage buffer: where
@@ -142,25 +145,10 @@ fn visibility_without_primitive_index_is_an_error() {
 #[test]
 fn an_index_buffer_past_the_binding_limit_is_an_error() {
     let mut ctx = common::gpu();
-    let s = scene("pillars");
-    let (w, h) = (32, 24);
-    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    let renderer = Renderer::new(&ctx, &gpu_scene);
-    let settings = CullSettings::for_camera(&s.camera);
-    let strategy = Strategy::tiled_gather(16);
-    ctx.limits.max_storage_buffer_binding_size = gpu_scene.indices.size() - 4;
-    let err = renderer
-        .render(
-            &ctx,
-            &gpu_scene,
-            Backend::Visibility,
-            &strategy,
-            &settings,
-            (w, h),
-        )
-        .err()
-        .expect("an index buffer past the limit")
-        .to_string();
+    let frame = small_frame(&ctx, "pillars");
+    ctx.limits.max_storage_buffer_binding_size = frame.0.indices.size() - 4;
+    let err = small_render(&ctx, &frame, Backend::Visibility)
+        .expect_err("an index buffer past the limit");
     assert!(
         err.contains("index buffer bytes") && err.contains("max_storage_buffer_binding_size"),
         "{err}"
