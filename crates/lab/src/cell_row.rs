@@ -76,6 +76,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
     let id = cell.id();
     let (w, h) = c.resolution;
     let first = &evals[0];
+    let (bytes_written, bytes_read) = c.backend.bytes_per_pixel(c.msaa, c.hdr);
     let temporal = temporal_stability(evals);
     let worst = Worst::of(evals, noise.as_ref());
     let (list_bytes, gbuffer_bytes) = (first.list_bytes, first.gbuffer_bytes);
@@ -183,8 +184,8 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         covered_pixels: Some(first.covered),
         gpu_ms_hierarchy: med(hierarchy_ms),
         scene_lights: (c.lights.radius.kind() == "hierarchy").then_some(scene.lights.len() as u64),
-        bytes_written_per_pixel: Some(c.backend.bytes_per_pixel(c.msaa, c.hdr).0),
-        bytes_read_per_pixel: Some(c.backend.bytes_per_pixel(c.msaa, c.hdr).1),
+        bytes_written_per_pixel: Some(bytes_written),
+        bytes_read_per_pixel: Some(bytes_read),
         ns_per_light_eval: ns_per_light_eval(
             &first.steady_passes,
             if c.backend == Backend::NaiveForward {

@@ -14,7 +14,7 @@ use manylights_shade::{InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::cell_row::{RowParts, cell_row};
 use crate::dynamic::{Movers, hierarchy_plan};
-use crate::evaluate::{References, evaluate};
+use crate::evaluate::{PoseEval, References, evaluate};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment};
 use crate::noise::{Draws, Noise, measure};
 use crate::renderers::{ReferenceFrames, Renderers};
@@ -215,36 +215,22 @@ pub(crate) fn run_cell(
         // drew their own, as many as the steady-state warm-up took).
         m.update(ctx, 0)?;
     }
-    let mut evals = Vec::with_capacity(checks.len());
-    for (k, &(p, frame)) in checks.iter().enumerate() {
-        let cam = &poses[p];
-        let pose = match (frame, &mut movers) {
-            (Some(f), Some(m)) => {
-                m.update(ctx, f)?;
-                format!("{name} frame {f} (pose {p})")
-            }
-            _ => format!("{name} pose {p}"),
-        };
-        if let Some(d) = &draws {
-            // Each check sees the ranges of its frame (the first frame's where none moves).
-            d.draw(ctx, frame.unwrap_or(0))?;
-        }
-        evals.push(evaluate(
+    let evals = evaluate_checks(
+        &PoseChecks {
             ctx,
             renderer,
-            refs.as_ref(),
-            &gpu_scene,
+            refs: refs.as_ref(),
+            gpu_scene: &gpu_scene,
             c,
-            cam,
-            &settings(cam),
-            &pose,
-            // Steady-state culling at the first pose, over as many runs as measured frames.
-            (k == 0 && timed).then_some(c.frames),
-            (k == 0 && c.export)
-                .then(|| out.join("cells").join(&id))
-                .as_deref(),
-        )?);
-    }
+            poses: &poses,
+            name,
+            timed,
+            export: c.export.then(|| out.join("cells").join(&id)),
+        },
+        &checks,
+        (draws.as_ref(), &mut movers),
+        &settings,
+    )?;
     if let Some(m) = &movers {
         m.check(ctx)?;
     }
@@ -281,6 +267,61 @@ pub(crate) fn run_cell(
         noise,
         measured: (&frames, &encode, &uploads, timed),
     }))
+}
+
+/// What each checked pose (or measured frame of moving lights) of a cell is evaluated with.
+struct PoseChecks<'a> {
+    ctx: &'a GpuContext,
+    renderer: &'a Renderer,
+    refs: Option<&'a References<'a>>,
+    gpu_scene: &'a GpuScene,
+    c: &'a Config,
+    poses: &'a [Camera],
+    name: &'a str,
+    /// Whether the frames were timed (steady-state culling is measured at the first check).
+    timed: bool,
+    /// Where the first check's export goes (`export: true`).
+    export: Option<PathBuf>,
+}
+
+/// Evaluates each check `(pose, frame)`, the lights moved to the frame's places and its
+/// stochastic ranges drawn first.
+fn evaluate_checks(
+    p: &PoseChecks<'_>,
+    checks: &[(usize, Option<u32>)],
+    (draws, movers): (Option<&Draws>, &mut Option<Movers>),
+    settings: &dyn Fn(&Camera) -> CullSettings,
+) -> Result<Vec<PoseEval>, LabError> {
+    let (ctx, name) = (p.ctx, p.name);
+    let mut evals = Vec::with_capacity(checks.len());
+    for (k, &(pose_index, frame)) in checks.iter().enumerate() {
+        let cam = &p.poses[pose_index];
+        let pose = match (frame, &mut *movers) {
+            (Some(f), Some(m)) => {
+                m.update(ctx, f)?;
+                format!("{name} frame {f} (pose {pose_index})")
+            }
+            _ => format!("{name} pose {pose_index}"),
+        };
+        if let Some(d) = draws {
+            // Each check sees the ranges of its frame (the first frame's where none moves).
+            d.draw(ctx, frame.unwrap_or(0))?;
+        }
+        evals.push(evaluate(
+            ctx,
+            p.renderer,
+            p.refs,
+            p.gpu_scene,
+            p.c,
+            cam,
+            &settings(cam),
+            &pose,
+            // Steady-state culling at the first pose, over as many runs as measured frames.
+            (k == 0 && p.timed).then_some(p.c.frames),
+            p.export.as_deref().filter(|_| k == 0),
+        )?);
+    }
+    Ok(evals)
 }
 
 /// A cell's measured frames: each one's passes (the lights' move and draws first), the host's

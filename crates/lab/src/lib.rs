@@ -22,6 +22,7 @@ mod noise;
 pub mod reference_cache;
 mod renderers;
 pub mod report;
+pub mod result_files;
 pub mod results;
 pub mod runner;
 pub mod score;

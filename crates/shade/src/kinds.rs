@@ -75,18 +75,24 @@ impl Backend {
         let colour = hdr.texel_bytes();
         // Forward's colour target a sample, and its resolve into the image.
         let raster_colour = s * colour + if samples > 1 { colour } else { 0 };
+        let surfaces = s * self.surface_bytes_per_sample();
         match self {
             // Depth in the prepass; the shading pass tests it and writes colour.
             Self::Forward | Self::NaiveForward => (s * 4 + raster_colour, s * 4),
-            Self::Deferred => (
-                s * GBUFFER_BYTES_PER_PIXEL + colour,
-                s * GBUFFER_BYTES_PER_PIXEL,
-            ),
-            Self::DeferredStoredPosition => (s * 40 + colour, s * 40),
-            Self::Visibility => (
-                s * VISIBILITY_BYTES_PER_PIXEL + colour,
-                s * VISIBILITY_BYTES_PER_PIXEL + VISIBILITY_TRIANGLE_BYTES,
-            ),
+            Self::Deferred | Self::DeferredStoredPosition => (surfaces + colour, surfaces),
+            Self::Visibility => (surfaces + colour, surfaces + VISIBILITY_TRIANGLE_BYTES),
+        }
+    }
+
+    /// Bytes a sample of the buffer of surfaces its raster pass writes, depth included: the
+    /// G-buffer's ([`GBUFFER_BYTES_PER_PIXEL`], 16 more with the stored position), the
+    /// visibility buffer's ([`VISIBILITY_BYTES_PER_PIXEL`]); 0 for the forward backends.
+    pub fn surface_bytes_per_sample(self) -> u64 {
+        match self {
+            Self::Deferred => GBUFFER_BYTES_PER_PIXEL,
+            Self::DeferredStoredPosition => GBUFFER_BYTES_PER_PIXEL + 16,
+            Self::Visibility => VISIBILITY_BYTES_PER_PIXEL,
+            Self::Forward | Self::NaiveForward => 0,
         }
     }
 

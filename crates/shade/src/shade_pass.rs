@@ -15,8 +15,7 @@ use manylights_gpu::{GpuContext, GpuScene, pipeline};
 use crate::pipelines::Surfaces;
 
 use crate::backends::{
-    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, GBUFFER_BYTES_PER_PIXEL, HdrFormat, Loads,
-    Renderer, VISIBILITY_BYTES_PER_PIXEL, VISIBILITY_ID,
+    Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Loads, Renderer, VISIBILITY_ID,
 };
 
 /// The textures of one frame of a backend.
@@ -148,16 +147,10 @@ impl Targets {
                 third,
             ]
         });
-        let per_pixel = match backend {
-            Backend::Visibility => VISIBILITY_BYTES_PER_PIXEL,
-            Backend::DeferredStoredPosition => GBUFFER_BYTES_PER_PIXEL + 16,
-            _ => GBUFFER_BYTES_PER_PIXEL,
-        };
-        let gbuffer_bytes = if deferred {
-            u64::from(width) * u64::from(height) * per_pixel * u64::from(samples)
-        } else {
-            0
-        };
+        let gbuffer_bytes = u64::from(width)
+            * u64::from(height)
+            * backend.surface_bytes_per_sample()
+            * u64::from(samples);
         Self {
             size: (width, height),
             hdr,
