@@ -590,17 +590,17 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
     let error: Axis<'_> = ("mean FLIP vs reference", &|r| r.flip_mean);
     draw(
         "speed_fp.svg",
-        "Speed against list quality: lights evaluated per light needed (1.0 is exact). A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+        "Speed against list quality: lights evaluated per light needed (1.0 is exact). A panel a setting; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front.",
         &|p| speed_accuracy(rows, p, gpu, fp),
     )?;
     draw(
         "speed_error.svg",
-        "Speed against image error: mean FLIP against the brute-force reference with the same light ranges (what culling and shading lose, not the cut-off). A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+        "Speed against image error: mean FLIP against the brute-force reference with the same light ranges (what culling and shading lose, not the cut-off). A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front.",
         &|p| speed_accuracy(rows, p, gpu, error),
     )?;
     draw(
         "frame_fp.svg",
-        "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. A panel a setting; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front.",
+        "The frame against list quality: culling and the shading pass that reads its lists, back to back as frames run (gpu_ms_cull_shade), against lights evaluated per light needed. A panel a setting; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front.",
         &|p| speed_accuracy(rows, p, frame, fp),
     )?;
     let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
@@ -621,7 +621,7 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
     draw(
         "frame_infinite.svg",
         &format!(
-            "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade, one frame; an accumulated point costs this a frame, K times it for its image){built} against mean FLIP against the infinite-range reference (at the reference's exposure). A panel a setting; colour: the method family (radius cut-offs, stochastic light culling in one frame, accumulated, interleaved, the hierarchy), a line through each configuration's sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front."
+            "Speed against accuracy against the light as it is: culling + shading in steady state (gpu_ms_cull_shade, one frame; an accumulated point costs this a frame, K times it for its image){built} against mean FLIP against the infinite-range reference (at the reference's exposure). A panel a setting; colour: the method family (radius cut-offs, stochastic light culling in one frame, accumulated, interleaved, the hierarchy), a line through each configuration's sweep; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front."
         ),
         &|p| speed_accuracy(rows, p, frame_cost, flip_inf),
     )?;
@@ -633,7 +633,7 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
         draw(
             "frame_steady_infinite.svg",
             &format!(
-                "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading){with_build} against mean FLIP against the infinite-range reference. A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred, open: forward. Black: each panel's Pareto front."
+                "The whole frame against accuracy against the light as it is: the frame in steady state (gpu_ms_frame_steady: geometry, culling and shading){with_build} against mean FLIP against the infinite-range reference. A panel a setting; colour: the method family, a line through its sweep; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front."
             ),
             &|p| speed_accuracy(rows, p, whole, flip_inf),
         )?;

@@ -8,7 +8,8 @@
 //!   the few other things its cells vary (MSAA, materials, ...);
 //! - a line through each configuration's sweep in order (thresholds, error bounds), so one
 //!   configuration reads as one curve; the caption lists the sweep values in that order;
-//! - marker shape for the strategy, fill for the backend (filled: deferred; open: forward);
+//! - marker shape for the strategy, fill for the backend (filled: deferred or visibility; open:
+//!   forward);
 //!   where one strategy ran and colours are the families, shape for the few other things the
 //!   cells vary (the material models, say);
 //! - the Pareto front of each panel in black;
@@ -400,7 +401,7 @@ fn legend_entries(keys: &Keys, front: bool) -> Vec<(String, Mark)> {
     }
     for &filled in &keys.fills {
         let label = if filled {
-            "filled: deferred"
+            "filled: deferred or visibility"
         } else {
             "open: forward (or no culling)"
         };
@@ -594,7 +595,9 @@ const SHAPES: [Shape; 6] = [
 /// Grey: the legend's markers for shape and fill, whose colour means nothing.
 const GREY_MARK: RGBColor = RGBColor(90, 90, 90);
 
-/// Deferred backends' points are filled; forward's and naive forward's open.
+/// The points of backends that light in a compute pass (deferred, the visibility buffer) are
+/// filled; forward's and naive forward's open. Deferred and visibility points that nothing else
+/// tells apart are numbered in the caption.
 fn is_filled(r: &Row) -> bool {
-    r.backend.starts_with("deferred")
+    r.backend.starts_with("deferred") || r.backend == "visibility"
 }
