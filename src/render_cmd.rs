@@ -9,7 +9,8 @@ use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::RadiusRule;
 use manylights_shade::image_out::{ImageSum, write_atomic};
 use manylights_shade::{
-    Backend, HdrFormat, HdrImage, ReferenceFrame, ReferenceRenderer, Renderer, accuracy,
+    Backend, HdrFormat, HdrImage, ReferenceFrame, ReferenceRenderer, Renderer, VisibilityPass,
+    accuracy,
 };
 
 use crate::options::{BackendName, SceneArgs, StrategyArgs, print_timings};
@@ -53,6 +54,18 @@ pub(crate) struct RenderArgs {
     /// --backend reference.
     #[arg(long, value_enum, default_value_t = HdrName::F32)]
     pub(crate) hdr: HdrName,
+    /// How --backend visibility finds each pixel's triangle: compute (a compute rasteriser,
+    /// where it can: one sample a pixel, no glass, 64-bit atomic max on the device; the raster
+    /// pass elsewhere) or raster (the raster pass always).
+    #[arg(long, value_enum, default_value_t = VisibilityPassName::Compute)]
+    pub(crate) visibility_pass: VisibilityPassName,
+}
+
+/// `--visibility-pass`'s values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum VisibilityPassName {
+    Compute,
+    Raster,
 }
 
 /// `--hdr`'s values.
@@ -242,8 +255,12 @@ impl Run<'_> {
             BackendName::Visibility => Backend::Visibility,
             BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
-        let renderer = Renderer::with_format(ctx, gpu_scene, samples, hdr)
+        let mut renderer = Renderer::with_format(ctx, gpu_scene, samples, hdr)
             .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
+        renderer.visibility_pass = match args.visibility_pass {
+            VisibilityPassName::Compute => VisibilityPass::Compute,
+            VisibilityPassName::Raster => VisibilityPass::Raster,
+        };
         // With --accumulate, the frames' mean; lists, counts and exports are the last
         // frame's (whose ranges the lights hold afterwards).
         let mut sum = ImageSum::default();
@@ -291,7 +308,12 @@ impl Run<'_> {
             println!("  dropped lights          {}", lists.dropped);
         }
         if out.gbuffer_bytes > 0 {
-            if out.backend == Backend::Visibility {
+            if out.computed_visibility() {
+                println!(
+                    "  visibility buffer bytes {} (compute rasteriser: keys, ids, depths)",
+                    out.gbuffer_bytes
+                );
+            } else if out.backend == Backend::Visibility {
                 println!("  visibility buffer bytes {}", out.gbuffer_bytes);
             } else {
                 println!("  G-buffer bytes          {}", out.gbuffer_bytes);

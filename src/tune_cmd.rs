@@ -111,6 +111,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         light_update: Default::default(),
         msaa: 1,
         hdr: Default::default(),
+        visibility_pass: Default::default(),
         materials: a.models()?,
         slack: DEFAULT_SLACK,
         frames: args.frames,

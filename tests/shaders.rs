@@ -107,6 +107,30 @@ fn every_culling_shader_validates_over_lookup_bounds() {
     assert!(over_bounds >= 3, "{over_bounds} culling shaders read depth");
 }
 
+/// Every culling shader that reads depth also over a float depth, as
+/// `Culler::with_float_depth` builds it: `depth_input_float.wgsl` in place of
+/// `depth_input.wgsl`, one sample a pixel.
+#[test]
+fn every_culling_shader_validates_over_a_float_depth() {
+    use manylights_cull::shaders::{DEPTH_INPUT, FLOAT_SWAPS};
+    let mut over_float = 0;
+    for def in manylights_cull::shaders::SHADERS {
+        if !def.files.iter().any(|f| f.path == DEPTH_INPUT.path) {
+            continue;
+        }
+        let src =
+            manylights_gpu::shaders::with_samples(def.compose_swapped(FLOAT_SWAPS), 1, def.name);
+        assert!(
+            src.contains("var depth_tex: texture_2d<f32>;") && !src.contains("texture_depth"),
+            "{}: still reads a depth texture",
+            def.name
+        );
+        validate_source(def.name, &src);
+        over_float += 1;
+    }
+    assert!(over_float >= 3, "{over_float} culling shaders read depth");
+}
+
 #[test]
 fn every_wgsl_file_is_used_by_a_shader() {
     let mut used: BTreeSet<String> = all_shaders()
@@ -117,6 +141,7 @@ fn every_wgsl_file_is_used_by_a_shader() {
     used.extend(
         manylights_cull::shaders::BOUNDS_SWAPS
             .iter()
+            .chain(manylights_cull::shaders::FLOAT_SWAPS)
             .map(|(_, to)| to.path.to_owned()),
     );
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");

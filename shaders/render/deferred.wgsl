@@ -78,8 +78,12 @@ struct Texels {
     material: u32,
 }
 
+// (`vec4<f32>(...).x` reads the depth buffer's f32 as it is, and the x of the R32Float texture
+// that the visibility buffer's compute rasteriser writes in its place: crate::pipelines's
+// float_depth.)
 fn load_texels(pixel: vec2<u32>) -> Texels {
-    return Texels(textureLoad(depth_tex, pixel, 0), load_normal_depth(pixel), textureLoad(gb_material, pixel, 0).x);
+    let z = vec4<f32>(textureLoad(depth_tex, pixel, 0)).x;
+    return Texels(z, load_normal_depth(pixel), textureLoad(gb_material, pixel, 0).x);
 }
 
 // The G-buffer's normal and view depth (none in a visibility buffer).

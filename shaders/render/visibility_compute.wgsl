@@ -1,19 +1,22 @@
-// shade.visibility_compute: the visibility pass rasterised in compute (issue 49's item 4, a
-// building block not yet wired into a backend). The opaque triangles' nearest id a pixel goes
+// shade.visibility_compute: the visibility buffer's pass rasterised in compute (the visibility
+// backend's default, crate::vis_compute). The opaque triangles' nearest id a pixel goes
 // into a 64-bit key a pixel, (0xffffffff - depth bits) << 32 | id, by atomicMax: the nearest
 // depth wins, equal depths the larger id (deterministic); 0, the clear value, is no triangle.
 // A thread a triangle clips it against the near plane (at most two triangles), rasterises a
 // small one itself and queues a large one, set up; vis_scan numbers the queued triangles'
-// VC_BLOCK-pixel square blocks and vis_blocks takes them a workgroup a block. Coverage: pixel
-// centres inside the edges, ties by the top-left rule, in f32 on unsnapped vertices (the
-// hardware snaps them to 1/256 pixel, so edge pixels may differ). Depth: NDC z interpolated
-// linearly in screen space, as the hardware's.
+// VC_BLOCK-pixel square blocks and vis_blocks takes them a workgroup a block. Coverage, as the
+// hardware's: vertices snapped to 1/256 pixel (Vulkan's usual subPixelPrecisionBits, 8), pixel
+// centres inside the edges, ties by the top-left rule, the edge functions exact in 64-bit
+// integers. (A triangle with a vertex past VC_EXACT_LIMIT pixels from the corner, where fixed
+// point would overflow, is tested in f32 on unsnapped vertices: the hardware clips such ones to
+// its guard band, which no rule here reproduces.) Depth: NDC z interpolated linearly in screen
+// space, as the hardware's.
 
 @group(1) @binding(0) var<storage, read> vc_vertices: array<u32>;
 @group(1) @binding(1) var<storage, read> vc_indices: array<u32>;
 @group(1) @binding(2) var<storage, read_write> vc_keys: array<atomic<u64>>;
 // (large triangles queued, unused); the queue: four vec4 an entry, each vertex's screen
-// position and depth (w: the doubled area, the id's bits, 0), then its rectangle in blocks
+// position and depth (w: 0, the id's bits, 1 where exact), then its rectangle in blocks
 // (x0, y0, width, height, as bits). Two entries a triangle at most: it cannot overflow.
 @group(1) @binding(3) var<storage, read_write> vc_queue_count: array<atomic<u32>, 2>;
 @group(1) @binding(4) var<storage, read_write> vc_queue: array<vec4<f32>>;
@@ -27,10 +30,17 @@ override VC_BLOCK: u32 = 64u;
 // Larger bounding boxes (pixels) go to the blocks.
 override VC_SMALL: u32 = 256u;
 
+// The largest |pixel coordinate| of a vertex tested exactly: 2^21 pixels, 2^29 in 1/256 pixel,
+// so that differences fit an i32 and products of two an i64.
+const VC_EXACT_LIMIT: f32 = 2097152.0;
+
 struct ScreenTri {
-    // xy: pixel coordinates (y down), z: NDC depth, for each vertex.
+    // xy: pixel coordinates (y down; snapped to 1/256 pixel where exact), z: NDC depth, for
+    // each vertex.
     p: array<vec3<f32>, 3>,
     valid: bool,
+    // Snapped, and tested in fixed point.
+    exact: bool,
 }
 
 // The clipped polygon of triangle t (at most four vertices, in clip space) and its count.
@@ -82,7 +92,37 @@ fn vc_part(cl: Clipped, part: u32) -> ScreenTri {
     s.p[0] = vc_screen(cl.v[0]);
     s.p[1] = vc_screen(cl.v[1u + part]);
     s.p[2] = vc_screen(cl.v[2u + part]);
+    let far = max(max(abs(s.p[0].xy), abs(s.p[1].xy)), abs(s.p[2].xy));
+    s.exact = all(far < vec2<f32>(VC_EXACT_LIMIT));
+    if s.exact {
+        for (var k = 0u; k < 3u; k++) {
+            s.p[k] = vec3<f32>(round(s.p[k].xy * 256.0) / 256.0, s.p[k].z);
+        }
+    }
     return s;
+}
+
+// A snapped position in 1/256 pixel (exact: it is a multiple of 1/256 below 2^21).
+fn vc_fixed(p: vec2<f32>) -> vec2<i32> {
+    return vec2<i32>(p * 256.0);
+}
+
+// vc_edge in fixed point, exact.
+fn vc_edge_fixed(a: vec2<i32>, b: vec2<i32>, q: vec2<i32>) -> i64 {
+    return i64(b.x - a.x) * i64(q.y - a.y) - i64(b.y - a.y) * i64(q.x - a.x);
+}
+
+// Pixel (x, y)'s centre in 1/256 pixel.
+fn vc_centre_fixed(x: u32, y: u32) -> vec2<i32> {
+    return vec2<i32>(i32(x) * 256 + 128, i32(y) * 256 + 128);
+}
+
+// s's doubled signed area: exact in sign (and zero) where s is.
+fn vc_area(s: ScreenTri) -> f32 {
+    if s.exact {
+        return f32(vc_edge_fixed(vc_fixed(s.p[0].xy), vc_fixed(s.p[1].xy), vc_fixed(s.p[2].xy)));
+    }
+    return vc_edge(s.p[0].xy, s.p[1].xy, s.p[2].xy);
 }
 
 // Edge function of edge a -> b at point q (positive inside a triangle wound clockwise on the
@@ -98,19 +138,36 @@ fn vc_top_left(a: vec2<f32>, b: vec2<f32>) -> bool {
     return (d.y == 0.0 && d.x > 0.0) || d.y < 0.0;
 }
 
-// Tests pixel (x, y) against s (wound positively, `area` > 0) and keeps its key.
-fn vc_pixel(s: ScreenTri, area: f32, x: u32, y: u32, id: u32) {
-    let q = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
-    let e0 = vc_edge(s.p[1].xy, s.p[2].xy, q);
-    let e1 = vc_edge(s.p[2].xy, s.p[0].xy, q);
-    let e2 = vc_edge(s.p[0].xy, s.p[1].xy, q);
-    let in0 = e0 > 0.0 || (e0 == 0.0 && vc_top_left(s.p[1].xy, s.p[2].xy));
-    let in1 = e1 > 0.0 || (e1 == 0.0 && vc_top_left(s.p[2].xy, s.p[0].xy));
-    let in2 = e2 > 0.0 || (e2 == 0.0 && vc_top_left(s.p[0].xy, s.p[1].xy));
+// Whether edge a -> b takes a point whose edge function is e (positive, or zero on a top or left
+// edge).
+fn vc_takes(e: f32, a: vec2<f32>, b: vec2<f32>) -> bool {
+    return e > 0.0 || (e == 0.0 && vc_top_left(a, b));
+}
+
+// Tests pixel (x, y) against s (wound positively, of positive area) and keeps its key.
+fn vc_pixel(s: ScreenTri, x: u32, y: u32, id: u32) {
+    var e: vec3<f32>;
+    if s.exact {
+        let q = vc_centre_fixed(x, y);
+        let a = vc_fixed(s.p[0].xy);
+        let b = vc_fixed(s.p[1].xy);
+        let c = vc_fixed(s.p[2].xy);
+        let e0 = vc_edge_fixed(b, c, q);
+        let e1 = vc_edge_fixed(c, a, q);
+        let e2 = vc_edge_fixed(a, b, q);
+        // (Each i64 to f32 keeps its sign and its zero: the test is exact.)
+        e = vec3<f32>(f32(e0), f32(e1), f32(e2));
+    } else {
+        let q = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+        e = vec3<f32>(vc_edge(s.p[1].xy, s.p[2].xy, q), vc_edge(s.p[2].xy, s.p[0].xy, q), vc_edge(s.p[0].xy, s.p[1].xy, q));
+    }
+    let in0 = vc_takes(e.x, s.p[1].xy, s.p[2].xy);
+    let in1 = vc_takes(e.y, s.p[2].xy, s.p[0].xy);
+    let in2 = vc_takes(e.z, s.p[0].xy, s.p[1].xy);
     if !(in0 && in1 && in2) {
         return;
     }
-    let z = (e0 * s.p[0].z + e1 * s.p[1].z + e2 * s.p[2].z) / area;
+    let z = (e.x * s.p[0].z + e.y * s.p[1].z + e.z * s.p[2].z) / (e.x + e.y + e.z);
     if z < 0.0 || z > 1.0 {
         return;
     }
@@ -118,12 +175,13 @@ fn vc_pixel(s: ScreenTri, area: f32, x: u32, y: u32, id: u32) {
     atomicMax(&vc_keys[y * u32(frame.viewport.x) + x], key);
 }
 
-// s wound positively (swapping two vertices where needed) and its doubled area; 0 where
-// degenerate.
+// s wound positively (swapping two vertices where needed).
 fn vc_wound(s_in: ScreenTri) -> ScreenTri {
     var s = s_in;
-    let area = vc_edge(s.p[0].xy, s.p[1].xy, s.p[2].xy);
-    if area < 0.0 {
+    if !s.valid {
+        return s;
+    }
+    if vc_area(s) < 0.0 {
         let t = s.p[1];
         s.p[1] = s.p[2];
         s.p[2] = t;
@@ -153,8 +211,7 @@ fn vis_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
         if !s.valid {
             continue;
         }
-        let area = vc_edge(s.p[0].xy, s.p[1].xy, s.p[2].xy);
-        if area <= 0.0 {
+        if vc_area(s) <= 0.0 {
             continue;
         }
         let r = vc_rect(s);
@@ -165,7 +222,7 @@ fn vis_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
         if size.x * size.y <= VC_SMALL {
             for (var y = r.y; y < r.w; y++) {
                 for (var x = r.x; x < r.z; x++) {
-                    vc_pixel(s, area, x, y, t + 1u);
+                    vc_pixel(s, x, y, t + 1u);
                 }
             }
             continue;
@@ -178,9 +235,9 @@ fn vis_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
             atomicAdd(&vc_queue_count[1], 1u);
             continue;
         }
-        vc_queue[4u * e] = vec4<f32>(s.p[0], area);
+        vc_queue[4u * e] = vec4<f32>(s.p[0], 0.0);
         vc_queue[4u * e + 1u] = vec4<f32>(s.p[1], bitcast<f32>(t + 1u));
-        vc_queue[4u * e + 2u] = vec4<f32>(s.p[2], 0.0);
+        vc_queue[4u * e + 2u] = vec4<f32>(s.p[2], f32(s.exact));
         vc_queue[4u * e + 3u] = bitcast<vec4<f32>>(vec4<u32>(b0, b1 - b0));
     }
 }
@@ -249,14 +306,15 @@ fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_in
         let k = b - vc_first[e];
         let q0 = vc_queue[4u * e];
         let q1 = vc_queue[4u * e + 1u];
+        let q2 = vc_queue[4u * e + 2u];
         var s: ScreenTri;
         s.p[0] = q0.xyz;
         s.p[1] = q1.xyz;
-        s.p[2] = vc_queue[4u * e + 2u].xyz;
+        s.p[2] = q2.xyz;
         s.valid = true;
+        s.exact = q2.w != 0.0;
         let block = rect.xy + vec2<u32>(k % rect.z, k / rect.z);
-        let corner = vec2<f32>(block * VC_BLOCK) + 0.5;
-        if vc_block_outside(s, corner, corner + f32(VC_BLOCK - 1u)) {
+        if vc_block_outside(s, block * VC_BLOCK, block * VC_BLOCK + VC_BLOCK - 1u) {
             continue;
         }
         let r = vc_rect(s);
@@ -265,20 +323,32 @@ fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_in
             let x = block.x * VC_BLOCK + j % VC_BLOCK;
             let y = block.y * VC_BLOCK + j / VC_BLOCK;
             if x >= r.x && x < r.z && y >= r.y && y < r.w {
-                vc_pixel(s, q0.w, x, y, id);
+                vc_pixel(s, x, y, id);
             }
         }
     }
 }
 
-// Whether every pixel centre of the rectangle lo..hi lies strictly outside one of s's edges (a
-// block to skip: the edge function is below 0 at all four corners).
-fn vc_block_outside(s: ScreenTri, lo: vec2<f32>, hi: vec2<f32>) -> bool {
+// Whether the centres of every pixel from lo to hi (inclusive) lie strictly outside one of s's
+// edges (a block to skip: the edge function is below 0 at all four corner pixels' centres;
+// exact where s is).
+fn vc_block_outside(s: ScreenTri, lo: vec2<u32>, hi: vec2<u32>) -> bool {
     for (var i = 0u; i < 3u; i++) {
         let a = s.p[(i + 1u) % 3u].xy;
         let b = s.p[(i + 2u) % 3u].xy;
-        let m = max(max(vc_edge(a, b, lo), vc_edge(a, b, hi)), max(vc_edge(a, b, vec2<f32>(lo.x, hi.y)), vc_edge(a, b, vec2<f32>(hi.x, lo.y))));
-        if m < 0.0 {
+        var outside: bool;
+        if s.exact {
+            let fa = vc_fixed(a);
+            let fb = vc_fixed(b);
+            let m = max(max(vc_edge_fixed(fa, fb, vc_centre_fixed(lo.x, lo.y)), vc_edge_fixed(fa, fb, vc_centre_fixed(hi.x, hi.y))), max(vc_edge_fixed(fa, fb, vc_centre_fixed(lo.x, hi.y)), vc_edge_fixed(fa, fb, vc_centre_fixed(hi.x, lo.y))));
+            outside = m < i64(0);
+        } else {
+            let l = vec2<f32>(lo) + 0.5;
+            let h = vec2<f32>(hi) + 0.5;
+            let m = max(max(vc_edge(a, b, l), vc_edge(a, b, h)), max(vc_edge(a, b, vec2<f32>(l.x, h.y)), vc_edge(a, b, vec2<f32>(h.x, l.y))));
+            outside = m < 0.0;
+        }
+        if outside {
             return true;
         }
     }

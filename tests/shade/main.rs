@@ -32,7 +32,9 @@ use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::accuracy::{ImageError, compare};
-use manylights_shade::{Backend, HdrImage, ReferenceRenderer, Renderer, ShadeOutput};
+use manylights_shade::{
+    Backend, HdrImage, ReferenceRenderer, Renderer, ShadeOutput, VisibilityPass,
+};
 
 const CULLED: [Backend; 4] = [
     Backend::Forward,
@@ -158,9 +160,20 @@ fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
     let raster: &[&str] = match backend {
         Backend::Forward => &["prepass.depth", "shade.forward"],
         Backend::Deferred | Backend::DeferredStoredPosition => &["shade.gbuffer"],
+        Backend::Visibility if out.computed_visibility() => &[],
         Backend::Visibility => &["shade.visibility"],
         Backend::NaiveForward => &["prepass.depth", "shade.naive"],
     };
+    if out.computed_visibility() {
+        for name in ["triangles", "scan", "blocks", "resolve"] {
+            let name = format!("shade.visibility_compute.{name}");
+            assert!(
+                t.iter()
+                    .any(|p| p.label == name && p.kind == PassKind::Compute),
+                "{what}: no compute pass {name} in {t:?}"
+            );
+        }
+    }
     for name in raster {
         assert!(
             t.iter()
@@ -198,7 +211,12 @@ fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
 #[test]
 fn every_strategy_and_backend_matches_the_reference() {
     let ctx = common::gpu();
-    let mut worst = [0.0f64; 4];
+    let mut worst = [0.0f64; 5];
+    // The visibility backend twice: the compute rasteriser (its default) and the raster pass.
+    let variants = CULLED
+        .into_iter()
+        .map(|b| (b, VisibilityPass::Compute))
+        .chain([(Backend::Visibility, VisibilityPass::Raster)]);
     for name in ["atrium", "pillars"] {
         let s = scene(name);
         for (w, h) in [(64, 48), (70, 45)] {
@@ -208,7 +226,7 @@ fn every_strategy_and_backend_matches_the_reference() {
                 .unwrap()
                 .color;
             assert!(reference.peak() > 0.0, "{name}: the reference is black");
-            let renderer = Renderer::new(&ctx, &gpu_scene);
+            let mut renderer = Renderer::new(&ctx, &gpu_scene);
             let settings = CullSettings::for_camera(&s.camera);
             let (naive, e) =
                 naive_against(&ctx, &renderer, &gpu_scene, &settings, (w, h), &reference);
@@ -219,8 +237,14 @@ fn every_strategy_and_backend_matches_the_reference() {
             check_timings(&naive, &format!("{name} naive"), Backend::NaiveForward);
             for strategy in strategies() {
                 let mut images = Vec::new();
-                for (k, backend) in CULLED.into_iter().enumerate() {
-                    let what = format!("{name} {w}x{h} {} {}", strategy.name(), backend.name());
+                for (k, (backend, pass)) in variants.clone().enumerate() {
+                    renderer.visibility_pass = pass;
+                    let what = format!(
+                        "{name} {w}x{h} {} {} {}",
+                        strategy.name(),
+                        backend.name(),
+                        pass.name()
+                    );
                     let out = renderer
                         .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
                         .unwrap();
@@ -230,9 +254,16 @@ fn every_strategy_and_backend_matches_the_reference() {
                     assert_eq!(out.color.non_finite_count(), 0, "{what}: NaN or Inf");
                     assert_eq!(out.lists.as_ref().unwrap().dropped, 0, "{what}");
                     check_timings(&out, &what, backend);
+                    assert_eq!(
+                        out.computed_visibility(),
+                        backend == Backend::Visibility && pass == VisibilityPass::Compute,
+                        "{what}: lavapipe has 64-bit atomic max"
+                    );
                     let per_pixel = match backend {
                         Backend::Deferred => 24,
                         Backend::DeferredStoredPosition => 40,
+                        // A 64-bit key, an id and a depth.
+                        Backend::Visibility if out.computed_visibility() => 16,
                         Backend::Visibility => 8,
                         _ => 0,
                     };
@@ -247,6 +278,7 @@ fn every_strategy_and_backend_matches_the_reference() {
                     (1, Backend::Deferred),
                     (2, Backend::DeferredStoredPosition),
                     (3, Backend::Visibility),
+                    (4, Backend::Visibility),
                 ] {
                     let e = compare(&images[k], &images[0], 1.0);
                     assert!(
@@ -260,8 +292,8 @@ fn every_strategy_and_backend_matches_the_reference() {
         }
     }
     println!(
-        "worst max abs error of the peak: forward {:.2e}, deferred {:.2e}, deferred_stored_position {:.2e}, visibility {:.2e}",
-        worst[0], worst[1], worst[2], worst[3]
+        "worst max abs error of the peak: forward {:.2e}, deferred {:.2e}, deferred_stored_position {:.2e}, visibility {:.2e} (raster pass {:.2e})",
+        worst[0], worst[1], worst[2], worst[3], worst[4]
     );
 }
 

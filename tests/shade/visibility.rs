@@ -7,12 +7,13 @@ use manylights_gpu::GpuScene;
 use manylights_gpu::layout::GpuFrame;
 use manylights_scene::Model;
 use manylights_shade::visibility::{read_geometry, read_surfaces, triangle_surface};
-use manylights_shade::{Backend, Renderer};
+use manylights_shade::{Backend, Renderer, VisibilityPass};
 
 use super::{common, scene};
 
 /// At every pixel of `atrium` and `pillars` (five material models mixed), at 64 x 48 and
-/// 70 x 45: a pixel holds a triangle id exactly where the G-buffer pass covers it; the id names
+/// 70 x 45, with the compute rasteriser and with the raster pass: a pixel holds a triangle id
+/// exactly where the G-buffer pass covers it; the id names
 /// an opaque triangle; and the oracle's surface for it, where the pixel centre's ray meets that
 /// triangle, is the rasterised one: the position within 1e-4 of the distance to the eye of the
 /// interpolated position `deferred_stored_position` stores, the normal within 1e-3 of the
@@ -30,61 +31,81 @@ fn triangle_ids_give_the_rasterised_surface() {
         for (w, h) in [(64, 48), (70, 45)] {
             let what = format!("{name} {w}x{h}");
             let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-            let renderer = Renderer::new(&ctx, &gpu_scene);
+            let mut renderer = Renderer::new(&ctx, &gpu_scene);
             let settings = CullSettings::for_camera(&s.camera);
             let strategy = Strategy::tiled_gather(16);
-            let render = |backend| {
-                renderer
-                    .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
-                    .unwrap()
-            };
-            let ids = read_surfaces(&ctx, &render(Backend::Visibility))
-                .unwrap()
-                .ids;
-            let g = read_surfaces(&ctx, &render(Backend::DeferredStoredPosition)).unwrap();
+            let g = read_surfaces(
+                &ctx,
+                &renderer
+                    .render(
+                        &ctx,
+                        &gpu_scene,
+                        Backend::DeferredStoredPosition,
+                        &strategy,
+                        &settings,
+                        (w, h),
+                    )
+                    .unwrap(),
+            )
+            .unwrap();
             let (vertices, indices) = read_geometry(&ctx, &gpu_scene).unwrap();
             let frame = GpuFrame::new(&s.camera, w, h, s.lights.len() as u32);
             let opaque = gpu_scene.opaque_index_count / 3;
-            let mut covered = 0;
-            for y in 0..h {
-                for x in 0..w {
-                    let k = (y * w + x) as usize;
-                    let at = format!("{what} pixel ({x}, {y})");
-                    let gb_covered = g.normal_depth[k][3] != 0.0;
-                    assert_eq!(ids[k] != 0, gb_covered, "{at}: id {}", ids[k]);
-                    if ids[k] == 0 {
-                        continue;
+            for pass in [VisibilityPass::Compute, VisibilityPass::Raster] {
+                renderer.visibility_pass = pass;
+                let out = renderer
+                    .render(
+                        &ctx,
+                        &gpu_scene,
+                        Backend::Visibility,
+                        &strategy,
+                        &settings,
+                        (w, h),
+                    )
+                    .unwrap();
+                let ids = read_surfaces(&ctx, &out).unwrap().ids;
+                let what = format!("{what} {}", pass.name());
+                let mut covered = 0;
+                for y in 0..h {
+                    for x in 0..w {
+                        let k = (y * w + x) as usize;
+                        let at = format!("{what} pixel ({x}, {y})");
+                        let gb_covered = g.normal_depth[k][3] != 0.0;
+                        assert_eq!(ids[k] != 0, gb_covered, "{at}: id {}", ids[k]);
+                        if ids[k] == 0 {
+                            continue;
+                        }
+                        covered += 1;
+                        assert!(
+                            ids[k] <= opaque,
+                            "{at}: id {} of {opaque} triangles",
+                            ids[k]
+                        );
+                        let t = triangle_surface(&vertices, &indices, &frame, (x, y), ids[k])
+                            .unwrap_or_else(|| panic!("{at}: the ray misses the triangle's plane"));
+                        assert!(
+                            t.barycentrics.min_element() >= -1e-2
+                                && t.barycentrics.max_element() <= 1.0 + 1e-2,
+                            "{at}: barycentrics {}",
+                            t.barycentrics
+                        );
+                        let stored = glam::Vec3::from_slice(&g.position[k][..3]).as_dvec3();
+                        let eye = frame.eye.truncate().as_dvec3();
+                        let dp = (t.position - stored).length() / (stored - eye).length();
+                        let normal = glam::Vec3::from_slice(&g.normal_depth[k][..3]).as_dvec3();
+                        let dn = (t.normal - normal).length();
+                        worst_p = worst_p.max(dp);
+                        worst_n = worst_n.max(dn);
+                        assert!(dp <= 1e-4, "{at}: position {} against {stored}", t.position);
+                        assert!(dn <= 1e-3, "{at}: normal {} against {normal}", t.normal);
+                        assert_eq!(t.material, g.ids[k], "{at}: material");
                     }
-                    covered += 1;
-                    assert!(
-                        ids[k] <= opaque,
-                        "{at}: id {} of {opaque} triangles",
-                        ids[k]
-                    );
-                    let t = triangle_surface(&vertices, &indices, &frame, (x, y), ids[k])
-                        .unwrap_or_else(|| panic!("{at}: the ray misses the triangle's plane"));
-                    assert!(
-                        t.barycentrics.min_element() >= -1e-2
-                            && t.barycentrics.max_element() <= 1.0 + 1e-2,
-                        "{at}: barycentrics {}",
-                        t.barycentrics
-                    );
-                    let stored = glam::Vec3::from_slice(&g.position[k][..3]).as_dvec3();
-                    let eye = frame.eye.truncate().as_dvec3();
-                    let dp = (t.position - stored).length() / (stored - eye).length();
-                    let normal = glam::Vec3::from_slice(&g.normal_depth[k][..3]).as_dvec3();
-                    let dn = (t.normal - normal).length();
-                    worst_p = worst_p.max(dp);
-                    worst_n = worst_n.max(dn);
-                    assert!(dp <= 1e-4, "{at}: position {} against {stored}", t.position);
-                    assert!(dn <= 1e-3, "{at}: normal {} against {normal}", t.normal);
-                    assert_eq!(t.material, g.ids[k], "{at}: material");
                 }
+                assert!(
+                    covered > (w * h) as usize / 2,
+                    "{what}: {covered} pixels covered"
+                );
             }
-            assert!(
-                covered > (w * h) as usize / 2,
-                "{what}: {covered} pixels covered"
-            );
         }
     }
     println!(
@@ -155,14 +176,13 @@ fn an_index_buffer_past_the_binding_limit_is_an_error() {
     );
 }
 
-/// The visibility pass rasterised in compute (`manylights_shade::vis_compute`, issue 49's item
-/// 4) against the hardware pass on the same frame: at least 99% of pixels hold the same
-/// triangle id (the rest at edges, where the hardware's snapped vertices and the compute pass's
-/// unsnapped ones differ; measured 99.4-100%), the same NDC depth to 1e-3 where they agree
-/// (measured: 1.3e-5 on `pillars`, 3.7e-4 on `atrium`, whose triangles cut by the near plane
-/// project far off the screen, where f32 edge functions lose bits), and no large triangle's
-/// triangle dropped; at 320 x 180 large triangles take the blocks' path; another tiling (8-pixel
-/// blocks, 16-pixel small triangles) gives the same frame.
+/// The visibility pass rasterised in compute (`manylights_shade::vis_compute`) against the
+/// hardware pass (`VisibilityPass::Raster`) on the same frame: at least 99.95% of pixels hold
+/// the same triangle id (both snap vertices to 1/256 pixel and take ties by the top-left rule;
+/// measured 100% but 5 of 57,600 pixels of `atrium` at 320 x 180, near-plane-clipped triangles
+/// whose clipped vertices round apart), the same NDC depth to 1e-4 where they agree (measured
+/// 5.3e-5), and no large triangle dropped; at 320 x 180 large triangles take the blocks' path;
+/// another tiling (8-pixel blocks, 16-pixel small triangles) gives the same frame.
 #[test]
 fn the_compute_visibility_pass_matches_the_hardware_pass() {
     use manylights_shade::vis_compute::{ComputeVisibility, Tiling};
@@ -172,7 +192,8 @@ fn the_compute_visibility_pass_matches_the_hardware_pass() {
         for (w, h) in [(64, 48), (70, 45), (320, 180)] {
             let what = format!("{name} {w}x{h}");
             let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-            let renderer = Renderer::new(&ctx, &gpu_scene);
+            let mut renderer = Renderer::new(&ctx, &gpu_scene);
+            renderer.visibility_pass = VisibilityPass::Raster;
             let settings = CullSettings::for_camera(&s.camera);
             let out = renderer
                 .render(
@@ -215,13 +236,78 @@ fn the_compute_visibility_pass_matches_the_hardware_pass() {
             assert_eq!(f.dropped, 0, "{what}");
             let n = ids.len();
             let same = (0..n).filter(|&k| ids[k] == f.ids[k]).count();
-            assert!(same * 100 >= n * 99, "{what}: {same} of {n} ids agree");
+            assert!(
+                same * 10_000 >= n * 9_995,
+                "{what}: {same} of {n} ids agree"
+            );
             let worst = (0..n)
                 .filter(|&k| ids[k] == f.ids[k])
                 .map(|k| (depth[k] - f.depth[k]).abs())
                 .fold(0.0f32, f32::max);
-            assert!(worst <= 1e-3, "{what}: depth within {worst}");
+            assert!(worst <= 1e-4, "{what}: depth within {worst}");
             println!("{what}: {same} of {n} ids agree, depth within {worst:e}");
+        }
+    }
+}
+
+/// Culling over the compute rasteriser's `R32Float` depth (`Culler::with_float_depth`, what
+/// `Renderer::culler_for` gives its frames) builds, for every strategy, the very lists that
+/// culling over a depth buffer of the same depths builds (the depth buffer the untimed
+/// `shade.visibility_depth` pass writes, culled by the renderer's own culler, whose lists the
+/// CPU oracles check in tests/cull): the two depth inputs are one culling.
+#[test]
+fn culling_over_the_compute_depth_equals_culling_over_the_depth_buffer() {
+    let ctx = common::gpu();
+    for name in ["atrium", "pillars"] {
+        let s = scene(name);
+        let (w, h) = (70, 45);
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let settings = CullSettings::for_camera(&s.camera);
+        for strategy in super::strategies() {
+            let what = format!("{name} {}", strategy.name());
+            let out = renderer
+                .render(
+                    &ctx,
+                    &gpu_scene,
+                    Backend::Visibility,
+                    &strategy,
+                    &settings,
+                    (w, h),
+                )
+                .unwrap();
+            assert!(
+                out.computed_visibility(),
+                "{what}: lavapipe has 64-bit atomic max"
+            );
+            let float_culler = renderer.culler_for(&out);
+            assert!(
+                !std::ptr::eq(float_culler, &renderer.culler),
+                "{what}: the compute frame's culler is the float-depth one"
+            );
+            let over_float = out.lists.as_ref().unwrap().read(&ctx).unwrap();
+            let mut timer = manylights_gpu::timing::GpuTimer::new(&ctx, 64);
+            let over_depth = renderer
+                .culler
+                .run(
+                    &ctx, &gpu_scene, &out.depth, &strategy, &settings, &mut timer,
+                )
+                .unwrap()
+                .read(&ctx)
+                .unwrap();
+            assert!(
+                !over_float.indices.is_empty(),
+                "{what}: the lists hold no light"
+            );
+            assert_eq!(over_float.ranges.len(), over_depth.ranges.len(), "{what}");
+            // Each bin's set of lights (an unordered strategy may append them in any order).
+            for b in 0..over_float.ranges.len() {
+                assert_eq!(
+                    over_float.sorted(b),
+                    over_depth.sorted(b),
+                    "{what}: bin {b}"
+                );
+            }
         }
     }
 }

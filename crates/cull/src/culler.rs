@@ -149,7 +149,7 @@ impl Culler {
     /// As [`Culler::new`]; with `subgroups` false, gather keeps its portable scans even where
     /// the device has subgroup operations (both paths give the same lists; the tests run both).
     pub fn with_subgroups(ctx: &GpuContext, scene: &GpuScene, subgroups: bool) -> Self {
-        Self::build(ctx, scene, subgroups, 1, false)
+        Self::build(ctx, scene, subgroups, 1, DepthInput::Samples(1))
     }
 
     /// As [`Culler::new`], for depth buffers of `samples` samples a pixel (MSAA; see
@@ -157,7 +157,7 @@ impl Culler {
     /// bounds, so lists stay conservative for every sample. Its lists are for culling and the
     /// exact oracle; the shading backends read lists of single-sample depth buffers.
     pub fn with_samples(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
-        Self::build(ctx, scene, true, samples, false)
+        Self::build(ctx, scene, true, samples, DepthInput::Samples(samples))
     }
 
     /// As [`Culler::with_samples`], culling over lookup bounds
@@ -166,7 +166,15 @@ impl Culler {
     /// farthest lookup depth) while its oracle and per-pixel consumers read depth buffers of
     /// `samples`.
     pub fn with_bounds(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
-        Self::build(ctx, scene, true, samples, true)
+        Self::build(ctx, scene, true, samples, DepthInput::Bounds)
+    }
+
+    /// As [`Culler::new`], culling over a depth a compute pass wrote (an `R32Float` texture of
+    /// NDC depths, 1.0 where nothing covers a pixel: the visibility buffer's compute
+    /// rasteriser) while its oracle and per-pixel consumers read a single-sample depth buffer
+    /// holding the same depths.
+    pub fn with_float_depth(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        Self::build(ctx, scene, true, 1, DepthInput::Float)
     }
 
     fn build(
@@ -174,10 +182,11 @@ impl Culler {
         scene: &GpuScene,
         subgroups: bool,
         samples: u32,
-        lookup_bounds: bool,
+        input: DepthInput,
     ) -> Self {
         let d = &ctx.device;
-        let depth = if lookup_bounds {
+        let lookup_bounds = input == DepthInput::Bounds;
+        let depth = if input != DepthInput::Samples(samples) {
             wgpu::BindingType::Texture {
                 sample_type: wgpu::TextureSampleType::Float { filterable: false },
                 view_dimension: wgpu::TextureViewDimension::D2,
@@ -203,11 +212,6 @@ impl Culler {
                 entry(5, UNIFORM),
             ],
         });
-        let input = if lookup_bounds {
-            DepthInput::Bounds
-        } else {
-            DepthInput::Samples(samples)
-        };
         let program = |def| Program::new(d, def, input, &scene.layout, &layout);
         let depth = program(&DEPTH_BOUNDS);
         let gather_subgroups = subgroups && gather_subgroups_fit(ctx);

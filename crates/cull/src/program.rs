@@ -4,15 +4,17 @@
 use manylights_gpu::pipeline;
 use manylights_gpu::shaders::ShaderDef;
 
-use crate::shaders::BOUNDS_SWAPS;
+use crate::shaders::{BOUNDS_SWAPS, FLOAT_SWAPS};
 
 /// What culling reads its depth from (`shaders/cull/common/depth_input.wgsl`).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum DepthInput {
     /// The depth buffer, of this many samples a pixel.
     Samples(u32),
     /// Lookup bounds (`manylights_gpu::lookup_bounds`), read as two samples a pixel.
     Bounds,
+    /// An `R32Float` texture of depths, one sample a pixel (written by a compute pass).
+    Float,
 }
 
 /// A compiled shader over bind group 0 (the scene) and one group 1.
@@ -35,6 +37,7 @@ impl Program {
                 DepthInput::Samples(samples) => def.create_samples(d, samples),
                 // Two "samples": the nearest and the farthest.
                 DepthInput::Bounds => def.create_swapped(d, 2, BOUNDS_SWAPS),
+                DepthInput::Float => def.create_swapped(d, 1, FLOAT_SWAPS),
             },
             layout: pipeline::layout(d, def.name, &[scene_layout, group1]),
         }

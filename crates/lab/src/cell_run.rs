@@ -143,7 +143,7 @@ pub(crate) fn run_cell(
     // Stochastic ranges first: they make the lights general, which the renderer is built for.
     let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let renderer = stage(name, "pipelines built", || {
-        renderers.get(ctx, &gpu_scene, c.msaa, c.hdr)
+        renderers.get(ctx, &gpu_scene, c.msaa, c.hdr, c.visibility_pass)
     })
     .map_err(|e| other(&format!("msaa = {}: {e}", c.msaa)))?;
     let settings = |cam: &Camera| CullSettings {

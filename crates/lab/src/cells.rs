@@ -152,6 +152,9 @@ pub fn params_label(c: &Config) -> String {
     if c.hdr != manylights_shade::HdrFormat::F32 {
         p.push_str(&format!(";hdr={}", c.hdr.name()));
     }
+    if c.visibility_pass != manylights_shade::VisibilityPass::Compute {
+        p.push_str(&format!(";visibility_pass={}", c.visibility_pass.name()));
+    }
     if !c.materials.is_empty() {
         p.push_str(&format!(";materials={}", models_label(&c.materials)));
     }
@@ -518,6 +521,9 @@ fn apply_variant(c: &mut Config, v: Variant) -> String {
     }
     if let Some(n) = v.msaa {
         c.msaa = n;
+    }
+    if let Some(pass) = v.visibility_pass {
+        c.visibility_pass = pass;
     }
     let auto = format!(
         "{}+{}",

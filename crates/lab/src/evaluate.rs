@@ -96,7 +96,7 @@ pub(crate) fn evaluate(
                 let bins = stage(pose, "list lengths read back", || lists.bin_lengths(ctx))
                     .map_err(|e| other(&e))?;
                 let counts = stage(pose, "exact oracle", || {
-                    renderer.culler.exact_counts(
+                    renderer.culler_for(&o).exact_counts(
                         ctx,
                         gpu_scene,
                         &o.depth,
@@ -113,7 +113,7 @@ pub(crate) fn evaluate(
                 let timed = stage(pose, "culling timed back to back", || {
                     steady_cull(
                         ctx,
-                        &renderer.culler,
+                        renderer.culler_for(&o),
                         gpu_scene,
                         &o.cull_depth,
                         &c.strategy,
@@ -131,7 +131,7 @@ pub(crate) fn evaluate(
                     let timed = stage(pose, "culling and shading timed back to back", || {
                         steady_cull_shade(
                             ctx,
-                            &renderer.culler,
+                            renderer.culler_for(&o),
                             gpu_scene,
                             &o.cull_depth,
                             &c.strategy,
@@ -153,7 +153,7 @@ pub(crate) fn evaluate(
                 stage(pose, "exported", || {
                     crate::export::export_run(
                         ctx,
-                        &renderer.culler,
+                        renderer.culler_for(&o),
                         gpu_scene,
                         &o.depth,
                         lists,
@@ -165,7 +165,7 @@ pub(crate) fn evaluate(
             }
             stage(pose, "lights per pixel", || {
                 renderer
-                    .culler
+                    .culler_for(&o)
                     .lights_per_pixel(ctx, gpu_scene, &o.depth, lists)
             })
             .map_err(|e| other(&e))?

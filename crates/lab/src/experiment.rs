@@ -13,7 +13,7 @@ use manylights_scene::procedural::{
     AtriumParams, Cis5650Params, CityParams, PillarsParams, ProceduralScene, TopdownParams,
 };
 use manylights_scene::{Camera, LightGenerator, LightSpec, Model, Motion, Projection, RadiusRule};
-use manylights_shade::{Backend, HdrFormat};
+use manylights_shade::{Backend, HdrFormat, VisibilityPass};
 use serde::{Deserialize, Serialize};
 
 pub use crate::cells::{Cell, params_label};
@@ -199,6 +199,9 @@ pub struct Variant {
     /// MSAA sample count override.
     #[serde(default)]
     pub msaa: Option<u32>,
+    /// The visibility backend's pass override (`Compute` or `Raster`).
+    #[serde(default)]
+    pub visibility_pass: Option<VisibilityPass>,
 }
 
 /// One value of the `settings` sweep axis: a scene, lights, camera and resolution (and how
@@ -353,6 +356,13 @@ pub struct Config {
     /// rounding). (Left out of a cell's identity when `F32`; `hdr=f16` in its `params`.)
     #[serde(default, skip_serializing_if = "is_f32")]
     pub hdr: HdrFormat,
+    /// How the visibility backend finds each pixel's triangle: `Compute` (the default: the
+    /// compute rasteriser, where it can: one sample a pixel, no glass, 64-bit atomic max; the
+    /// raster pass elsewhere) or `Raster` (the raster pass, `@builtin(primitive_index)`,
+    /// always). Other backends ignore it. (Left out of a cell's identity when `Compute`;
+    /// `visibility_pass=raster` in its `params`.)
+    #[serde(default, skip_serializing_if = "is_compute")]
+    pub visibility_pass: VisibilityPass,
     /// Material models to give the scene's surfaces, in turns (`manylights_scene::material::
     /// assign_models`): `[Ggx]` makes every surface GGX; `[BlinnPhong, Ggx, Sheen, ClearCoat,
     /// Wrap]` mixes five models in one frame, each material's parameters carried over
@@ -482,6 +492,10 @@ fn is_one(n: &u32) -> bool {
 
 fn is_f32(h: &HdrFormat) -> bool {
     *h == HdrFormat::F32
+}
+
+fn is_compute(p: &VisibilityPass) -> bool {
+    *p == VisibilityPass::Compute
 }
 
 fn one() -> u32 {

@@ -8,7 +8,7 @@
 
 use manylights_gpu::{GpuContext, GpuError, GpuScene};
 use manylights_scene::Camera;
-use manylights_shade::{HdrFormat, ReferenceFrame, Renderer};
+use manylights_shade::{HdrFormat, ReferenceFrame, Renderer, VisibilityPass};
 
 use crate::experiment::Config;
 
@@ -25,14 +25,16 @@ impl Renderers {
     /// The most renderers kept: a sweep's cells rarely need more kinds.
     const KEEP: usize = 4;
 
-    /// A renderer for `scene` at `samples` samples a pixel into a lit image of format `hdr`:
-    /// one built before for a scene laid out alike, or a new one.
+    /// A renderer for `scene` at `samples` samples a pixel into a lit image of format `hdr`
+    /// (one built before for a scene laid out alike, or a new one), its visibility backend
+    /// drawn by `visibility_pass`.
     pub fn get(
         &mut self,
         ctx: &GpuContext,
         scene: &GpuScene,
         samples: u32,
         hdr: HdrFormat,
+        visibility_pass: VisibilityPass,
     ) -> Result<&Renderer, GpuError> {
         let key = (
             samples,
@@ -58,7 +60,9 @@ impl Renderers {
                 self.0.len() - 1
             }
         };
-        Ok(&self.0[i].1)
+        let renderer = &mut self.0[i].1;
+        renderer.visibility_pass = visibility_pass;
+        Ok(renderer)
     }
 }
 
@@ -82,6 +86,7 @@ impl ReferenceFrames {
         let neutral = Config {
             strategy: manylights_cull::Strategy::tiled_gather(16),
             backend: manylights_shade::Backend::Forward,
+            visibility_pass: VisibilityPass::Compute,
             capacity: None,
             mask_budget: None,
             tile_boxes: false,

@@ -198,13 +198,16 @@ pub(crate) fn now() -> u64 {
         .map_or(0, |d| d.as_secs())
 }
 
-/// Pass category for the result columns.
-/// Whether `label` is a deferred backend's raster pass (`shade.gbuffer`, `shade.visibility`):
-/// geometry, as a depth prepass is.
+/// Whether `label` is a deferred backend's raster pass (`shade.gbuffer`, `shade.visibility`)
+/// or one of the compute rasteriser's (`shade.visibility_compute.*`): geometry, as a depth
+/// prepass is.
 pub(crate) fn is_surfaces_pass(label: &str) -> bool {
-    label == "shade.gbuffer" || label == "shade.visibility"
+    label == "shade.gbuffer"
+        || label == "shade.visibility"
+        || label.starts_with("shade.visibility_compute.")
 }
 
+/// Pass category for the result columns.
 pub(crate) fn category(label: &str) -> &'static str {
     if label.starts_with("prepass.") || is_surfaces_pass(label) {
         "prepass"

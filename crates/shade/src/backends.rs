@@ -23,8 +23,12 @@ use crate::pipelines::Surfaces;
 pub use crate::pipelines::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
 use crate::shade_pass::{ShadePass, Targets};
 
-pub use crate::kinds::{Backend, GBUFFER_BYTES_PER_PIXEL, HdrFormat, VISIBILITY_BYTES_PER_PIXEL};
+pub use crate::kinds::{
+    Backend, GBUFFER_BYTES_PER_PIXEL, HdrFormat, VISIBILITY_BYTES_PER_PIXEL, VisibilityPass,
+};
 pub(crate) use crate::kinds::{GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, VISIBILITY_ID};
+use crate::vis_compute::ComputeVisibility;
+use std::sync::OnceLock;
 
 /// What one frame of a backend produced.
 pub struct ShadeOutput {
@@ -52,6 +56,13 @@ pub struct ShadeOutput {
 }
 
 impl ShadeOutput {
+    /// Whether its triangles were found by the compute rasteriser
+    /// ([`Renderer::computes_visibility`]; its passes `shade.visibility_compute.*`), not a
+    /// raster pass.
+    pub fn computed_visibility(&self) -> bool {
+        self.targets.compute.is_some()
+    }
+
     /// Reads the colour target again (after [`Renderer::shade_pass`] shaded into it anew).
     pub fn read_color(&self, ctx: &GpuContext) -> Result<HdrImage, manylights_gpu::GpuError> {
         let (w, h) = self.targets.size;
@@ -101,6 +112,14 @@ pub struct Renderer {
     pub(crate) lookup_bounds: Option<LookupBounds>,
     /// Every backend's pipelines, built at their first use.
     pub(crate) pipelines: crate::pipelines::Pipelines,
+    /// How the visibility backend finds each pixel's triangle (default: the compute rasteriser
+    /// where it can, [`VisibilityPass::Compute`]).
+    pub visibility_pass: VisibilityPass,
+    /// Whether the device has 64-bit atomic max (the compute rasteriser needs it).
+    pub(crate) int64_atomics: bool,
+    /// The compute rasteriser and the culler over its `R32Float` depth, built at its first
+    /// frame.
+    pub(crate) compute_visibility: OnceLock<(ComputeVisibility, Culler)>,
 }
 
 impl Renderer {
@@ -181,6 +200,41 @@ impl Renderer {
         ctx.check_storage("index buffer bytes", scene.indices.size())
     }
 
+    /// Whether frames of `backend` find their triangles with the compute rasteriser: the
+    /// visibility backend with [`VisibilityPass::Compute`], at one sample a pixel, over a scene
+    /// without transparent surfaces (whose forward pass tests a depth buffer), on a device with
+    /// 64-bit atomic max. Elsewhere it draws the raster pass.
+    pub fn computes_visibility(&self, backend: Backend) -> bool {
+        backend == Backend::Visibility
+            && self.visibility_pass == VisibilityPass::Compute
+            && self.samples == 1
+            && !self.transparent
+            && self.int64_atomics
+    }
+
+    /// The compute rasteriser and its culler (built by the first frame that draws it).
+    fn compute_visibility(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+    ) -> &(ComputeVisibility, Culler) {
+        self.compute_visibility.get_or_init(|| {
+            let vis = ComputeVisibility::new(ctx, scene)
+                .expect("computes_visibility checked the device's 64-bit atomics");
+            (vis, Culler::with_float_depth(ctx, scene))
+        })
+    }
+
+    /// The culler whose lists `out` was shaded with, and which culls again over its
+    /// `cull_depth`: [`Renderer::culler`], or where the compute rasteriser drew the frame one
+    /// culling over its `R32Float` depth (`Culler::with_float_depth`; the same lists).
+    pub fn culler_for(&self, out: &ShadeOutput) -> &Culler {
+        match (&out.targets.compute, self.compute_visibility.get()) {
+            (Some(_), Some((_, culler))) => culler,
+            _ => &self.culler,
+        }
+    }
+
     /// Samples a pixel of its frames.
     pub fn samples(&self) -> u32 {
         self.samples
@@ -229,11 +283,19 @@ impl Renderer {
         if backend == Backend::Visibility {
             self.check_visibility(ctx, scene)?;
         }
-        self.pipelines.prepare(backend, self.transparent);
-        let targets = Targets::new(ctx, self, backend, (width, height));
+        let compute = self.computes_visibility(backend);
+        self.pipelines.prepare(backend, self.transparent, compute);
+        let vis = compute.then(|| self.compute_visibility(ctx, scene));
+        let targets = Targets::new(ctx, self, scene, backend, (width, height));
         let mut timer = GpuTimer::new(ctx, 64);
         let mut enc = ctx.encoder("shade");
         self.encode_geometry(&mut enc, &mut timer, scene, backend, &targets);
+        if let (Some((vis, _)), Some(t)) = (vis, &targets.compute) {
+            // The depth buffer the oracle reads, untimed (culling and lighting read the
+            // compute pass's depths).
+            vis.encode_depth(&mut enc, t, &targets.depth_view);
+        }
+        let culler = vis.map_or(&self.culler, |(_, c)| c);
         let lists = if backend == Backend::NaiveForward {
             self.encode_naive(&mut enc, &mut timer, scene, &targets);
             timer.resolve(&mut enc);
@@ -257,7 +319,7 @@ impl Renderer {
                     _ => "G-buffer",
                 },
             )?;
-            let lists = self.culler.run(
+            let lists = culler.run(
                 ctx,
                 scene,
                 targets.cull_depth(),
@@ -311,13 +373,22 @@ impl Renderer {
                     _ => self.prepass.encode(enc, scene, &targets.depth_view, timer),
                 }
             }
+            Backend::Visibility if targets.compute.is_some() => {
+                let (vis, _) = self
+                    .compute_visibility
+                    .get()
+                    .expect("built by the frame's render");
+                let t = targets.compute.as_ref().expect("matched");
+                vis.encode(enc, timer, scene, t);
+            }
             Backend::Deferred | Backend::DeferredStoredPosition | Backend::Visibility => {
-                let surfaces = Surfaces::of(backend);
+                let surfaces = Surfaces::of(backend, false);
+                let pass = self.pipelines.deferred(surfaces).gbuffer.as_ref();
                 self.raster_pass(
                     enc,
                     timer,
                     surfaces.pass_name(),
-                    std::slice::from_ref(&self.pipelines.deferred(surfaces).gbuffer),
+                    std::slice::from_ref(pass.expect("a raster pass")),
                     scene,
                     &targets
                         .gbuffer_targets(backend)

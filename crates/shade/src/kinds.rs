@@ -106,6 +106,29 @@ impl Backend {
     }
 }
 
+/// How the visibility backend finds each pixel's triangle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum VisibilityPass {
+    /// A compute rasteriser (`crate::vis_compute`: a 64-bit depth-and-id key a pixel kept by
+    /// atomic max), where it can: one sample a pixel, no transparent surfaces, and 64-bit atomic
+    /// max on the device (`SHADER_INT64_ATOMIC_MIN_MAX`); elsewhere the raster pass. The
+    /// default: 2-6x faster than the raster pass on the GPU machine (docs/BENCHMARKS.md).
+    #[default]
+    Compute,
+    /// The raster pass (`shade.visibility`, `@builtin(primitive_index)`) always.
+    Raster,
+}
+
+impl VisibilityPass {
+    /// Its name (the `visibility_pass` of experiments and results).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Compute => "compute",
+            Self::Raster => "raster",
+        }
+    }
+}
+
 /// The format of the lit (HDR) image a [`crate::Renderer`] shades into and reads back: 32-bit floats
 /// (the default: the image as shading computed it), or 16-bit floats, as engines' HDR targets
 /// commonly are (half the bytes the lighting pass writes; each channel rounded to 11

@@ -18,7 +18,7 @@ pub mod shade_pass;
 pub mod vis_compute;
 pub mod visibility;
 
-pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput};
+pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput, VisibilityPass};
 pub use image_out::HdrImage;
 pub use infinite::InfiniteReference;
 pub use reference::{ReferenceFrame, ReferenceRenderer};
@@ -35,4 +35,5 @@ pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     pipelines::VISIBILITY,
     vis_compute::VISIBILITY_COMPUTE,
     vis_compute::VISIBILITY_RESOLVE,
+    vis_compute::VISIBILITY_DEPTH,
 ];

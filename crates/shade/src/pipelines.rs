@@ -13,6 +13,7 @@ use std::sync::OnceLock;
 use crate::backends::{
     Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer, VISIBILITY_ID,
 };
+use crate::kinds::VisibilityPass;
 
 /// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
 pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
@@ -133,6 +134,14 @@ impl Renderer {
             pipeline::depth_texture(samples),
         ));
         let deferred_lists = layout("shade.deferred.lists", &entries);
+        // The visibility buffer's compute rasteriser: the depth an R32Float texture.
+        let mut entries = lists_entries(compute);
+        entries.push(pipeline::entry(
+            3,
+            compute,
+            texture(wgpu::TextureSampleType::Float { filterable: false }, 1),
+        ));
+        let deferred_float_lists = layout("shade.deferred.float_lists", &entries);
         let float = || {
             texture(
                 wgpu::TextureSampleType::Float { filterable: false },
@@ -185,9 +194,11 @@ impl Renderer {
             glass_layer: samples > 1 && transparent,
             forward_lists,
             deferred_lists,
+            deferred_float_lists,
             deferred_gbuffer,
             forward_module: OnceLock::new(),
             deferred_module: OnceLock::new(),
+            deferred_float_module: OnceLock::new(),
             forward: OnceLock::new(),
             glass: OnceLock::new(),
             naive: OnceLock::new(),
@@ -206,6 +217,9 @@ impl Renderer {
             band_points,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
+            visibility_pass: VisibilityPass::default(),
+            int64_atomics: ctx.features.int64_atomics,
+            compute_visibility: OnceLock::new(),
             lookup_bounds,
             pipelines,
         }
@@ -245,23 +259,29 @@ pub(crate) enum Surfaces {
     Stored,
     /// A visibility buffer: each pixel's triangle, interpolated at the pixel.
     Visibility,
+    /// A visibility buffer of the compute rasteriser (`crate::vis_compute`): the same, its
+    /// depth read from an `R32Float` texture.
+    VisibilityCompute,
 }
 
 impl Surfaces {
-    /// Those of `backend` (one whose lights are shaded in compute).
-    pub fn of(backend: Backend) -> Self {
+    /// Those of `backend` (one whose lights are shaded in compute), `compute` where the
+    /// visibility buffer is rasterised in compute.
+    pub fn of(backend: Backend, compute: bool) -> Self {
         match backend {
             Backend::DeferredStoredPosition => Self::Stored,
+            Backend::Visibility if compute => Self::VisibilityCompute,
             Backend::Visibility => Self::Visibility,
             _ => Self::Rebuilt,
         }
     }
 
-    /// The raster pass that writes them.
+    /// The raster pass that writes them (none for the compute rasteriser's).
     pub fn pass_name(self) -> &'static str {
         match self {
             Self::Rebuilt | Self::Stored => "shade.gbuffer",
             Self::Visibility => "shade.visibility",
+            Self::VisibilityCompute => "shade.visibility_compute",
         }
     }
 }
@@ -269,8 +289,9 @@ impl Surfaces {
 /// A deferred backend's G-buffer (or visibility buffer) pass and lighting passes, a pass a form
 /// of lists.
 pub(crate) struct Deferred {
-    /// The raster pass: `shade.gbuffer` or `shade.visibility`.
-    pub gbuffer: wgpu::RenderPipeline,
+    /// The raster pass: `shade.gbuffer` or `shade.visibility`; none where the visibility
+    /// buffer is rasterised in compute (the renderer's `ComputeVisibility`).
+    pub gbuffer: Option<wgpu::RenderPipeline>,
     /// Over a list a bin.
     pub bins: wgpu::ComputePipeline,
     /// Over z-binning's lists; then the same in rounds (`shade_zbin_rounds_group`, for a
@@ -301,26 +322,30 @@ pub(crate) struct Pipelines {
     glass_layer: bool,
     pub forward_lists: wgpu::BindGroupLayout,
     pub deferred_lists: wgpu::BindGroupLayout,
+    /// As `deferred_lists`, the depth an `R32Float` texture (`Surfaces::VisibilityCompute`).
+    pub deferred_float_lists: wgpu::BindGroupLayout,
     pub deferred_gbuffer: wgpu::BindGroupLayout,
     forward_module: OnceLock<wgpu::ShaderModule>,
     deferred_module: OnceLock<wgpu::ShaderModule>,
+    /// The deferred lighting module reading its depth from an `R32Float` texture.
+    deferred_float_module: OnceLock<wgpu::ShaderModule>,
     forward: OnceLock<Forward>,
     glass: OnceLock<Glass>,
     naive: OnceLock<Naive>,
     /// By [`Surfaces`], in its order.
-    deferred: [OnceLock<Deferred>; 3],
+    deferred: [OnceLock<Deferred>; 4],
 }
 
 impl Pipelines {
     /// Builds what a frame of `backend` draws with, where not built yet: before a frame's
     /// encoder opens, so that its recording time holds no compiling.
-    pub fn prepare(&self, backend: Backend, transparent: bool) {
+    pub fn prepare(&self, backend: Backend, transparent: bool, compute: bool) {
         match backend {
             Backend::Forward => {
                 self.forward();
             }
             Backend::Deferred | Backend::DeferredStoredPosition | Backend::Visibility => {
-                self.deferred(Surfaces::of(backend));
+                self.deferred(Surfaces::of(backend, compute));
             }
             Backend::NaiveForward => {
                 self.naive();
@@ -451,18 +476,26 @@ impl Pipelines {
         })
     }
 
+    /// The deferred lighting module over a depth in an `R32Float` texture (one sample).
+    fn deferred_float_module(&self) -> &wgpu::ShaderModule {
+        self.deferred_float_module.get_or_init(|| {
+            DEFERRED.create_edited(&self.device, 1, &|s| float_depth(hdr_storage(s, self.hdr)))
+        })
+    }
+
     /// A deferred backend's pipelines over `surfaces` (a stored position takes no MSAA:
     /// `Renderer::render` says so).
     pub fn deferred(&self, surfaces: Surfaces) -> &Deferred {
         self.deferred[surfaces as usize].get_or_init(|| self.build_deferred(surfaces))
     }
 
-    /// The raster pass that writes `surfaces`.
-    fn surfaces_pass(&self, surfaces: Surfaces) -> wgpu::RenderPipeline {
+    /// The raster pass that writes `surfaces` (none: the compute rasteriser's).
+    fn surfaces_pass(&self, surfaces: Surfaces) -> Option<wgpu::RenderPipeline> {
         let d = &self.device;
         let g0 = &self.scene_layout;
         let depth = pipeline::DepthTest::WriteLess;
-        match surfaces {
+        Some(match surfaces {
+            Surfaces::VisibilityCompute => return None,
             Surfaces::Rebuilt => pipeline::raster_msaa(
                 d,
                 "shade.gbuffer",
@@ -502,25 +535,30 @@ impl Pipelines {
                 depth,
                 self.samples,
             ),
-        }
+        })
     }
 
     fn build_deferred(&self, surfaces: Surfaces) -> Deferred {
         let d = &self.device;
         let g0 = &self.scene_layout;
         let gbuffer = self.surfaces_pass(surfaces);
-        let layout = pipeline::layout(
-            d,
-            "shade.deferred",
-            &[g0, &self.deferred_lists, &self.deferred_gbuffer],
-        );
+        let float = surfaces == Surfaces::VisibilityCompute;
+        let lists = if float {
+            &self.deferred_float_lists
+        } else {
+            &self.deferred_lists
+        };
+        let layout = pipeline::layout(d, "shade.deferred", &[g0, lists, &self.deferred_gbuffer]);
         // One lighting pass over every model of the opaque triangles, branching on each
         // pixel's. With MSAA, GLASS: the lighting composites the glass layer over each sample.
         let mut constants = vec![("MATERIAL_MODELS", f64::from(self.opaque_model_mask))];
         constants.extend(self.lights);
         constants.push((
             "VISIBILITY",
-            f64::from(u8::from(surfaces == Surfaces::Visibility)),
+            f64::from(u8::from(matches!(
+                surfaces,
+                Surfaces::Visibility | Surfaces::VisibilityCompute
+            ))),
         ));
         if self.samples > 1 {
             constants.push(("GLASS", f64::from(u8::from(self.glass_layer))));
@@ -529,7 +567,11 @@ impl Pipelines {
             constants: &constants,
             ..Default::default()
         };
-        let module = self.deferred_module();
+        let module = if float {
+            self.deferred_float_module()
+        } else {
+            self.deferred_module()
+        };
         let compute = |entry: &str| pipeline::compute_with(d, module, &layout, entry, &options);
         if self.samples > 1 {
             // One pass for the lists a bin (a tile's or a cluster's too) and one for z-binning's,
@@ -572,5 +614,20 @@ fn hdr_storage(source: String, hdr: HdrFormat) -> String {
     source.replace(
         DECLARED,
         &format!("var out_color: texture_storage_2d<{}, write>;", hdr.wgsl()),
+    )
+}
+
+/// The deferred lighting passes' depth (`depth_tex`, declared a depth texture in lookup.wgsl) as
+/// an `R32Float` texture: what the compute rasteriser writes (deferred.wgsl reads it through
+/// `vec4<f32>(...)`, which takes either).
+fn float_depth(source: String) -> String {
+    const DECLARED: &str = "@group(1) @binding(3) var depth_tex: texture_depth_2d;";
+    assert!(
+        source.contains(DECLARED),
+        "depth_tex is declared as {DECLARED}"
+    );
+    source.replace(
+        DECLARED,
+        "@group(1) @binding(3) var depth_tex: texture_2d<f32>;",
     )
 }

@@ -12,6 +12,8 @@ use manylights_gpu::prepass::depth_target_msaa;
 use manylights_gpu::timing::GpuTimer;
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
 
+use crate::vis_compute::ComputeTargets;
+
 use crate::pipelines::Surfaces;
 
 use crate::backends::{
@@ -41,6 +43,9 @@ pub struct Targets {
     pub(crate) msaa_bytes: u64,
     /// MSAA forward: the depth ranges and the depth culling reads.
     pub(crate) bounds: Option<BoundsTargets>,
+    /// The visibility buffer rasterised in compute: its keys, ids (the surface buffers' ids)
+    /// and `R32Float` depths (what culling and lighting read).
+    pub(crate) compute: Option<ComputeTargets>,
 }
 
 impl Targets {
@@ -48,6 +53,7 @@ impl Targets {
     pub(crate) fn new(
         ctx: &GpuContext,
         renderer: &Renderer,
+        scene: &GpuScene,
         backend: Backend,
         (width, height): (u32, u32),
     ) -> Self {
@@ -68,6 +74,13 @@ impl Targets {
         let stored = backend == Backend::DeferredStoredPosition;
         let visibility = backend == Backend::Visibility;
         let deferred = backend.lights_in_compute();
+        let compute = renderer.computes_visibility(backend).then(|| {
+            let (vis, _) = renderer
+                .compute_visibility
+                .get()
+                .expect("built before the frame's targets");
+            vis.targets(ctx, scene, (width, height))
+        });
         // Deferred lighting writes the image itself: with MSAA a multisampled colour target
         // only for the glass, drawn into it first and composited sample by sample by the
         // lighting pass (which reads it).
@@ -125,8 +138,8 @@ impl Targets {
                 .create_view(&Default::default()),
             };
             if visibility {
-                // The triangle ids in the material's place, and a 1 x 1 stand-in for the
-                // normal and view depth.
+                // The triangle ids in the material's place (the compute rasteriser's where it
+                // draws them), and a 1 x 1 stand-in for the normal and view depth.
                 let stand_in = pipeline::texture_2d_msaa(
                     d,
                     "visibility.no_normal_depth",
@@ -135,11 +148,11 @@ impl Targets {
                     usage,
                     samples,
                 );
-                return [
-                    stand_in.create_view(&Default::default()),
-                    ms("visibility.ids", VISIBILITY_ID),
-                    third,
-                ];
+                let ids = match &compute {
+                    Some(t) => t.ids.create_view(&Default::default()),
+                    None => ms("visibility.ids", VISIBILITY_ID),
+                };
+                return [stand_in.create_view(&Default::default()), ids, third];
             }
             [
                 ms("gbuffer.normal_depth", GB_NORMAL_DEPTH),
@@ -147,10 +160,15 @@ impl Targets {
                 third,
             ]
         });
-        let gbuffer_bytes = u64::from(width)
-            * u64::from(height)
-            * backend.surface_bytes_per_sample()
-            * u64::from(samples);
+        let gbuffer_bytes = match &compute {
+            Some(t) => t.bytes(),
+            None => {
+                u64::from(width)
+                    * u64::from(height)
+                    * backend.surface_bytes_per_sample()
+                    * u64::from(samples)
+            }
+        };
         Self {
             size: (width, height),
             hdr,
@@ -186,12 +204,16 @@ impl Targets {
                     }
                 },
             bounds,
+            compute,
         }
     }
 
-    /// The depth culling reads: the depth buffer, or the lookup bounds where the renderer has
-    /// them.
+    /// The depth culling reads: the depth buffer, the lookup bounds where the renderer has
+    /// them, or the compute rasteriser's `R32Float` depths.
     pub(crate) fn cull_depth(&self) -> &wgpu::Texture {
+        if let Some(t) = &self.compute {
+            return &t.depth;
+        }
         self.bounds.as_ref().map_or(&self.depth, |b| &b.bounds)
     }
 
@@ -328,7 +350,11 @@ impl ListPass for ShadePass<'_> {
             ));
         }
         let depth_only;
-        let layout = if self.gbuffer.is_some() {
+        let layout = if let Some(t) = &self.targets.compute {
+            depth_only = t.depth.create_view(&Default::default());
+            resources.push(wgpu::BindingResource::TextureView(&depth_only));
+            &self.renderer.pipelines.deferred_float_lists
+        } else if self.gbuffer.is_some() {
             depth_only = self
                 .targets
                 .depth
@@ -386,7 +412,8 @@ impl ListPass for ShadePass<'_> {
                 if let (true, Some(forward_lists)) = (layer, glass) {
                     self.transparent_pass(enc, timer, forward_lists, true);
                 }
-                let lighting = r.pipelines.deferred(Surfaces::of(self.backend));
+                let compute = self.targets.compute.is_some();
+                let lighting = r.pipelines.deferred(Surfaces::of(self.backend, compute));
                 pipeline::dispatch(
                     enc,
                     timer,

@@ -1,11 +1,16 @@
-//! The visibility pass rasterised in compute (issue 49's item 4; a building block, not yet a
-//! backend's pass): `shade.visibility_compute` keeps each pixel's nearest opaque triangle in a
-//! 64-bit key by atomic max (a thread a triangle, clipped against the near plane; large ones
-//! set up once, their 64 x 64 blocks (`Tiling`) numbered by one workgroup's scan and taken a workgroup a
-//! block), and `shade.visibility_resolve` writes the ids (as
-//! `shade.visibility` does: the triangle's index plus one, 0 for none) and NDC depths. It needs
-//! 64-bit atomic max on storage buffers (`SHADER_INT64_ATOMIC_MIN_MAX`; lavapipe and NVIDIA
-//! have it). Tested against the hardware pass's ids and depths (tests/shade/visibility.rs).
+//! The visibility buffer rasterised in compute: the visibility backend's pass by default
+//! ([`crate::VisibilityPass::Compute`]; the raster pass `shade.visibility` with MSAA, glass, or
+//! without 64-bit atomics). `shade.visibility_compute` keeps each pixel's nearest opaque
+//! triangle in a 64-bit key by atomic max (a thread a triangle, clipped against the near plane;
+//! large ones set up once, their 64 x 64 blocks (`Tiling`) numbered by one workgroup's scan and
+//! taken a workgroup a block); coverage as the hardware's (vertices snapped to 1/256 pixel,
+//! exact 64-bit edge functions, the top-left rule). `shade.visibility_resolve` writes the ids
+//! (as `shade.visibility` does: the triangle's index plus one, 0 for none) and NDC depths
+//! (`R32Float`, which culling, `Culler::with_float_depth`, and the lighting read);
+//! `shade.visibility_depth` copies those depths into a depth buffer outside the timed frame,
+//! for the exact oracle. It needs 64-bit atomic max on storage buffers
+//! (`SHADER_INT64_ATOMIC_MIN_MAX`; lavapipe and NVIDIA have it). Tested against the hardware
+//! pass's ids and depths (tests/shade/visibility.rs).
 
 use manylights_gpu::pipeline::{self, UNIFORM, storage};
 use manylights_gpu::shader_file;
@@ -26,6 +31,13 @@ pub const VISIBILITY_RESOLVE: ShaderDef = ShaderDef {
     name: "shade.visibility_resolve",
     consts: &[],
     files: &[FRAME, shader_file!("render/visibility_resolve.wgsl")],
+};
+
+/// `shade.visibility_depth`: the pass's depths into a depth buffer (untimed, for the oracle).
+pub const VISIBILITY_DEPTH: ShaderDef = ShaderDef {
+    name: "shade.visibility_depth",
+    consts: &[],
+    files: &[shader_file!("render/visibility_depth.wgsl")],
 };
 
 /// Workgroups of the blocks' pass, each taking every this-many-th entry.
@@ -62,6 +74,8 @@ pub struct ComputeVisibility {
     scan: wgpu::ComputePipeline,
     blocks: wgpu::ComputePipeline,
     resolve: wgpu::ComputePipeline,
+    depth_layout: wgpu::BindGroupLayout,
+    depth: wgpu::RenderPipeline,
 }
 
 /// A frame's compute visibility buffers.
@@ -71,10 +85,19 @@ pub struct ComputeTargets {
     counts: wgpu::Buffer,
     group: wgpu::BindGroup,
     resolve_group: wgpu::BindGroup,
+    depth_group: wgpu::BindGroup,
     /// Each pixel's triangle id (`R32Uint`).
     pub ids: wgpu::Texture,
     /// Each pixel's NDC depth (`R32Float`, 1 where nothing is drawn).
     pub depth: wgpu::Texture,
+}
+
+impl ComputeTargets {
+    /// Bytes of its buffers a frame: a 64-bit key, an id and a depth a pixel.
+    pub fn bytes(&self) -> u64 {
+        let (w, h) = self.size;
+        u64::from(w) * u64::from(h) * (8 + 4 + 4)
+    }
 }
 
 /// What the compute visibility pass wrote, read back: ids and depths a pixel (rows from the top)
@@ -152,7 +175,21 @@ impl ComputeVisibility {
             ..Default::default()
         };
         let compute = |entry| pipeline::compute_with(d, &module, &pl, entry, &options);
+        let depth_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("shade.visibility_depth"),
+            entries: &[pipeline::entry(
+                0,
+                wgpu::ShaderStages::FRAGMENT,
+                wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+            )],
+        });
         Ok(Self {
+            depth: depth_pipeline(d, &depth_layout),
+            depth_layout,
             triangles: compute("vis_triangles"),
             scan: compute("vis_scan"),
             blocks: compute("vis_blocks"),
@@ -237,8 +274,17 @@ impl ComputeVisibility {
                 wgpu::BindingResource::TextureView(&depth.create_view(&Default::default())),
             ],
         );
+        let depth_group = pipeline::group(
+            d,
+            "shade.visibility_depth",
+            &self.depth_layout,
+            &[wgpu::BindingResource::TextureView(
+                &depth.create_view(&Default::default()),
+            )],
+        );
         ComputeTargets {
             size: (w, h),
+            depth_group,
             keys,
             counts,
             group,
@@ -296,6 +342,34 @@ impl ComputeVisibility {
         );
     }
 
+    /// Encodes `shade.visibility_depth`: the depths of `t` (after [`ComputeVisibility::encode`])
+    /// into `depth`, a single-sample `Depth32Float` view of its size, untimed.
+    pub fn encode_depth(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        t: &ComputeTargets,
+        depth: &wgpu::TextureView,
+    ) {
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shade.visibility_depth"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.depth);
+        pass.set_bind_group(0, &t.depth_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+
     /// One frame of the pass, read back.
     pub fn run(
         &self,
@@ -316,4 +390,38 @@ impl ComputeVisibility {
             dropped: counts[1],
         })
     }
+}
+
+/// `shade.visibility_depth`'s pipeline: a triangle over the target writing every fragment's
+/// depth (compare `Always`).
+fn depth_pipeline(d: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> wgpu::RenderPipeline {
+    let module = VISIBILITY_DEPTH.create(d);
+    let pl = pipeline::layout(d, "shade.visibility_depth", &[layout]);
+    d.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some("shade.visibility_depth"),
+        layout: Some(&pl),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vis_depth_vs"),
+            compilation_options: Default::default(),
+            buffers: &[],
+        },
+        primitive: wgpu::PrimitiveState::default(),
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: manylights_gpu::prepass::DEPTH_FORMAT,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Always),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("vis_depth_fs"),
+            compilation_options: Default::default(),
+            targets: &[],
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
 }
