@@ -356,7 +356,9 @@ fn visibility(c: &mut Criterion) {
         };
         let (w, h) = s.size;
         let gs = GpuScene::upload(&ctx, &s.scene, &s.scene.camera, w, h).unwrap();
-        let renderer = Renderer::new(&ctx, &gs);
+        // The raster pass, as `visibility_pass: Raster` draws it.
+        let mut renderer = Renderer::new(&ctx, &gs);
+        renderer.visibility_pass = manylights_shade::VisibilityPass::Raster;
         let settings = CullSettings::for_camera(&s.scene.camera);
         let out = renderer
             .render(
@@ -368,7 +370,7 @@ fn visibility(c: &mut Criterion) {
                 (w, h),
             )
             .unwrap();
-        let tilings = [(64, 256), (32, 256), (64, 1024), (128, 1024)];
+        let tilings = [(64, 256), (32, 256), (128, 256), (64, 64), (64, 1024)];
         for (block, small) in tilings {
             let cv = ComputeVisibility::with_tiling(&ctx, &gs, Tiling { block, small }).unwrap();
             let targets = cv.targets(&ctx, &gs, (w, h));

@@ -139,40 +139,71 @@ fn vc_top_left(a: vec2<f32>, b: vec2<f32>) -> bool {
 }
 
 // Whether edge a -> b takes a point whose edge function is e (positive, or zero on a top or left
-// edge).
+// edge; the f32 path's test).
 fn vc_takes(e: f32, a: vec2<f32>, b: vec2<f32>) -> bool {
     return e > 0.0 || (e == 0.0 && vc_top_left(a, b));
 }
 
-// Tests pixel (x, y) against s (wound positively, of positive area) and keeps its key.
-fn vc_pixel(s: ScreenTri, x: u32, y: u32, id: u32) {
-    var e: vec3<f32>;
-    if s.exact {
-        let q = vc_centre_fixed(x, y);
-        let a = vc_fixed(s.p[0].xy);
-        let b = vc_fixed(s.p[1].xy);
-        let c = vc_fixed(s.p[2].xy);
-        let e0 = vc_edge_fixed(b, c, q);
-        let e1 = vc_edge_fixed(c, a, q);
-        let e2 = vc_edge_fixed(a, b, q);
-        // (Each i64 to f32 keeps its sign and its zero: the test is exact.)
-        e = vec3<f32>(f32(e0), f32(e1), f32(e2));
-    } else {
-        let q = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
-        e = vec3<f32>(vc_edge(s.p[1].xy, s.p[2].xy, q), vc_edge(s.p[2].xy, s.p[0].xy, q), vc_edge(s.p[0].xy, s.p[1].xy, q));
-    }
-    let in0 = vc_takes(e.x, s.p[1].xy, s.p[2].xy);
-    let in1 = vc_takes(e.y, s.p[2].xy, s.p[0].xy);
-    let in2 = vc_takes(e.z, s.p[0].xy, s.p[1].xy);
-    if !(in0 && in1 && in2) {
-        return;
-    }
+// Keeps the key of depth weights e (the three edge functions at pixel (x, y), inside s) for
+// triangle `id`.
+fn vc_keep(s: ScreenTri, e: vec3<f32>, x: u32, y: u32, id: u32) {
     let z = (e.x * s.p[0].z + e.y * s.p[1].z + e.z * s.p[2].z) / (e.x + e.y + e.z);
     if z < 0.0 || z > 1.0 {
         return;
     }
     let key = (u64(0xffffffffu - bitcast<u32>(z)) << 32u) | u64(id);
     atomicMax(&vc_keys[y * u32(frame.viewport.x) + x], key);
+}
+
+// Tests pixel (x, y) against s (wound positively, of positive area; not exact: f32 on unsnapped
+// vertices) and keeps its key.
+fn vc_pixel(s: ScreenTri, x: u32, y: u32, id: u32) {
+    let q = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);
+    let e = vec3<f32>(vc_edge(s.p[1].xy, s.p[2].xy, q), vc_edge(s.p[2].xy, s.p[0].xy, q), vc_edge(s.p[0].xy, s.p[1].xy, q));
+    let in0 = vc_takes(e.x, s.p[1].xy, s.p[2].xy);
+    let in1 = vc_takes(e.y, s.p[2].xy, s.p[0].xy);
+    let in2 = vc_takes(e.z, s.p[0].xy, s.p[1].xy);
+    if in0 && in1 && in2 {
+        vc_keep(s, e, x, y, id);
+    }
+}
+
+// An exact triangle's edge functions in fixed point (1/256 pixel, squared), stepped from pixel
+// to pixel by additions: edge i is the one opposite vertex i.
+struct Edges {
+    // At the pixel the walk starts from.
+    e: vec3<i64>,
+    // Their change a pixel to the right, and a pixel down.
+    dx: vec3<i64>,
+    dy: vec3<i64>,
+    // The least value a covered centre has: 0 on a top or left edge, 1 on the others.
+    least: vec3<i64>,
+}
+
+fn vc_edges(s: ScreenTri, x: u32, y: u32) -> Edges {
+    let q = vc_centre_fixed(x, y);
+    var f: array<vec2<i32>, 3>;
+    for (var k = 0u; k < 3u; k++) {
+        f[k] = vc_fixed(s.p[k].xy);
+    }
+    var out: Edges;
+    for (var i = 0u; i < 3u; i++) {
+        let a = f[(i + 1u) % 3u];
+        let b = f[(i + 2u) % 3u];
+        out.e[i] = vc_edge_fixed(a, b, q);
+        out.dx[i] = -i64(b.y - a.y) * i64(256);
+        out.dy[i] = i64(b.x - a.x) * i64(256);
+        out.least[i] = select(i64(1), i64(0), vc_top_left(s.p[(i + 1u) % 3u].xy, s.p[(i + 2u) % 3u].xy));
+    }
+    return out;
+}
+
+// Keeps the key of the pixel at (x, y) whose edge functions are e, where it is covered.
+fn vc_fixed_pixel(s: ScreenTri, ed: Edges, e: vec3<i64>, x: u32, y: u32, id: u32) {
+    if all(e >= ed.least) {
+        // (Each i64 to f32 keeps its sign: the weights are the edge functions rounded.)
+        vc_keep(s, vec3<f32>(f32(e.x), f32(e.y), f32(e.z)), x, y, id);
+    }
 }
 
 // s wound positively (swapping two vertices where needed).
@@ -220,9 +251,23 @@ fn vis_triangles(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let size = r.zw - r.xy;
         if size.x * size.y <= VC_SMALL {
-            for (var y = r.y; y < r.w; y++) {
-                for (var x = r.x; x < r.z; x++) {
-                    vc_pixel(s, x, y, t + 1u);
+            if s.exact {
+                // Row by row from the rectangle's corner, a pixel at a time by additions.
+                let ed = vc_edges(s, r.x, r.y);
+                var row = ed.e;
+                for (var y = r.y; y < r.w; y++) {
+                    var e = row;
+                    for (var x = r.x; x < r.z; x++) {
+                        vc_fixed_pixel(s, ed, e, x, y, t + 1u);
+                        e += ed.dx;
+                    }
+                    row += ed.dy;
+                }
+            } else {
+                for (var y = r.y; y < r.w; y++) {
+                    for (var x = r.x; x < r.z; x++) {
+                        vc_pixel(s, x, y, t + 1u);
+                    }
                 }
             }
             continue;
@@ -319,11 +364,26 @@ fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_in
         }
         let r = vc_rect(s);
         let id = bitcast<u32>(q1.w);
-        for (var j = li; j < VC_BLOCK * VC_BLOCK; j += 256u) {
-            let x = block.x * VC_BLOCK + j % VC_BLOCK;
-            let y = block.y * VC_BLOCK + j / VC_BLOCK;
-            if x >= r.x && x < r.z && y >= r.y && y < r.w {
-                vc_pixel(s, x, y, id);
+        // A thread's pixels: one column of the block, every (256 / VC_BLOCK)-th row (VC_BLOCK a
+        // power of two of at most 256).
+        let x = block.x * VC_BLOCK + li % VC_BLOCK;
+        let y0 = block.y * VC_BLOCK + li / VC_BLOCK;
+        let rows = 256u / VC_BLOCK;
+        if s.exact {
+            let ed = vc_edges(s, x, y0);
+            var e = ed.e;
+            let step = ed.dy * i64(rows);
+            for (var y = y0; y < (block.y + 1u) * VC_BLOCK; y += rows) {
+                if x >= r.x && x < r.z && y >= r.y && y < r.w {
+                    vc_fixed_pixel(s, ed, e, x, y, id);
+                }
+                e += step;
+            }
+        } else {
+            for (var y = y0; y < (block.y + 1u) * VC_BLOCK; y += rows) {
+                if x >= r.x && x < r.z && y >= r.y && y < r.w {
+                    vc_pixel(s, x, y, id);
+                }
             }
         }
     }

@@ -46,7 +46,8 @@ const BLOCK_GROUPS: u32 = 2048;
 /// How the compute visibility pass shares out its triangles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Tiling {
-    /// A large triangle's blocks' side, pixels (a workgroup a block).
+    /// A large triangle's blocks' side, pixels (a workgroup a block): a power of two of at most
+    /// 256 (a thread takes a column of a block).
     pub block: u32,
     /// The largest bounding box, pixels, that a triangle's own thread rasterises.
     pub small: u32,
@@ -129,6 +130,12 @@ impl ComputeVisibility {
                 "the compute visibility pass needs 64-bit atomic max on storage buffers (wgpu \
                  feature SHADER_INT64_ATOMIC_MIN_MAX), which adapter {} does not offer",
                 ctx.info.name
+            )));
+        }
+        if !tiling.block.is_power_of_two() || tiling.block > 256 {
+            return Err(GpuError::Unsupported(format!(
+                "compute visibility block side {}: a power of two of at most 256 pixels",
+                tiling.block
             )));
         }
         let d = &ctx.device;
