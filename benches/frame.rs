@@ -441,5 +441,117 @@ fn visibility(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, cull_shade, visibility);
+/// The whole frame in steady state, as experiments add up `gpu_ms_frame_steady` (issue 49's
+/// goals): each iteration times `runs` frames' geometry back to back (a span each: the G-buffer
+/// pass, or the visibility buffer rasterised in compute, or its raster pass), then `runs`
+/// frames' culling and lighting back to back (a span each), and counts the sum of their
+/// medians' worth: `frame.whole/<setting>_<strategy>_<backend>`, the backends `deferred`,
+/// `visibility` (the compute rasteriser, its default) and `visibility_raster`. Criterion keeps
+/// the GPU busy for seconds, where an experiment's cell times ten frames after a 200 ms warm-up:
+/// these figures vary less from run to run.
+fn whole(c: &mut Criterion) {
+    use manylights_shade::VisibilityPass;
+    let ctx = gpu();
+    let mut g = c.benchmark_group("frame.whole");
+    configure(&mut g);
+    let all = settings();
+    let gather16 = Strategy::tiled_gather(16);
+    let clusters32 = Strategy::Clustered {
+        tile_size: 32,
+        slices: 32,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered: true,
+        cells: false,
+    };
+    let cases = [
+        ("harada2012_gather8", "forward_plus", "gather16", gather16),
+        (
+            "harada2012_gather8",
+            "forward_plus",
+            "clusters32",
+            clusters32,
+        ),
+        ("cis5650_5k_gather", "hall_5k", "gather16", gather16),
+        ("cis5650_5k_gather", "hall_5k", "clusters32", clusters32),
+        (
+            "atrium_1m_clustered32x32",
+            "atrium_1m",
+            "clusters32",
+            clusters32,
+        ),
+    ];
+    let backends = [
+        ("deferred", Backend::Deferred, VisibilityPass::Compute),
+        ("visibility", Backend::Visibility, VisibilityPass::Compute),
+        (
+            "visibility_raster",
+            Backend::Visibility,
+            VisibilityPass::Raster,
+        ),
+    ];
+    for (from, setting, label, strategy) in cases {
+        let Some(s) = all.iter().find(|s| s.name == from) else {
+            continue;
+        };
+        let (w, h) = s.size;
+        let gs = GpuScene::upload(&ctx, &s.scene, &s.scene.camera, w, h).unwrap();
+        let settings = CullSettings::for_camera(&s.scene.camera);
+        let mut renderer = Renderer::new(&ctx, &gs);
+        for (name, backend, pass) in backends {
+            renderer.visibility_pass = pass;
+            let renderer = &renderer;
+            let first = renderer
+                .render(&ctx, &gs, backend, &strategy, &settings, (w, h))
+                .unwrap();
+            let lists = first.lists.as_ref().expect("culled");
+            let culler = renderer.culler_for(&first);
+            let mut shade = renderer
+                .shade_pass(&ctx, &gs, &first)
+                .expect("lights in compute");
+            let id = BenchmarkId::new(format!("{setting}_{label}_{name}"), format!("{w}x{h}"));
+            g.bench_function(id, |b| {
+                b.iter_custom(|iters| {
+                    let mut total = 0.0;
+                    let mut left = iters;
+                    while left > 0 {
+                        let runs = left.min(32) as u32;
+                        let mut geometry = GpuTimer::spans(&ctx, runs).expect("timestamps");
+                        renderer
+                            .geometry_repeated(&ctx, &gs, &first, runs, &mut geometry)
+                            .unwrap();
+                        let mut frame = GpuTimer::spans(&ctx, runs).expect("timestamps");
+                        culler
+                            .run_repeated_with(
+                                &ctx,
+                                &gs,
+                                &first.cull_depth,
+                                &strategy,
+                                &settings,
+                                lists,
+                                runs,
+                                &mut frame,
+                                &mut shade,
+                            )
+                            .unwrap();
+                        for t in [geometry, frame] {
+                            total += t
+                                .read(&ctx)
+                                .unwrap()
+                                .expect("timestamps")
+                                .iter()
+                                .map(|p| p.ms)
+                                .sum::<f64>();
+                        }
+                        left -= u64::from(runs);
+                    }
+                    Duration::from_secs_f64(total * 1e-3)
+                })
+            });
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, cull_shade, visibility, whole);
 criterion_main!(benches);
