@@ -4,7 +4,8 @@
 //! (`Culler::run_repeated_with`: lists sized from a first frame, each run followed by the
 //! lighting pass, no host round trip), returned to criterion through `iter_custom`. The G-buffer
 //! is drawn once, outside the measurement (a raster pass, slow on compute chips and the same
-//! for every strategy).
+//! for every strategy). `frame.visibility` times the visibility pass alone (raster and compute)
+//! and `frame.whole` the whole frame, geometry included (issue 49's goals).
 //!
 //! Settings (issue 21's table): the Forward+ paper's configuration (3,072 light-field lights of
 //! radius 2.5 m in the atrium, 1280 x 720) with gather's 8-pixel tiles and with clusters of 64
