@@ -480,7 +480,9 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
             "{stdout}"
         );
         assert!(
-            (backend != "visibility") || stdout.contains("visibility buffer bytes"),
+            (backend != "visibility")
+                || (stdout.contains("visibility buffer bytes")
+                    && stdout.contains("shade.visibility_compute.blocks")),
             "{stdout}"
         );
         let name = backend.replace('-', "_");
@@ -492,6 +494,43 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
         ] {
             assert!(out.join(&file).is_file(), "{backend}: {file} missing");
         }
+    }
+}
+
+/// `--visibility-pass raster` draws the visibility buffer with the raster pass, `compute` (the
+/// default) with the compute rasteriser: the printed passes say which ran.
+#[test]
+fn render_visibility_pass_picks_the_raster_or_the_compute_pass() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (pass, drawn, not) in [
+        ("raster", "shade.visibility ", "shade.visibility_compute"),
+        ("compute", "shade.visibility_compute.triangles", "shade.visibility "),
+    ] {
+        let out = tmp.path().join(pass);
+        let stdout = succeeds(
+            &[
+                "render",
+                "--scene",
+                "pillars",
+                "--lights",
+                "32",
+                "--backend",
+                "visibility",
+                "--visibility-pass",
+                pass,
+                "--width",
+                "32",
+                "--height",
+                "24",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            pass,
+        );
+        assert!(
+            stdout.contains(drawn) && !stdout.contains(not),
+            "{pass}: {stdout}"
+        );
     }
 }
 

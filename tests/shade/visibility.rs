@@ -140,24 +140,52 @@ fn small_render(
         .map_err(|e| e.to_string())
 }
 
-/// Where the device lacks `@builtin(primitive_index)`, the visibility backend is an error that
-/// names the feature and the adapter, and the other backends still render.
+/// Where the device lacks `@builtin(primitive_index)`, the visibility backend's raster pass is
+/// an error that names the feature and the adapter, and the other backends still render; the
+/// compute rasteriser, which does not need it, renders (where the device has 64-bit atomic
+/// max; without both, the error again).
 #[test]
 fn visibility_without_primitive_index_is_an_error() {
     let mut ctx = common::gpu();
     assert!(
-        ctx.features.primitive_index,
-        "lavapipe and NVIDIA offer PRIMITIVE_INDEX: the visibility backend's tests need it"
+        ctx.features.primitive_index && ctx.features.int64_atomics,
+        "lavapipe and NVIDIA offer PRIMITIVE_INDEX and 64-bit atomic max: the visibility \
+         backend's tests need both"
     );
     ctx.features.primitive_index = false;
-    let frame = small_frame(&ctx, "atrium");
+    let mut frame = small_frame(&ctx, "atrium");
+    small_render(&ctx, &frame, Backend::Visibility).expect("the compute rasteriser renders");
+    frame.1.visibility_pass = VisibilityPass::Raster;
     let err = small_render(&ctx, &frame, Backend::Visibility)
-        .expect_err("visibility without PRIMITIVE_INDEX");
+        .expect_err("the raster pass without PRIMITIVE_INDEX");
     assert!(
         err.contains("PRIMITIVE_INDEX") && err.contains(&ctx.info.name),
         "{err}"
     );
     small_render(&ctx, &frame, Backend::Deferred).unwrap();
+    ctx.features.int64_atomics = false;
+    let frame = small_frame(&ctx, "atrium");
+    let err = small_render(&ctx, &frame, Backend::Visibility)
+        .expect_err("neither PRIMITIVE_INDEX nor 64-bit atomics");
+    assert!(err.contains("PRIMITIVE_INDEX"), "{err}");
+}
+
+/// The compute rasteriser binds its keys (8 bytes a pixel) and its queue (128 bytes a
+/// triangle) as storage buffers: past the device's binding limit `render` says which and how
+/// to draw the frame instead (the raster pass), which then renders.
+#[test]
+fn compute_visibility_past_the_binding_limit_is_an_error() {
+    let mut ctx = common::gpu();
+    let mut frame = small_frame(&ctx, "pillars");
+    // Room for the index buffer, not for the queue (ten times its bytes).
+    ctx.limits.max_storage_buffer_binding_size = frame.0.indices.size();
+    let err = small_render(&ctx, &frame, Backend::Visibility).expect_err("a queue past the limit");
+    assert!(
+        err.contains("queue") && err.contains("--visibility-pass raster"),
+        "{err}"
+    );
+    frame.1.visibility_pass = VisibilityPass::Raster;
+    small_render(&ctx, &frame, Backend::Visibility).unwrap();
 }
 
 /// The visibility buffer's lighting binds the scene's index buffer as one storage buffer: where

@@ -83,22 +83,35 @@ impl DepthPrepass {
         depth: &wgpu::TextureView,
         timer: &mut GpuTimer,
     ) {
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("prepass.depth"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.render_pass("prepass.depth"),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let writes = timer.render_pass("prepass.depth");
+        let mut pass = begin_depth_pass(encoder, "prepass.depth", depth, writes);
         pass.set_pipeline(&self.pipeline);
         scene.draw(&mut pass);
     }
+}
+
+/// A render pass `label` with no colour target that clears `depth` to the far plane (1.0) and
+/// stores what it draws, timed by `timestamp_writes` (the depth prepass; the compute
+/// visibility pass's depth copy).
+pub fn begin_depth_pass<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    label: &str,
+    depth: &wgpu::TextureView,
+    timestamp_writes: Option<wgpu::RenderPassTimestampWrites<'_>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(label),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }

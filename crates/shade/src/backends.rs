@@ -20,8 +20,8 @@ use manylights_gpu::{GpuContext, GpuScene, readback};
 
 use crate::HdrImage;
 use crate::pipelines::Surfaces;
-pub use crate::pipelines::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
 use crate::shade_pass::{ShadePass, Targets};
+pub use crate::shaders::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
 
 pub use crate::kinds::{
     Backend, GBUFFER_BYTES_PER_PIXEL, HdrFormat, VISIBILITY_BYTES_PER_PIXEL, VisibilityPass,
@@ -181,23 +181,36 @@ impl Renderer {
         self.band_points
     }
 
-    /// Whether the visibility backend can render `scene` here: triangle ids need
-    /// `PRIMITIVE_INDEX`, and its lighting binds the scene's indices (as it does the vertices,
-    /// which `GpuScene::upload` checks) as one storage binding.
+    /// Whether the visibility backend can render `scene` at `size` here: its lighting binds the
+    /// scene's indices (as it does the vertices, which `GpuScene::upload` checks) as one storage
+    /// binding; the compute rasteriser binds its keys and queue so
+    /// ([`ComputeVisibility::check`]); the raster pass needs `PRIMITIVE_INDEX`.
     fn check_visibility(
         &self,
         ctx: &GpuContext,
         scene: &GpuScene,
+        size: (u32, u32),
     ) -> Result<(), manylights_gpu::GpuError> {
+        ctx.check_storage("index buffer bytes", scene.indices.size())?;
+        if self.computes_visibility(Backend::Visibility) {
+            return ComputeVisibility::check(ctx, scene, size).map_err(|e| {
+                manylights_gpu::GpuError::Unsupported(format!(
+                    "the visibility buffer's compute rasteriser cannot draw this frame: {e}; \
+                     visibility_pass: Raster (--visibility-pass raster) draws it with the raster \
+                     pass"
+                ))
+            });
+        }
         if !ctx.features.primitive_index {
             return Err(manylights_gpu::GpuError::Unsupported(format!(
-                "backend visibility needs `@builtin(primitive_index)` (wgpu feature \
+                "backend visibility's raster pass needs `@builtin(primitive_index)` (wgpu feature \
                  PRIMITIVE_INDEX; on Vulkan the geometryShader feature), which adapter {} does \
-                 not offer: use backend deferred or forward there",
+                 not offer (the compute rasteriser, which needs 64-bit atomic max instead, draws \
+                 only at one sample a pixel without glass): use backend deferred or forward there",
                 ctx.info.name
             )));
         }
-        ctx.check_storage("index buffer bytes", scene.indices.size())
+        Ok(())
     }
 
     /// Whether frames of `backend` find their triangles with the compute rasteriser: the
@@ -281,7 +294,7 @@ impl Renderer {
             .into());
         }
         if backend == Backend::Visibility {
-            self.check_visibility(ctx, scene)?;
+            self.check_visibility(ctx, scene, (width, height))?;
         }
         let compute = self.computes_visibility(backend);
         self.pipelines.prepare(backend, self.transparent, compute);

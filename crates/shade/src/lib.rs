@@ -15,6 +15,7 @@ pub mod kinds;
 pub mod pipelines;
 pub mod reference;
 pub mod shade_pass;
+pub mod shaders;
 pub mod vis_compute;
 pub mod visibility;
 
@@ -28,11 +29,11 @@ pub use shade_pass::ShadePass;
 pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     reference::SHADER,
     infinite::SHADER,
-    pipelines::FORWARD,
-    pipelines::GBUFFER,
-    pipelines::DEFERRED,
-    pipelines::DEFERRED_MSAA,
-    pipelines::VISIBILITY,
+    shaders::FORWARD,
+    shaders::GBUFFER,
+    shaders::DEFERRED,
+    shaders::DEFERRED_MSAA,
+    shaders::VISIBILITY,
     vis_compute::VISIBILITY_COMPUTE,
     vis_compute::VISIBILITY_RESOLVE,
     vis_compute::VISIBILITY_DEPTH,

@@ -1,100 +1,20 @@
-//! The pipelines of every backend (`Renderer::build`) and the shaders they are made from.
+//! The pipelines of every backend (`Renderer::build`), from the shaders of [`crate::shaders`].
 
 use manylights_cull::Culler;
-use manylights_cull::layout::CULL_CONSTS;
-use manylights_cull::shaders::{GEOMETRY, LOOKUP};
 use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
-use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
-use manylights_gpu::{GpuContext, GpuScene, shader_file};
+use manylights_gpu::{GpuContext, GpuScene};
 use std::sync::OnceLock;
 
 use crate::backends::{
     Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer, VISIBILITY_ID,
 };
 use crate::kinds::VisibilityPass;
-
-/// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
-pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
-/// The surface deferred lighting shades, from a G-buffer or a visibility buffer.
-pub const SURFACE: ShaderFile = shader_file!("render/surface.wgsl");
-/// `shade.forward` and `shade.naive`.
-pub const FORWARD: ShaderDef = ShaderDef {
-    name: "shade.forward",
-    consts: CULL_CONSTS,
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        BRDF,
-        SHADING,
-        VERTEX,
-        GEOMETRY,
-        LOOKUP,
-        LIST_SHADING,
-        shader_file!("render/forward.wgsl"),
-    ],
+use crate::shaders::{
+    DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, VISIBILITY, float_depth, hdr_storage,
 };
-/// `shade.gbuffer`.
-pub const GBUFFER: ShaderDef = ShaderDef {
-    name: "shade.gbuffer",
-    consts: &[],
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        BRDF,
-        SHADING,
-        VERTEX,
-        shader_file!("render/gbuffer.wgsl"),
-    ],
-};
-/// `shade.visibility`: the visibility buffer's raster pass (the shared vertex stage and a
-/// fragment writing the triangle id).
-pub const VISIBILITY: ShaderDef = ShaderDef {
-    name: "shade.visibility",
-    consts: &[],
-    files: &[FRAME, VERTEX, shader_file!("render/visibility.wgsl")],
-};
-
-/// `shade.deferred`.
-pub const DEFERRED: ShaderDef = ShaderDef {
-    name: "shade.deferred",
-    consts: CULL_CONSTS,
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        BRDF,
-        SHADING,
-        GEOMETRY,
-        LOOKUP,
-        LIST_SHADING,
-        SURFACE,
-        shader_file!("render/deferred.wgsl"),
-        shader_file!("render/deferred_zbin.wgsl"),
-    ],
-};
-
-/// `shade.deferred` over a multisampled G-buffer (MSAA): a pixel at once, or its samples apart
-/// at edges.
-pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
-    name: "shade.deferred",
-    consts: CULL_CONSTS,
-    files: &[
-        FRAME,
-        LIGHT,
-        SCENE,
-        BRDF,
-        SHADING,
-        GEOMETRY,
-        LOOKUP,
-        LIST_SHADING,
-        SURFACE,
-        shader_file!("render/deferred_msaa.wgsl"),
-    ],
-};
+pub use crate::shaders::{LIST_SHADING, SURFACE};
 
 fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
     vec![
@@ -602,32 +522,4 @@ impl Pipelines {
             clusters: compute(&format!("deferred_shade{s}_clusters")),
         }
     }
-}
-
-/// The deferred lighting passes' image (`out_color`, declared `rgba32float`) in format `hdr`.
-fn hdr_storage(source: String, hdr: HdrFormat) -> String {
-    const DECLARED: &str = "var out_color: texture_storage_2d<rgba32float, write>;";
-    assert!(
-        source.contains(DECLARED),
-        "out_color is declared as {DECLARED}"
-    );
-    source.replace(
-        DECLARED,
-        &format!("var out_color: texture_storage_2d<{}, write>;", hdr.wgsl()),
-    )
-}
-
-/// The deferred lighting passes' depth (`depth_tex`, declared a depth texture in lookup.wgsl) as
-/// an `R32Float` texture: what the compute rasteriser writes (deferred.wgsl reads it through
-/// `vec4<f32>(...)`, which takes either).
-fn float_depth(source: String) -> String {
-    const DECLARED: &str = "@group(1) @binding(3) var depth_tex: texture_depth_2d;";
-    assert!(
-        source.contains(DECLARED),
-        "depth_tex is declared as {DECLARED}"
-    );
-    source.replace(
-        DECLARED,
-        "@group(1) @binding(3) var depth_tex: texture_2d<f32>;",
-    )
 }

@@ -206,6 +206,13 @@ impl ComputeVisibility {
         })
     }
 
+    /// Whether a `width` x `height` frame of `scene` fits the device's storage bindings: the
+    /// keys (8 bytes a pixel) and the queue (two entries of 64 bytes a triangle).
+    pub fn check(ctx: &GpuContext, scene: &GpuScene, (w, h): (u32, u32)) -> Result<(), GpuError> {
+        ctx.check_storage("its keys' bytes", u64::from(w) * u64::from(h) * 8)?;
+        ctx.check_storage("its queue's bytes", queue_capacity(scene) * 64)
+    }
+
     /// Buffers for a `width` x `height` frame of `scene`.
     pub fn targets(
         &self,
@@ -232,13 +239,18 @@ impl ComputeVisibility {
         );
         let counts = buf("visibility_compute.counts", 8, rw);
         // Two entries a triangle (its near-plane parts) of 64 bytes: the queue cannot overflow.
-        let capacity = 2 * (scene.opaque_index_count / 3).max(1);
-        let queue = buf("visibility_compute.queue", u64::from(capacity) * 64, rw);
-        let first = buf("visibility_compute.first", u64::from(capacity + 1) * 4, rw);
+        let capacity = queue_capacity(scene);
+        let queue = buf("visibility_compute.queue", capacity * 64, rw);
+        let first = buf("visibility_compute.first", (capacity + 1) * 4, rw);
         let params = pipeline::uniform_buffer(
             d,
             "visibility_compute.params",
-            bytemuck::cast_slice(&[scene.opaque_index_count / 3, capacity, BLOCK_GROUPS, 0]),
+            bytemuck::cast_slice(&[
+                scene.opaque_index_count / 3,
+                capacity as u32,
+                BLOCK_GROUPS,
+                0,
+            ]),
         );
         let group = pipeline::group(
             d,
@@ -357,21 +369,8 @@ impl ComputeVisibility {
         t: &ComputeTargets,
         depth: &wgpu::TextureView,
     ) {
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shade.visibility_depth"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        let mut pass =
+            manylights_gpu::prepass::begin_depth_pass(enc, "shade.visibility_depth", depth, None);
         pass.set_pipeline(&self.depth);
         pass.set_bind_group(0, &t.depth_group, &[]);
         pass.draw(0..3, 0..1);
@@ -431,4 +430,10 @@ fn depth_pipeline(d: &wgpu::Device, layout: &wgpu::BindGroupLayout) -> wgpu::Ren
         multiview_mask: None,
         cache: None,
     })
+}
+
+/// Queue entries a frame of `scene` may need: two a triangle (its near-plane parts), so that it
+/// cannot overflow.
+fn queue_capacity(scene: &GpuScene) -> u64 {
+    2 * u64::from((scene.opaque_index_count / 3).max(1))
 }
