@@ -504,7 +504,11 @@ fn render_visibility_pass_picks_the_raster_or_the_compute_pass() {
     let tmp = tempfile::tempdir().unwrap();
     for (pass, drawn, not) in [
         ("raster", "shade.visibility ", "shade.visibility_compute"),
-        ("compute", "shade.visibility_compute.triangles", "shade.visibility "),
+        (
+            "compute",
+            "shade.visibility_compute.triangles",
+            "shade.visibility ",
+        ),
     ] {
         let out = tmp.path().join(pass);
         let stdout = succeeds(

@@ -43,6 +43,10 @@ pub struct SteadyCull {
 /// (lavapipe), which has no such clock ([`warm_up`]).
 pub const WARM_UP: std::time::Duration = std::time::Duration::from_millis(200);
 
+/// How long a warm-up submission should keep the GPU busy, at the least (its runs double until
+/// it does).
+const WARM_SUBMIT: std::time::Duration = std::time::Duration::from_millis(20);
+
 /// The warm-up on `ctx`'s adapter: [`WARM_UP`], or none on a CPU adapter.
 pub fn warm_up(ctx: &GpuContext) -> std::time::Duration {
     if ctx.info.device_type == wgpu::DeviceType::Cpu {
@@ -140,7 +144,7 @@ fn steady(
     mut then: Option<&mut dyn ListPass>,
 ) -> Result<Option<SteadyCull>, SteadyError> {
     let n = runs.clamp(1, max_runs(passes));
-    let mut repeat = |timer: &mut GpuTimer| -> Result<(), SteadyError> {
+    let mut repeat = |timer: &mut GpuTimer, n: u32| -> Result<(), SteadyError> {
         match then.as_deref_mut() {
             Some(pass) => {
                 culler.run_repeated_with(
@@ -170,30 +174,39 @@ pub fn steady_geometry(
     runs: u32,
 ) -> Result<Option<SteadyCull>, SteadyError> {
     let n = runs.clamp(1, max_runs(passes));
-    let mut repeat = |timer: &mut GpuTimer| -> Result<(), SteadyError> {
+    let mut repeat = |timer: &mut GpuTimer, n: u32| -> Result<(), SteadyError> {
         Ok(renderer.geometry_repeated(ctx, scene, out, n, timer)?)
     };
     timed_runs(ctx, passes, n, &mut repeat)
 }
 
-/// `repeat` (n runs of `passes` passes each, back to back into the timer it is given)
+/// `repeat` (`n` runs of `passes` passes each, back to back into the timer it is given)
 /// repeated untimed for [`warm_up`], then timed per pass and as spans.
 fn timed_runs(
     ctx: &GpuContext,
     passes: u32,
     n: u32,
-    repeat: &mut dyn FnMut(&mut GpuTimer) -> Result<(), SteadyError>,
+    repeat: &mut dyn FnMut(&mut GpuTimer, u32) -> Result<(), SteadyError>,
 ) -> Result<Option<SteadyCull>, SteadyError> {
     // Raise the clock first: the GPU idles while the host works between measurements, and an
     // idle GPU clocks down (an H100 sampled at 465-1,455 MHz between a tuner's cells, 1,980 MHz
-    // under load), so that the first passes after the host's work measure slow.
+    // under load), so that the first passes after the host's work measure slow. The warm-up's
+    // submissions double their runs (up to what a timer holds) until one takes WARM_SUBMIT: a
+    // submission of a few short runs leaves the GPU idle while the host records and waits, too
+    // little load for its clock to rise (an H200 timed culling and lighting at the Forward+
+    // configuration at 0.25 ms after ten runs a submission, 0.14 ms as criterion times them).
     let warm = std::time::Instant::now();
     let warm_up = warm_up(ctx);
+    let mut busy = n;
     while warm.elapsed() < warm_up {
-        repeat(&mut GpuTimer::new(ctx, n * passes.max(1)))?;
+        let submitted = std::time::Instant::now();
+        repeat(&mut GpuTimer::untimed(), busy)?;
+        if submitted.elapsed() < WARM_SUBMIT {
+            busy = (busy * 2).min(max_runs(passes)).max(busy);
+        }
     }
     let mut timer = GpuTimer::new(ctx, n * passes.max(1));
-    repeat(&mut timer)?;
+    repeat(&mut timer, n)?;
     let Some(t) = timer.read(ctx)? else {
         return Ok(None);
     };
@@ -220,7 +233,7 @@ fn timed_runs(
     );
     let span_ms = match GpuTimer::spans(ctx, n) {
         Some(mut spans) => {
-            repeat(&mut spans)?;
+            repeat(&mut spans, n)?;
             spans
                 .read(ctx)?
                 .map(|t| median(t.iter().map(|p| p.ms).collect()))
