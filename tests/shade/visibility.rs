@@ -339,3 +339,46 @@ fn culling_over_the_compute_depth_equals_culling_over_the_depth_buffer() {
         }
     }
 }
+
+/// The compute rasteriser's geometry back to back (`Renderer::geometry_repeated`, what the
+/// steady-state frame repeats): its four passes a run, timed, no raster pass, and the same ids
+/// after as before.
+#[test]
+fn compute_visibility_geometry_repeats_the_frame() {
+    let ctx = common::gpu();
+    let frame = small_frame(&ctx, "atrium");
+    let (gpu_scene, renderer, settings) = &frame;
+    let out = renderer
+        .render(
+            &ctx,
+            gpu_scene,
+            Backend::Visibility,
+            &Strategy::tiled_gather(16),
+            settings,
+            (32, 24),
+        )
+        .unwrap();
+    assert!(out.computed_visibility());
+    let before = read_surfaces(&ctx, &out).unwrap().ids;
+    let mut timer = manylights_gpu::timing::GpuTimer::new(&ctx, 64);
+    renderer
+        .geometry_repeated(&ctx, gpu_scene, &out, 3, &mut timer)
+        .unwrap();
+    let labels: Vec<String> = timer
+        .read(&ctx)
+        .unwrap()
+        .expect("timestamps (lavapipe has them)")
+        .into_iter()
+        .map(|p| p.label)
+        .collect();
+    let compute = labels
+        .iter()
+        .filter(|l| l.starts_with("shade.visibility_compute."))
+        .count();
+    assert_eq!(compute, 3 * 4, "{labels:?}");
+    assert!(
+        !labels.iter().any(|l| l == "shade.visibility"),
+        "{labels:?}"
+    );
+    assert_eq!(read_surfaces(&ctx, &out).unwrap().ids, before);
+}
