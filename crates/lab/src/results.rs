@@ -57,7 +57,8 @@ pub struct Row {
     pub dropped_lights: u64,
     /// Bytes of the lists.
     pub list_bytes: u64,
-    /// Bytes of the G-buffer.
+    /// Bytes of the G-buffer, or of the visibility buffer (with the compute rasteriser its keys
+    /// too).
     pub gbuffer_bytes: u64,
     /// PSNR against the reference, dB (`"inf"` in JSON for identical images).
     #[serde(with = "inf_f64")]
