@@ -88,7 +88,9 @@ pub(crate) enum Loads {
 
 /// Pipelines of every backend for one scene layout, and the culler.
 pub struct Renderer {
-    /// The culling strategies.
+    /// The culling strategies (frames of the visibility buffer's compute rasteriser cull with a
+    /// second culler over its `R32Float` depth, built with the defaults at their first frame:
+    /// [`Renderer::culler_for`]; knobs set here do not reach it).
     pub culler: Culler,
     /// Samples a pixel of the depth buffer and the forward passes' colour target (MSAA where
     /// more than one).
