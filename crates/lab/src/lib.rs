@@ -9,6 +9,7 @@
 //! Depends on every other crate; nothing depends on it but the CLI.
 
 mod budgets;
+mod camera_spec;
 mod cell_row;
 mod cell_run;
 mod cells;

@@ -20,6 +20,7 @@ use manylights_gpu::{GpuContext, GpuScene, readback};
 
 use crate::HdrImage;
 use crate::pipelines::Surfaces;
+pub(crate) use crate::raster::Loads;
 use crate::shade_pass::{ShadePass, Targets};
 pub use crate::shaders::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
 
@@ -69,21 +70,6 @@ impl ShadeOutput {
         let bytes = readback::read_texture(ctx, &self.targets.color, wgpu::TextureAspect::All)?;
         Ok(self.targets.hdr.image(w, h, &bytes))
     }
-}
-
-/// What a raster pass keeps of its targets, and what it draws.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Loads {
-    /// Clears colour and depth, draws the opaque surfaces (the G-buffer pass).
-    Clear,
-    /// Clears colour, keeps the prepass depth, draws the opaque surfaces (tested `Equal`).
-    Depth,
-    /// Keeps colour and depth, draws the transparent surfaces (blended over the opaque ones).
-    Transparent,
-    /// Clears colour to no glass (black, transmittance 1 in alpha), keeps depth, draws the
-    /// transparent surfaces: their own contribution and transmittance, a layer that deferred
-    /// lighting with MSAA composites over each sample.
-    GlassLayer,
 }
 
 /// Pipelines of every backend for one scene layout, and the culler.
@@ -513,90 +499,5 @@ impl Renderer {
     ) -> Option<ShadePass<'a>> {
         (out.backend != Backend::NaiveForward)
             .then(|| ShadePass::new(ctx, self, scene, out.backend, &out.targets))
-    }
-
-    /// A raster pass drawing the scene into `targets` (each with the single-sample texture it
-    /// resolves into where it is multisampled and this pass is the frame's last, then
-    /// discarded): what it keeps of them and what it draws as `loads` says.
-    #[expect(
-        clippy::too_many_arguments,
-        reason = "a pass: where, what, into which targets, with which lists"
-    )]
-    pub(crate) fn raster_pass(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
-        label: &str,
-        pipelines: &[wgpu::RenderPipeline],
-        scene: &GpuScene,
-        targets: &[(&wgpu::TextureView, Option<&wgpu::TextureView>)],
-        depth: &wgpu::TextureView,
-        loads: Loads,
-        lists: Option<&wgpu::BindGroup>,
-    ) {
-        let attachments: Vec<Option<wgpu::RenderPassColorAttachment<'_>>> = targets
-            .iter()
-            .map(|&(view, resolve_target)| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target,
-                    ops: wgpu::Operations {
-                        load: match loads {
-                            Loads::Transparent => wgpu::LoadOp::Load,
-                            Loads::GlassLayer => wgpu::LoadOp::Clear(wgpu::Color::BLACK),
-                            Loads::Clear | Loads::Depth => {
-                                wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
-                            }
-                        },
-                        store: if resolve_target.is_some() {
-                            wgpu::StoreOp::Discard
-                        } else {
-                            wgpu::StoreOp::Store
-                        },
-                    },
-                })
-            })
-            .collect();
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(label),
-            color_attachments: &attachments,
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: if loads == Loads::Clear {
-                        wgpu::LoadOp::Clear(1.0)
-                    } else {
-                        wgpu::LoadOp::Load
-                    },
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.render_pass(label),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        if let Some(group) = lists {
-            pass.set_bind_group(1, group, &[]);
-        }
-        // One pipeline draws every triangle; several (forward's, a material model each) draw
-        // the opaque triangles of a model each.
-        match pipelines {
-            [one] => {
-                pass.set_pipeline(one);
-                if matches!(loads, Loads::Transparent | Loads::GlassLayer) {
-                    scene.draw_transparent(&mut pass);
-                } else {
-                    scene.draw(&mut pass);
-                }
-            }
-            by_model => {
-                for (group, pipeline) in by_model.iter().enumerate() {
-                    pass.set_pipeline(pipeline);
-                    scene.draw_model(&mut pass, group);
-                }
-            }
-        }
     }
 }

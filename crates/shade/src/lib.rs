@@ -13,6 +13,7 @@ pub mod image_out;
 pub mod infinite;
 pub mod kinds;
 pub mod pipelines;
+mod raster;
 pub mod reference;
 pub mod shade_pass;
 pub mod shaders;
