@@ -161,13 +161,6 @@ pub(crate) fn run_cell(
         as_they_are.as_ref(),
     )?;
     let moving = movers.as_ref().is_some_and(Movers::moving);
-    let sampled = matches!(
-        c.lights.radius,
-        manylights_scene::RadiusRule::Hierarchy {
-            sample_from: Some(_),
-            ..
-        }
-    );
     let Measured {
         frames,
         encode,
@@ -203,14 +196,8 @@ pub(crate) fn run_cell(
         }),
         _ => None,
     };
-    let checks: Vec<(usize, Option<u32>)> = if moving {
-        (c.warmup..c.warmup + c.frames)
-            .map(|f| (f as usize % poses.len(), Some(f)))
-            .collect()
-    } else {
-        (0..poses.len()).map(|k| (k, None)).collect()
-    };
-    if let (true, false, Some(m)) = (sampled, moving, &mut movers) {
+    let checks = checked_frames(c, poses.len(), moving);
+    if let (true, false, Some(m)) = (sampled_bands(c), moving, &mut movers) {
         // Static lights with sampled bands: every check sees frame 0's draws (the timed frames
         // drew their own, as many as the steady-state warm-up took).
         m.update(ctx, 0)?;
@@ -267,6 +254,29 @@ pub(crate) fn run_cell(
         noise,
         measured: (&frames, &encode, &uploads, timed),
     }))
+}
+
+/// The poses a cell checks, each with the frame whose lights it checks: every pose of its path
+/// (`None`: the lights as they are), or with moving lights every measured frame (at its pose).
+fn checked_frames(c: &Config, poses: usize, moving: bool) -> Vec<(usize, Option<u32>)> {
+    if moving {
+        (c.warmup..c.warmup + c.frames)
+            .map(|f| (f as usize % poses, Some(f)))
+            .collect()
+    } else {
+        (0..poses).map(|k| (k, None)).collect()
+    }
+}
+
+/// Whether the cell's lights are a hierarchy with sampled bands.
+fn sampled_bands(c: &Config) -> bool {
+    matches!(
+        c.lights.radius,
+        manylights_scene::RadiusRule::Hierarchy {
+            sample_from: Some(_),
+            ..
+        }
+    )
 }
 
 /// What each checked pose (or measured frame of moving lights) of a cell is evaluated with.

@@ -8,11 +8,14 @@ use manylights_cull::ListPass as _;
 use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
 use manylights_cull::{CullSettings, Strategy};
 use manylights_gpu::layout::GpuFrame;
+use manylights_gpu::timing::PassTiming;
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::Camera;
 use manylights_shade::accuracy::{ImageError, compare, compare_adapted};
 use manylights_shade::infinite::infinite_image;
-use manylights_shade::{Backend, HdrImage, InfiniteReference, ReferenceRenderer, Renderer};
+use manylights_shade::{
+    Backend, HdrImage, InfiniteReference, ReferenceRenderer, Renderer, ShadeOutput,
+};
 
 use crate::LabError;
 use crate::experiment::Config;
@@ -109,45 +112,10 @@ pub(crate) fn evaluate(
                 metrics = Some(from_gpu_counts(&counts, &bins));
             }
             if let (Some(runs), Some(t)) = (steady_runs, &o.timings) {
-                let passes = t.iter().filter(|p| category(&p.label) == "cull").count() as u32;
-                let timed = stage(pose, "culling timed back to back", || {
-                    steady_cull(
-                        ctx,
-                        renderer.culler_for(&o),
-                        gpu_scene,
-                        &o.cull_depth,
-                        &c.strategy,
-                        settings,
-                        lists,
-                        passes,
-                        runs,
-                    )
-                })
-                .map_err(|e| other(&e))?;
-                steady = timed.map(|s| (s.total_ms, s.span_ms));
-                // Culling and the shading pass that reads its lists, back to back: a frame's
-                // culling and what its lists cost in shading.
-                if let Some(mut pass) = renderer.shade_pass(ctx, gpu_scene, &o) {
-                    let timed = stage(pose, "culling and shading timed back to back", || {
-                        steady_cull_shade(
-                            ctx,
-                            renderer.culler_for(&o),
-                            gpu_scene,
-                            &o.cull_depth,
-                            &c.strategy,
-                            settings,
-                            lists,
-                            passes + pass.passes(),
-                            runs,
-                            &mut pass,
-                        )
-                    })
-                    .map_err(|e| other(&e))?;
-                    if let Some(s) = &timed {
-                        steady_passes.extend(s.passes.iter().map(|p| (p.0.clone(), p.2)));
-                    }
-                    steady_frame = timed.map(|s| (s.total_ms, s.span_ms));
-                }
+                let timed =
+                    steady_lists((ctx, renderer, gpu_scene, settings), c, &o, t, runs, pose)?;
+                (steady, steady_frame) = (timed.cull, timed.frame);
+                steady_passes.extend(timed.passes);
             }
             if let Some(dir) = export {
                 stage(pose, "exported", || {
@@ -210,27 +178,10 @@ pub(crate) fn evaluate(
         }
         _ => None,
     };
-    let (mut acc, mut acc_inf, mut reference_color) = (None, None, None);
-    let (mut infinite, mut infinite_cached) = (None, None);
-    if let Some(refs) = reference {
-        let windowed = if c.cutoff_reference {
-            let r = stage(pose, "reference rendered", || {
-                refs.windowed(ctx, gpu_scene, c, cam)
-            })
-            .map_err(|e| other(&e))?;
-            acc = Some(compare(&o.color, &r.color, 1.0));
-            Some(r)
-        } else {
-            None
-        };
-        let (ri, cached) = stage(pose, "infinite-range reference", || {
-            refs.infinite(ctx, gpu_scene, cam, (w, h), windowed.as_ref())
-        })?;
-        acc_inf = Some(compare_adapted(&o.color, &ri));
-        infinite = Some(ri);
-        infinite_cached = Some(cached);
-        reference_color = windowed.map(|r| r.color);
-    }
+    let accuracy = match reference {
+        Some(refs) => against_references(ctx, refs, gpu_scene, c, cam, pose, &o.color)?,
+        None => Accuracy::default(),
+    };
     Ok(PoseEval {
         metrics,
         lights_per_pixel_mean: per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>()
@@ -239,11 +190,11 @@ pub(crate) fn evaluate(
         per_pixel,
         nonfinite: o.color.non_finite_count() as u64,
         color: o.color,
-        reference: reference_color,
-        infinite,
-        infinite_cached,
-        acc,
-        acc_inf,
+        reference: accuracy.reference,
+        infinite: accuracy.infinite,
+        infinite_cached: accuracy.infinite_cached,
+        acc: accuracy.acc,
+        acc_inf: accuracy.acc_inf,
         list_bytes,
         gbuffer_bytes: o.gbuffer_bytes,
         msaa_target_bytes: o.msaa_target_bytes,
@@ -254,6 +205,117 @@ pub(crate) fn evaluate(
         steady_geometry,
         steady_passes,
     })
+}
+
+/// What a pose measured against the references.
+#[derive(Default)]
+struct Accuracy {
+    acc: Option<ImageError>,
+    acc_inf: Option<ImageError>,
+    reference: Option<HdrImage>,
+    infinite: Option<HdrImage>,
+    infinite_cached: Option<bool>,
+}
+
+/// `color`, the pose's image, against the windowed reference (where the cell renders it) and the
+/// infinite-range one.
+fn against_references(
+    ctx: &GpuContext,
+    refs: &References<'_>,
+    gpu_scene: &GpuScene,
+    c: &Config,
+    cam: &Camera,
+    pose: &str,
+    color: &HdrImage,
+) -> Result<Accuracy, LabError> {
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let mut out = Accuracy::default();
+    let windowed = if c.cutoff_reference {
+        let r = stage(pose, "reference rendered", || {
+            refs.windowed(ctx, gpu_scene, c, cam)
+        })
+        .map_err(|e| other(&e))?;
+        out.acc = Some(compare(color, &r.color, 1.0));
+        Some(r)
+    } else {
+        None
+    };
+    let (ri, cached) = stage(pose, "infinite-range reference", || {
+        refs.infinite(ctx, gpu_scene, cam, c.resolution, windowed.as_ref())
+    })?;
+    out.acc_inf = Some(compare_adapted(color, &ri));
+    out.infinite = Some(ri);
+    out.infinite_cached = Some(cached);
+    out.reference = windowed.map(|r| r.color);
+    Ok(out)
+}
+
+/// Steady-state timings of a frame's lists.
+struct SteadyLists {
+    /// Culling back to back (run median, span), ms.
+    cull: Option<(f64, Option<f64>)>,
+    /// Culling and the shading pass after each run (run median, span), ms.
+    frame: Option<(f64, Option<f64>)>,
+    /// Each pass of culling and shading's runs: its median, ms.
+    passes: Vec<(String, f64)>,
+}
+
+/// The lists of `o` (a frame whose single run timed `t`) culled again `runs` times back to
+/// back, alone and with the shading pass that reads them: a frame's culling and what its lists
+/// cost in shading.
+fn steady_lists(
+    (ctx, renderer, gpu_scene, settings): (&GpuContext, &Renderer, &GpuScene, &CullSettings),
+    c: &Config,
+    o: &ShadeOutput,
+    t: &[PassTiming],
+    runs: u32,
+    pose: &str,
+) -> Result<SteadyLists, LabError> {
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let lists = o.lists.as_ref().expect("a frame with lists");
+    let culler = renderer.culler_for(o);
+    let passes = t.iter().filter(|p| category(&p.label) == "cull").count() as u32;
+    let timed = stage(pose, "culling timed back to back", || {
+        steady_cull(
+            ctx,
+            culler,
+            gpu_scene,
+            &o.cull_depth,
+            &c.strategy,
+            settings,
+            lists,
+            passes,
+            runs,
+        )
+    })
+    .map_err(|e| other(&e))?;
+    let mut out = SteadyLists {
+        cull: timed.map(|s| (s.total_ms, s.span_ms)),
+        frame: None,
+        passes: Vec::new(),
+    };
+    if let Some(mut pass) = renderer.shade_pass(ctx, gpu_scene, o) {
+        let timed = stage(pose, "culling and shading timed back to back", || {
+            steady_cull_shade(
+                ctx,
+                culler,
+                gpu_scene,
+                &o.cull_depth,
+                &c.strategy,
+                settings,
+                lists,
+                passes + pass.passes(),
+                runs,
+                &mut pass,
+            )
+        })
+        .map_err(|e| other(&e))?;
+        if let Some(s) = &timed {
+            out.passes = s.passes.iter().map(|p| (p.0.clone(), p.2)).collect();
+        }
+        out.frame = timed.map(|s| (s.total_ms, s.span_ms));
+    }
+    Ok(out)
 }
 
 /// The references of a cell: the brute-force raster reference, the infinite-range compute

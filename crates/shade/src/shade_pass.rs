@@ -59,7 +59,6 @@ impl Targets {
     ) -> Self {
         let samples = renderer.samples;
         let hdr = renderer.hdr;
-        let hdr_bytes = hdr.texel_bytes();
         let d = &ctx.device;
         let tex =
             |label, format, usage| pipeline::texture_2d(d, label, (width, height), format, usage);
@@ -71,8 +70,6 @@ impl Targets {
                 | wgpu::TextureUsages::TEXTURE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
         );
-        let stored = backend == Backend::DeferredStoredPosition;
-        let visibility = backend == Backend::Visibility;
         let deferred = backend.lights_in_compute();
         let compute = renderer.computes_visibility(backend).then(|| {
             let (vis, _) = renderer
@@ -105,60 +102,14 @@ impl Targets {
             .as_ref()
             .map(|b| b.targets(ctx, (width, height), &depth, backend == Backend::Forward));
         let gbuffer = deferred.then(|| {
-            // Read back by the visibility buffer's oracle (`crate::visibility`) at one sample.
-            let copy = if samples == 1 {
-                wgpu::TextureUsages::COPY_SRC
-            } else {
-                wgpu::TextureUsages::empty()
-            };
-            let usage = wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::TEXTURE_BINDING
-                | copy;
-            let (pw, ph) = if stored { (width, height) } else { (1, 1) };
-            let ms = |label, format| {
-                pipeline::texture_2d_msaa(d, label, (width, height), format, usage, samples)
-                    .create_view(&Default::default())
-            };
-            // The third: the stored position (a 1 x 1 stand-in where it is not stored); with
-            // MSAA, the glass the lighting composites (a stand-in without glass).
-            let third = match (samples > 1, &color_msaa) {
-                (false, _) => {
-                    pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage)
-                        .create_view(&Default::default())
-                }
-                (true, Some(glass)) => glass.clone(),
-                (true, None) => pipeline::texture_2d_msaa(
-                    d,
-                    "shade.glass",
-                    (1, 1),
-                    hdr.texture_format(),
-                    usage,
-                    samples,
-                )
-                .create_view(&Default::default()),
-            };
-            if visibility {
-                // The triangle ids in the material's place (the compute rasteriser's where it
-                // draws them), and a 1 x 1 stand-in for the normal and view depth.
-                let stand_in = pipeline::texture_2d_msaa(
-                    d,
-                    "visibility.no_normal_depth",
-                    (1, 1),
-                    GB_NORMAL_DEPTH,
-                    usage,
-                    samples,
-                );
-                let ids = match &compute {
-                    Some(t) => t.ids.create_view(&Default::default()),
-                    None => ms("visibility.ids", VISIBILITY_ID),
-                };
-                return [stand_in.create_view(&Default::default()), ids, third];
-            }
-            [
-                ms("gbuffer.normal_depth", GB_NORMAL_DEPTH),
-                ms("gbuffer.material", GB_MATERIAL),
-                third,
-            ]
+            surface_views(
+                d,
+                renderer,
+                backend,
+                (width, height),
+                color_msaa.as_ref(),
+                compute.as_ref(),
+            )
         });
         let gbuffer_bytes = match &compute {
             Some(t) => t.bytes(),
@@ -179,30 +130,13 @@ impl Targets {
             depth,
             gbuffer_bytes,
             gbuffer,
-            // Naive forward's frame reads no lookup bounds (they are made for measuring it).
-            msaa_bytes: bounds
-                .as_ref()
-                .filter(|_| backend != Backend::NaiveForward)
-                .map_or(0, |b| b.bytes)
-                + match (samples > 1, deferred) {
-                    (false, _) => 0,
-                    // The G-buffer, depth included, and for glass the colour it is blended in.
-                    (true, true) => {
-                        gbuffer_bytes
-                            + if renderer.transparent {
-                                u64::from(width)
-                                    * u64::from(height)
-                                    * u64::from(samples)
-                                    * hdr_bytes
-                            } else {
-                                0
-                            }
-                    }
-                    // Depth32Float and the colour, `samples` each a pixel.
-                    (true, false) => {
-                        u64::from(width) * u64::from(height) * u64::from(samples) * (4 + hdr_bytes)
-                    }
-                },
+            msaa_bytes: msaa_bytes(
+                renderer,
+                backend,
+                (width, height),
+                bounds.as_ref(),
+                gbuffer_bytes,
+            ),
             bounds,
             compute,
         }
@@ -239,6 +173,105 @@ impl Targets {
             _ => views.iter().take(2).collect(),
         }
     }
+}
+
+/// The surface buffers' views of a deferred backend's frame: the G-buffer's normal and view
+/// depth, material and stored position; the visibility buffer's stand-in, triangle ids (the
+/// compute rasteriser's where it draws them) and, with MSAA, the glass layer.
+fn surface_views(
+    d: &wgpu::Device,
+    renderer: &Renderer,
+    backend: Backend,
+    (width, height): (u32, u32),
+    color_msaa: Option<&wgpu::TextureView>,
+    compute: Option<&ComputeTargets>,
+) -> [wgpu::TextureView; 3] {
+    let samples = renderer.samples;
+    let hdr = renderer.hdr;
+    let stored = backend == Backend::DeferredStoredPosition;
+    // Read back by the visibility buffer's oracle (`crate::visibility`) at one sample.
+    let copy = if samples == 1 {
+        wgpu::TextureUsages::COPY_SRC
+    } else {
+        wgpu::TextureUsages::empty()
+    };
+    let usage =
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING | copy;
+    let (pw, ph) = if stored { (width, height) } else { (1, 1) };
+    let ms = |label, format| {
+        pipeline::texture_2d_msaa(d, label, (width, height), format, usage, samples)
+            .create_view(&Default::default())
+    };
+    // The third: the stored position (a 1 x 1 stand-in where it is not stored); with
+    // MSAA, the glass the lighting composites (a stand-in without glass).
+    let third = match (samples > 1, color_msaa) {
+        (false, _) => pipeline::texture_2d(d, "gbuffer.position", (pw, ph), GB_POSITION, usage)
+            .create_view(&Default::default()),
+        (true, Some(glass)) => glass.clone(),
+        (true, None) => pipeline::texture_2d_msaa(
+            d,
+            "shade.glass",
+            (1, 1),
+            hdr.texture_format(),
+            usage,
+            samples,
+        )
+        .create_view(&Default::default()),
+    };
+    if backend == Backend::Visibility {
+        // The triangle ids in the material's place (the compute rasteriser's where it
+        // draws them), and a 1 x 1 stand-in for the normal and view depth.
+        let stand_in = pipeline::texture_2d_msaa(
+            d,
+            "visibility.no_normal_depth",
+            (1, 1),
+            GB_NORMAL_DEPTH,
+            usage,
+            samples,
+        );
+        let ids = match compute {
+            Some(t) => t.ids.create_view(&Default::default()),
+            None => ms("visibility.ids", VISIBILITY_ID),
+        };
+        return [stand_in.create_view(&Default::default()), ids, third];
+    }
+    [
+        ms("gbuffer.normal_depth", GB_NORMAL_DEPTH),
+        ms("gbuffer.material", GB_MATERIAL),
+        third,
+    ]
+}
+
+/// Bytes of a frame's multisampled targets, and of the lookup bounds where its backend culls
+/// over them (naive forward's frame reads none: they are made for measuring it).
+fn msaa_bytes(
+    renderer: &Renderer,
+    backend: Backend,
+    (width, height): (u32, u32),
+    bounds: Option<&BoundsTargets>,
+    gbuffer_bytes: u64,
+) -> u64 {
+    let samples = u64::from(renderer.samples);
+    let pixels = u64::from(width) * u64::from(height);
+    let hdr_bytes = renderer.hdr.texel_bytes();
+    let bounds = bounds
+        .filter(|_| backend != Backend::NaiveForward)
+        .map_or(0, |b| b.bytes);
+    bounds
+        + match (samples > 1, backend.lights_in_compute()) {
+            (false, _) => 0,
+            // The G-buffer, depth included, and for glass the colour it is blended in.
+            (true, true) => {
+                gbuffer_bytes
+                    + if renderer.transparent {
+                        pixels * samples * hdr_bytes
+                    } else {
+                        0
+                    }
+            }
+            // Depth32Float and the colour, `samples` each a pixel.
+            (true, false) => pixels * samples * (4 + hdr_bytes),
+        }
 }
 
 /// The shading pass of a forward or deferred frame over the lists it is bound to.
