@@ -27,8 +27,15 @@ impl SceneArgs {
         self.hierarchy.map(|alpha| RadiusRule::Hierarchy {
             alpha,
             spacing: self.spacing.unwrap_or(DEFAULT_SPACING),
+            finest_nodes: self.finest_nodes(),
             sample_from: self.sample_from,
         })
+    }
+
+    /// `--finest-nodes R`, or the default (2).
+    pub(crate) fn finest_nodes(&self) -> f32 {
+        self.finest_nodes
+            .unwrap_or(manylights_scene::hierarchy::FINEST_NODES as f32)
     }
 
     /// `scene` uploaded at its camera: with --hierarchy, the hierarchy of its lights planned,
@@ -39,9 +46,15 @@ impl SceneArgs {
         if let (Some(h), None) = (self.spacing, self.hierarchy) {
             bail!("--spacing {h} without --hierarchy: the spacing is the hierarchy's grid's");
         }
+        if let (Some(r), None) = (self.finest_nodes, self.hierarchy) {
+            bail!(
+                "--finest-nodes {r} without --hierarchy: it is the hierarchy's finest grid's rule"
+            );
+        }
         let Some(RadiusRule::Hierarchy {
             alpha,
             spacing,
+            finest_nodes,
             sample_from,
         }) = self.hierarchy_rule()
         else {
@@ -55,6 +68,7 @@ impl SceneArgs {
         let params = HierarchyParams {
             alpha: alpha.into(),
             spacing: spacing.into(),
+            finest_nodes: finest_nodes.into(),
             top_lights: manylights_scene::hierarchy::TOP_LIGHTS,
             sample_from: sample_from.map(|l| l as usize),
         };
@@ -90,10 +104,10 @@ impl SceneArgs {
 /// `--spacing`'s default, metres (the experiments' and `tune`'s).
 pub(crate) const DEFAULT_SPACING: f32 = 0.25;
 
-/// `--hierarchy`'s parser: a finite alpha of at least 1.
+/// `--hierarchy`'s parser: a finite alpha above 0.
 pub(crate) fn alpha(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
-        Ok(v) if v.is_finite() && v >= 1.0 => Ok(v),
-        _ => Err(format!("`{s}`: a finite accuracy parameter of at least 1")),
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}`: a finite accuracy parameter above 0")),
     }
 }

@@ -57,15 +57,19 @@ pub(crate) struct SceneArgs {
     /// The lighting grid hierarchy (Yuksel and Yuksel 2017; Lin and Yuksel 2019) instead of a
     /// cut-off: near lights as they are, far ones from aggregates on nested grids, each level's
     /// light a sphere of bounded range with its band; deterministic, its bias shrinking as
-    /// ALPHA (at least 1) grows. Built once on the GPU before the frame; the lists and images
+    /// ALPHA (above 0; the papers use 1 and more) grows. Built once on the GPU before the frame; the lists and images
     /// are the hierarchy's, and render --compare also scores against infinite range.
     #[arg(long, value_name = "ALPHA", conflicts_with_all = ["threshold", "stochastic"], value_parser = crate::hierarchy_opt::alpha)]
     pub(crate) hierarchy: Option<f32>,
     /// The lighting grid hierarchy's finest grid spacing in metres, at least (it doubles while
-    /// the grid would hold more than a quarter as many nodes as there are lights; default
-    /// 0.25): with --hierarchy, and tune's --alphas.
+    /// the grid would hold more than --finest-nodes times as many nodes as there are lights;
+    /// default 0.25): with --hierarchy, and tune's --alphas.
     #[arg(long, value_name = "H", value_parser = positive_f32)]
     pub(crate) spacing: Option<f32>,
+    /// The most nodes the hierarchy's finest grid may hold a point light (default 2; the
+    /// authors' implementation 0.25, coarser grids): with --hierarchy, and tune's --alphas.
+    #[arg(long, value_name = "R", value_parser = positive_f32)]
+    pub(crate) finest_nodes: Option<f32>,
     /// With --hierarchy: stochastic band selection from level L on (0: every level; 1: the
     /// aggregates): each of those lights draws its band, weight 1 inside it, unbiased against
     /// the hierarchy, with shorter lists and noise.
@@ -395,7 +399,7 @@ impl SceneArgs {
         scene.assign_models(&self.models()?);
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
-            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --intensity, --spot-fraction)",
+            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --finest-nodes, --intensity, --spot-fraction)",
         )?;
         scene.lights.extend(generated);
         scene

@@ -56,7 +56,7 @@ pub(crate) struct TuneArgs {
     /// E, which joins them; --bound, --accumulate and --interleave apply to each).
     #[arg(long, value_delimiter = ',', default_values_t = [4.0, 1.0, 0.25], value_parser = positive_f32)]
     pub(crate) errors: Vec<f32>,
-    /// With --max-error: the accuracy parameters (alpha, at least 1) of the lighting grid
+    /// With --max-error: the accuracy parameters (alpha, above 0) of the lighting grid
     /// hierarchy tried, each with --spacing (`radius: Hierarchy(alpha, spacing)`; --hierarchy's
     /// alpha joins them).
     #[arg(long, value_delimiter = ',', default_values_t = [1.0, 2.0], value_parser = crate::hierarchy_opt::alpha)]
@@ -213,7 +213,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         range_of(best),
         ms(rank.time(best)),
         rank.describe(),
-        if best.gpu_ms_hierarchy.is_some() {
+        if best.hierarchy_build_ms().is_some() {
             " with the hierarchy's build"
         } else {
             ""
@@ -284,6 +284,7 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
         .chain(alphas.into_iter().map(|alpha| RadiusRule::Hierarchy {
             alpha,
             spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
+            finest_nodes: a.finest_nodes(),
             sample_from: None,
         }))
         .collect()

@@ -50,6 +50,7 @@ fn hierarchy_lights_shade_as_their_oracle() {
         HierarchyParams {
             alpha: 2.0,
             spacing: 0.75,
+            finest_nodes: hierarchy::FINEST_NODES,
             top_lights: 16,
             sample_from: None,
         },
@@ -113,10 +114,12 @@ fn built_level(
 }
 
 /// `built` against the oracle's level: the same total power (to 1e-5), and every light of
-/// either that carries at least 1e-6 of it matched in the other at its position (to 1e-4 of the
-/// spacing) with its power (to 1e-5 of the total). Nodes that gather a vanishing weight (a
-/// light's far corners at a coarse grid: 1e-12 of a light) are left out: f32 sums hold them to a
-/// few bits, or as nothing, and they light nothing.
+/// either that carries at least 1e-6 of it matched in the other by a light at its position (to
+/// 1e-4 of the spacing) with its power (to 1e-5 of the total). Several nodes may sit at one
+/// position (the 8 around a lone light on a grid finer than the lights each gather only it),
+/// so a match is any light that agrees in both. Nodes that gather a vanishing weight (a light's
+/// far corners at a coarse grid: 1e-12 of a light) are left out: f32 sums hold them to a few
+/// bits, or as nothing, and they light nothing.
 fn same_level(
     built: &[(DVec3, DVec3)],
     oracle: &[hierarchy::LevelLight],
@@ -135,17 +138,20 @@ fn same_level(
         (&oracle[..], built, "oracle"),
     ] {
         for (position, power) in from.iter().filter(|l| l.1.element_sum() >= 1e-6 * total) {
-            let (p, q) = to
+            let there: Vec<&(DVec3, DVec3)> = to
                 .iter()
-                .min_by(|a, b| a.0.distance(*position).total_cmp(&b.0.distance(*position)))
-                .unwrap();
+                .filter(|(p, _)| p.distance(*position) < 1e-4 * spacing)
+                .collect();
             assert!(
-                p.distance(*position) < 1e-4 * spacing,
-                "{what}: {dir} light at {position} ({power}), nearest {p}"
+                !there.is_empty(),
+                "{what}: {dir} light at {position} ({power}), none there"
             );
             assert!(
-                (*q - *power).abs().max_element() < 1e-5 * total,
-                "{what}: {dir} power {power} against {q}"
+                there
+                    .iter()
+                    .any(|(_, q)| (*q - *power).abs().max_element() < 1e-5 * total),
+                "{what}: {dir} power {power} at {position} against {:?}",
+                there.iter().map(|l| l.1).collect::<Vec<_>>()
             );
         }
     }
@@ -164,6 +170,7 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
     let params = HierarchyParams {
         alpha: 2.0,
         spacing: 0.75,
+        finest_nodes: hierarchy::FINEST_NODES,
         top_lights: 16,
         sample_from: None,
     };
@@ -275,6 +282,7 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     let params = HierarchyParams {
         alpha: 1.5,
         spacing: 0.5,
+        finest_nodes: hierarchy::FINEST_NODES,
         top_lights: 16,
         sample_from: Some(1),
     };
@@ -351,10 +359,12 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
                 -l.alpha,
                 want.r
             );
-            assert_eq!(
-                l.radius,
-                (want.r as f32).min(plan.reach),
-                "light {i}'s reach"
+            // The same reach, to the f32 rounding of `r (2 - xi)` on either side.
+            let reach = (want.r as f32).min(plan.reach);
+            assert!(
+                (l.radius - reach).abs() <= 2.0 * f32::EPSILON * reach,
+                "light {i}'s reach: {} against {reach}",
+                l.radius
             );
             // The same frame built again draws the same band for the same node, wherever
             // its slot; seed 4 draws anew.

@@ -6,11 +6,11 @@ use super::*;
 /// Bad values name the option and what it accepts.
 #[test]
 fn bad_hierarchy_options_name_the_option() {
-    for bad in ["0.5", "0", "nan", "inf"] {
+    for bad in ["-0.5", "0", "nan", "inf"] {
         rejects(
             &["--hierarchy", bad],
             2,
-            &["--hierarchy", "a finite accuracy parameter of at least 1"],
+            &["--hierarchy", "a finite accuracy parameter above 0"],
         );
     }
     rejects(
@@ -35,6 +35,16 @@ fn bad_hierarchy_options_name_the_option() {
     );
     rejects_cmd("cull", &["--spacing", "0.5"], 1, &["without --hierarchy"]);
     rejects(&["--sample-from", "1"], 2, &["--hierarchy"]);
+    rejects(
+        &["--hierarchy", "1", "--finest-nodes", "0"],
+        2,
+        &["--finest-nodes", "a finite number above 0"],
+    );
+    rejects(
+        &["--finest-nodes", "0.25"],
+        1,
+        &["--finest-nodes 0.25 without --hierarchy"],
+    );
 }
 
 /// `render --hierarchy`: forward and deferred shade the hierarchy's lights as the brute-force

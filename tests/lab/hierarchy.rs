@@ -125,6 +125,19 @@ fn a_hierarchy_of_moving_lights_is_built_each_frame() {
             r.gpu_ms_total.is_some(),
             "{cell}"
         );
+        // And in steady state, back to back, where culling was, each pass apart.
+        assert_eq!(
+            r.gpu_ms_hierarchy_steady.is_some(),
+            r.gpu_ms_cull_steady.is_some(),
+            "{cell}"
+        );
+        if let Some(ms) = r.gpu_ms_hierarchy_steady {
+            let points = r.passes_steady.get("lights.hierarchy.points");
+            assert!(
+                ms > 0.0 && points.is_some_and(|p| *p > 0.0 && *p <= ms),
+                "{cell}: build {ms} ms, points pass {points:?}"
+            );
+        }
         let inf = r.flip_mean_infinite.expect("the lights as they are");
         assert!(
             inf > 0.0 && inf < 0.2,

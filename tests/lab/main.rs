@@ -14,7 +14,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 23] = [
+const SHIPPED: [&str; 25] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -38,6 +38,8 @@ const SHIPPED: [&str; 23] = [
     "hierarchy-sampled",
     "hierarchy-sampled-1m",
     "visibility-frame",
+    "hierarchy-front",
+    "hierarchy-front-1m",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -386,7 +388,7 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
                  radius_rule,exposure_infinite,rmse_infinite,energy_error_infinite,seeds,accumulate,\
                  bias_infinite,noise_infinite,temporal_flicker_mean,reference_infinite_cached,\
                  materials,covered_pixels,ns_per_light_eval,gpu_ms_hierarchy,scene_lights,\
-                 bytes_written_per_pixel,bytes_read_per_pixel"
+                 bytes_written_per_pixel,bytes_read_per_pixel,gpu_ms_hierarchy_steady"
     ));
 }
 

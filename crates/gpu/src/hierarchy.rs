@@ -453,6 +453,33 @@ impl GpuHierarchy {
         }
     }
 
+    /// Passes a build records (the points pass and a pass a level above it).
+    pub fn pass_count(&self) -> u32 {
+        self.passes.len() as u32
+    }
+
+    /// Records `runs` builds back to back in one submission, each in a span of `timer`: the
+    /// build in steady state (every build of static lights leaves the same hierarchy).
+    pub fn build_repeated(
+        &self,
+        ctx: &GpuContext,
+        runs: u32,
+        timer: &mut GpuTimer,
+    ) -> Result<(), GpuError> {
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("lights.hierarchy_repeated"),
+            });
+        for _ in 0..runs {
+            timer.span_begin(&mut encoder, "lights.hierarchy");
+            self.encode(&mut encoder, timer);
+        }
+        timer.span_end(&mut encoder);
+        timer.resolve(&mut encoder);
+        ctx.submit_and_wait(encoder, "lights.hierarchy repeated")
+    }
+
     /// Builds the hierarchy now, in an encoder of its own: its passes' times where timed.
     pub fn build(&self, ctx: &GpuContext) -> Result<Option<Vec<PassTiming>>, GpuError> {
         let mut timer = GpuTimer::new(ctx, self.passes.len() as u32);

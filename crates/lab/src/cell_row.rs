@@ -14,6 +14,7 @@ use crate::experiment::{Cell, Config, Experiment, params_label};
 use crate::noise::{Draws, Noise};
 use crate::results::{Row, percentiles};
 use crate::runner::{category, now};
+use crate::steady::SteadyCull;
 
 /// The material models of the scene's surfaces, by id, their names joined by `+`.
 fn frame_models(scene: &Scene) -> String {
@@ -52,6 +53,9 @@ pub(crate) struct RowParts<'a> {
     pub(crate) poses: u32,
     pub(crate) draws: Option<&'a Draws>,
     pub(crate) noise: Option<Noise>,
+    /// The hierarchy's build in steady state (`gpu_ms_hierarchy_steady`, its passes in
+    /// `passes_steady`).
+    pub(crate) hierarchy_steady: Option<SteadyCull>,
     /// Each timed frame's passes, the encode and upload times, whether they were timed.
     pub(crate) measured: (&'a [Vec<PassTiming>], &'a [f64], &'a [f64], bool),
 }
@@ -71,11 +75,16 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         poses,
         draws,
         noise,
+        hierarchy_steady,
         measured: (frames, encode, uploads, timed),
     } = parts;
     let id = cell.id();
     let (w, h) = c.resolution;
     let first = &evals[0];
+    let build_passes: Vec<(String, f64)> = hierarchy_steady
+        .iter()
+        .flat_map(|s| s.passes.iter().map(|(label, _, ms)| (label.clone(), *ms)))
+        .collect();
     let (bytes_written, bytes_read) = c.backend.bytes_per_pixel(c.msaa, c.hdr);
     let temporal = temporal_stability(evals);
     let worst = Worst::of(evals, noise.as_ref());
@@ -123,7 +132,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         gbuffer_bytes,
         msaa: c.msaa,
         transparent,
-        passes_steady: first.steady_passes.iter().fold(
+        passes_steady: first.steady_passes.iter().chain(&build_passes).fold(
             std::collections::BTreeMap::new(),
             |mut m, (label, ms)| {
                 *m.entry(label.clone()).or_insert(0.0) += ms;
@@ -183,6 +192,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         materials: frame_models(scene),
         covered_pixels: Some(first.covered),
         gpu_ms_hierarchy: med(hierarchy_ms),
+        gpu_ms_hierarchy_steady: hierarchy_steady.as_ref().map(|s| s.total_ms),
         scene_lights: (c.lights.radius.kind() == "hierarchy").then_some(scene.lights.len() as u64),
         bytes_written_per_pixel: Some(bytes_written),
         bytes_read_per_pixel: Some(bytes_read),

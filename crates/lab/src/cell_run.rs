@@ -20,6 +20,7 @@ use crate::noise::{Draws, Noise, measure};
 use crate::renderers::{ReferenceFrames, Renderers};
 use crate::results::Row;
 use crate::runner::stage;
+use crate::steady::steady_build;
 use crate::{LabError, write_atomic};
 
 /// The cell's scene with its generated lights after its own, and how many lights it has of
@@ -221,6 +222,14 @@ pub(crate) fn run_cell(
     if let Some(m) = &movers {
         m.check(ctx)?;
     }
+    // The hierarchy's build back to back, as the frame's culling and shading were timed.
+    let hierarchy_steady = match (movers.as_ref().and_then(Movers::hierarchy), timed) {
+        (Some(hier), true) => stage(name, "hierarchy built back to back", || {
+            steady_build(ctx, hier, hier.pass_count(), c.frames)
+        })
+        .map_err(|e| LabError::Other(e.to_string()))?,
+        _ => None,
+    };
     let first = &evals[0];
     save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
     // Stochastic cells: each seed's image against infinite range (static lights only).
@@ -252,6 +261,7 @@ pub(crate) fn run_cell(
         poses: checks.len() as u32,
         draws: draws.as_ref(),
         noise,
+        hierarchy_steady,
         measured: (&frames, &encode, &uploads, timed),
     }))
 }

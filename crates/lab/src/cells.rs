@@ -422,7 +422,8 @@ impl Experiment {
 pub const RADIUS_PREFIXES: [&str; 4] = ["threshold=", "stochastic=", "radius=", "hierarchy="];
 
 /// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`,
-/// `hierarchy=A/hH` (alpha A, spacing H), or
+/// `hierarchy=A/hH` (alpha A, spacing H; then `/nR` where the finest grid may hold R nodes a
+/// point light, not the default 2, and `/sL` with bands sampled from level L), or
 /// `stochastic=E` with `/albedo` under the albedo bound, `/independent` for independent draws, `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel
 /// classes and `/exposureX` where the exposure is not 1.
 pub fn radius_label(rule: &RadiusRule) -> String {
@@ -432,13 +433,18 @@ pub fn radius_label(rule: &RadiusRule) -> String {
         RadiusRule::Hierarchy {
             alpha,
             spacing,
-            sample_from: None,
-        } => format!("hierarchy={alpha}/h{spacing}"),
-        RadiusRule::Hierarchy {
-            alpha,
-            spacing,
-            sample_from: Some(l),
-        } => format!("hierarchy={alpha}/h{spacing}/s{l}"),
+            finest_nodes,
+            sample_from,
+        } => {
+            let mut s = format!("hierarchy={alpha}/h{spacing}");
+            if f64::from(finest_nodes) != manylights_scene::hierarchy::FINEST_NODES {
+                s += &format!("/n{finest_nodes}");
+            }
+            if let Some(l) = sample_from {
+                s += &format!("/s{l}");
+            }
+            s
+        }
         RadiusRule::Stochastic {
             error,
             bound,

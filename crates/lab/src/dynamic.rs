@@ -29,6 +29,7 @@ pub(crate) fn hierarchy_plan(
     let RadiusRule::Hierarchy {
         alpha,
         spacing,
+        finest_nodes,
         sample_from,
     } = c.lights.radius
     else {
@@ -43,6 +44,7 @@ pub(crate) fn hierarchy_plan(
     let params = HierarchyParams {
         alpha: alpha.into(),
         spacing: spacing.into(),
+        finest_nodes: finest_nodes.into(),
         top_lights: hierarchy::TOP_LIGHTS,
         sample_from: sample_from.map(|l| l as usize),
     };
@@ -103,6 +105,11 @@ impl Movers {
             update: c.light_update,
             hierarchy,
         }))
+    }
+
+    /// The lighting grid hierarchy built before each frame, if any.
+    pub(crate) fn hierarchy(&self) -> Option<&GpuHierarchy> {
+        self.hierarchy.as_ref()
     }
 
     /// Whether lights move (a hierarchy of static lights is built each frame all the same).

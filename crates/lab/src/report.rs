@@ -604,16 +604,17 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
         &|p| speed_accuracy(rows, p, frame, fp),
     )?;
     let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
-    // A hierarchy's frame builds it too: its points carry the build (`gpu_ms_hierarchy`).
-    let hierarchy = rows.iter().any(|r| r.gpu_ms_hierarchy.is_some());
+    // A hierarchy's frame builds it too: its points carry the build
+    // (`Row::hierarchy_build_ms`: in steady state where it was timed so).
+    let hierarchy = rows.iter().any(|r| r.hierarchy_build_ms().is_some());
     let (frame_cost, built, with_build): (Axis<'_>, _, _) = if hierarchy {
         (
             (
                 "culling + shading (+ hierarchy build), GPU ms (steady state)",
                 &crate::tune::cost,
             ),
-            " and, for the lighting grid hierarchy, its build each frame (gpu_ms_hierarchy)",
-            " plus, for the lighting grid hierarchy, its build (gpu_ms_hierarchy)",
+            " and, for the lighting grid hierarchy, its build each frame (gpu_ms_hierarchy_steady, in steady state; in earlier runs gpu_ms_hierarchy)",
+            " plus, for the lighting grid hierarchy, its build (gpu_ms_hierarchy_steady; in earlier runs gpu_ms_hierarchy)",
         )
     } else {
         (frame, "", "")
@@ -628,7 +629,7 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
     if rows.iter().all(|r| r.gpu_ms_frame_steady.is_some()) {
         let whole: Axis<'_> = ("frame, GPU ms (steady state)", &|r| {
             r.gpu_ms_frame_steady
-                .map(|t| t + r.gpu_ms_hierarchy.unwrap_or(0.0))
+                .map(|t| t + r.hierarchy_build_ms().unwrap_or(0.0))
         });
         draw(
             "frame_steady_infinite.svg",

@@ -251,6 +251,13 @@ pub struct Row {
     /// `gpu_ms_total`, not of the steady-state culling and shading. Empty otherwise.
     #[serde(default)]
     pub gpu_ms_hierarchy: Option<f64>,
+    /// `radius: Hierarchy`: the build timed in steady state, builds back to back in one
+    /// submission after the warm-up (as `gpu_ms_cull_steady` times culling), ms: what a frame
+    /// pays for it beside `gpu_ms_cull_shade`. `gpu_ms_hierarchy` times each frame's build
+    /// after the GPU idled, at whatever clock it had fallen to. Empty otherwise, and in rows
+    /// written before it.
+    #[serde(default)]
+    pub gpu_ms_hierarchy_steady: Option<f64>,
     /// The scene's lights where the cell shades others in their place (`radius: Hierarchy`,
     /// whose nodes of every level `lights` counts); empty otherwise. A report's settings
     /// group cells by `Row::setting_lights`.
@@ -268,9 +275,9 @@ pub struct Row {
     pub bytes_read_per_pixel: Option<u64>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
-    /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s and
-    /// `gpu_ms_cull_shade`'s back-to-back runs, each pass's median over the runs, ms (empty
-    /// where they were not timed). JSON only.
+    /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s,
+    /// `gpu_ms_cull_shade`'s and `gpu_ms_hierarchy_steady`'s back-to-back runs, each pass's
+    /// median over the runs, ms (empty where they were not timed). JSON only.
     #[serde(default)]
     pub passes_steady: BTreeMap<String, f64>,
     /// Cell index in sweep order.
@@ -282,6 +289,12 @@ pub struct Row {
 }
 
 impl Row {
+    /// The hierarchy's build a frame pays, ms: `gpu_ms_hierarchy_steady` where it was timed,
+    /// else `gpu_ms_hierarchy`; `None` without a hierarchy.
+    pub fn hierarchy_build_ms(&self) -> Option<f64> {
+        self.gpu_ms_hierarchy_steady.or(self.gpu_ms_hierarchy)
+    }
+
     /// The lights of the setting the cell belongs to: the scene's (`scene_lights`) where the
     /// cell shades a hierarchy's nodes in their place, else `lights`.
     pub fn setting_lights(&self) -> u64 {
@@ -446,6 +459,7 @@ pub const COLUMNS: &[&str] = &[
     "scene_lights",
     "bytes_written_per_pixel",
     "bytes_read_per_pixel",
+    "gpu_ms_hierarchy_steady",
 ];
 
 fn one() -> u32 {

@@ -18,6 +18,7 @@
 //! host works between cells.
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
+use manylights_gpu::hierarchy::GpuHierarchy;
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES, PassKind};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_shade::{Renderer, ShadeOutput};
@@ -176,6 +177,23 @@ pub fn steady_geometry(
     let n = runs.clamp(1, max_runs(passes));
     let mut repeat = |timer: &mut GpuTimer, n: u32| -> Result<(), SteadyError> {
         Ok(renderer.geometry_repeated(ctx, scene, out, n, timer)?)
+    };
+    timed_runs(ctx, passes, n, &mut repeat)
+}
+
+/// The lighting grid hierarchy's build (`passes` passes: the points pass and a pass a level)
+/// `runs` times back to back ([`GpuHierarchy::build_repeated`]), as [`steady_cull`] times
+/// culling: the build as a frame of static lights pays it in steady state, for
+/// `gpu_ms_hierarchy_steady`. `None` without timestamp queries.
+pub fn steady_build(
+    ctx: &GpuContext,
+    hierarchy: &GpuHierarchy,
+    passes: u32,
+    runs: u32,
+) -> Result<Option<SteadyCull>, SteadyError> {
+    let n = runs.clamp(1, max_runs(passes));
+    let mut repeat = |timer: &mut GpuTimer, n: u32| -> Result<(), SteadyError> {
+        Ok(hierarchy.build_repeated(ctx, n, timer)?)
     };
     timed_runs(ctx, passes, n, &mut repeat)
 }

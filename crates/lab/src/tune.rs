@@ -30,10 +30,11 @@ use crate::{LabError, write_atomic};
 
 /// What a culling study ranks a candidate by, ms: culling and the shading pass that reads the
 /// lists, back to back (`gpu_ms_cull_shade`), and, with the lighting grid hierarchy, its build
-/// each frame (`gpu_ms_hierarchy`), which the frame pays too.
+/// each frame ([`Row::hierarchy_build_ms`]: in steady state where it was timed so), which the
+/// frame pays too.
 pub fn cost(r: &Row) -> Option<f64> {
     r.gpu_ms_cull_shade
-        .map(|t| t + r.gpu_ms_hierarchy.unwrap_or(0.0))
+        .map(|t| t + r.hierarchy_build_ms().unwrap_or(0.0))
 }
 
 /// What `tune` ranks candidates by.
@@ -53,7 +54,7 @@ impl Rank {
         match self {
             Self::Frame => r
                 .gpu_ms_frame_steady
-                .map(|t| t + r.gpu_ms_hierarchy.unwrap_or(0.0)),
+                .map(|t| t + r.hierarchy_build_ms().unwrap_or(0.0)),
             Self::CullShade => cost(r),
         }
     }
@@ -294,7 +295,7 @@ pub fn tune(
             cell.config.lights.radius.kind(),
             opts.rank.time(best).unwrap_or(f64::NAN),
             opts.rank.describe(),
-            if best.gpu_ms_hierarchy.is_some() {
+            if best.hierarchy_build_ms().is_some() {
                 " with the hierarchy's build"
             } else {
                 ""

@@ -79,10 +79,17 @@ pub enum RadiusRule {
     /// bounded range; deterministic, with a bias that shrinks as `alpha` grows. The generated
     /// radius is level 0's reach, `2 alpha spacing`.
     Hierarchy {
-        /// The accuracy parameter, >= 1: level `l`'s lights reach `2 alpha spacing 2^l`.
+        /// The accuracy parameter, > 0 (the papers use 1 and more): level `l`'s lights reach
+        /// `2 alpha h 2^l`, `h` the finest grid's spacing.
         alpha: f32,
-        /// The finest grid's spacing, metres, > 0.
+        /// The finest grid's spacing, metres, > 0, at least: it doubles while that grid would
+        /// hold more than `finest_nodes` times as many nodes as there are point lights.
         spacing: f32,
+        /// The most nodes the finest grid may hold a point light, > 0
+        /// (`HierarchyParams::finest_nodes`): 2 by default (left out of the serialised form),
+        /// the authors' implementation 0.25.
+        #[serde(default = "finest_nodes", skip_serializing_if = "is_finest_nodes")]
+        finest_nodes: f32,
         /// Stochastic band selection from this level on (`HierarchyParams::sample_from`):
         /// those levels' lights draw their bands each frame, unbiased, with shorter lists.
         /// Absent: none.
@@ -101,6 +108,14 @@ fn is_light_bound(b: &StochasticBound) -> bool {
 
 fn one() -> u32 {
     1
+}
+
+fn finest_nodes() -> f32 {
+    crate::hierarchy::FINEST_NODES as f32
+}
+
+fn is_finest_nodes(r: &f32) -> bool {
+    *r == finest_nodes()
 }
 
 fn is_one(n: &u32) -> bool {
@@ -198,12 +213,25 @@ impl LightSpec {
                     "a finite cut-off threshold > 0",
                 ));
             }
-            RadiusRule::Hierarchy { alpha, spacing, .. } => {
-                if !(alpha.is_finite() && alpha >= 1.0) {
+            RadiusRule::Hierarchy {
+                alpha,
+                spacing,
+                finest_nodes,
+                ..
+            } => {
+                if !(finest_nodes.is_finite() && finest_nodes > 0.0) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.finest_nodes",
+                        finest_nodes,
+                        "a finite number of nodes a point light > 0 (2 by default; 0.25 the \
+                         authors')",
+                    ));
+                }
+                if !(alpha.is_finite() && alpha > 0.0) {
                     return Err(SceneError::invalid(
                         "lights.radius.alpha",
                         alpha,
-                        "a finite accuracy parameter >= 1",
+                        "a finite accuracy parameter > 0",
                     ));
                 }
                 if !(spacing.is_finite() && spacing > 0.0) {
@@ -583,6 +611,54 @@ mod tests {
         assert!(ron::to_string(&back).unwrap().contains("draw:Independent"));
         let e = ron::from_str::<RadiusRule>("Stochastic(error: 0.1, draw: Sobol)").unwrap_err();
         assert!(e.to_string().contains("Stratified"), "{e}");
+    }
+
+    /// The hierarchy's alpha is any finite value above 0 (below the papers' 1 too), its
+    /// spacing any finite one above 0; bad ones name their field.
+    #[test]
+    fn bad_hierarchy_settings_name_their_field() {
+        let rule = |alpha: f32, spacing: f32| LightSpec {
+            radius: RadiusRule::Hierarchy {
+                alpha,
+                spacing,
+                finest_nodes: 2.0,
+                sample_from: None,
+            },
+            ..LightSpec::default()
+        };
+        let nodes = |finest_nodes: f32| LightSpec {
+            radius: RadiusRule::Hierarchy {
+                alpha: 1.0,
+                spacing: 0.25,
+                finest_nodes,
+                sample_from: None,
+            },
+            ..LightSpec::default()
+        };
+        for (spec, field) in [
+            (nodes(0.0), "lights.radius.finest_nodes = 0"),
+            (nodes(f32::NAN), "lights.radius.finest_nodes = NaN"),
+            (rule(0.0, 0.25), "lights.radius.alpha = 0"),
+            (rule(-1.0, 0.25), "lights.radius.alpha = -1"),
+            (rule(f32::NAN, 0.25), "lights.radius.alpha = NaN"),
+            (rule(f32::INFINITY, 0.25), "lights.radius.alpha = inf"),
+            (rule(1.0, 0.0), "lights.radius.spacing = 0"),
+        ] {
+            let e = spec.validate().unwrap_err().to_string();
+            assert!(e.contains(field) && e.contains("> 0"), "{e}");
+        }
+        for alpha in [0.5, 0.8, 1.0, 4.0] {
+            assert!(rule(alpha, 0.25).validate().is_ok(), "{alpha}");
+        }
+        assert!(nodes(0.25).validate().is_ok());
+        // The default is left out of the serialised form (cell identifiers stay), and read
+        // back; another value is named.
+        let text = ron::to_string(&rule(1.0, 0.25).radius).unwrap();
+        assert!(!text.contains("finest_nodes"), "{text}");
+        let back: RadiusRule = ron::from_str("Hierarchy(alpha: 1.0, spacing: 0.25)").unwrap();
+        assert_eq!(back, rule(1.0, 0.25).radius);
+        let text = ron::to_string(&nodes(0.25).radius).unwrap();
+        assert!(text.contains("finest_nodes:0.25"), "{text}");
     }
 
     use super::*;

@@ -18,8 +18,12 @@
 //!   the trilinear weight alone): a level's work is its own lights, so the GPU build
 //!   (`manylights_gpu::hierarchy`) costs the point lights once and a third of them more.
 //! - the finest grid kept is the first, from the given spacing up by doublings, that holds at
-//!   most a quarter as many lights as there are point lights (the implementation skips finer
-//!   ones the same way), and `h` is its spacing;
+//!   most `finest_nodes` times as many lights as there are point lights, and `h` is its
+//!   spacing. The authors' implementation skips finer grids the same way with a quarter;
+//!   [`FINEST_NODES`], 2, keeps a grid one or two doublings finer, which evaluates a third
+//!   fewer lights a point at the same error in this workspace's scenes (the point lights' band,
+//!   `2 alpha h`, holds fewer of them; the levels above are the same grids): see
+//!   docs/STRATEGIES.md, "The lighting grid hierarchy";
 //! - levels are added until one holds at most `top_lights` lights, or the next would hold no
 //!   fewer (a grid much coarser than the lights' spread keeps the 8 to 27 nodes around them):
 //!   that is the last level.
@@ -53,14 +57,24 @@ pub use band::{Band, band_xi, node_draw};
 /// line's hierarchies are built with.
 pub const TOP_LIGHTS: usize = 64;
 
+/// The finest grid holds at most this many nodes a point light by default
+/// ([`HierarchyParams::finest_nodes`]; the authors' implementation: 0.25).
+pub const FINEST_NODES: f64 = 2.0;
+
 /// The hierarchy's parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HierarchyParams {
-    /// The accuracy parameter: level `l`'s band ends at `2 alpha h 2^l`. At least 1.
+    /// The accuracy parameter: level `l`'s band ends at `2 alpha h 2^l`. Above 0; the papers
+    /// use 1 and more. Below 1 a level's aggregates are taken from the distance of its own
+    /// grid's spacing inwards, nearer than the lights they gather may lie: fewer lights a point,
+    /// a bias that grows fast.
     pub alpha: f64,
     /// The finest grid's spacing `h`, metres, at least: it doubles while the grid would hold
-    /// more than a quarter as many lights as there are point lights.
+    /// more than `finest_nodes` times as many lights as there are point lights.
     pub spacing: f64,
+    /// The most nodes the finest grid may hold a point light ([`FINEST_NODES`] by default;
+    /// the authors' 0.25 keeps coarser grids), above 0.
+    pub finest_nodes: f64,
     /// The last level holds at most this many lights.
     pub top_lights: usize,
     /// Stochastic band selection from this level on (issue 48, item 4): each of these levels'
@@ -84,8 +98,8 @@ pub struct LevelLight {
 pub struct Hierarchy {
     /// What it was built with.
     pub params: HierarchyParams,
-    /// The finest grid's spacing: `params.spacing`, doubled while the grid held more than a
-    /// quarter as many lights as there are point lights.
+    /// The finest grid's spacing: `params.spacing`, doubled while the grid held more than
+    /// `params.finest_nodes` times as many lights as there are point lights.
     pub h: f64,
     /// `levels[0]`: the point lights; `levels[l]`: the aggregates on the grid of spacing
     /// `h 2^(l-1)`, in the order of their nodes (z, then y, then x, ascending).
@@ -160,13 +174,13 @@ impl Hierarchy {
     /// The hierarchy of `lights` (their point lights aggregated, their spots kept).
     pub fn build(lights: &[Light], params: HierarchyParams) -> Hierarchy {
         let (points, spots) = split(lights);
-        // The finest grid kept is the first with at most a quarter as many lights as there
-        // are point lights, as the authors' implementation skips finer ones: `h` doubles until
-        // then (or until a grid is the last level's).
+        // The finest grid kept is the first with at most `finest_nodes` times as many lights
+        // as there are point lights, as the authors' implementation skips finer ones (with a
+        // quarter): `h` doubles until then (or until a grid is the last level's).
         let mut h = params.spacing;
         let mut first = level(&points, h);
         let mut doublings = 0;
-        while first.len() > points.len() / 4
+        while first.len() as f64 > params.finest_nodes * points.len() as f64
             && first.len() > params.top_lights
             && doublings < MAX_LEVELS
         {
@@ -391,6 +405,7 @@ mod tests {
         HierarchyParams {
             alpha,
             spacing: 0.5,
+            finest_nodes: 0.25,
             top_lights: 16,
             sample_from: None,
         }
@@ -584,10 +599,11 @@ mod tests {
                 .sum::<f64>()
                 / xs.len() as f64
         };
-        let errors: Vec<f64> = [1.0, 2.0, 4.0, 8.0, 16.0].map(error).to_vec();
+        // Below the papers' 1 as well.
+        let errors: Vec<f64> = [0.5, 0.75, 1.0, 2.0, 4.0, 8.0, 16.0].map(error).to_vec();
         for w in errors.windows(2) {
             assert!(w[1] < w[0], "{errors:?}");
         }
-        assert!(errors[4] < 1e-4 && errors[0] > 1e-3, "{errors:?}");
+        assert!(errors[6] < 1e-4 && errors[2] > 1e-3, "{errors:?}");
     }
 }

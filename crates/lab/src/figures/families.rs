@@ -34,15 +34,20 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
     match kind {
         "threshold" => ("cut-off thresholds".into(), v),
         "radius" => ("fixed radii".into(), v),
-        // `hierarchy=A/hH`: a family a finest spacing, swept over alpha.
+        // `hierarchy=A/hH[/nR][/sL]`: a family a finest spacing (and finest grid rule, and
+        // first sampled level), swept over alpha.
         "hierarchy" => {
             let h = pieces.next().and_then(|p| p.strip_prefix('h'));
             let mut name = match h {
                 Some(h) => format!("lighting grid hierarchy, spacing {h} m"),
                 None => "lighting grid hierarchy".into(),
             };
-            if let Some(l) = pieces.next().and_then(|p| p.strip_prefix('s')) {
-                name += &format!(", sampled from level {l}");
+            for p in pieces {
+                if let Some(n) = p.strip_prefix('n') {
+                    name += &format!(", {n} nodes a light");
+                } else if let Some(l) = p.strip_prefix('s') {
+                    name += &format!(", sampled from level {l}");
+                }
             }
             (name, v)
         }
@@ -124,5 +129,17 @@ mod tests {
             "lighting grid hierarchy, spacing 0.25 m, sampled from level 1"
         );
         assert!(sampled.chars().count() <= crate::figures::legend::LABEL_CHARS);
+        // The finest grid's rule where it is not the default, then the sampled level.
+        let (both, _) = f("setting=hall,hierarchy=2/h0.25/n0.25/s1,variant=x");
+        assert_eq!(
+            both,
+            "lighting grid hierarchy, spacing 0.25 m, 0.25 nodes a light, sampled from level 1"
+        );
+        let (coarse, _) = f("setting=hall,hierarchy=2/h0.25/n0.25,variant=x");
+        assert_eq!(
+            coarse,
+            "lighting grid hierarchy, spacing 0.25 m, 0.25 nodes a light"
+        );
+        assert!(coarse.chars().count() <= crate::figures::legend::LABEL_CHARS);
     }
 }
