@@ -86,7 +86,7 @@ impl SceneArgs {
         }
         let ms: Option<f64> = timings.map(|t| t.iter().map(|p| p.ms).sum());
         println!(
-            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{}",
+            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{}",
             shaded.lights.len(),
             scene.lights.len(),
             sample_from.map_or_else(String::new, |l| format!(", bands sampled from level {l}")),

@@ -49,7 +49,7 @@ fn bad_hierarchy_options_name_the_option() {
 
 /// `render --hierarchy`: forward and deferred shade the hierarchy's lights as the brute-force
 /// reference of the same hierarchy does, and a larger alpha comes nearer infinite range; with
-/// sampled bands too.
+/// sampled bands too, and with the authors' finest grid (`--finest-nodes 0.25`).
 #[test]
 fn render_hierarchy_matches_its_reference_and_nears_infinite_range() {
     let tmp = tempfile::tempdir().unwrap();
@@ -106,6 +106,25 @@ fn render_hierarchy_matches_its_reference_and_nears_infinite_range() {
     // Sampled bands: the backend still equals the reference over the same draws.
     let (_, sampled) = run("1", "deferred", &["--sample-from", "0"]);
     assert!(sampled.contains("bands sampled from level 0"), "{sampled}");
+    // The finest grid's rule: the default, and the authors' quarter.
+    let (_, default) = run("1.5", "deferred", &[]);
+    assert!(
+        default.contains("the finest grid at most 2 nodes a point light"),
+        "{default}"
+    );
+    let (_, quarter) = run("1.5", "deferred", &["--finest-nodes", "0.25"]);
+    assert!(
+        quarter.contains("the finest grid at most 0.25 nodes a point light"),
+        "{quarter}"
+    );
+    // A quarter of a node a light keeps a coarser finest grid.
+    let spacing = |out: &str| number_after(out, "lighting grid hierarchy", "finest spacing");
+    assert!(
+        spacing(&quarter) > spacing(&default),
+        "finest spacing {} by the quarter rule, {} by default",
+        spacing(&quarter),
+        spacing(&default)
+    );
 }
 
 /// `cull --hierarchy`: every level's lights, culled by each strategy, with no false negative
