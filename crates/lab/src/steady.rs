@@ -15,7 +15,8 @@
 //!
 //! The runs are repeated untimed for [`WARM_UP`] first (not on a CPU adapter), so that they
 //! are timed at the clock the GPU runs at under load, not the lower one it falls to while the
-//! host works between cells.
+//! host works between cells; the timed submission then holds as many runs as the warm-up's
+//! last. The lighting grid hierarchy's build is timed the same way ([`steady_build`]).
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::hierarchy::GpuHierarchy;
