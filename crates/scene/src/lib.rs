@@ -19,6 +19,7 @@ pub mod material;
 pub mod mesh;
 pub mod motion;
 pub mod procedural;
+pub mod radius;
 pub mod stochastic;
 
 pub use camera::{Camera, Projection};
