@@ -81,10 +81,6 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
     let id = cell.id();
     let (w, h) = c.resolution;
     let first = &evals[0];
-    let build_passes: Vec<(String, f64)> = hierarchy_steady
-        .iter()
-        .flat_map(|s| s.passes.iter().map(|(label, _, ms)| (label.clone(), *ms)))
-        .collect();
     let (bytes_written, bytes_read) = c.backend.bytes_per_pixel(c.msaa, c.hdr);
     let temporal = temporal_stability(evals);
     let worst = Worst::of(evals, noise.as_ref());
@@ -132,13 +128,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         gbuffer_bytes,
         msaa: c.msaa,
         transparent,
-        passes_steady: first.steady_passes.iter().chain(&build_passes).fold(
-            std::collections::BTreeMap::new(),
-            |mut m, (label, ms)| {
-                *m.entry(label.clone()).or_insert(0.0) += ms;
-                m
-            },
-        ),
+        passes_steady: steady_passes(first, hierarchy_steady.as_ref()),
         gpu_ms_geometry_steady: first.steady_geometry,
         gpu_ms_frame_steady: match (c.backend, first.steady_geometry, first.steady_frame) {
             (Backend::NaiveForward, g, _) => g,
@@ -212,6 +202,27 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         id,
         finished_unix: now(),
     }
+}
+
+/// Each steady-state pass's median, ms, summed by label: the first pose's geometry, culling and
+/// shading, and the hierarchy's build where it was timed (`passes_steady`).
+fn steady_passes(
+    first: &PoseEval,
+    build: Option<&SteadyCull>,
+) -> std::collections::BTreeMap<String, f64> {
+    let build = build
+        .into_iter()
+        .flat_map(|s| s.passes.iter().map(|(label, _, ms)| (label, *ms)));
+    let mut m = std::collections::BTreeMap::new();
+    for (label, ms) in first
+        .steady_passes
+        .iter()
+        .map(|(l, ms)| (l, *ms))
+        .chain(build)
+    {
+        *m.entry(label.clone()).or_insert(0.0) += ms;
+    }
+    m
 }
 
 /// A cell's measured frames as median and 10th and 90th percentile milliseconds: the whole,
