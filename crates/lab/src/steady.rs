@@ -16,7 +16,8 @@
 //! The runs are repeated untimed for [`WARM_UP`] first (not on a CPU adapter), so that they
 //! are timed at the clock the GPU runs at under load, not the lower one it falls to while the
 //! host works between cells; the timed submission then holds as many runs as the warm-up's
-//! last. The lighting grid hierarchy's build is timed the same way ([`steady_build`]).
+//! last, and the fastest of [`TIMED_TRIES`] timed submissions (and of as many of spans) is
+//! kept, since the clock can still be rising after the warm-up. The lighting grid hierarchy's build is timed the same way ([`steady_build`]).
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::hierarchy::GpuHierarchy;
@@ -48,6 +49,10 @@ pub const WARM_UP: std::time::Duration = std::time::Duration::from_millis(200);
 /// How long a warm-up submission should keep the GPU busy, at the least (its runs double until
 /// it does).
 const WARM_SUBMIT: std::time::Duration = std::time::Duration::from_millis(20);
+
+/// Timed submissions (and as many of spans) a steady-state measurement takes on a GPU, the
+/// fastest kept ([`timed_tries`]).
+pub const TIMED_TRIES: u32 = 3;
 
 /// The warm-up on `ctx`'s adapter: [`WARM_UP`], or none on a CPU adapter.
 pub fn warm_up(ctx: &GpuContext) -> std::time::Duration {
@@ -228,6 +233,71 @@ fn timed_runs(
     // clock to fall back while the host waits (an H200 timed 5 builds of the 50,000-light
     // hall's hierarchy at 0.26 or 0.99 ms from cell to cell, every pass 3.8 times slower).
     let n = n.max(busy);
+    // The fastest of a few timed submissions (and spans): the clock can still be rising after
+    // the warm-up (an H200 timed every pass of two of the quickstart's eight cells twice as
+    // slow as their neighbours, their spans right after at the neighbours' speed).
+    let mut best: Option<Timed> = None;
+    let mut span_ms: Option<f64> = None;
+    let mut totals = Vec::new();
+    for _ in 0..timed_tries(ctx) {
+        let Some((run_passes, total_ms)) = timed_once(ctx, passes, n, repeat)? else {
+            return Ok(None);
+        };
+        totals.push(total_ms);
+        if best.as_ref().is_none_or(|b| total_ms < b.1) {
+            best = Some((run_passes, total_ms));
+        }
+        if let Some(mut spans) = GpuTimer::spans(ctx, n) {
+            repeat(&mut spans, n)?;
+            if let Some(t) = spans.read(ctx)? {
+                let ms = median(t.iter().map(|p| p.ms).collect());
+                span_ms = Some(span_ms.map_or(ms, |s: f64| s.min(ms)));
+            }
+        }
+    }
+    let Some((passes, total_ms)) = best else {
+        return Ok(None);
+    };
+    let slowest = totals.iter().copied().fold(total_ms, f64::max);
+    if slowest > total_ms * 1.1 {
+        tracing::info!(
+            "steady timing: timed submissions of {n} runs read {totals:?} ms a run; kept {total_ms}"
+        );
+    }
+    Ok(Some(SteadyCull {
+        runs: n,
+        passes,
+        total_ms,
+        span_ms,
+    }))
+}
+
+/// Timed submissions a steady-state measurement takes, the fastest kept: [`TIMED_TRIES`] on a
+/// GPU, one on a CPU adapter (lavapipe), which has no clock to rise.
+pub fn timed_tries(ctx: &GpuContext) -> u32 {
+    if ctx.info.device_type == wgpu::DeviceType::Cpu {
+        1
+    } else {
+        TIMED_TRIES
+    }
+}
+
+/// The experiments' median (nearest rank).
+fn median(v: Vec<f64>) -> f64 {
+    percentiles(&v).map_or(0.0, |p| p.0)
+}
+
+/// A timed submission's passes (label, kind, median over the runs) and its median run, ms.
+type Timed = (Vec<(String, PassKind, f64)>, f64);
+
+/// One timed submission of `n` runs: each pass's median over the runs and the median run.
+/// `None` without timestamp queries.
+fn timed_once(
+    ctx: &GpuContext,
+    passes: u32,
+    n: u32,
+    repeat: &mut dyn FnMut(&mut GpuTimer, u32) -> Result<(), SteadyError>,
+) -> Result<Option<Timed>, SteadyError> {
     let mut timer = GpuTimer::new(ctx, n * passes.max(1));
     repeat(&mut timer, n)?;
     let Some(t) = timer.read(ctx)? else {
@@ -241,8 +311,6 @@ fn timed_runs(
             runs: n,
         });
     }
-    // The experiments' median (nearest rank).
-    let median = |v: Vec<f64>| percentiles(&v).map_or(0.0, |p| p.0);
     let passes = (0..k)
         .map(|j| {
             let ms = median((0..n as usize).map(|r| t[r * k + j].ms).collect());
@@ -254,19 +322,5 @@ fn timed_runs(
             .map(|r| t[r * k..(r + 1) * k].iter().map(|p| p.ms).sum())
             .collect(),
     );
-    let span_ms = match GpuTimer::spans(ctx, n) {
-        Some(mut spans) => {
-            repeat(&mut spans, n)?;
-            spans
-                .read(ctx)?
-                .map(|t| median(t.iter().map(|p| p.ms).collect()))
-        }
-        None => None,
-    };
-    Ok(Some(SteadyCull {
-        runs: n,
-        passes,
-        total_ms,
-        span_ms,
-    }))
+    Ok(Some((passes, total_ms)))
 }
