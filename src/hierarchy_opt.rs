@@ -86,11 +86,12 @@ impl SceneArgs {
         }
         let ms: Option<f64> = timings.map(|t| t.iter().map(|p| p.ms).sum());
         println!(
-            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{}",
+            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{} (its sums {})",
             shaded.lights.len(),
             scene.lights.len(),
             sample_from.map_or_else(String::new, |l| format!(", bands sampled from level {l}")),
-            ms.map_or_else(String::new, |ms| format!(", built in {ms:.3} ms"))
+            ms.map_or_else(String::new, |ms| format!(", built in {ms:.3} ms")),
+            build.sums().describe()
         );
         let as_they_are = GpuScene::upload(ctx, &scene, &scene.camera, w, h)?;
         Ok(Shaded {

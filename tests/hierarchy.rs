@@ -160,12 +160,30 @@ fn same_level(
 /// The hierarchy built on the GPU (`manylights_gpu::hierarchy`) is its oracle's
 /// (`Hierarchy::build_fixed` with the plan's shape): every level's lights, positions and powers,
 /// the point lights and spots with their bands; and again after every light has moved, in the
-/// same buffers, with nothing dropped.
+/// same buffers, with nothing dropped. Both ways of holding the sums (two 32-bit atomics, one
+/// 64-bit atomic: lavapipe has both).
 #[test]
 fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
+    use manylights_gpu::hierarchy::Sums;
+    let ctx = common::gpu();
+    assert!(
+        ctx.features.int64_atomic_add,
+        "adapter {} offers no 64-bit atomic add (SHADER_INT64_ATOMIC_ALL_OPS); lavapipe does: \
+         run the tests on it (scripts/ensure-vulkan.sh installs it)",
+        ctx.info.name
+    );
+    assert_eq!(Sums::for_context(&ctx), Sums::Bits64);
+    for sums in [Sums::Bits32, Sums::Bits64] {
+        gpu_build_is_its_oracle(&ctx, sums);
+    }
+}
+
+fn gpu_build_is_its_oracle(
+    ctx: &manylights_gpu::GpuContext,
+    sums: manylights_gpu::hierarchy::Sums,
+) {
     use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
     use manylights_gpu::layout::GpuLight;
-    let ctx = common::gpu();
     let original = atrium(1500, 0.2);
     let params = HierarchyParams {
         alpha: 2.0,
@@ -194,8 +212,10 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
         ..original.clone()
     };
     let camera = original.camera;
-    let gpu_scene = GpuScene::upload(&ctx, &shaded, &camera, 32, 32).unwrap();
-    let build = GpuHierarchy::new(&ctx, plan.clone(), &original.lights, &gpu_scene).unwrap();
+    let gpu_scene = GpuScene::upload(ctx, &shaded, &camera, 32, 32).unwrap();
+    let build =
+        GpuHierarchy::with_sums(ctx, plan.clone(), &original.lights, &gpu_scene, sums).unwrap();
+    assert_eq!(build.sums(), sums);
     // Spots among the lights: every light takes the general path.
     assert!(!gpu_scene.point_lights() && !gpu_scene.band_points());
     let moved: Vec<manylights_scene::Light> = original
@@ -208,13 +228,14 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
             ..*l
         })
         .collect();
-    for (what, lights) in [("at home", &original.lights), ("moved", &moved)] {
+    for (place, lights) in [("at home", &original.lights), ("moved", &moved)] {
+        let what = format!("{sums:?}, {place}");
         let gpu: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         ctx.queue
             .write_buffer(build.source(), 0, bytemuck::cast_slice(&gpu));
-        build.build(&ctx).unwrap();
+        build.build(ctx).unwrap();
         let bytes = manylights_gpu::readback::read_buffer(
-            &ctx,
+            ctx,
             &gpu_scene.lights,
             0,
             plan.shaded_count() * 64,
@@ -264,7 +285,7 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
                 "{what}: level {level}'s band"
             );
         }
-        assert_eq!(build.dropped(&ctx).unwrap(), (0, 0), "{what}");
+        assert_eq!(build.dropped(ctx).unwrap(), (0, 0), "{what}");
     }
 }
 

@@ -254,9 +254,14 @@ fn host_structs_match_wgsl_layout() {
     check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
         row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",
         exposure => "exposure", scale => "scale", interleave => "interleave"]);
-    let hierarchy = validate(&manylights_gpu::hierarchy::HIERARCHY);
-    check!(&hierarchy, manylights_gpu::hierarchy::Step, "Step", [a => "a", b => "b", c => "c", d => "d",
-        e => "e", g => "g", h => "h", far => "far"]);
+    for def in [
+        &manylights_gpu::hierarchy::HIERARCHY,
+        &manylights_gpu::hierarchy::HIERARCHY64,
+    ] {
+        let hierarchy = validate(def);
+        check!(&hierarchy, manylights_gpu::hierarchy::Step, "Step", [a => "a", b => "b", c => "c", d => "d",
+            e => "e", g => "g", h => "h", far => "far"]);
+    }
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.
     let (_, members) = wgsl_layout(&reference, "VertexIn");

@@ -11,11 +11,15 @@
 //   an empty slot becomes a dead light (no power, radius 0, at `far`). It is spread into level
 //   l + 1's grid unless l is the last level.
 // A grid's nodes are keyed by their index in the level's box of nodes (plus 1; 0 is an empty
-// slot) in an open-addressing hash table of 16 words a slot: the key, then six 64-bit sums kept
-// as two 32-bit words each (WGSL has no float atomics): power r, g, b, and the power-weighted
-// offset of the position from the node in units of the spacing, x, y, z, all scaled by `scale`
-// (2^52 over the lights' total power: the sums fit 63 bits, and each term keeps an f32's 24
-// bits). The counters count splats dropped: a node outside its level's box, a table full.
+// slot) in an open-addressing hash table of 16 words a slot: the key, then six 64-bit fixed
+// point sums (so that they do not hang on the order of the additions): power r, g, b, and the
+// power-weighted offset of the position from the node in units of the spacing, x, y, z, all
+// scaled by `scale` (2^52 over the lights' total power: the sums fit 63 bits, and each term
+// keeps an f32's 24 bits). How a slot holds them is the file before this one's:
+// hierarchy_sums32.wgsl (two 32-bit atomics a sum) or hierarchy_sums64.wgsl (one 64-bit
+// atomic, SHADER_INT64_ATOMIC_ALL_OPS): `slot_claim`, `slot_key`, `sum_add`,
+// `sum_add_signed`, `sum_read`, `sum_read_signed`. The counters count splats dropped: a node
+// outside its level's box, a table full.
 
 struct Step {
     // mode (0 points, 1 finalize), items (source lights or slots), threads a dispatch row,
@@ -46,56 +50,10 @@ struct Step {
 // The shaded light each source light becomes (points pass).
 @group(0) @binding(2) var<storage, read> target_index: array<u32>;
 @group(0) @binding(3) var<storage, read_write> shaded: array<Light>;
-@group(0) @binding(4) var<storage, read_write> slots: array<atomic<u32>>;
 // [nodes outside their level's box, splats into a full table]
 @group(0) @binding(5) var<storage, read_write> dropped: array<atomic<u32>, 2>;
 
-const SLOT_WORDS: u32 = 16u;
-const TWO32: f32 = 4294967296.0;
 const MAX_PROBES: u32 = 256u;
-
-// Adds a non-negative term to the 64-bit sum at word i (low word, then high).
-fn add64(i: u32, v: f32) {
-    let hi = floor(v / TWO32);
-    let lo = u32(v - hi * TWO32);
-    let old = atomicAdd(&slots[i], lo);
-    let carry = select(0u, 1u, old + lo < old);
-    let high = u32(hi) + carry;
-    if high != 0u {
-        atomicAdd(&slots[i + 1u], high);
-    }
-}
-
-// Adds a signed term to the 64-bit two's complement sum at word i.
-fn add64_signed(i: u32, v: f32) {
-    if v >= 0.0 {
-        add64(i, v);
-        return;
-    }
-    let m = -v;
-    let hi = floor(m / TWO32);
-    let lo = u32(m - hi * TWO32);
-    let lo_n = ~lo + 1u;
-    let hi_n = ~u32(hi) + select(0u, 1u, lo == 0u);
-    let old = atomicAdd(&slots[i], lo_n);
-    let carry = select(0u, 1u, old + lo_n < old);
-    atomicAdd(&slots[i + 1u], hi_n + carry);
-}
-
-fn read64(i: u32) -> f32 {
-    return f32(atomicLoad(&slots[i + 1u])) * TWO32 + f32(atomicLoad(&slots[i]));
-}
-
-fn read64_signed(i: u32) -> f32 {
-    let lo = atomicLoad(&slots[i]);
-    let hi = atomicLoad(&slots[i + 1u]);
-    if hi < 0x80000000u {
-        return f32(hi) * TWO32 + f32(lo);
-    }
-    let lo_m = ~lo + 1u;
-    let hi_m = ~hi + select(0u, 1u, lo == 0u);
-    return -(f32(hi_m) * TWO32 + f32(lo_m));
-}
 
 // The slot of `key` in the next level's table (inserting it), or none.
 fn slot_of(key: u32) -> i32 {
@@ -108,15 +66,12 @@ fn slot_of(key: u32) -> i32 {
             return -1;
         }
         let at = step.b.z + probe;
-        let r = atomicCompareExchangeWeak(&slots[at * SLOT_WORDS], 0u, key);
-        if r.exchanged || r.old_value == key {
+        let old = slot_claim(at, key);
+        if old == 0u || old == key {
             return i32(at);
         }
-        if r.old_value != 0u {
-            probe = (probe + 1u) % count;
-            tries += 1u;
-        }
-        // A weak exchange that failed on an empty slot is tried again.
+        probe = (probe + 1u) % count;
+        tries += 1u;
     }
     return -1;
 }
@@ -152,13 +107,13 @@ fn splat(position: vec3<f32>, power: vec3<f32>) {
         let c = w * power * step.c.w;
         let cs = c.r + c.g + c.b;
         let o = u - vec3<f32>(node);
-        let i = u32(at) * SLOT_WORDS;
-        add64(i + 1u, c.r);
-        add64(i + 3u, c.g);
-        add64(i + 5u, c.b);
-        add64_signed(i + 7u, cs * o.x);
-        add64_signed(i + 9u, cs * o.y);
-        add64_signed(i + 11u, cs * o.z);
+        let at_u = u32(at);
+        sum_add(at_u, 0u, c.r);
+        sum_add(at_u, 1u, c.g);
+        sum_add(at_u, 2u, c.b);
+        sum_add_signed(at_u, 3u, cs * o.x);
+        sum_add_signed(at_u, 4u, cs * o.y);
+        sum_add_signed(at_u, 5u, cs * o.z);
     }
 }
 
@@ -241,9 +196,8 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let at = step.b.x + t;
-    let i = at * SLOT_WORDS;
-    let key = atomicLoad(&slots[i]);
-    let p = vec3<f32>(read64(i + 1u), read64(i + 3u), read64(i + 5u));
+    let key = slot_key(at);
+    let p = vec3<f32>(sum_read(at, 0u), sum_read(at, 1u), sum_read(at, 2u));
     let weight = p.r + p.g + p.b;
     if key == 0u || weight <= 0.0 {
         var dead = level_light(step.far.xyz, vec3<f32>(0.0));
@@ -256,7 +210,7 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = key - 1u;
     let node = step.g.xyz
         + vec3<i32>(vec3<u32>(k % dims.x, (k / dims.x) % dims.y, k / (dims.x * dims.y)));
-    let offset = vec3<f32>(read64_signed(i + 7u), read64_signed(i + 9u), read64_signed(i + 11u))
+    let offset = vec3<f32>(sum_read_signed(at, 3u), sum_read_signed(at, 4u), sum_read_signed(at, 5u))
         / weight;
     let position = (vec3<f32>(node) + offset) * bitcast<f32>(step.g.w);
     let power = p / step.c.w;

@@ -86,6 +86,10 @@ pub struct Negotiated {
     /// 64-bit integers and their atomic min and max on storage buffers (`SHADER_INT64`,
     /// `SHADER_INT64_ATOMIC_MIN_MAX`): the compute visibility pass.
     pub int64_atomics: bool,
+    /// Every 64-bit atomic on storage buffers, add and compare-exchange among them
+    /// (`SHADER_INT64`, `SHADER_INT64_ATOMIC_ALL_OPS`): the hierarchy build's sums, one atomic
+    /// an add (`manylights_gpu::hierarchy::Sums`).
+    pub int64_atomic_add: bool,
 }
 
 /// A headless wgpu device and what was negotiated for it.
@@ -210,6 +214,8 @@ impl GpuContext {
             // The compute visibility pass's keys.
             wgpu::Features::SHADER_INT64,
             wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
+            // The hierarchy build's sums.
+            wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS,
         ] {
             if offered.contains(f) {
                 required |= f;
@@ -254,6 +260,9 @@ impl GpuContext {
             int64_atomics: required.contains(
                 wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
             ),
+            int64_atomic_add: required.contains(
+                wgpu::Features::SHADER_INT64 | wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS,
+            ),
         };
         let loop_limit = is_llvmpipe(&info).then_some(LLVMPIPE_LOOP_LIMIT);
         Ok(Self {
@@ -273,7 +282,7 @@ impl GpuContext {
     /// One line naming the adapter, driver and negotiated features, for logs and results.
     pub fn summary(&self) -> String {
         format!(
-            "{} ({:?}; driver {} {}; timestamps: {}; subgroups: {} [{}..{}])",
+            "{} ({:?}; driver {} {}; timestamps: {}; subgroups: {} [{}..{}]; 64-bit atomics: {})",
             self.info.name,
             self.info.backend,
             self.info.driver,
@@ -286,6 +295,11 @@ impl GpuContext {
             if self.features.subgroups { "yes" } else { "no" },
             self.features.subgroup_size.0,
             self.features.subgroup_size.1,
+            match (self.features.int64_atomic_add, self.features.int64_atomics) {
+                (true, _) => "all",
+                (false, true) => "min/max",
+                (false, false) => "no",
+            },
         )
     }
 

@@ -23,12 +23,66 @@ use crate::shaders::{LIGHT, ShaderDef};
 use crate::timing::{GpuTimer, PassTiming};
 use crate::{GpuContext, GpuError, GpuScene};
 
-/// The build's passes.
+/// The build's passes, its sums in 32-bit atomics ([`Sums::Bits32`]).
 pub const HIERARCHY: ShaderDef = ShaderDef {
     name: "lights.hierarchy",
     consts: &[],
-    files: &[LIGHT, crate::shader_file!("lights/hierarchy.wgsl")],
+    files: &[
+        LIGHT,
+        crate::shader_file!("lights/hierarchy_sums32.wgsl"),
+        crate::shader_file!("lights/hierarchy.wgsl"),
+    ],
 };
+
+/// The build's passes, its sums in 64-bit atomics ([`Sums::Bits64`]).
+pub const HIERARCHY64: ShaderDef = ShaderDef {
+    name: "lights.hierarchy",
+    consts: &[],
+    files: &[
+        LIGHT,
+        crate::shader_file!("lights/hierarchy_sums64.wgsl"),
+        crate::shader_file!("lights/hierarchy.wgsl"),
+    ],
+};
+
+/// How the build's hash-table slots hold their 64-bit fixed-point sums: the same integers
+/// either way, so the same hierarchy, but for the last rounding when a sum is read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sums {
+    /// Two 32-bit atomics a sum, the carry by hand (`shaders/lights/hierarchy_sums32.wgsl`):
+    /// every adapter.
+    Bits32,
+    /// One 64-bit atomic a sum (`shaders/lights/hierarchy_sums64.wgsl`): adapters with
+    /// `SHADER_INT64_ATOMIC_ALL_OPS` (lavapipe and NVIDIA's Vulkan driver have it).
+    Bits64,
+}
+
+impl Sums {
+    /// The fastest the adapter offers: 64-bit atomics where it has them.
+    pub fn for_context(ctx: &GpuContext) -> Self {
+        if ctx.features.int64_atomic_add {
+            Self::Bits64
+        } else {
+            Self::Bits32
+        }
+    }
+
+    /// Its shader.
+    pub fn shader(self) -> &'static ShaderDef {
+        match self {
+            Self::Bits32 => &HIERARCHY,
+            Self::Bits64 => &HIERARCHY64,
+        }
+    }
+
+    /// As `render`/`cull` print it.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Bits32 => "two 32-bit atomics a sum",
+            Self::Bits64 => "one 64-bit atomic a sum",
+        }
+    }
+}
 
 const WORKGROUP: u32 = 256;
 /// Words of a hash table slot (the shader's `SLOT_WORDS`).
@@ -297,17 +351,39 @@ pub struct GpuHierarchy {
     steps: Vec<wgpu::Buffer>,
     points: wgpu::ComputePipeline,
     finalize: wgpu::ComputePipeline,
+    sums: Sums,
 }
 
 impl GpuHierarchy {
     /// The build of `plan` from `lights` (the scene's lights, at home) into `shaded`, whose
-    /// lights must be `plan.placeholder(lights)`.
+    /// lights must be `plan.placeholder(lights)`, its sums as the adapter does them fastest
+    /// ([`Sums::for_context`]).
     pub fn new(
         ctx: &GpuContext,
         plan: HierarchyPlan,
         lights: &[Light],
         shaded: &GpuScene,
     ) -> Result<Self, GpuError> {
+        Self::with_sums(ctx, plan, lights, shaded, Sums::for_context(ctx))
+    }
+
+    /// As [`GpuHierarchy::new`], its sums held as `sums` says; [`Sums::Bits64`] needs
+    /// `SHADER_INT64_ATOMIC_ALL_OPS` (`Negotiated::int64_atomic_add`).
+    pub fn with_sums(
+        ctx: &GpuContext,
+        plan: HierarchyPlan,
+        lights: &[Light],
+        shaded: &GpuScene,
+        sums: Sums,
+    ) -> Result<Self, GpuError> {
+        if sums == Sums::Bits64 && !ctx.features.int64_atomic_add {
+            return Err(GpuError::Unsupported(format!(
+                "the hierarchy build's 64-bit sums need 64-bit atomic add on storage buffers \
+                 (wgpu feature SHADER_INT64_ATOMIC_ALL_OPS), which adapter {} does not offer; \
+                 Sums::Bits32 runs everywhere",
+                ctx.info.name
+            )));
+        }
         if u64::from(shaded.light_count) != plan.shaded_count() {
             return Err(GpuError::OverLimit {
                 what: "the shaded scene's lights".into(),
@@ -379,7 +455,7 @@ impl GpuHierarchy {
                 entry(5, c, storage(false)),
             ],
         });
-        let module = HIERARCHY.create(d);
+        let module = sums.shader().create(d);
         let pl = pipeline::layout(d, "lights.hierarchy", &[&layout]);
         let points = pipeline::compute(d, &module, &pl, "points");
         let finalize = pipeline::compute(d, &module, &pl, "finalize");
@@ -420,7 +496,13 @@ impl GpuHierarchy {
             steps,
             points,
             finalize,
+            sums,
         })
+    }
+
+    /// How its sums are held.
+    pub fn sums(&self) -> Sums {
+        self.sums
     }
 
     /// The seed of the next builds' draws (`HierarchyParams::sample_from`: the sampled

@@ -315,6 +315,7 @@ pub const SHADERS: &[ShaderDef] = &[
     crate::motion::MOTION,
     crate::stochastic::STOCHASTIC,
     crate::hierarchy::HIERARCHY,
+    crate::hierarchy::HIERARCHY64,
 ];
 
 #[cfg(test)]
