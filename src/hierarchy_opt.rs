@@ -28,6 +28,7 @@ impl SceneArgs {
             alpha,
             spacing: self.spacing.unwrap_or(DEFAULT_SPACING),
             finest_nodes: self.finest_nodes(),
+            growth: self.growth(),
             sample_from: self.sample_from,
         })
     }
@@ -36,6 +37,12 @@ impl SceneArgs {
     pub(crate) fn finest_nodes(&self) -> f32 {
         self.finest_nodes
             .unwrap_or(manylights_scene::hierarchy::FINEST_NODES as f32)
+    }
+
+    /// `--growth K`, or the default (1).
+    pub(crate) fn growth(&self) -> f32 {
+        self.growth
+            .unwrap_or(manylights_scene::hierarchy::GROWTH as f32)
     }
 
     /// `scene` uploaded at its camera: with --hierarchy, the hierarchy of its lights planned,
@@ -51,10 +58,14 @@ impl SceneArgs {
                 "--finest-nodes {r} without --hierarchy: it is the hierarchy's finest grid's rule"
             );
         }
+        if let (Some(k), None) = (self.growth, self.hierarchy) {
+            bail!("--growth {k} without --hierarchy: it is the hierarchy's bands'");
+        }
         let Some(RadiusRule::Hierarchy {
             alpha,
             spacing,
             finest_nodes,
+            growth,
             sample_from,
         }) = self.hierarchy_rule()
         else {
@@ -69,6 +80,7 @@ impl SceneArgs {
             alpha: alpha.into(),
             spacing: spacing.into(),
             finest_nodes: finest_nodes.into(),
+            growth: growth.into(),
             top_lights: manylights_scene::hierarchy::TOP_LIGHTS,
             sample_from: sample_from.map(|l| l as usize),
         };
@@ -86,7 +98,7 @@ impl SceneArgs {
         }
         let ms: Option<f64> = timings.map(|t| t.iter().map(|p| p.ms).sum());
         println!(
-            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{} (its sums {})",
+            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, bands growing {growth}, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{} (its sums {})",
             shaded.lights.len(),
             scene.lights.len(),
             sample_from.map_or_else(String::new, |l| format!(", bands sampled from level {l}")),

@@ -70,6 +70,11 @@ pub(crate) struct SceneArgs {
     /// authors' implementation 0.25, coarser grids): with --hierarchy, and tune's --alphas.
     #[arg(long, value_name = "R", value_parser = positive_f32)]
     pub(crate) finest_nodes: Option<f32>,
+    /// How much farther, in its grid's units, each level of the hierarchy takes over than the
+    /// level below (from 1, the papers' bands and the default, to 4): with --hierarchy, and
+    /// tune's --alphas.
+    #[arg(long, value_name = "K", value_parser = positive_f32)]
+    pub(crate) growth: Option<f32>,
     /// With --hierarchy: stochastic band selection from level L on (0: every level; 1: the
     /// aggregates): each of those lights draws its band, weight 1 inside it, unbiased against
     /// the hierarchy, with shorter lists and noise.
@@ -399,7 +404,7 @@ impl SceneArgs {
         scene.assign_models(&self.models()?);
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
-            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --finest-nodes, --intensity, --spot-fraction)",
+            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --finest-nodes, --growth, --intensity, --spot-fraction)",
         )?;
         scene.lights.extend(generated);
         scene

@@ -285,6 +285,7 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
             alpha,
             spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
             finest_nodes: a.finest_nodes(),
+            growth: a.growth(),
             sample_from: None,
         }))
         .collect()

@@ -51,6 +51,7 @@ fn hierarchy_lights_shade_as_their_oracle() {
             alpha: 2.0,
             spacing: 0.75,
             finest_nodes: hierarchy::FINEST_NODES,
+            growth: hierarchy::GROWTH,
             top_lights: 16,
             sample_from: None,
         },
@@ -173,14 +174,20 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
         ctx.info.name
     );
     assert_eq!(Sums::for_context(&ctx), Sums::Bits64);
-    for sums in [Sums::Bits32, Sums::Bits64] {
-        gpu_build_is_its_oracle(&ctx, sums);
+    // The papers' bands and growing ones (the bands' radii are the plan's).
+    for (sums, growth) in [
+        (Sums::Bits32, 1.0),
+        (Sums::Bits64, 1.0),
+        (Sums::Bits64, 1.15),
+    ] {
+        gpu_build_is_its_oracle(&ctx, sums, growth);
     }
 }
 
 fn gpu_build_is_its_oracle(
     ctx: &manylights_gpu::GpuContext,
     sums: manylights_gpu::hierarchy::Sums,
+    growth: f64,
 ) {
     use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
     use manylights_gpu::layout::GpuLight;
@@ -189,6 +196,7 @@ fn gpu_build_is_its_oracle(
         alpha: 2.0,
         spacing: 0.75,
         finest_nodes: hierarchy::FINEST_NODES,
+        growth,
         top_lights: 16,
         sample_from: None,
     };
@@ -229,7 +237,7 @@ fn gpu_build_is_its_oracle(
         })
         .collect();
     for (place, lights) in [("at home", &original.lights), ("moved", &moved)] {
-        let what = format!("{sums:?}, {place}");
+        let what = format!("{sums:?}, growth {growth}, {place}");
         let gpu: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         ctx.queue
             .write_buffer(build.source(), 0, bytemuck::cast_slice(&gpu));
@@ -304,6 +312,7 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
         alpha: 1.5,
         spacing: 0.5,
         finest_nodes: hierarchy::FINEST_NODES,
+        growth: hierarchy::GROWTH,
         top_lights: 16,
         sample_from: Some(1),
     };

@@ -45,6 +45,16 @@ fn bad_hierarchy_options_name_the_option() {
         1,
         &["--finest-nodes 0.25 without --hierarchy"],
     );
+    rejects(
+        &["--hierarchy", "1", "--growth", "0.5"],
+        1,
+        &["lights.radius.growth = 0.5", "from 1"],
+    );
+    rejects(
+        &["--growth", "1.2"],
+        1,
+        &["--growth 1.2 without --hierarchy"],
+    );
 }
 
 /// `render --hierarchy`: forward and deferred shade the hierarchy's lights as the brute-force

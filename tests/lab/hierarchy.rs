@@ -25,7 +25,8 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
             warmup: 0,
         ),
         sweep: (
-            radius: [Hierarchy(alpha: 1.0, spacing: 0.25), Hierarchy(alpha: 4.0, spacing: 0.25)],
+            radius: [Hierarchy(alpha: 1.0, spacing: 0.25), Hierarchy(alpha: 4.0, spacing: 0.25),
+                Hierarchy(alpha: 1.0, spacing: 0.25, growth: 1.2)],
             variants: [
                 (label: "forward-gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
                 (label: "forward-zbin", backend: Forward, strategy: ZBin(tile_size: 8)),
@@ -41,7 +42,15 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
     let e = Experiment::parse(src, Path::new("hierarchy.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
-    assert_eq!(s.rows.len(), 16);
+    assert_eq!(s.rows.len(), 24);
+    // Growing bands are named.
+    assert_eq!(
+        s.rows
+            .iter()
+            .filter(|r| r.cell.contains("hierarchy=1/h0.25/g1.2"))
+            .count(),
+        8
+    );
     for r in &s.rows {
         let cell = &r.cell;
         assert_eq!(r.radius_rule, "hierarchy", "{cell}");

@@ -14,7 +14,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 25] = [
+const SHIPPED: [&str; 26] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -40,6 +40,7 @@ const SHIPPED: [&str; 25] = [
     "visibility-frame",
     "hierarchy-front",
     "hierarchy-front-1m",
+    "hierarchy-growth",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {

@@ -227,7 +227,7 @@ impl HierarchyPlan {
 
     /// The band of level `level`: (r, inner), r infinite for the last level.
     fn band(&self, level: usize) -> (f32, f32) {
-        let r = |l: usize| (self.params.alpha * self.h * f64::from(1u32 << l)) as f32;
+        let r = |l: usize| self.params.r(self.h, l) as f32;
         let outer = if level + 1 == self.levels {
             f32::INFINITY
         } else {

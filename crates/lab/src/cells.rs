@@ -434,11 +434,15 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             alpha,
             spacing,
             finest_nodes,
+            growth,
             sample_from,
         } => {
             let mut s = format!("hierarchy={alpha}/h{spacing}");
             if f64::from(finest_nodes) != manylights_scene::hierarchy::FINEST_NODES {
                 s += &format!("/n{finest_nodes}");
+            }
+            if f64::from(growth) != manylights_scene::hierarchy::GROWTH {
+                s += &format!("/g{growth}");
             }
             if let Some(l) = sample_from {
                 s += &format!("/s{l}");

@@ -30,6 +30,7 @@ pub(crate) fn hierarchy_plan(
         alpha,
         spacing,
         finest_nodes,
+        growth,
         sample_from,
     } = c.lights.radius
     else {
@@ -45,6 +46,7 @@ pub(crate) fn hierarchy_plan(
         alpha: alpha.into(),
         spacing: spacing.into(),
         finest_nodes: finest_nodes.into(),
+        growth: growth.into(),
         top_lights: hierarchy::TOP_LIGHTS,
         sample_from: sample_from.map(|l| l as usize),
     };

@@ -68,6 +68,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         alpha: 1.0,
         spacing: 0.25,
         finest_nodes: FINEST_NODES,
+        growth: manylights_scene::hierarchy::GROWTH,
         top_lights: TOP_LIGHTS,
         sample_from: None,
     };

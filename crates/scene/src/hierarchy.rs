@@ -57,6 +57,10 @@ pub use band::{Band, band_xi, node_draw};
 /// line's hierarchies are built with.
 pub const TOP_LIGHTS: usize = 64;
 
+/// How much farther, in its grid's units, each level takes over from the one below than the
+/// level below did, by default ([`HierarchyParams::growth`]; the papers' bands: 1).
+pub const GROWTH: f64 = 1.0;
+
 /// The finest grid holds at most this many nodes a point light by default
 /// ([`HierarchyParams::finest_nodes`]; the authors' implementation: 0.25).
 pub const FINEST_NODES: f64 = 2.0;
@@ -75,6 +79,12 @@ pub struct HierarchyParams {
     /// The most nodes the finest grid may hold a point light ([`FINEST_NODES`] by default;
     /// the authors' 0.25 keeps coarser grids), above 0.
     pub finest_nodes: f64,
+    /// `r_l = alpha h (2 growth)^l`: each level's band ends `growth` times farther in its
+    /// grid's units than the level below's ([`GROWTH`], 1, the papers' bands; at least 1, so
+    /// that a level is whole before the next rises). Above 1 a level's weight stays 1 from
+    /// `2 r_(l-1)` to `r_l`, and the coarse levels, whose aggregates carry the most power, are
+    /// taken from farther in their grids' units (crates/scene/examples/band_schedule.rs).
+    pub growth: f64,
     /// The last level holds at most this many lights.
     pub top_lights: usize,
     /// Stochastic band selection from this level on (issue 48, item 4): each of these levels'
@@ -82,6 +92,13 @@ pub struct HierarchyParams {
     /// estimate is the hierarchy's on average and its lists shorter. `None`: every band as it
     /// is. Spots are never sampled.
     pub sample_from: Option<usize>,
+}
+
+impl HierarchyParams {
+    /// `r_l = alpha h (2 growth)^l` for the finest spacing `h`.
+    pub fn r(&self, h: f64, level: usize) -> f64 {
+        self.alpha * h * (2.0 * self.growth).powi(level as i32)
+    }
 }
 
 /// A light of a level: its position and its power (colour x intensity).
@@ -233,9 +250,9 @@ impl Hierarchy {
         }
     }
 
-    /// `r_l = alpha h 2^l`, `h` the finest grid's spacing ([`Hierarchy::h`]).
+    /// `r_l = alpha h (2 growth)^l`, `h` the finest grid's spacing ([`Hierarchy::h`]).
     pub fn r(&self, level: usize) -> f64 {
-        self.params.alpha * self.h * f64::from(1u32 << level)
+        self.params.r(self.h, level)
     }
 
     /// Level `level`'s weight at distance `d` from one of its lights (as its [`Band`] has it).

@@ -66,6 +66,11 @@ pub enum RadiusRule {
         /// the authors' implementation 0.25.
         #[serde(default = "finest_nodes", skip_serializing_if = "is_finest_nodes")]
         finest_nodes: f32,
+        /// How much farther in its grid's units each level's band ends than the level
+        /// below's, >= 1 (`HierarchyParams::growth`): 1 by default, the papers' bands (left out
+        /// of the serialised form).
+        #[serde(default = "growth", skip_serializing_if = "is_growth")]
+        growth: f32,
         /// Stochastic band selection from this level on (`HierarchyParams::sample_from`):
         /// those levels' lights draw their bands each frame, unbiased, with shorter lists.
         /// Absent: none.
@@ -92,6 +97,14 @@ fn finest_nodes() -> f32 {
 
 fn is_finest_nodes(r: &f32) -> bool {
     *r == finest_nodes()
+}
+
+fn growth() -> f32 {
+    crate::hierarchy::GROWTH as f32
+}
+
+fn is_growth(g: &f32) -> bool {
+    *g == growth()
 }
 
 fn is_one(n: &u32) -> bool {
@@ -140,8 +153,16 @@ impl RadiusRule {
                 alpha,
                 spacing,
                 finest_nodes,
+                growth,
                 ..
             } => {
+                if !(growth.is_finite() && (1.0..=4.0).contains(&growth)) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.growth",
+                        growth,
+                        "a finite growth of the bands from 1 (the papers', the default) to 4",
+                    ));
+                }
                 if !(finest_nodes.is_finite() && finest_nodes > 0.0) {
                     return Err(SceneError::invalid(
                         "lights.radius.finest_nodes",
@@ -310,6 +331,7 @@ mod tests {
                 alpha,
                 spacing,
                 finest_nodes: 2.0,
+                growth: 1.0,
                 sample_from: None,
             },
             ..LightSpec::default()
@@ -319,10 +341,30 @@ mod tests {
                 alpha: 1.0,
                 spacing: 0.25,
                 finest_nodes,
+                growth: 1.0,
                 sample_from: None,
             },
             ..LightSpec::default()
         };
+        let growth = |growth: f32| LightSpec {
+            radius: RadiusRule::Hierarchy {
+                alpha: 1.0,
+                spacing: 0.25,
+                finest_nodes: 2.0,
+                growth,
+                sample_from: None,
+            },
+            ..LightSpec::default()
+        };
+        for (spec, field) in [
+            (growth(0.9), "lights.radius.growth = 0.9"),
+            (growth(4.5), "lights.radius.growth = 4.5"),
+            (growth(f32::NAN), "lights.radius.growth = NaN"),
+        ] {
+            let e = spec.validate().unwrap_err().to_string();
+            assert!(e.contains(field) && e.contains("from 1"), "{e}");
+        }
+        assert!(growth(1.15).validate().is_ok());
         for (spec, field) in [
             (nodes(0.0), "lights.radius.finest_nodes = 0"),
             (nodes(f32::NAN), "lights.radius.finest_nodes = NaN"),
@@ -347,5 +389,11 @@ mod tests {
         assert_eq!(back, rule(1.0, 0.25).radius);
         let text = ron::to_string(&nodes(0.25).radius).unwrap();
         assert!(text.contains("finest_nodes:0.25"), "{text}");
+        assert!(!text.contains("growth"), "{text}");
+        let text = ron::to_string(&growth(1.15).radius).unwrap();
+        assert!(text.contains("growth:1.15"), "{text}");
+        let back: RadiusRule =
+            ron::from_str("Hierarchy(alpha: 1.0, spacing: 0.25, growth: 1.15)").unwrap();
+        assert_eq!(back, growth(1.15).radius);
     }
 }

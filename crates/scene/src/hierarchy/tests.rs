@@ -35,6 +35,7 @@ fn params(alpha: f64) -> HierarchyParams {
         alpha,
         spacing: 0.5,
         finest_nodes: 0.25,
+        growth: GROWTH,
         top_lights: 16,
         sample_from: None,
     }
@@ -95,10 +96,22 @@ fn a_fixed_shape_build_is_the_build_and_keeps_its_shape() {
     }
 }
 
+/// With the papers' bands and with growing ones (`growth` above 1: a level whole between its
+/// ramps).
 #[test]
 fn the_blending_weights_sum_to_one_at_every_distance() {
-    let h = Hierarchy::build(&lights(3000, 60.0, 2), params(1.5));
+    for growth in [1.0, 1.15, 1.5] {
+        let p = HierarchyParams {
+            growth,
+            ..params(1.5)
+        };
+        weights_sum_to_one(&Hierarchy::build(&lights(3000, 60.0, 2), p));
+    }
+}
+
+fn weights_sum_to_one(h: &Hierarchy) {
     let n = h.levels.len();
+    assert!(n >= 3, "{n} levels");
     for k in 0..20_000 {
         let d = k as f64 * 0.01;
         let sum: f64 = (0..n).map(|l| h.band(l, d)).sum();
@@ -116,18 +129,23 @@ fn the_blending_weights_sum_to_one_at_every_distance() {
 fn a_single_light_is_exact_at_every_distance() {
     for p in [Vec3::new(0.3, 1.7, -2.2), Vec3::new(100.25, -3.0, 7.5)] {
         let ls = [Light::point(p, 1.0, Vec3::new(1.0, 0.5, 0.25), 3.0)];
-        // Every level there may be.
-        let pr = params(1.0);
-        let h = Hierarchy::build_fixed(&ls, pr, pr.spacing, MAX_LEVELS);
-        assert_eq!(h.levels.len(), MAX_LEVELS);
-        for k in 0..400 {
-            let d = 0.05 * 1.03f64.powi(k);
-            let x = p.as_dvec3() + DVec3::new(0.6, -0.48, 0.64) * d;
-            let (e, got) = (exact(&ls, x), estimate(&h, x));
-            assert!(
-                (got - e).abs().max_element() <= 1e-9 * e.max_element(),
-                "at {d}: {got} against {e}"
-            );
+        // Every level there may be, with the papers' bands and growing ones.
+        for growth in [1.0, 1.2] {
+            let pr = HierarchyParams {
+                growth,
+                ..params(1.0)
+            };
+            let h = Hierarchy::build_fixed(&ls, pr, pr.spacing, MAX_LEVELS);
+            assert_eq!(h.levels.len(), MAX_LEVELS);
+            for k in 0..400 {
+                let d = 0.05 * 1.03f64.powi(k);
+                let x = p.as_dvec3() + DVec3::new(0.6, -0.48, 0.64) * d;
+                let (e, got) = (exact(&ls, x), estimate(&h, x));
+                assert!(
+                    (got - e).abs().max_element() <= 1e-9 * e.max_element(),
+                    "growth {growth} at {d}: {got} against {e}"
+                );
+            }
         }
     }
 }
@@ -234,4 +252,39 @@ fn the_error_falls_as_alpha_grows() {
         assert!(w[1] < w[0], "{errors:?}");
     }
     assert!(errors[6] < 1e-4 && errors[2] > 1e-3, "{errors:?}");
+}
+
+/// Growing bands take the coarse levels from farther: at the same alpha the error falls as
+/// `growth` grows from 1 to 1.25 (in this small box it rises again by 1.5, where the last
+/// level's few aggregates take over), and it falls as alpha grows at a growth above 1.
+#[test]
+fn the_error_falls_as_the_bands_grow() {
+    let ls = lights(2000, 40.0, 4);
+    let mut r = rng(6);
+    let xs: Vec<DVec3> = (0..300)
+        .map(|_| DVec3::new(r() * 40.0, r() * 12.0, r() * 40.0))
+        .collect();
+    let error = |alpha: f64, growth: f64| {
+        let p = HierarchyParams {
+            growth,
+            ..params(alpha)
+        };
+        let h = Hierarchy::build(&ls, p);
+        assert!(h.levels.len() >= 3);
+        xs.iter()
+            .map(|&x| {
+                let (e, got) = (exact(&ls, x), estimate(&h, x));
+                ((got - e).abs() / e).element_sum() / 3.0
+            })
+            .sum::<f64>()
+            / xs.len() as f64
+    };
+    let by_growth: Vec<f64> = [1.0, 1.1, 1.25].map(|g| error(1.0, g)).to_vec();
+    for w in by_growth.windows(2) {
+        assert!(w[1] < w[0], "{by_growth:?}");
+    }
+    let by_alpha: Vec<f64> = [0.5, 1.0, 2.0, 4.0].map(|a| error(a, 1.15)).to_vec();
+    for w in by_alpha.windows(2) {
+        assert!(w[1] < w[0], "{by_alpha:?}");
+    }
 }
