@@ -229,23 +229,30 @@ fn the_flattened_lights_shade_the_estimate() {
     }
 }
 
+/// 300 points drawn with `seed` in the 40 m box of [`lights`]' scenes.
+fn points(seed: u64) -> Vec<DVec3> {
+    let mut r = rng(seed);
+    (0..300)
+        .map(|_| DVec3::new(r() * 40.0, r() * 12.0, r() * 40.0))
+        .collect()
+}
+
+/// The mean relative error of `h`'s estimate at `xs` against `ls` at infinite range.
+fn mean_error(h: &Hierarchy, ls: &[Light], xs: &[DVec3]) -> f64 {
+    xs.iter()
+        .map(|&x| {
+            let (e, got) = (exact(ls, x), estimate(h, x));
+            ((got - e).abs() / e).element_sum() / 3.0
+        })
+        .sum::<f64>()
+        / xs.len() as f64
+}
+
 #[test]
 fn the_error_falls_as_alpha_grows() {
     let ls = lights(2000, 40.0, 4);
-    let mut r = rng(5);
-    let xs: Vec<DVec3> = (0..300)
-        .map(|_| DVec3::new(r() * 40.0, r() * 12.0, r() * 40.0))
-        .collect();
-    let error = |alpha: f64| {
-        let h = Hierarchy::build(&ls, params(alpha));
-        xs.iter()
-            .map(|&x| {
-                let (e, got) = (exact(&ls, x), estimate(&h, x));
-                ((got - e).abs() / e).element_sum() / 3.0
-            })
-            .sum::<f64>()
-            / xs.len() as f64
-    };
+    let xs = points(5);
+    let error = |alpha: f64| mean_error(&Hierarchy::build(&ls, params(alpha)), &ls, &xs);
     // Below the papers' 1 as well.
     let errors: Vec<f64> = [0.5, 0.75, 1.0, 2.0, 4.0, 8.0, 16.0].map(error).to_vec();
     for w in errors.windows(2) {
@@ -260,10 +267,7 @@ fn the_error_falls_as_alpha_grows() {
 #[test]
 fn the_error_falls_as_the_bands_grow() {
     let ls = lights(2000, 40.0, 4);
-    let mut r = rng(6);
-    let xs: Vec<DVec3> = (0..300)
-        .map(|_| DVec3::new(r() * 40.0, r() * 12.0, r() * 40.0))
-        .collect();
+    let xs = points(6);
     let error = |alpha: f64, growth: f64| {
         let p = HierarchyParams {
             growth,
@@ -271,13 +275,7 @@ fn the_error_falls_as_the_bands_grow() {
         };
         let h = Hierarchy::build(&ls, p);
         assert!(h.levels.len() >= 3);
-        xs.iter()
-            .map(|&x| {
-                let (e, got) = (exact(&ls, x), estimate(&h, x));
-                ((got - e).abs() / e).element_sum() / 3.0
-            })
-            .sum::<f64>()
-            / xs.len() as f64
+        mean_error(&h, &ls, &xs)
     };
     let by_growth: Vec<f64> = [1.0, 1.1, 1.25].map(|g| error(1.0, g)).to_vec();
     for w in by_growth.windows(2) {
