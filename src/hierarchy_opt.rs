@@ -6,7 +6,6 @@
 use anyhow::{Result, bail};
 use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
 use manylights_gpu::{GpuContext, GpuScene};
-use manylights_scene::hierarchy::HierarchyParams;
 use manylights_scene::{RadiusRule, Scene};
 
 use crate::options::SceneArgs;
@@ -61,13 +60,15 @@ impl SceneArgs {
         if let (Some(k), None) = (self.growth, self.hierarchy) {
             bail!("--growth {k} without --hierarchy: it is the hierarchy's bands'");
         }
-        let Some(RadiusRule::Hierarchy {
-            alpha,
-            spacing,
-            finest_nodes,
-            growth,
-            sample_from,
-        }) = self.hierarchy_rule()
+        let Some(
+            rule @ RadiusRule::Hierarchy {
+                alpha,
+                finest_nodes,
+                growth,
+                sample_from,
+                ..
+            },
+        ) = self.hierarchy_rule()
         else {
             let gpu_scene = GpuScene::upload(ctx, &scene, &scene.camera, w, h)?;
             return Ok(Shaded {
@@ -76,14 +77,7 @@ impl SceneArgs {
                 as_they_are: None,
             });
         };
-        let params = HierarchyParams {
-            alpha: alpha.into(),
-            spacing: spacing.into(),
-            finest_nodes: finest_nodes.into(),
-            growth: growth.into(),
-            top_lights: manylights_scene::hierarchy::TOP_LIGHTS,
-            sample_from: sample_from.map(|l| l as usize),
-        };
+        let params = rule.hierarchy_params().expect("a hierarchy rule");
         let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, 0.0)?;
         let (levels, h_used, points, spots) = (plan.levels, plan.h, plan.points, plan.spots);
         let gpu_scene = GpuScene::upload(ctx, &shaded, &scene.camera, w, h)?;

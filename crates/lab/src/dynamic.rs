@@ -9,8 +9,7 @@
 use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
 use manylights_gpu::motion::{LightMotion, UpdateCost};
 use manylights_gpu::{GpuContext, GpuScene};
-use manylights_scene::hierarchy::{self, HierarchyParams};
-use manylights_scene::{RadiusRule, Scene};
+use manylights_scene::Scene;
 
 use crate::LabError;
 use crate::experiment::{Config, LightUpdate};
@@ -26,14 +25,7 @@ pub(crate) fn hierarchy_plan(
     c: &Config,
     scene: &Scene,
 ) -> Result<Option<(HierarchyPlan, Scene)>, LabError> {
-    let RadiusRule::Hierarchy {
-        alpha,
-        spacing,
-        finest_nodes,
-        growth,
-        sample_from,
-    } = c.lights.radius
-    else {
+    let Some(params) = c.lights.radius.hierarchy_params() else {
         return Ok(None);
     };
     // A moving light goes at most its radius from home (manylights_scene::motion).
@@ -41,14 +33,6 @@ pub(crate) fn hierarchy_plan(
         0.0
     } else {
         scene.lights.iter().map(|l| l.radius).fold(0.0, f32::max)
-    };
-    let params = HierarchyParams {
-        alpha: alpha.into(),
-        spacing: spacing.into(),
-        finest_nodes: finest_nodes.into(),
-        growth: growth.into(),
-        top_lights: hierarchy::TOP_LIGHTS,
-        sample_from: sample_from.map(|l| l as usize),
     };
     HierarchyPlan::for_scene(scene, params, moving)
         .map(Some)

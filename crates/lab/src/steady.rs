@@ -17,7 +17,8 @@
 //! are timed at the clock the GPU runs at under load, not the lower one it falls to while the
 //! host works between cells; the timed submission then holds as many runs as the warm-up's
 //! last, and the fastest of [`TIMED_TRIES`] timed submissions (and of as many of spans) is
-//! kept, since the clock can still be rising after the warm-up. The lighting grid hierarchy's build is timed the same way ([`steady_build`]).
+//! kept, since the clock can still be rising after the warm-up. The lighting grid hierarchy's
+//! build is timed the same way ([`steady_build`]).
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::hierarchy::GpuHierarchy;
@@ -54,12 +55,17 @@ const WARM_SUBMIT: std::time::Duration = std::time::Duration::from_millis(20);
 /// fastest kept ([`timed_tries`]).
 pub const TIMED_TRIES: u32 = 3;
 
+/// Whether `ctx`'s adapter has a clock that rises under load: not a CPU adapter (lavapipe).
+fn clocked(ctx: &GpuContext) -> bool {
+    ctx.info.device_type != wgpu::DeviceType::Cpu
+}
+
 /// The warm-up on `ctx`'s adapter: [`WARM_UP`], or none on a CPU adapter.
 pub fn warm_up(ctx: &GpuContext) -> std::time::Duration {
-    if ctx.info.device_type == wgpu::DeviceType::Cpu {
-        std::time::Duration::ZERO
-    } else {
+    if clocked(ctx) {
         WARM_UP
+    } else {
+        std::time::Duration::ZERO
     }
 }
 
@@ -275,11 +281,7 @@ fn timed_runs(
 /// Timed submissions a steady-state measurement takes, the fastest kept: [`TIMED_TRIES`] on a
 /// GPU, one on a CPU adapter (lavapipe), which has no clock to rise.
 pub fn timed_tries(ctx: &GpuContext) -> u32 {
-    if ctx.info.device_type == wgpu::DeviceType::Cpu {
-        1
-    } else {
-        TIMED_TRIES
-    }
+    if clocked(ctx) { TIMED_TRIES } else { 1 }
 }
 
 /// The experiments' median (nearest rank).

@@ -120,6 +120,29 @@ fn four() -> u32 {
 }
 
 impl RadiusRule {
+    /// The hierarchy's parameters where the rule is `Hierarchy` (the last level of at most
+    /// [`crate::hierarchy::TOP_LIGHTS`] lights), else `None`.
+    pub fn hierarchy_params(&self) -> Option<crate::hierarchy::HierarchyParams> {
+        let Self::Hierarchy {
+            alpha,
+            spacing,
+            finest_nodes,
+            growth,
+            sample_from,
+        } = *self
+        else {
+            return None;
+        };
+        Some(crate::hierarchy::HierarchyParams {
+            alpha: alpha.into(),
+            spacing: spacing.into(),
+            finest_nodes: finest_nodes.into(),
+            growth: growth.into(),
+            top_lights: crate::hierarchy::TOP_LIGHTS,
+            sample_from: sample_from.map(|l| l as usize),
+        })
+    }
+
     /// The name of the rule in cell names and result columns: `fixed`, `threshold`,
     /// `stochastic` or `hierarchy`.
     pub fn kind(&self) -> &'static str {
@@ -326,36 +349,19 @@ mod tests {
     /// spacing any finite one above 0; bad ones name their field.
     #[test]
     fn bad_hierarchy_settings_name_their_field() {
-        let rule = |alpha: f32, spacing: f32| LightSpec {
+        let spec = |alpha: f32, spacing: f32, finest_nodes: f32, growth: f32| LightSpec {
             radius: RadiusRule::Hierarchy {
                 alpha,
                 spacing,
-                finest_nodes: 2.0,
-                growth: 1.0,
-                sample_from: None,
-            },
-            ..LightSpec::default()
-        };
-        let nodes = |finest_nodes: f32| LightSpec {
-            radius: RadiusRule::Hierarchy {
-                alpha: 1.0,
-                spacing: 0.25,
                 finest_nodes,
-                growth: 1.0,
-                sample_from: None,
-            },
-            ..LightSpec::default()
-        };
-        let growth = |growth: f32| LightSpec {
-            radius: RadiusRule::Hierarchy {
-                alpha: 1.0,
-                spacing: 0.25,
-                finest_nodes: 2.0,
                 growth,
                 sample_from: None,
             },
             ..LightSpec::default()
         };
+        let rule = |alpha: f32, spacing: f32| spec(alpha, spacing, 2.0, 1.0);
+        let nodes = |finest_nodes: f32| spec(1.0, 0.25, finest_nodes, 1.0);
+        let growth = |growth: f32| spec(1.0, 0.25, 2.0, growth);
         for (spec, field) in [
             (growth(0.9), "lights.radius.growth = 0.9"),
             (growth(4.5), "lights.radius.growth = 4.5"),
