@@ -14,13 +14,12 @@ use manylights_shade::{InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::cell_row::{RowParts, cell_row};
 use crate::dynamic::{Movers, hierarchy_plan};
-use crate::evaluate::{PoseEval, References, evaluate};
+use crate::evaluate::{PoseEval, References, Steady, evaluate};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment};
 use crate::noise::{Draws, Noise, measure};
 use crate::renderers::{ReferenceFrames, Renderers};
 use crate::results::Row;
 use crate::runner::stage;
-use crate::steady::steady_build;
 use crate::{LabError, write_atomic};
 
 /// The cell's scene with its generated lights after its own, and how many lights it has of
@@ -203,7 +202,7 @@ pub(crate) fn run_cell(
         // drew their own, as many as the steady-state warm-up took).
         m.update(ctx, 0)?;
     }
-    let evals = evaluate_checks(
+    let mut evals = evaluate_checks(
         &PoseChecks {
             ctx,
             renderer,
@@ -222,14 +221,8 @@ pub(crate) fn run_cell(
     if let Some(m) = &movers {
         m.check(ctx)?;
     }
-    // The hierarchy's build back to back, as the frame's culling and shading were timed.
-    let hierarchy_steady = match (movers.as_ref().and_then(Movers::hierarchy), timed) {
-        (Some(hier), true) => stage(name, "hierarchy built back to back", || {
-            steady_build(ctx, hier, hier.pass_count(), c.frames)
-        })
-        .map_err(|e| LabError::Other(e.to_string()))?,
-        _ => None,
-    };
+    // The hierarchy's build was timed back to back at the first check (`evaluate`).
+    let hierarchy_steady = evals.first_mut().and_then(|e| e.steady_build.take());
     let first = &evals[0];
     save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
     // Stochastic cells: each seed's image against infinite range (static lights only).
@@ -336,8 +329,12 @@ fn evaluate_checks(
             cam,
             &settings(cam),
             &pose,
-            // Steady-state culling at the first pose, over as many runs as measured frames.
-            (k == 0 && p.timed).then_some(p.c.frames),
+            // Steady-state culling (and the hierarchy's build) at the first pose, over as many
+            // runs as measured frames.
+            (k == 0 && p.timed).then(|| Steady {
+                runs: p.c.frames,
+                hierarchy: movers.as_ref().and_then(Movers::hierarchy),
+            }),
             p.export.as_deref().filter(|_| k == 0),
         )?);
     }

@@ -7,6 +7,7 @@
 use manylights_cull::ListPass as _;
 use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
 use manylights_cull::{CullSettings, Strategy};
+use manylights_gpu::hierarchy::GpuHierarchy;
 use manylights_gpu::layout::GpuFrame;
 use manylights_gpu::timing::PassTiming;
 use manylights_gpu::{GpuContext, GpuScene};
@@ -21,7 +22,7 @@ use crate::LabError;
 use crate::experiment::Config;
 use crate::renderers::ReferenceFrames;
 use crate::runner::{category, stage};
-use crate::steady::{steady_cull, steady_cull_shade, steady_geometry};
+use crate::steady::{SteadyCull, steady_build, steady_cull, steady_cull_shade, steady_geometry};
 
 /// What one camera pose measured.
 pub(crate) struct PoseEval {
@@ -53,6 +54,15 @@ pub(crate) struct PoseEval {
     /// Each pass of the geometry's and of culling and shading's back-to-back runs: its
     /// median, ms.
     pub(crate) steady_passes: Vec<(String, f64)>,
+    /// The lighting grid hierarchy's build back to back, where it was timed.
+    pub(crate) steady_build: Option<SteadyCull>,
+}
+
+/// What the first pose of a timed cell times back to back: culling, shading and the geometry
+/// over `runs` runs, and the hierarchy's build where the cell has one.
+pub(crate) struct Steady<'a> {
+    pub(crate) runs: u32,
+    pub(crate) hierarchy: Option<&'a GpuHierarchy>,
 }
 
 /// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
@@ -71,9 +81,10 @@ pub(crate) fn evaluate(
     cam: &Camera,
     settings: &CullSettings,
     pose: &str,
-    steady_runs: Option<u32>,
+    timed: Option<Steady<'_>>,
     export: Option<&std::path::Path>,
 ) -> Result<PoseEval, LabError> {
+    let steady_runs = timed.as_ref().map(|t| t.runs);
     let light_count = u64::from(gpu_scene.light_count);
     let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let (w, h) = c.resolution;
@@ -178,6 +189,23 @@ pub(crate) fn evaluate(
         }
         _ => None,
     };
+    // The hierarchy's build back to back right after the frame's passes, at the clock they ran
+    // at: timed after the host's accuracy work, the GPU's clock could fall so far that the
+    // warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times
+    // slow, every pass alike). Every build of the same lights is the same hierarchy.
+    let steady_build = match (timed, &o.timings) {
+        (
+            Some(Steady {
+                runs,
+                hierarchy: Some(hier),
+            }),
+            Some(_),
+        ) => stage(pose, "hierarchy built back to back", || {
+            steady_build(ctx, hier, hier.pass_count(), runs)
+        })
+        .map_err(|e| other(&e))?,
+        _ => None,
+    };
     let accuracy = match reference {
         Some(refs) => against_references(ctx, refs, gpu_scene, c, cam, pose, &o.color)?,
         None => Accuracy::default(),
@@ -204,6 +232,7 @@ pub(crate) fn evaluate(
         steady_frame,
         steady_geometry,
         steady_passes,
+        steady_build,
     })
 }
 

@@ -252,7 +252,8 @@ pub struct Row {
     #[serde(default)]
     pub gpu_ms_hierarchy: Option<f64>,
     /// `radius: Hierarchy`: the build timed in steady state, builds back to back in one
-    /// submission after the warm-up (as `gpu_ms_cull_steady` times culling), ms: what a frame
+    /// submission after the warm-up (as `gpu_ms_cull_steady` times culling, right after it and
+    /// before the accuracy work, at the clock the frame's passes ran at), ms: what a frame
     /// pays for it beside `gpu_ms_cull_shade`. `gpu_ms_hierarchy` times each frame's build
     /// after the GPU idled, at whatever clock it had fallen to. Empty otherwise, and in rows
     /// written before it.
