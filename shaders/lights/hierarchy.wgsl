@@ -66,13 +66,7 @@ fn slot_of(key: u32) -> i32 {
             return -1;
         }
         let at = step.b.z + probe;
-        // A plain atomic load first: a node's slot is claimed once and then only read, by
-        // every splat into the node (hundreds at a million lights), which a compare-exchange
-        // each would serialise on the key's word.
-        var old = slot_key(at);
-        if old == 0u {
-            old = slot_claim(at, key);
-        }
+        let old = slot_claim(at, key);
         if old == 0u || old == key {
             return i32(at);
         }
