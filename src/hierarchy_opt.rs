@@ -28,6 +28,7 @@ impl SceneArgs {
             spacing: self.spacing.unwrap_or(DEFAULT_SPACING),
             finest_nodes: self.finest_nodes(),
             growth: self.growth(),
+            ramp: self.ramp(),
             sample_from: self.sample_from,
         })
     }
@@ -42,6 +43,12 @@ impl SceneArgs {
     pub(crate) fn growth(&self) -> f32 {
         self.growth
             .unwrap_or(manylights_scene::hierarchy::GROWTH as f32)
+    }
+
+    /// `--ramp C`, or the default (2).
+    pub(crate) fn ramp(&self) -> f32 {
+        self.ramp
+            .unwrap_or(manylights_scene::hierarchy::RAMP as f32)
     }
 
     /// `scene` uploaded at its camera: with --hierarchy, the hierarchy of its lights planned,
@@ -60,11 +67,15 @@ impl SceneArgs {
         if let (Some(k), None) = (self.growth, self.hierarchy) {
             bail!("--growth {k} without --hierarchy: it is the hierarchy's bands'");
         }
+        if let (Some(c), None) = (self.ramp, self.hierarchy) {
+            bail!("--ramp {c} without --hierarchy: it is the hierarchy's bands'");
+        }
         let Some(
             rule @ RadiusRule::Hierarchy {
                 alpha,
                 finest_nodes,
                 growth,
+                ramp,
                 sample_from,
                 ..
             },
@@ -92,7 +103,7 @@ impl SceneArgs {
         }
         let ms: Option<f64> = timings.map(|t| t.iter().map(|p| p.ms).sum());
         println!(
-            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, bands growing {growth}, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{} (its sums {})",
+            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, bands growing {growth} over ramps of {ramp}, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{} (its sums {})",
             shaded.lights.len(),
             scene.lights.len(),
             sample_from.map_or_else(String::new, |l| format!(", bands sampled from level {l}")),

@@ -75,6 +75,11 @@ pub(crate) struct SceneArgs {
     /// tune's --alphas.
     #[arg(long, value_name = "K", value_parser = positive_f32)]
     pub(crate) growth: Option<f32>,
+    /// How far each level of the hierarchy hands over to the next, from its band's r to this
+    /// times r (above 1 and at most 2, the papers' ramps and the default): with --hierarchy,
+    /// and tune's --alphas.
+    #[arg(long, value_name = "C", value_parser = positive_f32)]
+    pub(crate) ramp: Option<f32>,
     /// With --hierarchy: stochastic band selection from level L on (0: every level; 1: the
     /// aggregates): each of those lights draws its band, weight 1 inside it, unbiased against
     /// the hierarchy, with shorter lists and noise.
@@ -404,7 +409,7 @@ impl SceneArgs {
         scene.assign_models(&self.models()?);
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
-            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --finest-nodes, --growth, --intensity, --spot-fraction)",
+            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --finest-nodes, --growth, --ramp, --intensity, --spot-fraction)",
         )?;
         scene.lights.extend(generated);
         scene

@@ -286,6 +286,7 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
             spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
             finest_nodes: a.finest_nodes(),
             growth: a.growth(),
+            ramp: a.ramp(),
             sample_from: None,
         }))
         .collect()

@@ -43,6 +43,13 @@ fn rgb(t: [f32; 4]) -> DVec3 {
 #[test]
 fn hierarchy_lights_shade_as_their_oracle() {
     let ctx = common::gpu();
+    // The papers' ramps and narrow ones (the frame's band ramp, GpuScene::set_light_bands).
+    for ramp in [hierarchy::RAMP, 1.25] {
+        hierarchy_lights_shade_as_their_oracle_with(&ctx, ramp);
+    }
+}
+
+fn hierarchy_lights_shade_as_their_oracle_with(ctx: &manylights_gpu::GpuContext, ramp: f64) {
     let (w, h) = (40, 24);
     let original = atrium(1500, 0.2);
     let hier = Hierarchy::build(
@@ -52,6 +59,7 @@ fn hierarchy_lights_shade_as_their_oracle() {
             spacing: 0.75,
             finest_nodes: hierarchy::FINEST_NODES,
             growth: hierarchy::GROWTH,
+            ramp,
             top_lights: 16,
             sample_from: None,
         },
@@ -174,13 +182,14 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
         ctx.info.name
     );
     assert_eq!(Sums::for_context(&ctx), Sums::Bits64);
-    // The papers' bands and growing ones (the bands' radii are the plan's).
-    for (sums, growth) in [
-        (Sums::Bits32, 1.0),
-        (Sums::Bits64, 1.0),
-        (Sums::Bits64, 1.15),
+    // The papers' bands, growing ones and narrow ramps (the bands' radii are the plan's).
+    for (sums, growth, ramp) in [
+        (Sums::Bits32, 1.0, 2.0),
+        (Sums::Bits64, 1.0, 2.0),
+        (Sums::Bits64, 1.15, 2.0),
+        (Sums::Bits64, 1.15, 1.25),
     ] {
-        gpu_build_is_its_oracle(&ctx, sums, growth);
+        gpu_build_is_its_oracle(&ctx, sums, growth, ramp);
     }
 }
 
@@ -188,6 +197,7 @@ fn gpu_build_is_its_oracle(
     ctx: &manylights_gpu::GpuContext,
     sums: manylights_gpu::hierarchy::Sums,
     growth: f64,
+    ramp: f64,
 ) {
     use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
     use manylights_gpu::layout::GpuLight;
@@ -197,6 +207,7 @@ fn gpu_build_is_its_oracle(
         spacing: 0.75,
         finest_nodes: hierarchy::FINEST_NODES,
         growth,
+        ramp,
         top_lights: 16,
         sample_from: None,
     };
@@ -313,6 +324,8 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
         spacing: 0.5,
         finest_nodes: hierarchy::FINEST_NODES,
         growth: hierarchy::GROWTH,
+        // Narrow ramps: drawn within (1, 1.5) of inner and r.
+        ramp: 1.5,
         top_lights: 16,
         sample_from: Some(1),
     };
@@ -354,13 +367,14 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     let mut checked = 0;
     for level in 0..plan.levels {
         let (first, count) = plan.level_range(level);
-        let soft = hierarchy::Band::new(
+        let soft = hierarchy::Band::with_ramp(
             if level == 0 { 0.0 } else { r(level - 1) },
             if level + 1 == plan.levels {
                 f64::INFINITY
             } else {
                 r(level)
             },
+            params.ramp,
         );
         for i in first..first + count {
             let l = &a[i as usize];
@@ -389,7 +403,7 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
                 -l.alpha,
                 want.r
             );
-            // The same reach, to the f32 rounding of `r (2 - xi)` on either side.
+            // The same reach, to the f32 rounding of `r (c - (c - 1) xi)` on either side.
             let reach = (want.r as f32).min(plan.reach);
             assert!(
                 (l.radius - reach).abs() <= 2.0 * f32::EPSILON * reach,

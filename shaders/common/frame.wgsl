@@ -15,8 +15,10 @@ struct Frame {
     light_count: u32,
     // FRAME_FLAG_* bits.
     flags: u32,
-    _pad1: u32,
-    _pad2: u32,
+    // The lighting grid hierarchy's ramps (light_band; GpuScene::set_band_ramp) and
+    // 1 / (band_ramp - 1).
+    band_ramp: f32,
+    band_slope: f32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;

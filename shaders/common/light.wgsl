@@ -74,42 +74,6 @@ fn light_falloff_infinite(d: f32) -> f32 {
     return 1.0 / max(d * d, D_MIN * D_MIN);
 }
 
-// The falloff a light is shaded with: a hierarchy light's band times 1 / d^2 (alpha < 0), the
-// windowed one or, for stochastic light culling
-// (alpha > 0), max(1 / d^2, alpha) inside the range drawn for the frame (light_range): 1 / d^2
-// divided by the probability min(d^-2 / alpha, 1) that the light reaches d, an unbiased
-// estimate of the infinite-range falloff (manylights_scene::stochastic).
-fn light_attenuation(light: Light, d: f32) -> f32 {
-    if light.alpha < 0.0 {
-        return light_band(light, d) * light_falloff_infinite(d);
-    }
-    if light.alpha > 0.0 {
-        return select(0.0, max(light_falloff_infinite(d), light.alpha), d < light_range(light));
-    }
-    return light_falloff(d, light.radius);
-}
-
-// A hierarchy light's band weight at distance d (manylights_scene::hierarchy::Band::weight):
-// rising from 0 at `inner` to 1 at r (1 throughout where inner is 0), falling to 0 at 2 r (1
-// throughout where r is infinite); a sampled band (the top bit of `interleave`, HARD_BAND) is
-// 1 between inner and r and 0 elsewhere.
-fn light_band(light: Light, d: f32) -> f32 {
-    let r = -light.alpha;
-    if (light.interleave & HARD_BAND) != 0u {
-        let start = bitcast<f32>(light.interleave & ~HARD_BAND);
-        return select(0.0, 1.0, d > start && d < r);
-    }
-    let inner = bitcast<f32>(light.interleave);
-    var rising = 1.0;
-    if inner > 0.0 {
-        if d <= inner {
-            return 0.0;
-        }
-        rising = min((d - inner) / inner, 1.0);
-    }
-    return min(rising, clamp(2.0 - d / r, 0.0, 1.0));
-}
-
 // Spot cone factor; exactly zero at and outside the outer cone.
 fn light_spot(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
     let t = clamp((cos_theta - cos_outer) / max(cos_inner - cos_outer, SPOT_EPS), 0.0, 1.0);

@@ -23,6 +23,44 @@ fn emitted(m: Material) -> vec3<f32> {
     return m.emissive;
 }
 
+// The falloff a light is shaded with: a hierarchy light's band times 1 / d^2 (alpha < 0), the
+// windowed one or, for stochastic light culling
+// (alpha > 0), max(1 / d^2, alpha) inside the range drawn for the frame (light_range): 1 / d^2
+// divided by the probability min(d^-2 / alpha, 1) that the light reaches d, an unbiased
+// estimate of the infinite-range falloff (manylights_scene::stochastic).
+fn light_attenuation(light: Light, d: f32) -> f32 {
+    if light.alpha < 0.0 {
+        return light_band(light, d) * light_falloff_infinite(d);
+    }
+    if light.alpha > 0.0 {
+        return select(0.0, max(light_falloff_infinite(d), light.alpha), d < light_range(light));
+    }
+    return light_falloff(d, light.radius);
+}
+
+// A hierarchy light's band weight at distance d (manylights_scene::hierarchy::Band::weight):
+// rising from 0 at `inner` to 1 at frame.band_ramp times it (1 throughout where inner is 0),
+// falling from 1 at r to 0 at band_ramp times r (1 throughout where r is infinite), each ramp's
+// fraction times frame.band_slope, 1 / (band_ramp - 1) (1 for the papers' ramps of 2); a
+// sampled band (the top bit of `interleave`, HARD_BAND) is 1 between inner and r and 0
+// elsewhere. Here with the frame, not in light.wgsl, as the frame carries the ramp.
+fn light_band(light: Light, d: f32) -> f32 {
+    let r = -light.alpha;
+    if (light.interleave & HARD_BAND) != 0u {
+        let start = bitcast<f32>(light.interleave & ~HARD_BAND);
+        return select(0.0, 1.0, d > start && d < r);
+    }
+    let inner = bitcast<f32>(light.interleave);
+    var rising = 1.0;
+    if inner > 0.0 {
+        if d <= inner {
+            return 0.0;
+        }
+        rising = min((d - inner) / inner * frame.band_slope, 1.0);
+    }
+    return min(rising, clamp((frame.band_ramp - d / r) * frame.band_slope, 0.0, 1.0));
+}
+
 // Radiance towards `v` from surface point `p` (unit normal `n`) lit by one light.
 fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let to_light = light.position - p;

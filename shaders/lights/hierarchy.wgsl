@@ -41,7 +41,7 @@ struct Step {
     // where dead lights sit (xyz); w: infinity (a spot's band never falls)
     far: vec4<f32>,
     // the frame's seed, 1 where this level's bands are sampled (band_xi, sampled_light), the
-    // level (node_draw)
+    // level (node_draw), the bands' ramp (bits; manylights_scene::hierarchy::Band::ramp)
     s: vec4<u32>,
 }
 
@@ -121,7 +121,7 @@ fn splat(position: vec3<f32>, power: vec3<f32>) {
 fn level_light(position: vec3<f32>, power: vec3<f32>) -> Light {
     var l: Light;
     l.position = position;
-    l.radius = min(2.0 * step.c.x, step.c.z);
+    l.radius = min(bitcast<f32>(step.s.w) * step.c.x, step.c.z);
     l.color = power;
     l.intensity = 1.0;
     l.direction = vec3<f32>(0.0);
@@ -147,18 +147,19 @@ fn node_draw(key: u32) -> u32 {
 }
 
 // A level's light of draw id `id` (band_xi): with its band sampled where the level's are
-// (manylights_scene::hierarchy::Band::sampled: weight 1 between inner (1 + xi) and
-// r (2 - xi), the reach cut to match).
+// (manylights_scene::hierarchy::Band::sampled: weight 1 between inner (1 + (c - 1) xi) and
+// r (c - (c - 1) xi) for ramps of c, the reach cut to match).
 fn sampled_light(l_in: Light, id: u32) -> Light {
     var l = l_in;
     if step.s.y == 1u {
-        let xi = band_xi(id);
+        let c = bitcast<f32>(step.s.w);
+        let t = (c - 1.0) * band_xi(id);
         let r = -l.alpha;
         // The last level's r is infinite, and so is its end.
-        let to = r * (2.0 - xi);
+        let to = r * (c - t);
         l.radius = min(to, step.c.z);
         l.alpha = -to;
-        l.interleave = bitcast<u32>(step.c.y * (1.0 + xi)) | HARD_BAND;
+        l.interleave = bitcast<u32>(step.c.y * (1.0 + t)) | HARD_BAND;
     }
     return l;
 }

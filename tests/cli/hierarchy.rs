@@ -55,6 +55,12 @@ fn bad_hierarchy_options_name_the_option() {
         1,
         &["--growth 1.2 without --hierarchy"],
     );
+    rejects(
+        &["--hierarchy", "1", "--ramp", "2.5"],
+        1,
+        &["lights.radius.ramp = 2.5", "above 1"],
+    );
+    rejects(&["--ramp", "1.5"], 1, &["--ramp 1.5 without --hierarchy"]);
 }
 
 /// `render --hierarchy`: forward and deferred shade the hierarchy's lights as the brute-force

@@ -26,7 +26,7 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
         ),
         sweep: (
             radius: [Hierarchy(alpha: 1.0, spacing: 0.25), Hierarchy(alpha: 4.0, spacing: 0.25),
-                Hierarchy(alpha: 1.0, spacing: 0.25, growth: 1.2)],
+                Hierarchy(alpha: 1.0, spacing: 0.25, growth: 1.2, ramp: 1.5)],
             variants: [
                 (label: "forward-gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
                 (label: "forward-zbin", backend: Forward, strategy: ZBin(tile_size: 8)),
@@ -43,11 +43,11 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
     assert_eq!(s.rows.len(), 24);
-    // Growing bands are named.
+    // Growing bands and narrow ramps are named.
     assert_eq!(
         s.rows
             .iter()
-            .filter(|r| r.cell.contains("hierarchy=1/h0.25/g1.2"))
+            .filter(|r| r.cell.contains("hierarchy=1/h0.25/g1.2/c1.5,"))
             .count(),
         8
     );

@@ -108,7 +108,8 @@ pub struct Step {
     pub h: [u32; 4],
     /// Where dead lights sit; w: infinity.
     pub far: [f32; 4],
-    /// The frame's seed, 1 where this level's bands are sampled, the level, unused.
+    /// The frame's seed, 1 where this level's bands are sampled, the level, the bands' ramp
+    /// (bits).
     pub s: [u32; 4],
 }
 
@@ -331,7 +332,7 @@ impl HierarchyPlan {
                         0,
                         u32::from(self.params.sample_from.is_some_and(|f| l >= f)),
                         l as u32,
-                        0,
+                        (self.params.ramp as f32).to_bits(),
                     ],
                 }
             })
@@ -485,7 +486,9 @@ impl GpuHierarchy {
                 (s.a[0] == 1, group, grid(s.a[1]))
             })
             .collect();
-        // Point lights and aggregates shade on the short path unless a spot is among them.
+        // Point lights and aggregates shade on the short path unless a spot is among them, with
+        // the bands' ramps in the frame.
+        shaded.set_band_ramp(ctx, plan.params.ramp as f32);
         shaded.mark_band_points(ctx);
         Ok(Self {
             plan,

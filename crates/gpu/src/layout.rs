@@ -95,8 +95,12 @@ pub struct GpuFrame {
     pub light_count: u32,
     /// `FRAME_FLAG_*` bits.
     pub flags: u32,
-    /// Padding to 16 bytes.
-    pub _pad: [u32; 2],
+    /// The lighting grid hierarchy's ramps (`light_band`): a band rises from its inner distance
+    /// to `band_ramp` times it and falls from its r to `band_ramp` times r
+    /// (`manylights_scene::hierarchy::Band::ramp`; 2, the papers', by default).
+    pub band_ramp: f32,
+    /// `1 / (band_ramp - 1)`.
+    pub band_slope: f32,
 }
 const _: () = assert!(size_of::<GpuFrame>() == 304);
 
@@ -120,7 +124,8 @@ impl GpuFrame {
             viewport: Vec4::new(w, h, 1.0 / w, 1.0 / h),
             light_count,
             flags: 0,
-            _pad: [0; 2],
+            band_ramp: manylights_scene::hierarchy::RAMP as f32,
+            band_slope: (1.0 / (manylights_scene::hierarchy::RAMP - 1.0)) as f32,
         }
     }
 }

@@ -51,6 +51,9 @@ pub struct GpuScene {
     point_kind: AtomicU32,
     /// The flags of the last [`GpuScene::set_view`], without `FRAME_FLAG_POINT_LIGHTS`.
     view_flags: AtomicU32,
+    /// The hierarchy bands' ramp the frame carries (the bits of an f32;
+    /// [`GpuScene::set_band_ramp`]).
+    band_ramp: AtomicU32,
     /// Layout of group 0.
     pub layout: wgpu::BindGroupLayout,
     /// Group 0.
@@ -235,6 +238,7 @@ impl GpuScene {
             point_lights: AtomicBool::new(point_lights),
             point_kind: AtomicU32::new(0),
             view_flags: AtomicU32::new(0),
+            band_ramp: AtomicU32::new(frame.band_ramp.to_bits()),
             layout,
             bind_group,
         })
@@ -247,8 +251,11 @@ impl GpuScene {
         let flags = flags
             & !(FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS | FRAME_FLAG_BAND_POINTS);
         self.view_flags.store(flags, Ordering::Relaxed);
+        let ramp = f32::from_bits(self.band_ramp.load(Ordering::Relaxed));
         let frame = GpuFrame {
             flags: self.frame_flags(flags),
+            band_ramp: ramp,
+            band_slope: 1.0 / (ramp - 1.0),
             ..GpuFrame::new(camera, width, height, self.light_count)
         };
         ctx.queue
@@ -322,7 +329,27 @@ impl GpuScene {
         if !gpu.is_empty() {
             ctx.queue.write_buffer(&self.lights, 0, cast_slice(&gpu));
         }
+        if let Some(b) = bands.first() {
+            assert!(
+                bands.iter().all(|c| c.ramp == b.ramp),
+                "one hierarchy's bands share their ramp"
+            );
+            self.set_band_ramp(ctx, b.ramp as f32);
+        }
         self.mark_band_points(ctx);
+    }
+
+    /// The ramps of the hierarchy's bands the frame carries from now on (`light_band`: a band
+    /// rises from its inner distance to `ramp` times it and falls from its r to `ramp` times r;
+    /// above 1 and at most 2, the papers' and the default).
+    pub fn set_band_ramp(&self, ctx: &GpuContext, ramp: f32) {
+        assert!(ramp > 1.0 && ramp <= 2.0, "a band ramp of {ramp}");
+        self.band_ramp.store(ramp.to_bits(), Ordering::Relaxed);
+        ctx.queue.write_buffer(
+            &self.frame,
+            std::mem::offset_of!(GpuFrame, band_ramp) as u64,
+            bytemuck::cast_slice(&[ramp, 1.0 / (ramp - 1.0)]),
+        );
     }
 
     /// Whether the frame tells shading that the point lights carry stochastic ranges without

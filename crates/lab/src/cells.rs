@@ -423,7 +423,8 @@ pub const RADIUS_PREFIXES: [&str; 4] = ["threshold=", "stochastic=", "radius=", 
 
 /// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`,
 /// `hierarchy=A/hH` (alpha A, spacing H; then `/nR` where the finest grid may hold R nodes a
-/// point light, not the default 2, and `/sL` with bands sampled from level L), or
+/// point light, not the default 2, `/gK` with bands growing K, `/cC` with ramps of C, and `/sL`
+/// with bands sampled from level L), or
 /// `stochastic=E` with `/albedo` under the albedo bound, `/independent` for independent draws, `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel
 /// classes and `/exposureX` where the exposure is not 1.
 pub fn radius_label(rule: &RadiusRule) -> String {
@@ -435,6 +436,7 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             spacing,
             finest_nodes,
             growth,
+            ramp,
             sample_from,
         } => {
             let mut s = format!("hierarchy={alpha}/h{spacing}");
@@ -443,6 +445,9 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             }
             if f64::from(growth) != manylights_scene::hierarchy::GROWTH {
                 s += &format!("/g{growth}");
+            }
+            if f64::from(ramp) != manylights_scene::hierarchy::RAMP {
+                s += &format!("/c{ramp}");
             }
             if let Some(l) = sample_from {
                 s += &format!("/s{l}");

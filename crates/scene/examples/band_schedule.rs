@@ -69,6 +69,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         spacing: 0.25,
         finest_nodes: FINEST_NODES,
         growth: manylights_scene::hierarchy::GROWTH,
+        ramp: manylights_scene::hierarchy::RAMP,
         top_lights: TOP_LIGHTS,
         sample_from: None,
     };

@@ -61,6 +61,10 @@ pub const TOP_LIGHTS: usize = 64;
 /// level below did, by default ([`HierarchyParams::growth`]; the papers' bands: 1).
 pub const GROWTH: f64 = 1.0;
 
+/// How far each band's ramps run by default ([`HierarchyParams::ramp`]): from a level's `r` to
+/// twice it, the papers' bands.
+pub const RAMP: f64 = 2.0;
+
 /// The finest grid holds at most this many nodes a point light by default
 /// ([`HierarchyParams::finest_nodes`]; the authors' implementation: 0.25).
 pub const FINEST_NODES: f64 = 2.0;
@@ -85,6 +89,10 @@ pub struct HierarchyParams {
     /// `2 r_(l-1)` to `r_l`, and the coarse levels, whose aggregates carry the most power, are
     /// taken from farther in their grids' units (crates/scene/examples/band_schedule.rs).
     pub growth: f64,
+    /// Each level hands over to the next from `r_l` to `ramp r_l` ([`RAMP`], 2, the papers';
+    /// in (1, 2]): narrower ramps shade fewer lights of both levels and lose the blend's
+    /// smoothing (crates/scene/examples/band_schedule.rs).
+    pub ramp: f64,
     /// The last level holds at most this many lights.
     pub top_lights: usize,
     /// Stochastic band selection from this level on (issue 48, item 4): each of these levels'
@@ -255,37 +263,31 @@ impl Hierarchy {
         self.params.r(self.h, level)
     }
 
-    /// Level `level`'s weight at distance `d` from one of its lights (as its [`Band`] has it).
-    pub fn band(&self, level: usize, d: f64) -> f64 {
+    /// Level `level`'s band: from `r_(l-1)` (0 for level 0) to `r_l` (infinite for the last
+    /// level), with the parameters' ramps.
+    pub fn level_band(&self, level: usize) -> Band {
         let last = self.levels.len() - 1;
-        if last == 0 {
-            return 1.0;
-        }
-        let r = self.r(level);
-        let rising = if level == 0 {
-            1.0
-        } else {
-            let r_min = self.r(level - 1);
-            if d <= r_min {
-                return 0.0;
-            }
-            ((d - r_min) / r_min).min(1.0)
-        };
-        let falling = if level == last {
-            1.0
-        } else {
-            (2.0 - d / r).clamp(0.0, 1.0)
-        };
-        rising.min(falling)
+        Band::with_ramp(
+            if level == 0 { 0.0 } else { self.r(level - 1) },
+            if level == last {
+                f64::INFINITY
+            } else {
+                self.r(level)
+            },
+            self.params.ramp,
+        )
+    }
+
+    /// Level `level`'s weight at distance `d` from one of its lights (its [`Band`]'s).
+    pub fn band(&self, level: usize, d: f64) -> f64 {
+        self.level_band(level).weight(d)
     }
 
     /// The sphere of level `level`'s lights: what they reach (`None`: unbounded, the last
     /// level) and the distance inside which they contribute nothing.
     pub fn sphere(&self, level: usize) -> (Option<f64>, f64) {
-        let last = self.levels.len() - 1;
-        let outer = (level < last).then(|| 2.0 * self.r(level));
-        let inner = if level == 0 { 0.0 } else { self.r(level - 1) };
-        (outer, inner)
+        let band = self.level_band(level);
+        (band.r.is_finite().then(|| band.outer()), band.inner)
     }
 
     /// The hierarchy's estimate at `x` of `sum f(light, d) power`, over every level's light
@@ -326,18 +328,10 @@ impl Hierarchy {
     /// surface lies farther from any light ([`reach`]): an unbounded band ends there with
     /// nothing lost, and every radius stays finite for culling.
     pub fn flatten(&self, reach: f32) -> (Vec<Light>, Vec<Band>) {
-        let last = self.levels.len() - 1;
         let mut lights = Vec::new();
         let mut bands = Vec::new();
         for (level, ls) in self.levels.iter().enumerate() {
-            let band = Band::new(
-                if level == 0 { 0.0 } else { self.r(level - 1) },
-                if level == last {
-                    f64::INFINITY
-                } else {
-                    self.r(level)
-                },
-            );
+            let band = self.level_band(level);
             for l in ls {
                 lights.push(Light::point(
                     l.position.as_vec3(),
@@ -353,7 +347,9 @@ impl Hierarchy {
                 radius: reach,
                 ..*s
             });
-            bands.push(Band::new(0.0, f64::INFINITY));
+            // Whole at every distance, whatever the ramp; the hierarchy's, as every band of
+            // one hierarchy shares it (the frame carries it).
+            bands.push(Band::with_ramp(0.0, f64::INFINITY, self.params.ramp));
         }
         (lights, bands)
     }

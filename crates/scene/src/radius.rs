@@ -71,6 +71,11 @@ pub enum RadiusRule {
         /// of the serialised form).
         #[serde(default = "growth", skip_serializing_if = "is_growth")]
         growth: f32,
+        /// How far each level hands over to the next, from `r_l` to `ramp r_l`, in (1, 2]
+        /// (`HierarchyParams::ramp`): 2 by default, the papers' (left out of the serialised
+        /// form).
+        #[serde(default = "ramp", skip_serializing_if = "is_ramp")]
+        ramp: f32,
         /// Stochastic band selection from this level on (`HierarchyParams::sample_from`):
         /// those levels' lights draw their bands each frame, unbiased, with shorter lists.
         /// Absent: none.
@@ -107,6 +112,14 @@ fn is_growth(g: &f32) -> bool {
     *g == growth()
 }
 
+fn ramp() -> f32 {
+    crate::hierarchy::RAMP as f32
+}
+
+fn is_ramp(c: &f32) -> bool {
+    *c == ramp()
+}
+
 fn is_one(n: &u32) -> bool {
     *n == 1
 }
@@ -128,6 +141,7 @@ impl RadiusRule {
             spacing,
             finest_nodes,
             growth,
+            ramp,
             sample_from,
         } = *self
         else {
@@ -138,6 +152,7 @@ impl RadiusRule {
             spacing: spacing.into(),
             finest_nodes: finest_nodes.into(),
             growth: growth.into(),
+            ramp: ramp.into(),
             top_lights: crate::hierarchy::TOP_LIGHTS,
             sample_from: sample_from.map(|l| l as usize),
         })
@@ -177,6 +192,7 @@ impl RadiusRule {
                 spacing,
                 finest_nodes,
                 growth,
+                ramp,
                 ..
             } => {
                 if !(growth.is_finite() && (1.0..=4.0).contains(&growth)) {
@@ -184,6 +200,13 @@ impl RadiusRule {
                         "lights.radius.growth",
                         growth,
                         "a finite growth of the bands from 1 (the papers', the default) to 4",
+                    ));
+                }
+                if !(ramp.is_finite() && ramp > 1.0 && ramp <= 2.0) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.ramp",
+                        ramp,
+                        "a finite ramp above 1 and at most 2 (the papers', the default)",
                     ));
                 }
                 if !(finest_nodes.is_finite() && finest_nodes > 0.0) {
@@ -349,19 +372,31 @@ mod tests {
     /// spacing any finite one above 0; bad ones name their field.
     #[test]
     fn bad_hierarchy_settings_name_their_field() {
-        let spec = |alpha: f32, spacing: f32, finest_nodes: f32, growth: f32| LightSpec {
-            radius: RadiusRule::Hierarchy {
-                alpha,
-                spacing,
-                finest_nodes,
-                growth,
-                sample_from: None,
-            },
-            ..LightSpec::default()
-        };
-        let rule = |alpha: f32, spacing: f32| spec(alpha, spacing, 2.0, 1.0);
-        let nodes = |finest_nodes: f32| spec(1.0, 0.25, finest_nodes, 1.0);
-        let growth = |growth: f32| spec(1.0, 0.25, 2.0, growth);
+        let spec =
+            |alpha: f32, spacing: f32, finest_nodes: f32, growth: f32, ramp: f32| LightSpec {
+                radius: RadiusRule::Hierarchy {
+                    alpha,
+                    spacing,
+                    finest_nodes,
+                    growth,
+                    ramp,
+                    sample_from: None,
+                },
+                ..LightSpec::default()
+            };
+        let rule = |alpha: f32, spacing: f32| spec(alpha, spacing, 2.0, 1.0, 2.0);
+        let nodes = |finest_nodes: f32| spec(1.0, 0.25, finest_nodes, 1.0, 2.0);
+        let growth = |growth: f32| spec(1.0, 0.25, 2.0, growth, 2.0);
+        let ramp = |ramp: f32| spec(1.0, 0.25, 2.0, 1.0, ramp);
+        for (spec, field) in [
+            (ramp(1.0), "lights.radius.ramp = 1"),
+            (ramp(2.5), "lights.radius.ramp = 2.5"),
+            (ramp(f32::INFINITY), "lights.radius.ramp = inf"),
+        ] {
+            let e = spec.validate().unwrap_err().to_string();
+            assert!(e.contains(field) && e.contains("above 1"), "{e}");
+        }
+        assert!(ramp(1.25).validate().is_ok());
         for (spec, field) in [
             (growth(0.9), "lights.radius.growth = 0.9"),
             (growth(4.5), "lights.radius.growth = 4.5"),

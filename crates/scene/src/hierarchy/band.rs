@@ -3,19 +3,24 @@
 //! (issue 48 item 4), each light's draw from the frame's seed and its draw id.
 
 /// A flattened light's band: its weight at distance `d` is
-/// `min(rising, falling)`, rising from 0 at `inner` to 1 at `2 inner` (1 throughout where
-/// `inner` is 0: level 0) and falling from 1 at `r` to 0 at `2 r` (1 throughout where `r` is
-/// infinite: the last level, and the spots); a middle level's `2 inner` is its `r`. A sampled
-/// band (`hard`, [`Band::sampled`]) is 1 for `inner < d < r` and 0 elsewhere.
+/// `min(rising, falling)`, rising from 0 at `inner` to 1 at `ramp inner` (1 throughout where
+/// `inner` is 0: level 0) and falling from 1 at `r` to 0 at `ramp r` (1 throughout where `r` is
+/// infinite: the last level, and the spots); the papers' ramps are 2
+/// ([`super::RAMP`]), and a level's `inner` is the `r` of the level below, so the two weights
+/// sum to 1 over that ramp. A sampled band (`hard`, [`Band::sampled`]) is 1 for `inner < d < r`
+/// and 0 elsewhere.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Band {
     /// Where the weight starts to rise (0: it is 1 from the light out).
     pub inner: f64,
-    /// Where it is 1; it falls to 0 at twice this (infinite: it never falls). A hard band's
-    /// end.
+    /// Where it is 1; it falls to 0 at `ramp` times this (infinite: it never falls). A hard
+    /// band's end.
     pub r: f64,
     /// A sampled band: weight 1 between `inner` and `r`.
     pub hard: bool,
+    /// How far each ramp runs: from `inner` to `ramp inner` and from `r` to `ramp r`, in
+    /// (1, 2] ([`super::HierarchyParams::ramp`]).
+    pub ramp: f64,
 }
 
 /// The draw in (0, 1) of the light of draw id `id` in the frame of `seed`: PCG's hash of the id
@@ -34,31 +39,40 @@ pub fn node_draw(level: u32, key: u32) -> u32 {
 }
 
 impl Band {
-    /// A soft band (`hard` false) from `inner` and `r`.
+    /// A soft band (`hard` false) from `inner` and `r`, with the papers' ramps (2).
     pub fn new(inner: f64, r: f64) -> Self {
+        Self::with_ramp(inner, r, super::RAMP)
+    }
+
+    /// A soft band from `inner` and `r` whose ramps run to `ramp` times them.
+    pub fn with_ramp(inner: f64, r: f64, ramp: f64) -> Self {
         Self {
             inner,
             r,
             hard: false,
+            ramp,
         }
     }
 
-    /// The band drawn with `xi` in (0, 1): weight 1 for `inner (1 + xi) < d < r (2 - xi)`, 0
-    /// elsewhere (from 0 where `inner` is 0; unbounded where `r` is infinite). The same `xi`
-    /// cuts both edges, so the probability over `xi` that it holds `d` is
-    /// `min(rising, falling)`, the soft band's weight: unbiased. A hard band stays as it is.
+    /// The band drawn with `xi` in (0, 1): weight 1 for
+    /// `inner (1 + (ramp - 1) xi) < d < r (ramp - (ramp - 1) xi)`, 0 elsewhere (from 0 where
+    /// `inner` is 0; unbounded where `r` is infinite). The same `xi` cuts both edges, so the
+    /// probability over `xi` that it holds `d` is `min(rising, falling)`, the soft band's
+    /// weight: unbiased. A hard band stays as it is.
     pub fn sampled(&self, xi: f64) -> Self {
         if self.hard {
             return *self;
         }
+        let t = (self.ramp - 1.0) * xi;
         Self {
-            inner: self.inner * (1.0 + xi),
+            inner: self.inner * (1.0 + t),
             r: if self.r.is_infinite() {
                 f64::INFINITY
             } else {
-                self.r * (2.0 - xi)
+                self.r * (self.ramp - t)
             },
             hard: true,
+            ramp: self.ramp,
         }
     }
 
@@ -71,20 +85,27 @@ impl Band {
                 0.0
             };
         }
+        // As `light_band` (shaders/common/shading.wgsl) has it: over `ramp - 1`, which is 1
+        // for the papers' ramps.
+        let slope = 1.0 / (self.ramp - 1.0);
         let rising = if self.inner == 0.0 {
             1.0
         } else if d <= self.inner {
             return 0.0;
         } else {
-            ((d - self.inner) / self.inner).min(1.0)
+            ((d - self.inner) / self.inner * slope).min(1.0)
         };
-        rising.min((2.0 - d / self.r).clamp(0.0, 1.0))
+        rising.min(((self.ramp - d / self.r) * slope).clamp(0.0, 1.0))
     }
 
-    /// What the band reaches: `2 r` (infinite for the last level and the spots; a hard
+    /// What the band reaches: `ramp r` (infinite for the last level and the spots; a hard
     /// band's `r`).
     pub fn outer(&self) -> f64 {
-        if self.hard { self.r } else { 2.0 * self.r }
+        if self.hard {
+            self.r
+        } else {
+            self.ramp * self.r
+        }
     }
 }
 
@@ -102,6 +123,8 @@ mod tests {
             Band::new(0.0, 2.0),
             Band::new(1.0, 2.0),
             Band::new(4.0, f64::INFINITY),
+            Band::with_ramp(1.0, 2.5, 1.25),
+            Band::with_ramp(0.0, 2.0, 1.5),
         ] {
             for i in 0..200 {
                 let d = f64::from(i) * 0.05 + 0.013;

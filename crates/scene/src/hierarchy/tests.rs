@@ -36,6 +36,7 @@ fn params(alpha: f64) -> HierarchyParams {
         spacing: 0.5,
         finest_nodes: 0.25,
         growth: GROWTH,
+        ramp: RAMP,
         top_lights: 16,
         sample_from: None,
     }
@@ -96,13 +97,20 @@ fn a_fixed_shape_build_is_the_build_and_keeps_its_shape() {
     }
 }
 
-/// With the papers' bands and with growing ones (`growth` above 1: a level whole between its
-/// ramps).
+/// With the papers' bands, with growing ones (`growth` above 1: a level whole between its
+/// ramps) and with narrower ramps (`ramp` below 2).
 #[test]
 fn the_blending_weights_sum_to_one_at_every_distance() {
-    for growth in [1.0, 1.15, 1.5] {
+    for (growth, ramp) in [
+        (1.0, 2.0),
+        (1.15, 2.0),
+        (1.5, 2.0),
+        (1.0, 1.25),
+        (1.15, 1.5),
+    ] {
         let p = HierarchyParams {
             growth,
+            ramp,
             ..params(1.5)
         };
         weights_sum_to_one(&Hierarchy::build(&lights(3000, 60.0, 2), p));
@@ -129,10 +137,11 @@ fn weights_sum_to_one(h: &Hierarchy) {
 fn a_single_light_is_exact_at_every_distance() {
     for p in [Vec3::new(0.3, 1.7, -2.2), Vec3::new(100.25, -3.0, 7.5)] {
         let ls = [Light::point(p, 1.0, Vec3::new(1.0, 0.5, 0.25), 3.0)];
-        // Every level there may be, with the papers' bands and growing ones.
-        for growth in [1.0, 1.2] {
+        // Every level there may be, with the papers' bands, growing ones and narrow ramps.
+        for (growth, ramp) in [(1.0, 2.0), (1.2, 2.0), (1.15, 1.25)] {
             let pr = HierarchyParams {
                 growth,
+                ramp,
                 ..params(1.0)
             };
             let h = Hierarchy::build_fixed(&ls, pr, pr.spacing, MAX_LEVELS);
@@ -143,7 +152,7 @@ fn a_single_light_is_exact_at_every_distance() {
                 let (e, got) = (exact(&ls, x), estimate(&h, x));
                 assert!(
                     (got - e).abs().max_element() <= 1e-9 * e.max_element(),
-                    "growth {growth} at {d}: {got} against {e}"
+                    "growth {growth}, ramp {ramp} at {d}: {got} against {e}"
                 );
             }
         }
