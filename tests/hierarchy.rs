@@ -70,10 +70,10 @@ fn hierarchy_lights_shade_as_their_oracle_with(ctx: &manylights_gpu::GpuContext,
         lights: flat.clone(),
         ..original.clone()
     };
-    let gpu = GpuScene::upload(&ctx, &scene, &scene.camera, w, h).unwrap();
-    gpu.set_light_bands(&ctx, &flat, &bands);
-    let rr = ReferenceRenderer::new(&ctx, &gpu);
-    let got = rr.render(&ctx, &gpu, w, h).unwrap();
+    let gpu = GpuScene::upload(ctx, &scene, &scene.camera, w, h).unwrap();
+    gpu.set_light_bands(ctx, &flat, &bands);
+    let rr = ReferenceRenderer::new(ctx, &gpu);
+    let got = rr.render(ctx, &gpu, w, h).unwrap();
     let eye = scene.camera.position.as_dvec3();
     let (mut checked, mut biased) = (0, 0);
     let mut mean = 0.0;

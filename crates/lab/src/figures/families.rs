@@ -34,8 +34,8 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
     match kind {
         "threshold" => ("cut-off thresholds".into(), v),
         "radius" => ("fixed radii".into(), v),
-        // `hierarchy=A/hH[/nR][/sL]`: a family a finest spacing (and finest grid rule, and
-        // first sampled level), swept over alpha.
+        // `hierarchy=A/hH[/nR][/gK][/cC][/sL]`: a family a finest spacing (and finest grid
+        // rule, growth of the bands, ramps, and first sampled level), swept over alpha.
         "hierarchy" => {
             let h = pieces.next().and_then(|p| p.strip_prefix('h'));
             let mut name = match h {
@@ -45,6 +45,10 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
             for p in pieces {
                 if let Some(n) = p.strip_prefix('n') {
                     name += &format!(", {n} nodes a light");
+                } else if let Some(k) = p.strip_prefix('g') {
+                    name += &format!(", growth {k}");
+                } else if let Some(c) = p.strip_prefix('c') {
+                    name += &format!(", ramps {c}");
                 } else if let Some(l) = p.strip_prefix('s') {
                     name += &format!(", sampled from level {l}");
                 }
@@ -141,5 +145,12 @@ mod tests {
             "lighting grid hierarchy, spacing 0.25 m, 0.25 nodes a light"
         );
         assert!(coarse.chars().count() <= crate::figures::legend::LABEL_CHARS);
+        // Growing bands and narrow ramps are families of their own.
+        let (narrow, _) = f("hierarchy=0.7/h0.25/g1.15/c1.25,variant=x");
+        assert_eq!(
+            narrow,
+            "lighting grid hierarchy, spacing 0.25 m, growth 1.15, ramps 1.25"
+        );
+        assert!(narrow.chars().count() <= crate::figures::legend::LABEL_CHARS);
     }
 }
