@@ -5,7 +5,15 @@
 // One dispatch a level, in order:
 // - `points` (mode 0): a thread a source light. A point light is written to the shaded lights
 //   as level 0's light (colour x intensity, its band); a spot as it is (radius `reach`, a band
-//   that never falls). A point light is spread into level 1's grid (`splat`).
+//   that never falls). A point light is binned into its cell of level 1's grid (`bin`), or,
+//   where the cell's nodes leave the grid's box or the cells' table is full, spread into level
+//   1's grid at once (`splat`).
+// - `cells`, `fill`, `cell_splat` (level 0's step): each binned cell takes its lights' room in
+//   a list, its lights write themselves there, and a thread a cell spreads its lights into its 8
+//   nodes, each node's six sums added up in registers (Term) and added to the node's slot once:
+//   the same integers as a splat a light (integer sums do not hang on their order), with a
+//   cell's lights' atomics on a node's words made one. At a million lights a cell of level 1
+//   holds about 3.
 // - `finalize` (mode 1): a thread a slot of level l's hash table. A node's sums become its
 //   light (power, power-weighted position), written to the shaded lights with level l's band;
 //   an empty slot becomes a dead light (no power, radius 0, at `far`). It is spread into level
@@ -52,6 +60,13 @@ struct Step {
 @group(0) @binding(3) var<storage, read_write> shaded: array<Light>;
 // [nodes outside their level's box, splats into a full table]
 @group(0) @binding(5) var<storage, read_write> dropped: array<atomic<u32>, 2>;
+// Level 0's cells of level 1's grid (cell_word): word 0 the lists' total, then for each of
+// step.b.w slots of an open-addressing table its key (the cell's lowest node's, as slot_of keys
+// nodes), its lights, its list's offset and its fill cursor; then each source light's cell slot
+// (NO_CELL: spread at once), then the lists of source light indices.
+@group(0) @binding(6) var<storage, read_write> cells: array<atomic<u32>>;
+
+const NO_CELL: u32 = 0xffffffffu;
 
 const MAX_PROBES: u32 = 256u;
 
@@ -117,6 +132,58 @@ fn splat(position: vec3<f32>, power: vec3<f32>) {
     }
 }
 
+// Word k (0 key, 1 lights, 2 offset, 3 cursor) of cell slot c.
+fn cell_word(c: u32, k: u32) -> u32 {
+    return 4u + 4u * c + k;
+}
+
+// Where source light i's cell slot is.
+fn light_cell(i: u32) -> u32 {
+    return 4u + 4u * step.b.w + i;
+}
+
+// Entry j of the cells' lists.
+fn cell_list(j: u32) -> u32 {
+    return 4u + 4u * step.b.w + step.a.y + j;
+}
+
+// The slot of cell `key` in the cells' table (inserting it), or NO_CELL where it is full.
+fn cell_of(key: u32) -> u32 {
+    let count = step.b.w;
+    var probe = ((key * 2654435769u) ^ (key >> 15u)) % count;
+    for (var tries = 0u; tries < min(count, MAX_PROBES); tries++) {
+        let at = cell_word(probe, 0u);
+        let r = atomicCompareExchangeWeak(&cells[at], 0u, key);
+        if r.exchanged || r.old_value == key {
+            return probe;
+        }
+        // A weak exchange that failed on an empty slot is tried again.
+        if r.old_value != 0u {
+            probe = (probe + 1u) % count;
+        }
+    }
+    return NO_CELL;
+}
+
+// Bins source light i, a point light at `position` of power `power`, into its cell of the next
+// level's grid (cell_splat spreads it); a light whose cell's nodes are not all in the grid's
+// box, or whose cell finds no room, is spread at once (splat), as before binning.
+fn bin(i: u32, position: vec3<f32>, power: vec3<f32>) {
+    let spacing = bitcast<f32>(step.d.w);
+    let rel = vec3<i32>(floor(position / spacing)) - step.d.xyz;
+    var c = NO_CELL;
+    if all(rel >= vec3<i32>(0)) && all(vec3<u32>(rel) + 1u < step.e.xyz) {
+        let r = vec3<u32>(rel);
+        c = cell_of((r.z * step.e.y + r.y) * step.e.x + r.x + 1u);
+    }
+    atomicStore(&cells[light_cell(i)], c);
+    if c == NO_CELL {
+        splat(position, power);
+        return;
+    }
+    atomicAdd(&cells[cell_word(c, 1u)], 1u);
+}
+
 // A point light of a level: `power` at `position`, shaded with the level's band.
 fn level_light(position: vec3<f32>, power: vec3<f32>) -> Light {
     var l: Light;
@@ -176,6 +243,7 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let l = source[i];
     if l.kind == LIGHT_KIND_SPOT {
+        atomicStore(&cells[light_cell(i)], NO_CELL);
         var s = l;
         s.radius = step.c.z;
         s.alpha = -step.far.w;
@@ -186,7 +254,95 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
     let power = l.color * l.intensity;
     shaded[target_index[i]] = sampled_light(level_light(l.position, power), target_index[i]);
     if step.a.w == 1u {
-        splat(l.position, power);
+        bin(i, l.position, power);
+    } else {
+        atomicStore(&cells[light_cell(i)], NO_CELL);
+    }
+}
+
+// A thread a slot of the cells' table: a cell's list takes its room.
+@compute @workgroup_size(256)
+fn cells_room(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = item(id);
+    if t >= step.b.w || atomicLoad(&cells[cell_word(t, 0u)]) == 0u {
+        return;
+    }
+    let n = atomicLoad(&cells[cell_word(t, 1u)]);
+    atomicStore(&cells[cell_word(t, 2u)], atomicAdd(&cells[0], n));
+}
+
+// A thread a source light: a binned light writes its index into its cell's list.
+@compute @workgroup_size(256)
+fn fill(@builtin(global_invocation_id) id: vec3<u32>) {
+    let i = item(id);
+    if i >= step.a.y {
+        return;
+    }
+    let c = atomicLoad(&cells[light_cell(i)]);
+    if c == NO_CELL {
+        return;
+    }
+    let at = atomicLoad(&cells[cell_word(c, 2u)]) + atomicAdd(&cells[cell_word(c, 3u)], 1u);
+    atomicStore(&cells[cell_list(at)], i);
+}
+
+// A thread a slot of the cells' table: the cell's lights spread into its 8 nodes of the next
+// level's grid as `splat` spreads each (the same weights and terms, from the same f32
+// arithmetic), each node's six sums added up first.
+@compute @workgroup_size(256)
+fn cell_splat(@builtin(global_invocation_id) id: vec3<u32>) {
+    let t = item(id);
+    if t >= step.b.w {
+        return;
+    }
+    let key = atomicLoad(&cells[cell_word(t, 0u)]);
+    if key == 0u {
+        return;
+    }
+    let n = atomicLoad(&cells[cell_word(t, 1u)]);
+    let first = atomicLoad(&cells[cell_word(t, 2u)]);
+    let spacing = bitcast<f32>(step.d.w);
+    let dims = step.e.xyz;
+    let k = key - 1u;
+    let rel = vec3<u32>(k % dims.x, (k / dims.x) % dims.y, k / (dims.x * dims.y));
+    for (var corner = 0u; corner < 8u; corner++) {
+        let bit = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u);
+        let node = step.d.xyz + vec3<i32>(rel + bit);
+        var sums = array<Term, 6>(term_zero(), term_zero(), term_zero(), term_zero(), term_zero(), term_zero());
+        var splats = 0u;
+        for (var j = 0u; j < n; j++) {
+            let l = source[atomicLoad(&cells[cell_list(first + j)])];
+            let power = l.color * l.intensity;
+            let u = l.position / spacing;
+            let f = u - floor(u);
+            let w3 = select(1.0 - f, f, bit == vec3<u32>(1u));
+            let w = w3.x * w3.y * w3.z;
+            if w == 0.0 {
+                continue;
+            }
+            let c = w * power * step.c.w;
+            let cs = c.r + c.g + c.b;
+            let o = u - vec3<f32>(node);
+            sums[0] = term_add(sums[0], term_of(c.r));
+            sums[1] = term_add(sums[1], term_of(c.g));
+            sums[2] = term_add(sums[2], term_of(c.b));
+            sums[3] = term_add(sums[3], term_of_signed(cs * o.x));
+            sums[4] = term_add(sums[4], term_of_signed(cs * o.y));
+            sums[5] = term_add(sums[5], term_of_signed(cs * o.z));
+            splats += 1u;
+        }
+        if splats == 0u {
+            continue;
+        }
+        let r = rel + bit;
+        let at = slot_of((r.z * dims.y + r.y) * dims.x + r.x + 1u);
+        if at < 0 {
+            atomicAdd(&dropped[1], splats);
+            continue;
+        }
+        for (var s = 0u; s < 6u; s++) {
+            sum_add_term(u32(at), s, sums[s]);
+        }
     }
 }
 

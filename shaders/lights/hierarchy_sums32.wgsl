@@ -73,3 +73,43 @@ fn sum_read_signed(at: u32, k: u32) -> f32 {
     let hi_m = ~hi + select(0u, 1u, lo == 0u);
     return -(f32(hi_m) * TWO32 + f32(lo_m));
 }
+
+// A 64-bit fixed-point term or sum held in registers, (low, high) words: what a cell of the
+// points' grid sums over its lights before one atomic add a node (hierarchy.wgsl's
+// cell_splat). The same integers as sum_add's and sum_add_signed's, so the same sums.
+alias Term = vec2<u32>;
+
+fn term_zero() -> Term {
+    return vec2<u32>(0u);
+}
+
+// sum_add's integer for a non-negative term.
+fn term_of(v: f32) -> Term {
+    let hi = floor(v / TWO32);
+    return vec2<u32>(u32(v - hi * TWO32), u32(hi));
+}
+
+// sum_add_signed's integer (two's complement).
+fn term_of_signed(v: f32) -> Term {
+    if v >= 0.0 {
+        return term_of(v);
+    }
+    let m = term_of(-v);
+    return vec2<u32>(~m.x + 1u, ~m.y + select(0u, 1u, m.x == 0u));
+}
+
+fn term_add(a: Term, b: Term) -> Term {
+    let lo = a.x + b.x;
+    return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
+}
+
+// Adds a term held in registers to sum k of slot `at`.
+fn sum_add_term(at: u32, k: u32, t: Term) {
+    let i = at * SLOT_WORDS + 1u + 2u * k;
+    let old = atomicAdd(&slots[i], t.x);
+    let carry = select(0u, 1u, old + t.x < old);
+    let high = t.y + carry;
+    if high != 0u {
+        atomicAdd(&slots[i + 1u], high);
+    }
+}

@@ -44,3 +44,29 @@ fn sum_read(at: u32, k: u32) -> f32 {
 fn sum_read_signed(at: u32, k: u32) -> f32 {
     return f32(bitcast<i64>(atomicLoad(&slots[at * SLOT_WORDS64 + 1u + k])));
 }
+
+// A 64-bit fixed-point term or sum held in registers: what a cell of the points' grid sums
+// over its lights before one atomic add a node (hierarchy.wgsl's cell_splat). The same integers
+// as sum_add's and sum_add_signed's (addition wraps, as the atomics do), so the same sums.
+alias Term = u64;
+
+fn term_zero() -> Term {
+    return 0lu;
+}
+
+fn term_of(v: f32) -> Term {
+    return u64(v);
+}
+
+fn term_of_signed(v: f32) -> Term {
+    return bitcast<u64>(i64(v));
+}
+
+fn term_add(a: Term, b: Term) -> Term {
+    return a + b;
+}
+
+// Adds a term held in registers to sum k of slot `at`.
+fn sum_add_term(at: u32, k: u32, t: Term) {
+    atomicAdd(&slots[at * SLOT_WORDS64 + 1u + k], t);
+}

@@ -1,0 +1,261 @@
+//! The hierarchy's plan: its fixed shape (`HierarchyPlan`: each level's grid box and hash table,
+//! the shaded lights' layout) and each build dispatch's parameters (`Step`).
+
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use manylights_scene::hierarchy::{Hierarchy, HierarchyParams};
+use manylights_scene::{Light, LightKind, Scene};
+
+use crate::GpuError;
+
+/// Host mirror of `Step` in `shaders/lights/hierarchy.wgsl` (one dispatch's parameters).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct Step {
+    /// Mode (0 points, 1 finalize), items, threads a dispatch row, splat.
+    pub a: [u32; 4],
+    /// First slot read, first shaded light written, the next level's first slot and slots.
+    pub b: [u32; 4],
+    /// The level's band r and inner distance, reach, scale.
+    pub c: [f32; 4],
+    /// The next level's first node and spacing (bits).
+    pub d: [i32; 4],
+    /// The next level's nodes along each axis.
+    pub e: [u32; 4],
+    /// This level's first node and spacing (bits).
+    pub g: [i32; 4],
+    /// This level's nodes along each axis.
+    pub h: [u32; 4],
+    /// Where dead lights sit; w: infinity.
+    pub far: [f32; 4],
+    /// The frame's seed, 1 where this level's bands are sampled, the level, the bands' ramp
+    /// (bits).
+    pub s: [u32; 4],
+}
+
+/// A level's grid: its spacing and the box of nodes its table keys.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NodeBox {
+    /// Spacing, metres.
+    pub spacing: f32,
+    /// The box's first node (integer multiples of the spacing).
+    pub first: [i32; 3],
+    /// Nodes along each axis.
+    pub dims: [u32; 3],
+}
+
+/// The hierarchy's fixed shape and the shaded lights' layout.
+#[derive(Clone, Debug)]
+pub struct HierarchyPlan {
+    /// What it is built with.
+    pub params: HierarchyParams,
+    /// The finest grid's spacing.
+    pub h: f64,
+    /// Levels (the point lights and the grids).
+    pub levels: usize,
+    /// Level `l >= 1`'s grid, `grids[l - 1]`.
+    pub grids: Vec<NodeBox>,
+    /// Level `l >= 1`'s slots (its table's size).
+    pub slots: Vec<u32>,
+    /// Point lights and spots among the lights.
+    pub points: u32,
+    /// Spots.
+    pub spots: u32,
+    /// Where an unbounded band ends (`manylights_scene::hierarchy::reach`).
+    pub reach: f32,
+    /// Where dead lights sit.
+    pub far: Vec3,
+    /// The sums' scale: 2^52 over the point lights' total power (the channels' sum).
+    pub scale: f32,
+}
+
+impl HierarchyPlan {
+    /// The shape of the hierarchy of `lights` (as `Hierarchy::build` chooses it), its grids'
+    /// boxes covering `region` (min, max: where the lights may be, moving ones included), and
+    /// tables of `slack` times each level's lights now (at least 1.25; more where lights move).
+    pub fn new(
+        lights: &[Light],
+        params: HierarchyParams,
+        region: (Vec3, Vec3),
+        reach: f32,
+        slack: f64,
+    ) -> Result<(Self, Hierarchy), GpuError> {
+        let hier = Hierarchy::build(lights, params);
+        let mut grids = Vec::new();
+        let mut slots = Vec::new();
+        for (l, level) in hier.levels.iter().enumerate().skip(1) {
+            let spacing = (hier.h * f64::from(1u32 << (l - 1))) as f32;
+            let lo = (region.0 / spacing).floor().as_ivec3() - 1;
+            let hi = (region.1 / spacing).floor().as_ivec3() + 2;
+            let dims = (hi - lo + 1).as_uvec3();
+            let nodes = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
+            if nodes >= u64::from(u32::MAX) {
+                return Err(GpuError::OverLimit {
+                    what: format!(
+                        "hierarchy level {l}'s grid nodes ({} x {} x {} at {spacing} m)",
+                        dims.x, dims.y, dims.z
+                    ),
+                    value: nodes,
+                    limit: u64::from(u32::MAX) - 1,
+                    limit_name: "a 32-bit node key (raise the spacing)",
+                });
+            }
+            grids.push(NodeBox {
+                spacing,
+                first: lo.to_array(),
+                dims: dims.to_array(),
+            });
+            slots.push((level.len() as f64 * slack.max(1.25)).ceil() as u32 + 64);
+        }
+        let total: f64 = hier.levels[0]
+            .iter()
+            .map(|l| l.power.x + l.power.y + l.power.z)
+            .sum();
+        let plan = Self {
+            params,
+            h: hier.h,
+            levels: hier.levels.len(),
+            grids,
+            slots,
+            points: hier.levels[0].len() as u32,
+            spots: hier.spots.len() as u32,
+            reach,
+            far: region.1 + Vec3::splat(2.0 * reach),
+            scale: if total > 0.0 {
+                (2f64.powi(52) / total) as f32
+            } else {
+                1.0
+            },
+        };
+        Ok((plan, hier))
+    }
+
+    /// The shaded lights: points, every level's slots, spots.
+    pub fn shaded_count(&self) -> u64 {
+        u64::from(self.points)
+            + self.slots.iter().map(|&s| u64::from(s)).sum::<u64>()
+            + u64::from(self.spots)
+    }
+
+    /// Level `level`'s first shaded light and how many it has (slots, for `level >= 1`).
+    pub fn level_range(&self, level: usize) -> (u32, u32) {
+        if level == 0 {
+            return (0, self.points);
+        }
+        let before: u32 = self.slots[..level - 1].iter().sum();
+        (self.points + before, self.slots[level - 1])
+    }
+
+    /// The band of level `level`: (r, inner), r infinite for the last level.
+    fn band(&self, level: usize) -> (f32, f32) {
+        let r = |l: usize| self.params.r(self.h, l) as f32;
+        let outer = if level + 1 == self.levels {
+            f32::INFINITY
+        } else {
+            r(level)
+        };
+        (outer, if level == 0 { 0.0 } else { r(level - 1) })
+    }
+
+    /// The plan for `scene`'s lights and the scene to upload in their place: its geometry with
+    /// [`HierarchyPlan::placeholder`]'s lights, which the build fills. `moving`: the farthest
+    /// any light goes from where it is now (0 where none moves); the grids' boxes, the
+    /// unbounded bands' reach and the tables' room cover that too. The last level holds at
+    /// most `params.top_lights` lights.
+    pub fn for_scene(
+        scene: &Scene,
+        params: HierarchyParams,
+        moving: f32,
+    ) -> Result<(Self, Scene), GpuError> {
+        let margin = 1.0 + moving.max(0.0);
+        let b = scene
+            .lights
+            .iter()
+            .fold(scene.bounds(), |b, l| b.union_point(l.position));
+        let (plan, _) = Self::new(
+            &scene.lights,
+            params,
+            (b.min - margin, b.max + margin),
+            manylights_scene::hierarchy::reach(scene) + 2.0 * (margin - 1.0),
+            if moving > 0.0 { 2.0 } else { 1.25 },
+        )?;
+        let shaded = Scene {
+            lights: plan.placeholder(&scene.lights),
+            ..scene.clone()
+        };
+        Ok((plan, shaded))
+    }
+
+    /// Lights to upload as the shaded scene's before the first build: dead point lights in
+    /// every slot of the layout, the spots as they are.
+    pub fn placeholder(&self, lights: &[Light]) -> Vec<Light> {
+        let dead = Light::point(self.far, 0.0, Vec3::ZERO, 0.0);
+        let mut out = vec![dead; (self.shaded_count() - u64::from(self.spots)) as usize];
+        out.extend(
+            lights
+                .iter()
+                .filter(|l| matches!(l.kind, LightKind::Spot { .. }))
+                .map(|l| Light {
+                    radius: self.reach,
+                    ..*l
+                }),
+        );
+        out
+    }
+
+    /// Each dispatch's parameters, in order (the points pass, then a finalize pass a level).
+    pub(super) fn steps(&self, sources: u32, row: impl Fn(u32) -> u32) -> Vec<Step> {
+        let slot_base = |l: usize| -> u32 { self.slots[..l - 1].iter().sum() };
+        let grid = |l: usize| {
+            self.grids
+                .get(l.wrapping_sub(1))
+                .map_or(([0; 4], [0; 4]), |g| {
+                    (
+                        [
+                            g.first[0],
+                            g.first[1],
+                            g.first[2],
+                            g.spacing.to_bits() as i32,
+                        ],
+                        [g.dims[0], g.dims[1], g.dims[2], 0],
+                    )
+                })
+        };
+        let far = [self.far.x, self.far.y, self.far.z, f32::INFINITY];
+        (0..self.levels)
+            .map(|l| {
+                let splat = u32::from(l + 1 < self.levels);
+                let items = if l == 0 { sources } else { self.slots[l - 1] };
+                let (next_base, next_slots) = if splat == 1 {
+                    (slot_base(l + 1), self.slots[l])
+                } else {
+                    (0, 0)
+                };
+                let (r, inner) = self.band(l);
+                let (d, e) = grid(l + 1);
+                let (g, h) = if l == 0 { ([0; 4], [0; 4]) } else { grid(l) };
+                Step {
+                    a: [u32::from(l > 0), items, row(items), splat],
+                    b: [
+                        if l == 0 { 0 } else { slot_base(l) },
+                        self.level_range(l).0,
+                        next_base,
+                        next_slots,
+                    ],
+                    c: [r, inner, self.reach, self.scale],
+                    d,
+                    e,
+                    g,
+                    h,
+                    far,
+                    s: [
+                        0,
+                        u32::from(self.params.sample_from.is_some_and(|f| l >= f)),
+                        l as u32,
+                        (self.params.ramp as f32).to_bits(),
+                    ],
+                }
+            })
+            .collect()
+    }
+}
