@@ -8,16 +8,17 @@
 //   that never falls). A point light is binned into its cell of level 1's grid (`bin`), or,
 //   where the cell's nodes leave the grid's box or the cells' table is full, spread into level
 //   1's grid at once (`splat`).
-// - `cells`, `fill`, `cell_splat` (level 0's step): each binned cell takes its lights' room in
-//   a list, its lights write themselves there, and a thread a cell spreads its lights into its 8
-//   nodes, each node's six sums added up in registers (Term) and added to the node's slot once:
-//   the same integers as a splat a light (integer sums do not hang on their order), with a
-//   cell's lights' atomics on a node's words made one. At a million lights a cell of level 1
-//   holds about 3.
+// - `cells_room`, `fill`, `cell_splat` (after each pass that bins, with its step; the cells'
+//   buffer cleared before it): each binned cell takes its lights' room in a list, its lights
+//   write themselves there, and a thread a cell spreads its lights into its 8 nodes, each
+//   node's six sums added up in registers (Term) and added to the node's slot once: the same
+//   integers as a splat a light (integer sums do not hang on their order), with a cell's
+//   lights' atomics on a node's words made one. At a million lights a cell of level 1 holds
+//   about 3 point lights; a cell of a coarser level holds up to 8 nodes of the level below.
 // - `finalize` (mode 1): a thread a slot of level l's hash table. A node's sums become its
 //   light (power, power-weighted position), written to the shaded lights with level l's band;
-//   an empty slot becomes a dead light (no power, radius 0, at `far`). It is spread into level
-//   l + 1's grid unless l is the last level.
+//   an empty slot becomes a dead light (no power, radius 0, at `far`). It is binned into its
+//   cell of level l + 1's grid (as the points pass bins) unless l is the last level.
 // A grid's nodes are keyed by their index in the level's box of nodes (plus 1; 0 is an empty
 // slot) in an open-addressing hash table of 16 words a slot: the key, then six 64-bit fixed
 // point sums (so that they do not hang on the order of the additions): power r, g, b, and the
@@ -60,10 +61,11 @@ struct Step {
 @group(0) @binding(3) var<storage, read_write> shaded: array<Light>;
 // [nodes outside their level's box, splats into a full table]
 @group(0) @binding(5) var<storage, read_write> dropped: array<atomic<u32>, 2>;
-// Level 0's cells of level 1's grid (cell_word): word 0 the lists' total, then for each of
-// step.b.w slots of an open-addressing table its key (the cell's lowest node's, as slot_of keys
-// nodes), its lights, its list's offset and its fill cursor; then each source light's cell slot
-// (NO_CELL: spread at once), then the lists of source light indices.
+// The cells of the next level's grid that this pass's items are binned into (cell_word): word 0
+// the lists' total, then for each of step.b.w slots of an open-addressing table its key (the
+// cell's lowest node's, as slot_of keys nodes), its items, its list's offset and its fill
+// cursor; then each item's cell slot (NO_CELL: spread at once, or no light), then the lists of
+// item indices.
 @group(0) @binding(6) var<storage, read_write> cells: array<atomic<u32>>;
 
 const NO_CELL: u32 = 0xffffffffu;
@@ -137,7 +139,7 @@ fn cell_word(c: u32, k: u32) -> u32 {
     return 4u + 4u * c + k;
 }
 
-// Where source light i's cell slot is.
+// Where item i's cell slot is.
 fn light_cell(i: u32) -> u32 {
     return 4u + 4u * step.b.w + i;
 }
@@ -165,9 +167,17 @@ fn cell_of(key: u32) -> u32 {
     return NO_CELL;
 }
 
-// Bins source light i, a point light at `position` of power `power`, into its cell of the next
-// level's grid (cell_splat spreads it); a light whose cell's nodes are not all in the grid's
-// box, or whose cell finds no room, is spread at once (splat), as before binning.
+// Item i is binned into no cell (a spot, a dead slot), where this pass bins (the cells' buffer
+// holds this pass's items only then).
+fn no_cell(i: u32) {
+    if step.a.w == 1u {
+        atomicStore(&cells[light_cell(i)], NO_CELL);
+    }
+}
+
+// Bins item i (a source point light, or a level's light) at `position` of power `power` into
+// its cell of the next level's grid (cell_splat spreads it); a light whose cell's nodes are not
+// all in the grid's box, or whose cell finds no room, is spread at once (splat).
 fn bin(i: u32, position: vec3<f32>, power: vec3<f32>) {
     let spacing = bitcast<f32>(step.d.w);
     let rel = vec3<i32>(floor(position / spacing)) - step.d.xyz;
@@ -243,7 +253,7 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let l = source[i];
     if l.kind == LIGHT_KIND_SPOT {
-        atomicStore(&cells[light_cell(i)], NO_CELL);
+        no_cell(i);
         var s = l;
         s.radius = step.c.z;
         s.alpha = -step.far.w;
@@ -255,8 +265,6 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
     shaded[target_index[i]] = sampled_light(level_light(l.position, power), target_index[i]);
     if step.a.w == 1u {
         bin(i, l.position, power);
-    } else {
-        atomicStore(&cells[light_cell(i)], NO_CELL);
     }
 }
 
@@ -271,7 +279,7 @@ fn cells_room(@builtin(global_invocation_id) id: vec3<u32>) {
     atomicStore(&cells[cell_word(t, 2u)], atomicAdd(&cells[0], n));
 }
 
-// A thread a source light: a binned light writes its index into its cell's list.
+// A thread an item: a binned one writes its index into its cell's list.
 @compute @workgroup_size(256)
 fn fill(@builtin(global_invocation_id) id: vec3<u32>) {
     let i = item(id);
@@ -284,6 +292,16 @@ fn fill(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let at = atomicLoad(&cells[cell_word(c, 2u)]) + atomicAdd(&cells[cell_word(c, 3u)], 1u);
     atomicStore(&cells[cell_list(at)], i);
+}
+
+// Item i of this pass's step as binned: a source light (the points pass), or the light this
+// level's slot i became (finalize: its power the colour, intensity 1), the same position and
+// power bin had.
+fn cell_item(i: u32) -> Light {
+    if step.a.x == 0u {
+        return source[i];
+    }
+    return shaded[step.b.y + i];
 }
 
 // A thread a slot of the cells' table: the cell's lights spread into its 8 nodes of the next
@@ -311,7 +329,7 @@ fn cell_splat(@builtin(global_invocation_id) id: vec3<u32>) {
         var sums = array<Term, 6>(term_zero(), term_zero(), term_zero(), term_zero(), term_zero(), term_zero());
         var splats = 0u;
         for (var j = 0u; j < n; j++) {
-            let l = source[atomicLoad(&cells[cell_list(first + j)])];
+            let l = cell_item(atomicLoad(&cells[cell_list(first + j)]));
             let power = l.color * l.intensity;
             let u = l.position / spacing;
             let f = u - floor(u);
@@ -361,6 +379,7 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
         dead.radius = 0.0;
         dead.intensity = 0.0;
         shaded[step.b.y + t] = dead;
+        no_cell(t);
         return;
     }
     let dims = step.h.xyz;
@@ -373,6 +392,6 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
     let power = p / step.c.w;
     shaded[step.b.y + t] = sampled_light(level_light(position, power), node_draw(key));
     if step.a.w == 1u {
-        splat(position, power);
+        bin(t, position, power);
     }
 }

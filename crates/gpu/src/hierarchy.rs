@@ -88,6 +88,24 @@ const WORKGROUP: u32 = 256;
 /// Words of a hash table slot (the shader's `SLOT_WORDS`).
 const SLOT_WORDS: u64 = 16;
 
+/// A pass of the build: the points pass or a level's (`finalize`), its bind group and
+/// dispatch, and where it bins its items into the next level's cells, the cells' passes.
+struct Pass {
+    finalize: bool,
+    group: wgpu::BindGroup,
+    groups: (u32, u32),
+    cells: Option<CellPasses>,
+}
+
+/// The cells' passes after a pass that bins: the bytes of the cells' buffer it uses, and the
+/// dispatches over the cells' table (`cells_room`, `cell_splat`) and over the items (`fill`).
+#[derive(Clone, Copy)]
+struct CellPasses {
+    bytes: u64,
+    table: (u32, u32),
+    items: (u32, u32),
+}
+
 /// The build on the GPU: its buffers, pipelines and a bind group a pass.
 pub struct GpuHierarchy {
     /// The plan it follows.
@@ -95,12 +113,10 @@ pub struct GpuHierarchy {
     source: wgpu::Buffer,
     slots: wgpu::Buffer,
     dropped: wgpu::Buffer,
-    /// Level 0's cells of level 1's grid, their lists and each light's cell (`cell_word`).
+    /// The cells of the next level's grid a pass bins its items into, their lists and each
+    /// item's cell (the shader's `cell_word`), cleared before each pass that bins.
     cells: wgpu::Buffer,
-    passes: Vec<(bool, wgpu::BindGroup, (u32, u32))>,
-    /// Where level 1 is built from cells: the dispatches of the cells' passes over the cells'
-    /// table and over the source lights.
-    cell_groups: Option<((u32, u32), (u32, u32))>,
+    passes: Vec<Pass>,
     /// Each pass's parameters (`Step`), whose seed [`GpuHierarchy::set_seed`] writes.
     steps: Vec<wgpu::Buffer>,
     points: wgpu::ComputePipeline,
@@ -192,9 +208,31 @@ impl GpuHierarchy {
             mapped_at_creation: false,
         });
         let sources = lights.len() as u32;
-        // The cells' table is level 1's table's size (a cell is keyed by its lowest node).
-        let cell_slots = u64::from(plan.slots.first().copied().unwrap_or(0));
-        let cell_bytes = 4 * (4 + 4 * cell_slots + 2 * u64::from(sources) + 1);
+        let max = ctx.limits.max_compute_workgroups_per_dimension;
+        let grid = |items: u32| {
+            let n = items.div_ceil(WORKGROUP).max(1);
+            (n.min(max), n.div_ceil(max))
+        };
+        let steps_of = plan.steps(sources, |items| grid(items).0 * WORKGROUP);
+        // A pass that spreads into a next level bins its items into that level's cells: a table
+        // of the next level's table's size (a cell is keyed by its lowest node), a cell slot an
+        // item and the lists; the dispatches in rows of the pass's own width (`item`).
+        let cell_passes = |s: &Step| {
+            (s.a[3] == 1).then(|| {
+                let rows = |n: u32| (s.a[2] / WORKGROUP, n.div_ceil(s.a[2]).max(1));
+                CellPasses {
+                    bytes: 4 * (4 + 4 * u64::from(s.b[3]) + 2 * u64::from(s.a[1])),
+                    table: rows(s.b[3]),
+                    items: rows(s.a[1]),
+                }
+            })
+        };
+        let cell_bytes = steps_of
+            .iter()
+            .filter_map(|s| cell_passes(s).map(|c| c.bytes))
+            .max()
+            .unwrap_or(0)
+            .max(16);
         ctx.check_storage("hierarchy cell bytes", cell_bytes)?;
         let cells = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lights.hierarchy.cells"),
@@ -229,15 +267,8 @@ impl GpuHierarchy {
         let finalize = pipeline::compute(d, &module, &pl, "finalize");
         let cell_pipelines = ["cells_room", "fill", "cell_splat"]
             .map(|entry| pipeline::compute(d, &module, &pl, entry));
-        let max = ctx.limits.max_compute_workgroups_per_dimension;
-        let grid = |items: u32| {
-            let n = items.div_ceil(WORKGROUP).max(1);
-            (n.min(max), n.div_ceil(max))
-        };
         let mut steps = Vec::new();
-        let mut cell_groups = None;
-        let passes = plan
-            .steps(sources, |items| grid(items).0 * WORKGROUP)
+        let passes = steps_of
             .into_iter()
             .map(|s| {
                 let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -260,13 +291,12 @@ impl GpuHierarchy {
                     ],
                 );
                 steps.push(params);
-                if s.a[0] == 0 && s.a[3] == 1 {
-                    // Rows of the points pass's width (`item`), over the cells' table and
-                    // over the source lights.
-                    let rows = |n: u32| (s.a[2] / WORKGROUP, n.div_ceil(s.a[2]).max(1));
-                    cell_groups = Some((rows(s.b[3]), rows(s.a[1])));
+                Pass {
+                    finalize: s.a[0] == 1,
+                    group,
+                    groups: grid(s.a[1]),
+                    cells: cell_passes(&s),
                 }
-                (s.a[0] == 1, group, grid(s.a[1]))
             })
             .collect();
         // Point lights and aggregates shade on the short path unless a spot is among them, with
@@ -280,7 +310,6 @@ impl GpuHierarchy {
             dropped,
             cells,
             passes,
-            cell_groups,
             steps,
             points,
             finalize,
@@ -311,35 +340,42 @@ impl GpuHierarchy {
     }
 
     /// Records the build: the tables cleared, then a pass a level (`lights.hierarchy.points`,
-    /// `lights.hierarchy.level1`, ...), level 1 made from the points' cells between the points
-    /// pass and level 1's (`lights.hierarchy.cells`, `.fill`, `.cell_splat`).
+    /// `lights.hierarchy.level1`, ...), each that spreads into a next level followed by the
+    /// cells' passes that make that level from its items' cells
+    /// (`lights.hierarchy.cells<l>`, `.fill<l>`, `.cell_splat<l>`, `l` the level binned).
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
         encoder.clear_buffer(&self.slots, 0, None);
-        encoder.clear_buffer(&self.cells, 0, None);
-        for (l, (finalize, group, groups)) in self.passes.iter().enumerate() {
-            let (label, pipeline) = if *finalize {
+        for (l, p) in self.passes.iter().enumerate() {
+            let (label, pipeline) = if p.finalize {
                 (format!("lights.hierarchy.level{l}"), &self.finalize)
             } else {
                 ("lights.hierarchy.points".to_string(), &self.points)
             };
-            pipeline::dispatch(encoder, timer, &label, pipeline, &[group], *groups);
-            if let (false, Some((table, lights))) = (*finalize, self.cell_groups) {
+            if let Some(c) = p.cells {
+                encoder.clear_buffer(&self.cells, 0, Some(c.bytes));
+            }
+            pipeline::dispatch(encoder, timer, &label, pipeline, &[&p.group], p.groups);
+            if let Some(c) = p.cells {
                 let [room, fill, splat] = &self.cell_pipelines;
-                for (label, pipeline, groups) in [
-                    ("lights.hierarchy.cells", room, table),
-                    ("lights.hierarchy.fill", fill, lights),
-                    ("lights.hierarchy.cell_splat", splat, table),
+                for (name, pipeline, groups) in [
+                    ("cells", room, c.table),
+                    ("fill", fill, c.items),
+                    ("cell_splat", splat, c.table),
                 ] {
-                    pipeline::dispatch(encoder, timer, label, pipeline, &[group], groups);
+                    let label = format!("lights.hierarchy.{name}{l}");
+                    pipeline::dispatch(encoder, timer, &label, pipeline, &[&p.group], groups);
                 }
             }
         }
     }
 
-    /// Passes a build records (the points pass, the cells' three where there is a level 1,
-    /// and a pass a level above level 0).
+    /// Passes a build records: a pass a level (the points pass first) and the cells' three
+    /// after each that spreads into a next level.
     pub fn pass_count(&self) -> u32 {
-        self.passes.len() as u32 + if self.cell_groups.is_some() { 3 } else { 0 }
+        self.passes
+            .iter()
+            .map(|p| if p.cells.is_some() { 4 } else { 1 })
+            .sum()
     }
 
     /// Records `runs` builds back to back in one submission, each in a span of `timer`: the
