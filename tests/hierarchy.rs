@@ -182,14 +182,17 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
         ctx.info.name
     );
     assert_eq!(Sums::for_context(&ctx), Sums::Bits64);
-    // The papers' bands, growing ones and narrow ramps (the bands' radii are the plan's).
-    for (sums, growth, ramp) in [
-        (Sums::Bits32, 1.0, 2.0),
-        (Sums::Bits64, 1.0, 2.0),
-        (Sums::Bits64, 1.15, 2.0),
-        (Sums::Bits64, 1.15, 1.25),
+    // The papers' bands, growing ones and narrow ramps (the bands' radii are the plan's);
+    // every level made from cells (0), and none (each light spread at once).
+    for (sums, growth, ramp, cell_items) in [
+        (Sums::Bits32, 1.0, 2.0, 0),
+        (Sums::Bits32, 1.0, 2.0, u32::MAX),
+        (Sums::Bits64, 1.0, 2.0, 0),
+        (Sums::Bits64, 1.0, 2.0, u32::MAX),
+        (Sums::Bits64, 1.15, 2.0, 0),
+        (Sums::Bits64, 1.15, 1.25, 0),
     ] {
-        gpu_build_is_its_oracle(&ctx, sums, growth, ramp);
+        gpu_build_is_its_oracle(&ctx, sums, growth, ramp, cell_items);
     }
 }
 
@@ -198,6 +201,7 @@ fn gpu_build_is_its_oracle(
     sums: manylights_gpu::hierarchy::Sums,
     growth: f64,
     ramp: f64,
+    cell_items: u32,
 ) {
     use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
     use manylights_gpu::layout::GpuLight;
@@ -232,8 +236,15 @@ fn gpu_build_is_its_oracle(
     };
     let camera = original.camera;
     let gpu_scene = GpuScene::upload(ctx, &shaded, &camera, 32, 32).unwrap();
-    let build =
-        GpuHierarchy::with_sums(ctx, plan.clone(), &original.lights, &gpu_scene, sums).unwrap();
+    let build = GpuHierarchy::with_cells(
+        ctx,
+        plan.clone(),
+        &original.lights,
+        &gpu_scene,
+        sums,
+        cell_items,
+    )
+    .unwrap();
     assert_eq!(build.sums(), sums);
     // Spots among the lights: every light takes the general path.
     assert!(!gpu_scene.point_lights() && !gpu_scene.band_points());
@@ -248,7 +259,9 @@ fn gpu_build_is_its_oracle(
         })
         .collect();
     for (place, lights) in [("at home", &original.lights), ("moved", &moved)] {
-        let what = format!("{sums:?}, growth {growth}, {place}");
+        let what = format!(
+            "{sums:?}, growth {growth}, ramp {ramp}, cells from {cell_items} items, {place}"
+        );
         let gpu: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         ctx.queue
             .write_buffer(build.source(), 0, bytemuck::cast_slice(&gpu));

@@ -32,7 +32,8 @@
 
 struct Step {
     // mode (0 points, 1 finalize), items (source lights or slots), threads a dispatch row,
-    // splat (1: spread into the next level)
+    // spread into the next level (0 no, the last level; 1 each item at once, splat; 2 binned
+    // into cells first, bin)
     a: vec4<u32>,
     // first slot read (finalize), first shaded light written (finalize), first slot of the
     // next level, the next level's slot count
@@ -170,7 +171,7 @@ fn cell_of(key: u32) -> u32 {
 // Item i is binned into no cell (a spot, a dead slot), where this pass bins (the cells' buffer
 // holds this pass's items only then).
 fn no_cell(i: u32) {
-    if step.a.w == 1u {
+    if step.a.w == 2u {
         atomicStore(&cells[light_cell(i)], NO_CELL);
     }
 }
@@ -192,6 +193,15 @@ fn bin(i: u32, position: vec3<f32>, power: vec3<f32>) {
         return;
     }
     atomicAdd(&cells[cell_word(c, 1u)], 1u);
+}
+
+// Item i spreads into the next level as the step says (step.a.w): binned, at once, or not.
+fn spread(i: u32, position: vec3<f32>, power: vec3<f32>) {
+    if step.a.w == 2u {
+        bin(i, position, power);
+    } else if step.a.w == 1u {
+        splat(position, power);
+    }
 }
 
 // A point light of a level: `power` at `position`, shaded with the level's band.
@@ -263,9 +273,7 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let power = l.color * l.intensity;
     shaded[target_index[i]] = sampled_light(level_light(l.position, power), target_index[i]);
-    if step.a.w == 1u {
-        bin(i, l.position, power);
-    }
+    spread(i, l.position, power);
 }
 
 // A thread a slot of the cells' table: a cell's list takes its room.
@@ -391,7 +399,5 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
     let position = (vec3<f32>(node) + offset) * bitcast<f32>(step.g.w);
     let power = p / step.c.w;
     shaded[step.b.y + t] = sampled_light(level_light(position, power), node_draw(key));
-    if step.a.w == 1u {
-        bin(t, position, power);
-    }
+    spread(t, position, power);
 }

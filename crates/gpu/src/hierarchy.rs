@@ -85,6 +85,11 @@ mod plan;
 pub use plan::{HierarchyPlan, NodeBox, Step};
 
 const WORKGROUP: u32 = 256;
+
+/// A pass that spreads at least this many items into the next level bins them into cells
+/// first (the cells' three passes after it); fewer are each spread at once, where the cells'
+/// dispatches would cost more than their atomics save (a guess, not yet timed).
+pub const CELL_ITEMS: u32 = 16_384;
 /// Words of a hash table slot (the shader's `SLOT_WORDS`).
 const SLOT_WORDS: u64 = 16;
 
@@ -147,6 +152,20 @@ impl GpuHierarchy {
         lights: &[Light],
         shaded: &GpuScene,
         sums: Sums,
+    ) -> Result<Self, GpuError> {
+        Self::with_cells(ctx, plan, lights, shaded, sums, CELL_ITEMS)
+    }
+
+    /// As [`GpuHierarchy::with_sums`], a pass that spreads at least `cell_items` items into
+    /// the next level binning them into cells first ([`CELL_ITEMS`] by default; 0: every
+    /// such pass, `u32::MAX`: none, each item spread at once). The same hierarchy either way.
+    pub fn with_cells(
+        ctx: &GpuContext,
+        plan: HierarchyPlan,
+        lights: &[Light],
+        shaded: &GpuScene,
+        sums: Sums,
+        cell_items: u32,
     ) -> Result<Self, GpuError> {
         if sums == Sums::Bits64 && !ctx.features.int64_atomic_add {
             return Err(GpuError::Unsupported(format!(
@@ -213,12 +232,21 @@ impl GpuHierarchy {
             let n = items.div_ceil(WORKGROUP).max(1);
             (n.min(max), n.div_ceil(max))
         };
-        let steps_of = plan.steps(sources, |items| grid(items).0 * WORKGROUP);
+        let steps_of: Vec<Step> = plan
+            .steps(sources, |items| grid(items).0 * WORKGROUP)
+            .into_iter()
+            .map(|mut s| {
+                if s.a[3] == 1 && s.a[1] >= cell_items {
+                    s.a[3] = 2;
+                }
+                s
+            })
+            .collect();
         // A pass that spreads into a next level bins its items into that level's cells: a table
         // of the next level's table's size (a cell is keyed by its lowest node), a cell slot an
         // item and the lists; the dispatches in rows of the pass's own width (`item`).
         let cell_passes = |s: &Step| {
-            (s.a[3] == 1).then(|| {
+            (s.a[3] == 2).then(|| {
                 let rows = |n: u32| (s.a[2] / WORKGROUP, n.div_ceil(s.a[2]).max(1));
                 CellPasses {
                     bytes: 4 * (4 + 4 * u64::from(s.b[3]) + 2 * u64::from(s.a[1])),

@@ -12,7 +12,8 @@ use crate::GpuError;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct Step {
-    /// Mode (0 points, 1 finalize), items, threads a dispatch row, splat.
+    /// Mode (0 points, 1 finalize), items, threads a dispatch row, spread (0 none, 1 each item
+    /// at once, 2 binned into cells first: [`crate::hierarchy::CELL_ITEMS`]).
     pub a: [u32; 4],
     /// First slot read, first shaded light written, the next level's first slot and slots.
     pub b: [u32; 4],
