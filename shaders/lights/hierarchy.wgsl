@@ -26,8 +26,8 @@
 // scaled by `scale` (2^52 over the lights' total power: the sums fit 63 bits, and each term
 // keeps an f32's 24 bits). How a slot holds them is the file before this one's:
 // hierarchy_sums32.wgsl (two 32-bit atomics a sum) or hierarchy_sums64.wgsl (one 64-bit
-// atomic, SHADER_INT64_ATOMIC_ALL_OPS): `slot_claim`, `slot_key`, `sum_add`,
-// `sum_add_signed`, `sum_read`, `sum_read_signed`. The counters count splats dropped: a node
+// atomic, SHADER_INT64_ATOMIC_ALL_OPS): `slot_claim`, `slot_key`, `Term`
+// (`term_of`, `term_of_signed`, `term_add`), `sum_add_term`, `sum_read`, `sum_read_signed`. The counters count splats dropped: a node
 // outside its level's box, a table full.
 
 struct Step {
@@ -94,6 +94,18 @@ fn slot_of(key: u32) -> i32 {
     return -1;
 }
 
+// Corner `corner` (0..7) of a cell as an offset of 0 or 1 along each axis.
+fn corner_bits(corner: u32) -> vec3<u32> {
+    return vec3<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u);
+}
+
+// The trilinear weight of corner `bit` for a light at fraction `f` of its cell: splat's and
+// cell_splat's, so that both add the same terms.
+fn corner_weight(f: vec3<f32>, bit: vec3<u32>) -> f32 {
+    let t = select(1.0 - f, f, bit == vec3<u32>(1u));
+    return t.x * t.y * t.z;
+}
+
 // Spreads a light's power over the 8 nodes of its cell of the next level's grid.
 fn splat(position: vec3<f32>, power: vec3<f32>) {
     let spacing = bitcast<f32>(step.d.w);
@@ -103,9 +115,8 @@ fn splat(position: vec3<f32>, power: vec3<f32>) {
     let origin = step.d.xyz;
     let dims = step.e.xyz;
     for (var corner = 0u; corner < 8u; corner++) {
-        let bit = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u);
-        let t = select(1.0 - f, f, bit == vec3<u32>(1u));
-        let w = t.x * t.y * t.z;
+        let bit = corner_bits(corner);
+        let w = corner_weight(f, bit);
         if w == 0.0 {
             continue;
         }
@@ -126,12 +137,12 @@ fn splat(position: vec3<f32>, power: vec3<f32>) {
         let cs = c.r + c.g + c.b;
         let o = u - vec3<f32>(node);
         let at_u = u32(at);
-        sum_add(at_u, 0u, c.r);
-        sum_add(at_u, 1u, c.g);
-        sum_add(at_u, 2u, c.b);
-        sum_add_signed(at_u, 3u, cs * o.x);
-        sum_add_signed(at_u, 4u, cs * o.y);
-        sum_add_signed(at_u, 5u, cs * o.z);
+        sum_add_term(at_u, 0u, term_of(c.r));
+        sum_add_term(at_u, 1u, term_of(c.g));
+        sum_add_term(at_u, 2u, term_of(c.b));
+        sum_add_term(at_u, 3u, term_of_signed(cs * o.x));
+        sum_add_term(at_u, 4u, term_of_signed(cs * o.y));
+        sum_add_term(at_u, 5u, term_of_signed(cs * o.z));
     }
 }
 
@@ -332,7 +343,7 @@ fn cell_splat(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = key - 1u;
     let rel = vec3<u32>(k % dims.x, (k / dims.x) % dims.y, k / (dims.x * dims.y));
     for (var corner = 0u; corner < 8u; corner++) {
-        let bit = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, (corner >> 2u) & 1u);
+        let bit = corner_bits(corner);
         let node = step.d.xyz + vec3<i32>(rel + bit);
         var sums = array<Term, 6>(term_zero(), term_zero(), term_zero(), term_zero(), term_zero(), term_zero());
         var splats = 0u;
@@ -341,8 +352,7 @@ fn cell_splat(@builtin(global_invocation_id) id: vec3<u32>) {
             let power = l.color * l.intensity;
             let u = l.position / spacing;
             let f = u - floor(u);
-            let w3 = select(1.0 - f, f, bit == vec3<u32>(1u));
-            let w = w3.x * w3.y * w3.z;
+            let w = corner_weight(f, bit);
             if w == 0.0 {
                 continue;
             }

@@ -27,36 +27,6 @@ fn slot_key(at: u32) -> u32 {
     return atomicLoad(&slots[at * SLOT_WORDS]);
 }
 
-// Adds a non-negative term to sum k of slot `at`.
-fn sum_add(at: u32, k: u32, v: f32) {
-    let i = at * SLOT_WORDS + 1u + 2u * k;
-    let hi = floor(v / TWO32);
-    let lo = u32(v - hi * TWO32);
-    let old = atomicAdd(&slots[i], lo);
-    let carry = select(0u, 1u, old + lo < old);
-    let high = u32(hi) + carry;
-    if high != 0u {
-        atomicAdd(&slots[i + 1u], high);
-    }
-}
-
-// Adds a signed term to sum k of slot `at` (64-bit two's complement).
-fn sum_add_signed(at: u32, k: u32, v: f32) {
-    if v >= 0.0 {
-        sum_add(at, k, v);
-        return;
-    }
-    let i = at * SLOT_WORDS + 1u + 2u * k;
-    let m = -v;
-    let hi = floor(m / TWO32);
-    let lo = u32(m - hi * TWO32);
-    let lo_n = ~lo + 1u;
-    let hi_n = ~u32(hi) + select(0u, 1u, lo == 0u);
-    let old = atomicAdd(&slots[i], lo_n);
-    let carry = select(0u, 1u, old + lo_n < old);
-    atomicAdd(&slots[i + 1u], hi_n + carry);
-}
-
 fn sum_read(at: u32, k: u32) -> f32 {
     let i = at * SLOT_WORDS + 1u + 2u * k;
     return f32(atomicLoad(&slots[i + 1u])) * TWO32 + f32(atomicLoad(&slots[i]));
@@ -74,22 +44,22 @@ fn sum_read_signed(at: u32, k: u32) -> f32 {
     return -(f32(hi_m) * TWO32 + f32(lo_m));
 }
 
-// A 64-bit fixed-point term or sum held in registers, (low, high) words: what a cell of the
-// points' grid sums over its lights before one atomic add a node (hierarchy.wgsl's
-// cell_splat). The same integers as sum_add's and sum_add_signed's, so the same sums.
+// A 64-bit fixed-point term or sum held in registers, (low, high) words: a term splat adds,
+// or what a cell sums over its lights before one atomic add a node (hierarchy.wgsl's
+// cell_splat).
 alias Term = vec2<u32>;
 
 fn term_zero() -> Term {
     return vec2<u32>(0u);
 }
 
-// sum_add's integer for a non-negative term.
+// The integer of a non-negative term.
 fn term_of(v: f32) -> Term {
     let hi = floor(v / TWO32);
     return vec2<u32>(u32(v - hi * TWO32), u32(hi));
 }
 
-// sum_add_signed's integer (two's complement).
+// The integer of a signed term (two's complement).
 fn term_of_signed(v: f32) -> Term {
     if v >= 0.0 {
         return term_of(v);
@@ -103,7 +73,7 @@ fn term_add(a: Term, b: Term) -> Term {
     return vec2<u32>(lo, a.y + b.y + select(0u, 1u, lo < a.x));
 }
 
-// Adds a term held in registers to sum k of slot `at`.
+// Adds a term to sum k of slot `at`, the carry from the low word into the high one by hand.
 fn sum_add_term(at: u32, k: u32, t: Term) {
     let i = at * SLOT_WORDS + 1u + 2u * k;
     let old = atomicAdd(&slots[i], t.x);

@@ -27,16 +27,6 @@ fn slot_key(at: u32) -> u32 {
     return u32(atomicLoad(&slots[at * SLOT_WORDS64]));
 }
 
-// Adds a non-negative term to sum k of slot `at`.
-fn sum_add(at: u32, k: u32, v: f32) {
-    atomicAdd(&slots[at * SLOT_WORDS64 + 1u + k], u64(v));
-}
-
-// Adds a signed term to sum k of slot `at` (64-bit two's complement).
-fn sum_add_signed(at: u32, k: u32, v: f32) {
-    atomicAdd(&slots[at * SLOT_WORDS64 + 1u + k], bitcast<u64>(i64(v)));
-}
-
 fn sum_read(at: u32, k: u32) -> f32 {
     return f32(atomicLoad(&slots[at * SLOT_WORDS64 + 1u + k]));
 }
@@ -45,9 +35,9 @@ fn sum_read_signed(at: u32, k: u32) -> f32 {
     return f32(bitcast<i64>(atomicLoad(&slots[at * SLOT_WORDS64 + 1u + k])));
 }
 
-// A 64-bit fixed-point term or sum held in registers: what a cell of the points' grid sums
-// over its lights before one atomic add a node (hierarchy.wgsl's cell_splat). The same integers
-// as sum_add's and sum_add_signed's (addition wraps, as the atomics do), so the same sums.
+// A 64-bit fixed-point term or sum held in registers: a term splat adds, or what a cell sums
+// over its lights before one atomic add a node (hierarchy.wgsl's cell_splat; addition wraps, as
+// the atomics do).
 alias Term = u64;
 
 fn term_zero() -> Term {
@@ -66,7 +56,7 @@ fn term_add(a: Term, b: Term) -> Term {
     return a + b;
 }
 
-// Adds a term held in registers to sum k of slot `at`.
+// Adds a term to sum k of slot `at`.
 fn sum_add_term(at: u32, k: u32, t: Term) {
     atomicAdd(&slots[at * SLOT_WORDS64 + 1u + k], t);
 }

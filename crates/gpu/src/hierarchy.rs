@@ -93,6 +93,70 @@ pub const CELL_ITEMS: u32 = 16_384;
 /// Words of a hash table slot (the shader's `SLOT_WORDS`).
 const SLOT_WORDS: u64 = 16;
 
+/// Whether `plan` can be built into `shaded` with `sums` on `ctx`'s adapter.
+fn check_build(
+    ctx: &GpuContext,
+    plan: &HierarchyPlan,
+    shaded: &GpuScene,
+    sums: Sums,
+) -> Result<(), GpuError> {
+    if sums == Sums::Bits64 && !ctx.features.int64_atomic_add {
+        return Err(GpuError::Unsupported(format!(
+            "the hierarchy build's 64-bit sums need 64-bit atomic add on storage buffers \
+             (wgpu feature SHADER_INT64_ATOMIC_ALL_OPS), which adapter {} does not offer; \
+             Sums::Bits32 runs everywhere",
+            ctx.info.name
+        )));
+    }
+    if u64::from(shaded.light_count) != plan.shaded_count() {
+        return Err(GpuError::OverLimit {
+            what: "the shaded scene's lights".into(),
+            value: shaded.light_count.into(),
+            limit: plan.shaded_count(),
+            limit_name: "the hierarchy's layout (HierarchyPlan::placeholder)",
+        });
+    }
+    Ok(())
+}
+
+/// The shaded light each of `lights` becomes (the points pass's `target_index`): point lights
+/// from the first, spots after every level's slots; one more entry, so the buffer is never
+/// empty.
+fn target_indices(plan: &HierarchyPlan, lights: &[Light]) -> Vec<u32> {
+    let (mut next_point, mut next_spot) = (0u32, plan.shaded_count() as u32 - plan.spots);
+    lights
+        .iter()
+        .map(|l| {
+            let slot = if matches!(l.kind, LightKind::Spot { .. }) {
+                &mut next_spot
+            } else {
+                &mut next_point
+            };
+            *slot += 1;
+            *slot - 1
+        })
+        .chain(std::iter::once(0))
+        .collect()
+}
+
+/// The build's bind group layout: its step, the source lights, the target indices, the shaded
+/// lights, the slots, the drop counters and the cells (`shaders/lights/hierarchy.wgsl`).
+fn group_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let c = wgpu::ShaderStages::COMPUTE;
+    d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("lights.hierarchy"),
+        entries: &[
+            entry(0, c, UNIFORM),
+            entry(1, c, storage(true)),
+            entry(2, c, storage(true)),
+            entry(3, c, storage(false)),
+            entry(4, c, storage(false)),
+            entry(5, c, storage(false)),
+            entry(6, c, storage(false)),
+        ],
+    })
+}
+
 /// A pass of the build: the points pass or a level's (`finalize`), its bind group and
 /// dispatch, and where it bins its items into the next level's cells, the cells' passes.
 struct Pass {
@@ -109,6 +173,22 @@ struct CellPasses {
     bytes: u64,
     table: (u32, u32),
     items: (u32, u32),
+}
+
+impl CellPasses {
+    /// Those of step `s`, where it bins (spread 2): a table of the next level's table's size (a
+    /// cell is keyed by its lowest node), a cell slot an item and the lists; the dispatches in
+    /// rows of the pass's own width (`item`).
+    fn of(s: &Step) -> Option<Self> {
+        (s.a[3] == 2).then(|| {
+            let rows = |n: u32| (s.a[2] / WORKGROUP, n.div_ceil(s.a[2]).max(1));
+            Self {
+                bytes: 4 * (4 + 4 * u64::from(s.b[3]) + 2 * u64::from(s.a[1])),
+                table: rows(s.b[3]),
+                items: rows(s.a[1]),
+            }
+        })
+    }
 }
 
 /// The build on the GPU: its buffers, pipelines and a bind group a pass.
@@ -167,22 +247,7 @@ impl GpuHierarchy {
         sums: Sums,
         cell_items: u32,
     ) -> Result<Self, GpuError> {
-        if sums == Sums::Bits64 && !ctx.features.int64_atomic_add {
-            return Err(GpuError::Unsupported(format!(
-                "the hierarchy build's 64-bit sums need 64-bit atomic add on storage buffers \
-                 (wgpu feature SHADER_INT64_ATOMIC_ALL_OPS), which adapter {} does not offer; \
-                 Sums::Bits32 runs everywhere",
-                ctx.info.name
-            )));
-        }
-        if u64::from(shaded.light_count) != plan.shaded_count() {
-            return Err(GpuError::OverLimit {
-                what: "the shaded scene's lights".into(),
-                value: shaded.light_count.into(),
-                limit: plan.shaded_count(),
-                limit_name: "the hierarchy's layout (HierarchyPlan::placeholder)",
-            });
-        }
+        check_build(ctx, &plan, shaded, sums)?;
         let d = &ctx.device;
         let total_slots: u64 = plan.slots.iter().map(|&s| u64::from(s)).sum();
         let slot_bytes = (total_slots * SLOT_WORDS * 4).max(16);
@@ -199,23 +264,9 @@ impl GpuHierarchy {
                 | wgpu::BufferUsages::COPY_DST
                 | wgpu::BufferUsages::COPY_SRC,
         });
-        let (mut next_point, mut next_spot) = (0u32, plan.shaded_count() as u32 - plan.spots);
-        let target: Vec<u32> = lights
-            .iter()
-            .map(|l| {
-                let slot = if matches!(l.kind, LightKind::Spot { .. }) {
-                    &mut next_spot
-                } else {
-                    &mut next_point
-                };
-                *slot += 1;
-                *slot - 1
-            })
-            .chain(std::iter::once(0))
-            .collect();
         let target = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lights.hierarchy.target"),
-            contents: bytemuck::cast_slice(&target),
+            contents: bytemuck::cast_slice(&target_indices(&plan, lights)),
             usage: wgpu::BufferUsages::STORAGE,
         });
         let slots = d.create_buffer(&wgpu::BufferDescriptor {
@@ -232,32 +283,10 @@ impl GpuHierarchy {
             let n = items.div_ceil(WORKGROUP).max(1);
             (n.min(max), n.div_ceil(max))
         };
-        let steps_of: Vec<Step> = plan
-            .steps(sources, |items| grid(items).0 * WORKGROUP)
-            .into_iter()
-            .map(|mut s| {
-                if s.a[3] == 1 && s.a[1] >= cell_items {
-                    s.a[3] = 2;
-                }
-                s
-            })
-            .collect();
-        // A pass that spreads into a next level bins its items into that level's cells: a table
-        // of the next level's table's size (a cell is keyed by its lowest node), a cell slot an
-        // item and the lists; the dispatches in rows of the pass's own width (`item`).
-        let cell_passes = |s: &Step| {
-            (s.a[3] == 2).then(|| {
-                let rows = |n: u32| (s.a[2] / WORKGROUP, n.div_ceil(s.a[2]).max(1));
-                CellPasses {
-                    bytes: 4 * (4 + 4 * u64::from(s.b[3]) + 2 * u64::from(s.a[1])),
-                    table: rows(s.b[3]),
-                    items: rows(s.a[1]),
-                }
-            })
-        };
+        let steps_of = plan.steps(sources, |items| grid(items).0 * WORKGROUP, cell_items);
         let cell_bytes = steps_of
             .iter()
-            .filter_map(|s| cell_passes(s).map(|c| c.bytes))
+            .filter_map(|s| CellPasses::of(s).map(|c| c.bytes))
             .max()
             .unwrap_or(0)
             .max(16);
@@ -276,19 +305,7 @@ impl GpuHierarchy {
                 | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let c = wgpu::ShaderStages::COMPUTE;
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("lights.hierarchy"),
-            entries: &[
-                entry(0, c, UNIFORM),
-                entry(1, c, storage(true)),
-                entry(2, c, storage(true)),
-                entry(3, c, storage(false)),
-                entry(4, c, storage(false)),
-                entry(5, c, storage(false)),
-                entry(6, c, storage(false)),
-            ],
-        });
+        let layout = group_layout(d);
         let module = sums.shader().create(d);
         let pl = pipeline::layout(d, "lights.hierarchy", &[&layout]);
         let points = pipeline::compute(d, &module, &pl, "points");
@@ -323,7 +340,7 @@ impl GpuHierarchy {
                     finalize: s.a[0] == 1,
                     group,
                     groups: grid(s.a[1]),
-                    cells: cell_passes(&s),
+                    cells: CellPasses::of(&s),
                 }
             })
             .collect();

@@ -171,40 +171,19 @@ pub(crate) fn evaluate(
                 .collect()
         }
     };
-    // The geometry back to back: with culling and shading, the frame in steady state.
-    let steady_geometry = match (steady_runs, &o.timings) {
-        (Some(runs), Some(t)) => {
-            let passes = t
-                .iter()
-                .filter(|p| category(&p.label) == "prepass" || c.backend == Backend::NaiveForward)
-                .count() as u32;
-            stage(pose, "geometry timed back to back", || {
-                steady_geometry(ctx, renderer, gpu_scene, &o, passes, runs)
-            })
-            .map_err(|e| other(&e))?
-            .map(|s| {
-                steady_passes.splice(0..0, s.passes.iter().map(|p| (p.0.clone(), p.2)));
-                s.total_ms
-            })
-        }
-        _ => None,
-    };
-    // The hierarchy's build back to back right after the frame's passes, at the clock they ran
-    // at: timed after the host's accuracy work, the GPU's clock could fall so far that the
-    // warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times
-    // slow, every pass alike). Every build of the same lights is the same hierarchy.
-    let steady_build = match (timed, &o.timings) {
-        (
-            Some(Steady {
-                runs,
-                hierarchy: Some(hier),
-            }),
-            Some(_),
-        ) => stage(pose, "hierarchy built back to back", || {
-            steady_build(ctx, hier, hier.pass_count(), runs)
-        })
-        .map_err(|e| other(&e))?,
-        _ => None,
+    let (steady_geometry, steady_build) = match (timed, &o.timings) {
+        (Some(t), Some(timings)) => steady_after_frame(
+            ctx,
+            renderer,
+            gpu_scene,
+            c,
+            &o,
+            timings,
+            t,
+            pose,
+            &mut steady_passes,
+        )?,
+        _ => (None, None),
     };
     let accuracy = match reference {
         Some(refs) => against_references(ctx, refs, gpu_scene, c, cam, pose, &o.color)?,
@@ -234,6 +213,56 @@ pub(crate) fn evaluate(
         steady_passes,
         steady_build,
     })
+}
+
+/// What the first pose of a timed cell times after culling and shading (`timings`: its single
+/// frame's passes): the frame's geometry back to back (with culling and shading, the frame in
+/// steady state; its passes put first in `steady_passes`), then the hierarchy's build where
+/// the cell has one.
+#[allow(
+    clippy::too_many_arguments,
+    reason = "one call site; what evaluate has measured so far"
+)]
+fn steady_after_frame(
+    ctx: &GpuContext,
+    renderer: &Renderer,
+    gpu_scene: &GpuScene,
+    c: &Config,
+    o: &ShadeOutput,
+    timings: &[PassTiming],
+    timed: Steady<'_>,
+    pose: &str,
+    steady_passes: &mut Vec<(String, f64)>,
+) -> Result<(Option<f64>, Option<SteadyCull>), LabError> {
+    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
+    let passes = timings
+        .iter()
+        .filter(|p| category(&p.label) == "prepass" || c.backend == Backend::NaiveForward)
+        .count() as u32;
+    let geometry = stage(pose, "geometry timed back to back", || {
+        steady_geometry(ctx, renderer, gpu_scene, o, passes, timed.runs)
+    })
+    .map_err(|e| other(&e))?
+    .map(|s| {
+        steady_passes.splice(0..0, s.passes.iter().map(|p| (p.0.clone(), p.2)));
+        s.total_ms
+    });
+    // The hierarchy's build back to back right after the frame's passes, at the clock they ran
+    // at: timed after the host's accuracy work, the GPU's clock could fall so far that the
+    // warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times
+    // slow, every pass alike). Every build of the same lights is the same hierarchy.
+    // The hierarchy's build back to back right after the frame's passes, at the clock they ran
+    // at: timed after the host's accuracy work, the GPU's clock could fall so far that the
+    // warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times
+    // slow, every pass alike). Every build of the same lights is the same hierarchy.
+    let build = match timed.hierarchy {
+        Some(hier) => stage(pose, "hierarchy built back to back", || {
+            steady_build(ctx, hier, hier.pass_count(), timed.runs)
+        })
+        .map_err(|e| other(&e))?,
+        None => None,
+    };
+    Ok((geometry, build))
 }
 
 /// What a pose measured against the references.

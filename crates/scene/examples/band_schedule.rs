@@ -1,7 +1,8 @@
 //! A probe of the lighting grid hierarchy's bands in f64 (issue 48): lights evaluated a point
 //! and the mean relative error against infinite range, for bands more general than the
 //! papers'. Level `l >= 1` takes over from level `l - 1` at `T_l = alpha k^(l-1) h 2^(l-1)`
-//! over a ramp from `T_l` to `c T_l`; `k = 1, c = 2` are the papers' bands (`Hierarchy::band`).
+//! over a ramp from `T_l` to `c T_l` (`Hierarchy::band` with `HierarchyParams::growth` k and
+//! `ramp` c); `k = 1, c = 2` are the papers' bands.
 //! The points are the centres of every n-th triangle of the scene (their normals' cosine in the
 //! sum), the estimate `sum w P cos / d^2` (`falloff_infinite`).
 //!
@@ -14,21 +15,6 @@ use manylights_scene::hierarchy::{FINEST_NODES, Hierarchy, HierarchyParams, TOP_
 use manylights_scene::light::falloff_infinite;
 use manylights_scene::procedural::{AtriumParams, atrium, cis5650};
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule};
-
-/// Level `level`'s weight at distance `d`, the takeovers `t` (`t[l]`: level l's), ramps of `c`.
-fn weight(level: usize, last: usize, d: f64, t: &[f64], c: f64) -> f64 {
-    if last == 0 {
-        return 1.0;
-    }
-    let ramp = |l: usize| ((d - t[l]) / ((c - 1.0) * t[l])).clamp(0.0, 1.0);
-    let rising = if level == 0 { 1.0 } else { ramp(level) };
-    let falling = if level == last {
-        1.0
-    } else {
-        1.0 - ramp(level + 1)
-    };
-    rising.min(falling)
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1).peekable();
@@ -73,7 +59,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         top_lights: TOP_LIGHTS,
         sample_from: None,
     };
-    let h = Hierarchy::build(&scene.lights, params);
+    // The levels do not hang on alpha, growth or the ramps: one build, its bands set per
+    // configuration.
+    let mut h = Hierarchy::build(&scene.lights, params);
     let last = h.levels.len() - 1;
     let sizes: Vec<usize> = h.levels.iter().map(Vec::len).collect();
     println!("h {} m, levels {sizes:?}", h.h);
@@ -106,13 +94,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         })
         .collect();
     for (alpha, k, c) in configs {
-        let t: Vec<f64> = (0..=last)
-            .map(|l| match l {
-                0 => 0.0,
-                l => alpha * k.powi(l as i32 - 1) * h.h * 2f64.powi(l as i32 - 1),
-            })
-            .collect();
-        if (1..last).any(|l| c * t[l] > t[l + 1] * (1.0 + 1e-12)) {
+        h.params = HierarchyParams {
+            alpha,
+            growth: k,
+            ramp: c,
+            ..params
+        };
+        if c > 2.0 * k * (1.0 + 1e-12) {
             println!("alpha {alpha} k {k} c {c}: a ramp reaches past the next takeover (C <= 2K)");
             continue;
         }
@@ -122,7 +110,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut estimate = 0.0;
             for (l, lights) in h.levels.iter().enumerate() {
                 for light in lights {
-                    let w = weight(l, last, x.distance(light.position), &t, c);
+                    let w = h.band(l, x.distance(light.position));
                     if w > 0.0 {
                         per_level[l] += 1.0;
                         estimate += w * term(x, n, light.position, light.power);

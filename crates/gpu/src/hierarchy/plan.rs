@@ -204,8 +204,15 @@ impl HierarchyPlan {
         out
     }
 
-    /// Each dispatch's parameters, in order (the points pass, then a finalize pass a level).
-    pub(super) fn steps(&self, sources: u32, row: impl Fn(u32) -> u32) -> Vec<Step> {
+    /// Each dispatch's parameters, in order (the points pass, then a finalize pass a level); a
+    /// pass that spreads at least `cell_items` items into the next level bins them into cells
+    /// first (spread 2), a smaller one spreads each at once (1), the last level none (0).
+    pub(super) fn steps(
+        &self,
+        sources: u32,
+        row: impl Fn(u32) -> u32,
+        cell_items: u32,
+    ) -> Vec<Step> {
         let slot_base = |l: usize| -> u32 { self.slots[..l - 1].iter().sum() };
         let grid = |l: usize| {
             self.grids
@@ -225,9 +232,13 @@ impl HierarchyPlan {
         let far = [self.far.x, self.far.y, self.far.z, f32::INFINITY];
         (0..self.levels)
             .map(|l| {
-                let splat = u32::from(l + 1 < self.levels);
                 let items = if l == 0 { sources } else { self.slots[l - 1] };
-                let (next_base, next_slots) = if splat == 1 {
+                let spread = match (l + 1 < self.levels, items >= cell_items) {
+                    (false, _) => 0,
+                    (true, false) => 1,
+                    (true, true) => 2,
+                };
+                let (next_base, next_slots) = if spread > 0 {
                     (slot_base(l + 1), self.slots[l])
                 } else {
                     (0, 0)
@@ -236,7 +247,7 @@ impl HierarchyPlan {
                 let (d, e) = grid(l + 1);
                 let (g, h) = if l == 0 { ([0; 4], [0; 4]) } else { grid(l) };
                 Step {
-                    a: [u32::from(l > 0), items, row(items), splat],
+                    a: [u32::from(l > 0), items, row(items), spread],
                     b: [
                         if l == 0 { 0 } else { slot_base(l) },
                         self.level_range(l).0,
