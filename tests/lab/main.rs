@@ -14,7 +14,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 26] = [
+const SHIPPED: [&str; 28] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -41,6 +41,8 @@ const SHIPPED: [&str; 26] = [
     "hierarchy-front",
     "hierarchy-front-1m",
     "hierarchy-growth",
+    "hierarchy-ramps",
+    "hierarchy-ramps-hall",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {

@@ -87,9 +87,11 @@ pub use plan::{HierarchyPlan, NodeBox, Step};
 const WORKGROUP: u32 = 256;
 
 /// A pass that spreads at least this many items into the next level bins them into cells
-/// first (the cells' three passes after it); fewer are each spread at once, where the cells'
-/// dispatches would cost more than their atomics save (a guess, not yet timed).
-pub const CELL_ITEMS: u32 = 16_384;
+/// first (the cells' three passes after it); fewer are each spread at once. On the H200 the
+/// cells break even at about 50,000 items (the hall's 50,000 points: 0.066 against 0.064 ms;
+/// the 47,025 of a million lights' level 2: 0.062 against 0.064) and win beyond (1M points:
+/// 0.60 against 1.25 ms; 359,223 of level 1: 0.21 against 0.31).
+pub const CELL_ITEMS: u32 = 65_536;
 /// Words of a hash table slot (the shader's `SLOT_WORDS`).
 const SLOT_WORDS: u64 = 16;
 
@@ -167,11 +169,13 @@ struct Pass {
 }
 
 /// The cells' passes after a pass that bins: the bytes of the cells' buffer it uses, and the
-/// dispatches over the cells' table (`cells_room`, `cell_splat`) and over the items (`fill`).
+/// dispatches over the cells' table (`cells_room`), over its slots' corners (`cell_splat`, 8
+/// threads a slot) and over the items (`fill`).
 #[derive(Clone, Copy)]
 struct CellPasses {
     bytes: u64,
     table: (u32, u32),
+    corners: (u32, u32),
     items: (u32, u32),
 }
 
@@ -185,6 +189,7 @@ impl CellPasses {
             Self {
                 bytes: 4 * (4 + 4 * u64::from(s.b[3]) + 2 * u64::from(s.a[1])),
                 table: rows(s.b[3]),
+                corners: rows(8 * s.b[3]),
                 items: rows(s.a[1]),
             }
         })
@@ -405,7 +410,7 @@ impl GpuHierarchy {
                 for (name, pipeline, groups) in [
                     ("cells", room, c.table),
                     ("fill", fill, c.items),
-                    ("cell_splat", splat, c.table),
+                    ("cell_splat", splat, c.corners),
                 ] {
                     let label = format!("lights.hierarchy.{name}{l}");
                     pipeline::dispatch(encoder, timer, &label, pipeline, &[&p.group], groups);
