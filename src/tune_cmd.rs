@@ -61,6 +61,15 @@ pub(crate) struct TuneArgs {
     /// alpha joins them).
     #[arg(long, value_delimiter = ',', default_values_t = [1.0, 2.0], value_parser = crate::hierarchy_opt::alpha)]
     pub(crate) alphas: Vec<f32>,
+    /// With --max-error: the growths of the hierarchy's bands tried (as --growth's K, which
+    /// joins them; from 1 to 4), each with every alpha of --alphas and ramp of --ramps; 1, the
+    /// papers' bands, where neither is given.
+    #[arg(long, value_delimiter = ',', value_parser = positive_f32)]
+    pub(crate) growths: Vec<f32>,
+    /// With --max-error: the hierarchy's ramps tried (as --ramp's C, which joins them; above 1
+    /// and at most 2), each with every alpha and growth; 2, the papers', where neither is given.
+    #[arg(long, value_delimiter = ',', value_parser = positive_f32)]
+    pub(crate) ramps: Vec<f32>,
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {
@@ -92,6 +101,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     let a = &args.scene;
     // The scene and its lights, checked before any GPU work.
     let scene = a.build()?;
+    let radii = candidate_ranges(args)?;
     let ctx = a.gpu()?;
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from("out/tune"));
     let base = Config {
@@ -123,7 +133,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         export: false,
     };
     let ranges = if args.max_error.is_some() {
-        candidate_ranges(args).len()
+        radii.len()
     } else {
         1
     };
@@ -150,7 +160,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
             progress: show_progress(),
             commit: env!("MANYLIGHTS_COMMIT").into(),
             max_error: args.max_error,
-            radii: candidate_ranges(args),
+            radii,
             rank,
         },
     )?;
@@ -230,22 +240,60 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     Ok(())
 }
 
+/// `list` with `one` joined where it is not in it already, or `default` alone where both are
+/// empty.
+fn joined(list: &[f32], one: Option<f32>, default: f32) -> Vec<f32> {
+    let mut v = list.to_vec();
+    if let Some(x) = one
+        && !v.contains(&x)
+    {
+        v.push(x);
+    }
+    if v.is_empty() {
+        v.push(default);
+    }
+    v
+}
+
 /// With --max-error, the light ranges tried: --thresholds' cut-offs, --errors' stochastic
 /// bounds (with --stochastic's E among them, and its --bound, --accumulate and --interleave
-/// on each) and --alphas' lighting grid hierarchies (with --spacing).
-fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
+/// on each) and the lighting grid hierarchies of every alpha of --alphas, growth of --growths
+/// and ramp of --ramps (with --spacing); a hierarchy's parameters out of range are an error
+/// naming the options.
+pub(crate) fn candidate_ranges(args: &TuneArgs) -> Result<Vec<RadiusRule>> {
+    use manylights_scene::hierarchy::{GROWTH, RAMP};
     let a = &args.scene;
-    let mut errors = args.errors.clone();
-    if let Some(e) = a.stochastic
-        && !errors.contains(&e)
-    {
-        errors.push(e);
+    let errors = joined(&args.errors, a.stochastic, 1.0);
+    let alphas = joined(&args.alphas, a.hierarchy, 1.0);
+    let growths = joined(&args.growths, a.growth, GROWTH as f32);
+    let ramps = joined(&args.ramps, a.ramp, RAMP as f32);
+    let mut hierarchies = Vec::new();
+    for &alpha in &alphas {
+        for &growth in &growths {
+            for &ramp in &ramps {
+                hierarchies.push(RadiusRule::Hierarchy {
+                    alpha,
+                    spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
+                    finest_nodes: a.finest_nodes(),
+                    growth,
+                    ramp,
+                    sample_from: None,
+                });
+            }
+        }
     }
-    let mut alphas = args.alphas.clone();
-    if let Some(alpha) = a.hierarchy
-        && !alphas.contains(&alpha)
-    {
-        alphas.push(alpha);
+    for h in &hierarchies {
+        if let RadiusRule::Hierarchy {
+            alpha,
+            growth,
+            ramp,
+            ..
+        } = h
+        {
+            h.validate().with_context(|| {
+                format!("tune's hierarchy of alpha {alpha}, growth {growth}, ramp {ramp} (--alphas, --growths, --ramps)")
+            })?;
+        }
     }
     let stochastic = match a.light_spec().radius {
         r @ RadiusRule::Stochastic { .. } => r,
@@ -259,7 +307,8 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
             draw: StochasticDraw::Stratified,
         },
     };
-    args.thresholds
+    Ok(args
+        .thresholds
         .iter()
         .map(|&t| RadiusRule::Threshold(t))
         .chain(errors.into_iter().map(|e| match stochastic {
@@ -281,15 +330,8 @@ fn candidate_ranges(args: &TuneArgs) -> Vec<RadiusRule> {
             },
             other => other,
         }))
-        .chain(alphas.into_iter().map(|alpha| RadiusRule::Hierarchy {
-            alpha,
-            spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
-            finest_nodes: a.finest_nodes(),
-            growth: a.growth(),
-            ramp: a.ramp(),
-            sample_from: None,
-        }))
-        .collect()
+        .chain(hierarchies)
+        .collect())
 }
 
 /// The light range a ranked candidate was tried with, where ranges were candidates: the cell

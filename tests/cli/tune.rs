@@ -92,9 +92,10 @@ fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
 
 /// `tune --max-error F`: light ranges are candidates too, every candidate is scored against
 /// the infinite-range reference, and only those within mean FLIP F are ranked; the best is
-/// written with its radius rule; the lighting grid hierarchy is among them (--alphas). A budget
-/// none reaches is an error naming the lowest error; a budget that is not a positive number is
-/// a usage error.
+/// written with its radius rule; the lighting grid hierarchy is among them (--alphas, with
+/// --growths and --ramps). A budget none reaches is an error naming the lowest error; a budget
+/// that is not a positive number is a usage error, a growth or ramp out of range an error
+/// naming it before any GPU work.
 #[test]
 fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
     let tmp = tempfile::tempdir().unwrap();
@@ -118,6 +119,10 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
         "0.5",
         "--alphas",
         "1",
+        "--growths",
+        "1.15",
+        "--ramps",
+        "1.25",
         "--spacing",
         "0.5",
     ];
@@ -167,7 +172,9 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
         assert_eq!(r.false_negatives, Some(0), "{}", r.cell);
     }
     assert!(
-        stdout.lines().any(|l| l.contains(" hierarchy=1/h0.5")),
+        stdout
+            .lines()
+            .any(|l| l.contains(" hierarchy=1/h0.5/g1.15/c1.25")),
         "{stdout}"
     );
     // None within a budget no candidate reaches (the same cells, resumed).
@@ -187,6 +194,27 @@ fn tune_max_error_ranks_only_what_is_accurate_enough_against_infinite_range() {
             && stderr.contains("--max-error 0.001"),
         "{stderr}"
     );
+    for (option, bad, field) in [("--growths", "1.15,5", "growth"), ("--ramps", "1", "ramp")] {
+        let o = manylights(&[
+            "tune",
+            "--scene",
+            "atrium",
+            "--max-error",
+            "0.5",
+            option,
+            bad,
+        ]);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{option} {bad}: {stderr}");
+        assert!(
+            stderr.contains(option) && stderr.contains(&format!("lights.radius.{field}")),
+            "{stderr}"
+        );
+        assert!(
+            !stderr.contains("adapter:"),
+            "checked before the GPU: {stderr}"
+        );
+    }
     for bad in ["0", "-1", "nan"] {
         let o = manylights(&["tune", "--scene", "atrium", "--max-error", bad]);
         let stderr = String::from_utf8_lossy(&o.stderr);
