@@ -23,14 +23,27 @@ pub(crate) struct Shaded {
 impl SceneArgs {
     /// `--hierarchy ALPHA` with `--spacing H` (0.25 m by default) as a radius rule.
     pub(crate) fn hierarchy_rule(&self) -> Option<RadiusRule> {
-        self.hierarchy.map(|alpha| RadiusRule::Hierarchy {
+        self.hierarchy
+            .map(|alpha| self.hierarchy_with(alpha, self.growth(), self.ramp(), self.sample_from))
+    }
+
+    /// The hierarchy of `alpha`, `growth` and `ramp` with `--spacing` and `--finest-nodes`
+    /// (tune's candidates; --hierarchy's rule).
+    pub(crate) fn hierarchy_with(
+        &self,
+        alpha: f32,
+        growth: f32,
+        ramp: f32,
+        sample_from: Option<u32>,
+    ) -> RadiusRule {
+        RadiusRule::Hierarchy {
             alpha,
             spacing: self.spacing.unwrap_or(DEFAULT_SPACING),
             finest_nodes: self.finest_nodes(),
-            growth: self.growth(),
-            ramp: self.ramp(),
-            sample_from: self.sample_from,
-        })
+            growth,
+            ramp,
+            sample_from,
+        }
     }
 
     /// `--finest-nodes R`, or the default (2).

@@ -271,28 +271,15 @@ pub(crate) fn candidate_ranges(args: &TuneArgs) -> Result<Vec<RadiusRule>> {
     for &alpha in &alphas {
         for &growth in &growths {
             for &ramp in &ramps {
-                hierarchies.push(RadiusRule::Hierarchy {
-                    alpha,
-                    spacing: a.spacing.unwrap_or(crate::hierarchy_opt::DEFAULT_SPACING),
-                    finest_nodes: a.finest_nodes(),
-                    growth,
-                    ramp,
-                    sample_from: None,
-                });
+                let rule = a.hierarchy_with(alpha, growth, ramp, None);
+                rule.validate().with_context(|| {
+                    format!(
+                        "tune's hierarchy of alpha {alpha}, growth {growth}, ramp {ramp} \
+                         (--alphas, --growths, --ramps)"
+                    )
+                })?;
+                hierarchies.push(rule);
             }
-        }
-    }
-    for h in &hierarchies {
-        if let RadiusRule::Hierarchy {
-            alpha,
-            growth,
-            ramp,
-            ..
-        } = h
-        {
-            h.validate().with_context(|| {
-                format!("tune's hierarchy of alpha {alpha}, growth {growth}, ramp {ramp} (--alphas, --growths, --ramps)")
-            })?;
         }
     }
     let stochastic = match a.light_spec().radius {

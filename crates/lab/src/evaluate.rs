@@ -251,10 +251,6 @@ fn steady_after_frame(
     // at: timed after the host's accuracy work, the GPU's clock could fall so far that the
     // warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times
     // slow, every pass alike). Every build of the same lights is the same hierarchy.
-    // The hierarchy's build back to back right after the frame's passes, at the clock they ran
-    // at: timed after the host's accuracy work, the GPU's clock could fall so far that the
-    // warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times
-    // slow, every pass alike). Every build of the same lights is the same hierarchy.
     let build = match timed.hierarchy {
         Some(hier) => stage(pose, "hierarchy built back to back", || {
             steady_build(ctx, hier, hier.pass_count(), timed.runs)
