@@ -24,11 +24,11 @@ struct Surface {
 
 // Vertex i's position, normal and material (GpuVertex).
 fn vis_position(i: u32) -> vec3<f32> {
-    return bitcast<vec3<f32>>(vec3<u32>(vis_vertices[7u * i], vis_vertices[7u * i + 1u], vis_vertices[7u * i + 2u]));
+    return bitcast<vec3<f32>>(vec3<u32>(vis_vertices[VERTEX_WORDS * i], vis_vertices[VERTEX_WORDS * i + 1u], vis_vertices[VERTEX_WORDS * i + 2u]));
 }
 
 fn vis_normal(i: u32) -> vec3<f32> {
-    return bitcast<vec3<f32>>(vec3<u32>(vis_vertices[7u * i + 3u], vis_vertices[7u * i + 4u], vis_vertices[7u * i + 5u]));
+    return bitcast<vec3<f32>>(vec3<u32>(vis_vertices[VERTEX_WORDS * i + 3u], vis_vertices[VERTEX_WORDS * i + 4u], vis_vertices[VERTEX_WORDS * i + 5u]));
 }
 
 // The surface of triangle `tri` seen through the point `ndc` of the image: the point where the
@@ -55,5 +55,5 @@ fn visibility_surface(ndc: vec2<f32>, tri: u32) -> Surface {
     let p = p0 + b1 * e1 + b2 * e2;
     let v = view_dir(p);
     let n = normalize((1.0 - b1 - b2) * vis_normal(i0) + b1 * vis_normal(i1) + b2 * vis_normal(i2));
-    return Surface(p, facing_normal(n, v), v, materials[vis_vertices[7u * i0 + 6u]]);
+    return Surface(p, facing_normal(n, v), v, materials[vis_vertices[VERTEX_WORDS * i0 + 6u]]);
 }

@@ -1,7 +1,9 @@
 // shade.visibility_compute: the visibility buffer's pass rasterised in compute (the visibility
 // backend's default, crate::vis_compute). The opaque triangles' nearest id a pixel goes
-// into a 64-bit key a pixel, (0xffffffff - depth bits) << 32 | id, by atomicMax: the nearest
-// depth wins, equal depths the larger id (deterministic); 0, the clear value, is no triangle.
+// into a 64-bit key a pixel, (0xffffffff - depth bits) << 32 | (0xffffffff - id), by atomicMax:
+// the nearest depth wins, equal depths the smaller id, as in the raster pass, whose depth test
+// Less keeps the first triangle drawn; 0, the clear value, is no triangle (a key's high word is
+// never 0: depths are at most 1).
 // A thread a triangle clips it against the near plane (at most two triangles), rasterises a
 // small one itself and queues a large one, set up; vis_scan numbers the queued triangles'
 // VC_BLOCK-pixel square blocks and vis_blocks takes them a workgroup a block. Coverage, as the
@@ -50,7 +52,7 @@ struct Clipped {
 }
 
 fn vc_position(i: u32) -> vec3<f32> {
-    return bitcast<vec3<f32>>(vec3<u32>(vc_vertices[7u * i], vc_vertices[7u * i + 1u], vc_vertices[7u * i + 2u]));
+    return bitcast<vec3<f32>>(vec3<u32>(vc_vertices[VERTEX_WORDS * i], vc_vertices[VERTEX_WORDS * i + 1u], vc_vertices[VERTEX_WORDS * i + 2u]));
 }
 
 fn vc_clip(t: u32) -> Clipped {
@@ -151,7 +153,7 @@ fn vc_keep(s: ScreenTri, e: vec3<f32>, x: u32, y: u32, id: u32) {
     if z < 0.0 || z > 1.0 {
         return;
     }
-    let key = (u64(0xffffffffu - bitcast<u32>(z)) << 32u) | u64(id);
+    let key = (u64(0xffffffffu - bitcast<u32>(z)) << 32u) | u64(0xffffffffu - id);
     atomicMax(&vc_keys[y * u32(frame.viewport.x) + x], key);
 }
 

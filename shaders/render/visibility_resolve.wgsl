@@ -14,9 +14,11 @@ fn vis_resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let k = vr_keys[gid.y * size.x + gid.x];
     var depth = 1.0;
-    if k.x != 0u || k.y != 0u {
+    var id = 0u;
+    if k.y != 0u {
         depth = bitcast<f32>(0xffffffffu - k.y);
+        id = 0xffffffffu - k.x;
     }
-    textureStore(vr_ids, gid.xy, vec4<u32>(k.x, 0u, 0u, 0u));
+    textureStore(vr_ids, gid.xy, vec4<u32>(id, 0u, 0u, 0u));
     textureStore(vr_depth, gid.xy, vec4<f32>(depth, 0.0, 0.0, 0.0));
 }

@@ -55,7 +55,8 @@ pub fn wgsl_prelude() -> String {
          const XI_BITS: u32 = {xi_bits}u;\n\
          const PHI_BITS: u32 = {phi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
-         const F0_DIELECTRIC: f32 = {f0:?};\n{models}",
+         const F0_DIELECTRIC: f32 = {f0:?};\n\
+         const VERTEX_WORDS: u32 = {vertex_words}u;\n{models}",
         pi = std::f32::consts::PI,
         d_min = light::D_MIN as f32,
         spot_eps = light::SPOT_EPS as f32,
@@ -64,6 +65,7 @@ pub fn wgsl_prelude() -> String {
         phi_bits = manylights_scene::stochastic::PHI_BITS,
         min_roughness = manylights_scene::brdf::MIN_ROUGHNESS as f32,
         f0 = manylights_scene::brdf::F0_DIELECTRIC as f32,
+        vertex_words = size_of::<GpuVertex>() / 4,
         models = manylights_scene::Model::ALL
             .iter()
             .map(|m| format!(

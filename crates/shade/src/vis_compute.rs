@@ -55,11 +55,9 @@ pub struct Tiling {
 
 impl Default for Tiling {
     fn default() -> Self {
-        // H200, frame.visibility, 2026-11-28: 64-pixel blocks and 256-pixel small triangles
-        // 0.225 / 0.143 / 0.327 ms at the Forward+ configuration, the hall and the atrium at
-        // 1080p; 32-pixel blocks 0.291 / 0.187 / 0.480; 16 and 8 pixels 2-11x slower (a block's
-        // bisection and set-up outweigh its pixels); small triangles to 1,024 pixels 1.5-1.9x
-        // slower in the atrium (a thread's loop).
+        // The fastest tiling of those timed (frame.visibility; docs/bench/HISTORY.md, "The
+        // compute rasteriser's tiling"): smaller blocks cost more in a block's bisection and
+        // set-up than their pixels save, larger small triangles more in a thread's loop.
         Self {
             block: 64,
             small: 256,
@@ -101,13 +99,16 @@ impl ComputeTargets {
     }
 }
 
-/// What the compute visibility pass wrote, read back: ids and depths a pixel (rows from the top)
-/// and the large triangles dropped past the queue (none: it holds both parts of every triangle).
+/// What the compute visibility pass wrote, read back: ids and depths a pixel (rows from the top),
+/// the large triangles queued for the blocks' pass, and those dropped past the queue (none: it
+/// holds both parts of every triangle; the count guards the queue's bound).
 pub struct ComputeFrame {
     /// Triangle ids (index plus one, 0 for none).
     pub ids: Vec<u32>,
     /// NDC depths (1 for none).
     pub depth: Vec<f32>,
+    /// Large triangles (clipped parts) queued for `vis_blocks`.
+    pub queued: u32,
     /// Large triangles dropped past the queue.
     pub dropped: u32,
 }
@@ -393,6 +394,7 @@ impl ComputeVisibility {
         Ok(ComputeFrame {
             ids: bytemuck::cast_slice(&ids).to_vec(),
             depth: bytemuck::cast_slice(&depth).to_vec(),
+            queued: counts[0],
             dropped: counts[1],
         })
     }
