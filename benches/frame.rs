@@ -5,9 +5,9 @@
 //! lighting pass, no host round trip), returned to criterion through `iter_custom`. The G-buffer
 //! is drawn once, outside the measurement (a raster pass, slow on compute chips and the same
 //! for every strategy). `frame.visibility` times the visibility pass alone (raster and compute)
-//! and `frame.whole` the whole frame, geometry included (issue 49's goals).
+//! and `frame.whole` the whole frame, geometry included.
 //!
-//! Settings (issue 21's table): the Forward+ paper's configuration (3,072 light-field lights of
+//! Settings: the Forward+ paper's configuration (3,072 light-field lights of
 //! radius 2.5 m in the atrium, 1280 x 720) with gather's 8-pixel tiles and with clusters of 64
 //! pixels x 24 slices; the CIS 5650 hall (`cis5650`) with 5,000 and 50,000 lights of radius 2 m
 //! at 1920 x 1080, gather's 16-pixel tiles (at 5,000 also 24), and at 50,000 clusters too; 1M
@@ -149,7 +149,7 @@ fn settings() -> Vec<Setting> {
             strategy: Strategy::tiled_gather(16),
             hdr: HdrFormat::F32,
         },
-        // The fastest tiles for gather there in `manylights run` (H100, 2026-11-27, 08:05Z).
+        // The fastest tiles for gather there in `manylights run` (H100).
         Setting {
             name: "cis5650_5k_gather24",
             scene: cis5650(if q { 500 } else { 5000 }),
@@ -207,9 +207,9 @@ fn settings() -> Vec<Setting> {
             strategy: grid(32, 32, false, false),
             hdr: HdrFormat::F32,
         },
-        // The fastest grid there in `manylights run` (H100, 2026-11-27, 04:10Z): 24 px x 48
-        // slices; and since the lighting pass tests each clusters' light against the box of a
-        // workgroup's pixels (06:25Z), 24 x 32.
+        // The fastest grids there in `manylights run` (H100): 24 px x 48 slices, and with the
+        // lighting pass's test of each cluster's light against the box of a workgroup's pixels,
+        // 24 x 32.
         Setting {
             name: "atrium_1m_clustered24x48",
             scene: million(),
@@ -224,7 +224,7 @@ fn settings() -> Vec<Setting> {
             strategy: grid(24, 32, true, false),
             hdr: HdrFormat::F32,
         },
-        // The same two grids with the clusters' 2.5D cells (`cells: true`, issue 33).
+        // The same two grids with the clusters' 2.5D cells (`cells: true`).
         Setting {
             name: "atrium_1m_clustered32x32_cells",
             scene: million(),
@@ -340,7 +340,8 @@ fn cull_shade(c: &mut Criterion) {
 /// The visibility pass of the Forward+ configuration, the hall at 5,000 lights and the atrium at
 /// a million lights, each frame timed as one span (`frame.visibility/<setting>_raster`: the
 /// hardware pass, `shade.visibility`; `_compute`: `manylights_shade::vis_compute`, its clears
-/// included), back to back in one submission: what issue 49's item 4 weighs.
+/// included), back to back in one submission: the two ways of drawing the visibility buffer
+/// weighed against each other.
 fn visibility(c: &mut Criterion) {
     use manylights_shade::vis_compute::{ComputeVisibility, Tiling};
     let ctx = gpu();
@@ -442,8 +443,8 @@ fn visibility(c: &mut Criterion) {
     g.finish();
 }
 
-/// The whole frame in steady state, as experiments add up `gpu_ms_frame_steady` (issue 49's
-/// goals): each iteration times `runs` frames' geometry back to back (a span each: the G-buffer
+/// The whole frame in steady state, as experiments add up `gpu_ms_frame_steady`: each
+/// iteration times `runs` frames' geometry back to back (a span each: the G-buffer
 /// pass, or the visibility buffer rasterised in compute, or its raster pass), then `runs`
 /// frames' culling and lighting back to back (a span each), and counts the sum of their
 /// medians' worth: `frame.whole/<setting>_<strategy>_<backend>`, the backends `deferred`,

@@ -168,7 +168,7 @@ fn cull(c: &mut Criterion) {
 /// of runs are each one submission with no host round trip inside ([`Culler::run_repeated`]).
 /// (Both methods gave the same figures on the H200: docs/bench/HISTORY.md, Method.) `MANYLIGHTS_BENCH_ROUNDTRIP=1` times each run
 /// on its own instead (two submissions and a readback of the list size each, the GPU idle in
-/// between), the method of the figures before 2026-11-21T12:00Z. `MANYLIGHTS_BENCH_SPANS=1`
+/// between), the method of the oldest figures in docs/bench/HISTORY.md. `MANYLIGHTS_BENCH_SPANS=1`
 /// times each back-to-back run with one pair of timestamps around all its passes instead of a
 /// pair per pass ([`GpuTimer::spans`]): the run's time including the gaps between its passes,
 /// without the passes' own timestamps.

@@ -1,4 +1,4 @@
-//! The lighting grid hierarchy (issue 48) on the GPU: its lights flattened with their bands
+//! The lighting grid hierarchy on the GPU: its lights flattened with their bands
 //! (`manylights_scene::hierarchy`), uploaded with `GpuScene::set_light_bands` and shaded by
 //! the brute-force reference, against the hierarchy's shading in f64 at the same surface points.
 

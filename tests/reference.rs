@@ -159,7 +159,7 @@ fn every_material_model_matches_f64() {
 ///
 /// Tolerance: |gpu - f64| <= 1e-3 x the image's peak value. The GPU interpolates the surface
 /// point in f32, which the f32 falloff and the exponent-32 specular lobe amplify. Measured
-/// (2026-11-21, the maxima this test prints): lavapipe (Mesa 22.3.6) 1.7e-5 of the peak with a
+/// (the maxima this test prints): lavapipe (Mesa 22.3.6) 1.7e-5 of the peak with a
 /// relative position error of 3.3e-6; NVIDIA H200 (driver 580.159.04) 2.9e-4 of the peak with
 /// 7.7e-5, so the bound holds with a margin of 3.5x on the less precise device. Outside the
 /// radius (by 1e-4 relative, to absorb that same interpolation error) a pixel must be exactly

@@ -158,7 +158,7 @@ const TILE_GROUP_LIGHTS: u32 = 32u;
 // The clusters' loader reads a light's fields, not the whole Light: 1M lights at 32 x 32 1.847
 // -> 1.832 ms. The tile path takes POINT_BATCH lights a batch, one a thread, in the same 2 KB as
 // 32 of 64 bytes: 151.8 -> 151.2 µs at the Forward+ configuration, the hall at 5,000 lights
-// 226.0 -> 224.8 (16 px) and 219.9 -> 218.5 (24 px) (H100, 2026-11-27).
+// 226.0 -> 224.8 (16 px) and 219.9 -> 218.5 (24 px) (H100).
 const POINT_BATCH: u32 = 64u;
 var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
 var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, POINT_BATCH, POINT_LIGHTS)>;
@@ -314,7 +314,7 @@ var<workgroup> wg_part_box: array<atomic<u32>, 6u * GROUP_PARTS>;
 // word 2 (GROUP_PARTS p + h) + k / 32 for part h, p the batch's parity (two sets, so that one is
 // cleared while the other is read, with no barrier of its own). Two words a part: a
 // POINT_LIGHTS pipeline takes POINT_BATCH (64) lights a batch here too, 1M lights at 32 x 32
-// 1.832 -> 1.805 ms, at 24 x 32 1.896 -> 1.880 (H100, 2026-11-27).
+// 1.832 -> 1.805 ms, at 24 x 32 1.896 -> 1.880 (H100).
 var<workgroup> wg_part_keep: array<atomic<u32>, 4u * GROUP_PARTS>;
 
 fn widen_part_box(li: u32, p: vec3<f32>) {

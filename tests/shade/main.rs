@@ -10,7 +10,7 @@
 //!   and the pixel centre, which differs from the interpolated world position the reference
 //!   shades: by a few ulps of the world coordinates on lavapipe (measured: up to 7.5e-5 of the
 //!   peak), and by the rasteriser's own interpolation error on NVIDIA (measured on an H200,
-//!   driver 580.159.04, 2026-11-21: 2.6e-3 of the peak at 64 x 48, where a light 0.1 m from a
+//!   driver 580.159.04: 2.6e-3 of the peak at 64 x 48, where a light 0.1 m from a
 //!   wall makes the peak; mean FLIP 0.001). Next to a light the inverse-square falloff amplifies
 //!   position differences, so this is the real cost of rebuilding positions; the stored-position
 //!   variant shows it is nothing else. The measured maxima are printed.

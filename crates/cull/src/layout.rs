@@ -79,13 +79,11 @@ pub const CLUSTER_GROUP_MIN_LIGHTS: u32 = 4096;
 /// Deferred lighting over z-binning's lists in a point-light pipeline takes a workgroup's lights
 /// in rounds (`shade_zbin_rounds`, shaders/render/deferred.wgsl: each thread walks its run of
 /// the mask's words and loads a light a round) from this many lights, and the workgroup's one
-/// walk below. Culling and deferred lighting, rounds against the one walk (H200, 2026-11-27,
-/// side by side with 86923a8): 1M lights in the atrium 4.04 against 8.81 ms (32-pixel tiles) and 3.87
-/// against 9.11 (16); the hall at 50,000 lights 2.98 against 3.64 ms, but at 5,000 601 against
-/// 486 µs and the Forward+ configuration 481 against 363 µs, where a workgroup's lights are few
-/// and a round's barriers cost more than the loads they overlap. The rounds have entry points
-/// and pipelines of their own (`shade_zbin_rounds_group`): in the one walk's pipeline they cost
-/// it 1-3% below this count.
+/// walk below: with many lights the rounds overlap a workgroup's loads (half the time at 1M
+/// lights), with few a round's barriers cost more than the loads they overlap (docs/bench/
+/// HISTORY.md, "Z-binning's lighting in rounds"). The rounds have entry points and pipelines of
+/// their own (`shade_zbin_rounds_group`): in the one walk's pipeline they cost it 1-3% below
+/// this count.
 pub const ZBIN_ROUNDS_MIN_LIGHTS: u32 = 16384;
 /// Threads sharing one light's tiles in `cull.tiled_scatter`; each (light, lane) has a count, so
 /// the scan runs over lights x SCATTER_LANES entries.

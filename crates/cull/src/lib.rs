@@ -224,15 +224,10 @@ pub const CLUSTER_TILE_RECT_PAIRS: u64 = 1 << 19;
 pub const CLUSTER_LANE_TILES: u32 = 4;
 
 /// The default fewest lights at which z-binning sets its masks a light at a time
-/// ([`crate::Culler::zbin_scatter_min_lights`]). Culling and deferred lighting on the H100
-/// (2026-11-27, frame bench builds of de20ddf with the one path or the other), a tile at a time
-/// against a light at a time: at 3,072 lights (the Forward+ configuration, 8-pixel tiles) 0.366
-/// against 2.785 ms, since its large lights each cover thousands of tiles; in the hall at 5,000
-/// lights 0.487 against 1.440 ms; at 1M lights in the atrium 16.81 against 9.14 (16-pixel tiles)
-/// and 14.85 against 8.84 (32). In a second run (10:10Z, both with a lighting pass since
-/// reverted, the same in both): the hall at 50,000 lights 5.06 against 5.90 (16) and 4.72
-/// against 4.80 (32), the atrium at 262,144 lights 4.49 against 3.13 (16) and 4.11 against 2.74
-/// (32).
+/// ([`crate::Culler::zbin_scatter_min_lights`]): a tile at a time wins where lights are few
+/// and large (each covers thousands of tiles), a light at a time from between 50,000 and 262,144
+/// lights, as timed with culling and deferred lighting (docs/bench/HISTORY.md, "Z-binning's
+/// masks: a tile or a light at a time").
 pub const ZBIN_SCATTER_MIN_LIGHTS: u32 = 131_072;
 
 /// The step of chunk sizes: a batch of the shader, 64 lights, one a thread.

@@ -1,4 +1,4 @@
-//! A probe of the lighting grid hierarchy's bands in f64 (issue 48): lights evaluated a point
+//! A probe of the lighting grid hierarchy's bands in f64: lights evaluated a point
 //! and the mean relative error against infinite range, for bands more general than the
 //! papers'. Level `l >= 1` takes over from level `l - 1` at `T_l = alpha k^(l-1) h 2^(l-1)`
 //! over a ramp from `T_l` to `c T_l` (`Hierarchy::band` with `HierarchyParams::growth` k and

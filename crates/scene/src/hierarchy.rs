@@ -1,7 +1,7 @@
 //! The lighting grid hierarchy (C. Yuksel and C. Yuksel, "Lighting Grid Hierarchy for
 //! Self-illuminating Explosions", TOG 36(4), 2017; D. Lin and C. Yuksel, "Real-Time Rendering
-//! with Lighting Grid Hierarchy", I3D 2019), in f64: the oracle of the hierarchy light model
-//! (issue 48). A shading point takes the lights near it as they are and far ones from coarse
+//! with Lighting Grid Hierarchy", I3D 2019), in f64: the oracle of the hierarchy light model.
+//! A shading point takes the lights near it as they are and far ones from coarse
 //! aggregates, so every light it evaluates is a sphere of bounded range and the estimate is
 //! deterministic, with a bias that shrinks as `alpha` grows.
 //!
@@ -95,7 +95,7 @@ pub struct HierarchyParams {
     pub ramp: f64,
     /// The last level holds at most this many lights.
     pub top_lights: usize,
-    /// Stochastic band selection from this level on (issue 48, item 4): each of these levels'
+    /// Stochastic band selection from this level on: each of these levels'
     /// lights draws its band afresh each frame ([`Band::sampled`]), weight 1 inside it, so the
     /// estimate is the hierarchy's on average and its lists shorter. `None`: every band as it
     /// is. Spots are never sampled.

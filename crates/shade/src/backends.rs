@@ -1,5 +1,6 @@
-//! The shading backends: forward (Forward+), deferred, and naive forward, each over any culling
-//! strategy (naive forward culls nothing), with per-pass GPU timing.
+//! The shading backends: forward (Forward+), deferred (and its stored-position variant), the
+//! visibility buffer, and naive forward, each over any culling strategy (naive forward culls
+//! nothing), with per-pass GPU timing.
 //!
 //! - `forward`: `prepass.depth`, culling, `shade.forward` (the geometry again with depth test
 //!   `Equal`, a loop over each pixel's list).
@@ -7,9 +8,12 @@
 //!   culling on its depth, `shade.deferred` (a compute pass over pixels reading the lists).
 //! - `deferred_stored_position`: as `deferred`, with the interpolated world position stored in
 //!   the G-buffer instead of rebuilt (agrees with forward to rounding on any GPU).
+//! - `visibility`: a triangle id and depth a pixel (`shade.visibility`, or rasterised in compute,
+//!   `shade.visibility_compute.*`), culling on its depth, `shade.deferred` with each pixel's
+//!   surface rebuilt from its triangle.
 //! - `naive_forward`: `prepass.depth`, `shade.naive` (every light at every fragment).
 //!
-//! All three use the one shading model of `shaders/common/shading.wgsl`.
+//! All five use the one shading model of `shaders/common/shading.wgsl`.
 
 use manylights_cull::ListPass;
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};

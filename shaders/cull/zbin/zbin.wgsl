@@ -17,7 +17,7 @@
 //    keeps it (tile_keeps).
 //    - Gather: cull.zbin.masks, a workgroup a tile, tests every sorted light of its cover and
 //      writes its whole mask (zero outside the cover), so the masks need no clear. Its work
-//      grows as tiles x the lights of a cover: 9.2 ms at 1M lights (issue 33, d686d30).
+//      grows as tiles x the lights of a cover (docs/bench/HISTORY.md has its time at 1M lights).
 //    - Scatter (many lights): cull.zbin.covers, a workgroup a tile, stores its cover and zeroes
 //      its mask; then cull.zbin.scatter (zbin_scatter.wgsl) sets each light's bit in the tiles
 //      of its rectangle: work as the (light, tile) pairs.

@@ -1,5 +1,6 @@
-//! The culling strategies, a module each. A strategy owns its pipelines (built once in
-//! [`crate::Culler::new`] from its shader, `shaders/cull/<strategy>/`), decides its path for a
+//! The culling strategies, a module each. A strategy owns its pipelines (built once from its
+//! shader, `shaders/cull/<strategy>/`: gather's and 2.5D's in [`crate::Culler::new`], the others'
+//! at their first run, `Culler::scatter`, `clustered`, `zbin`), decides its path for a
 //! run (its checks against the device's limits, its buffers), and declares the steps of the run
 //! as a `Plan`; `frame::execute` records the plan, once or back to back, and
 //! [`crate::Culler::run`] picks the strategy's `run`. What several strategies share are the

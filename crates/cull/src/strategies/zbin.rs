@@ -14,7 +14,7 @@
 //! 5. Each tile's mask, by one of two paths with the same bits
 //!    ([`crate::Culler::zbin_scatter_min_lights`] picks):
 //!    - gather: `cull.zbin.masks`, a workgroup a tile testing every sorted light of its cover
-//!      (the bins of its depth bounds): tiles x lights of a cover, 9.2 ms at 1M lights (issue 33, d686d30);
+//!      (the bins of its depth bounds): work as tiles x the lights of a cover;
 //!    - scatter: `cull.zbin.covers` (a workgroup a tile: its cover, its mask zeroed), then
 //!      `cull.zbin.scatter` (`shaders/cull/zbin/zbin_scatter.wgsl`, four threads a sorted
 //!      light: its bit in each tile of its rectangle that keeps it): work as the (light, tile)

@@ -1,6 +1,6 @@
 //! A flattened light's band (its weight at every distance), and stochastic band selection:
-//! the band drawn each frame as a hard one whose expectation is the soft band's weight
-//! (issue 48 item 4), each light's draw from the frame's seed and its draw id.
+//! the band drawn each frame as a hard one whose expectation is the soft band's weight, each
+//! light's draw from the frame's seed and its draw id.
 
 /// A flattened light's band: its weight at distance `d` is
 /// `min(rising, falling)`, rising from 0 at `inner` to 1 at `ramp inner` (1 throughout where
