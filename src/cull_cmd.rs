@@ -82,7 +82,6 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let crate::hierarchy_opt::Shaded {
         scene, gpu_scene, ..
     } = a.upload(&ctx, scene)?;
-    // Stochastic ranges before any culler: they mark the lights general.
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();
     let depth = depth_target_msaa(&ctx, w, h, samples);

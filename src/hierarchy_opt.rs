@@ -5,7 +5,7 @@
 
 use anyhow::{Result, bail};
 use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
-use manylights_gpu::{GpuContext, GpuScene};
+use manylights_gpu::{GpuContext, GpuScene, LightModel};
 use manylights_scene::{RadiusRule, Scene};
 
 use crate::options::SceneArgs;
@@ -94,7 +94,10 @@ impl SceneArgs {
             },
         ) = self.hierarchy_rule()
         else {
-            let gpu_scene = GpuScene::upload(ctx, &scene, &scene.camera, w, h)?;
+            // The generated lights are the last --lights of the light buffer.
+            let first = scene.lights.len() as u32 - self.lights;
+            let model = LightModel::of_rule(&self.light_spec().radius, first);
+            let gpu_scene = GpuScene::upload_with(ctx, &scene, model, &scene.camera, w, h)?;
             return Ok(Shaded {
                 scene,
                 gpu_scene,
@@ -104,7 +107,8 @@ impl SceneArgs {
         let params = rule.hierarchy_params().expect("a hierarchy rule");
         let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, 0.0)?;
         let (levels, h_used, points, spots) = (plan.levels, plan.h, plan.points, plan.spots);
-        let gpu_scene = GpuScene::upload(ctx, &shaded, &scene.camera, w, h)?;
+        let gpu_scene =
+            GpuScene::upload_with(ctx, &shaded, plan.light_model(), &scene.camera, w, h)?;
         let build = GpuHierarchy::new(ctx, plan, &scene.lights, &gpu_scene)?;
         let timings = build.build(ctx)?;
         let (outside, full) = build.dropped(ctx)?;

@@ -90,7 +90,6 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         gpu_scene,
         as_they_are,
     } = a.upload(&ctx, scene)?;
-    // Stochastic ranges before any renderer: they mark the lights general.
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();
     let draw = |f: u32| -> Result<()> {

@@ -70,7 +70,15 @@ fn hierarchy_lights_shade_as_their_oracle_with(ctx: &manylights_gpu::GpuContext,
         lights: flat.clone(),
         ..original.clone()
     };
-    let gpu = GpuScene::upload(ctx, &scene, &scene.camera, w, h).unwrap();
+    let gpu = GpuScene::upload_with(
+        ctx,
+        &scene,
+        manylights_gpu::LightModel::hierarchy(ramp as f32),
+        &scene.camera,
+        w,
+        h,
+    )
+    .unwrap();
     gpu.set_light_bands(ctx, &flat, &bands);
     let rr = ReferenceRenderer::new(ctx, &gpu);
     let got = rr.render(ctx, &gpu, w, h).unwrap();
@@ -235,7 +243,20 @@ fn gpu_build_is_its_oracle(
         ..original.clone()
     };
     let camera = original.camera;
-    let gpu_scene = GpuScene::upload(ctx, &shaded, &camera, 32, 32).unwrap();
+    // A scene uploaded for other ranges is refused: it would not shade the bands.
+    let windowed = GpuScene::upload(ctx, &shaded, &camera, 32, 32).unwrap();
+    let refused = GpuHierarchy::with_cells(
+        ctx,
+        plan.clone(),
+        &original.lights,
+        &windowed,
+        sums,
+        cell_items,
+    );
+    let message = refused.err().expect("refused").to_string();
+    assert!(message.contains("HierarchyPlan::light_model"), "{message}");
+    let gpu_scene =
+        GpuScene::upload_with(ctx, &shaded, plan.light_model(), &camera, 32, 32).unwrap();
     let build = GpuHierarchy::with_cells(
         ctx,
         plan.clone(),
@@ -247,7 +268,7 @@ fn gpu_build_is_its_oracle(
     .unwrap();
     assert_eq!(build.sums(), sums);
     // Spots among the lights: every light takes the general path.
-    assert!(!gpu_scene.point_lights() && !gpu_scene.band_points());
+    assert_eq!(gpu_scene.light_path(), manylights_gpu::LightPath::General);
     let moved: Vec<manylights_scene::Light> = original
         .lights
         .iter()
@@ -344,11 +365,12 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     };
     let (plan, shaded) = HierarchyPlan::for_scene(&original, params, 0.0).unwrap();
     assert!(plan.levels >= 3, "{} levels", plan.levels);
-    let gpu_scene = GpuScene::upload(&ctx, &shaded, &original.camera, 32, 32).unwrap();
+    let gpu_scene =
+        GpuScene::upload_with(&ctx, &shaded, plan.light_model(), &original.camera, 32, 32)
+            .unwrap();
     let build = GpuHierarchy::new(&ctx, plan.clone(), &original.lights, &gpu_scene).unwrap();
     // Point lights alone: the hierarchy's lights take the band points' short path.
-    assert!(gpu_scene.point_lights() && gpu_scene.band_points());
-    assert!(!gpu_scene.stochastic_points());
+    assert_eq!(gpu_scene.light_path(), manylights_gpu::LightPath::BandPoints);
     // A build's shaded lights and its hash table's slot keys.
     let read = |seed: u32| -> (Vec<GpuLight>, Vec<u32>) {
         build.set_seed(&ctx, seed);

@@ -231,7 +231,8 @@ fn stochastic_scene_in(
         ..LightSpec::default()
     };
     let params = spec.stochastic(&scene).unwrap();
-    let gpu = GpuScene::upload(ctx, &scene, &scene.camera, w, h).unwrap();
+    let model = manylights_gpu::LightModel::of_rule(&rule, 0);
+    let gpu = GpuScene::upload_with(ctx, &scene, model, &scene.camera, w, h).unwrap();
     let strata = stochastic::strata(&scene.lights);
     Stochastic {
         scene,

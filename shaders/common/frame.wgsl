@@ -15,7 +15,7 @@ struct Frame {
     light_count: u32,
     // FRAME_FLAG_* bits.
     flags: u32,
-    // The lighting grid hierarchy's ramps (light_band; GpuScene::set_band_ramp) and
+    // The lighting grid hierarchy's ramps (light_band; LightModel::band_ramp) and
     // 1 / (band_ramp - 1).
     band_ramp: f32,
     band_slope: f32,

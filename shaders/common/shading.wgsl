@@ -80,25 +80,25 @@ fn shade_light_at(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: ve
 
 // POINT_LIGHTS: the pipeline is built for frames whose lights are all point lights shaded with
 // the windowed falloff (no spot cone, no stochastic alpha; manylights_shade::Renderer builds it
-// where GpuScene::point_lights says so). Its loops over lists then shade with shade_point_light
+// where the scene's manylights_gpu::LightPath says so). Its loops over lists then shade with shade_point_light
 // alone: with the general model's code beside it in the same loop, the lighting pass kept most
 // of that code's cost (docs/bench/HISTORY.md, "The lighting pass against its floor").
 override POINT_LIGHTS: bool = false;
 
 // STOCHASTIC_POINTS (with POINT_LIGHTS): the frame's lights are all point lights with
-// stochastic ranges drawn for the frame and no interleaving (FRAME_FLAG_STOCHASTIC_POINTS, set by
-// GpuScene::mark_stochastic_points): shade_point_light shades max(1 / d^2, alpha) inside the
+// stochastic ranges drawn for the frame and no interleaving (FRAME_FLAG_STOCHASTIC_POINTS, from a
+// scene uploaded for them, LightPath::StochasticPoints): shade_point_light shades max(1 / d^2, alpha) inside the
 // drawn range, light_attenuation's stochastic arm, on the same short path.
 override STOCHASTIC_POINTS: bool = false;
 
 // BAND_POINTS (with POINT_LIGHTS): the frame's lights are all the lighting grid hierarchy's point
-// lights (FRAME_FLAG_BAND_POINTS, set by GpuScene::mark_band_points): shade_point_light shades
+// lights (FRAME_FLAG_BAND_POINTS, LightPath::BandPoints): shade_point_light shades
 // each with its band times 1 / d^2 (light_band: -alpha its r, interleave its inner and
 // HARD_BAND), light_attenuation's hierarchy arm, on the same short path.
 override BAND_POINTS: bool = false;
 
-// Whether the frame says every light is a windowed point light (FRAME_FLAG_POINT_LIGHTS, which
-// GpuScene sets from the lights it holds, and no infinite-range falloff).
+// Whether the frame says its lights are of the kind this pipeline is built for (the frame's flags
+// of the scene's LightPath, and no infinite-range falloff).
 fn point_lights_only() -> bool {
     let want = FRAME_FLAG_POINT_LIGHTS | select(0u, FRAME_FLAG_STOCHASTIC_POINTS, STOCHASTIC_POINTS)
         | select(0u, FRAME_FLAG_BAND_POINTS, BAND_POINTS);

@@ -142,7 +142,7 @@ fn tile_group_lighting_equals_the_loop_a_pixel() {
     for s in [atrium_lights(300, 0.02), atrium_lights(700, 0.1)] {
         let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
         let renderer = Renderer::new(&ctx, &gpu_scene);
-        assert!(renderer.point_lights());
+        assert!(renderer.light_path().point_lights());
         let settings = CullSettings::for_camera(&s.camera);
         for strategy in [Strategy::tiled_gather(8), Strategy::tiled_gather(16)] {
             let what = format!("{} {} lights", strategy.name(), s.lights.len());
@@ -236,7 +236,7 @@ fn zbin_group_lighting_matches_the_tile_lists() {
     ] {
         let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
         let renderer = Renderer::new(&ctx, &gpu_scene);
-        assert!(renderer.point_lights());
+        assert!(renderer.light_path().point_lights());
         let settings = CullSettings::for_camera(&s.camera);
         for tile_size in [8, 16] {
             let render = |strategy: Strategy| {

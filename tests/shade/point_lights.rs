@@ -4,6 +4,7 @@
 //! a workgroup and a pixel at a time) and every culled backend.
 
 use manylights_gpu::layout::GpuLight;
+use manylights_gpu::{LightModel, LightPath};
 
 use super::*;
 
@@ -72,11 +73,10 @@ fn max_difference(a: &HdrImage, b: &HdrImage) -> f32 {
     d / a.peak()
 }
 
-/// A scene of point lights is flagged, one with spots is not, and a scene marked for general
-/// lights (as stochastic ranges mark it) drops the flag. A renderer built for a flagged scene
-/// shades with the short path, and its images equal those of a renderer built for the general
-/// path within rounding; it refuses a scene marked since. And the flag is what picks the
-/// path: spot lights written into a flagged scene's buffer are shaded as points (cones
+/// A scene of point lights takes the short path, one with spots does not, nor one uploaded for
+/// the general model. A renderer built for the short path's scene shades with it, and its images
+/// equal those of a renderer built for the general path within rounding; it refuses the
+/// general scene. And the flag is what picks the path: spot lights written into a flagged scene's buffer are shaded as points (cones
 /// ignored), so the flag must only be set where the lights allow it.
 #[test]
 fn point_lights_shade_as_the_general_model_does() {
@@ -85,19 +85,27 @@ fn point_lights_shade_as_the_general_model_does() {
     let spots = scene("atrium");
     let points = point_scene("atrium");
     let spot_gpu = GpuScene::upload(&ctx, &spots, &spots.camera, size.0, size.1).unwrap();
-    assert!(
-        !spot_gpu.point_lights(),
+    assert_eq!(
+        spot_gpu.light_path(),
+        LightPath::General,
         "a scene with spots must not be flagged"
     );
     let fast = GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
-    assert!(fast.point_lights(), "a scene of point lights is flagged");
-    let general = GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
-    general.mark_general_lights(&ctx);
-    assert!(!general.point_lights());
+    assert_eq!(fast.light_path(), LightPath::Points, "a scene of point lights is flagged");
+    let general = GpuScene::upload_with(
+        &ctx,
+        &points,
+        LightModel::CUT_OFF.general(),
+        &points.camera,
+        size.0,
+        size.1,
+    )
+    .unwrap();
+    assert_eq!(general.light_path(), LightPath::General);
     let point_renderer = Renderer::new(&ctx, &fast);
-    assert!(point_renderer.point_lights());
+    assert_eq!(point_renderer.light_path(), LightPath::Points);
     let general_renderer = Renderer::new(&ctx, &general);
-    assert!(!general_renderer.point_lights());
+    assert_eq!(general_renderer.light_path(), LightPath::General);
     let refused = point_renderer.render(
         &ctx,
         &general,
@@ -136,8 +144,9 @@ fn point_lights_shade_as_the_general_model_does() {
 }
 
 /// The shader's own guard: a point-light renderer's shading pass run past the host's check
-/// (`Renderer::shade_pass`, as the benches drive it) over a frame whose lights were marked
-/// general since writes NaN at every covered pixel, for forward and deferred lighting alike.
+/// (`Renderer::shade_pass`, as the benches drive it) over a scene of the same lights uploaded
+/// for the general model writes NaN at every covered pixel, for forward and deferred lighting
+/// alike.
 #[test]
 fn point_light_pipelines_write_nan_over_general_lights() {
     let ctx = common::gpu();
@@ -157,10 +166,12 @@ fn point_light_pipelines_write_nan_over_general_lights() {
             "{}",
             backend.name()
         );
-        gpu_scene.mark_general_lights(&ctx);
-        let mut pass = renderer.shade_pass(&ctx, &gpu_scene, &out).unwrap();
+        let general =
+            GpuScene::upload_with(&ctx, &s, LightModel::CUT_OFF.general(), &s.camera, w, h)
+                .unwrap();
+        let mut pass = renderer.shade_pass(&ctx, &general, &out).unwrap();
         let again = shade_again(
-            &ctx, &renderer, &gpu_scene, &out, &strategy, &settings, &mut pass,
+            &ctx, &renderer, &general, &out, &strategy, &settings, &mut pass,
         );
         let nan = again
             .data
@@ -176,7 +187,8 @@ fn point_light_pipelines_write_nan_over_general_lights() {
 /// which shade `max(1 / d^2, alpha)` inside the drawn range): the same image as the general
 /// model's path over the same draws, on every form of lists and every culled backend. A
 /// point-light renderer built without stochastic ranges refuses such a scene, and one built
-/// with them a scene without; interleaving, or lights left undrawn, mark the scene general.
+/// with them a scene without; interleaving, or lights left undrawn, take the general path; draws
+/// over a scene uploaded for other ranges are refused.
 #[test]
 fn stochastic_point_lights_shade_as_the_general_model_does() {
     use manylights_gpu::stochastic::StochasticRanges;
@@ -184,7 +196,10 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
     let ctx = common::gpu();
     let size = (70, 45);
     let points = point_scene("atrium");
-    let upload = || GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
+    let upload_for = |model| {
+        GpuScene::upload_with(&ctx, &points, model, &points.camera, size.0, size.1).unwrap()
+    };
+    let upload = || upload_for(LightModel::stochastic(0, 1));
     let params = StochasticParams {
         error: 0.05,
         exposure: 1.0,
@@ -197,15 +212,14 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
     let fast = upload();
     let n = fast.light_count;
     let fast_draw = StochasticRanges::new(&ctx, &fast, 0, n, &params, &strata).unwrap();
-    assert!(fast.point_lights() && fast.stochastic_points());
-    let general = upload();
+    assert_eq!(fast.light_path(), LightPath::StochasticPoints);
+    let general = upload_for(LightModel::stochastic(0, 1).general());
     let general_draw = StochasticRanges::new(&ctx, &general, 0, n, &params, &strata).unwrap();
-    general.mark_general_lights(&ctx);
-    assert!(!general.point_lights() && !general.stochastic_points());
+    assert_eq!(general.light_path(), LightPath::General);
     let stochastic_renderer = Renderer::new(&ctx, &fast);
-    assert!(stochastic_renderer.point_lights() && stochastic_renderer.stochastic_points());
+    assert_eq!(stochastic_renderer.light_path(), LightPath::StochasticPoints);
     let general_renderer = Renderer::new(&ctx, &general);
-    assert!(!general_renderer.point_lights());
+    assert_eq!(general_renderer.light_path(), LightPath::General);
     fast_draw.draw(&ctx, 2).unwrap();
     general_draw.draw(&ctx, 2).unwrap();
     // (The short path multiplies colour by intensity first: rounding apart.)
@@ -217,9 +231,9 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
         size,
     );
     // Each kind of point-light renderer refuses the other kind's scene.
-    let windowed = upload();
+    let windowed = upload_for(LightModel::CUT_OFF);
     let windowed_renderer = Renderer::new(&ctx, &windowed);
-    assert!(windowed_renderer.point_lights() && !windowed_renderer.stochastic_points());
+    assert_eq!(windowed_renderer.light_path(), LightPath::Points);
     let settings = CullSettings::for_camera(&points.camera);
     let strategy = Strategy::tiled_gather(16);
     for (renderer, scene) in [
@@ -260,18 +274,27 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
         );
     }
     // Interleaved classes, or lights left undrawn, are the general model's.
-    let interleaved = upload();
+    let interleaved = upload_for(LightModel::stochastic(0, 2));
     let il = StochasticParams {
         interleave: 2,
         ..params
     };
     StochasticRanges::new(&ctx, &interleaved, 0, n, &il, &strata).unwrap();
-    assert!(!interleaved.point_lights() && !interleaved.stochastic_points());
-    let part = upload();
+    assert_eq!(interleaved.light_path(), LightPath::General);
+    let part = upload_for(LightModel::stochastic(1, 1));
     StochasticRanges::new(&ctx, &part, 1, n - 1, &params, &strata[1..]).unwrap();
+    // Draws that the scene was not uploaded for are refused: it would shade them as what it
+    // was uploaded for.
+    for (scene, first, p) in [(&windowed, 0, &params), (&fast, 0, &il), (&fast, 1, &params)] {
+        let message = StochasticRanges::new(&ctx, scene, first, n - first, p, &strata[first as usize..])
+            .err()
+            .expect("refused")
+            .to_string();
+        assert!(message.contains("LightModel::stochastic"), "{message}");
+    }
     // Stratified draws need one stratum a drawn light.
     let short = StochasticRanges::new(&ctx, &upload(), 0, n, &params, &strata[1..]);
     let message = short.err().expect("refused").to_string();
     assert!(message.contains("strata"), "{message}");
-    assert!(!part.point_lights() && !part.stochastic_points());
+    assert_eq!(part.light_path(), LightPath::General);
 }

@@ -110,6 +110,15 @@ fn check_build(
             ctx.info.name
         )));
     }
+    if shaded.light_model().ranges != plan.light_model().ranges {
+        return Err(GpuError::Unsupported(format!(
+            "the hierarchy's build writes its lights with bands of ramp {} into a scene uploaded \
+             for {:?}: upload the shaded scene with HierarchyPlan::light_model \
+             (GpuScene::upload_with)",
+            plan.params.ramp,
+            shaded.light_model().ranges
+        )));
+    }
     if u64::from(shaded.light_count) != plan.shaded_count() {
         return Err(GpuError::OverLimit {
             what: "the shaded scene's lights".into(),
@@ -349,10 +358,6 @@ impl GpuHierarchy {
                 }
             })
             .collect();
-        // Point lights and aggregates shade on the short path unless a spot is among them, with
-        // the bands' ramps in the frame.
-        shaded.set_band_ramp(ctx, plan.params.ramp as f32);
-        shaded.mark_band_points(ctx);
         Ok(Self {
             plan,
             source,

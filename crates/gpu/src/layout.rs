@@ -21,19 +21,19 @@ pub const FRAME_FLAG_INFINITE_RANGE: u32 = 1;
 /// `Frame.flags`: every light is a point light shaded with the windowed falloff (no spot cone,
 /// no stochastic alpha). Shading pipelines built for such lights (`POINT_LIGHTS`,
 /// shaders/common/shading.wgsl) check it and write NaN where it is missing. Set by
-/// [`crate::GpuScene`] from the lights it holds; a light buffer that may hold anything else
-/// must not carry it.
+/// [`crate::GpuScene`] from its light path ([`crate::LightPath`]: its light model and the
+/// lights it was uploaded with); a light buffer that may hold anything else must not carry it.
 pub const FRAME_FLAG_POINT_LIGHTS: u32 = 2;
 
 /// `Frame.flags`, with [`FRAME_FLAG_POINT_LIGHTS`]: the point lights carry stochastic ranges
-/// drawn for the frame, without interleaving (shaded `max(1 / d^2, alpha)` inside them). Set by
-/// [`crate::GpuScene::mark_stochastic_points`]; pipelines built with `STOCHASTIC_POINTS`
+/// drawn for the frame, without interleaving (shaded `max(1 / d^2, alpha)` inside them):
+/// [`crate::LightPath::StochasticPoints`]; pipelines built with `STOCHASTIC_POINTS`
 /// check it, and those without check its absence.
 pub const FRAME_FLAG_STOCHASTIC_POINTS: u32 = 4;
 
 /// `Frame.flags`, with [`FRAME_FLAG_POINT_LIGHTS`]: the point lights are the lighting grid
 /// hierarchy's, each shaded with its band times `1 / d^2` ([`GpuLight::with_band`]; no spot among
-/// them). Set by [`crate::GpuScene::mark_band_points`]; pipelines built with `BAND_POINTS`
+/// them): [`crate::LightPath::BandPoints`]; pipelines built with `BAND_POINTS`
 /// check it, and those without check its absence.
 pub const FRAME_FLAG_BAND_POINTS: u32 = 8;
 

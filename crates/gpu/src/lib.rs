@@ -11,6 +11,7 @@
 pub mod context;
 pub mod hierarchy;
 pub mod layout;
+pub mod light_model;
 pub mod lookup_bounds;
 pub mod motion;
 pub mod pipeline;
@@ -22,4 +23,5 @@ pub mod stochastic;
 pub mod timing;
 
 pub use context::{GpuContext, GpuError, GpuOptions};
+pub use light_model::{LightModel, LightPath};
 pub use scene::GpuScene;

@@ -2,18 +2,14 @@
 //! index travels per vertex), the lights and materials as storage buffers, and the frame uniform.
 //! Group 0 of every pass binds: 0 = frame, 1 = lights, 2 = materials.
 
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
-
 use bytemuck::cast_slice;
 use glam::Vec3;
 use manylights_scene::hierarchy::Band;
 use manylights_scene::{Camera, Light, Scene};
 use wgpu::util::DeviceExt;
 
-use crate::layout::{
-    FRAME_FLAG_BAND_POINTS, FRAME_FLAG_POINT_LIGHTS, FRAME_FLAG_STOCHASTIC_POINTS, GpuFrame,
-    GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT,
-};
+use crate::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT};
+use crate::light_model::{LightModel, LightPath, Ranges};
 use crate::{GpuContext, GpuError};
 
 /// A scene uploaded for rendering.
@@ -41,19 +37,10 @@ pub struct GpuScene {
     pub materials: wgpu::Buffer,
     /// The frame uniform.
     pub frame: wgpu::Buffer,
-    /// Whether every light is a point light with the windowed falloff (`FRAME_FLAG_POINT_LIGHTS`):
-    /// as uploaded, until [`GpuScene::mark_general_lights`].
-    point_lights: AtomicBool,
-    /// With `point_lights`, the flag of their kind on the short path: 0 (windowed),
-    /// `FRAME_FLAG_STOCHASTIC_POINTS` (stochastic ranges without interleaving, from
-    /// [`GpuScene::mark_stochastic_points`]) or `FRAME_FLAG_BAND_POINTS` (the lighting grid
-    /// hierarchy's, with bands, from [`GpuScene::mark_band_points`]).
-    point_kind: AtomicU32,
-    /// The flags of the last [`GpuScene::set_view`], without `FRAME_FLAG_POINT_LIGHTS`.
-    view_flags: AtomicU32,
-    /// The hierarchy bands' ramp the frame carries (the bits of an f32;
-    /// [`GpuScene::set_band_ramp`]).
-    band_ramp: AtomicU32,
+    /// How its lights are shaded, as uploaded ([`GpuScene::upload_with`]).
+    model: LightModel,
+    /// The path shading takes, from the model and the lights as uploaded.
+    path: LightPath,
     /// Layout of group 0.
     pub layout: wgpu::BindGroupLayout,
     /// Group 0.
@@ -95,7 +82,8 @@ fn group0_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
 }
 
 impl GpuScene {
-    /// Uploads `scene` (which must validate) and sets the frame for `camera` at `width` x `height`.
+    /// Uploads `scene` (which must validate) with each light's own radius
+    /// ([`LightModel::CUT_OFF`]) and sets the frame for `camera` at `width` x `height`.
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
@@ -103,6 +91,31 @@ impl GpuScene {
         width: u32,
         height: u32,
     ) -> Result<Self, GpuError> {
+        Self::upload_with(ctx, scene, LightModel::CUT_OFF, camera, width, height)
+    }
+
+    /// Uploads `scene` (which must validate) for the light model `model` (the passes that write
+    /// its lights check it: stochastic ranges, the hierarchy's build) and sets the frame for
+    /// `camera` at `width` x `height`.
+    pub fn upload_with(
+        ctx: &GpuContext,
+        scene: &Scene,
+        model: LightModel,
+        camera: &Camera,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, GpuError> {
+        model.validate().map_err(GpuError::Unsupported)?;
+        if let Ranges::Stochastic { first, .. } = model.ranges
+            && first as usize > scene.lights.len()
+        {
+            return Err(GpuError::OverLimit {
+                what: "the first light with stochastic ranges".into(),
+                value: u64::from(first),
+                limit: scene.lights.len() as u64,
+                limit_name: "the scene's light count",
+            });
+        }
         let mut vertices = Vec::with_capacity(scene.vertex_count());
         let mut by_model: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
         let mut transparent: Vec<u32> = Vec::new();
@@ -158,9 +171,12 @@ impl GpuScene {
             limit_name: "u32 light index",
         })?;
         let mut lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
-        let point_lights = lights
-            .iter()
-            .all(|l| l.kind == LIGHT_KIND_POINT && l.alpha == 0.0);
+        let path = model.path(
+            lights
+                .iter()
+                .all(|l| l.kind == LIGHT_KIND_POINT && l.alpha == 0.0),
+            light_count,
+        );
         if lights.is_empty() {
             lights.push(bytemuck::Zeroable::zeroed());
         }
@@ -203,14 +219,7 @@ impl GpuScene {
             cast_slice(&materials),
             wgpu::BufferUsages::STORAGE | copy,
         );
-        let frame = GpuFrame {
-            flags: if point_lights {
-                FRAME_FLAG_POINT_LIGHTS
-            } else {
-                0
-            },
-            ..GpuFrame::new(camera, width, height, light_count)
-        };
+        let frame = Self::frame(model, path, camera, (width, height), light_count, 0);
         let frame_buf = init(
             "scene.frame",
             bytemuck::bytes_of(&frame),
@@ -235,29 +244,44 @@ impl GpuScene {
             light_count,
             materials: materials_buf,
             frame: frame_buf,
-            point_lights: AtomicBool::new(point_lights),
-            point_kind: AtomicU32::new(0),
-            view_flags: AtomicU32::new(0),
-            band_ramp: AtomicU32::new(frame.band_ramp.to_bits()),
+            model,
+            path,
             layout,
             bind_group,
         })
     }
 
-    /// Rewrites the frame uniform for another camera, resolution or flags (`FRAME_FLAG_*`; the
-    /// scene adds `FRAME_FLAG_POINT_LIGHTS` where its lights allow it), and sorts the
-    /// transparent triangles back to front for the camera.
-    pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
-        let flags = flags
-            & !(FRAME_FLAG_POINT_LIGHTS | FRAME_FLAG_STOCHASTIC_POINTS | FRAME_FLAG_BAND_POINTS);
-        self.view_flags.store(flags, Ordering::Relaxed);
-        let ramp = f32::from_bits(self.band_ramp.load(Ordering::Relaxed));
-        let frame = GpuFrame {
-            flags: self.frame_flags(flags),
+    /// The frame uniform of `camera` rendering a `width` x `height` target with the view's
+    /// `flags` (`FRAME_FLAG_*` but the light path's) for lights of `model` shaded by `path`.
+    fn frame(
+        model: LightModel,
+        path: LightPath,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        light_count: u32,
+        flags: u32,
+    ) -> GpuFrame {
+        let ramp = model.band_ramp();
+        GpuFrame {
+            flags: (flags & !LightPath::FLAGS) | path.frame_flags(),
             band_ramp: ramp,
             band_slope: 1.0 / (ramp - 1.0),
-            ..GpuFrame::new(camera, width, height, self.light_count)
-        };
+            ..GpuFrame::new(camera, width, height, light_count)
+        }
+    }
+
+    /// Rewrites the frame uniform for another camera, resolution or flags (`FRAME_FLAG_*`; the
+    /// light path's flags are the scene's own, whatever `flags` holds), and sorts the
+    /// transparent triangles back to front for the camera.
+    pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
+        let frame = Self::frame(
+            self.model,
+            self.path,
+            camera,
+            (width, height),
+            self.light_count,
+            flags,
+        );
         ctx.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         if !self.transparent.is_empty() {
@@ -270,49 +294,23 @@ impl GpuScene {
         }
     }
 
-    /// `flags` with `FRAME_FLAG_POINT_LIGHTS` where every light is a point light on the short
-    /// path, and with the flag of its kind (stochastic ranges, hierarchy bands).
-    fn frame_flags(&self, flags: u32) -> u32 {
-        if !self.point_lights.load(Ordering::Relaxed) {
-            return flags;
-        }
-        flags | FRAME_FLAG_POINT_LIGHTS | self.point_kind.load(Ordering::Relaxed)
+    /// How its lights are shaded, as uploaded.
+    pub fn light_model(&self) -> LightModel {
+        self.model
     }
 
-    /// Whether the frame tells shading that every light is a windowed point light
-    /// (`FRAME_FLAG_POINT_LIGHTS`).
-    pub fn point_lights(&self) -> bool {
-        self.point_lights.load(Ordering::Relaxed)
-    }
-
-    /// From now on the lights may be anything the general model shades (stochastic alphas
-    /// written on the GPU): the frame drops `FRAME_FLAG_POINT_LIGHTS`, so every light is shaded
-    /// with its spot cone and alpha read.
-    pub fn mark_general_lights(&self, ctx: &GpuContext) {
-        self.point_lights.store(false, Ordering::Relaxed);
-        self.point_kind.store(0, Ordering::Relaxed);
-        self.write_flags(ctx);
-    }
-
-    /// Whether the frame tells shading that the point lights are the lighting grid hierarchy's,
-    /// each with its band (`FRAME_FLAG_BAND_POINTS`, with `FRAME_FLAG_POINT_LIGHTS`).
-    pub fn band_points(&self) -> bool {
-        self.point_kind.load(Ordering::Relaxed) == FRAME_FLAG_BAND_POINTS
-    }
-
-    /// From now on every light carries a hierarchy band ([`GpuLight::with_band`], written on
-    /// the GPU by `lights.hierarchy` or by [`GpuScene::set_light_bands`]): a scene of point lights
-    /// stays on the short path, shaded with the band times `1 / d^2`
-    /// (`FRAME_FLAG_BAND_POINTS`); any other scene (spots among the lights) is marked general
-    /// ([`GpuScene::mark_general_lights`]).
-    pub fn mark_band_points(&self, ctx: &GpuContext) {
-        self.mark_point_kind(ctx, FRAME_FLAG_BAND_POINTS);
+    /// The path shading takes over its lights: what its renderers' pipelines are built for.
+    pub fn light_path(&self) -> LightPath {
+        self.path
     }
 
     /// Uploads `lights` again (the scene's, the same count) with their hierarchy bands
-    /// (`manylights_scene::hierarchy`, one a light: [`GpuLight::with_band`]), and marks them
-    /// band points ([`GpuScene::mark_band_points`]: general where a spot is among them).
-    /// Panics unless there are as many lights and bands as the scene has lights.
+    /// (`manylights_scene::hierarchy`, one a light: [`GpuLight::with_band`]), as a hierarchy's
+    /// build writes them.
+    ///
+    /// # Panics
+    /// Unless the scene was uploaded for the hierarchy with the bands' ramp, and there are as
+    /// many lights and bands as the scene has lights.
     pub fn set_light_bands(&self, ctx: &GpuContext, lights: &[Light], bands: &[Band]) {
         assert!(
             lights.len() == self.light_count as usize && bands.len() == lights.len(),
@@ -321,6 +319,16 @@ impl GpuScene {
             bands.len(),
             self.light_count
         );
+        if let Some(b) = bands.first() {
+            assert!(
+                bands.iter().all(|c| c.ramp == b.ramp)
+                    && self.model.ranges == (Ranges::Hierarchy { ramp: b.ramp as f32 }),
+                "bands of ramp {} for a scene uploaded for {:?}: upload it with \
+                 LightModel::hierarchy of the bands' one ramp",
+                b.ramp,
+                self.model.ranges
+            );
+        }
         let gpu: Vec<GpuLight> = lights
             .iter()
             .zip(bands)
@@ -329,62 +337,6 @@ impl GpuScene {
         if !gpu.is_empty() {
             ctx.queue.write_buffer(&self.lights, 0, cast_slice(&gpu));
         }
-        if let Some(b) = bands.first() {
-            assert!(
-                bands.iter().all(|c| c.ramp == b.ramp),
-                "one hierarchy's bands share their ramp"
-            );
-            self.set_band_ramp(ctx, b.ramp as f32);
-        }
-        self.mark_band_points(ctx);
-    }
-
-    /// The ramps of the hierarchy's bands the frame carries from now on (`light_band`: a band
-    /// rises from its inner distance to `ramp` times it and falls from its r to `ramp` times r;
-    /// above 1 and at most 2, the papers' and the default).
-    pub fn set_band_ramp(&self, ctx: &GpuContext, ramp: f32) {
-        assert!(ramp > 1.0 && ramp <= 2.0, "a band ramp of {ramp}");
-        self.band_ramp.store(ramp.to_bits(), Ordering::Relaxed);
-        ctx.queue.write_buffer(
-            &self.frame,
-            std::mem::offset_of!(GpuFrame, band_ramp) as u64,
-            bytemuck::cast_slice(&[ramp, 1.0 / (ramp - 1.0)]),
-        );
-    }
-
-    /// Whether the frame tells shading that the point lights carry stochastic ranges without
-    /// interleaving (`FRAME_FLAG_STOCHASTIC_POINTS`, with `FRAME_FLAG_POINT_LIGHTS`).
-    pub fn stochastic_points(&self) -> bool {
-        self.point_kind.load(Ordering::Relaxed) == FRAME_FLAG_STOCHASTIC_POINTS
-    }
-
-    /// From now on every light carries a stochastic range and alpha drawn for each frame, one
-    /// range a light (no interleaving): a scene of windowed point lights stays on the short
-    /// path, shaded `max(1 / d^2, alpha)` inside the ranges (`FRAME_FLAG_STOCHASTIC_POINTS`);
-    /// any other scene is marked general ([`GpuScene::mark_general_lights`]).
-    pub fn mark_stochastic_points(&self, ctx: &GpuContext) {
-        self.mark_point_kind(ctx, FRAME_FLAG_STOCHASTIC_POINTS);
-    }
-
-    /// Point lights stay on the short path as `kind` (a `FRAME_FLAG_*_POINTS` flag); any other
-    /// lights are marked general.
-    fn mark_point_kind(&self, ctx: &GpuContext, kind: u32) {
-        if self.point_lights.load(Ordering::Relaxed) {
-            self.point_kind.store(kind, Ordering::Relaxed);
-            self.write_flags(ctx);
-        } else {
-            self.mark_general_lights(ctx);
-        }
-    }
-
-    /// Writes the frame's flags again from the last view's and the lights' state.
-    fn write_flags(&self, ctx: &GpuContext) {
-        let flags = self.frame_flags(self.view_flags.load(Ordering::Relaxed));
-        ctx.queue.write_buffer(
-            &self.frame,
-            std::mem::offset_of!(GpuFrame, flags) as u64,
-            bytemuck::bytes_of(&flags),
-        );
     }
 
     /// Whether the scene has transparent triangles.

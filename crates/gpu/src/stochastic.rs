@@ -11,7 +11,7 @@ use wgpu::util::DeviceExt;
 use crate::pipeline::{self, UNIFORM, entry, storage};
 use crate::shaders::{LIGHT, ShaderDef};
 use crate::timing::{GpuTimer, PassTiming};
-use crate::{GpuContext, GpuError, GpuScene};
+use crate::{GpuContext, GpuError, GpuScene, LightModel};
 
 /// The pass.
 pub const STOCHASTIC: ShaderDef = ShaderDef {
@@ -94,13 +94,24 @@ impl StochasticRanges {
                 limit_name: "the scene's light count",
             });
         }
-        // The drawn lights carry alpha: shading must read it. Where every light of a scene of
-        // windowed point lights is drawn, one range a light, they stay on the short path
-        // (shaded max(1 / d^2, alpha) inside the range); otherwise the general model shades.
-        if params.interleave <= 1 && first == 0 && count == scene.light_count {
-            scene.mark_stochastic_points(ctx);
-        } else {
-            scene.mark_general_lights(ctx);
+        // The drawn lights carry alpha: the scene must have been uploaded for these draws, so
+        // that shading reads it (LightModel::path).
+        let wanted = LightModel::stochastic(first, params.interleave);
+        if scene.light_model().ranges != wanted.ranges
+            || u64::from(first) + u64::from(count) != u64::from(scene.light_count)
+        {
+            return Err(GpuError::Unsupported(format!(
+                "stochastic ranges for lights {first}..{} with {} x {} pixel classes over a \
+                 scene of {} lights uploaded for {:?}: upload it with \
+                 LightModel::stochastic({first}, {}) (GpuScene::upload_with), which draws every \
+                 light from the first drawn one on",
+                u64::from(first) + u64::from(count),
+                params.interleave.max(1),
+                params.interleave.max(1),
+                scene.light_count,
+                scene.light_model().ranges,
+                params.interleave.max(1),
+            )));
         }
         let d = &ctx.device;
         let groups_needed = count.div_ceil(WORKGROUP).max(1);

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use manylights_cull::{CullSettings, heatmap};
 use manylights_gpu::hierarchy::GpuHierarchy;
 use manylights_gpu::timing::PassTiming;
-use manylights_gpu::{GpuContext, GpuScene};
+use manylights_gpu::{GpuContext, GpuScene, LightModel};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::{Camera, Scene};
 use manylights_shade::{InfiniteReference, ReferenceRenderer, Renderer};
@@ -90,8 +90,9 @@ impl CellScene {
         };
         let (w, h) = c.resolution;
         ctx.check_resolution(w, h).map_err(|e| other(&e))?;
+        let model = LightModel::of_rule(&c.lights.radius, own_lights as u32);
         let gpu_scene = stage(name, "scene uploaded", || {
-            GpuScene::upload(ctx, shaded, &poses[0], w, h)
+            GpuScene::upload_with(ctx, shaded, model, &poses[0], w, h)
         })
         .map_err(|e| other(&e))?;
         let as_they_are = match (&hier, c.accuracy) {
@@ -140,7 +141,6 @@ pub(crate) fn run_cell(
         hierarchy,
     } = CellScene::upload(ctx, c, base, name)?;
     let (w, h) = c.resolution;
-    // Stochastic ranges first: they make the lights general, which the renderer is built for.
     let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
     let renderer = stage(name, "pipelines built", || {
         renderers.get(ctx, &gpu_scene, c.msaa, c.hdr, c.visibility_pass)

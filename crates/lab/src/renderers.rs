@@ -1,21 +1,20 @@
 //! The renderers of a run, kept from cell to cell: building one compiles every culling and
 //! shading pipeline, most of a small cell's time (on lavapipe about 1.5 s of a tiny stability
 //! cell's 2.3). A renderer's pipelines depend only on the sample count, the lit image's format,
-//! whether the scene has transparent surfaces, its opaque surfaces' material models and whether
-//! its lights are all windowed point lights: bind group layouts of equal entries are one layout
+//! whether the scene has transparent surfaces, its opaque surfaces' material models and its
+//! lights' path (`manylights_gpu::LightPath`): bind group layouts of equal entries are one layout
 //! to wgpu, so a renderer serves every scene laid out alike. Also the brute-force reference
 //! frames of the latest views ([`ReferenceFrames`]).
 
-use manylights_gpu::{GpuContext, GpuError, GpuScene};
+use manylights_gpu::{GpuContext, GpuError, GpuScene, LightPath};
 use manylights_scene::Camera;
 use manylights_shade::{HdrFormat, ReferenceFrame, Renderer, VisibilityPass};
 
 use crate::experiment::Config;
 
 /// What a renderer is built for: samples a pixel, glass, the opaque material models in order,
-/// windowed point lights alone, stochastic ranges on them, hierarchy bands on them, the lit
-/// image's format.
-type Key = (u32, bool, Vec<u32>, bool, bool, bool, HdrFormat);
+/// the lights' path, the lit image's format.
+type Key = (u32, bool, Vec<u32>, LightPath, HdrFormat);
 
 /// The renderers built so far in a run (the most recent [`Renderers::KEEP`]).
 #[derive(Default)]
@@ -44,9 +43,7 @@ impl Renderers {
                 .iter()
                 .map(|&(model, _)| model)
                 .collect(),
-            scene.point_lights(),
-            scene.stochastic_points(),
-            scene.band_points(),
+            scene.light_path(),
             hdr,
         );
         let i = match self.0.iter().position(|(k, _)| *k == key) {

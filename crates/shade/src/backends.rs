@@ -20,7 +20,7 @@ use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
 use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::timing::{GpuTimer, PassTiming};
-use manylights_gpu::{GpuContext, GpuScene, readback};
+use manylights_gpu::{GpuContext, GpuScene, LightPath, readback};
 
 use crate::HdrImage;
 use crate::pipelines::Surfaces;
@@ -87,15 +87,10 @@ pub struct Renderer {
     pub(crate) samples: u32,
     /// The lit image's format.
     pub(crate) hdr: HdrFormat,
-    /// Built for windowed point lights alone (`POINT_LIGHTS`, shaders/common/shading.wgsl):
-    /// the scene said so when the renderer was built ([`GpuScene::point_lights`]).
-    pub(crate) point_lights: bool,
-    /// With `point_lights`: its shading pipelines were built for stochastic ranges on them
-    /// (`STOCHASTIC_POINTS`, [`GpuScene::stochastic_points`]).
-    pub(crate) stochastic_points: bool,
-    /// With `point_lights`: built for the lighting grid hierarchy's bands on them
-    /// (`BAND_POINTS`, [`GpuScene::band_points`]).
-    pub(crate) band_points: bool,
+    /// The path its shading pipelines are built for (`POINT_LIGHTS`, `STOCHASTIC_POINTS`,
+    /// `BAND_POINTS`, shaders/common/shading.wgsl): the scene's when the renderer was built
+    /// ([`GpuScene::light_path`]).
+    pub(crate) light_path: LightPath,
     pub(crate) prepass: DepthPrepass,
     /// Whether the scene has transparent surfaces.
     pub(crate) transparent: bool,
@@ -153,24 +148,10 @@ impl Renderer {
         Ok(Self::build(ctx, scene, samples, hdr))
     }
 
-    /// Whether its shading passes are built for windowed point lights alone (see
-    /// [`GpuScene::point_lights`]); such a renderer refuses a scene whose lights are not.
-    pub fn point_lights(&self) -> bool {
-        self.point_lights
-    }
-
-    /// Whether its point-light pipelines shade stochastic ranges
-    /// ([`GpuScene::stochastic_points`]); such a renderer refuses a scene without them, and a
-    /// point-light renderer without them a scene with them.
-    pub fn stochastic_points(&self) -> bool {
-        self.stochastic_points
-    }
-
-    /// Whether its point-light pipelines shade the lighting grid hierarchy's bands
-    /// ([`GpuScene::band_points`]); such a renderer refuses a scene without them, and a
-    /// point-light renderer without them a scene with them.
-    pub fn band_points(&self) -> bool {
-        self.band_points
+    /// The path its shading pipelines are built for ([`GpuScene::light_path`]). A renderer of
+    /// the general path shades any scene; one of a point-light path only scenes of that path.
+    pub fn light_path(&self) -> LightPath {
+        self.light_path
     }
 
     /// Whether the visibility backend can render `scene` at `size` here: its lighting binds the
@@ -262,18 +243,13 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, CullError> {
         ctx.check_resolution(width, height)?;
-        if self.point_lights
-            && (!scene.point_lights()
-                || self.stochastic_points != scene.stochastic_points()
-                || self.band_points != scene.band_points())
-        {
-            return Err(manylights_gpu::GpuError::Unsupported(
-                "a renderer built for point lights cannot shade this scene's lights (spots, or \
-                 stochastic ranges or hierarchy bands given since, or none where it was built \
-                 for them): build the renderer after StochasticRanges::new or GpuHierarchy::new, \
-                 from the scene as it will be shaded"
-                    .into(),
-            )
+        if self.light_path.point_lights() && self.light_path != scene.light_path() {
+            return Err(manylights_gpu::GpuError::Unsupported(format!(
+                "a renderer built for {} cannot shade a scene of {}: build the renderer from a \
+                 scene uploaded for the same light model and lights (GpuScene::upload_with)",
+                self.light_path.name(),
+                scene.light_path().name()
+            ))
             .into());
         }
         if self.samples > 1 && backend == Backend::DeferredStoredPosition {

@@ -90,12 +90,8 @@ impl Renderer {
                 pipeline::entry(5, compute, pipeline::storage(true)),
             ],
         );
-        // A POINT_LIGHTS pipeline where every light is a windowed point light (shading.wgsl).
-        let point_lights = scene.point_lights();
-        // STOCHASTIC_POINTS: those point lights with stochastic ranges (shading.wgsl).
-        let stochastic_points = point_lights && scene.stochastic_points();
-        // BAND_POINTS: those point lights the lighting grid hierarchy's, with bands.
-        let band_points = point_lights && scene.band_points();
+        // POINT_LIGHTS, STOCHASTIC_POINTS and BAND_POINTS (shading.wgsl) from the scene's path.
+        let light_path = scene.light_path();
         let transparent = scene.has_transparent();
         let lookup_bounds =
             (samples > 1 || transparent).then(|| LookupBounds::new(ctx, scene, samples));
@@ -106,11 +102,7 @@ impl Renderer {
             hdr,
             opaque_models: scene.opaque_models.iter().map(|&(m, _)| m).collect(),
             opaque_model_mask: scene.opaque_model_mask(),
-            lights: [
-                ("POINT_LIGHTS", f64::from(u8::from(point_lights))),
-                ("STOCHASTIC_POINTS", f64::from(u8::from(stochastic_points))),
-                ("BAND_POINTS", f64::from(u8::from(band_points))),
-            ],
+            lights: light_path.constants(),
             glass_layer: samples > 1 && transparent,
             forward_lists,
             deferred_lists,
@@ -132,9 +124,7 @@ impl Renderer {
             },
             samples,
             hdr,
-            point_lights,
-            stochastic_points,
-            band_points,
+            light_path,
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             transparent,
             visibility_pass: VisibilityPass::default(),

@@ -456,7 +456,7 @@ impl ListPass for ShadePass<'_> {
                         ListForm::ZBin => {
                             // In rounds with many point lights (`ZBIN_ROUNDS_MIN_LIGHTS`).
                             let rounds =
-                                r.point_lights && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
+                                r.light_path.point_lights() && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
                             &lighting.zbin[usize::from(rounds)]
                         }
                         ListForm::Tiles => &lighting.tiles,

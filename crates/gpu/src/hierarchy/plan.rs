@@ -187,6 +187,12 @@ impl HierarchyPlan {
         Ok((plan, shaded))
     }
 
+    /// The light model to upload the shaded scene with ([`crate::GpuScene::upload_with`]):
+    /// the hierarchy's bands over its ramp.
+    pub fn light_model(&self) -> crate::LightModel {
+        crate::LightModel::hierarchy(self.params.ramp as f32)
+    }
+
     /// Lights to upload as the shaded scene's before the first build: dead point lights in
     /// every slot of the layout, the spots as they are.
     pub fn placeholder(&self, lights: &[Light]) -> Vec<Light> {
