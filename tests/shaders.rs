@@ -201,6 +201,12 @@ fn host_structs_match_wgsl_layout() {
         ($module:expr, $ty:ty, $wgsl:literal, [$($field:ident => $member:literal),* $(,)?]) => {{
             let (size, members) = wgsl_layout($module, $wgsl);
             assert_eq!(size as usize, size_of::<$ty>(), "size of {} vs {}", $wgsl, stringify!($ty));
+            // Every member but padding (`_` names) is checked: a field added to both sides
+            // must join the list.
+            let listed = [$($member),*];
+            for (name, _) in members.iter().filter(|(n, _)| !n.starts_with('_')) {
+                assert!(listed.contains(&name.as_str()), "{}.{} is not checked", $wgsl, name);
+            }
             $(
                 let off = members.iter().find(|(n, _)| n == $member).unwrap_or_else(|| panic!("{}.{} missing", $wgsl, $member)).1;
                 assert_eq!(off as usize, std::mem::offset_of!($ty, $field), "{}.{} offset", $wgsl, $member);
@@ -208,59 +214,34 @@ fn host_structs_match_wgsl_layout() {
         }};
     }
     check!(GpuFrame, "Frame", [clip_from_world => "clip_from_world", view_from_world => "view_from_world",
-        clip_from_view => "clip_from_view", world_from_view => "world_from_view", eye => "eye", viewport => "viewport", light_count => "light_count", flags => "flags"]);
+        clip_from_view => "clip_from_view", world_from_view => "world_from_view", eye => "eye", viewport => "viewport", light_count => "light_count", flags => "flags",
+        band_ramp => "band_ramp", band_slope => "band_slope"]);
     check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
         direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer", alpha => "alpha", interleave => "interleave"]);
     check!(GpuMaterial, "Material", [base_color => "base_color", model => "model", emissive => "emissive", opacity => "opacity", params => "params"]);
     let cull = validate(&manylights_cull::shaders::DEPTH_BOUNDS);
-    let (size, members) = wgsl_layout(&cull, "CullParams");
-    assert_eq!(size as usize, size_of::<GpuCullParams>());
-    let expect = [
-        ("tiles_x", offset_of!(GpuCullParams, tiles_x)),
-        ("light_count", offset_of!(GpuCullParams, light_count)),
-        ("slices", offset_of!(GpuCullParams, slices)),
-        ("flags", offset_of!(GpuCullParams, flags)),
-        ("bins", offset_of!(GpuCullParams, bins)),
-        ("near", offset_of!(GpuCullParams, near)),
-        ("slack", offset_of!(GpuCullParams, slack)),
-        ("slice_scale", offset_of!(GpuCullParams, slice_scale)),
-    ];
-    for (name, off) in expect {
-        assert_eq!(
-            members.iter().find(|m| m.0 == name).map(|m| m.1 as usize),
-            Some(off),
-            "CullParams.{name}"
-        );
-    }
-    let (size, members) = wgsl_layout(&cull, "TileDepth");
-    assert_eq!(size as usize, size_of::<GpuTileDepth>());
-    let expect = [
-        ("dmin", offset_of!(GpuTileDepth, dmin)),
-        ("dmax", offset_of!(GpuTileDepth, dmax)),
-        ("mask", offset_of!(GpuTileDepth, mask)),
-        ("covered", offset_of!(GpuTileDepth, covered)),
-    ];
-    for (name, off) in expect {
-        assert_eq!(
-            members.iter().find(|m| m.0 == name).map(|m| m.1 as usize),
-            Some(off),
-            "TileDepth.{name}"
-        );
-    }
+    check!(&cull, GpuCullParams, "CullParams", [tiles_x => "tiles_x", tiles_y => "tiles_y",
+        tile_size => "tile_size", light_count => "light_count", slices => "slices",
+        slicing => "slicing", flags => "flags", bins => "bins", near => "near", far => "far",
+        slack => "slack", slice_scale => "slice_scale", capacity => "capacity",
+        coarse => "coarse", coarse_x => "coarse_x", chunk => "chunk"]);
+    check!(&cull, GpuTileDepth, "TileDepth", [dmin => "dmin", dmax => "dmax", mask => "mask",
+        covered => "covered"]);
     let motion = validate(&manylights_gpu::motion::MOTION);
     check!(&motion, MotionParams, "MotionParams", [kind => "kind", first => "first", count => "count",
         row => "row", speed => "speed", time => "time"]);
     let stochastic = validate(&manylights_gpu::stochastic::STOCHASTIC);
     check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
         row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",
-        exposure => "exposure", scale => "scale", interleave => "interleave"]);
+        exposure => "exposure", scale => "scale", interleave => "interleave",
+        stratified => "stratified"]);
     for def in [
         &manylights_gpu::hierarchy::HIERARCHY,
         &manylights_gpu::hierarchy::HIERARCHY64,
     ] {
         let hierarchy = validate(def);
         check!(&hierarchy, manylights_gpu::hierarchy::Step, "Step", [a => "a", b => "b", c => "c", d => "d",
-            e => "e", g => "g", h => "h", far => "far"]);
+            e => "e", g => "g", h => "h", far => "far", s => "s"]);
     }
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.
@@ -278,5 +259,20 @@ fn host_structs_match_wgsl_layout() {
     assert_eq!(
         attrs[2].offset as usize,
         std::mem::offset_of!(GpuVertex, material)
+    );
+    // The storage passes read a vertex as VERTEX_WORDS words: the position from word 0, the
+    // normal from word 3, the material from word 6 (shaders/render/surface.wgsl,
+    // visibility_compute.wgsl).
+    assert!(manylights_gpu::layout::wgsl_prelude().contains(&format!(
+        "const VERTEX_WORDS: u32 = {}u;",
+        size_of::<GpuVertex>() / 4
+    )));
+    assert_eq!(
+        [
+            offset_of!(GpuVertex, position),
+            offset_of!(GpuVertex, normal),
+            offset_of!(GpuVertex, material)
+        ],
+        [0, 12, 24]
     );
 }
