@@ -15,6 +15,11 @@ use manylights_scene::procedural::{self, ProceduralScene};
 use manylights_scene::stochastic::{INTERLEAVE_MAX, StochasticBound, StochasticDraw};
 use manylights_scene::{LightGenerator, LightSpec, Model, RadiusRule, Scene};
 
+/// `--radius` where none is given.
+const DEFAULT_RADIUS: f32 = 3.0;
+/// `--slices` where none is given.
+const DEFAULT_SLICES: u32 = 24;
+
 /// Scene, lights, resolution and adapter: shared by every subcommand.
 #[derive(clap::Args, Debug)]
 pub(crate) struct SceneArgs {
@@ -40,9 +45,10 @@ pub(crate) struct SceneArgs {
     /// Seed of every random choice of the light generator.
     #[arg(long, default_value_t = 1)]
     pub(crate) seed: u64,
-    /// Fixed light radius in metres (the light contributes exactly nothing beyond it).
-    #[arg(long, default_value_t = 3.0, conflicts_with = "threshold")]
-    pub(crate) radius: f32,
+    /// Fixed light radius in metres (the light contributes exactly nothing beyond it; default
+    /// 3). Stochastic ranges and the hierarchy choose their own ranges.
+    #[arg(long, conflicts_with_all = ["threshold", "stochastic", "hierarchy"])]
+    pub(crate) radius: Option<f32>,
     /// Derive each radius from its intensity instead: the distance where intensity / d^2 falls
     /// to this threshold.
     #[arg(long)]
@@ -190,15 +196,16 @@ pub(crate) struct StrategyArgs {
     /// clustered.
     #[arg(long)]
     pub(crate) tile_size: Option<u32>,
-    /// Depth slices of the cluster grid (clustered only).
-    #[arg(long, default_value_t = 24)]
-    pub(crate) slices: u32,
-    /// Depth bins of z-binning (zbin only; 1..=1024).
-    #[arg(long, default_value_t = manylights_cull::DEFAULT_ZBINS)]
-    pub(crate) bins: u32,
-    /// Slicing of the cluster grid (clustered), or of z-binning's depth bins (zbin).
-    #[arg(long, value_enum, default_value_t = SlicingName::Exponential)]
-    pub(crate) slicing: SlicingName,
+    /// Depth slices of the cluster grid (clustered only; default 24).
+    #[arg(long)]
+    pub(crate) slices: Option<u32>,
+    /// Depth bins of z-binning (zbin only; 1..=1024; default 256).
+    #[arg(long)]
+    pub(crate) bins: Option<u32>,
+    /// Slicing of the cluster grid (clustered), or of z-binning's depth bins (zbin); default
+    /// exponential.
+    #[arg(long, value_enum)]
+    pub(crate) slicing: Option<SlicingName>,
     /// Emit lights only into clusters that hold geometry (clustered only).
     #[arg(long)]
     pub(crate) skip_empty: bool,
@@ -213,9 +220,9 @@ pub(crate) struct StrategyArgs {
     pub(crate) unordered: bool,
     /// Gather and 2.5D: 8 culls lights against coarse tiles of 8 x 8 tiles first, and each tile
     /// tests only its coarse tile's survivors; 0 tests every light at every tile (the paper's
-    /// single level).
-    #[arg(long, default_value_t = manylights_cull::DEFAULT_COARSE)]
-    pub(crate) coarse: u32,
+    /// single level; default 8).
+    #[arg(long)]
+    pub(crate) coarse: Option<u32>,
     /// Conservative slack, relative to each light's distance from the eye.
     #[arg(long, default_value_t = DEFAULT_SLACK)]
     pub(crate) slack: f32,
@@ -230,39 +237,64 @@ pub(crate) struct StrategyArgs {
 }
 
 impl StrategyArgs {
+    /// The strategy the options name; an error where an option is given that the strategy does
+    /// not read (it would be ignored without a word).
     pub(crate) fn strategy(&self) -> Result<Strategy> {
+        self.check_used()?;
         let default_tile = if matches!(self.strategy, StrategyName::Clustered) {
             64
         } else {
             16
         };
         let tile_size = self.tile_size.unwrap_or(default_tile);
+        let coarse = self.coarse.unwrap_or(manylights_cull::DEFAULT_COARSE);
+        let slicing = self.slicing.unwrap_or(SlicingName::Exponential).into();
         let strategy = match self.strategy {
-            StrategyName::TiledGather => Strategy::TiledGather {
-                tile_size,
-                coarse: self.coarse,
-            },
+            StrategyName::TiledGather => Strategy::TiledGather { tile_size, coarse },
             StrategyName::TiledScatter => Strategy::TiledScatter { tile_size },
-            StrategyName::DepthMask => Strategy::DepthMask {
-                tile_size,
-                coarse: self.coarse,
-            },
+            StrategyName::DepthMask => Strategy::DepthMask { tile_size, coarse },
             StrategyName::Clustered => Strategy::Clustered {
                 tile_size,
-                slices: self.slices,
-                slicing: self.slicing.into(),
+                slices: self.slices.unwrap_or(DEFAULT_SLICES),
+                slicing,
                 skip_empty: self.skip_empty,
                 ordered: !self.unordered,
                 cells: self.cells,
             },
             StrategyName::Zbin => Strategy::ZBin {
                 tile_size,
-                bins: self.bins,
-                slicing: self.slicing.into(),
+                bins: self.bins.unwrap_or(manylights_cull::DEFAULT_ZBINS),
+                slicing,
             },
         };
         strategy.validate()?;
         Ok(strategy)
+    }
+
+    /// An error naming the first option given that `--strategy` does not read, and the
+    /// strategies that do.
+    fn check_used(&self) -> Result<()> {
+        use StrategyName::{Clustered, DepthMask, TiledGather, Zbin};
+        let given: [(&str, bool, &[StrategyName]); 7] = [
+            ("--coarse", self.coarse.is_some(), &[TiledGather, DepthMask]),
+            ("--slices", self.slices.is_some(), &[Clustered]),
+            ("--skip-empty", self.skip_empty, &[Clustered]),
+            ("--cells", self.cells, &[Clustered]),
+            ("--unordered", self.unordered, &[Clustered]),
+            ("--bins", self.bins.is_some(), &[Zbin]),
+            ("--slicing", self.slicing.is_some(), &[Clustered, Zbin]),
+        ];
+        for (option, set, readers) in given {
+            if set && !readers.contains(&self.strategy) {
+                let names: Vec<String> = readers.iter().map(|r| r.cli_name()).collect();
+                bail!(
+                    "{option} is read only by --strategy {}; --strategy {} would ignore it",
+                    names.join(" and "),
+                    self.strategy.cli_name()
+                );
+            }
+        }
+        Ok(())
     }
 
     pub(crate) fn settings(&self, camera: &manylights_scene::Camera) -> Result<CullSettings> {
@@ -306,7 +338,7 @@ pub(crate) enum Generator {
     Field,
 }
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub(crate) enum StrategyName {
     /// Forward+ tiled gather (Harada et al. 2012, 4.1).
     TiledGather,
@@ -319,6 +351,14 @@ pub(crate) enum StrategyName {
     /// Z-binning with tile bitmasks (Drobot 2017; Unity URP's Forward+).
     #[value(name = "zbin")]
     Zbin,
+}
+
+impl StrategyName {
+    /// Its `--strategy` value.
+    fn cli_name(self) -> String {
+        self.to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_owned())
+    }
 }
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -452,7 +492,7 @@ impl SceneArgs {
                 (None, Some(t)) => RadiusRule::Threshold(t),
                 (None, None) => self
                     .hierarchy_rule()
-                    .unwrap_or(RadiusRule::Fixed(self.radius)),
+                    .unwrap_or(RadiusRule::Fixed(self.radius.unwrap_or(DEFAULT_RADIUS))),
             },
             intensity: self.intensity,
             spot_fraction: self.spot_fraction,
@@ -482,8 +522,7 @@ impl SceneArgs {
     }
 
     /// The stochastic ranges of `scene`'s generated lights (the last `--lights` of its light
-    /// buffer) where --stochastic asks for them; built before any renderer, since they mark
-    /// the scene's lights general.
+    /// buffer) where --stochastic asks for them (the scene uploaded for them by `upload`).
     pub(crate) fn draws(
         &self,
         ctx: &GpuContext,

@@ -419,6 +419,36 @@ fn cull_rejects_bad_parameters() {
         1,
         &["bins = 0", "1..=1024"],
     );
+    // An option the strategy does not read is an error, not ignored.
+    for (extra, option, readers) in [
+        (&["--slices", "32"][..], "--slices", "clustered"),
+        (
+            &["--strategy", "zbin", "--cells"][..],
+            "--cells",
+            "clustered",
+        ),
+        (
+            &["--strategy", "tiled-scatter", "--coarse", "0"][..],
+            "--coarse",
+            "tiled-gather and depth-mask",
+        ),
+        (
+            &["--strategy", "clustered", "--bins", "64"][..],
+            "--bins",
+            "zbin",
+        ),
+        (
+            &["--strategy", "depth-mask", "--slicing", "linear"][..],
+            "--slicing",
+            "clustered and zbin",
+        ),
+        (&["--unordered"][..], "--unordered", "clustered"),
+        (&["--skip-empty"][..], "--skip-empty", "clustered"),
+    ] {
+        for cmd in ["cull", "render"] {
+            rejects_cmd(cmd, extra, 1, &[option, readers, "would ignore it"]);
+        }
+    }
     rejects_cmd(
         "cull",
         &["--strategy", "zbin", "--capacity", "4"],

@@ -48,6 +48,15 @@ fn bad_stochastic_options_name_the_option() {
         2,
         &["--threshold", "cannot be used with"],
     );
+    // Stochastic ranges and the hierarchy choose their own ranges: a radius beside them is
+    // an error, not dropped.
+    for other in [["--stochastic", "0.1"], ["--hierarchy", "1"]] {
+        rejects(
+            &["--radius", "5", other[0], other[1]],
+            2,
+            &["--radius", "cannot be used with"],
+        );
+    }
     rejects_cmd(
         "cull",
         &["--stochastic", "1", "--interleave", "0"],
