@@ -12,16 +12,12 @@
 //   depth ranges over their pixels, as depth_range.wgsl's passes keep them): a pixel behind
 //   glass needs lights from the glass to the opaque surface (AMD's TiledLighting11), and a
 //   pixel of glass over the background is covered.
-// DEPTH_SAMPLES, RANGES and TRANSPARENT are set by the host, and the textures it reads declared
-// multisampled where DEPTH_SAMPLES is more than one.
-const DEPTH_SAMPLES: u32 = 1u;
-const RANGES: bool = false;
-const TRANSPARENT: bool = false;
+// Its textures and DEPTH_SAMPLES come from depth_bounds_inputs.wgsl (one sample a pixel) or
+// depth_bounds_inputs_msaa.wgsl (multisampled) before it; RANGES and TRANSPARENT are the
+// pipeline's override constants.
+override RANGES: bool = false;
+override TRANSPARENT: bool = false;
 
-@group(0) @binding(0) var ranges: texture_2d<f32>;
-@group(0) @binding(1) var depth: texture_depth_2d;
-@group(0) @binding(2) var near: texture_depth_2d;
-@group(0) @binding(3) var far: texture_depth_2d;
 @group(0) @binding(4) var bounds: texture_storage_2d<rg32float, write>;
 
 // A pixel's nearest and farthest lookup depth, and whether anything covers it (z: 1.0 or

@@ -36,11 +36,24 @@ pub const PREPASS_RANGES: ShaderDef = ShaderDef {
     files: &[FRAME, VERTEX, shader_file!("common/depth_range.wgsl")],
 };
 
-/// `prepass.depth_bounds`.
+/// `prepass.depth_bounds` at one sample a pixel.
 pub const BOUNDS: ShaderDef = ShaderDef {
     name: "prepass.depth_bounds",
     consts: &[],
-    files: &[shader_file!("common/depth_bounds.wgsl")],
+    files: &[
+        shader_file!("common/depth_bounds_inputs.wgsl"),
+        shader_file!("common/depth_bounds.wgsl"),
+    ],
+};
+
+/// `prepass.depth_bounds` with MSAA: its inputs multisampled.
+pub const BOUNDS_MSAA: ShaderDef = ShaderDef {
+    name: "prepass.depth_bounds",
+    consts: &[],
+    files: &[
+        shader_file!("common/depth_bounds_inputs_msaa.wgsl"),
+        shader_file!("common/depth_bounds.wgsl"),
+    ],
 };
 
 /// Format of the lookup bounds culling reads: a pixel's nearest lookup depth in x, its farthest
@@ -143,32 +156,21 @@ impl LookupBounds {
         let pipeline_layout = pipeline::layout(d, BOUNDS.name, &[&layout]);
         // With MSAA, one pipeline over the forward prepass's depth ranges and one over the
         // depth alone (deferred's G-buffer keeps no ranges); without, over the depth.
+        let module = if multisampled { &BOUNDS_MSAA } else { &BOUNDS }.create(d);
         let bounds_with = |ranges: bool| {
-            let mut source = BOUNDS.source(BOUNDS.files);
+            let on = |b: bool| f64::from(u8::from(b));
+            let mut constants = vec![
+                ("RANGES", on(ranges)),
+                ("TRANSPARENT", on(scene.has_transparent())),
+            ];
             if multisampled {
-                source = source
-                    .replace("texture_2d<f32>", "texture_multisampled_2d<f32>")
-                    .replace("texture_depth_2d", "texture_depth_multisampled_2d")
-                    .replace(
-                        "const DEPTH_SAMPLES: u32 = 1u;",
-                        &format!("const DEPTH_SAMPLES: u32 = {samples}u;"),
-                    );
+                constants.push(("DEPTH_SAMPLES", f64::from(samples)));
             }
-            if ranges {
-                source =
-                    source.replace("const RANGES: bool = false;", "const RANGES: bool = true;");
-            }
-            if scene.has_transparent() {
-                source = source.replace(
-                    "const TRANSPARENT: bool = false;",
-                    "const TRANSPARENT: bool = true;",
-                );
-            }
-            let module = d.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(BOUNDS.name),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
-            pipeline::compute(d, &module, &pipeline_layout, "depth_bounds")
+            let options = wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            };
+            pipeline::compute_with(d, &module, &pipeline_layout, "depth_bounds", &options)
         };
         let bounds = [bounds_with(false), bounds_with(multisampled)];
         Self {

@@ -312,6 +312,7 @@ pub const SHADERS: &[ShaderDef] = &[
     PREPASS,
     crate::lookup_bounds::PREPASS_RANGES,
     crate::lookup_bounds::BOUNDS,
+    crate::lookup_bounds::BOUNDS_MSAA,
     crate::motion::MOTION,
     crate::stochastic::STOCHASTIC,
     crate::hierarchy::HIERARCHY,
