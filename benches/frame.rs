@@ -507,7 +507,7 @@ fn whole(c: &mut Criterion) {
                 .render(&ctx, &gs, backend, &strategy, &settings, (w, h))
                 .unwrap();
             let lists = first.lists.as_ref().expect("culled");
-            let culler = renderer.culler_for(&first);
+            let culler = &renderer.culler;
             let mut shade = renderer
                 .shade_pass(&ctx, &gs, &first)
                 .expect("lights in compute");

@@ -366,11 +366,13 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     let (plan, shaded) = HierarchyPlan::for_scene(&original, params, 0.0).unwrap();
     assert!(plan.levels >= 3, "{} levels", plan.levels);
     let gpu_scene =
-        GpuScene::upload_with(&ctx, &shaded, plan.light_model(), &original.camera, 32, 32)
-            .unwrap();
+        GpuScene::upload_with(&ctx, &shaded, plan.light_model(), &original.camera, 32, 32).unwrap();
     let build = GpuHierarchy::new(&ctx, plan.clone(), &original.lights, &gpu_scene).unwrap();
     // Point lights alone: the hierarchy's lights take the band points' short path.
-    assert_eq!(gpu_scene.light_path(), manylights_gpu::LightPath::BandPoints);
+    assert_eq!(
+        gpu_scene.light_path(),
+        manylights_gpu::LightPath::BandPoints
+    );
     // A build's shaded lights and its hash table's slot keys.
     let read = |seed: u32| -> (Vec<GpuLight>, Vec<u32>) {
         build.set_seed(&ctx, seed);

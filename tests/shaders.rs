@@ -108,7 +108,7 @@ fn every_culling_shader_validates_over_lookup_bounds() {
 }
 
 /// Every culling shader that reads depth also over a float depth, as
-/// `Culler::with_float_depth` builds it: `depth_input_float.wgsl` in place of
+/// a culler's pipelines over an `R32Float` depth build it: `depth_input_float.wgsl` in place of
 /// `depth_input.wgsl`, one sample a pixel.
 #[test]
 fn every_culling_shader_validates_over_a_float_depth() {

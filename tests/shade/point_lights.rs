@@ -91,7 +91,11 @@ fn point_lights_shade_as_the_general_model_does() {
         "a scene with spots must not be flagged"
     );
     let fast = GpuScene::upload(&ctx, &points, &points.camera, size.0, size.1).unwrap();
-    assert_eq!(fast.light_path(), LightPath::Points, "a scene of point lights is flagged");
+    assert_eq!(
+        fast.light_path(),
+        LightPath::Points,
+        "a scene of point lights is flagged"
+    );
     let general = GpuScene::upload_with(
         &ctx,
         &points,
@@ -217,7 +221,10 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
     let general_draw = StochasticRanges::new(&ctx, &general, 0, n, &params, &strata).unwrap();
     assert_eq!(general.light_path(), LightPath::General);
     let stochastic_renderer = Renderer::new(&ctx, &fast);
-    assert_eq!(stochastic_renderer.light_path(), LightPath::StochasticPoints);
+    assert_eq!(
+        stochastic_renderer.light_path(),
+        LightPath::StochasticPoints
+    );
     let general_renderer = Renderer::new(&ctx, &general);
     assert_eq!(general_renderer.light_path(), LightPath::General);
     fast_draw.draw(&ctx, 2).unwrap();
@@ -285,11 +292,16 @@ fn stochastic_point_lights_shade_as_the_general_model_does() {
     StochasticRanges::new(&ctx, &part, 1, n - 1, &params, &strata[1..]).unwrap();
     // Draws that the scene was not uploaded for are refused: it would shade them as what it
     // was uploaded for.
-    for (scene, first, p) in [(&windowed, 0, &params), (&fast, 0, &il), (&fast, 1, &params)] {
-        let message = StochasticRanges::new(&ctx, scene, first, n - first, p, &strata[first as usize..])
-            .err()
-            .expect("refused")
-            .to_string();
+    for (scene, first, p) in [
+        (&windowed, 0, &params),
+        (&fast, 0, &il),
+        (&fast, 1, &params),
+    ] {
+        let message =
+            StochasticRanges::new(&ctx, scene, first, n - first, p, &strata[first as usize..])
+                .err()
+                .expect("refused")
+                .to_string();
         assert!(message.contains("LightModel::stochastic"), "{message}");
     }
     // Stratified draws need one stratum a drawn light.

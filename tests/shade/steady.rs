@@ -69,3 +69,44 @@ fn geometry_back_to_back_repeats_the_frames_geometry() {
         }
     }
 }
+
+/// A timer holds any number of passes and spans: past its first query set's room it starts
+/// another, and every pass comes back, in order, with its kind.
+#[test]
+fn a_timer_grows_past_its_first_query_set() {
+    use manylights_gpu::timing::{GpuTimer, PassKind};
+    let ctx = common::gpu();
+    let mut timer = GpuTimer::new(&ctx, 2);
+    assert!(timer.enabled(), "{}: no timestamp queries", ctx.info.name);
+    let mut enc = ctx.encoder("timer test");
+    let labels: Vec<String> = (0..7).map(|k| format!("test.pass{k}")).collect();
+    for label in &labels {
+        let pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(label),
+            timestamp_writes: timer.compute_pass(label),
+        });
+        drop(pass);
+    }
+    timer.resolve(&mut enc);
+    ctx.submit_and_wait(enc, "timer test").unwrap();
+    let t = timer.read(&ctx).unwrap().expect("timed");
+    assert_eq!(
+        t.iter().map(|p| p.label.clone()).collect::<Vec<_>>(),
+        labels
+    );
+    assert!(
+        t.iter()
+            .all(|p| p.kind == PassKind::Compute && p.ms.is_finite() && p.ms >= 0.0),
+        "{t:?}"
+    );
+    if let Some(mut spans) = GpuTimer::spans(&ctx, 1) {
+        let mut enc = ctx.encoder("span test");
+        for k in 0..3 {
+            spans.span_begin(&mut enc, &format!("test.span{k}"));
+        }
+        spans.span_end(&mut enc);
+        spans.resolve(&mut enc);
+        ctx.submit_and_wait(enc, "span test").unwrap();
+        assert_eq!(spans.read(&ctx).unwrap().expect("timed").len(), 3);
+    }
+}

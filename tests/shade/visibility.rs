@@ -281,11 +281,12 @@ fn the_compute_visibility_pass_matches_the_hardware_pass() {
     }
 }
 
-/// Culling over the compute rasteriser's `R32Float` depth (`Culler::with_float_depth`, what
-/// `Renderer::culler_for` gives its frames) builds, for every strategy, the very lists that
-/// culling over a depth buffer of the same depths builds (the depth buffer the untimed
-/// `shade.visibility_depth` pass writes, culled by the renderer's own culler, whose lists the
-/// CPU oracles check in tests/cull): the two depth inputs are one culling.
+/// Culling over the compute rasteriser's `R32Float` depth (the renderer's one culler, over its
+/// pipelines for a float depth) builds, for every strategy, the very lists that culling over a
+/// depth buffer of the same depths builds (the depth buffer the untimed
+/// `shade.visibility_depth` pass writes, whose lists the CPU oracles check in tests/cull): the
+/// two depth inputs are one culling. And the culler's knobs reach the compute frames: z-binning's
+/// masks take the path `zbin_scatter_min_lights` picks.
 #[test]
 fn culling_over_the_compute_depth_equals_culling_over_the_depth_buffer() {
     let ctx = common::gpu();
@@ -293,8 +294,34 @@ fn culling_over_the_compute_depth_equals_culling_over_the_depth_buffer() {
         let s = scene(name);
         let (w, h) = (70, 45);
         let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-        let renderer = Renderer::new(&ctx, &gpu_scene);
+        let mut renderer = Renderer::new(&ctx, &gpu_scene);
         let settings = CullSettings::for_camera(&s.camera);
+        for (min_lights, pass) in [(0, "cull.zbin.scatter"), (u32::MAX, "cull.zbin.masks")] {
+            renderer.culler.zbin_scatter_min_lights = min_lights;
+            let out = renderer
+                .render(
+                    &ctx,
+                    &gpu_scene,
+                    Backend::Visibility,
+                    &Strategy::ZBin {
+                        tile_size: 8,
+                        bins: 64,
+                        slicing: manylights_cull::Slicing::Exponential,
+                    },
+                    &settings,
+                    (w, h),
+                )
+                .unwrap();
+            assert!(out.computed_visibility(), "{name}");
+            let t = out.timings.as_ref().expect("timestamp queries");
+            assert!(
+                t.iter().any(|p| p.label == pass),
+                "{name}: zbin_scatter_min_lights {min_lights} did not reach the compute frame's \
+                 culling ({pass} not among {:?})",
+                t.iter().map(|p| &p.label).collect::<Vec<_>>()
+            );
+        }
+        renderer.culler.zbin_scatter_min_lights = manylights_cull::ZBIN_SCATTER_MIN_LIGHTS;
         for strategy in super::strategies() {
             let what = format!("{name} {}", strategy.name());
             let out = renderer
@@ -310,11 +337,6 @@ fn culling_over_the_compute_depth_equals_culling_over_the_depth_buffer() {
             assert!(
                 out.computed_visibility(),
                 "{what}: lavapipe has 64-bit atomic max"
-            );
-            let float_culler = renderer.culler_for(&out);
-            assert!(
-                !std::ptr::eq(float_culler, &renderer.culler),
-                "{what}: the compute frame's culler is the float-depth one"
             );
             let over_float = out.lists.as_ref().unwrap().read(&ctx).unwrap();
             let mut timer = manylights_gpu::timing::GpuTimer::new(&ctx, 64);
@@ -449,7 +471,10 @@ fn coplanar_copies_keep_the_first_triangle_in_both_visibility_passes() {
                 );
             }
             let same = (0..n).filter(|&k| raster[k] == compute[k]).count();
-            assert!(covered > n / 4, "{what}: only {covered} of {n} pixels covered");
+            assert!(
+                covered > n / 4,
+                "{what}: only {covered} of {n} pixels covered"
+            );
             assert!(
                 same * 10_000 >= n * 9_995,
                 "{what}: {same} of {n} ids agree"

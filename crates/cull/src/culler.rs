@@ -1,35 +1,35 @@
 //! The orchestration: [`Culler`] builds every strategy's and building block's pipelines once
-//! (tiled scatter's, the clusters' and z-binning's at their first run), and
-//! a run checks its inputs, computes the parameters and hands them to the strategy's module
-//! ([`crate::strategies`]), which records its plan through [`crate::frame::execute`].
+//! over its depth input, and over a float depth at the first run over one
+//! ([`crate::input_pipelines`]; tiled scatter's, the clusters' and z-binning's at their first
+//! run), and a run checks its inputs, computes the parameters and hands them to the strategy's
+//! module ([`crate::strategies`]), which records its plan through [`crate::frame::execute`].
 
 use manylights_gpu::pipeline::{self, UNIFORM, depth_texture, storage};
 use manylights_gpu::timing::GpuTimer;
 use std::sync::OnceLock;
 
-use manylights_gpu::shaders::ShaderDef;
-use manylights_gpu::{GpuContext, GpuScene};
+use manylights_gpu::{GpuContext, GpuError, GpuScene};
 
-use crate::blocks::lists::Lists;
-use crate::blocks::tile_depth::TileDepth;
-use crate::blocks::tile_lines::TileLines;
-use crate::blocks::tile_masks::TileMasks;
 use crate::frame::{self, Done, Frame, Repeat};
+use crate::input_pipelines::InputPipelines;
 use crate::layout::{GpuCullParams, LINE_THREADS_MIN};
 use crate::per_pixel::PerPixel;
-use crate::program::{DepthInput, Program};
+use crate::program::DepthInput;
 use crate::radix_sort::RadixSort;
 use crate::record::{ListPass, Recorder};
 use crate::scan::Scan;
-use crate::shaders::{
-    CLUSTERED, DEPTH_BOUNDS, TILED_GATHER, TILED_GATHER_SUBGROUP, TILED_SCATTER, ZBIN, ZBIN_SCATTER,
-};
 use crate::strategies::{Plan, clustered, depth_mask, tiled_gather, tiled_scatter, zbin};
 use crate::{CullError, CullOutput, CullSettings, Strategy};
 
 /// Pipelines of every culling pass, and the knobs of the runs.
 pub struct Culler {
-    layout: wgpu::BindGroupLayout,
+    /// Every culling pipeline over its own depth input.
+    pipelines: InputPipelines,
+    /// Over an `R32Float` depth a compute pass wrote (the visibility buffer's compute
+    /// rasteriser), built at the first run over one: the same culler, knobs and lists.
+    float_pipelines: OnceLock<InputPipelines>,
+    /// Whether gather's scans may use subgroups (`Culler::with_subgroups`).
+    subgroups: bool,
     /// Samples a pixel of the depth buffers its oracle checks (MSAA where more than one): the
     /// exact oracle checks every sample.
     pub samples: u32,
@@ -107,22 +107,8 @@ pub struct Culler {
     /// ([`crate::ZBIN_SCATTER_MIN_LIGHTS`] by default; 0: always, `u32::MAX`: never). The same
     /// masks either way.
     pub zbin_scatter_min_lights: u32,
-    pub(crate) tile_depth: TileDepth,
-    pub(crate) tile_lines: TileLines,
-    pub(crate) tile_masks: TileMasks,
-    pub(crate) lists: Lists,
-    pub(crate) gather: tiled_gather::Pipelines,
-    /// Built at the strategy's first run ([`Culler::scatter`], [`Culler::clustered`],
-    /// [`Culler::zbin`]): the clusters' pipelines are half of all culling's, and a renderer
-    /// that never runs a strategy need not build it (on a software rasteriser building every
-    /// pipeline took 3 s, 2 of them the clusters').
-    scatter: OnceLock<tiled_scatter::Pipelines>,
-    clustered: OnceLock<clustered::Pipelines>,
-    zbin: OnceLock<zbin::Pipelines>,
-    /// What the pipelines built at first use are built over.
-    device: wgpu::Device,
+    /// What the float depth's pipelines are built over.
     scene_layout: wgpu::BindGroupLayout,
-    input: DepthInput,
     pub(crate) per_pixel: PerPixel,
     scan: Scan,
     pub(crate) sort: RadixSort,
@@ -131,7 +117,7 @@ pub struct Culler {
 }
 
 /// A binding of the culling groups (visible to compute and, for list consumers, fragments).
-fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
+pub(crate) fn entry(binding: u32, ty: wgpu::BindingType) -> wgpu::BindGroupLayoutEntry {
     pipeline::entry(
         binding,
         wgpu::ShaderStages::COMPUTE | wgpu::ShaderStages::FRAGMENT,
@@ -169,14 +155,6 @@ impl Culler {
         Self::build(ctx, scene, true, samples, DepthInput::Bounds)
     }
 
-    /// As [`Culler::new`], culling over a depth a compute pass wrote (an `R32Float` texture of
-    /// NDC depths, 1.0 where nothing covers a pixel: the visibility buffer's compute
-    /// rasteriser) while its oracle and per-pixel consumers read a single-sample depth buffer
-    /// holding the same depths.
-    pub fn with_float_depth(ctx: &GpuContext, scene: &GpuScene) -> Self {
-        Self::build(ctx, scene, true, 1, DepthInput::Float)
-    }
-
     fn build(
         ctx: &GpuContext,
         scene: &GpuScene,
@@ -186,21 +164,6 @@ impl Culler {
     ) -> Self {
         let d = &ctx.device;
         let lookup_bounds = input == DepthInput::Bounds;
-        let depth = if input != DepthInput::Samples(samples) {
-            wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            }
-        } else {
-            depth_texture(samples)
-        };
-        let mut entries = vec![entry(0, UNIFORM), entry(1, depth)];
-        entries.extend((2..=11).map(|b| entry(b, storage(false))));
-        let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("cull.group1"),
-            entries: &entries,
-        });
         let lists_layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("lists.group1"),
             entries: &[
@@ -212,33 +175,17 @@ impl Culler {
                 entry(5, UNIFORM),
             ],
         });
-        let program = |def| Program::new(d, def, input, &scene.layout, &layout);
-        let depth = program(&DEPTH_BOUNDS);
-        let gather_subgroups = subgroups && gather_subgroups_fit(ctx);
-        // One module for all of gather's pipelines, and the blocks' whose passes it holds.
-        let gather = program(if gather_subgroups {
-            &TILED_GATHER_SUBGROUP
-        } else {
-            &TILED_GATHER
-        });
+        let pipelines = InputPipelines::new(ctx, &scene.layout, input, subgroups);
         Self {
-            tile_depth: TileDepth::new(ctx, &depth),
-            tile_lines: TileLines::new(d, &depth, &gather),
-            tile_masks: TileMasks::new(d, &gather),
-            lists: Lists::new(d, &gather),
-            gather: tiled_gather::Pipelines::new(d, &gather),
-            scatter: OnceLock::new(),
-            clustered: OnceLock::new(),
-            zbin: OnceLock::new(),
-            device: d.clone(),
+            gather_subgroups: pipelines.gather_subgroups,
+            pipelines,
+            float_pipelines: OnceLock::new(),
+            subgroups,
             scene_layout: scene.layout.clone(),
-            input,
             per_pixel: PerPixel::new(d, samples, &scene.layout, &lists_layout),
-            layout,
             samples,
             lookup_bounds,
             lists_layout,
-            gather_subgroups,
             gather_min_chunk: crate::MIN_CHUNK,
             gather_min_chunk_masked: crate::MIN_CHUNK_MASKED,
             mask_budget: crate::MASK_BUDGET,
@@ -258,39 +205,30 @@ impl Culler {
         }
     }
 
-    /// A program of `def` over this culler's depth input and layouts.
-    fn program(&self, def: &ShaderDef) -> Program {
-        Program::new(
-            &self.device,
-            def,
-            self.input,
-            &self.scene_layout,
-            &self.layout,
-        )
-    }
-
-    /// Tiled scatter's pipelines, built at their first use.
-    pub(crate) fn scatter(&self) -> &tiled_scatter::Pipelines {
-        self.scatter.get_or_init(|| {
-            tiled_scatter::Pipelines::new(&self.device, &self.program(&TILED_SCATTER))
-        })
-    }
-
-    /// The clusters' pipelines, built at their first use.
-    pub(crate) fn clustered(&self) -> &clustered::Pipelines {
-        self.clustered
-            .get_or_init(|| clustered::Pipelines::new(&self.device, &self.program(&CLUSTERED)))
-    }
-
-    /// Z-binning's pipelines, built at their first use.
-    pub(crate) fn zbin(&self) -> &zbin::Pipelines {
-        self.zbin.get_or_init(|| {
-            zbin::Pipelines::new(
-                &self.device,
-                &self.program(&ZBIN),
-                &self.program(&ZBIN_SCATTER),
-            )
-        })
+    /// The pipelines over `depth`: its own input's, or where it is an `R32Float` depth a
+    /// compute pass wrote (and the culler's own input is a single-sample depth buffer) those
+    /// over a float depth, built at their first use.
+    fn pipelines_for(
+        &self,
+        ctx: &GpuContext,
+        depth: &wgpu::Texture,
+    ) -> Result<&InputPipelines, CullError> {
+        if depth.format() != wgpu::TextureFormat::R32Float
+            || self.pipelines.input == DepthInput::Float
+        {
+            return Ok(&self.pipelines);
+        }
+        if self.pipelines.input != DepthInput::Samples(1) {
+            return Err(GpuError::Unsupported(format!(
+                "culling over an R32Float depth with a culler of {:?}: a float depth is one \
+                 sample a pixel",
+                self.pipelines.input
+            ))
+            .into());
+        }
+        Ok(self.float_pipelines.get_or_init(|| {
+            InputPipelines::new(ctx, &self.scene_layout, DepthInput::Float, self.subgroups)
+        }))
     }
 
     /// Runs `strategy` over the depth buffer `depth` of `scene` (whose frame uniform is set for
@@ -312,8 +250,8 @@ impl Culler {
     /// between or inside the runs, as a renderer does frame after frame: what steady-state
     /// timing measures. The lists are sized from `earlier`, a [`Culler::run`] of the same
     /// scene, depth, strategy and settings; the last run's total is read back and checked
-    /// against it ([`CullError::SizeChanged`] where it differs). `timer` needs room for
-    /// `runs` times the passes of one run; a timer of spans ([`GpuTimer::spans`]) times each
+    /// against it ([`CullError::SizeChanged`] where it differs). `timer` records `runs` times
+    /// the passes of one run; a timer of spans ([`GpuTimer::spans`]) times each
     /// run as one span, `cull.<strategy>`, with no timestamps between its passes.
     #[allow(
         clippy::too_many_arguments,
@@ -336,7 +274,7 @@ impl Culler {
 
     /// As [`Culler::run_repeated`], each run followed by `then` (a pass reading its lists, such
     /// as shading) inside its span: a frame's culling and the pass that pays for its lists,
-    /// timed together. `timer` needs room for `then`'s passes too.
+    /// timed together. `timer` records `then`'s passes too.
     #[allow(
         clippy::too_many_arguments,
         reason = "the inputs of a run, as `run` takes them, the repeat and the pass after it"
@@ -378,6 +316,7 @@ impl Culler {
         let params = strategy.params(depth.width(), depth.height(), scene.light_count, settings);
         let inputs = RunInputs {
             culler: self,
+            pipelines: self.pipelines_for(ctx, depth)?,
             ctx,
             rec: Recorder {
                 ctx,
@@ -407,6 +346,8 @@ impl Culler {
 /// What a strategy's `run` takes besides its parameters.
 pub(crate) struct RunInputs<'a> {
     pub culler: &'a Culler,
+    /// The culler's pipelines over the run's depth input.
+    pub pipelines: &'a InputPipelines,
     pub ctx: &'a GpuContext,
     pub rec: Recorder<'a>,
     pub depth: &'a wgpu::Texture,
@@ -427,7 +368,7 @@ impl RunInputs<'_> {
     pub fn frame(&self, params: GpuCullParams, items: u64) -> Frame<'_> {
         Frame::new(
             self.ctx,
-            &self.culler.layout,
+            &self.pipelines.layout,
             self.depth,
             self.strategy,
             params,
@@ -454,6 +395,6 @@ impl RunInputs<'_> {
 /// Whether gather's subgroup scans apply: subgroup operations, with subgroups that tile each
 /// scan's segment (sizes are powers of two; the smallest segment is a lines-path tile's
 /// [`LINE_THREADS_MIN`]). Elsewhere (64-wide subgroups) gather takes the portable scans.
-fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
+pub(crate) fn gather_subgroups_fit(ctx: &GpuContext) -> bool {
     ctx.features.subgroups && ctx.features.subgroup_size.1 <= LINE_THREADS_MIN
 }

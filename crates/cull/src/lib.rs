@@ -34,6 +34,7 @@ mod culler;
 mod frame;
 pub mod geometry;
 pub mod heatmap;
+mod input_pipelines;
 pub mod layout;
 pub mod metrics;
 mod output;

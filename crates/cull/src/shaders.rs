@@ -26,10 +26,10 @@ pub const DEPTH_INPUT_BOUNDS: ShaderFile = shader_file!("cull/common/depth_input
 /// the shader tests validate every culling shader so built).
 pub const BOUNDS_SWAPS: &[(ShaderFile, ShaderFile)] = &[(DEPTH_INPUT, DEPTH_INPUT_BOUNDS)];
 /// [`DEPTH_INPUT`]'s place where culling reads a depth a compute pass wrote
-/// (`Culler::with_float_depth`: an `R32Float` texture, one sample a pixel).
+/// (a culler's pipelines over an `R32Float` texture, one sample a pixel).
 pub const DEPTH_INPUT_FLOAT: ShaderFile = shader_file!("cull/common/depth_input_float.wgsl");
 /// The files that take another's place where culling reads a float depth
-/// (`Culler::with_float_depth`; validated as [`BOUNDS_SWAPS`]' are).
+/// (validated as [`BOUNDS_SWAPS`]' are).
 pub const FLOAT_SWAPS: &[(ShaderFile, ShaderFile)] = &[(DEPTH_INPUT, DEPTH_INPUT_FLOAT)];
 /// Tile masks and their fill ([`crate::blocks::tile_masks`]; composed into gather's module,
 /// which holds the workgroup scan the fill uses; tiled scatter's count pass that sets them is in

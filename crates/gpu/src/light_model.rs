@@ -213,16 +213,30 @@ mod tests {
             LightModel::stochastic(0, 1).path(true, 4),
             LightPath::StochasticPoints
         );
-        assert_eq!(LightModel::stochastic(0, 2).path(true, 4), LightPath::General);
-        assert_eq!(LightModel::stochastic(1, 1).path(true, 4), LightPath::General);
+        assert_eq!(
+            LightModel::stochastic(0, 2).path(true, 4),
+            LightPath::General
+        );
+        assert_eq!(
+            LightModel::stochastic(1, 1).path(true, 4),
+            LightPath::General
+        );
         assert_eq!(
             LightModel::hierarchy(1.5).path(true, 4),
             LightPath::BandPoints
         );
-        assert_eq!(LightModel::hierarchy(1.5).path(false, 4), LightPath::General);
+        assert_eq!(
+            LightModel::hierarchy(1.5).path(false, 4),
+            LightPath::General
+        );
         assert_eq!(LightModel::hierarchy(1.25).band_ramp(), 1.25);
         assert_eq!(LightModel::CUT_OFF.band_ramp(), DEFAULT_BAND_RAMP);
-        assert!(LightModel::hierarchy(2.5).validate().unwrap_err().contains("ramp = 2.5"));
+        assert!(
+            LightModel::hierarchy(2.5)
+                .validate()
+                .unwrap_err()
+                .contains("ramp = 2.5")
+        );
         for p in [
             LightPath::General,
             LightPath::Points,

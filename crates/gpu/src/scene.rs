@@ -322,7 +322,10 @@ impl GpuScene {
         if let Some(b) = bands.first() {
             assert!(
                 bands.iter().all(|c| c.ramp == b.ramp)
-                    && self.model.ranges == (Ranges::Hierarchy { ramp: b.ramp as f32 }),
+                    && self.model.ranges
+                        == (Ranges::Hierarchy {
+                            ramp: b.ramp as f32
+                        }),
                 "bands of ramp {} for a scene uploaded for {:?}: upload it with \
                  LightModel::hierarchy of the bands' one ramp",
                 b.ramp,

@@ -42,49 +42,36 @@ pub struct PassTiming {
 /// Most queries one set may hold (a WebGPU limit).
 pub const MAX_QUERIES: u32 = 4096;
 
-/// Timestamp queries for up to `capacity` passes of one submission.
+/// Timestamp queries for the passes of one submission.
+///
+/// The queries live in sets of `capacity` passes (the first made with the timer, at most
+/// [`MAX_QUERIES`] / 2 a set); a pass past the last set's room starts another set, so a frame
+/// of any number of passes is timed whole.
 ///
 /// A timer made by [`GpuTimer::spans`] times spans of passes instead: no pass writes
 /// timestamps, and [`GpuTimer::span_begin`] and [`GpuTimer::span_end`] write one pair between
 /// passes around each span. A span also counts what per-pass timestamps leave out: transfers
 /// between passes (buffer clears and copies) and the gaps between dependent passes.
 pub struct GpuTimer {
-    set: Option<wgpu::QuerySet>,
-    resolve: Option<wgpu::Buffer>,
+    /// Where more sets come from; `None` without timestamp queries.
+    device: Option<wgpu::Device>,
+    /// Each set of queries and the buffer it resolves into.
+    sets: Vec<(wgpu::QuerySet, wgpu::Buffer)>,
     passes: Vec<(String, PassKind)>,
+    /// Passes a set.
     capacity: u32,
     spans: bool,
-    open: Option<u32>,
+    /// The open span's end query: its set and index.
+    open: Option<(usize, u32)>,
 }
 
 impl GpuTimer {
-    /// A timer for up to `capacity` passes (at most [`MAX_QUERIES`] / 2).
+    /// A timer whose query sets hold `capacity` passes each (at most [`MAX_QUERIES`] / 2).
     pub fn new(ctx: &GpuContext, capacity: u32) -> Self {
-        let capacity = capacity.clamp(1, MAX_QUERIES / 2);
-        if !ctx.features.timestamps {
-            return Self {
-                capacity,
-                ..Self::untimed()
-            };
-        }
-        let set = ctx.device.create_query_set(&wgpu::QuerySetDescriptor {
-            label: Some("timer"),
-            ty: wgpu::QueryType::Timestamp,
-            count: capacity * 2,
-        });
-        let resolve = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("timer.resolve"),
-            size: u64::from(capacity) * 16,
-            usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
         Self {
-            set: Some(set),
-            resolve: Some(resolve),
-            passes: Vec::new(),
-            capacity,
-            spans: false,
-            open: None,
+            device: ctx.features.timestamps.then(|| ctx.device.clone()),
+            capacity: capacity.clamp(1, MAX_QUERIES / 2),
+            ..Self::untimed()
         }
     }
 
@@ -92,8 +79,8 @@ impl GpuTimer {
     /// measured frame.
     pub fn untimed() -> Self {
         Self {
-            set: None,
-            resolve: None,
+            device: None,
+            sets: Vec::new(),
             passes: Vec::new(),
             capacity: 1,
             spans: false,
@@ -101,8 +88,8 @@ impl GpuTimer {
         }
     }
 
-    /// A timer for up to `capacity` spans of passes (see [`GpuTimer`]); `None` where the device
-    /// cannot write timestamps between passes.
+    /// A timer for spans of passes (see [`GpuTimer`]), its query sets of `capacity` spans each;
+    /// `None` where the device cannot write timestamps between passes.
     pub fn spans(ctx: &GpuContext, capacity: u32) -> Option<Self> {
         ctx.features.encoder_timestamps.then(|| Self {
             spans: true,
@@ -121,37 +108,46 @@ impl GpuTimer {
             return;
         }
         self.span_end(encoder);
-        if let Some(q) = self.push(label, PassKind::Compute)
-            && let Some(set) = &self.set
-        {
-            encoder.write_timestamp(set, q);
-            self.open = Some(q + 1);
+        if let Some((set, q)) = self.push(label, PassKind::Compute) {
+            encoder.write_timestamp(&self.sets[set].0, q);
+            self.open = Some((set, q + 1));
         }
     }
 
     /// Ends the open span, if any.
     pub fn span_end(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        if let (Some(q), Some(set)) = (self.open.take(), &self.set) {
-            encoder.write_timestamp(set, q);
+        if let Some((set, q)) = self.open.take() {
+            encoder.write_timestamp(&self.sets[set].0, q);
         }
     }
 
     /// Whether this timer records anything.
     pub fn enabled(&self) -> bool {
-        self.set.is_some()
+        self.device.is_some()
     }
 
-    /// The first of the next pair of queries, recorded as `label`; none without timestamps.
-    fn push(&mut self, label: &str, kind: PassKind) -> Option<u32> {
-        self.set.as_ref()?;
+    /// The set and first query of the next pair, recorded as `label` (a new set where the last
+    /// one is full); none without timestamps.
+    fn push(&mut self, label: &str, kind: PassKind) -> Option<(usize, u32)> {
+        let device = self.device.as_ref()?;
         let i = self.passes.len() as u32;
-        assert!(
-            i < self.capacity,
-            "GpuTimer: more than {} passes or spans in one timer",
-            self.capacity
-        );
+        let (set, slot) = ((i / self.capacity) as usize, i % self.capacity);
+        if set == self.sets.len() {
+            let queries = device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("timer"),
+                ty: wgpu::QueryType::Timestamp,
+                count: self.capacity * 2,
+            });
+            let resolve = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("timer.resolve"),
+                size: u64::from(self.capacity) * 16,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            });
+            self.sets.push((queries, resolve));
+        }
         self.passes.push((label.to_owned(), kind));
-        Some(i * 2)
+        Some((set, slot * 2))
     }
 
     /// The next pair of queries for a pass, or none for a pass of a timer of spans.
@@ -159,8 +155,8 @@ impl GpuTimer {
         if self.spans {
             return None;
         }
-        let q = self.push(label, kind)?;
-        Some((self.set.as_ref()?, q))
+        let (set, q) = self.push(label, kind)?;
+        Some((&self.sets[set].0, q))
     }
 
     /// Timestamp writes for a render pass named `label`.
@@ -185,25 +181,32 @@ impl GpuTimer {
 
     /// Resolves the queries written so far; call once, at the end of the encoder.
     pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
-        if let (Some(set), Some(buf)) = (&self.set, &self.resolve) {
-            let n = self.passes.len() as u32 * 2;
+        let mut left = self.passes.len() as u32;
+        for (set, buf) in &self.sets {
+            let n = left.min(self.capacity);
             if n > 0 {
-                encoder.resolve_query_set(set, 0..n, buf, 0);
+                encoder.resolve_query_set(set, 0..n * 2, buf, 0);
             }
+            left -= n;
         }
     }
 
     /// Reads the timings back after the submission finished. `Ok(None)` when the adapter has no
     /// timestamp queries.
     pub fn read(&self, ctx: &GpuContext) -> Result<Option<Vec<PassTiming>>, GpuError> {
-        let Some(buf) = &self.resolve else {
+        if self.device.is_none() {
             return Ok(None);
-        };
-        if self.passes.is_empty() {
-            return Ok(Some(Vec::new()));
         }
-        let bytes = readback::read_buffer(ctx, buf, 0, self.passes.len() as u64 * 16)?;
-        let ticks: &[u64] = bytemuck::cast_slice(&bytes);
+        let mut ticks: Vec<u64> = Vec::with_capacity(self.passes.len() * 2);
+        let mut left = self.passes.len() as u64;
+        for (_, buf) in &self.sets {
+            let n = left.min(u64::from(self.capacity));
+            if n > 0 {
+                let bytes = readback::read_buffer(ctx, buf, 0, n * 16)?;
+                ticks.extend_from_slice(bytemuck::cast_slice(&bytes));
+            }
+            left -= n;
+        }
         let period = f64::from(ctx.queue.get_timestamp_period());
         Ok(Some(
             self.passes

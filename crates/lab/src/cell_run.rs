@@ -26,7 +26,7 @@ use crate::{LabError, write_atomic};
 /// its own.
 fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
     let mut scene = match c.scene.procedural() {
-        Some(p) => p.build().map_err(|e| LabError::Other(e.to_string()))?,
+        Some(p) => p.build()?,
         None => {
             let crate::experiment::SceneSpec::Gltf(p) = &c.scene else {
                 unreachable!("procedural handled")
@@ -36,8 +36,7 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
             } else {
                 base.join(p)
             };
-            let (scene, report) = gltf_import::load(&path, &GltfOptions::default())
-                .map_err(|e| LabError::Other(e.to_string()))?;
+            let (scene, report) = gltf_import::load(&path, &GltfOptions::default())?;
             if report.unread_textures > 0 {
                 tracing::warn!(
                     "{}: {} material textures are not read (their factors are)",
@@ -49,15 +48,10 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
         }
     };
     scene.assign_models(&c.materials);
-    let lights = c
-        .lights
-        .generate(&scene)
-        .map_err(|e| LabError::Other(e.to_string()))?;
+    let lights = c.lights.generate(&scene)?;
     let own = scene.lights.len();
     scene.lights.extend(lights);
-    scene
-        .validate()
-        .map_err(|e| LabError::Other(e.to_string()))?;
+    scene.validate()?;
     Ok((scene, own))
 }
 
@@ -79,7 +73,6 @@ struct CellScene {
 
 impl CellScene {
     fn upload(ctx: &GpuContext, c: &Config, base: &Path, name: &str) -> Result<Self, LabError> {
-        let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
         let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
         let hier = stage(name, "hierarchy planned", || hierarchy_plan(c, &scene))?;
         let shaded = hier.as_ref().map_or(&scene, |(_, s)| s);
@@ -89,23 +82,19 @@ impl CellScene {
             CameraSpec::Path(ps) => ps.iter().map(|p| p.camera()).collect(),
         };
         let (w, h) = c.resolution;
-        ctx.check_resolution(w, h).map_err(|e| other(&e))?;
+        ctx.check_resolution(w, h)?;
         let model = LightModel::of_rule(&c.lights.radius, own_lights as u32);
         let gpu_scene = stage(name, "scene uploaded", || {
             GpuScene::upload_with(ctx, shaded, model, &poses[0], w, h)
-        })
-        .map_err(|e| other(&e))?;
+        })?;
         let as_they_are = match (&hier, c.accuracy) {
-            (Some(_), true) => {
-                Some(GpuScene::upload(ctx, &scene, &poses[0], w, h).map_err(|e| other(&e))?)
-            }
+            (Some(_), true) => Some(GpuScene::upload(ctx, &scene, &poses[0], w, h)?),
             _ => None,
         };
         let shaded_lights = shaded.lights.len();
         let hierarchy = hier
             .map(|(plan, _)| GpuHierarchy::new(ctx, plan, &scene.lights, &gpu_scene))
-            .transpose()
-            .map_err(|e| other(&e))?;
+            .transpose()?;
         Ok(CellScene {
             shaded_lights,
             scene,
@@ -129,7 +118,6 @@ pub(crate) fn run_cell(
     let resolved = cell.config.at_limits(ctx);
     let c = &resolved;
     let id = cell.id();
-    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let name = cell.name.as_str();
     let CellScene {
         scene,
@@ -145,7 +133,7 @@ pub(crate) fn run_cell(
     let renderer = stage(name, "pipelines built", || {
         renderers.get(ctx, &gpu_scene, c.msaa, c.hdr, c.visibility_pass)
     })
-    .map_err(|e| other(&format!("msaa = {}: {e}", c.msaa)))?;
+    .map_err(|e| LabError::from(e).during(format!("msaa = {}", c.msaa)))?;
     let settings = |cam: &Camera| CullSettings {
         slack: c.slack,
         capacity: c.capacity,
@@ -180,8 +168,7 @@ pub(crate) fn run_cell(
     let reference = c
         .accuracy
         .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
-        .transpose()
-        .map_err(|e| other(&e))?;
+        .transpose()?;
     let infinite = c.accuracy.then(|| InfiniteReference::new(ctx, &gpu_scene));
     // The infinite-range reference is cached in the run folder, except for moving lights.
     let refs = match (&reference, &infinite) {
@@ -363,7 +350,6 @@ fn render_frames(
     settings: &dyn Fn(&Camera) -> CullSettings,
 ) -> Result<Measured, LabError> {
     let (w, h) = c.resolution;
-    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
     let mut encode = Vec::new();
     let mut uploads = Vec::new();
@@ -393,8 +379,7 @@ fn render_frames(
                 &settings(cam),
                 (w, h),
             )
-        })
-        .map_err(|e| other(&e))?;
+        })?;
         let enc = ctx.take_encode_ms();
         if f >= c.warmup as usize {
             match o.timings {
@@ -447,8 +432,7 @@ fn save_images(
         img.write_to(
             &mut std::io::Cursor::new(&mut bytes),
             image::ImageFormat::Png,
-        )
-        .map_err(|e| LabError::Other(e.to_string()))?;
+        )?;
         write_atomic(&out.join("images").join(format!("{id}_{name}.png")), &bytes)?;
     }
     Ok(())

@@ -14,10 +14,6 @@ use manylights_scene::Scene;
 use crate::LabError;
 use crate::experiment::{Config, LightUpdate};
 
-fn other(e: impl std::fmt::Display) -> LabError {
-    LabError::Other(e.to_string())
-}
-
 /// With `radius: Hierarchy`, the plan of the cell's lighting grid hierarchy and the scene it
 /// shades: the scene's geometry with the plan's layout of lights in place of its own (points,
 /// every level's table slots, spots), which the GPU build fills each frame; none otherwise.
@@ -36,7 +32,7 @@ pub(crate) fn hierarchy_plan(
     };
     HierarchyPlan::for_scene(scene, params, moving)
         .map(Some)
-        .map_err(other)
+        .map_err(LabError::from)
 }
 
 /// The lights of a cell that change each frame, and how.
@@ -63,20 +59,17 @@ impl Movers {
             None
         } else {
             let moving = &scene.lights[first..];
-            Some(
-                match &hierarchy {
-                    Some(h) => LightMotion::on_buffer(
-                        ctx,
-                        h.source(),
-                        scene.lights.len() as u32,
-                        moving,
-                        first as u32,
-                        c.lights.motion,
-                    ),
-                    None => LightMotion::new(ctx, gpu_scene, moving, first as u32, c.lights.motion),
-                }
-                .map_err(other)?,
-            )
+            Some(match &hierarchy {
+                Some(h) => LightMotion::on_buffer(
+                    ctx,
+                    h.source(),
+                    scene.lights.len() as u32,
+                    moving,
+                    first as u32,
+                    c.lights.motion,
+                ),
+                None => LightMotion::new(ctx, gpu_scene, moving, first as u32, c.lights.motion),
+            }?)
         };
         if motion.is_none() && hierarchy.is_none() {
             return Ok(None);
@@ -106,14 +99,14 @@ impl Movers {
     /// Moves the lights to where they are at frame `frame`, then builds the hierarchy.
     pub(crate) fn update(&mut self, ctx: &GpuContext, frame: u32) -> Result<UpdateCost, LabError> {
         let mut cost = match (&mut self.motion, self.update) {
-            (Some(m), LightUpdate::Gpu) => m.animate(ctx, frame).map_err(other)?,
-            (Some(m), LightUpdate::Upload) => m.upload(ctx, frame).map_err(other)?,
+            (Some(m), LightUpdate::Gpu) => m.animate(ctx, frame)?,
+            (Some(m), LightUpdate::Upload) => m.upload(ctx, frame)?,
             (None, _) => UpdateCost::default(),
         };
         if let Some(h) = &self.hierarchy {
             // Sampled bands draw afresh each frame.
             h.set_seed(ctx, frame);
-            if let Some(t) = h.build(ctx).map_err(other)? {
+            if let Some(t) = h.build(ctx)? {
                 cost.gpu.get_or_insert_with(Vec::new).extend(t);
             }
             if let Some(to) = &self.as_they_are {
@@ -123,8 +116,7 @@ impl Movers {
                         label: Some("lights.as_they_are"),
                     });
                 e.copy_buffer_to_buffer(h.source(), 0, to, 0, h.source().size().min(to.size()));
-                ctx.submit_and_wait(e, "lights.as_they_are")
-                    .map_err(other)?;
+                ctx.submit_and_wait(e, "lights.as_they_are")?;
             }
         }
         Ok(cost)
@@ -136,14 +128,9 @@ impl Movers {
         let Some(h) = &self.hierarchy else {
             return Ok(());
         };
-        let (outside, full) = h.dropped(ctx).map_err(other)?;
+        let (outside, full) = h.dropped(ctx)?;
         if outside + full > 0 {
-            return Err(LabError::Other(format!(
-                "the lighting grid hierarchy dropped {outside} splats outside its grids' boxes \
-                 and {full} into full tables (its shape is planned from the first frame's \
-                 lights, with room for moving lights to go their radius from home): a larger \
-                 spacing needs fewer nodes"
-            )));
+            return Err(LabError::HierarchyDropped { outside, full });
         }
         Ok(())
     }

@@ -86,13 +86,11 @@ pub(crate) fn evaluate(
 ) -> Result<PoseEval, LabError> {
     let steady_runs = timed.as_ref().map(|t| t.runs);
     let light_count = u64::from(gpu_scene.light_count);
-    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let (w, h) = c.resolution;
     gpu_scene.set_view(ctx, cam, w, h, 0);
     let o = stage(pose, "rendered", || {
         renderer.render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
-    })
-    .map_err(|e| other(&e))?;
+    })?;
     let frame = GpuFrame::new(cam, w, h, gpu_scene.light_count);
     let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
     let mut metrics: Option<ListMetrics> = None;
@@ -107,10 +105,9 @@ pub(crate) fn evaluate(
             tile_masks = Some(lists.used_tile_masks());
             dropped = u64::from(lists.dropped);
             if c.exact_stride > 0 {
-                let bins = stage(pose, "list lengths read back", || lists.bin_lengths(ctx))
-                    .map_err(|e| other(&e))?;
+                let bins = stage(pose, "list lengths read back", || lists.bin_lengths(ctx))?;
                 let counts = stage(pose, "exact oracle", || {
-                    renderer.culler_for(&o).exact_counts(
+                    renderer.culler.exact_counts(
                         ctx,
                         gpu_scene,
                         &o.depth,
@@ -118,8 +115,7 @@ pub(crate) fn evaluate(
                         frame.clip_from_world.inverse(),
                         c.exact_stride,
                     )
-                })
-                .map_err(|e| other(&e))?;
+                })?;
                 metrics = Some(from_gpu_counts(&counts, &bins));
             }
             if let (Some(runs), Some(t)) = (steady_runs, &o.timings) {
@@ -132,7 +128,7 @@ pub(crate) fn evaluate(
                 stage(pose, "exported", || {
                     crate::export::export_run(
                         ctx,
-                        renderer.culler_for(&o),
+                        &renderer.culler,
                         gpu_scene,
                         &o.depth,
                         lists,
@@ -144,10 +140,9 @@ pub(crate) fn evaluate(
             }
             stage(pose, "lights per pixel", || {
                 renderer
-                    .culler_for(&o)
+                    .culler
                     .lights_per_pixel(ctx, gpu_scene, &o.depth, lists)
-            })
-            .map_err(|e| other(&e))?
+            })?
         }
         None => {
             if c.exact_stride > 0 {
@@ -234,15 +229,13 @@ fn steady_after_frame(
     pose: &str,
     steady_passes: &mut Vec<(String, f64)>,
 ) -> Result<(Option<f64>, Option<SteadyCull>), LabError> {
-    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let passes = timings
         .iter()
         .filter(|p| category(&p.label) == "prepass" || c.backend == Backend::NaiveForward)
         .count() as u32;
     let geometry = stage(pose, "geometry timed back to back", || {
         steady_geometry(ctx, renderer, gpu_scene, o, passes, timed.runs)
-    })
-    .map_err(|e| other(&e))?
+    })?
     .map(|s| {
         steady_passes.splice(0..0, s.passes.iter().map(|p| (p.0.clone(), p.2)));
         s.total_ms
@@ -254,8 +247,7 @@ fn steady_after_frame(
     let build = match timed.hierarchy {
         Some(hier) => stage(pose, "hierarchy built back to back", || {
             steady_build(ctx, hier, hier.pass_count(), timed.runs)
-        })
-        .map_err(|e| other(&e))?,
+        })?,
         None => None,
     };
     Ok((geometry, build))
@@ -282,13 +274,11 @@ fn against_references(
     pose: &str,
     color: &HdrImage,
 ) -> Result<Accuracy, LabError> {
-    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let mut out = Accuracy::default();
     let windowed = if c.cutoff_reference {
         let r = stage(pose, "reference rendered", || {
             refs.windowed(ctx, gpu_scene, c, cam)
-        })
-        .map_err(|e| other(&e))?;
+        })?;
         out.acc = Some(compare(color, &r.color, 1.0));
         Some(r)
     } else {
@@ -325,9 +315,8 @@ fn steady_lists(
     runs: u32,
     pose: &str,
 ) -> Result<SteadyLists, LabError> {
-    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let lists = o.lists.as_ref().expect("a frame with lists");
-    let culler = renderer.culler_for(o);
+    let culler = &renderer.culler;
     let passes = t.iter().filter(|p| category(&p.label) == "cull").count() as u32;
     let timed = stage(pose, "culling timed back to back", || {
         steady_cull(
@@ -341,8 +330,7 @@ fn steady_lists(
             passes,
             runs,
         )
-    })
-    .map_err(|e| other(&e))?;
+    })?;
     let mut out = SteadyLists {
         cull: timed.map(|s| (s.total_ms, s.span_ms)),
         frame: None,
@@ -362,8 +350,7 @@ fn steady_lists(
                 runs,
                 &mut pass,
             )
-        })
-        .map_err(|e| other(&e))?;
+        })?;
         if let Some(s) = &timed {
             out.passes = s.passes.iter().map(|p| (p.0.clone(), p.2)).collect();
         }
@@ -433,8 +420,7 @@ impl References<'_> {
                 infinite_image(ctx, (self.rr, self.inf), scene, cam, size, windowed)
             }
             None => infinite_image(ctx, (self.rr, self.inf), gpu_scene, cam, size, windowed),
-        }
-        .map_err(|e| LabError::Other(e.to_string()))?;
+        }?;
         if let Some((dir, key)) = &key {
             cache::save(dir, key, &img)?;
         }
@@ -458,24 +444,19 @@ pub(crate) fn naive_metrics(
     light_count: u64,
     settings: &CullSettings,
 ) -> Result<ListMetrics, LabError> {
-    let other = |e: &dyn std::fmt::Display| LabError::Other(e.to_string());
     let mut timer = manylights_gpu::timing::GpuTimer::new(ctx, 32);
     let probe = Strategy::tiled_gather(16);
     let lists = renderer
         .culler
-        .run(ctx, gpu_scene, cull_depth, &probe, settings, &mut timer)
-        .map_err(|e| other(&e))?;
-    let counts = renderer
-        .culler
-        .exact_counts(
-            ctx,
-            gpu_scene,
-            depth,
-            &lists,
-            frame.clip_from_world.inverse(),
-            exact_stride,
-        )
-        .map_err(|e| other(&e))?;
+        .run(ctx, gpu_scene, cull_depth, &probe, settings, &mut timer)?;
+    let counts = renderer.culler.exact_counts(
+        ctx,
+        gpu_scene,
+        depth,
+        &lists,
+        frame.clip_from_world.inverse(),
+        exact_stride,
+    )?;
     // Covered samples (with MSAA a pixel's fourth word counts its covered samples).
     let sampled: u64 = counts.iter().map(|k| u64::from(k[3])).sum();
     let needed: u64 = counts.iter().map(|k| u64::from(k[1])).sum();

@@ -30,13 +30,13 @@ pub fn export_run(
     strategy: &str,
     dir: &Path,
 ) -> Result<Vec<PathBuf>, LabError> {
-    let gpu = |e: manylights_gpu::GpuError| LabError::Other(format!("export: {e}"));
+    let gpu = |e: manylights_gpu::GpuError| LabError::from(e).during("export");
     if scene.has_transparent() {
         // The arrays are a pixel's opaque surface; glass fragments lie elsewhere.
-        return Err(LabError::Other(
-            "export: the scene has transparent surfaces (glass), which the arrays (one depth \
-             a pixel) cannot hold: export a scene without glass"
-                .into(),
+        return Err(LabError::refused(
+            "export",
+            "the scene has transparent surfaces (glass), which the arrays (one depth a pixel) \
+             cannot hold: export a scene without glass",
         ));
     }
     let (w, h) = (depth.width(), depth.height());
@@ -46,12 +46,12 @@ pub fn export_run(
     // Per pixel [evaluated, needed, found, covered], every pixel.
     let counts = culler
         .exact_counts(ctx, scene, depth, lists, frame.clip_from_world.inverse(), 1)
-        .map_err(|e| LabError::Other(format!("export: {e}")))?;
+        .map_err(|e| LabError::from(e).during("export"))?;
     let evaluated: Vec<u32> = counts.iter().map(|c| c[0]).collect();
     let needed: Vec<u32> = counts.iter().map(|c| c[1]).collect();
     let bins = lists
         .read(ctx)
-        .map_err(|e| LabError::Other(format!("export: {e}")))?;
+        .map_err(|e| LabError::from(e).during("export"))?;
     let n = u64::from(scene.light_count);
     let lights: Vec<GpuLight> = bytemuck::pod_collect_to_vec(
         &readback::read_buffer(ctx, &scene.lights, 0, n * size_of::<GpuLight>() as u64)
@@ -120,7 +120,7 @@ impl Dtype for i32 {
 /// `data` as array `name` of `shape` (C order, little-endian).
 fn npy<T: Dtype>(name: &'static str, shape: &[u64], data: &[T]) -> Result<Array, LabError> {
     let bytes = crate::score::npy::encode(shape, data)
-        .map_err(|e| LabError::Other(format!("encoding {name}: {e}")))?;
+        .map_err(|e| LabError::refused(format!("encoding {name}"), e.to_string()))?;
     Ok(Array {
         name,
         shape: shape.to_vec(),
@@ -144,9 +144,10 @@ pub fn write(dir: &Path, d: &ExportData<'_>) -> Result<Vec<PathBuf>, LabError> {
         ("evaluated", d.evaluated.len()),
     ] {
         if len != pixels {
-            return Err(LabError::Other(format!(
-                "export: {name} holds {len} values for {w} x {h} pixels"
-            )));
+            return Err(LabError::refused(
+                "export",
+                format!("{name} holds {len} values for {w} x {h} pixels"),
+            ));
         }
     }
     let hw = [u64::from(h), u64::from(w)];
@@ -206,7 +207,7 @@ pub fn write(dir: &Path, d: &ExportData<'_>) -> Result<Vec<PathBuf>, LabError> {
     written.extend(write_lists(&dir.join("lists"), d)?);
     let path = dir.join("manifest.json");
     let text = serde_json::to_string_pretty(&manifest)
-        .map_err(|e| LabError::Other(format!("export manifest: {e}")))?;
+        .map_err(|e| LabError::refused("export manifest", e.to_string()))?;
     write_atomic(&path, text.as_bytes())?;
     written.push(path);
     Ok(written)
@@ -272,7 +273,7 @@ fn write_lists(dir: &Path, d: &ExportData<'_>) -> Result<Vec<PathBuf>, LabError>
     }
     let path = dir.join("grid.json");
     let text = serde_json::to_string_pretty(&grid)
-        .map_err(|e| LabError::Other(format!("export lists: {e}")))?;
+        .map_err(|e| LabError::refused("export lists", e.to_string()))?;
     write_atomic(&path, text.as_bytes())?;
     written.push(path);
     Ok(written)

@@ -68,9 +68,76 @@ pub enum LabError {
         /// Why.
         message: String,
     },
-    /// Anything else, with its context.
-    #[error("{0}")]
-    Other(String),
+    /// A scene that could not be built, loaded or lit (its field and value named).
+    #[error(transparent)]
+    Scene(#[from] manylights_scene::SceneError),
+    /// The device refused or failed (a limit, a missing feature, a lost device).
+    #[error(transparent)]
+    Gpu(#[from] manylights_gpu::GpuError),
+    /// Culling or shading refused or failed (a parameter, a limit, the GPU).
+    #[error(transparent)]
+    Cull(#[from] manylights_cull::CullError),
+    /// A frame could not be rendered.
+    #[error(transparent)]
+    Shade(#[from] manylights_shade::ShadeError),
+    /// Steady-state timing failed.
+    #[error(transparent)]
+    Steady(#[from] steady::SteadyError),
+    /// An image could not be encoded.
+    #[error(transparent)]
+    Image(#[from] image::ImageError),
+    /// A step of a cell failed: what it was doing, and why.
+    #[error("{step}: {source}")]
+    Step {
+        /// What the cell was doing (`export`, `msaa = 4`, ...).
+        step: String,
+        /// Why it failed.
+        source: Box<LabError>,
+    },
+    /// The lighting grid hierarchy's build dropped splats: its tables or boxes were too small
+    /// for the frame's lights.
+    #[error(
+        "the lighting grid hierarchy dropped {outside} splats outside its grids' boxes and {full} \
+         into full tables (its shape is planned from the first frame's lights, with room for \
+         moving lights to go their radius from home): a larger spacing needs fewer nodes"
+    )]
+    HierarchyDropped {
+        /// Splats outside the grids' boxes.
+        outside: u64,
+        /// Splats into full tables.
+        full: u64,
+    },
+    /// A figure of a report could not be drawn.
+    #[error("report figure: {0}")]
+    Figure(String),
+    /// A request the workbench refuses: what was asked, and why.
+    #[error("{what}: {why}")]
+    Refused {
+        /// What was asked (`export`, `merge`, `tune`, a directory).
+        what: String,
+        /// Why, and what would do.
+        why: String,
+    },
+}
+
+impl LabError {
+    /// A refusal of `what`, for `why`.
+    pub(crate) fn refused(what: impl Into<String>, why: impl Into<String>) -> Self {
+        Self::Refused {
+            what: what.into(),
+            why: why.into(),
+        }
+    }
+}
+
+impl LabError {
+    /// This error as the failure of `step`.
+    pub(crate) fn during(self, step: impl Into<String>) -> Self {
+        Self::Step {
+            step: step.into(),
+            source: Box::new(self),
+        }
+    }
 }
 
 /// Writes `path` through a temporary file in its directory (no partial files).

@@ -31,10 +31,6 @@ use manylights_shade::{HdrImage, Renderer};
 use crate::LabError;
 use crate::experiment::Config;
 
-fn other(e: &dyn std::fmt::Display) -> LabError {
-    LabError::Other(e.to_string())
-}
-
 /// The stochastic ranges of a cell.
 pub(crate) struct Draws {
     ranges: StochasticRanges,
@@ -65,8 +61,7 @@ impl Draws {
         };
         let count = (scene.lights.len() - first) as u32;
         let strata = manylights_scene::stochastic::strata(&scene.lights[first..]);
-        let ranges = StochasticRanges::new(ctx, gpu_scene, first as u32, count, &params, &strata)
-            .map_err(|e| other(&e))?;
+        let ranges = StochasticRanges::new(ctx, gpu_scene, first as u32, count, &params, &strata)?;
         Ok(Some(Self {
             ranges,
             accumulate: accumulate.max(1),
@@ -80,7 +75,7 @@ impl Draws {
         ctx: &GpuContext,
         frame: u32,
     ) -> Result<Option<Vec<PassTiming>>, LabError> {
-        self.ranges.draw(ctx, frame).map_err(|e| other(&e))
+        self.ranges.draw(ctx, frame).map_err(LabError::from)
     }
 }
 
@@ -123,9 +118,7 @@ pub(crate) fn measure(
         for j in 0..k {
             draws.draw(ctx, s * k + j)?;
             gpu_scene.set_view(ctx, cam, w, h, 0);
-            let o = renderer
-                .render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
-                .map_err(|e| other(&e))?;
+            let o = renderer.render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))?;
             sum.add(&o.color);
         }
         images.push(mean_over(&sum, reference)?);
@@ -158,7 +151,7 @@ pub(crate) fn measure(
 /// The mean of `sum`'s images with the reference's coverage in alpha.
 fn mean_over(sum: &ImageSum, reference: &HdrImage) -> Result<HdrImage, LabError> {
     sum.mean_over(reference)
-        .ok_or_else(|| LabError::Other("no image to average (0 seeds or frames)".into()))
+        .ok_or_else(|| LabError::refused("noise", "no image to average (0 seeds or frames)"))
 }
 
 /// The relative RMS bias (noise taken out) and standard deviation over lit pixels, and the

@@ -119,7 +119,7 @@ pub fn write_results(dir: &Path, rows: &[Row]) -> Result<(), LabError> {
 pub fn merge(inputs: &[&Path], out: &Path) -> Result<Vec<Row>, LabError> {
     let first = inputs
         .first()
-        .ok_or_else(|| LabError::Other("merge: no input directories".into()))?;
+        .ok_or_else(|| LabError::refused("merge", "no input directories"))?;
     let mut by_id: BTreeMap<String, Row> = BTreeMap::new();
     let mut experiment: Option<String> = None;
     for dir in inputs {
@@ -131,21 +131,27 @@ pub fn merge(inputs: &[&Path], out: &Path) -> Result<Vec<Row>, LabError> {
         match &experiment {
             None => experiment = Some(exp),
             Some(e) if *e != exp => {
-                return Err(LabError::Other(format!(
-                    "merge: {} ran a different experiment file than {}",
-                    dir.display(),
-                    first.display()
-                )));
+                return Err(LabError::refused(
+                    "merge",
+                    format!(
+                        "{} ran a different experiment file than {}",
+                        dir.display(),
+                        first.display()
+                    ),
+                ));
             }
             Some(_) => {}
         }
         for row in load_cells(dir)? {
             if let Some(prev) = by_id.get(&row.id) {
                 if prev.cell != row.cell {
-                    return Err(LabError::Other(format!(
-                        "merge: cell id {} names `{}` and `{}`",
-                        row.id, prev.cell, row.cell
-                    )));
+                    return Err(LabError::refused(
+                        "merge",
+                        format!(
+                            "cell id {} names `{}` and `{}`",
+                            row.id, prev.cell, row.cell
+                        ),
+                    ));
                 }
             }
             by_id.insert(row.id.clone(), row);

@@ -90,10 +90,10 @@ pub fn run_parsed(
     let exp_copy = out.join("experiment.ron");
     match std::fs::read_to_string(&exp_copy) {
         Ok(prev) if prev != src => {
-            return Err(LabError::Other(format!(
-                "{} holds results of a different experiment file; choose another --out or remove it",
-                out.display()
-            )));
+            return Err(LabError::refused(
+                out.display().to_string(),
+                "holds results of a different experiment file; choose another --out or remove it",
+            ));
         }
         Ok(_) => {}
         Err(_) => write_atomic(&exp_copy, src.as_bytes())?,

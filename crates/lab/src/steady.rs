@@ -69,7 +69,8 @@ pub fn warm_up(ctx: &GpuContext) -> std::time::Duration {
     }
 }
 
-/// The most runs one timer holds for a strategy whose single run took `passes` passes.
+/// The most runs timed back to back in one submission for a strategy whose single run took
+/// `passes` passes: as many as one query set holds.
 pub fn max_runs(passes: u32) -> u32 {
     MAX_QUERIES / 2 / passes.max(1)
 }

@@ -171,7 +171,7 @@ fn to_ron(e: &Experiment) -> Result<String, LabError> {
             | ron::extensions::Extensions::IMPLICIT_SOME,
     );
     ron::ser::to_string_pretty(e, pretty)
-        .map_err(|err| LabError::Other(format!("writing the experiment: {err}")))
+        .map_err(|err| LabError::refused("writing the experiment", err.to_string()))
 }
 
 /// Tries every candidate on `base` (its strategy is replaced; everything else is kept) and
@@ -194,9 +194,10 @@ pub fn tune(
     let mut radius = None;
     if let Some(f) = opts.max_error {
         if !(f.is_finite() && f > 0.0) {
-            return Err(LabError::Other(format!(
-                "max_error = {f}: a mean FLIP above 0 (and finite)"
-            )));
+            return Err(LabError::refused(
+                format!("max_error = {f}"),
+                "a mean FLIP above 0 (and finite)",
+            ));
         }
         // Scored against infinite range only: the same cut-off's brute-force reference is not
         // what the budget is about.
@@ -271,14 +272,17 @@ pub fn tune(
             ),
             _ => String::new(),
         };
-        LabError::Other(format!(
-            "no candidate was eligible within the budget of {} s ({} rejected, {} untried): \
-             raise --budget-s, or see {} for the rejected ones{error}",
-            opts.budget.as_secs(),
-            rejected.len(),
-            cells.len() - rejected.len(),
-            out.join("results.csv").display()
-        ))
+        LabError::refused(
+            "tune",
+            format!(
+                "no candidate was eligible within the budget of {} s ({} rejected, {} untried): \
+                 raise --budget-s, or see {} for the rejected ones{error}",
+                opts.budget.as_secs(),
+                rejected.len(),
+                cells.len() - rejected.len(),
+                out.join("results.csv").display()
+            ),
+        )
     })?;
     let cell = cells
         .iter()

@@ -16,17 +16,17 @@
 //! All five use the one shading model of `shaders/common/shading.wgsl`.
 
 use manylights_cull::ListPass;
-use manylights_cull::{CullError, CullOutput, CullSettings, Culler, Strategy};
+use manylights_cull::{CullOutput, CullSettings, Culler, Strategy};
 use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::prepass::DepthPrepass;
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene, LightPath, readback};
 
-use crate::HdrImage;
 use crate::pipelines::Surfaces;
 pub(crate) use crate::raster::Loads;
 use crate::shade_pass::{ShadePass, Targets};
 pub use crate::shaders::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
+use crate::{HdrImage, ShadeError};
 
 pub use crate::kinds::{
     Backend, GBUFFER_BYTES_PER_PIXEL, HdrFormat, VISIBILITY_BYTES_PER_PIXEL, VisibilityPass,
@@ -78,9 +78,8 @@ impl ShadeOutput {
 
 /// Pipelines of every backend for one scene layout, and the culler.
 pub struct Renderer {
-    /// The culling strategies (frames of the visibility buffer's compute rasteriser cull with a
-    /// second culler over its `R32Float` depth, built with the defaults at their first frame:
-    /// [`Renderer::culler_for`]; knobs set here do not reach it).
+    /// The culling strategies, over whatever depth a frame's geometry wrote (the depth buffer,
+    /// lookup bounds, or the compute rasteriser's `R32Float` depth).
     pub culler: Culler,
     /// Samples a pixel of the depth buffer and the forward passes' colour target (MSAA where
     /// more than one).
@@ -104,9 +103,8 @@ pub struct Renderer {
     pub visibility_pass: VisibilityPass,
     /// Whether the device has 64-bit atomic max (the compute rasteriser needs it).
     pub(crate) int64_atomics: bool,
-    /// The compute rasteriser and the culler over its `R32Float` depth, built at its first
-    /// frame.
-    pub(crate) compute_visibility: OnceLock<(ComputeVisibility, Culler)>,
+    /// The compute rasteriser, built at its first frame.
+    pub(crate) compute_visibility: OnceLock<ComputeVisibility>,
 }
 
 impl Renderer {
@@ -198,27 +196,12 @@ impl Renderer {
             && self.int64_atomics
     }
 
-    /// The compute rasteriser and its culler (built by the first frame that draws it).
-    fn compute_visibility(
-        &self,
-        ctx: &GpuContext,
-        scene: &GpuScene,
-    ) -> &(ComputeVisibility, Culler) {
+    /// The compute rasteriser (built by the first frame that draws it).
+    fn compute_visibility(&self, ctx: &GpuContext, scene: &GpuScene) -> &ComputeVisibility {
         self.compute_visibility.get_or_init(|| {
-            let vis = ComputeVisibility::new(ctx, scene)
-                .expect("computes_visibility checked the device's 64-bit atomics");
-            (vis, Culler::with_float_depth(ctx, scene))
+            ComputeVisibility::new(ctx, scene)
+                .expect("computes_visibility checked the device's 64-bit atomics")
         })
-    }
-
-    /// The culler whose lists `out` was shaded with, and which culls again over its
-    /// `cull_depth`: [`Renderer::culler`], or where the compute rasteriser drew the frame one
-    /// culling over its `R32Float` depth (`Culler::with_float_depth`; the same lists).
-    pub fn culler_for(&self, out: &ShadeOutput) -> &Culler {
-        match (&out.targets.compute, self.compute_visibility.get()) {
-            (Some(_), Some((_, culler))) => culler,
-            _ => &self.culler,
-        }
     }
 
     /// Samples a pixel of its frames.
@@ -241,25 +224,23 @@ impl Renderer {
         strategy: &Strategy,
         settings: &CullSettings,
         (width, height): (u32, u32),
-    ) -> Result<ShadeOutput, CullError> {
+    ) -> Result<ShadeOutput, ShadeError> {
         ctx.check_resolution(width, height)?;
         if self.light_path.point_lights() && self.light_path != scene.light_path() {
-            return Err(manylights_gpu::GpuError::Unsupported(format!(
-                "a renderer built for {} cannot shade a scene of {}: build the renderer from a \
-                 scene uploaded for the same light model and lights (GpuScene::upload_with)",
-                self.light_path.name(),
-                scene.light_path().name()
-            ))
-            .into());
+            return Err(ShadeError::LightPath {
+                built: self.light_path,
+                scene: scene.light_path(),
+            });
         }
         if self.samples > 1 && backend == Backend::DeferredStoredPosition {
-            return Err(manylights_gpu::GpuError::Unsupported(format!(
-                "backend {} with MSAA ({} samples): not built; MSAA renders with forward, \
-                 deferred and naive_forward",
-                backend.name(),
-                self.samples
-            ))
-            .into());
+            return Err(ShadeError::Backend {
+                backend: backend.name(),
+                why: format!(
+                    "with MSAA ({} samples): not built; MSAA renders with forward, deferred, \
+                     visibility and naive_forward",
+                    self.samples
+                ),
+            });
         }
         if backend == Backend::Visibility {
             self.check_visibility(ctx, scene, (width, height))?;
@@ -271,12 +252,11 @@ impl Renderer {
         let mut timer = GpuTimer::new(ctx, 64);
         let mut enc = ctx.encoder("shade");
         self.encode_geometry(&mut enc, &mut timer, scene, backend, &targets);
-        if let (Some((vis, _)), Some(t)) = (vis, &targets.compute) {
+        if let (Some(vis), Some(t)) = (vis, &targets.compute) {
             // The depth buffer the oracle reads, untimed (culling and lighting read the
             // compute pass's depths).
             vis.encode_depth(&mut enc, t, &targets.depth_view);
         }
-        let culler = vis.map_or(&self.culler, |(_, c)| c);
         let lists = if backend == Backend::NaiveForward {
             self.encode_naive(&mut enc, &mut timer, scene, &targets);
             timer.resolve(&mut enc);
@@ -300,7 +280,7 @@ impl Renderer {
                     _ => "G-buffer",
                 },
             )?;
-            let lists = culler.run(
+            let lists = self.culler.run(
                 ctx,
                 scene,
                 targets.cull_depth(),
@@ -355,7 +335,7 @@ impl Renderer {
                 }
             }
             Backend::Visibility if targets.compute.is_some() => {
-                let (vis, _) = self
+                let vis = self
                     .compute_visibility
                     .get()
                     .expect("built by the frame's render");

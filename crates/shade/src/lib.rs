@@ -9,6 +9,7 @@
 
 pub mod accuracy;
 pub mod backends;
+mod error;
 pub mod image_out;
 pub mod infinite;
 pub mod kinds;
@@ -21,6 +22,7 @@ pub mod vis_compute;
 pub mod visibility;
 
 pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput, VisibilityPass};
+pub use error::ShadeError;
 pub use image_out::HdrImage;
 pub use infinite::InfiniteReference;
 pub use reference::{ReferenceFrame, ReferenceRenderer};

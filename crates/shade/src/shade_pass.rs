@@ -72,7 +72,7 @@ impl Targets {
         );
         let deferred = backend.lights_in_compute();
         let compute = renderer.computes_visibility(backend).then(|| {
-            let (vis, _) = renderer
+            let vis = renderer
                 .compute_visibility
                 .get()
                 .expect("built before the frame's targets");
@@ -455,8 +455,8 @@ impl ListPass for ShadePass<'_> {
                         ListForm::Bins => &lighting.bins,
                         ListForm::ZBin => {
                             // In rounds with many point lights (`ZBIN_ROUNDS_MIN_LIGHTS`).
-                            let rounds =
-                                r.light_path.point_lights() && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
+                            let rounds = r.light_path.point_lights()
+                                && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
                             &lighting.zbin[usize::from(rounds)]
                         }
                         ListForm::Tiles => &lighting.tiles,

@@ -6,7 +6,7 @@
 //! taken a workgroup a block); coverage as the hardware's (vertices snapped to 1/256 pixel,
 //! exact 64-bit edge functions, the top-left rule). `shade.visibility_resolve` writes the ids
 //! (as `shade.visibility` does: the triangle's index plus one, 0 for none) and NDC depths
-//! (`R32Float`, which culling, `Culler::with_float_depth`, and the lighting read);
+//! (`R32Float`, which culling, over the culler's float-depth pipelines, and the lighting read);
 //! `shade.visibility_depth` copies those depths into a depth buffer outside the timed frame,
 //! for the exact oracle. It needs 64-bit atomic max on storage buffers
 //! (`SHADER_INT64_ATOMIC_MIN_MAX`; lavapipe and NVIDIA have it). Tested against the hardware

@@ -94,7 +94,7 @@ pub(crate) fn run(
     let f = r.frame(params, entries);
     let name = r.strategy.name();
     let done = if masked && c.gather_lines {
-        r.execute(&f, c.tile_lines.plan(&f, name, &c.placeholder), t)?
+        r.execute(&f, r.pipelines.tile_lines.plan(&f, name, &c.placeholder), t)?
     } else {
         r.execute(&f, BinnedPlan::new(r, &f, masked), t)?
     };
@@ -180,15 +180,15 @@ impl<'a> BinnedPlan<'a> {
 
 impl Plan for BinnedPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
-        let (f, c) = (self.f, self.r.culler);
+        let (f, q) = (self.f, self.r.pipelines);
         let mut steps = f.clears(self.masked);
         let rows = if self.chunked {
             Rows::Rects
         } else {
             Rows::None
         };
-        steps.push(c.tile_depth.pass(&f.params, &self.group_a, rows));
-        let g = &c.gather;
+        steps.push(q.tile_depth.pass(&f.params, &self.group_a, rows));
+        let g = &q.gather;
         let (pipeline, reads, writes): (_, &'static [Buf], &'static [Buf]) = if self.masked {
             (
                 &g.count_masks,
@@ -219,7 +219,7 @@ impl Plan for BinnedPlan<'_> {
         // (With tile masks the count pass sums the total itself and the fill places each
         // tile's list with an atomic add: no scan.)
         if !self.masked {
-            steps.extend(c.lists.count_tail(f, &self.group_a, self.entries()));
+            steps.extend(q.lists.count_tail(f, &self.group_a, self.entries()));
         }
         steps
     }
@@ -247,15 +247,15 @@ impl Plan for BinnedPlan<'_> {
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
         let (_, group) = self.sized.as_ref().expect("sized before the fill");
-        let (f, c) = (self.f, self.r.culler);
+        let (f, q) = (self.f, self.r.pipelines);
         if self.masked {
-            return vec![c.tile_masks.fill(self.name("fill"), &f.params, group)];
+            return vec![q.tile_masks.fill(self.name("fill"), &f.params, group)];
         }
         if self.chunked {
             // The coarse-to-fine fill writes the ranges itself.
             return vec![Step::pass(
                 self.name("fill"),
-                &c.gather.fill,
+                &q.gather.fill,
                 group,
                 self.groups(),
                 &[Buf::TileDepth, Buf::LightRects, Buf::Lights, Buf::Offsets],
@@ -265,13 +265,13 @@ impl Plan for BinnedPlan<'_> {
         vec![
             Step::pass(
                 self.name("fill"),
-                &c.gather.fill_flat,
+                &q.gather.fill_flat,
                 group,
                 self.groups(),
                 &[Buf::TileDepth, Buf::Lights, Buf::Offsets],
                 &[Buf::Indices, Buf::Cursors],
             ),
-            c.lists.finalize(f, group),
+            q.lists.finalize(f, group),
         ]
     }
 

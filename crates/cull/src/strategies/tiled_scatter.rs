@@ -122,12 +122,12 @@ impl<'a> MasksPlan<'a> {
 
 impl Plan for MasksPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
-        let (f, c) = (self.f, self.r.culler);
+        let (f, q) = (self.f, self.r.pipelines);
         let mut steps = f.clears(true);
-        steps.push(c.tile_depth.pass(&f.params, &self.group_a, Rows::Blocks));
+        steps.push(q.tile_depth.pass(&f.params, &self.group_a, Rows::Blocks));
         steps.push(Step::pass(
             "cull.tiled_scatter.count",
-            &c.scatter().masks,
+            &q.scatter().masks,
             &self.group_a,
             (self.groups, 1),
             &[
@@ -156,9 +156,9 @@ impl Plan for MasksPlan<'_> {
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
         let (_, group) = self.sized.as_ref().expect("sized before the fill");
-        let c = self.r.culler;
+        let q = self.r.pipelines;
         vec![
-            c.tile_masks
+            q.tile_masks
                 .fill("cull.tiled_scatter.fill".into(), &self.f.params, group),
         ]
     }
@@ -224,12 +224,12 @@ impl<'a> PairsPlan<'a> {
 
 impl Plan for PairsPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
-        let (f, c) = (self.f, self.r.culler);
+        let (f, q) = (self.f, self.r.pipelines);
         let mut steps = f.clears(false);
-        steps.push(c.tile_depth.pass(&f.params, &self.group_a, Rows::None));
+        steps.push(q.tile_depth.pass(&f.params, &self.group_a, Rows::None));
         steps.push(Step::pass(
             "cull.tiled_scatter.count",
-            &c.scatter().count,
+            &q.scatter().count,
             &self.group_a,
             self.light_groups,
             &[Buf::TileDepth, Buf::Lights],
@@ -287,11 +287,11 @@ impl Plan for PairsPlan<'_> {
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
         let s = self.sized.as_ref().expect("sized before the fill");
-        let (f, c) = (self.f, self.r.culler);
+        let (f, q) = (self.f, self.r.pipelines);
         vec![
             Step::pass(
                 "cull.tiled_scatter.pairs",
-                &c.scatter().pairs,
+                &q.scatter().pairs,
                 &s.group_pairs,
                 self.light_groups,
                 &[Buf::TileDepth, Buf::Lights, Buf::Offsets],
@@ -307,7 +307,7 @@ impl Plan for PairsPlan<'_> {
             },
             Step::pass(
                 "cull.tiled_scatter.ranges",
-                &c.scatter().ranges,
+                &q.scatter().ranges,
                 s.group_sorted(),
                 groups_2d(s.n.div_ceil(64), GROUPS_X),
                 &[Buf::PairKeys, Buf::Offsets],
@@ -315,7 +315,7 @@ impl Plan for PairsPlan<'_> {
             ),
             Step::pass(
                 "cull.finalize",
-                &c.scatter().finalize,
+                &q.scatter().finalize,
                 s.group_sorted(),
                 crate::blocks::lists::bin_groups(f),
                 &[Buf::Ranges, Buf::Cursors],

@@ -189,12 +189,12 @@ impl Plan for ZBinPlan<'_> {
     }
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
-        let (f, c) = (self.f, self.r.culler);
+        let (f, q) = (self.f, self.r.pipelines);
         let p = &f.params;
-        let z = c.zbin();
+        let z = q.zbin();
         let mut steps = vec![
             f.clear_ranges(),
-            c.tile_depth.pass(p, &self.group_lists, Rows::Rects),
+            q.tile_depth.pass(p, &self.group_lists, Rows::Rects),
             Step::pass(
                 "cull.zbin.keys",
                 &z.keys,

@@ -36,7 +36,7 @@ pub(crate) fn register_font() {
 }
 
 fn err(e: impl std::fmt::Display) -> LabError {
-    LabError::Other(format!("report figure: {e}"))
+    LabError::Figure(e.to_string())
 }
 
 const PALETTE: [RGBColor; 8] = [

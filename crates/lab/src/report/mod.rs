@@ -241,10 +241,10 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     register_font();
     let mut rows = load_rows(dir)?;
     if rows.is_empty() {
-        return Err(LabError::Other(format!(
-            "{}: no finished cells to report on (run the experiment first)",
-            dir.display()
-        )));
+        return Err(LabError::refused(
+            dir.display().to_string(),
+            "no finished cells to report on (run the experiment first)",
+        ));
     }
     let exp_src = std::fs::read_to_string(dir.join("experiment.ron")).unwrap_or_default();
     let exp = crate::Experiment::parse(&exp_src, &dir.join("experiment.ron")).ok();

@@ -244,8 +244,8 @@ impl<'a> ClusterPlan<'a> {
 
 impl Plan for ClusterPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
-        let (f, c) = (self.f, self.r.culler);
-        let g = c.clustered();
+        let (f, q) = (self.f, self.r.pipelines);
+        let g = q.clustered();
         if self.by_tiles {
             // Every cluster's count is stored and every range finalized: only the stats need
             // clearing, and with the cursor not those (its passes zero the words they use).
@@ -283,7 +283,7 @@ impl Plan for ClusterPlan<'_> {
                 ));
             }
             if !self.cursor {
-                steps.extend(c.lists.count_tail(f, &self.group_a, f.params.bins));
+                steps.extend(q.lists.count_tail(f, &self.group_a, f.params.bins));
             }
             return steps;
         }
@@ -365,7 +365,7 @@ impl Plan for ClusterPlan<'_> {
                 &[Buf::Counts],
             ),
         ]);
-        steps.extend(c.lists.count_tail(f, &self.group_a, f.params.bins));
+        steps.extend(q.lists.count_tail(f, &self.group_a, f.params.bins));
         steps
     }
 
@@ -390,8 +390,8 @@ impl Plan for ClusterPlan<'_> {
 
     fn fill(&self, _sized: bool) -> Vec<Step<'_>> {
         let (_, group) = self.sized.as_ref().expect("sized before the fill");
-        let (f, c) = (self.f, self.r.culler);
-        let g = c.clustered();
+        let (f, q) = (self.f, self.r.pipelines);
+        let g = q.clustered();
         if self.by_tiles {
             // It writes every range: no cull.finalize.
             let (pipeline, reads, writes): (_, &[Buf], &[Buf]) = if self.cursor {
@@ -495,7 +495,7 @@ impl Plan for ClusterPlan<'_> {
                 ));
             }
         }
-        steps.push(c.lists.finalize(f, group));
+        steps.push(q.lists.finalize(f, group));
         steps
     }
 
