@@ -241,16 +241,16 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         pixel_png.display()
     );
     if let Some(export) = &args.export {
-        let files = manylights_lab::export::export_run(
-            &ctx,
-            &culler,
-            &gpu_scene,
-            &depth,
-            &out,
-            &frame,
-            strategy.name(),
-            export,
-        )?;
+        let run = manylights_lab::export::RunToExport {
+            ctx: &ctx,
+            culler: &culler,
+            scene: &gpu_scene,
+            depth: &depth,
+            lists: &out,
+            frame: &frame,
+            strategy: strategy.name(),
+        };
+        let files = manylights_lab::export::export_run(&run, export)?;
         println!("exported {} files to {}", files.len(), export.display());
     }
     let false_negatives =
@@ -339,10 +339,17 @@ pub(crate) fn repeated_timings(
             MAX_QUERIES / 2
         );
     }
-    let s = manylights_lab::steady::steady_cull(
-        ctx, culler, scene, depth, strategy, settings, first, passes, n,
-    )?
-    .expect("timestamps were there for the first run");
+    let repeated = manylights_lab::steady::Repeated {
+        ctx,
+        culler,
+        scene,
+        depth,
+        strategy,
+        settings,
+        first,
+    };
+    let s = manylights_lab::steady::steady_cull(&repeated, passes, n)?
+        .expect("timestamps were there for the first run");
     let mut lines = format!("  {n} runs back to back (median per pass):\n");
     for (label, kind, ms) in &s.passes {
         writeln!(lines, "  {label:<28} {:>8} {ms:>10.3} ms", kind.as_str())?;

@@ -329,16 +329,16 @@ impl Run<'_> {
                 h,
                 scene.lights.len() as u32,
             );
-            let files = manylights_lab::export::export_run(
+            let run = manylights_lab::export::RunToExport {
                 ctx,
-                &renderer.culler,
-                gpu_scene,
-                &out.depth,
+                culler: &renderer.culler,
+                scene: gpu_scene,
+                depth: &out.depth,
                 lists,
-                &frame,
-                strategy.name(),
-                export,
-            )?;
+                frame: &frame,
+                strategy: strategy.name(),
+            };
+            let files = manylights_lab::export::export_run(&run, export)?;
             println!("exported {} files to {}", files.len(), export.display());
         }
         let heat = dir.join(format!("heatmap_lights_per_pixel_{}.png", backend.name()));

@@ -14,7 +14,7 @@ use manylights_shade::{InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::cell_row::{RowParts, cell_row};
 use crate::dynamic::{Movers, hierarchy_plan};
-use crate::evaluate::{PoseEval, References, Steady, evaluate};
+use crate::evaluate::{Pose, PoseEval, References, Steady, evaluate};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment};
 use crate::noise::{Draws, Noise, measure};
 use crate::renderers::{ReferenceFrames, Renderers};
@@ -215,16 +215,16 @@ pub(crate) fn run_cell(
     // Stochastic cells: each seed's image against infinite range (static lights only).
     let noise: Option<Noise> = match (&draws, &first.infinite) {
         (Some(d), Some(inf)) if !moving => Some(stage(name, "seeds measured", || {
-            measure(
+            let at = Pose {
                 ctx,
                 renderer,
-                &gpu_scene,
+                gpu_scene: &gpu_scene,
                 c,
-                &poses[0],
-                &settings(&poses[0]),
-                d,
-                inf,
-            )
+                cam: &poses[0],
+                settings: &settings(&poses[0]),
+                name,
+            };
+            measure(&at, d, inf)
         })?),
         _ => None,
     };
@@ -307,15 +307,18 @@ fn evaluate_checks(
             // Each check sees the ranges of its frame (the first frame's where none moves).
             d.draw(ctx, frame.unwrap_or(0))?;
         }
-        evals.push(evaluate(
+        let at = Pose {
             ctx,
-            p.renderer,
-            p.refs,
-            p.gpu_scene,
-            p.c,
+            renderer: p.renderer,
+            gpu_scene: p.gpu_scene,
+            c: p.c,
             cam,
-            &settings(cam),
-            &pose,
+            settings: &settings(cam),
+            name: &pose,
+        };
+        evals.push(evaluate(
+            &at,
+            p.refs,
             // Steady-state culling (and the hierarchy's build) at the first pose, over as many
             // runs as measured frames.
             (k == 0 && p.timed).then(|| Steady {

@@ -22,7 +22,9 @@ use crate::LabError;
 use crate::experiment::Config;
 use crate::renderers::ReferenceFrames;
 use crate::runner::{category, stage};
-use crate::steady::{SteadyCull, steady_build, steady_cull, steady_cull_shade, steady_geometry};
+use crate::steady::{
+    Repeated, SteadyCull, steady_build, steady_cull, steady_cull_shade, steady_geometry,
+};
 
 /// What one camera pose measured.
 pub(crate) struct PoseEval {
@@ -65,25 +67,38 @@ pub(crate) struct Steady<'a> {
     pub(crate) hierarchy: Option<&'a GpuHierarchy>,
 }
 
-/// Renders `cam` once and measures it: list metrics from the exact oracle, lights per pixel,
-/// and (with `accuracy`) the error against the reference and the infinite-range reference.
-/// `pose` names the pose in the log; with `export`, the pose's data is exported there.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "one call site; the arguments are what one pose needs"
-)]
+/// What one pose of a cell is rendered and measured with.
+pub(crate) struct Pose<'a> {
+    pub(crate) ctx: &'a GpuContext,
+    pub(crate) renderer: &'a Renderer,
+    pub(crate) gpu_scene: &'a GpuScene,
+    /// The cell's configuration.
+    pub(crate) c: &'a Config,
+    pub(crate) cam: &'a Camera,
+    /// Culling's settings for the camera.
+    pub(crate) settings: &'a CullSettings,
+    /// The pose's name in the log.
+    pub(crate) name: &'a str,
+}
+
+/// Renders the pose once and measures it: list metrics from the exact oracle, lights per
+/// pixel, and (with `reference`) the error against the reference and the infinite-range
+/// reference; with `timed`, steady-state timings; with `export`, the pose's data exported there.
 pub(crate) fn evaluate(
-    ctx: &GpuContext,
-    renderer: &Renderer,
+    p: &Pose<'_>,
     reference: Option<&References<'_>>,
-    gpu_scene: &GpuScene,
-    c: &Config,
-    cam: &Camera,
-    settings: &CullSettings,
-    pose: &str,
     timed: Option<Steady<'_>>,
     export: Option<&std::path::Path>,
 ) -> Result<PoseEval, LabError> {
+    let Pose {
+        ctx,
+        renderer,
+        gpu_scene,
+        c,
+        cam,
+        settings,
+        name: pose,
+    } = *p;
     let steady_runs = timed.as_ref().map(|t| t.runs);
     let light_count = u64::from(gpu_scene.light_count);
     let (w, h) = c.resolution;
@@ -119,23 +134,22 @@ pub(crate) fn evaluate(
                 metrics = Some(from_gpu_counts(&counts, &bins));
             }
             if let (Some(runs), Some(t)) = (steady_runs, &o.timings) {
-                let timed =
-                    steady_lists((ctx, renderer, gpu_scene, settings), c, &o, t, runs, pose)?;
+                let timed = steady_lists(p, &o, t, runs)?;
                 (steady, steady_frame) = (timed.cull, timed.frame);
                 steady_passes.extend(timed.passes);
             }
             if let Some(dir) = export {
                 stage(pose, "exported", || {
-                    crate::export::export_run(
+                    let run = crate::export::RunToExport {
                         ctx,
-                        &renderer.culler,
-                        gpu_scene,
-                        &o.depth,
+                        culler: &renderer.culler,
+                        scene: gpu_scene,
+                        depth: &o.depth,
                         lists,
-                        &frame,
-                        c.strategy.name(),
-                        dir,
-                    )
+                        frame: &frame,
+                        strategy: c.strategy.name(),
+                    };
+                    crate::export::export_run(&run, dir)
                 })?;
             }
             stage(pose, "lights per pixel", || {
@@ -147,16 +161,7 @@ pub(crate) fn evaluate(
         None => {
             if c.exact_stride > 0 {
                 metrics = Some(stage(pose, "exact oracle", || {
-                    naive_metrics(
-                        ctx,
-                        renderer,
-                        gpu_scene,
-                        (&o.depth, &o.cull_depth),
-                        &frame,
-                        c.exact_stride,
-                        light_count,
-                        settings,
-                    )
+                    naive_metrics(p, (&o.depth, &o.cull_depth), &frame)
                 })?);
             }
             o.color
@@ -167,21 +172,11 @@ pub(crate) fn evaluate(
         }
     };
     let (steady_geometry, steady_build) = match (timed, &o.timings) {
-        (Some(t), Some(timings)) => steady_after_frame(
-            ctx,
-            renderer,
-            gpu_scene,
-            c,
-            &o,
-            timings,
-            t,
-            pose,
-            &mut steady_passes,
-        )?,
+        (Some(t), Some(timings)) => steady_after_frame(p, &o, timings, t, &mut steady_passes)?,
         _ => (None, None),
     };
     let accuracy = match reference {
-        Some(refs) => against_references(ctx, refs, gpu_scene, c, cam, pose, &o.color)?,
+        Some(refs) => against_references(p, refs, &o.color)?,
         None => Accuracy::default(),
     };
     Ok(PoseEval {
@@ -214,21 +209,21 @@ pub(crate) fn evaluate(
 /// frame's passes): the frame's geometry back to back (with culling and shading, the frame in
 /// steady state; its passes put first in `steady_passes`), then the hierarchy's build where
 /// the cell has one.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "one call site; what evaluate has measured so far"
-)]
 fn steady_after_frame(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    gpu_scene: &GpuScene,
-    c: &Config,
+    p: &Pose<'_>,
     o: &ShadeOutput,
     timings: &[PassTiming],
     timed: Steady<'_>,
-    pose: &str,
     steady_passes: &mut Vec<(String, f64)>,
 ) -> Result<(Option<f64>, Option<SteadyCull>), LabError> {
+    let Pose {
+        ctx,
+        renderer,
+        gpu_scene,
+        c,
+        name: pose,
+        ..
+    } = *p;
     let passes = timings
         .iter()
         .filter(|p| category(&p.label) == "prepass" || c.backend == Backend::NaiveForward)
@@ -266,14 +261,18 @@ struct Accuracy {
 /// `color`, the pose's image, against the windowed reference (where the cell renders it) and the
 /// infinite-range one.
 fn against_references(
-    ctx: &GpuContext,
+    p: &Pose<'_>,
     refs: &References<'_>,
-    gpu_scene: &GpuScene,
-    c: &Config,
-    cam: &Camera,
-    pose: &str,
     color: &HdrImage,
 ) -> Result<Accuracy, LabError> {
+    let Pose {
+        ctx,
+        gpu_scene,
+        c,
+        cam,
+        name: pose,
+        ..
+    } = *p;
     let mut out = Accuracy::default();
     let windowed = if c.cutoff_reference {
         let r = stage(pose, "reference rendered", || {
@@ -308,28 +307,34 @@ struct SteadyLists {
 /// back, alone and with the shading pass that reads them: a frame's culling and what its lists
 /// cost in shading.
 fn steady_lists(
-    (ctx, renderer, gpu_scene, settings): (&GpuContext, &Renderer, &GpuScene, &CullSettings),
-    c: &Config,
+    p: &Pose<'_>,
     o: &ShadeOutput,
     t: &[PassTiming],
     runs: u32,
-    pose: &str,
 ) -> Result<SteadyLists, LabError> {
+    let Pose {
+        ctx,
+        renderer,
+        gpu_scene,
+        c,
+        settings,
+        name: pose,
+        ..
+    } = *p;
     let lists = o.lists.as_ref().expect("a frame with lists");
     let culler = &renderer.culler;
     let passes = t.iter().filter(|p| category(&p.label) == "cull").count() as u32;
+    let repeated = Repeated {
+        ctx,
+        culler,
+        scene: gpu_scene,
+        depth: &o.cull_depth,
+        strategy: &c.strategy,
+        settings,
+        first: lists,
+    };
     let timed = stage(pose, "culling timed back to back", || {
-        steady_cull(
-            ctx,
-            culler,
-            gpu_scene,
-            &o.cull_depth,
-            &c.strategy,
-            settings,
-            lists,
-            passes,
-            runs,
-        )
+        steady_cull(&repeated, passes, runs)
     })?;
     let mut out = SteadyLists {
         cull: timed.map(|s| (s.total_ms, s.span_ms)),
@@ -338,18 +343,7 @@ fn steady_lists(
     };
     if let Some(mut pass) = renderer.shade_pass(ctx, gpu_scene, o) {
         let timed = stage(pose, "culling and shading timed back to back", || {
-            steady_cull_shade(
-                ctx,
-                culler,
-                gpu_scene,
-                &o.cull_depth,
-                &c.strategy,
-                settings,
-                lists,
-                passes + pass.passes(),
-                runs,
-                &mut pass,
-            )
+            steady_cull_shade(&repeated, passes + pass.passes(), runs, &mut pass)
         })?;
         if let Some(s) = &timed {
             out.passes = s.passes.iter().map(|p| (p.0.clone(), p.2)).collect();
@@ -430,20 +424,20 @@ impl References<'_> {
 
 /// Naive forward evaluates every light; the exact oracle (run over any conservative lists)
 /// gives the lights needed.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "one call site; the arguments are what one pose needs"
-)]
 pub(crate) fn naive_metrics(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    gpu_scene: &GpuScene,
+    p: &Pose<'_>,
     (depth, cull_depth): (&wgpu::Texture, &wgpu::Texture),
     frame: &GpuFrame,
-    exact_stride: u32,
-    light_count: u64,
-    settings: &CullSettings,
 ) -> Result<ListMetrics, LabError> {
+    let Pose {
+        ctx,
+        renderer,
+        gpu_scene,
+        c,
+        settings,
+        ..
+    } = *p;
+    let (exact_stride, light_count) = (c.exact_stride, u64::from(gpu_scene.light_count));
     let mut timer = manylights_gpu::timing::GpuTimer::new(ctx, 32);
     let probe = Strategy::tiled_gather(16);
     let lists = renderer

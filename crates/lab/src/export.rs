@@ -13,23 +13,37 @@ use serde_json::json;
 
 use crate::{LabError, write_atomic};
 
-/// Exports the run of `strategy` whose lists are `lists`, over the depth buffer `depth` of
-/// `scene` seen as `frame` says, into `dir`: the depth read back, the exact oracle at every
-/// pixel, the lists read back, and the lights as the GPU holds them. Returns the files.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "the parts of a run, as cull, render and the runner hold them"
-)]
-pub fn export_run(
-    ctx: &GpuContext,
-    culler: &Culler,
-    scene: &GpuScene,
-    depth: &wgpu::Texture,
-    lists: &CullOutput,
-    frame: &GpuFrame,
-    strategy: &str,
-    dir: &Path,
-) -> Result<Vec<PathBuf>, LabError> {
+/// A culling run to export, as cull, render and the runner hold it: the lists of `strategy`
+/// over the depth buffer `depth` of `scene` seen as `frame` says, by `culler`.
+pub struct RunToExport<'a> {
+    /// The device.
+    pub ctx: &'a GpuContext,
+    /// The culler whose exact oracle checks the lists.
+    pub culler: &'a Culler,
+    /// The scene.
+    pub scene: &'a GpuScene,
+    /// The depth buffer.
+    pub depth: &'a wgpu::Texture,
+    /// The lists.
+    pub lists: &'a CullOutput,
+    /// The frame uniform the run was culled with.
+    pub frame: &'a GpuFrame,
+    /// The strategy's name.
+    pub strategy: &'a str,
+}
+
+/// Exports the run `r` into `dir`: the depth read back, the exact oracle at every pixel, the
+/// lists read back, and the lights as the GPU holds them. Returns the files.
+pub fn export_run(r: &RunToExport<'_>, dir: &Path) -> Result<Vec<PathBuf>, LabError> {
+    let RunToExport {
+        ctx,
+        culler,
+        scene,
+        depth,
+        lists,
+        frame,
+        strategy,
+    } = *r;
     let gpu = |e: manylights_gpu::GpuError| LabError::from(e).during("export");
     if scene.has_transparent() {
         // The arrays are a pixel's opaque surface; glass fragments lie elsewhere.

@@ -19,16 +19,16 @@
 //!   to the mean reference luminance (the largest such change, `temporal_flicker`, saturates
 //!   for any noisy method).
 
-use manylights_cull::CullSettings;
 use manylights_gpu::stochastic::StochasticRanges;
 use manylights_gpu::timing::PassTiming;
 use manylights_gpu::{GpuContext, GpuScene};
-use manylights_scene::{Camera, RadiusRule, Scene};
+use manylights_scene::{RadiusRule, Scene};
+use manylights_shade::HdrImage;
 use manylights_shade::accuracy::{LIT_FRACTION, compare_adapted, luminance};
 use manylights_shade::image_out::ImageSum;
-use manylights_shade::{HdrImage, Renderer};
 
 use crate::LabError;
+use crate::evaluate::Pose;
 use crate::experiment::Config;
 
 /// The stochastic ranges of a cell.
@@ -94,22 +94,22 @@ pub(crate) struct Noise {
     pub(crate) flicker_mean: Option<f64>,
 }
 
-/// Renders each seed's image of the cell at `cam` and measures it against `reference` (see
+/// Renders each seed's image of the cell at the pose and measures it against `reference` (see
 /// the module docs).
-#[allow(
-    clippy::too_many_arguments,
-    reason = "one call site; the arguments are what one measurement needs"
-)]
 pub(crate) fn measure(
-    ctx: &GpuContext,
-    renderer: &Renderer,
-    gpu_scene: &GpuScene,
-    c: &Config,
-    cam: &Camera,
-    settings: &CullSettings,
+    p: &Pose<'_>,
     draws: &Draws,
     reference: &HdrImage,
 ) -> Result<Noise, LabError> {
+    let Pose {
+        ctx,
+        renderer,
+        gpu_scene,
+        c,
+        cam,
+        settings,
+        ..
+    } = *p;
     let (w, h) = c.resolution;
     let k = draws.accumulate;
     let mut images = Vec::with_capacity(draws.seeds as usize);

@@ -94,69 +94,64 @@ pub enum SteadyError {
     },
 }
 
+/// The culling run being repeated: its culler, scene, depth, strategy and settings, and the run
+/// that sized its lists.
+pub struct Repeated<'a> {
+    /// The device.
+    pub ctx: &'a GpuContext,
+    /// The culler.
+    pub culler: &'a Culler,
+    /// The scene.
+    pub scene: &'a GpuScene,
+    /// The depth culled over.
+    pub depth: &'a wgpu::Texture,
+    /// The strategy.
+    pub strategy: &'a Strategy,
+    /// Its settings.
+    pub settings: &'a CullSettings,
+    /// The single run whose lists size the repeated runs'.
+    pub first: &'a CullOutput,
+}
+
 /// `runs` runs (at least 1, at most [`max_runs`] of `passes`, the single run's passes) of
-/// `strategy` back to back, sized from `first`, timed per pass and then as spans. `None`
+/// the run `r` back to back, sized from its first, timed per pass and then as spans. `None`
 /// without timestamp queries.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the inputs of the run being repeated"
-)]
 pub fn steady_cull(
-    ctx: &GpuContext,
-    culler: &Culler,
-    scene: &GpuScene,
-    depth: &wgpu::Texture,
-    strategy: &Strategy,
-    settings: &CullSettings,
-    first: &CullOutput,
+    r: &Repeated<'_>,
     passes: u32,
     runs: u32,
 ) -> Result<Option<SteadyCull>, SteadyError> {
-    let inputs = (ctx, culler, scene, depth, strategy, settings, first);
-    steady(inputs, passes, runs, None)
+    steady(r, passes, runs, None)
 }
 
 /// As [`steady_cull`], each run followed by `then` (the shading pass that reads its lists,
 /// [`manylights_shade::Renderer::shade_pass`]) inside its span: culling and shading timed
 /// together as a frame pays them, for `gpu_ms_cull_shade`. `passes` counts the culling passes
 /// of a single run and the shading pass.
-#[expect(
-    clippy::too_many_arguments,
-    reason = "the inputs of the run being repeated, and the pass after it"
-)]
 pub fn steady_cull_shade(
-    ctx: &GpuContext,
-    culler: &Culler,
-    scene: &GpuScene,
-    depth: &wgpu::Texture,
-    strategy: &Strategy,
-    settings: &CullSettings,
-    first: &CullOutput,
+    r: &Repeated<'_>,
     passes: u32,
     runs: u32,
     then: &mut dyn ListPass,
 ) -> Result<Option<SteadyCull>, SteadyError> {
-    let inputs = (ctx, culler, scene, depth, strategy, settings, first);
-    steady(inputs, passes, runs, Some(then))
+    steady(r, passes, runs, Some(then))
 }
 
-/// The inputs of the runs being repeated.
-type Inputs<'a> = (
-    &'a GpuContext,
-    &'a Culler,
-    &'a GpuScene,
-    &'a wgpu::Texture,
-    &'a Strategy,
-    &'a CullSettings,
-    &'a CullOutput,
-);
-
 fn steady(
-    (ctx, culler, scene, depth, strategy, settings, first): Inputs<'_>,
+    r: &Repeated<'_>,
     passes: u32,
     runs: u32,
     mut then: Option<&mut dyn ListPass>,
 ) -> Result<Option<SteadyCull>, SteadyError> {
+    let Repeated {
+        ctx,
+        culler,
+        scene,
+        depth,
+        strategy,
+        settings,
+        first,
+    } = *r;
     let n = runs.clamp(1, max_runs(passes));
     let mut repeat = |timer: &mut GpuTimer, n: u32| -> Result<(), SteadyError> {
         match then.as_deref_mut() {
