@@ -131,6 +131,40 @@ fn every_culling_shader_validates_over_a_float_depth() {
     assert!(over_float >= 3, "{over_float} culling shaders read depth");
 }
 
+/// Deferred lighting in every variant `Pipelines` builds: its image in 16-bit floats
+/// (`out_color_f16.wgsl`) or 32, its depth the compute rasteriser's `R32Float`
+/// (`lookup_depth_float.wgsl`) or the depth buffer, and with MSAA.
+#[test]
+fn deferred_lighting_validates_in_every_variant() {
+    use manylights_shade::HdrFormat;
+    use manylights_shade::shaders::{DEFERRED, DEFERRED_MSAA, deferred_swaps};
+    for (def, samples, float) in [
+        (DEFERRED, 1, false),
+        (DEFERRED, 1, true),
+        (DEFERRED_MSAA, 4, false),
+    ] {
+        for hdr in [HdrFormat::F32, HdrFormat::F16] {
+            let what = format!("{} {samples}x {hdr:?} float depth {float}", def.name);
+            let src = manylights_gpu::shaders::with_samples(
+                def.compose_swapped(&deferred_swaps(hdr, float)),
+                samples,
+                def.name,
+            );
+            assert_eq!(
+                src.contains("texture_storage_2d<rgba16float, write>"),
+                hdr == HdrFormat::F16,
+                "{what}: the image's format"
+            );
+            assert_eq!(
+                src.contains("var depth_tex: texture_2d<f32>;"),
+                float,
+                "{what}: the depth's type"
+            );
+            validate_source(&what, &src);
+        }
+    }
+}
+
 #[test]
 fn every_wgsl_file_is_used_by_a_shader() {
     let mut used: BTreeSet<String> = all_shaders()
@@ -142,6 +176,11 @@ fn every_wgsl_file_is_used_by_a_shader() {
         manylights_cull::shaders::BOUNDS_SWAPS
             .iter()
             .chain(manylights_cull::shaders::FLOAT_SWAPS)
+            .chain(manylights_cull::shaders::LOOKUP_FLOAT_SWAPS)
+            .chain(&manylights_shade::shaders::deferred_swaps(
+                manylights_shade::HdrFormat::F16,
+                true,
+            ))
             .map(|(_, to)| to.path.to_owned()),
     );
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");

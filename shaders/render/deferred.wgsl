@@ -3,7 +3,6 @@
 // writes HDR radiance (alpha 1 where covered, 0 for background, as the reference does).
 @group(2) @binding(0) var gb_normal_depth: texture_2d<f32>;
 @group(2) @binding(1) var gb_material: texture_2d<u32>;
-@group(2) @binding(2) var out_color: texture_storage_2d<rgba32float, write>;
 // The stored world position (deferred_stored_position; a 1 x 1 placeholder otherwise).
 @group(2) @binding(3) var gb_position: texture_2d<f32>;
 

@@ -16,7 +16,6 @@
 // (shade_triangles_msaa).
 @group(2) @binding(0) var gb_normal_depth: texture_multisampled_2d<f32>;
 @group(2) @binding(1) var gb_material: texture_multisampled_2d<u32>;
-@group(2) @binding(2) var out_color: texture_storage_2d<rgba32float, write>;
 @group(2) @binding(3) var glass: texture_multisampled_2d<f32>;
 
 override GLASS: bool = false;

@@ -18,6 +18,12 @@ pub const GEOMETRY: ShaderFile = shader_file!("cull/common/geometry.wgsl");
 pub const LISTS: ShaderFile = shader_file!("cull/common/lists.wgsl");
 /// The pixel-to-list lookup of every list consumer.
 pub const LOOKUP: ShaderFile = shader_file!("cull/common/lookup.wgsl");
+/// The depth [`LOOKUP`] looks lists up at: the depth buffer.
+pub const LOOKUP_DEPTH: ShaderFile = shader_file!("cull/common/lookup_depth.wgsl");
+/// [`LOOKUP_DEPTH`]'s place over a float depth a compute pass wrote.
+pub const LOOKUP_DEPTH_FLOAT: ShaderFile = shader_file!("cull/common/lookup_depth_float.wgsl");
+/// The files that take another's place where a list consumer reads a float depth.
+pub const LOOKUP_FLOAT_SWAPS: &[(ShaderFile, ShaderFile)] = &[(LOOKUP_DEPTH, LOOKUP_DEPTH_FLOAT)];
 /// The depth culling reads (`depth_at`, binding 1): the depth buffer's samples.
 pub const DEPTH_INPUT: ShaderFile = shader_file!("cull/common/depth_input.wgsl");
 /// [`DEPTH_INPUT`]'s place where culling reads lookup bounds (`Culler::with_bounds`).
@@ -160,6 +166,7 @@ pub const LIGHTS_PER_PIXEL: ShaderDef = ShaderDef {
         SCENE,
         GEOMETRY,
         LOOKUP,
+        LOOKUP_DEPTH,
         shader_file!("cull/per_pixel/lights_per_pixel.wgsl"),
     ],
 };
@@ -173,6 +180,7 @@ pub const EXACT: ShaderDef = ShaderDef {
         SCENE,
         GEOMETRY,
         LOOKUP,
+        LOOKUP_DEPTH,
         EXACT_POINT,
         shader_file!("cull/per_pixel/exact.wgsl"),
     ],
@@ -191,6 +199,7 @@ pub const EXACT_TRANSPARENT: ShaderDef = ShaderDef {
         VERTEX,
         GEOMETRY,
         LOOKUP,
+        LOOKUP_DEPTH,
         EXACT_POINT,
         shader_file!("cull/per_pixel/exact_transparent.wgsl"),
     ],

@@ -206,18 +206,6 @@ impl ShaderDef {
         self.module(device, source)
     }
 
-    /// [`ShaderDef::create_samples`] with its composed text passed through `edit` (such as a
-    /// storage texture's format chosen at run time).
-    pub fn create_edited(
-        &self,
-        device: &wgpu::Device,
-        samples: u32,
-        edit: &dyn Fn(String) -> String,
-    ) -> wgpu::ShaderModule {
-        let source = with_samples(self.source(&self.swapped(&[])), samples, self.name);
-        self.module(device, edit(source))
-    }
-
     /// The module of `source`, labelled with this shader's name.
     fn module(&self, device: &wgpu::Device, source: String) -> wgpu::ShaderModule {
         device.create_shader_module(wgpu::ShaderModuleDescriptor {

@@ -170,14 +170,6 @@ impl HdrFormat {
         }
     }
 
-    /// The WGSL storage texel format of the lighting pass's image (`rgba32float`, `rgba16float`).
-    pub(crate) fn wgsl(self) -> &'static str {
-        match self {
-            Self::F32 => "rgba32float",
-            Self::F16 => "rgba16float",
-        }
-    }
-
     /// The image from tightly packed texels of this format, as f32.
     pub fn image(self, width: u32, height: u32, bytes: &[u8]) -> HdrImage {
         match self {

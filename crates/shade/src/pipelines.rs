@@ -11,9 +11,7 @@ use crate::backends::{
     Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer, VISIBILITY_ID,
 };
 use crate::kinds::VisibilityPass;
-use crate::shaders::{
-    DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, VISIBILITY, float_depth, hdr_storage,
-};
+use crate::shaders::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, VISIBILITY, deferred_swaps};
 pub use crate::shaders::{LIST_SHADING, SURFACE};
 
 fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
@@ -382,14 +380,14 @@ impl Pipelines {
             } else {
                 &DEFERRED
             };
-            def.create_edited(&self.device, self.samples, &|s| hdr_storage(s, self.hdr))
+            def.create_swapped(&self.device, self.samples, &deferred_swaps(self.hdr, false))
         })
     }
 
     /// The deferred lighting module over a depth in an `R32Float` texture (one sample).
     fn deferred_float_module(&self) -> &wgpu::ShaderModule {
         self.deferred_float_module.get_or_init(|| {
-            DEFERRED.create_edited(&self.device, 1, &|s| float_depth(hdr_storage(s, self.hdr)))
+            DEFERRED.create_swapped(&self.device, 1, &deferred_swaps(self.hdr, true))
         })
     }
 

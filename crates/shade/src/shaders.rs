@@ -1,8 +1,8 @@
 //! The shaders of the backends' passes (composed from `shaders/render/` and the shared files)
-//! and the text edits that specialise them at run time.
+//! and the files that take others' places in their variants.
 
 use manylights_cull::layout::CULL_CONSTS;
-use manylights_cull::shaders::{GEOMETRY, LOOKUP};
+use manylights_cull::shaders::{GEOMETRY, LOOKUP, LOOKUP_DEPTH, LOOKUP_FLOAT_SWAPS};
 use manylights_gpu::shader_file;
 use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
 
@@ -10,6 +10,10 @@ use crate::kinds::HdrFormat;
 
 /// The loop over a pixel's list, with its per-pixel reject (forward and deferred).
 pub const LIST_SHADING: ShaderFile = shader_file!("render/list_shading.wgsl");
+/// Deferred lighting's image, `rgba32float`.
+pub const OUT_COLOR: ShaderFile = shader_file!("render/out_color.wgsl");
+/// [`OUT_COLOR`]'s place for a 16-bit image.
+pub const OUT_COLOR_F16: ShaderFile = shader_file!("render/out_color_f16.wgsl");
 /// The surface deferred lighting shades, from a G-buffer or a visibility buffer.
 pub const SURFACE: ShaderFile = shader_file!("render/surface.wgsl");
 /// `shade.forward` and `shade.naive`.
@@ -25,6 +29,7 @@ pub const FORWARD: ShaderDef = ShaderDef {
         VERTEX,
         GEOMETRY,
         LOOKUP,
+        LOOKUP_DEPTH,
         LIST_SHADING,
         shader_file!("render/forward.wgsl"),
     ],
@@ -63,8 +68,10 @@ pub const DEFERRED: ShaderDef = ShaderDef {
         SHADING,
         GEOMETRY,
         LOOKUP,
+        LOOKUP_DEPTH,
         LIST_SHADING,
         SURFACE,
+        OUT_COLOR,
         shader_file!("render/deferred.wgsl"),
         shader_file!("render/deferred_zbin.wgsl"),
     ],
@@ -83,34 +90,24 @@ pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
         SHADING,
         GEOMETRY,
         LOOKUP,
+        LOOKUP_DEPTH,
         LIST_SHADING,
         SURFACE,
+        OUT_COLOR,
         shader_file!("render/deferred_msaa.wgsl"),
     ],
 };
 
-/// The deferred lighting passes' image (`out_color`, declared `rgba32float`) in format `hdr`.
-pub(crate) fn hdr_storage(source: String, hdr: HdrFormat) -> String {
-    redeclare(
-        source,
-        "var out_color: texture_storage_2d<rgba32float, write>;",
-        &format!("var out_color: texture_storage_2d<{}, write>;", hdr.wgsl()),
-    )
-}
-
-/// The deferred lighting passes' depth (`depth_tex`, declared a depth texture in lookup.wgsl) as
-/// an `R32Float` texture: what the compute rasteriser writes (deferred.wgsl reads it through
-/// `vec4<f32>(...)`, which takes either).
-pub(crate) fn float_depth(source: String) -> String {
-    redeclare(
-        source,
-        "@group(1) @binding(3) var depth_tex: texture_depth_2d;",
-        "@group(1) @binding(3) var depth_tex: texture_2d<f32>;",
-    )
-}
-
-/// `source` with its declaration `declared` (which it must hold) replaced by `with`.
-fn redeclare(source: String, declared: &str, with: &str) -> String {
-    assert!(source.contains(declared), "the shader declares {declared}");
-    source.replace(declared, with)
+/// The files deferred lighting takes in others' places: its image in format `hdr`, and where
+/// `float_depth` its depth an `R32Float` texture (the compute rasteriser's, which deferred.wgsl
+/// reads through `vec4<f32>(...)`).
+pub fn deferred_swaps(hdr: HdrFormat, float_depth: bool) -> Vec<(ShaderFile, ShaderFile)> {
+    let mut swaps = Vec::new();
+    if hdr == HdrFormat::F16 {
+        swaps.push((OUT_COLOR, OUT_COLOR_F16));
+    }
+    if float_depth {
+        swaps.extend_from_slice(LOOKUP_FLOAT_SWAPS);
+    }
+    swaps
 }

@@ -70,4 +70,3 @@ fn list_length(pixel: vec2<u32>, z: f32) -> u32 {
     return light_list(pixel, z).y;
 }
 
-@group(1) @binding(3) var depth_tex: texture_depth_2d;
