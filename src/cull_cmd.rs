@@ -5,8 +5,8 @@ use std::path::PathBuf;
 
 use anyhow::{Result, bail};
 use manylights_cull::metrics::{self, ListMetrics};
-use manylights_cull::{CullOutput, CullSettings, Culler, Strategy, heatmap};
-use manylights_gpu::lookup_bounds::LookupBounds;
+use manylights_cull::{CullOutput, CullSettings, Culler, heatmap};
+use manylights_gpu::lookup_bounds::{BoundsTargets, LookupBounds};
 use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
 use manylights_gpu::stochastic::StochasticRanges;
 use manylights_gpu::timing::{GpuTimer, MAX_QUERIES};
@@ -65,18 +65,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let scene = a.build()?;
     let ctx = a.gpu()?;
     let samples = args.msaa;
-    if a.glass && args.export.is_some() {
-        bail!(
-            "--export with --glass: exports hold one depth a pixel, not glass; export without --glass"
-        );
-    }
-    ctx.check_msaa(samples)
-        .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
-    if samples > 1 && args.export.is_some() {
-        bail!(
-            "--export with --msaa {samples}: exports hold one depth a pixel; export without --msaa"
-        );
-    }
+    check_samples(&ctx, args)?;
     let (w, h) = (a.width, a.height);
     // With --hierarchy, its lights in place of the scene's, built on the GPU.
     let crate::hierarchy_opt::Shaded {
@@ -84,33 +73,8 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     } = a.upload(&ctx, scene)?;
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();
-    let depth = depth_target_msaa(&ctx, w, h, samples);
     let mut timer = GpuTimer::new(&ctx, 64);
-    let mut enc = ctx.device.create_command_encoder(&Default::default());
-    let depth_view = depth.create_view(&Default::default());
-    // Over transparent surfaces, culling covers them as the forward backend does: over the
-    // lookup bounds (from the nearest glass to the opaque surface), where the exact oracle
-    // also checks every visible glass fragment.
-    let bounds = gpu_scene.has_transparent().then(|| {
-        let b = LookupBounds::new(&ctx, &gpu_scene, samples);
-        let t = b.targets(&ctx, (w, h), &depth, true);
-        (b, t)
-    });
-    match &bounds {
-        Some((b, t)) if b.has_prepass() => {
-            b.encode_prepass(&mut enc, &gpu_scene, &depth_view, t, &mut timer)
-        }
-        _ => DepthPrepass::with_samples(&ctx, &gpu_scene, samples).encode(
-            &mut enc,
-            &gpu_scene,
-            &depth_view,
-            &mut timer,
-        ),
-    }
-    if let Some((b, t)) = &bounds {
-        b.encode_bounds(&mut enc, &gpu_scene, t, b.has_prepass(), &mut timer);
-    }
-    ctx.submit_and_wait(enc, "depth prepass")?;
+    let (depth, bounds) = depth_prepass(&ctx, &gpu_scene, (w, h), samples, &mut timer)?;
     let (culler, cull_depth) = match &bounds {
         Some((_, t)) => (Culler::with_bounds(&ctx, &gpu_scene, samples), &t.bounds),
         None => (Culler::with_samples(&ctx, &gpu_scene, samples), &depth),
@@ -155,19 +119,16 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     )?;
     let timings = timer.read(&ctx)?;
     let repeated = if args.repeat > 0 {
-        // The culling passes of the run above (the others are the prepass, a raster pass, and
-        // the lookup bounds', `prepass.*`).
-        let passes = timings.as_ref().map(|t| {
-            t.iter()
-                .filter(|p| {
-                    p.kind == manylights_gpu::timing::PassKind::Compute
-                        && !p.label.starts_with("prepass.")
-                })
-                .count() as u32
-        });
-        repeated_timings(
-            &ctx, &culler, &gpu_scene, cull_depth, &strategy, &settings, &out, passes, args,
-        )?
+        let run = manylights_lab::steady::Repeated {
+            ctx: &ctx,
+            culler: &culler,
+            scene: &gpu_scene,
+            depth: cull_depth,
+            strategy: &strategy,
+            settings: &settings,
+            first: &out,
+        };
+        repeated_timings(&run, timings.as_deref(), args)?
     } else {
         String::new()
     };
@@ -183,10 +144,11 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/cull"));
     let tile_png = dir.join(format!("heatmap_tiles_{}.png", strategy.name()));
     let pixel_png = dir.join(format!("heatmap_pixels_{}.png", strategy.name()));
-    for (path, img) in [
-        (&tile_png, heatmap::tiles(&out.params, &tiles, w, h, max)),
-        (&pixel_png, heatmap::pixels(&per_pixel, w, h, max)),
-    ] {
+    let (tile_img, pixel_img) = (
+        heatmap::tiles(&out.params, &tiles, w, h, max),
+        heatmap::pixels(&per_pixel, w, h, max),
+    );
+    for (path, img) in [(&tile_png, tile_img), (&pixel_png, pixel_img)] {
         write_atomic(path, |f| {
             img.write_to(f, image::ImageFormat::Png)
                 .map_err(|e| e.to_string())
@@ -212,27 +174,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         println!("  covered pixels          {}", m.covered_pixels);
     }
     print_earlier(&earlier, frames);
-    println!("  false negatives         {}", m.false_negatives);
-    match m.false_positive_ratio {
-        Some(r) => println!("  false-positive ratio    {r:.3} (lights evaluated / lights needed)"),
-        None => println!("  false-positive ratio    n/a (no pixel needs a light)"),
-    }
-    println!("  lights per pixel        {:.2}", m.lights_per_pixel_mean);
-    println!("  max lights per bin      {}", m.max_lights_per_bin);
-    println!(
-        "  list entries / bytes    {} / {}",
-        out.total,
-        out.list_bytes()
-    );
-    println!("  dropped lights          {}", out.dropped);
-    println!(
-        "  tile masks              {}",
-        match (&out.tile_masks, &out.tile_lines) {
-            (Some(m), _) => format!("used ({} bytes)", m.size()),
-            (None, Some(l)) => format!("used as tile lines ({} bytes)", l.size()),
-            (None, None) => "not used".into(),
-        }
-    );
+    print_lists(&m, &out);
     print_timings(timings.as_deref());
     print!("{repeated}");
     println!(
@@ -289,6 +231,87 @@ fn earlier_frames(
 }
 
 /// The frames before the last one's counts, with `--accumulate K`.
+/// Checks `--msaa` on the device and against `--export` and `--glass` (exports hold one depth
+/// a pixel).
+fn check_samples(ctx: &GpuContext, args: &CullArgs) -> Result<()> {
+    let samples = args.msaa;
+    if args.scene.glass && args.export.is_some() {
+        bail!(
+            "--export with --glass: exports hold one depth a pixel, not glass; export without --glass"
+        );
+    }
+    ctx.check_msaa(samples)
+        .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
+    if samples > 1 && args.export.is_some() {
+        bail!(
+            "--export with --msaa {samples}: exports hold one depth a pixel; export without --msaa"
+        );
+    }
+    Ok(())
+}
+
+/// The depth prepass of `gpu_scene` at `size` and `samples`, submitted, timed by `timer`; over
+/// transparent surfaces with the lookup bounds culling reads, as the forward backend culls
+/// them (from the nearest glass to the opaque surface, where the exact oracle also checks
+/// every visible glass fragment).
+fn depth_prepass(
+    ctx: &GpuContext,
+    gpu_scene: &GpuScene,
+    (w, h): (u32, u32),
+    samples: u32,
+    timer: &mut GpuTimer,
+) -> Result<(wgpu::Texture, Option<(LookupBounds, BoundsTargets)>)> {
+    let depth = depth_target_msaa(ctx, w, h, samples);
+    let mut enc = ctx.device.create_command_encoder(&Default::default());
+    let depth_view = depth.create_view(&Default::default());
+    let bounds = gpu_scene.has_transparent().then(|| {
+        let b = LookupBounds::new(ctx, gpu_scene, samples);
+        let t = b.targets(ctx, (w, h), &depth, true);
+        (b, t)
+    });
+    match &bounds {
+        Some((b, t)) if b.has_prepass() => {
+            b.encode_prepass(&mut enc, gpu_scene, &depth_view, t, timer)
+        }
+        _ => DepthPrepass::with_samples(ctx, gpu_scene, samples).encode(
+            &mut enc,
+            gpu_scene,
+            &depth_view,
+            timer,
+        ),
+    }
+    if let Some((b, t)) = &bounds {
+        b.encode_bounds(&mut enc, gpu_scene, t, b.has_prepass(), timer);
+    }
+    ctx.submit_and_wait(enc, "depth prepass")?;
+    Ok((depth, bounds))
+}
+
+/// The lists' measures: false negatives, false positives, lengths, bytes, drops, tile masks.
+fn print_lists(m: &ListMetrics, out: &CullOutput) {
+    println!("  false negatives         {}", m.false_negatives);
+    match m.false_positive_ratio {
+        Some(r) => println!("  false-positive ratio    {r:.3} (lights evaluated / lights needed)"),
+        None => println!("  false-positive ratio    n/a (no pixel needs a light)"),
+    }
+    println!("  lights per pixel        {:.2}", m.lights_per_pixel_mean);
+    println!("  max lights per bin      {}", m.max_lights_per_bin);
+    println!(
+        "  list entries / bytes    {} / {}",
+        out.total,
+        out.list_bytes()
+    );
+    println!("  dropped lights          {}", out.dropped);
+    println!(
+        "  tile masks              {}",
+        match (&out.tile_masks, &out.tile_lines) {
+            (Some(m), _) => format!("used ({} bytes)", m.size()),
+            (None, Some(l)) => format!("used as tile lines ({} bytes)", l.size()),
+            (None, None) => "not used".into(),
+        }
+    );
+}
+
 fn print_earlier(earlier: &[ListMetrics], frames: u32) {
     if frames <= 1 {
         return;
@@ -308,29 +331,27 @@ fn print_earlier(earlier: &[ListMetrics], frames: u32) {
     }
 }
 
-/// `cull --repeat N`: N runs back to back in one submission; each pass's median over them, as
-/// lines to print.
-#[allow(
-    clippy::too_many_arguments,
-    reason = "the inputs of the run being repeated"
-)]
+/// `cull --repeat N`: N runs of `run` back to back in one submission; each pass's median over
+/// them, as lines to print. `timings`: the first run's frame (its depth prepass and culling),
+/// none without timestamp queries.
 pub(crate) fn repeated_timings(
-    ctx: &GpuContext,
-    culler: &Culler,
-    scene: &GpuScene,
-    depth: &wgpu::Texture,
-    strategy: &Strategy,
-    settings: &CullSettings,
-    first: &CullOutput,
-    passes: Option<u32>,
+    run: &manylights_lab::steady::Repeated<'_>,
+    timings: Option<&[manylights_gpu::timing::PassTiming]>,
     args: &CullArgs,
 ) -> Result<String> {
     use std::fmt::Write as _;
     let n = args.repeat;
-    // `passes`: those of `first`, or none without timestamp queries.
-    let Some(passes) = passes else {
+    let Some(timings) = timings else {
         return Ok("  (no GPU timings: the adapter has no timestamp queries)\n".into());
     };
+    // The culling passes of the first run (the others are the prepass, a raster pass, and the
+    // lookup bounds', `prepass.*`).
+    let passes = timings
+        .iter()
+        .filter(|p| {
+            p.kind == manylights_gpu::timing::PassKind::Compute && !p.label.starts_with("prepass.")
+        })
+        .count() as u32;
     let most = manylights_lab::steady::max_runs(passes);
     if n > most {
         bail!(
@@ -339,16 +360,7 @@ pub(crate) fn repeated_timings(
             MAX_QUERIES / 2
         );
     }
-    let repeated = manylights_lab::steady::Repeated {
-        ctx,
-        culler,
-        scene,
-        depth,
-        strategy,
-        settings,
-        first,
-    };
-    let s = manylights_lab::steady::steady_cull(&repeated, passes, n)?
+    let s = manylights_lab::steady::steady_cull(run, passes, n)?
         .expect("timestamps were there for the first run");
     let mut lines = format!("  {n} runs back to back (median per pass):\n");
     for (label, kind, ms) in &s.passes {

@@ -105,17 +105,7 @@ impl GpuScene {
         width: u32,
         height: u32,
     ) -> Result<Self, GpuError> {
-        model.validate().map_err(GpuError::Unsupported)?;
-        if let Ranges::Stochastic { first, .. } = model.ranges
-            && first as usize > scene.lights.len()
-        {
-            return Err(GpuError::OverLimit {
-                what: "the first light with stochastic ranges".into(),
-                value: u64::from(first),
-                limit: scene.lights.len() as u64,
-                limit_name: "the scene's light count",
-            });
-        }
+        check_model(&model, scene)?;
         let mut vertices = Vec::with_capacity(scene.vertex_count());
         let mut by_model: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
         let mut transparent: Vec<u32> = Vec::new();
@@ -384,6 +374,23 @@ impl GpuScene {
 /// the view direction (a painter's order: exact for panes that do not overlap in depth
 /// within a pixel's view; intersecting transparent triangles are not split). Ties keep the
 /// scene's order.
+/// Whether `model` is one `scene` can be uploaded for: its values, and its first drawn light
+/// among the scene's.
+fn check_model(model: &LightModel, scene: &Scene) -> Result<(), GpuError> {
+    model.validate().map_err(GpuError::Unsupported)?;
+    match model.ranges {
+        Ranges::Stochastic { first, .. } if first as usize > scene.lights.len() => {
+            Err(GpuError::OverLimit {
+                what: "the first light with stochastic ranges".into(),
+                value: u64::from(first),
+                limit: scene.lights.len() as u64,
+                limit_name: "the scene's light count",
+            })
+        }
+        _ => Ok(()),
+    }
+}
+
 fn back_to_front(triangles: &[[u32; 3]], centroids: &[Vec3], camera: &Camera) -> Vec<[u32; 3]> {
     let view = camera.view_from_world();
     let mut order: Vec<(f32, usize)> = centroids
