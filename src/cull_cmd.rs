@@ -363,8 +363,14 @@ pub(crate) fn repeated_timings(
     let s = manylights_lab::steady::steady_cull(run, passes, n)?
         .expect("timestamps were there for the first run");
     let mut lines = format!("  {n} runs back to back (median per pass):\n");
-    for (label, kind, ms) in &s.passes {
-        writeln!(lines, "  {label:<28} {:>8} {ms:>10.3} ms", kind.as_str())?;
+    for p in &s.passes {
+        writeln!(
+            lines,
+            "  {:<28} {:>8} {:>10.3} ms",
+            p.label,
+            p.kind.as_str(),
+            p.ms
+        )?;
     }
     writeln!(
         lines,

@@ -321,16 +321,11 @@ pub(crate) fn candidate_ranges(args: &TuneArgs) -> Result<Vec<RadiusRule>> {
         .collect())
 }
 
-/// The light range a ranked candidate was tried with, where ranges were candidates: the cell
-/// name's radius part (` threshold=0.1`, ` stochastic=1`, ` hierarchy=1/h0.25`), else nothing.
+/// The light range a ranked candidate was tried with, where ranges were candidates: its range
+/// parameter (` threshold=0.1`, ` stochastic=1`, ` hierarchy=1/h0.25`), else nothing.
 fn range_of(r: &manylights_lab::Row) -> String {
-    r.cell
-        .split(',')
-        .next()
-        .filter(|p| {
-            manylights_lab::RADIUS_PREFIXES
-                .iter()
-                .any(|k| p.starts_with(k))
-        })
-        .map_or(String::new(), |p| format!(" {p}"))
+    manylights_lab::RADIUS_AXES
+        .iter()
+        .find_map(|k| r.parameters.get(*k).map(|v| format!(" {k}={v}")))
+        .unwrap_or_default()
 }

@@ -270,6 +270,68 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                 r.passes_steady,
                 r.passes
             );
+            // The cell's parameters as columns: its name is made of them, and its light
+            // range's value is a column of its own.
+            // (A value may hold commas, a camera pose's: each `name=value` is in the name,
+            // and together with the commas between them they are all of it.)
+            let parameters: Vec<String> = r
+                .parameters
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect();
+            if r.cell != "base" {
+                let len: usize = parameters.iter().map(String::len).sum();
+                assert!(
+                    parameters.iter().all(|p| r.cell.contains(p.as_str()))
+                        && len + parameters.len() - 1 == r.cell.len(),
+                    "{name} {}: parameters {:?}",
+                    r.cell,
+                    r.parameters
+                );
+            }
+            assert_eq!(
+                r.setting,
+                r.parameters.get("setting").cloned().unwrap_or_default(),
+                "{name} {}",
+                r.cell
+            );
+            assert!(
+                r.radius_value.is_some(),
+                "{name} {}: no radius_value",
+                r.cell
+            );
+            // Each pass's category, from the plans that recorded it: the per-category columns
+            // are the sums of the single frame's passes of each.
+            for l in r.passes.keys().chain(r.passes_steady.keys()) {
+                assert!(
+                    r.pass_categories.contains_key(l),
+                    "{name} {}: no category for {l} in {:?}",
+                    r.cell,
+                    r.pass_categories
+                );
+            }
+            let of = |c: &str| -> f64 {
+                r.passes
+                    .iter()
+                    .filter(|(l, _)| r.pass_categories[*l] == c)
+                    .map(|(_, ms)| ms)
+                    .sum()
+            };
+            for (c, column) in [
+                ("prepass", r.gpu_ms_prepass),
+                ("cull", r.gpu_ms_cull),
+                ("shade", r.gpu_ms_shade),
+            ] {
+                let column = column.unwrap_or(0.0);
+                // Medians of sums against sums of medians: equal over one timed frame, near
+                // over several.
+                assert!(
+                    column == 0.0 || of(c) > 0.0,
+                    "{name} {}: {c} {column} ms without a pass of it in {:?}",
+                    r.cell,
+                    r.pass_categories
+                );
+            }
             // Steady-state culling, and culling with shading, for every culling cell; neither
             // for naive forward.
             if r.backend == "naive_forward" {
@@ -391,7 +453,10 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
                  radius_rule,exposure_infinite,rmse_infinite,energy_error_infinite,seeds,accumulate,\
                  bias_infinite,noise_infinite,temporal_flicker_mean,reference_infinite_cached,\
                  materials,covered_pixels,ns_per_light_eval,gpu_ms_hierarchy,scene_lights,\
-                 bytes_written_per_pixel,bytes_read_per_pixel,gpu_ms_hierarchy_steady"
+                 bytes_written_per_pixel,bytes_read_per_pixel,gpu_ms_hierarchy_steady,setting,\
+                 radius_value,hierarchy_spacing,hierarchy_finest_nodes,hierarchy_growth,\
+                 hierarchy_ramp,hierarchy_sample_from,stochastic_bound,stochastic_draw,interleave,\
+                 stochastic_exposure"
     ));
 }
 

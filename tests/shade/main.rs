@@ -27,11 +27,12 @@ mod transparent;
 mod visibility;
 
 use manylights_cull::{CullSettings, Slicing, Strategy};
-use manylights_gpu::timing::{GpuTimer, PassKind};
+use manylights_gpu::timing::{Category, GpuTimer, PassKind, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::procedural::ProceduralScene;
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene};
 use manylights_shade::accuracy::{ImageError, compare};
+use manylights_shade::frame_plan::{Resource, Role};
 use manylights_shade::{
     Backend, HdrImage, ReferenceRenderer, Renderer, ShadeOutput, VisibilityPass,
 };
@@ -202,6 +203,65 @@ fn check_timings(out: &ShadeOutput, what: &str, backend: Backend) {
             p.label,
             p.ms
         );
+    }
+    check_plan(out, t, what);
+}
+
+/// The frame's passes as its plan declares them: every resource a pass reads is an input or
+/// written by an earlier pass; the passes are timed in their entry's category, the geometry's
+/// before culling's before the shading's; the checks' passes are not timed; a culling run
+/// between geometry and shading unless naive forward.
+fn check_plan(out: &ShadeOutput, t: &[PassTiming], what: &str) {
+    let mut written: Vec<Resource> = Resource::INPUTS.to_vec();
+    for p in &out.passes {
+        for r in &p.reads {
+            assert!(
+                written.contains(r),
+                "{what}: {} reads {r:?}, which no earlier pass writes: {:?}",
+                p.name,
+                out.passes
+            );
+        }
+        written.extend(&p.writes);
+    }
+    let culls = out.passes.iter().filter(|p| p.name == "cull").count();
+    assert_eq!(
+        culls,
+        usize::from(out.backend != Backend::NaiveForward),
+        "{what}: {:?}",
+        out.passes
+    );
+    let phase = |c: Category| match c {
+        Category::LightUpdate => 0,
+        Category::Prepass => 1,
+        Category::Cull => 2,
+        Category::Shade => 3,
+    };
+    assert!(
+        t.windows(2)
+            .all(|w| phase(w[0].category) <= phase(w[1].category)),
+        "{what}: passes out of their categories' order: {t:?}"
+    );
+    for timing in t {
+        let culling = ["cull.", "scan.", "sort."]
+            .iter()
+            .any(|p| timing.label.starts_with(p));
+        match out.passes.iter().find(|p| p.name == timing.label) {
+            Some(p) => {
+                assert_eq!(p.role, Role::Frame, "{what}: {} is timed", p.name);
+                assert_eq!(timing.category, p.category, "{what}: {}", p.name);
+            }
+            None if culling => assert_eq!(timing.category, Category::Cull, "{what}: {timing:?}"),
+            // The passes of a step named by its main pass (the glass's bounds).
+            None => assert_eq!(timing.category, Category::Prepass, "{what}: {timing:?}"),
+        }
+    }
+    if out.computed_visibility() {
+        let depth = out
+            .passes
+            .iter()
+            .find(|p| p.name == "shade.visibility_depth");
+        assert_eq!(depth.map(|p| p.role), Some(Role::Checks), "{what}");
     }
 }
 

@@ -10,7 +10,7 @@ use manylights_scene::procedural::{AtriumParams, PillarsParams, ProceduralScene}
 use manylights_shade::accuracy::compare;
 use manylights_shade::{Backend, ReferenceRenderer, Renderer};
 
-use super::{common, naive_against, scene, strategies, within_tolerance};
+use super::{check_timings, common, naive_against, scene, strategies, within_tolerance};
 
 /// `name` with its glass panes and the tests' lights.
 pub(crate) fn glass_scene(name: &str) -> manylights_scene::Scene {
@@ -92,6 +92,7 @@ fn forward_and_deferred_shade_glass_over_exact_lists() {
                     let out = renderer
                         .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
                         .unwrap_or_else(|e| panic!("{what}: {e}"));
+                    check_timings(&out, &what, backend);
                     let e = compare(&out.color, &reference, 1.0);
                     if backend.lights_in_compute() && samples > 1 {
                         // Edges lit a sample at a time (tests/shade/msaa.rs).

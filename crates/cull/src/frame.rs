@@ -1,7 +1,7 @@
 //! One culling run: the buffers every strategy shares (`Frame`), and the driver that records a
 //! strategy's plan once, sized exactly between two submissions, or back to back (`execute`).
 
-use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::timing::{Category, GpuTimer};
 use manylights_gpu::{GpuContext, GpuError, pipeline, readback};
 
 use crate::layout::GpuCullParams;
@@ -304,7 +304,9 @@ pub(crate) fn execute<P: Plan>(
                 .collect();
             let mut enc = ctx.encoder("cull.repeated");
             for _ in 0..r.runs {
+                let outer = timer.set_category(Category::Cull);
                 timer.span_begin(&mut enc, &f.span);
+                timer.set_category(outer);
                 rec.record(&mut enc, timer, &steps)?;
                 if let Some(pass) = then.as_ref() {
                     pass.record(&mut enc, timer);

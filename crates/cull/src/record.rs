@@ -15,7 +15,7 @@
 
 use std::borrow::Cow;
 
-use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::timing::{Category, GpuTimer};
 use manylights_gpu::{GpuContext, GpuError, pipeline};
 
 use crate::radix_sort::RadixSort;
@@ -252,9 +252,22 @@ pub struct Recorder<'a> {
 }
 
 impl Recorder<'_> {
-    /// Encodes `steps` in order into `enc`; each pass is timed as its name (by a timer of
-    /// passes; a timer of spans times whole runs, `frame::execute`).
+    /// Encodes `steps` in order into `enc`; each pass is timed as its name, in
+    /// [`Category::Cull`] (by a timer of passes; a timer of spans times whole runs,
+    /// `frame::execute`).
     pub fn record(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        steps: &[Step<'_>],
+    ) -> Result<(), GpuError> {
+        let outer = timer.set_category(Category::Cull);
+        let recorded = self.record_steps(enc, timer, steps);
+        timer.set_category(outer);
+        recorded
+    }
+
+    fn record_steps(
         &self,
         enc: &mut wgpu::CommandEncoder,
         timer: &mut GpuTimer,

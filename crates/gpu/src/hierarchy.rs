@@ -17,7 +17,7 @@ use wgpu::util::DeviceExt;
 use crate::layout::GpuLight;
 use crate::pipeline::{self, UNIFORM, entry, storage};
 use crate::shaders::{LIGHT, ShaderDef};
-use crate::timing::{GpuTimer, PassTiming};
+use crate::timing::{Category, GpuTimer, PassTiming};
 use crate::{GpuContext, GpuError, GpuScene};
 
 /// The build's passes, its sums in 32-bit atomics ([`Sums::Bits32`]).
@@ -399,6 +399,7 @@ impl GpuHierarchy {
     /// cells' passes that make that level from its items' cells
     /// (`lights.hierarchy.cells<l>`, `.fill<l>`, `.cell_splat<l>`, `l` the level binned).
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        let outer = timer.set_category(Category::LightUpdate);
         encoder.clear_buffer(&self.slots, 0, None);
         for (l, p) in self.passes.iter().enumerate() {
             let (label, pipeline) = if p.finalize {
@@ -422,6 +423,7 @@ impl GpuHierarchy {
                 }
             }
         }
+        timer.set_category(outer);
     }
 
     /// Passes a build records: a pass a level (the points pass first) and the cells' three
@@ -447,7 +449,9 @@ impl GpuHierarchy {
                 label: Some("lights.hierarchy_repeated"),
             });
         for _ in 0..runs {
+            let outer = timer.set_category(Category::LightUpdate);
             timer.span_begin(&mut encoder, "lights.hierarchy");
+            timer.set_category(outer);
             self.encode(&mut encoder, timer);
         }
         timer.span_end(&mut encoder);

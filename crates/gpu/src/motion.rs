@@ -14,7 +14,7 @@ use wgpu::util::DeviceExt;
 use crate::layout::GpuLight;
 use crate::pipeline::{self, UNIFORM, entry, storage};
 use crate::shaders::{LIGHT, ShaderDef, WgslConst};
-use crate::timing::{GpuTimer, PassTiming};
+use crate::timing::{Category, GpuTimer, PassTiming};
 use crate::{GpuContext, GpuError, GpuScene};
 
 /// The animation pass.
@@ -188,6 +188,7 @@ impl LightMotion {
             bytemuck::bytes_of(&time),
         );
         let mut timer = GpuTimer::new(ctx, 1);
+        timer.set_category(Category::LightUpdate);
         let mut encoder = encoder(ctx, "lights.animate");
         pipeline::dispatch(
             &mut encoder,
@@ -286,6 +287,7 @@ impl LightMotion {
         let mut timer = GpuTimer::spans(ctx, 1);
         let mut encoder = encoder(ctx, "lights.upload");
         if let Some(t) = &mut timer {
+            t.set_category(Category::LightUpdate);
             t.span_begin(&mut encoder, "lights.upload");
         }
         encoder.copy_buffer_to_buffer(

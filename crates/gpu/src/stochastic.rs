@@ -10,7 +10,7 @@ use wgpu::util::DeviceExt;
 
 use crate::pipeline::{self, UNIFORM, entry, storage};
 use crate::shaders::{LIGHT, ShaderDef};
-use crate::timing::{GpuTimer, PassTiming};
+use crate::timing::{Category, GpuTimer, PassTiming};
 use crate::{GpuContext, GpuError, GpuScene, LightModel};
 
 /// The pass.
@@ -191,6 +191,7 @@ impl StochasticRanges {
             bytemuck::bytes_of(&frame),
         );
         let mut timer = GpuTimer::new(ctx, 1);
+        timer.set_category(Category::LightUpdate);
         // Not ctx.encoder: the draw is not part of the frame's encoding time.
         let mut encoder = ctx
             .device

@@ -28,6 +28,49 @@ impl PassKind {
     }
 }
 
+/// What part of a frame a pass belongs to: the result columns `gpu_ms_prepass`, `gpu_ms_cull`,
+/// `gpu_ms_shade` and `gpu_ms_light_update` sum the passes of each. A pass takes the category
+/// its timer holds when it is timed ([`GpuTimer::set_category`]), which the recorder of its
+/// plan sets: a frame plan's entry's, culling's, a light update's.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Category {
+    /// The frame's geometry: a depth prepass, a G-buffer or visibility buffer (raster or
+    /// compute), the lookup bounds.
+    Prepass,
+    /// Culling: the lists from the depth.
+    Cull,
+    /// Shading, and any pass that is none of the others (a reference's).
+    #[default]
+    Shade,
+    /// Moving the lights, drawing their ranges, building a hierarchy over them.
+    LightUpdate,
+}
+
+impl Category {
+    /// Every category, in a frame's order (the light update first).
+    pub const ALL: [Category; 4] = [
+        Category::LightUpdate,
+        Category::Prepass,
+        Category::Cull,
+        Category::Shade,
+    ];
+
+    /// `prepass`, `cull`, `shade` or `light_update`: the result columns' part of the name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Self::Prepass => "prepass",
+            Self::Cull => "cull",
+            Self::Shade => "shade",
+            Self::LightUpdate => "light_update",
+        }
+    }
+
+    /// The category named `name` ([`Category::as_str`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|c| c.as_str() == name)
+    }
+}
+
 /// One timed pass.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PassTiming {
@@ -35,6 +78,8 @@ pub struct PassTiming {
     pub label: String,
     /// Raster or compute.
     pub kind: PassKind,
+    /// The part of the frame it belongs to.
+    pub category: Category,
     /// GPU time in milliseconds.
     pub ms: f64,
 }
@@ -57,7 +102,9 @@ pub struct GpuTimer {
     device: Option<wgpu::Device>,
     /// Each set of queries and the buffer it resolves into.
     sets: Vec<(wgpu::QuerySet, wgpu::Buffer)>,
-    passes: Vec<(String, PassKind)>,
+    passes: Vec<(String, PassKind, Category)>,
+    /// The category of the passes timed from now on.
+    category: Category,
     /// Passes a set.
     capacity: u32,
     spans: bool,
@@ -82,6 +129,7 @@ impl GpuTimer {
             device: None,
             sets: Vec::new(),
             passes: Vec::new(),
+            category: Category::default(),
             capacity: 1,
             spans: false,
             open: None,
@@ -121,6 +169,12 @@ impl GpuTimer {
         }
     }
 
+    /// Times the passes (and spans) that follow as `category`, until it is set again; returns
+    /// the category it held, for the caller to restore.
+    pub fn set_category(&mut self, category: Category) -> Category {
+        std::mem::replace(&mut self.category, category)
+    }
+
     /// Whether this timer records anything.
     pub fn enabled(&self) -> bool {
         self.device.is_some()
@@ -146,7 +200,7 @@ impl GpuTimer {
             });
             self.sets.push((queries, resolve));
         }
-        self.passes.push((label.to_owned(), kind));
+        self.passes.push((label.to_owned(), kind, self.category));
         Some((set, slot * 2))
     }
 
@@ -212,11 +266,12 @@ impl GpuTimer {
             self.passes
                 .iter()
                 .enumerate()
-                .map(|(i, (label, kind))| {
+                .map(|(i, (label, kind, category))| {
                     let dt = ticks[2 * i + 1].wrapping_sub(ticks[2 * i]);
                     PassTiming {
                         label: label.clone(),
                         kind: *kind,
+                        category: *category,
                         ms: dt as f64 * period * 1e-6,
                     }
                 })

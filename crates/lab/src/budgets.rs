@@ -79,11 +79,11 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
     // scene's: a hierarchy's cells count the nodes they shade, `Row::setting_lights`).
     let mut settings: BTreeMap<(String, String, u32, u32, u32), Vec<&Row>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.flip_mean_infinite.is_some()) {
-        let label = r
-            .cell
-            .split(',')
-            .find_map(|p| p.strip_prefix("setting="))
-            .map_or_else(|| format!("{:020}", r.setting_lights()), str::to_owned);
+        let label = if r.setting.is_empty() {
+            format!("{:020}", r.setting_lights())
+        } else {
+            r.setting.clone()
+        };
         settings
             .entry((r.scene.clone(), label, r.width, r.height, r.msaa))
             .or_default()
@@ -257,6 +257,8 @@ mod tests {
         let mut h = row("setting=hall,hierarchy=1/h0.25", "hierarchy", 0.2, 0.04, 0);
         h.lights += 1000;
         rows.push(h);
+        // Rows written before their parameters were columns: the report backfills them.
+        crate::results::backfill(&mut rows);
         let refs: Vec<&Row> = rows.iter().collect();
         assert_eq!(
             fastest_within(&refs, 0.05, Family::Conservative)
@@ -322,7 +324,7 @@ mod tests {
             row("threshold=1", "threshold", 1000),
             row("hierarchy=1/h0.25", "hierarchy", 1234),
         ];
-        crate::results::backfill_scene_lights(&mut rows);
+        crate::results::backfill(&mut rows);
         assert_eq!(rows[1].scene_lights, Some(1000));
         assert_eq!(rows[1].setting_lights(), 1000);
         let f = findings(&rows);
@@ -330,7 +332,7 @@ mod tests {
         assert!(f[0].contains("1000 lights"), "{}", f[0]);
         // A row that says its scene's count keeps it.
         rows[1].scene_lights = Some(999);
-        crate::results::backfill_scene_lights(&mut rows);
+        crate::results::backfill(&mut rows);
         assert_eq!(rows[1].setting_lights(), 999);
     }
 }

@@ -5,16 +5,16 @@
 use std::collections::BTreeSet;
 
 use manylights_gpu::GpuContext;
-use manylights_gpu::timing::{PassKind, PassTiming};
-use manylights_scene::Scene;
+use manylights_gpu::timing::{Category, PassKind, PassTiming};
+use manylights_scene::{RadiusRule, Scene};
 use manylights_shade::Backend;
 
 use crate::evaluate::{PoseEval, temporal_stability};
 use crate::experiment::{Cell, Config, Experiment, params_label};
 use crate::noise::{Draws, Noise};
 use crate::results::{Row, percentiles};
-use crate::runner::{category, now};
-use crate::steady::SteadyCull;
+use crate::runner::now;
+use crate::steady::{PassMedian, SteadyCull};
 
 /// The material models of the scene's surfaces, by id, their names joined by `+`.
 fn frame_models(scene: &Scene) -> String {
@@ -26,13 +26,13 @@ fn frame_models(scene: &Scene) -> String {
     crate::cells::models_label(&models.into_iter().collect::<Vec<_>>())
 }
 
-/// The shading passes' steady-state time (`shade.*` but the G-buffer or visibility buffer) per light evaluated, ns;
-/// none where they were not timed apart or nothing was evaluated.
-fn ns_per_light_eval(passes: &[(String, f64)], evaluated: f64) -> Option<f64> {
+/// The shading passes' steady-state time (those of [`Category::Shade`]) per light evaluated,
+/// ns; none where they were not timed apart or nothing was evaluated.
+fn ns_per_light_eval(passes: &[PassMedian], evaluated: f64) -> Option<f64> {
     let ms: f64 = passes
         .iter()
-        .filter(|(label, _)| label.starts_with("shade.") && !crate::runner::is_surfaces_pass(label))
-        .map(|(_, ms)| ms)
+        .filter(|p| p.category == Category::Shade)
+        .map(|p| p.ms)
         .sum();
     (ms > 0.0 && evaluated > 0.0).then(|| ms * 1e6 / evaluated)
 }
@@ -100,6 +100,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
     let med = |s: Option<(f64, f64, f64)>| s.map(|x| x.0);
     let p10 = |s: Option<(f64, f64, f64)>| s.map(|x| x.1);
     let p90 = |s: Option<(f64, f64, f64)>| s.map(|x| x.2);
+    let rule = RuleColumns::of(&c.lights.radius);
     Row {
         experiment: exp.name.clone(),
         cell: cell.name.clone(),
@@ -129,6 +130,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         msaa: c.msaa,
         transparent,
         passes_steady: steady_passes(first, hierarchy_steady.as_ref()),
+        pass_categories: pass_categories(frames, first, hierarchy_steady.as_ref()),
         gpu_ms_geometry_steady: first.steady_geometry,
         gpu_ms_frame_steady: match (c.backend, first.steady_geometry, first.steady_frame) {
             (Backend::NaiveForward, g, _) => g,
@@ -197,10 +199,86 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         lights_needed_per_pixel_mean: worst.needed_per_pixel_mean,
         gpu_ms_light_update: med(light_update),
         cpu_ms_upload: percentiles(uploads).map(|x| x.0),
+        setting: cell
+            .parameters
+            .iter()
+            .find(|(k, _)| k == "setting")
+            .map(|(_, v)| v.clone())
+            .unwrap_or_default(),
+        radius_value: rule.value,
+        hierarchy_spacing: rule.spacing,
+        hierarchy_finest_nodes: rule.finest_nodes,
+        hierarchy_growth: rule.growth,
+        hierarchy_ramp: rule.ramp,
+        hierarchy_sample_from: rule.sample_from,
+        stochastic_bound: rule.bound,
+        stochastic_draw: rule.draw,
+        interleave: rule.interleave,
+        stochastic_exposure: rule.exposure,
+        parameters: cell.parameters.iter().cloned().collect(),
         passes,
         index: cell.index,
         id,
         finished_unix: now(),
+    }
+}
+
+/// A radius rule's parameters as the row's columns.
+#[derive(Default)]
+struct RuleColumns {
+    value: Option<f64>,
+    spacing: Option<f64>,
+    finest_nodes: Option<f64>,
+    growth: Option<f64>,
+    ramp: Option<f64>,
+    sample_from: Option<u32>,
+    bound: Option<String>,
+    draw: Option<String>,
+    interleave: Option<u32>,
+    exposure: Option<f64>,
+}
+
+impl RuleColumns {
+    fn of(rule: &RadiusRule) -> Self {
+        // As the rule's f32 is written (0.1, not 0.10000000149011612).
+        let col = |v: f32| v.to_string().parse::<f64>().ok();
+        match *rule {
+            RadiusRule::Fixed(v) | RadiusRule::Threshold(v) => Self {
+                value: col(v),
+                ..Self::default()
+            },
+            RadiusRule::Hierarchy {
+                alpha,
+                spacing,
+                finest_nodes,
+                growth,
+                ramp,
+                sample_from,
+            } => Self {
+                value: col(alpha),
+                spacing: col(spacing),
+                finest_nodes: col(finest_nodes),
+                growth: col(growth),
+                ramp: col(ramp),
+                sample_from,
+                ..Self::default()
+            },
+            RadiusRule::Stochastic {
+                error,
+                bound,
+                exposure,
+                interleave,
+                draw,
+                ..
+            } => Self {
+                value: col(error),
+                bound: Some(bound.name().into()),
+                draw: Some(draw.name().into()),
+                interleave: Some(interleave),
+                exposure: col(exposure),
+                ..Self::default()
+            },
+        }
     }
 }
 
@@ -210,19 +288,32 @@ fn steady_passes(
     first: &PoseEval,
     build: Option<&SteadyCull>,
 ) -> std::collections::BTreeMap<String, f64> {
-    let build = build
-        .into_iter()
-        .flat_map(|s| s.passes.iter().map(|(label, _, ms)| (label, *ms)));
+    let build = build.into_iter().flat_map(|s| s.passes.iter());
     let mut m = std::collections::BTreeMap::new();
-    for (label, ms) in first
-        .steady_passes
-        .iter()
-        .map(|(l, ms)| (l, *ms))
-        .chain(build)
-    {
-        *m.entry(label.clone()).or_insert(0.0) += ms;
+    for p in first.steady_passes.iter().chain(build) {
+        *m.entry(p.label.clone()).or_insert(0.0) += p.ms;
     }
     m
+}
+
+/// The category of every pass the row times (`passes`, `passes_steady`), by label.
+fn pass_categories(
+    frames: &[Vec<PassTiming>],
+    first: &PoseEval,
+    build: Option<&SteadyCull>,
+) -> std::collections::BTreeMap<String, String> {
+    let steady = first
+        .steady_passes
+        .iter()
+        .chain(build.into_iter().flat_map(|s| s.passes.iter()))
+        .map(|p| (p.label.clone(), p.category));
+    frames
+        .iter()
+        .flatten()
+        .map(|p| (p.label.clone(), p.category))
+        .chain(steady)
+        .map(|(l, c)| (l, c.as_str().to_owned()))
+        .collect()
 }
 
 /// A cell's measured frames as median and 10th and 90th percentile milliseconds: the whole,
@@ -252,10 +343,10 @@ impl Timings {
                 .collect()
         };
         let stats = |v: Vec<f64>| if timed { percentiles(&v) } else { None };
-        let of_category = |name: &str| stats(series(&|p| category(&p.label) == name));
+        let of_category = |c: Category| stats(series(&|p| p.category == c));
         let updates_timed = frames
             .iter()
-            .any(|t| t.iter().any(|p| category(&p.label) == "light_update"));
+            .any(|t| t.iter().any(|p| p.category == Category::LightUpdate));
         let mut passes = std::collections::BTreeMap::new();
         if timed {
             let labels: BTreeSet<String> = frames
@@ -270,11 +361,11 @@ impl Timings {
         }
         Timings {
             total: stats(series(&|_| true)),
-            cull: of_category("cull"),
-            shade: of_category("shade"),
-            prepass: of_category("prepass"),
+            cull: of_category(Category::Cull),
+            shade: of_category(Category::Shade),
+            prepass: of_category(Category::Prepass),
             light_update: if updates_timed {
-                of_category("light_update")
+                of_category(Category::LightUpdate)
             } else {
                 None
             },

@@ -21,8 +21,12 @@ use crate::experiment::{
 pub struct Cell {
     /// Position in the sweep order.
     pub index: usize,
-    /// Readable name from the swept values (`base` without a sweep).
+    /// Readable name from the swept values (`base` without a sweep): its parameters as
+    /// `name=value` parts joined by commas.
     pub name: String,
+    /// The swept values: each axis's name (`setting`, `scene`, `lights`, `threshold`, ...,
+    /// `variant`) and the value's, in sweep order.
+    pub parameters: Vec<(String, String)>,
     /// The configuration.
     pub config: Config,
 }
@@ -281,28 +285,31 @@ impl Experiment {
         axis!(s.settings, apply_setting);
         axis!(s.scene, |c: &mut Config, v: SceneSpec| {
             c.scene = v;
-            format!("scene={}", c.scene.label())
+            ("scene", c.scene.label())
         });
         axis!(s.lights, |c: &mut Config, v: LightSpec| {
             c.lights = v;
             // One name part (no comma), so that a figure's series drops it with the count.
-            format!("lights={}({})", v.count, radius_label(&v.radius))
+            (
+                "lights",
+                format!("{}({})", v.count, radius_label(&v.radius)),
+            )
         });
         axis!(s.light_count, |c: &mut Config, v: u32| {
             c.lights.count = v;
-            format!("lights={v}")
+            ("lights", v.to_string())
         });
         axis!(s.light_seed, |c: &mut Config, v: u64| {
             c.lights.seed = v;
-            format!("seed={v}")
+            ("seed", v.to_string())
         });
         axis!(s.generator, |c: &mut Config, v: LightGenerator| {
             c.lights.generator = v;
-            format!("generator={v:?}")
+            ("generator", format!("{v:?}"))
         });
         axis!(s.radius, |c: &mut Config, v: RadiusRule| {
             c.lights.radius = v;
-            radius_label(&v)
+            radius_parameter(&v)
         });
         axis!(s.camera, |c: &mut Config, v: CameraSpec| {
             let label = match &v {
@@ -311,61 +318,58 @@ impl Experiment {
                 CameraSpec::Path(p) => format!("path{}", p.len()),
             };
             c.camera = v;
-            format!("camera={label}")
+            ("camera", label)
         });
         axis!(s.resolution, |c: &mut Config, v: (u32, u32)| {
             c.resolution = v;
-            format!("res={}x{}", v.0, v.1)
+            ("res", format!("{}x{}", v.0, v.1))
         });
         axis!(s.strategy, |c: &mut Config, v: Strategy| {
             c.strategy = v;
-            format!("strategy={}", strategy_label(&v))
+            ("strategy", strategy_label(&v))
         });
         axis!(s.backend, |c: &mut Config, v: Backend| {
             c.backend = v;
-            format!("backend={}", v.name())
+            ("backend", v.name().to_string())
         });
         axis!(s.capacity, |c: &mut Config, v: Option<u32>| {
             c.capacity = v;
-            format!("capacity={}", v.map_or("none".into(), |x| x.to_string()))
+            ("capacity", v.map_or("none".into(), |x| x.to_string()))
         });
         axis!(s.mask_budget, |c: &mut Config, v: Option<u64>| {
             c.mask_budget = v;
-            format!(
-                "mask_budget={}",
-                v.map_or("default".into(), |x| x.to_string())
-            )
+            ("mask_budget", v.map_or("default".into(), |x| x.to_string()))
         });
         axis!(s.tile_boxes, |c: &mut Config, v: bool| {
             c.tile_boxes = v;
-            format!("tile_boxes={v}")
+            ("tile_boxes", v.to_string())
         });
         axis!(s.motion, |c: &mut Config, v: Motion| {
             c.lights.motion = v;
-            format!("motion={}", v.label())
+            ("motion", v.label())
         });
         axis!(s.light_update, |c: &mut Config, v: LightUpdate| {
             c.light_update = v;
-            format!("light_update={}", v.name())
+            ("light_update", v.name().to_string())
         });
         axis!(s.msaa, |c: &mut Config, v: u32| {
             c.msaa = v;
-            format!("msaa={v}")
+            ("msaa", v.to_string())
         });
         axis!(s.hdr, |c: &mut Config, v: manylights_shade::HdrFormat| {
             c.hdr = v;
-            format!("hdr={}", v.name())
+            ("hdr", v.name().to_string())
         });
         axis!(s.materials, |c: &mut Config, v: Vec<Model>| {
-            let label = format!("materials={}", models_label(&v));
+            let label = models_label(&v);
             c.materials = v;
-            label
+            ("materials", label)
         });
         axis!(s.device_limit, |c: &mut Config, v: Option<DeviceLimit>| {
             c.device_limit = v;
-            format!(
-                "limit={}",
-                v.map_or("none".into(), |x| format!("{x:?}").to_lowercase())
+            (
+                "limit",
+                v.map_or("none".into(), |x| format!("{x:?}").to_lowercase()),
             )
         });
         axis!(s.variants, apply_variant);
@@ -418,8 +422,9 @@ impl Experiment {
     }
 }
 
-/// How the part of a cell's name that [`radius_label`] writes begins, one prefix a rule.
-pub const RADIUS_PREFIXES: [&str; 4] = ["threshold=", "stochastic=", "radius=", "hierarchy="];
+/// The names of the parameter [`radius_parameter`] makes, one a rule: a cell whose parameters
+/// hold one sweeps its light range.
+pub const RADIUS_AXES: [&str; 4] = ["threshold", "stochastic", "radius", "hierarchy"];
 
 /// A radius rule in cell names, one name part (no comma): `radius=R`, `threshold=T`,
 /// `hierarchy=A/hH` (alpha A, spacing H; then `/nR` where the finest grid may hold R nodes a
@@ -428,9 +433,16 @@ pub const RADIUS_PREFIXES: [&str; 4] = ["threshold=", "stochastic=", "radius=", 
 /// `stochastic=E` with `/albedo` under the albedo bound, `/independent` for independent draws, `/accK` where K frames accumulate, `/ilN` with N x N interleaved pixel
 /// classes and `/exposureX` where the exposure is not 1.
 pub fn radius_label(rule: &RadiusRule) -> String {
+    let (name, value) = radius_parameter(rule);
+    format!("{name}={value}")
+}
+
+/// A radius rule as a sweep's parameter: the axis name (`radius`, `threshold`, `hierarchy`,
+/// `stochastic`) and the value [`radius_label`] writes after it.
+pub fn radius_parameter(rule: &RadiusRule) -> (&'static str, String) {
     match *rule {
-        RadiusRule::Fixed(r) => format!("radius={r}"),
-        RadiusRule::Threshold(t) => format!("threshold={t}"),
+        RadiusRule::Fixed(r) => ("radius", r.to_string()),
+        RadiusRule::Threshold(t) => ("threshold", t.to_string()),
         RadiusRule::Hierarchy {
             alpha,
             spacing,
@@ -439,7 +451,7 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             ramp,
             sample_from,
         } => {
-            let mut s = format!("hierarchy={alpha}/h{spacing}");
+            let mut s = format!("{alpha}/h{spacing}");
             if f64::from(finest_nodes) != manylights_scene::hierarchy::FINEST_NODES {
                 s += &format!("/n{finest_nodes}");
             }
@@ -452,7 +464,7 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             if let Some(l) = sample_from {
                 s += &format!("/s{l}");
             }
-            s
+            ("hierarchy", s)
         }
         RadiusRule::Stochastic {
             error,
@@ -463,7 +475,7 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             draw,
             ..
         } => {
-            let mut s = format!("stochastic={error}");
+            let mut s = error.to_string();
             if bound != StochasticBound::Light {
                 s += &format!("/{}", bound.name());
             }
@@ -479,16 +491,17 @@ pub fn radius_label(rule: &RadiusRule) -> String {
             if exposure != 1.0 {
                 s += &format!("/exposure{exposure}");
             }
-            s
+            ("stochastic", s)
         }
     }
 }
 
-/// One value of a sweep axis: applies it to a configuration and returns its name part.
-type Apply = Box<dyn Fn(&mut Config) -> String>;
+/// One value of a sweep axis: applies it to a configuration and returns its parameter, the
+/// axis's name and the value's (the cell's name part `name=value`).
+type Apply = Box<dyn Fn(&mut Config) -> (&'static str, String)>;
 
-/// A setting of the sweep applied to `c`: what it sets, and its name part.
-fn apply_setting(c: &mut Config, v: Setting) -> String {
+/// A setting of the sweep applied to `c`: what it sets, and its parameter.
+fn apply_setting(c: &mut Config, v: Setting) -> (&'static str, String) {
     if let Some(scene) = v.scene {
         c.scene = scene;
     }
@@ -507,12 +520,12 @@ fn apply_setting(c: &mut Config, v: Setting) -> String {
     if let Some(b) = v.cutoff_reference {
         c.cutoff_reference = b;
     }
-    format!("setting={}", v.label)
+    ("setting", v.label)
 }
 
-/// A variant of the sweep applied to `c`: what it sets, and its name part (its label, or
+/// A variant of the sweep applied to `c`: what it sets, and its parameter (its label, or
 /// backend+strategy).
-fn apply_variant(c: &mut Config, v: Variant) -> String {
+fn apply_variant(c: &mut Config, v: Variant) -> (&'static str, String) {
     if let Some(st) = v.strategy {
         c.strategy = st;
     }
@@ -549,13 +562,13 @@ fn apply_variant(c: &mut Config, v: Variant) -> String {
             strategy_label(&c.strategy)
         }
     );
-    format!("variant={}", v.label.unwrap_or(auto))
+    ("variant", v.label.unwrap_or(auto))
 }
 
 /// Every combination of the axes' values over `base`, in sweep order (the last axis fastest),
 /// each named by its values' name parts.
 fn product(base: &Config, axes: &[Vec<Apply>]) -> Vec<Cell> {
-    let mut cells = vec![(base.clone(), Vec::<String>::new())];
+    let mut cells = vec![(base.clone(), Vec::<(&'static str, String)>::new())];
     for axis in axes {
         let mut next = Vec::with_capacity(cells.len() * axis.len());
         for (cfg, names) in &cells {
@@ -572,13 +585,21 @@ fn product(base: &Config, axes: &[Vec<Apply>]) -> Vec<Cell> {
     cells
         .into_iter()
         .enumerate()
-        .map(|(index, (config, names))| Cell {
+        .map(|(index, (config, parameters))| Cell {
             index,
-            name: if names.is_empty() {
+            name: if parameters.is_empty() {
                 "base".into()
             } else {
-                names.join(",")
+                parameters
+                    .iter()
+                    .map(|(k, v)| format!("{k}={v}"))
+                    .collect::<Vec<_>>()
+                    .join(",")
             },
+            parameters: parameters
+                .into_iter()
+                .map(|(k, v)| (k.to_owned(), v))
+                .collect(),
             config,
         })
         .collect()

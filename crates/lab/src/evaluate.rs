@@ -9,7 +9,7 @@ use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
 use manylights_cull::{CullSettings, Strategy};
 use manylights_gpu::hierarchy::GpuHierarchy;
 use manylights_gpu::layout::GpuFrame;
-use manylights_gpu::timing::PassTiming;
+use manylights_gpu::timing::{Category, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::Camera;
 use manylights_shade::accuracy::{ImageError, compare, compare_adapted};
@@ -21,9 +21,9 @@ use manylights_shade::{
 use crate::LabError;
 use crate::experiment::Config;
 use crate::renderers::ReferenceFrames;
-use crate::runner::{category, stage};
+use crate::runner::stage;
 use crate::steady::{
-    Repeated, SteadyCull, steady_build, steady_cull, steady_cull_shade, steady_geometry,
+    PassMedian, Repeated, SteadyCull, steady_build, steady_cull, steady_cull_shade, steady_geometry,
 };
 
 /// What one camera pose measured.
@@ -55,7 +55,7 @@ pub(crate) struct PoseEval {
     pub(crate) steady_geometry: Option<f64>,
     /// Each pass of the geometry's and of culling and shading's back-to-back runs: its
     /// median, ms.
-    pub(crate) steady_passes: Vec<(String, f64)>,
+    pub(crate) steady_passes: Vec<PassMedian>,
     /// The lighting grid hierarchy's build back to back, where it was timed.
     pub(crate) steady_build: Option<SteadyCull>,
 }
@@ -214,7 +214,7 @@ fn steady_after_frame(
     o: &ShadeOutput,
     timings: &[PassTiming],
     timed: Steady<'_>,
-    steady_passes: &mut Vec<(String, f64)>,
+    steady_passes: &mut Vec<PassMedian>,
 ) -> Result<(Option<f64>, Option<SteadyCull>), LabError> {
     let Pose {
         ctx,
@@ -226,13 +226,13 @@ fn steady_after_frame(
     } = *p;
     let passes = timings
         .iter()
-        .filter(|p| category(&p.label) == "prepass" || c.backend == Backend::NaiveForward)
+        .filter(|p| p.category == Category::Prepass || c.backend == Backend::NaiveForward)
         .count() as u32;
     let geometry = stage(pose, "geometry timed back to back", || {
         steady_geometry(ctx, renderer, gpu_scene, o, passes, timed.runs)
     })?
     .map(|s| {
-        steady_passes.splice(0..0, s.passes.iter().map(|p| (p.0.clone(), p.2)));
+        steady_passes.splice(0..0, s.passes.iter().cloned());
         s.total_ms
     });
     // The hierarchy's build back to back right after the frame's passes, at the clock they ran
@@ -300,7 +300,7 @@ struct SteadyLists {
     /// Culling and the shading pass after each run (run median, span), ms.
     frame: Option<(f64, Option<f64>)>,
     /// Each pass of culling and shading's runs: its median, ms.
-    passes: Vec<(String, f64)>,
+    passes: Vec<PassMedian>,
 }
 
 /// The lists of `o` (a frame whose single run timed `t`) culled again `runs` times back to
@@ -323,7 +323,7 @@ fn steady_lists(
     } = *p;
     let lists = o.lists.as_ref().expect("a frame with lists");
     let culler = &renderer.culler;
-    let passes = t.iter().filter(|p| category(&p.label) == "cull").count() as u32;
+    let passes = t.iter().filter(|p| p.category == Category::Cull).count() as u32;
     let repeated = Repeated {
         ctx,
         culler,
@@ -346,7 +346,7 @@ fn steady_lists(
             steady_cull_shade(&repeated, passes + pass.passes(), runs, &mut pass)
         })?;
         if let Some(s) = &timed {
-            out.passes = s.passes.iter().map(|p| (p.0.clone(), p.2)).collect();
+            out.passes = s.passes.clone();
         }
         out.frame = timed.map(|s| (s.total_ms, s.span_ms));
     }

@@ -20,6 +20,7 @@ pub mod export;
 mod figures;
 mod forward_deferred;
 mod noise;
+mod old_rows;
 pub mod reference_cache;
 mod renderers;
 pub mod report;
@@ -31,7 +32,7 @@ pub mod stability;
 pub mod steady;
 pub mod tune;
 
-pub use cells::RADIUS_PREFIXES;
+pub use cells::RADIUS_AXES;
 pub use experiment::{Cell, Config, Experiment};
 pub use results::Row;
 

@@ -10,8 +10,10 @@
 
 use std::collections::BTreeMap;
 
+use manylights_gpu::timing::Category;
 use serde::{Deserialize, Serialize};
 
+pub use crate::old_rows::backfill;
 pub use crate::result_files::{load_cells, load_rows, merge, save_cell, to_csv, write_results};
 
 /// One cell's results.
@@ -274,6 +276,44 @@ pub struct Row {
     /// buffer's triangle fetch), as `bytes_written_per_pixel` models it.
     #[serde(default)]
     pub bytes_read_per_pixel: Option<u64>,
+    /// The `setting=` label of the sweep's setting the cell is in; empty outside settings.
+    #[serde(default)]
+    pub setting: String,
+    /// The radius rule's value: the fixed radius, the cut-off threshold, stochastic culling's
+    /// error bound, or the hierarchy's alpha (`radius_rule` says which).
+    #[serde(default)]
+    pub radius_value: Option<f64>,
+    /// `radius: Hierarchy`: the finest grid's spacing, m.
+    #[serde(default)]
+    pub hierarchy_spacing: Option<f64>,
+    /// `radius: Hierarchy`: the most nodes the finest grid may hold a point light.
+    #[serde(default)]
+    pub hierarchy_finest_nodes: Option<f64>,
+    /// `radius: Hierarchy`: how much farther each level's band ends than the level below's.
+    #[serde(default)]
+    pub hierarchy_growth: Option<f64>,
+    /// `radius: Hierarchy`: how far each level hands over to the next.
+    #[serde(default)]
+    pub hierarchy_ramp: Option<f64>,
+    /// `radius: Hierarchy`: the first level whose bands are sampled; empty for none.
+    #[serde(default)]
+    pub hierarchy_sample_from: Option<u32>,
+    /// Stochastic cells: what the error bounds (`light` or `albedo`).
+    #[serde(default)]
+    pub stochastic_bound: Option<String>,
+    /// Stochastic cells: how a frame's numbers are drawn (`stratified` or `independent`).
+    #[serde(default)]
+    pub stochastic_draw: Option<String>,
+    /// Stochastic cells: the side of the interleaved pixel classes (1: none).
+    #[serde(default)]
+    pub interleave: Option<u32>,
+    /// Stochastic cells: the exposure the error bound is taken at.
+    #[serde(default)]
+    pub stochastic_exposure: Option<f64>,
+    /// The cell's swept parameters: each axis's name and the value's (`setting`, `scene`,
+    /// `lights`, `threshold`, `strategy`, `variant`, ...), what its name is made of. JSON only.
+    #[serde(default)]
+    pub parameters: BTreeMap<String, String>,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s,
@@ -281,6 +321,11 @@ pub struct Row {
     /// median over the runs, ms (empty where they were not timed). JSON only.
     #[serde(default)]
     pub passes_steady: BTreeMap<String, f64>,
+    /// The category of each pass of `passes` and `passes_steady` (`prepass`, `cull`, `shade`
+    /// or `light_update`: the frame plan's and culling's), by name. JSON only; empty in rows
+    /// written before it ([`Row::pass_category`]).
+    #[serde(default)]
+    pub pass_categories: BTreeMap<String, String>,
     /// Cell index in sweep order.
     pub index: usize,
     /// Cell id (hash of its configuration).
@@ -290,6 +335,15 @@ pub struct Row {
 }
 
 impl Row {
+    /// The category of the pass `label`: `pass_categories`', or in rows written before it
+    /// the one its name implied then.
+    pub fn pass_category(&self, label: &str) -> Option<Category> {
+        match self.pass_categories.get(label) {
+            Some(name) => Category::from_name(name),
+            None => Some(crate::old_rows::category_before_plans(label)),
+        }
+    }
+
     /// The hierarchy's build a frame pays, ms: `gpu_ms_hierarchy_steady` where it was timed,
     /// else `gpu_ms_hierarchy`; `None` without a hierarchy.
     pub fn hierarchy_build_ms(&self) -> Option<f64> {
@@ -300,35 +354,6 @@ impl Row {
     /// cell shades a hierarchy's nodes in their place, else `lights`.
     pub fn setting_lights(&self) -> u64 {
         self.scene_lights.unwrap_or(self.lights)
-    }
-}
-
-/// Rows written before `scene_lights` existed: a hierarchy's row takes the light count of a
-/// row of another light range whose cell name is the same once the range's part is left out
-/// (`setting=hall,hierarchy=1/h0.25,variant=v` and `setting=hall,threshold=1,variant=v`).
-pub fn backfill_scene_lights(rows: &mut [Row]) {
-    fn without_range(cell: &str) -> String {
-        cell.split(',')
-            .filter(|p| {
-                !crate::cells::RADIUS_PREFIXES
-                    .iter()
-                    .any(|k| p.starts_with(k))
-            })
-            .collect::<Vec<_>>()
-            .join(",")
-    }
-    let known: BTreeMap<(String, String), u64> = rows
-        .iter()
-        .filter(|r| r.radius_rule != "hierarchy")
-        .map(|r| ((r.scene.clone(), without_range(&r.cell)), r.lights))
-        .collect();
-    for r in rows
-        .iter_mut()
-        .filter(|r| r.radius_rule == "hierarchy" && r.scene_lights.is_none())
-    {
-        r.scene_lights = known
-            .get(&(r.scene.clone(), without_range(&r.cell)))
-            .copied();
     }
 }
 
@@ -461,6 +486,17 @@ pub const COLUMNS: &[&str] = &[
     "bytes_written_per_pixel",
     "bytes_read_per_pixel",
     "gpu_ms_hierarchy_steady",
+    "setting",
+    "radius_value",
+    "hierarchy_spacing",
+    "hierarchy_finest_nodes",
+    "hierarchy_growth",
+    "hierarchy_ramp",
+    "hierarchy_sample_from",
+    "stochastic_bound",
+    "stochastic_draw",
+    "interleave",
+    "stochastic_exposure",
 ];
 
 fn one() -> u32 {

@@ -197,26 +197,3 @@ pub(crate) fn now() -> u64 {
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs())
 }
-
-/// Whether `label` is a deferred backend's raster pass (`shade.gbuffer`, `shade.visibility`)
-/// or one of the compute rasteriser's (`shade.visibility_compute.*`): geometry, as a depth
-/// prepass is.
-pub(crate) fn is_surfaces_pass(label: &str) -> bool {
-    label == "shade.gbuffer"
-        || label == "shade.visibility"
-        || label.starts_with("shade.visibility_compute.")
-}
-
-/// Pass category for the result columns.
-pub(crate) fn category(label: &str) -> &'static str {
-    if label.starts_with("prepass.") || is_surfaces_pass(label) {
-        "prepass"
-    } else if label.starts_with("cull.") || label.starts_with("scan.") || label.starts_with("sort.")
-    {
-        "cull"
-    } else if label.starts_with("lights.") {
-        "light_update"
-    } else {
-        "shade"
-    }
-}

@@ -22,7 +22,7 @@
 
 use manylights_cull::{CullError, CullOutput, CullSettings, Culler, ListPass, Strategy};
 use manylights_gpu::hierarchy::GpuHierarchy;
-use manylights_gpu::timing::{GpuTimer, MAX_QUERIES, PassKind};
+use manylights_gpu::timing::{Category, GpuTimer, MAX_QUERIES, PassKind};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_shade::{Renderer, ShadeOutput};
 
@@ -33,8 +33,8 @@ use crate::results::percentiles;
 pub struct SteadyCull {
     /// Runs timed.
     pub runs: u32,
-    /// Each pass of a run: its label, kind and median over the runs.
-    pub passes: Vec<(String, PassKind, f64)>,
+    /// Each pass of a run, with its median over the runs.
+    pub passes: Vec<PassMedian>,
     /// Median over the runs of the sum of a run's passes.
     pub total_ms: f64,
     /// Median span of a run (one timestamp pair around its passes); `None` where the adapter
@@ -285,8 +285,21 @@ fn median(v: Vec<f64>) -> f64 {
     percentiles(&v).map_or(0.0, |p| p.0)
 }
 
-/// A timed submission's passes (label, kind, median over the runs) and its median run, ms.
-type Timed = (Vec<(String, PassKind, f64)>, f64);
+/// A pass of back-to-back runs: what it is and its median time over the runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PassMedian {
+    /// Its name.
+    pub label: String,
+    /// Raster or compute.
+    pub kind: PassKind,
+    /// The part of the frame it belongs to.
+    pub category: Category,
+    /// Its median over the runs, ms.
+    pub ms: f64,
+}
+
+/// A timed submission's passes and its median run, ms.
+type Timed = (Vec<PassMedian>, f64);
 
 /// One timed submission of `n` runs: each pass's median over the runs and the median run.
 /// `None` without timestamp queries.
@@ -312,7 +325,12 @@ fn timed_once(
     let passes = (0..k)
         .map(|j| {
             let ms = median((0..n as usize).map(|r| t[r * k + j].ms).collect());
-            (t[j].label.clone(), t[j].kind, ms)
+            PassMedian {
+                label: t[j].label.clone(),
+                kind: t[j].kind,
+                category: t[j].category,
+                ms,
+            }
         })
         .collect();
     let total_ms = median(

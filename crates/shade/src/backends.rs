@@ -19,10 +19,12 @@ use manylights_cull::ListPass;
 use manylights_cull::{CullOutput, CullSettings, Culler, Strategy};
 use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::prepass::DepthPrepass;
-use manylights_gpu::timing::{GpuTimer, PassTiming};
+use manylights_gpu::timing::{Category, GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene, LightPath, readback};
 
+use crate::frame_plan::{self, FramePass, PassInfo, Recording, Resource, Work};
 use crate::pipelines::Surfaces;
+use crate::raster::Draw;
 pub(crate) use crate::raster::Loads;
 use crate::shade_pass::{ShadePass, Targets};
 pub use crate::shaders::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, LIST_SHADING};
@@ -56,6 +58,9 @@ pub struct ShadeOutput {
     pub msaa_target_bytes: u64,
     /// The backend that rendered it.
     pub backend: Backend,
+    /// Its passes in order, the culling run among them (`cull`), with what each reads and
+    /// writes ([`crate::frame_plan`]).
+    pub passes: Vec<PassInfo>,
     /// Its textures, for [`Renderer::shade_pass`].
     pub(crate) targets: Targets,
 }
@@ -247,31 +252,21 @@ impl Renderer {
         }
         let compute = self.computes_visibility(backend);
         self.pipelines.prepare(backend, self.transparent, compute);
-        let vis = compute.then(|| self.compute_visibility(ctx, scene));
-        let targets = Targets::new(ctx, self, scene, backend, (width, height));
-        let mut timer = GpuTimer::new(ctx, 64);
-        let mut enc = ctx.encoder("shade");
-        self.encode_geometry(&mut enc, &mut timer, scene, backend, &targets);
-        if let (Some(vis), Some(t)) = (vis, &targets.compute) {
-            // The depth buffer the oracle reads, untimed (culling and lighting read the
-            // compute pass's depths).
-            vis.encode_depth(&mut enc, t, &targets.depth_view);
+        if compute {
+            self.compute_visibility(ctx, scene);
         }
+        let targets = Targets::new(ctx, self, scene, backend, (width, height));
+        let geometry = self.geometry_plan(scene, backend, &targets);
+        let mut passes: Vec<PassInfo> = geometry.iter().map(FramePass::info).collect();
+        // Room for the geometry's passes, culling's and the shading's (the timer grows past it).
+        let mut timer = GpuTimer::new(ctx, frame_plan::timed_passes(&geometry) + 64);
+        let mut enc = ctx.encoder("shade");
+        frame_plan::record(&mut enc, &mut timer, scene, &geometry, Recording::Frame);
         let lists = if backend == Backend::NaiveForward {
-            self.encode_naive(&mut enc, &mut timer, scene, &targets);
             timer.resolve(&mut enc);
             ctx.submit_and_wait(enc, "naive forward")?;
-            if targets.bounds.is_some() {
-                // Not the naive frame's: what a culler measuring its lights needed reads
-                // (`ShadeOutput::cull_depth`), untimed.
-                let mut enc = ctx.encoder("lookup bounds");
-                let mut untimed = GpuTimer::untimed();
-                self.encode_lookup_bounds(&mut enc, &mut untimed, scene, backend, &targets);
-                ctx.submit_and_wait(enc, "lookup bounds")?;
-            }
             None
         } else {
-            let deferred = backend.lights_in_compute();
             ctx.submit_and_wait(
                 enc,
                 match backend {
@@ -288,12 +283,14 @@ impl Renderer {
                 settings,
                 &mut timer,
             )?;
+            passes.push(frame_plan::cull_info(targets.cull_depth_resource()));
             let mut pass = ShadePass::new(ctx, self, scene, backend, &targets);
             pass.bind(ctx, lists.list_bindings(), lists.form());
+            passes.extend(pass.plan().iter().map(FramePass::info));
             let mut enc = ctx.encoder("shade");
             pass.record(&mut enc, &mut timer);
             timer.resolve(&mut enc);
-            let during = if deferred {
+            let during = if backend.lights_in_compute() {
                 "deferred lighting"
             } else {
                 "forward shading"
@@ -311,28 +308,54 @@ impl Renderer {
             gbuffer_bytes: targets.gbuffer_bytes,
             msaa_target_bytes: targets.msaa_bytes,
             backend,
+            passes,
             targets,
         })
     }
 
-    /// Encodes a frame's geometry: the depth prepass or the G-buffer pass, then the lookup
-    /// bounds culling reads (where the renderer keeps them).
-    fn encode_geometry(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
-        scene: &GpuScene,
+    /// The passes of a frame of `backend` before its culling, over `targets`: the depth
+    /// prepass or the G-buffer (or visibility buffer) pass, then the lookup bounds culling
+    /// reads (where the renderer keeps them). Naive forward culls nothing: its plan is its
+    /// whole frame, and its lookup bounds, which a culler measuring its lights needed reads
+    /// (`ShadeOutput::cull_depth`), are for the checks.
+    pub(crate) fn geometry_plan<'a>(
+        &'a self,
+        scene: &'a GpuScene,
         backend: Backend,
-        targets: &Targets,
-    ) {
+        targets: &'a Targets,
+    ) -> Vec<FramePass<'a>> {
+        use Resource::{ComputeDepth, Depth, DepthRanges, Scene, Surfaces as SurfaceBuffers};
+        let depth = &targets.depth_view;
+        let mut plan = Vec::new();
         match backend {
             Backend::Forward | Backend::NaiveForward => {
-                match (&self.lookup_bounds, &targets.bounds) {
-                    (Some(b), Some(t)) if b.has_prepass() && backend == Backend::Forward => {
-                        b.encode_prepass(enc, scene, &targets.depth_view, t, timer)
+                plan.push(match (&self.lookup_bounds, &targets.bounds) {
+                    (Some(bounds), Some(t))
+                        if bounds.has_prepass() && backend == Backend::Forward =>
+                    {
+                        FramePass::new(
+                            "prepass.depth",
+                            Category::Prepass,
+                            Work::RangesPrepass {
+                                bounds,
+                                depth,
+                                targets: t,
+                            },
+                            &[Scene],
+                            &[Depth, DepthRanges],
+                        )
                     }
-                    _ => self.prepass.encode(enc, scene, &targets.depth_view, timer),
-                }
+                    _ => FramePass::new(
+                        "prepass.depth",
+                        Category::Prepass,
+                        Work::DepthPrepass {
+                            prepass: &self.prepass,
+                            depth,
+                        },
+                        &[Scene],
+                        &[Depth],
+                    ),
+                });
             }
             Backend::Visibility if targets.compute.is_some() => {
                 let vis = self
@@ -340,85 +363,118 @@ impl Renderer {
                     .get()
                     .expect("built by the frame's render");
                 let t = targets.compute.as_ref().expect("matched");
-                vis.encode(enc, timer, scene, t);
+                plan.extend(vis.plan(scene, t));
+                // The depth buffer the oracle reads (culling and lighting read the compute
+                // pass's depths).
+                plan.push(
+                    FramePass::new(
+                        "shade.visibility_depth",
+                        Category::Prepass,
+                        Work::ComputeDepth {
+                            vis,
+                            targets: t,
+                            depth,
+                        },
+                        &[ComputeDepth],
+                        &[Depth],
+                    )
+                    .for_checks(),
+                );
             }
             Backend::Deferred | Backend::DeferredStoredPosition | Backend::Visibility => {
                 let surfaces = Surfaces::of(backend, false);
                 let pass = self.pipelines.deferred(surfaces).gbuffer.as_ref();
-                self.raster_pass(
-                    enc,
-                    timer,
-                    surfaces.pass_name(),
-                    std::slice::from_ref(pass.expect("a raster pass")),
-                    scene,
-                    &targets
+                let draw = Draw {
+                    pipelines: std::slice::from_ref(pass.expect("a raster pass")),
+                    targets: targets
                         .gbuffer_targets(backend)
                         .into_iter()
                         .map(|v| (v, None))
-                        .collect::<Vec<_>>(),
-                    &targets.depth_view,
-                    Loads::Clear,
-                    None,
-                );
+                        .collect(),
+                    depth,
+                    loads: Loads::Clear,
+                    lists: None,
+                };
+                plan.push(FramePass::new(
+                    surfaces.pass_name(),
+                    Category::Prepass,
+                    Work::Draw(draw),
+                    &[Scene],
+                    &[Depth, SurfaceBuffers],
+                ));
             }
         }
-        // The lookup bounds, after the geometry: what culling reads (naive forward culls
-        // nothing: `Renderer::render` makes its bounds outside its frame).
-        if backend != Backend::NaiveForward {
-            self.encode_lookup_bounds(enc, timer, scene, backend, targets);
+        let bounds = self.lookup_bounds_pass(backend, targets);
+        if backend == Backend::NaiveForward {
+            plan.extend(self.naive_plan(scene, targets));
+            plan.extend(bounds.map(FramePass::for_checks));
+        } else {
+            plan.extend(bounds);
         }
+        plan
     }
 
-    /// Encodes the lookup bounds culling reads, where the renderer keeps them.
-    fn encode_lookup_bounds(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
-        scene: &GpuScene,
+    /// The lookup bounds culling reads, where the renderer keeps them.
+    fn lookup_bounds_pass<'a>(
+        &'a self,
         backend: Backend,
-        targets: &Targets,
-    ) {
-        if let (Some(b), Some(t)) = (&self.lookup_bounds, &targets.bounds) {
-            // Forward's prepass kept the depth ranges (with MSAA); deferred's G-buffer did not.
-            let ranges = backend == Backend::Forward && b.has_prepass();
-            b.encode_bounds(enc, scene, t, ranges, timer);
-        }
+        targets: &'a Targets,
+    ) -> Option<FramePass<'a>> {
+        let (Some(bounds), Some(t)) = (&self.lookup_bounds, &targets.bounds) else {
+            return None;
+        };
+        // Forward's prepass kept the depth ranges (with MSAA); deferred's G-buffer did not.
+        let ranges = backend == Backend::Forward && bounds.has_prepass();
+        let reads: &[Resource] = if ranges {
+            &[Resource::Scene, Resource::Depth, Resource::DepthRanges]
+        } else {
+            &[Resource::Scene, Resource::Depth]
+        };
+        Some(FramePass::new(
+            "prepass.depth_bounds",
+            Category::Prepass,
+            Work::LookupBounds {
+                bounds,
+                targets: t,
+                ranges,
+            },
+            reads,
+            &[Resource::LookupBounds],
+        ))
     }
 
-    /// Encodes naive forward's shading: every light at every fragment, then any transparent
-    /// surfaces over it.
-    fn encode_naive(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
-        scene: &GpuScene,
-        targets: &Targets,
-    ) {
+    /// Naive forward's shading: every light at every fragment, then any transparent surfaces
+    /// over it.
+    fn naive_plan<'a>(&'a self, scene: &GpuScene, targets: &'a Targets) -> Vec<FramePass<'a>> {
+        use Resource::{Color, Depth, Lights, Scene};
         let transparent = scene.has_transparent();
-        self.raster_pass(
-            enc,
-            timer,
+        let naive = self.pipelines.naive();
+        let draw = |pipeline, last, loads| {
+            Work::Draw(Draw {
+                pipelines: std::slice::from_ref(pipeline),
+                targets: vec![targets.color_attachment(last)],
+                depth: &targets.depth_view,
+                loads,
+                lists: None,
+            })
+        };
+        let mut plan = vec![FramePass::new(
             "shade.naive",
-            std::slice::from_ref(&self.pipelines.naive().opaque),
-            scene,
-            &[targets.color_attachment(!transparent)],
-            &targets.depth_view,
-            Loads::Depth,
-            None,
-        );
+            Category::Shade,
+            draw(&naive.opaque, !transparent, Loads::Depth),
+            &[Scene, Lights, Depth],
+            &[Color],
+        )];
         if transparent {
-            self.raster_pass(
-                enc,
-                timer,
+            plan.push(FramePass::new(
                 "shade.naive_transparent",
-                std::slice::from_ref(&self.pipelines.naive().transparent),
-                scene,
-                &[targets.color_attachment(true)],
-                &targets.depth_view,
-                Loads::Transparent,
-                None,
-            );
+                Category::Shade,
+                draw(&naive.transparent, true, Loads::Transparent),
+                &[Scene, Lights, Depth, Color],
+                &[Color],
+            ));
         }
+        plan
     }
 
     /// `runs` repetitions of the geometry of the frame `out` rendered (the depth prepass or the
@@ -435,12 +491,12 @@ impl Renderer {
         timer: &mut GpuTimer,
     ) -> Result<(), manylights_gpu::GpuError> {
         let mut enc = ctx.encoder("shade.geometry_repeated");
+        let plan = self.geometry_plan(scene, out.backend, &out.targets);
         for _ in 0..runs {
+            let outer = timer.set_category(Category::Prepass);
             timer.span_begin(&mut enc, "geometry");
-            self.encode_geometry(&mut enc, timer, scene, out.backend, &out.targets);
-            if out.backend == Backend::NaiveForward {
-                self.encode_naive(&mut enc, timer, scene, &out.targets);
-            }
+            timer.set_category(outer);
+            frame_plan::record(&mut enc, timer, scene, &plan, Recording::Repeat);
         }
         timer.span_end(&mut enc);
         timer.resolve(&mut enc);

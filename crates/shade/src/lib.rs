@@ -10,6 +10,7 @@
 pub mod accuracy;
 pub mod backends;
 mod error;
+pub mod frame_plan;
 pub mod image_out;
 pub mod infinite;
 pub mod kinds;

@@ -9,12 +9,14 @@ use manylights_cull::layout::ZBIN_ROUNDS_MIN_LIGHTS;
 use manylights_cull::{ListForm, ListPass};
 use manylights_gpu::lookup_bounds::BoundsTargets;
 use manylights_gpu::prepass::depth_target_msaa;
-use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::timing::{Category, GpuTimer};
 use manylights_gpu::{GpuContext, GpuScene, pipeline};
 
 use crate::vis_compute::ComputeTargets;
 
+use crate::frame_plan::{self, FramePass, Recording, Resource, Work};
 use crate::pipelines::Surfaces;
+use crate::raster::Draw;
 
 use crate::backends::{
     Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Loads, Renderer, VISIBILITY_ID,
@@ -149,6 +151,17 @@ impl Targets {
             return &t.depth;
         }
         self.bounds.as_ref().map_or(&self.depth, |b| &b.bounds)
+    }
+
+    /// What [`Targets::cull_depth`] is, as a frame plan's resource.
+    pub(crate) fn cull_depth_resource(&self) -> Resource {
+        if self.compute.is_some() {
+            Resource::ComputeDepth
+        } else if self.bounds.is_some() {
+            Resource::LookupBounds
+        } else {
+            Resource::Depth
+        }
     }
 
     /// The forward passes' colour target: the HDR target, or with MSAA the multisampled one,
@@ -327,18 +340,13 @@ impl<'a> ShadePass<'a> {
     }
 }
 
-impl ShadePass<'_> {
+impl<'a> ShadePass<'a> {
     /// `shade.forward_transparent`: the glass over `lists`, blended into the colour target
     /// (resolved from its samples with MSAA); with `layer` (deferred with MSAA) into the
     /// multisampled target alone, as its own contribution and transmittance, which the
     /// lighting pass then composites over each sample.
-    fn transparent_pass(
-        &self,
-        enc: &mut wgpu::CommandEncoder,
-        timer: &mut GpuTimer,
-        lists: &wgpu::BindGroup,
-        layer: bool,
-    ) {
+    fn glass_pass(&self, lists: &'a wgpu::BindGroup, layer: bool) -> FramePass<'a> {
+        use Resource::{Color, Depth, GlassLayer, Lights, Lists, Scene};
         let r = self.renderer;
         let zbin = usize::from(self.form == ListForm::ZBin);
         let glass = r.pipelines.glass();
@@ -350,17 +358,117 @@ impl ShadePass<'_> {
                 Loads::Transparent,
             ),
         };
-        r.raster_pass(
-            enc,
-            timer,
+        let (reads, writes): (&[Resource], &[Resource]) = if loads == Loads::GlassLayer {
+            (&[Scene, Lights, Depth, Lists], &[GlassLayer])
+        } else {
+            (&[Scene, Lights, Depth, Lists, Color], &[Color])
+        };
+        FramePass::new(
             "shade.forward_transparent",
-            std::slice::from_ref(pipeline),
-            self.scene,
-            &[target],
-            &self.targets.depth_view,
-            loads,
-            Some(lists),
-        );
+            Category::Shade,
+            Work::Draw(Draw {
+                pipelines: std::slice::from_ref(pipeline),
+                targets: vec![target],
+                depth: &self.targets.depth_view,
+                loads,
+                lists: Some(lists),
+            }),
+            reads,
+            writes,
+        )
+    }
+
+    /// The frame's passes after its culling, over the lists it is bound to: forward's
+    /// `shade.forward` (and the glass over it), or deferred's lighting `shade.deferred` (and
+    /// the glass, before it with MSAA, into the layer it composites, or after it over the lit
+    /// image). A pass that reads the lists and writes what the shading reads goes first.
+    pub fn plan(&self) -> Vec<FramePass<'_>> {
+        use Resource::{
+            Color, ComputeDepth, Depth, GlassLayer, Lights, Lists, Scene,
+            Surfaces as SurfaceBuffers,
+        };
+        let lists = self.lists.as_ref().expect("bound before it is planned");
+        let r = self.renderer;
+        let transparent = r.transparent;
+        let mut plan = Vec::new();
+        match &self.gbuffer {
+            None => {
+                plan.push(FramePass::new(
+                    "shade.forward",
+                    Category::Shade,
+                    Work::Draw(Draw {
+                        pipelines: match self.form {
+                            ListForm::Bins | ListForm::Tiles | ListForm::Clusters => {
+                                &r.pipelines.forward().bins
+                            }
+                            ListForm::ZBin => &r.pipelines.forward().zbin,
+                        },
+                        targets: vec![self.targets.color_attachment(!transparent)],
+                        depth: &self.targets.depth_view,
+                        loads: Loads::Depth,
+                        lists: Some(lists),
+                    }),
+                    &[Scene, Lights, Depth, Lists],
+                    &[Color],
+                ));
+                if transparent {
+                    plan.push(self.glass_pass(lists, false));
+                }
+            }
+            Some(gbuffer) => {
+                let (w, h) = self.targets.size;
+                // With MSAA the glass first, into its own multisampled layer, which the
+                // lighting composites over each sample it lights (the reference blends each
+                // sample its own).
+                let layer = self.renderer.samples > 1;
+                let glass = self.forward_lists.as_ref();
+                if let (true, Some(forward_lists)) = (layer, glass) {
+                    plan.push(self.glass_pass(forward_lists, true));
+                }
+                let compute = self.targets.compute.is_some();
+                let lighting = r.pipelines.deferred(Surfaces::of(self.backend, compute));
+                let pipeline = match self.form {
+                    ListForm::Bins => &lighting.bins,
+                    ListForm::ZBin => {
+                        // In rounds with many point lights (`ZBIN_ROUNDS_MIN_LIGHTS`).
+                        let rounds = r.light_path.point_lights()
+                            && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
+                        &lighting.zbin[usize::from(rounds)]
+                    }
+                    ListForm::Tiles => &lighting.tiles,
+                    ListForm::Clusters => &lighting.clusters,
+                };
+                let mut reads = vec![
+                    Scene,
+                    Lights,
+                    SurfaceBuffers,
+                    if compute { ComputeDepth } else { Depth },
+                    Lists,
+                ];
+                if layer && glass.is_some() {
+                    reads.push(GlassLayer);
+                }
+                let mut lit = FramePass::new(
+                    "shade.deferred",
+                    Category::Shade,
+                    Work::Dispatch {
+                        pipeline,
+                        groups: vec![&self.scene.bind_group, lists, gbuffer],
+                        grid: [w.div_ceil(8), h.div_ceil(8), 1],
+                    },
+                    &[],
+                    &[Color],
+                );
+                lit.reads = reads;
+                plan.push(lit);
+                // Deferred cannot shade transparent surfaces: at one sample a pixel a forward
+                // pass over the same lists does, over the lit image (as engines do).
+                if let (false, Some(forward_lists)) = (layer, glass) {
+                    plan.push(self.glass_pass(forward_lists, false));
+                }
+            }
+        }
+        plan
     }
 }
 
@@ -409,68 +517,6 @@ impl ListPass for ShadePass<'_> {
     }
 
     fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
-        let lists = self.lists.as_ref().expect("bound before it is recorded");
-        let r = self.renderer;
-        let transparent = r.transparent;
-
-        match &self.gbuffer {
-            None => {
-                r.raster_pass(
-                    enc,
-                    timer,
-                    "shade.forward",
-                    match self.form {
-                        ListForm::Bins | ListForm::Tiles | ListForm::Clusters => {
-                            &r.pipelines.forward().bins
-                        }
-                        ListForm::ZBin => &r.pipelines.forward().zbin,
-                    },
-                    self.scene,
-                    &[self.targets.color_attachment(!transparent)],
-                    &self.targets.depth_view,
-                    Loads::Depth,
-                    Some(lists),
-                );
-                if transparent {
-                    self.transparent_pass(enc, timer, lists, false);
-                }
-            }
-            Some(gbuffer) => {
-                let (w, h) = self.targets.size;
-                // With MSAA the glass first, into its own multisampled layer, which the
-                // lighting composites over each sample it lights (the reference blends each
-                // sample its own).
-                let layer = self.renderer.samples > 1;
-                let glass = self.forward_lists.as_ref();
-                if let (true, Some(forward_lists)) = (layer, glass) {
-                    self.transparent_pass(enc, timer, forward_lists, true);
-                }
-                let compute = self.targets.compute.is_some();
-                let lighting = r.pipelines.deferred(Surfaces::of(self.backend, compute));
-                pipeline::dispatch(
-                    enc,
-                    timer,
-                    "shade.deferred",
-                    match self.form {
-                        ListForm::Bins => &lighting.bins,
-                        ListForm::ZBin => {
-                            // In rounds with many point lights (`ZBIN_ROUNDS_MIN_LIGHTS`).
-                            let rounds = r.light_path.point_lights()
-                                && self.scene.light_count >= ZBIN_ROUNDS_MIN_LIGHTS;
-                            &lighting.zbin[usize::from(rounds)]
-                        }
-                        ListForm::Tiles => &lighting.tiles,
-                        ListForm::Clusters => &lighting.clusters,
-                    },
-                    &[&self.scene.bind_group, lists, gbuffer],
-                    (w.div_ceil(8), h.div_ceil(8)),
-                );
-                // Deferred cannot shade transparent surfaces: at one sample a pixel a forward
-                // pass over the same lists does, over the lit image (as engines do).
-                if let (false, Some(forward_lists)) = (layer, glass) {
-                    self.transparent_pass(enc, timer, forward_lists, false);
-                }
-            }
-        }
+        frame_plan::record(enc, timer, self.scene, &self.plan(), Recording::Frame);
     }
 }

@@ -16,7 +16,9 @@ use manylights_gpu::pipeline::{self, UNIFORM, storage};
 use manylights_gpu::shader_file;
 use manylights_gpu::shaders::FRAME;
 use manylights_gpu::shaders::ShaderDef;
-use manylights_gpu::timing::GpuTimer;
+use manylights_gpu::timing::{Category, GpuTimer};
+
+use crate::frame_plan::{self, FramePass, Recording, Resource, Work};
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback};
 
 /// `shade.visibility_compute`.
@@ -314,8 +316,80 @@ impl ComputeVisibility {
         }
     }
 
-    /// Encodes the pass over `t` (the scene's frame uniform set for its size): clears, the
-    /// triangles, the large ones' blocks, the resolve; timed as `shade.visibility_compute.*`.
+    /// The pass over `t` (the scene's frame uniform set for its size) as a frame's entries:
+    /// clears, the triangles, the large ones' blocks, the resolve, timed as
+    /// `shade.visibility_compute.*`.
+    pub(crate) fn plan<'a>(
+        &'a self,
+        scene: &'a GpuScene,
+        t: &'a ComputeTargets,
+    ) -> Vec<FramePass<'a>> {
+        use Resource::{ComputeDepth, Scene, Surfaces};
+        let triangles = scene.opaque_index_count / 3;
+        let (w, h) = t.size;
+        let pass =
+            |name, pipeline, groups, grid: (u32, u32), reads: &[Resource], writes: &[Resource]| {
+                FramePass::new(
+                    name,
+                    Category::Prepass,
+                    Work::Dispatch {
+                        pipeline,
+                        groups,
+                        grid: [grid.0, grid.1, 1],
+                    },
+                    reads,
+                    writes,
+                )
+            };
+        let g = || vec![&scene.bind_group, &t.group];
+        let clear = |buffer| {
+            FramePass::new(
+                "clear",
+                Category::Prepass,
+                Work::Clear(buffer),
+                &[],
+                &[ComputeDepth],
+            )
+        };
+        vec![
+            clear(&t.keys),
+            clear(&t.counts),
+            pass(
+                "shade.visibility_compute.triangles",
+                &self.triangles,
+                g(),
+                (triangles.div_ceil(64).max(1), 1),
+                &[Scene, ComputeDepth],
+                &[ComputeDepth],
+            ),
+            pass(
+                "shade.visibility_compute.scan",
+                &self.scan,
+                g(),
+                (1, 1),
+                &[ComputeDepth],
+                &[ComputeDepth],
+            ),
+            pass(
+                "shade.visibility_compute.blocks",
+                &self.blocks,
+                g(),
+                (BLOCK_GROUPS, 1),
+                &[Scene, ComputeDepth],
+                &[ComputeDepth],
+            ),
+            pass(
+                "shade.visibility_compute.resolve",
+                &self.resolve,
+                vec![&scene.bind_group, &t.resolve_group],
+                (w.div_ceil(8), h.div_ceil(8)),
+                &[Scene, ComputeDepth],
+                &[ComputeDepth, Surfaces],
+            ),
+        ]
+    }
+
+    /// Encodes the passes of its plan over `t`, timed by `timer`.
     pub fn encode(
         &self,
         enc: &mut wgpu::CommandEncoder,
@@ -323,46 +397,11 @@ impl ComputeVisibility {
         scene: &GpuScene,
         t: &ComputeTargets,
     ) {
-        enc.clear_buffer(&t.keys, 0, None);
-        enc.clear_buffer(&t.counts, 0, None);
-        let triangles = scene.opaque_index_count / 3;
-        let g = [&scene.bind_group, &t.group];
-        pipeline::dispatch(
-            enc,
-            timer,
-            "shade.visibility_compute.triangles",
-            &self.triangles,
-            &g,
-            (triangles.div_ceil(64).max(1), 1),
-        );
-        pipeline::dispatch(
-            enc,
-            timer,
-            "shade.visibility_compute.scan",
-            &self.scan,
-            &g,
-            (1, 1),
-        );
-        pipeline::dispatch(
-            enc,
-            timer,
-            "shade.visibility_compute.blocks",
-            &self.blocks,
-            &g,
-            (BLOCK_GROUPS, 1),
-        );
-        let (w, h) = t.size;
-        pipeline::dispatch(
-            enc,
-            timer,
-            "shade.visibility_compute.resolve",
-            &self.resolve,
-            &[&scene.bind_group, &t.resolve_group],
-            (w.div_ceil(8), h.div_ceil(8)),
-        );
+        let plan = self.plan(scene, t);
+        frame_plan::record(enc, timer, scene, &plan, Recording::Frame);
     }
 
-    /// Encodes `shade.visibility_depth`: the depths of `t` (after [`ComputeVisibility::encode`])
+    /// Encodes `shade.visibility_depth`: the depths of `t` (after the passes of its plan)
     /// into `depth`, a single-sample `Depth32Float` view of its size, untimed.
     pub fn encode_depth(
         &self,

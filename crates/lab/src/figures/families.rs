@@ -1,25 +1,22 @@
-//! A figure's method families, from the radius part of each cell's name
-//! (`crate::cells::radius_label`): cut-off thresholds, fixed radii, stochastic light culling in
-//! one frame, accumulated or interleaved, and the lighting grid hierarchy a finest spacing (and
-//! a first sampled level); each row's place in its family's sweep, and which way that sweep
-//! runs.
+//! A figure's method families, from each row's light-range columns (`radius_rule`,
+//! `radius_value`, `hierarchy_*`, `stochastic_*`, `accumulate`, `interleave`): cut-off
+//! thresholds, fixed radii, stochastic light culling in one frame, accumulated or interleaved,
+//! and the lighting grid hierarchy a finest spacing (and a first sampled level); each row's
+//! place in its family's sweep, and which way that sweep runs.
 
+use crate::cells::RADIUS_AXES;
 use crate::results::Row;
 
-/// The cell's name parts that set the radius rule: `threshold=`, `radius=`, `stochastic=` or
-/// `hierarchy=`.
-pub(super) fn radius_part(cell: &str) -> Option<&str> {
-    cell.split(',').find(|p| {
-        crate::cells::RADIUS_PREFIXES
-            .iter()
-            .any(|k| p.starts_with(k))
-    })
+/// Whether the row's cell sweeps its light range (one of [`RADIUS_AXES`] among its parameters):
+/// then its range's value is its place in its family's sweep.
+pub(super) fn sweeps_range(r: &Row) -> bool {
+    RADIUS_AXES.iter().any(|k| r.parameters.contains_key(*k))
 }
 
-/// A row's method family and its place in the family's sweep (the threshold, radius or error
-/// bound), from the radius part of its cell name (`crate::cells::radius_label`).
+/// A row's method family and its place in the family's sweep (the threshold, radius, error
+/// bound or alpha) where its cell sweeps the range; else the rule's family alone.
 pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
-    let Some(part) = radius_part(&r.cell) else {
+    if !sweeps_range(r) {
         let name = match r.radius_rule.as_str() {
             "threshold" => "cut-off thresholds",
             "stochastic" => "stochastic",
@@ -27,57 +24,61 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
             _ => "fixed radius",
         };
         return (name.into(), None);
-    };
-    let (kind, value) = part.split_once('=').unwrap_or((part, ""));
-    let mut pieces = value.split('/');
-    let v = pieces.next().and_then(|v| v.parse::<f64>().ok());
-    match kind {
-        "threshold" => ("cut-off thresholds".into(), v),
-        "radius" => ("fixed radii".into(), v),
-        // `hierarchy=A/hH[/nR][/gK][/cC][/sL]`: a family a finest spacing (and finest grid
-        // rule, growth of the bands, ramps, and first sampled level), swept over alpha.
-        "hierarchy" => {
-            let h = pieces.next().and_then(|p| p.strip_prefix('h'));
-            let mut name = match h {
-                Some(h) => format!("lighting grid hierarchy, spacing {h} m"),
-                None => "lighting grid hierarchy".into(),
-            };
-            for p in pieces {
-                if let Some(n) = p.strip_prefix('n') {
-                    name += &format!(", {n} nodes a light");
-                } else if let Some(k) = p.strip_prefix('g') {
-                    name += &format!(", growth {k}");
-                } else if let Some(c) = p.strip_prefix('c') {
-                    name += &format!(", ramps {c}");
-                } else if let Some(l) = p.strip_prefix('s') {
-                    name += &format!(", sampled from level {l}");
-                }
-            }
-            (name, v)
-        }
-        _ => {
-            let (mut acc, mut il, mut extra) = (None, None, Vec::new());
-            for p in pieces {
-                if let Some(k) = p.strip_prefix("acc") {
-                    acc = Some(k.to_owned());
-                } else if let Some(n) = p.strip_prefix("il") {
-                    il = Some(n.to_owned());
-                } else {
-                    extra.push(p.to_owned());
-                }
-            }
-            let mut name = match (acc, il) {
-                (None, None) => "stochastic, one frame".to_owned(),
-                (Some(k), None) => format!("stochastic, {k} frames accumulated"),
-                (None, Some(n)) => format!("stochastic, {n}x{n} interleaved"),
-                (Some(k), Some(n)) => format!("stochastic, {n}x{n} interleaved, {k} frames"),
-            };
-            for e in extra {
-                name += &format!(" ({e})");
-            }
-            (name, v)
-        }
     }
+    let v = r.radius_value;
+    match r.radius_rule.as_str() {
+        "threshold" => ("cut-off thresholds".into(), v),
+        "hierarchy" => (hierarchy_family(r), v),
+        "stochastic" => (stochastic_family(r), v),
+        _ => ("fixed radii".into(), v),
+    }
+}
+
+/// A hierarchy's family: a finest spacing, and the finest grid's rule, growth of the bands,
+/// ramps and first sampled level where they are not the defaults; swept over alpha.
+fn hierarchy_family(r: &Row) -> String {
+    use manylights_scene::hierarchy::{FINEST_NODES, GROWTH, RAMP};
+    let mut name = match r.hierarchy_spacing {
+        Some(h) => format!("lighting grid hierarchy, spacing {h} m"),
+        None => "lighting grid hierarchy".into(),
+    };
+    let not = |v: Option<f64>, default: f64| v.filter(|&v| v != default);
+    if let Some(n) = not(r.hierarchy_finest_nodes, FINEST_NODES) {
+        name += &format!(", {n} nodes a light");
+    }
+    if let Some(k) = not(r.hierarchy_growth, GROWTH) {
+        name += &format!(", growth {k}");
+    }
+    if let Some(c) = not(r.hierarchy_ramp, RAMP) {
+        name += &format!(", ramps {c}");
+    }
+    if let Some(l) = r.hierarchy_sample_from {
+        name += &format!(", sampled from level {l}");
+    }
+    name
+}
+
+/// Stochastic culling's family: one frame, accumulated, interleaved, or both; then its bound,
+/// draw and exposure where they are not the defaults.
+fn stochastic_family(r: &Row) -> String {
+    let acc = r.accumulate.filter(|&k| k > 1);
+    let il = r.interleave.filter(|&n| n > 1);
+    let mut name = match (acc, il) {
+        (None, None) => "stochastic, one frame".to_owned(),
+        (Some(k), None) => format!("stochastic, {k} frames accumulated"),
+        (None, Some(n)) => format!("stochastic, {n}x{n} interleaved"),
+        (Some(k), Some(n)) => format!("stochastic, {n}x{n} interleaved, {k} frames"),
+    };
+    if let Some(b) = r.stochastic_bound.as_deref().filter(|b| *b != "light") {
+        name += &format!(" ({b})");
+    }
+    if let Some(d) = r.stochastic_draw.as_deref().filter(|d| *d != "stratified") {
+        name += &format!(" ({d})");
+    }
+    if let Some(x) = r.stochastic_exposure.filter(|&x| x != 1.0) {
+        name += &format!(" (exposure{x})");
+    }
+    name
 }
 
 /// Whether a family's sweep value grows as its error falls: the hierarchy's alpha and a fixed
@@ -91,16 +92,56 @@ mod tests {
     use super::*;
     use crate::results::Row;
 
+    /// A row written before rows carried their parameters: only its cell name says them, and
+    /// the backfill makes its columns from it.
     fn row(cell: &str, strategy: &str, backend: &str) -> Row {
         let mut r = crate::results::tests::sample_row();
         r.cell = cell.into();
         r.strategy = strategy.into();
         r.backend = backend.into();
+        let mut rows = [r];
+        crate::results::backfill(&mut rows);
+        let [r] = rows;
         r
     }
 
     #[test]
-    fn families_and_sweeps_come_from_the_cell_name() {
+    fn families_come_from_the_columns() {
+        let mut r = crate::results::tests::sample_row();
+        r.radius_rule = "hierarchy".into();
+        r.radius_value = Some(2.0);
+        r.hierarchy_spacing = Some(0.25);
+        r.hierarchy_finest_nodes = Some(2.0);
+        r.hierarchy_growth = Some(1.15);
+        // Not swept: the rule's family alone.
+        assert_eq!(family(&r), ("lighting grid hierarchy".into(), None));
+        r.parameters
+            .insert("hierarchy".into(), "whatever the name says".into());
+        assert_eq!(
+            family(&r),
+            (
+                "lighting grid hierarchy, spacing 0.25 m, growth 1.15".into(),
+                Some(2.0)
+            )
+        );
+        r.radius_rule = "stochastic".into();
+        r.parameters.clear();
+        r.parameters.insert("stochastic".into(), String::new());
+        r.radius_value = Some(0.5);
+        r.interleave = Some(2);
+        r.accumulate = Some(1);
+        r.stochastic_draw = Some("independent".into());
+        assert_eq!(
+            family(&r),
+            (
+                "stochastic, 2x2 interleaved (independent)".into(),
+                Some(0.5)
+            )
+        );
+    }
+
+    #[test]
+    fn old_rows_families_come_from_the_cell_name() {
         let f = |cell: &str| family(&row(cell, "tiled_gather", "deferred"));
         assert_eq!(
             f("setting=hall,threshold=0.03,variant=x"),

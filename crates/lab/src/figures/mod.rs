@@ -12,6 +12,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::LabError;
 use crate::results::Row;
+use manylights_gpu::timing::Category;
 
 mod axes;
 mod families;
@@ -74,12 +75,13 @@ pub(crate) fn write_svg(
 
 /// The configuration of a row without its light count: one series of the scaling figure.
 pub(crate) fn series_key(r: &Row) -> String {
-    let parts: Vec<&str> = r
-        .cell
-        .split(',')
-        .filter(|p| !p.starts_with("lights=") && !p.starts_with("seed="))
+    let parts: Vec<String> = r
+        .parameters
+        .iter()
+        .filter(|(k, _)| *k != "lights" && *k != "seed")
+        .map(|(k, v)| format!("{k}={v}"))
         .collect();
-    if parts.is_empty() || parts == ["base"] {
+    if parts.is_empty() {
         format!("{}+{}", r.backend, r.strategy)
     } else {
         parts.join(",")
@@ -182,14 +184,19 @@ pub(crate) fn passes(rows: &[Row], path: &Path) -> Result<Option<Layout>, LabErr
         && shown.iter().all(|r| r.gpu_ms_light_update.is_none());
     let parts = |r: &Row| {
         if steady {
-            let part = |c: &str| -> f64 {
+            let part = |c: Category| -> f64 {
                 r.passes_steady
                     .iter()
-                    .filter(|(l, _)| crate::runner::category(l) == c)
+                    .filter(|(l, _)| r.pass_category(l) == Some(c))
                     .map(|(_, ms)| ms)
                     .sum()
             };
-            [0.0, part("prepass"), part("cull"), part("shade")]
+            [
+                0.0,
+                part(Category::Prepass),
+                part(Category::Cull),
+                part(Category::Shade),
+            ]
         } else {
             [
                 r.gpu_ms_light_update.unwrap_or(0.0),

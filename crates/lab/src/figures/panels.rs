@@ -24,10 +24,11 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::axes::{self, Scale};
-use super::families::{family, grows_tighter, radius_part};
+use super::families::{family, grows_tighter};
 use super::legend::{LABEL_CHARS, Mark, clip_label, clip_to, legend, legend_width};
 use super::{Axis, FONT, Layout, PALETTE, err, pareto};
 use crate::LabError;
+use crate::cells::RADIUS_AXES;
 use crate::results::Row;
 
 /// The most entries a figure's legend holds.
@@ -133,20 +134,21 @@ pub(super) fn draw_marker<DB: DrawingBackend>(
         .map_err(err)
 }
 
-/// Name parts that only say which panel a cell is in, or its strategy and backend (shown by
+/// Parameters that only say which panel a cell is in, or its strategy and backend (shown by
 /// marker and fill).
-fn is_panel_or_marker_part(p: &str) -> bool {
+fn is_panel_or_marker(name: &str) -> bool {
     [
-        "setting=",
-        "scene=",
-        "lights=",
-        "seed=",
-        "variant=",
-        "strategy=",
-        "backend=",
+        "setting", "scene", "lights", "seed", "variant", "strategy", "backend",
     ]
-    .iter()
-    .any(|k| p.starts_with(k))
+    .contains(&name)
+}
+
+/// The row's parameters but its light range's, as `name=value` parts.
+fn without_range(r: &Row) -> impl Iterator<Item = (&str, String)> {
+    r.parameters
+        .iter()
+        .filter(|(k, _)| !RADIUS_AXES.contains(&k.as_str()))
+        .map(|(k, v)| (k.as_str(), format!("{k}={v}")))
 }
 
 /// What a point is, for drawing.
@@ -186,17 +188,11 @@ pub(crate) struct Spec<'a> {
 
 /// The panels of `rows`: each row's panel index and the panels' titles.
 fn panels_of(rows: &[&Row]) -> (Vec<usize>, Vec<String>) {
-    let setting = |r: &Row| {
-        r.cell
-            .split(',')
-            .find_map(|p| p.strip_prefix("setting="))
-            .map(str::to_owned)
-    };
+    let setting = |r: &Row| (!r.setting.is_empty()).then(|| r.setting.clone());
     let scene = |r: &Row| {
-        r.cell
-            .split(',')
-            .find_map(|p| p.strip_prefix("scene="))
-            .map_or_else(|| r.scene.clone(), str::to_owned)
+        r.parameters
+            .get("scene")
+            .map_or_else(|| r.scene.clone(), String::clone)
     };
     let lights = |r: &Row| format!("{} lights", r.setting_lights());
     let res = |r: &Row| format!("{}x{}", r.width, r.height);
@@ -298,13 +294,12 @@ pub(crate) fn draw(rows: &[Row], path: &Path, spec: &Spec<'_>) -> Result<Option<
     Ok(Some(layout))
 }
 
-/// The cell name less its radius part and the parts that say its panel, strategy or backend:
-/// what else the cells vary (materials, MSAA, ...).
+/// The cell's parameters less its light range and those that say its panel, strategy or
+/// backend: what else the cells vary (materials, MSAA, ...).
 fn rest(r: &Row) -> String {
-    let radius = radius_part(&r.cell);
-    r.cell
-        .split(',')
-        .filter(|p| Some(*p) != radius && !is_panel_or_marker_part(p))
+    without_range(r)
+        .filter(|(k, _)| !is_panel_or_marker(k))
+        .map(|(_, p)| p)
         .collect::<Vec<_>>()
         .join(",")
 }
@@ -359,12 +354,7 @@ fn points<'r>(shown: &[&'r Row], panel_of: &[usize], spec: &Spec<'_>) -> (Vec<Pt
         } else {
             Shape::of_strategy(&r.strategy)
         };
-        let radius = radius_part(&r.cell);
-        let cell: Vec<&str> = r
-            .cell
-            .split(',')
-            .map(|p| if Some(p) == radius { "" } else { p })
-            .collect();
+        let cell: Vec<String> = without_range(r).map(|(_, p)| p).collect();
         pts.push(Pt {
             row: r,
             x: (spec.x.1)(r).unwrap_or(0.0),

@@ -255,7 +255,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     if let Some(e) = &exp {
         crate::results::in_experiment_order(e, &mut rows);
     }
-    crate::results::backfill_scene_lights(&mut rows);
+    crate::results::backfill(&mut rows);
     let not_run = exp
         .as_ref()
         .map_or_else(Vec::new, |e| cells_not_run(e, dir, &rows));
