@@ -302,7 +302,11 @@ fn gpu_build_is_its_oracle(
         for (k, (l, band)) in flat.iter().zip(&bands).take(points).enumerate() {
             let want = GpuLight::from(l).with_band(band);
             assert_eq!(out[k].position, want.position, "{what}: point {k}");
-            assert_eq!((out[k].radius, out[k].alpha), (want.radius, want.alpha));
+            assert_eq!(
+                (out[k].radius, out[k].alpha, out[k].kind),
+                (want.radius, want.alpha, want.kind),
+                "{what}: point {k}"
+            );
             assert!(
                 (out[k].color - want.color).abs().max_element() < 1e-6 * want.color.max_element()
             );
@@ -334,8 +338,13 @@ fn gpu_build_is_its_oracle(
                 - oracle.spots.len()
                 - oracle.levels[level..].iter().map(Vec::len).sum::<usize>()];
             assert_eq!(
-                -out[first as usize].alpha, want.r as f32,
+                out[first as usize].alpha, want.r as f32,
                 "{what}: level {level}'s band"
+            );
+            assert_eq!(
+                out[first as usize].falloff(),
+                manylights_gpu::layout::LIGHT_FALLOFF_BAND,
+                "{what}: level {level}'s falloff"
             );
         }
         assert_eq!(build.dropped(ctx).unwrap(), (0, 0), "{what}");
@@ -350,7 +359,7 @@ fn gpu_build_is_its_oracle(
 #[test]
 fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
-    use manylights_gpu::layout::{GpuLight, HARD_BAND};
+    use manylights_gpu::layout::{GpuLight, LIGHT_FALLOFF_BAND};
     let ctx = common::gpu();
     let original = atrium(600, 0.0);
     let params = HierarchyParams {
@@ -419,25 +428,26 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
                 continue; // a dead slot
             }
             if level == 0 {
-                assert_eq!(l.interleave & HARD_BAND, 0, "level 0 light {i} stays soft");
+                assert!(!l.hard_band(), "level 0 light {i} stays soft");
+                assert_eq!(l.falloff(), LIGHT_FALLOFF_BAND, "level 0 light {i}");
                 continue;
             }
             let key = keys_a[(i - plan.points) as usize];
             assert_ne!(key, 0, "light {i}: a live aggregate's slot has its node");
             let id = hierarchy::node_draw(level as u32, key);
             let want = soft.sampled(hierarchy::band_xi(3, id));
-            let from = f32::from_bits(l.interleave & !HARD_BAND);
-            assert_ne!(l.interleave & HARD_BAND, 0, "light {i} of level {level}");
+            let from = f32::from_bits(l.interleave);
+            assert!(l.hard_band(), "light {i} of level {level}");
             assert!(
                 (f64::from(from) - want.inner).abs() <= 1e-5 * want.inner.max(1.0),
                 "light {i}: from {from}, want {}",
                 want.inner
             );
             assert!(
-                (f64::from(-l.alpha) - want.r).abs() <= 1e-5 * want.r.max(1.0)
+                (f64::from(l.alpha) - want.r).abs() <= 1e-5 * want.r.max(1.0)
                     || (l.alpha.is_infinite() && want.r.is_infinite()),
                 "light {i}: to {}, want {}",
-                -l.alpha,
+                l.alpha,
                 want.r
             );
             // The same reach, to the f32 rounding of `r (c - (c - 1) xi)` on either side.

@@ -268,6 +268,13 @@ fn stochastic_draws_match_their_oracle() {
                 let at = format!("{kind:?}, interleave {interleave} frame {frame} light {i}");
                 let (want, alpha) = s.params.at_frame(l, i as u32, s.strata[i], frame);
                 assert_eq!(g.alpha, alpha, "{at}: alpha");
+                // Stochastic culling's falloff (a biased draw's would be the windowed one),
+                // the light's shape kept.
+                assert_eq!(
+                    g.kind,
+                    GpuLight::from(l).shape() | manylights_gpu::layout::LIGHT_FALLOFF_STOCHASTIC,
+                    "{at}: kind"
+                );
                 assert_eq!(
                     g.interleave,
                     s.params.interleave_word(i as u32, frame),

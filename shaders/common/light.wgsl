@@ -9,20 +9,27 @@ struct Light {
     intensity: f32,
     // Spot axis (unit); unused for point lights.
     direction: vec3<f32>,
-    // LIGHT_KIND_POINT or LIGHT_KIND_SPOT.
+    // Its shape (LIGHT_KIND_POINT or LIGHT_KIND_SPOT, LIGHT_SHAPE_MASK), falloff
+    // (LIGHT_FALLOFF_WINDOWED, _STOCHASTIC or _BAND, LIGHT_FALLOFF_MASK) and flags
+    // (LIGHT_FLAG_HARD_BAND), or-ed.
     kind: u32,
     cos_inner: f32,
     cos_outer: f32,
-    // Stochastic light culling's alpha (manylights_scene::stochastic): above 0, the light is
-    // shaded with max(1 / d^2, alpha) inside its radius, the range drawn for this frame
-    // (lights.stochastic); 0, the windowed falloff; below 0, a light of the lighting grid
-    // hierarchy (manylights_scene::hierarchy::Band), -alpha its band's r (light_band).
+    // LIGHT_FALLOFF_STOCHASTIC: stochastic light culling's alpha (manylights_scene::stochastic),
+    // the light shaded with max(1 / d^2, alpha) inside its radius, the range drawn for this
+    // frame (lights.stochastic). LIGHT_FALLOFF_BAND: a light of the lighting grid hierarchy
+    // (manylights_scene::hierarchy::Band), alpha its band's r (light_band). Unread otherwise.
     alpha: f32,
-    // Interleaved stochastic ranges (manylights_scene::stochastic): 0 none; otherwise
-    // n << 24 | key, and a pixel of class c of n x n evaluates the light out to its class's
-    // range (light_range), within `radius`, the longest of the classes' ranges. With alpha < 0,
-    // the bits of the band's inner distance.
+    // LIGHT_FALLOFF_STOCHASTIC: interleaved ranges (manylights_scene::stochastic), 0 none;
+    // otherwise n << 24 | key, and a pixel of class c of n x n evaluates the light out to its
+    // class's range (light_range), within `radius`, the longest of the classes' ranges.
+    // LIGHT_FALLOFF_BAND: the bits of the band's inner distance.
     interleave: u32,
+}
+
+// The light's shape: LIGHT_KIND_POINT or LIGHT_KIND_SPOT.
+fn light_shape(light: Light) -> u32 {
+    return light.kind & LIGHT_SHAPE_MASK;
 }
 
 // The pixel being shaded: every entry point that shades lights sets it first, for the classes
@@ -42,7 +49,7 @@ fn stochastic_unit(h: u32) -> f32 {
     return (f32(h >> (32u - XI_BITS)) + 0.5) / f32(1u << XI_BITS);
 }
 
-// The range a stochastic light (alpha > 0) is evaluated to at shading_pixel: its radius, or
+// The range a stochastic light (LIGHT_FALLOFF_STOCHASTIC) is evaluated to at shading_pixel: its radius, or
 // with interleaving its pixel class's range 1 / sqrt(alpha * xi) (manylights_scene::stochastic::
 // StochasticParams::at_pixel).
 fn light_range(light: Light) -> f32 {

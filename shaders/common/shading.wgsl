@@ -23,16 +23,17 @@ fn emitted(m: Material) -> vec3<f32> {
     return m.emissive;
 }
 
-// The falloff a light is shaded with: a hierarchy light's band times 1 / d^2 (alpha < 0), the
-// windowed one or, for stochastic light culling
-// (alpha > 0), max(1 / d^2, alpha) inside the range drawn for the frame (light_range): 1 / d^2
-// divided by the probability min(d^-2 / alpha, 1) that the light reaches d, an unbiased
-// estimate of the infinite-range falloff (manylights_scene::stochastic).
+// The falloff a light is shaded with, by its kind's falloff bits: a hierarchy light's band
+// times 1 / d^2 (LIGHT_FALLOFF_BAND), the windowed one or, for stochastic light culling
+// (LIGHT_FALLOFF_STOCHASTIC), max(1 / d^2, alpha) inside the range drawn for the frame
+// (light_range): 1 / d^2 divided by the probability min(d^-2 / alpha, 1) that the light
+// reaches d, an unbiased estimate of the infinite-range falloff (manylights_scene::stochastic).
 fn light_attenuation(light: Light, d: f32) -> f32 {
-    if light.alpha < 0.0 {
+    let falloff = light.kind & LIGHT_FALLOFF_MASK;
+    if falloff == LIGHT_FALLOFF_BAND {
         return light_band(light, d) * light_falloff_infinite(d);
     }
-    if light.alpha > 0.0 {
+    if falloff == LIGHT_FALLOFF_STOCHASTIC {
         return select(0.0, max(light_falloff_infinite(d), light.alpha), d < light_range(light));
     }
     return light_falloff(d, light.radius);
@@ -42,15 +43,15 @@ fn light_attenuation(light: Light, d: f32) -> f32 {
 // rising from 0 at `inner` to 1 at frame.band_ramp times it (1 throughout where inner is 0),
 // falling from 1 at r to 0 at band_ramp times r (1 throughout where r is infinite), each ramp's
 // fraction times frame.band_slope, 1 / (band_ramp - 1) (1 for the papers' ramps of 2); a
-// sampled band (the top bit of `interleave`, HARD_BAND) is 1 between inner and r and 0
-// elsewhere. Here with the frame, not in light.wgsl, as the frame carries the ramp.
+// sampled band (LIGHT_FLAG_HARD_BAND) is 1 between inner and r and 0 elsewhere. r is the
+// light's alpha, inner the bits of its interleave. Here with the frame, not in light.wgsl, as
+// the frame carries the ramp.
 fn light_band(light: Light, d: f32) -> f32 {
-    let r = -light.alpha;
-    if (light.interleave & HARD_BAND) != 0u {
-        let start = bitcast<f32>(light.interleave & ~HARD_BAND);
-        return select(0.0, 1.0, d > start && d < r);
-    }
+    let r = light.alpha;
     let inner = bitcast<f32>(light.interleave);
+    if (light.kind & LIGHT_FLAG_HARD_BAND) != 0u {
+        return select(0.0, 1.0, d > inner && d < r);
+    }
     var rising = 1.0;
     if inner > 0.0 {
         if d <= inner {
@@ -93,8 +94,9 @@ override STOCHASTIC_POINTS: bool = false;
 
 // BAND_POINTS (with POINT_LIGHTS): the frame's lights are all the lighting grid hierarchy's point
 // lights (FRAME_FLAG_BAND_POINTS, LightPath::BandPoints): shade_point_light shades
-// each with its band times 1 / d^2 (light_band: -alpha its r, interleave its inner and
-// HARD_BAND), light_attenuation's hierarchy arm, on the same short path.
+// each with its band times 1 / d^2 (light_band: alpha its r, interleave its inner,
+// LIGHT_FLAG_HARD_BAND a sampled band), light_attenuation's hierarchy arm, on the same short
+// path.
 override BAND_POINTS: bool = false;
 
 // Whether the frame says its lights are of the kind this pipeline is built for (the frame's flags
@@ -156,7 +158,7 @@ fn shade_light_atten(light: Light, to_light: vec3<f32>, d: f32, atten: f32, n: v
     }
     let l = select(n, to_light / d, d > 0.0);
     var cone = 1.0;
-    if light.kind == LIGHT_KIND_SPOT {
+    if light_shape(light) == LIGHT_KIND_SPOT {
         cone = light_spot(dot(-l, light.direction), light.cos_inner, light.cos_outer);
     }
     if cone == 0.0 {

@@ -223,10 +223,10 @@ fn level_light(position: vec3<f32>, power: vec3<f32>) -> Light {
     l.color = power;
     l.intensity = 1.0;
     l.direction = vec3<f32>(0.0);
-    l.kind = LIGHT_KIND_POINT;
+    l.kind = LIGHT_KIND_POINT | LIGHT_FALLOFF_BAND;
     l.cos_inner = 1.0;
     l.cos_outer = -1.0;
-    l.alpha = -step.c.x;
+    l.alpha = step.c.x;
     l.interleave = bitcast<u32>(step.c.y);
     return l;
 }
@@ -252,12 +252,13 @@ fn sampled_light(l_in: Light, id: u32) -> Light {
     if step.s.y == 1u {
         let c = bitcast<f32>(step.s.w);
         let t = (c - 1.0) * band_xi(id);
-        let r = -l.alpha;
+        let r = l.alpha;
         // The last level's r is infinite, and so is its end.
         let to = r * (c - t);
         l.radius = min(to, step.c.z);
-        l.alpha = -to;
-        l.interleave = bitcast<u32>(step.c.y * (1.0 + t)) | HARD_BAND;
+        l.alpha = to;
+        l.interleave = bitcast<u32>(step.c.y * (1.0 + t));
+        l.kind |= LIGHT_FLAG_HARD_BAND;
     }
     return l;
 }
@@ -273,11 +274,12 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let l = source[i];
-    if l.kind == LIGHT_KIND_SPOT {
+    if light_shape(l) == LIGHT_KIND_SPOT {
         no_cell(i);
         var s = l;
+        s.kind = LIGHT_KIND_SPOT | LIGHT_FALLOFF_BAND;
         s.radius = step.c.z;
-        s.alpha = -step.far.w;
+        s.alpha = step.far.w;
         s.interleave = 0u;
         shaded[target_index[i]] = s;
         return;

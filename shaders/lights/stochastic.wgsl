@@ -85,4 +85,7 @@ fn draw(@builtin(global_invocation_id) gid: vec3<u32>) {
         drawn[index].interleave = n << 24u | key;
     }
     drawn[index].alpha = select(alpha, 0.0, stochastic.biased != 0u);
+    // Biased (the windowed falloff over the drawn range) or stochastic light culling's.
+    let falloff = select(LIGHT_FALLOFF_STOCHASTIC, LIGHT_FALLOFF_WINDOWED, stochastic.biased != 0u);
+    drawn[index].kind = (drawn[index].kind & ~LIGHT_FALLOFF_MASK) | falloff;
 }

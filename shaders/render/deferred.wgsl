@@ -161,9 +161,16 @@ const TILE_GROUP_LIGHTS: u32 = 32u;
 const POINT_BATCH: u32 = 64u;
 var<workgroup> wg_lights: array<Light, select(TILE_GROUP_LIGHTS, 1u, POINT_LIGHTS)>;
 var<workgroup> wg_points: array<array<vec4<f32>, 2>, select(1u, POINT_BATCH, POINT_LIGHTS)>;
-// With BAND_POINTS, each slot's band beside it: the light's `interleave` (its inner distance and
-// HARD_BAND); its r is in the slot's alpha (point_energy).
+// With BAND_POINTS, each slot's band beside it (band_slot); its r is in the slot's alpha
+// (point_energy).
 var<workgroup> wg_bands: array<u32, select(1u, POINT_BATCH, BAND_POINTS)>;
+
+// A band light's slot in wg_bands: the bits of its inner distance, never negative, with the top
+// bit set for a sampled band (LIGHT_FLAG_HARD_BAND).
+const SLOT_HARD_BAND: u32 = 0x80000000u;
+fn band_slot(light: Light) -> u32 {
+    return light.interleave | select(0u, SLOT_HARD_BAND, (light.kind & LIGHT_FLAG_HARD_BAND) != 0u);
+}
 
 // The second half of a point light's slot in wg_points: colour and intensity; for stochastic
 // point lights (STOCHASTIC_POINTS) and the hierarchy's (BAND_POINTS) colour times intensity, and
@@ -190,7 +197,9 @@ fn point_light(q: vec4<f32>, e: vec4<f32>, band: u32) -> Light {
     light.color = e.xyz;
     light.intensity = select(e.w, 1.0, premultiplied);
     light.alpha = select(0.0, e.w, premultiplied);
-    light.interleave = band;
+    light.interleave = band & ~SLOT_HARD_BAND;
+    let falloff = select(select(LIGHT_FALLOFF_WINDOWED, LIGHT_FALLOFF_STOCHASTIC, STOCHASTIC_POINTS), LIGHT_FALLOFF_BAND, BAND_POINTS);
+    light.kind = LIGHT_KIND_POINT | falloff | select(0u, LIGHT_FLAG_HARD_BAND, (band & SLOT_HARD_BAND) != 0u);
     return light;
 }
 
@@ -239,7 +248,7 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             if POINT_LIGHTS {
                 wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(light.position, light.radius), point_energy(light.color, light.intensity, light.alpha));
                 if BAND_POINTS {
-                    wg_bands[li] = light.interleave;
+                    wg_bands[li] = band_slot(light);
                 }
             } else {
                 wg_lights[li] = light;
@@ -365,7 +374,7 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             if POINT_LIGHTS {
                 wg_points[li] = array<vec4<f32>, 2>(vec4<f32>(lights[i].position, lights[i].radius), point_energy(lights[i].color, lights[i].intensity, lights[i].alpha));
                 if BAND_POINTS {
-                    wg_bands[li] = lights[i].interleave;
+                    wg_bands[li] = band_slot(lights[i]);
                 }
             } else {
                 wg_lights[li] = lights[i];

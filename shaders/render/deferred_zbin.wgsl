@@ -169,7 +169,7 @@ fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: S
             if infinite || part_box_holds(0u, q.xyz, q.w) {
                 wg_points[li] = array<vec4<f32>, 2>(q, point_energy(lights[i].color, lights[i].intensity, lights[i].alpha));
                 if BAND_POINTS {
-                    wg_bands[li] = lights[i].interleave;
+                    wg_bands[li] = band_slot(lights[i]);
                 }
                 slot = k;
             }

@@ -173,7 +173,7 @@ impl CullLight {
             center,
             radius: l.radius,
             slack: slack * (center.length() + l.radius),
-            is_cone: l.kind == LIGHT_KIND_SPOT && l.cos_outer > CONE_MIN_COS,
+            is_cone: l.shape() == LIGHT_KIND_SPOT && l.cos_outer > CONE_MIN_COS,
             axis: (frame.view_from_world * l.direction.extend(0.0)).xyz(),
             tan_outer: (1.0 - l.cos_outer * l.cos_outer).max(0.0).sqrt()
                 / l.cos_outer.max(CONE_MIN_COS),

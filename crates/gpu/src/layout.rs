@@ -9,10 +9,26 @@ use glam::{Mat4, Vec3, Vec4};
 use manylights_scene::hierarchy::Band;
 use manylights_scene::{Camera, Light, LightKind, Material, light};
 
-/// `Light.kind` of a point light.
+/// `Light.kind`'s shape of a point light.
 pub const LIGHT_KIND_POINT: u32 = 0;
-/// `Light.kind` of a spot light.
+/// `Light.kind`'s shape of a spot light.
 pub const LIGHT_KIND_SPOT: u32 = 1;
+/// The bits of `Light.kind` that hold its shape ([`LIGHT_KIND_POINT`], [`LIGHT_KIND_SPOT`]).
+pub const LIGHT_SHAPE_MASK: u32 = 0xff;
+/// The bits of `Light.kind` that hold its falloff: [`LIGHT_FALLOFF_WINDOWED`],
+/// [`LIGHT_FALLOFF_STOCHASTIC`] or [`LIGHT_FALLOFF_BAND`].
+pub const LIGHT_FALLOFF_MASK: u32 = 0xff00;
+/// `Light.kind`'s falloff: the windowed falloff within `radius` (a light as uploaded).
+pub const LIGHT_FALLOFF_WINDOWED: u32 = 0;
+/// `Light.kind`'s falloff: stochastic light culling's, `max(1 / d^2, alpha)` inside the range
+/// drawn for the frame (`lights.stochastic` sets it).
+pub const LIGHT_FALLOFF_STOCHASTIC: u32 = 0x100;
+/// `Light.kind`'s falloff: a light of the lighting grid hierarchy, its band's weight times
+/// `1 / d^2` ([`GpuLight::with_band`]).
+pub const LIGHT_FALLOFF_BAND: u32 = 0x200;
+/// `Light.kind`'s flag of a band light whose band is sampled (`Band::hard`): weight 1 between
+/// its inner distance and `r`, 0 elsewhere.
+pub const LIGHT_FLAG_HARD_BAND: u32 = 0x1_0000;
 
 /// `Frame.flags`: shade with the infinite-range falloff (no radius cut-off), for the reference
 /// that measures what the cut-off costs.
@@ -47,11 +63,16 @@ pub fn wgsl_prelude() -> String {
          const SHININESS: f32 = {shininess:?};\n\
          const LIGHT_KIND_POINT: u32 = {LIGHT_KIND_POINT}u;\n\
          const LIGHT_KIND_SPOT: u32 = {LIGHT_KIND_SPOT}u;\n\
+         const LIGHT_SHAPE_MASK: u32 = {LIGHT_SHAPE_MASK}u;\n\
+         const LIGHT_FALLOFF_MASK: u32 = {LIGHT_FALLOFF_MASK}u;\n\
+         const LIGHT_FALLOFF_WINDOWED: u32 = {LIGHT_FALLOFF_WINDOWED}u;\n\
+         const LIGHT_FALLOFF_STOCHASTIC: u32 = {LIGHT_FALLOFF_STOCHASTIC}u;\n\
+         const LIGHT_FALLOFF_BAND: u32 = {LIGHT_FALLOFF_BAND}u;\n\
+         const LIGHT_FLAG_HARD_BAND: u32 = {LIGHT_FLAG_HARD_BAND}u;\n\
          const FRAME_FLAG_INFINITE_RANGE: u32 = {FRAME_FLAG_INFINITE_RANGE}u;\n\
          const FRAME_FLAG_POINT_LIGHTS: u32 = {FRAME_FLAG_POINT_LIGHTS}u;\n\
          const FRAME_FLAG_STOCHASTIC_POINTS: u32 = {FRAME_FLAG_STOCHASTIC_POINTS}u;\n\
          const FRAME_FLAG_BAND_POINTS: u32 = {FRAME_FLAG_BAND_POINTS}u;\n\
-         const HARD_BAND: u32 = {HARD_BAND}u;\n\
          const XI_BITS: u32 = {xi_bits}u;\n\
          const PHI_BITS: u32 = {phi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
@@ -146,38 +167,56 @@ pub struct GpuLight {
     pub intensity: f32,
     /// Spot axis (unit); zero for point lights.
     pub direction: Vec3,
-    /// [`LIGHT_KIND_POINT`] or [`LIGHT_KIND_SPOT`].
+    /// Its shape ([`LIGHT_KIND_POINT`] or [`LIGHT_KIND_SPOT`], [`LIGHT_SHAPE_MASK`]), its
+    /// falloff ([`LIGHT_FALLOFF_WINDOWED`], [`LIGHT_FALLOFF_STOCHASTIC`] or
+    /// [`LIGHT_FALLOFF_BAND`], [`LIGHT_FALLOFF_MASK`]) and its flags
+    /// ([`LIGHT_FLAG_HARD_BAND`]), or-ed.
     pub kind: u32,
     /// Cosine of the inner half-angle.
     pub cos_inner: f32,
     /// Cosine of the outer half-angle.
     pub cos_outer: f32,
-    /// Stochastic light culling's alpha (`manylights_scene::stochastic`), written each frame
-    /// by `lights.stochastic` with the range in `radius`; 0: the windowed falloff. Below 0: a
-    /// light of the lighting grid hierarchy ([`GpuLight::with_band`]), `-alpha` its band's `r`.
+    /// [`LIGHT_FALLOFF_STOCHASTIC`]: stochastic light culling's alpha
+    /// (`manylights_scene::stochastic`), written each frame by `lights.stochastic` with the
+    /// range in `radius`. [`LIGHT_FALLOFF_BAND`]: the band's `r` ([`GpuLight::with_band`]).
+    /// Unread with the windowed falloff.
     pub alpha: f32,
-    /// Interleaved stochastic ranges: 0 none, otherwise `n << 24 | key`
-    /// (`StochasticParams::interleave_word`), written by `lights.stochastic`. For a hierarchy
-    /// light (`alpha < 0`) the bits of its band's `inner`.
+    /// [`LIGHT_FALLOFF_STOCHASTIC`]: interleaved ranges, 0 none, otherwise `n << 24 | key`
+    /// (`StochasticParams::interleave_word`), written by `lights.stochastic`.
+    /// [`LIGHT_FALLOFF_BAND`]: the bits of its band's `inner`.
     pub interleave: u32,
 }
 const _: () = assert!(size_of::<GpuLight>() == 64);
 
-/// The bit of a hierarchy light's `interleave` that marks its band sampled (`light_band`).
-pub const HARD_BAND: u32 = 0x8000_0000;
-
 impl GpuLight {
     /// The light shaded with its hierarchy band (`manylights_scene::hierarchy::Band`): the
     /// infinite-range falloff times the band's weight, within `radius`, its reach. An unbounded
-    /// band (`r` infinite) is `alpha = -inf`.
-    /// A sampled band (`band.hard`, weight 1 between `inner` and `r`) sets the top bit of
-    /// `interleave` (an inner distance is never negative), which `light_band` reads.
+    /// band (`r` infinite) is `alpha = inf`. A sampled band (`band.hard`, weight 1 between
+    /// `inner` and `r`) carries [`LIGHT_FLAG_HARD_BAND`].
     pub fn with_band(self, band: &Band) -> Self {
+        let hard = if band.hard { LIGHT_FLAG_HARD_BAND } else { 0 };
         Self {
-            alpha: -(band.r as f32),
-            interleave: (band.inner as f32).to_bits() | if band.hard { HARD_BAND } else { 0 },
+            kind: self.shape() | LIGHT_FALLOFF_BAND | hard,
+            alpha: band.r as f32,
+            interleave: (band.inner as f32).to_bits(),
             ..self
         }
+    }
+
+    /// Its shape: [`LIGHT_KIND_POINT`] or [`LIGHT_KIND_SPOT`].
+    pub fn shape(&self) -> u32 {
+        self.kind & LIGHT_SHAPE_MASK
+    }
+
+    /// Its falloff: [`LIGHT_FALLOFF_WINDOWED`], [`LIGHT_FALLOFF_STOCHASTIC`] or
+    /// [`LIGHT_FALLOFF_BAND`].
+    pub fn falloff(&self) -> u32 {
+        self.kind & LIGHT_FALLOFF_MASK
+    }
+
+    /// Whether it is a band light whose band is sampled ([`LIGHT_FLAG_HARD_BAND`]).
+    pub fn hard_band(&self) -> bool {
+        self.kind & LIGHT_FLAG_HARD_BAND != 0
     }
 }
 

@@ -162,9 +162,7 @@ impl GpuScene {
         })?;
         let mut lights: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
         let path = model.path(
-            lights
-                .iter()
-                .all(|l| l.kind == LIGHT_KIND_POINT && l.alpha == 0.0),
+            lights.iter().all(|l| l.kind == LIGHT_KIND_POINT),
             light_count,
         );
         if lights.is_empty() {

@@ -185,7 +185,8 @@ pub fn write(dir: &Path, d: &ExportData<'_>) -> Result<Vec<PathBuf>, LabError> {
     let scalar = |f: fn(&GpuLight) -> f32| -> Vec<f32> { d.lights.iter().map(f).collect() };
     let offsets: Vec<u32> = d.lists.ranges.iter().map(|r| r[0]).collect();
     let counts: Vec<u32> = d.lists.ranges.iter().map(|r| r[1]).collect();
-    let kinds: Vec<u32> = d.lights.iter().map(|l| l.kind).collect();
+    // The shape alone: the export format predates the falloff bits of `GpuLight::kind`.
+    let kinds: Vec<u32> = d.lights.iter().map(GpuLight::shape).collect();
     let m = |m: &glam::Mat4| rows(m);
     let files = vec![
         npy("depth.npy", &hw, d.depth)?,

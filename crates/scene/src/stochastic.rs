@@ -313,7 +313,7 @@ impl StochasticParams {
 /// The stochastic estimate at surface point `p` (unit normal `n`, unit direction `v` to the
 /// viewer) in f64: each light with its frame's range in `radius` and its alpha in `alphas`,
 /// shaded with `max(1 / d^2, alpha)` inside the range. The CPU twin of the GPU's
-/// `light_attenuation` for lights with alpha > 0.
+/// `light_attenuation` for lights of stochastic culling's falloff (`LIGHT_FALLOFF_STOCHASTIC`).
 pub fn shade(
     p: DVec3,
     n: DVec3,

@@ -142,7 +142,7 @@ fn cull_light(l: Light) -> CullLight {
     out.radius = l.radius;
     out.slack = cull.slack * (length(out.center) + l.radius);
     // The cone test applies to spots narrower than a hemisphere; wider ones use the sphere.
-    out.is_cone = l.kind == LIGHT_KIND_SPOT && l.cos_outer > CONE_MIN_COS;
+    out.is_cone = light_shape(l) == LIGHT_KIND_SPOT && l.cos_outer > CONE_MIN_COS;
     out.axis = (frame.view_from_world * vec4<f32>(l.direction, 0.0)).xyz;
     out.tan_outer = sqrt(max(1.0 - l.cos_outer * l.cos_outer, 0.0)) / max(l.cos_outer, CONE_MIN_COS);
     return out;

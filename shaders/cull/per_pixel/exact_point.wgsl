@@ -27,7 +27,7 @@ fn reaches(l: Light, p: vec3<f32>) -> bool {
     if d >= l.radius {
         return false;
     }
-    if l.kind == LIGHT_KIND_SPOT {
+    if light_shape(l) == LIGHT_KIND_SPOT {
         return d > 0.0 && dot(to_p, l.direction) / d > l.cos_outer;
     }
     return true;
