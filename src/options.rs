@@ -189,9 +189,9 @@ impl From<ModelName> for Model {
 /// A culling strategy and its parameters.
 #[derive(clap::Args, Debug)]
 pub(crate) struct StrategyArgs {
-    /// Culling strategy.
-    #[arg(long, value_enum, default_value_t = StrategyName::TiledGather)]
-    pub(crate) strategy: StrategyName,
+    /// Culling strategy (default: tiled-gather).
+    #[arg(long, value_enum)]
+    pub(crate) strategy: Option<StrategyName>,
     /// Tile side in pixels (8, 16 and 32 are usual; 4..=256 accepted). Default: 16, or 64 for
     /// clustered.
     #[arg(long)]
@@ -237,11 +237,37 @@ pub(crate) struct StrategyArgs {
 }
 
 impl StrategyArgs {
+    /// The strategy named by `--strategy`, tiled gather where it is not given.
+    fn name(&self) -> StrategyName {
+        self.strategy.unwrap_or(StrategyName::TiledGather)
+    }
+
+    /// The first option given that only culling reads (`--strategy` and its parameters, a
+    /// list cap, the box test's ablation), for an error where nothing culls.
+    pub(crate) fn culling_option_given(&self) -> Option<&'static str> {
+        [
+            ("--strategy", self.strategy.is_some()),
+            ("--tile-size", self.tile_size.is_some()),
+            ("--slices", self.slices.is_some()),
+            ("--bins", self.bins.is_some()),
+            ("--slicing", self.slicing.is_some()),
+            ("--skip-empty", self.skip_empty),
+            ("--cells", self.cells),
+            ("--unordered", self.unordered),
+            ("--coarse", self.coarse.is_some()),
+            ("--capacity", self.capacity.is_some()),
+            ("--no-tile-boxes", self.no_tile_boxes),
+            ("--slack", self.slack != DEFAULT_SLACK),
+        ]
+        .into_iter()
+        .find_map(|(option, given)| given.then_some(option))
+    }
+
     /// The strategy the options name; an error where an option is given that the strategy does
     /// not read (it would be ignored without a word).
     pub(crate) fn strategy(&self) -> Result<Strategy> {
         self.check_used()?;
-        let default_tile = if matches!(self.strategy, StrategyName::Clustered) {
+        let default_tile = if matches!(self.name(), StrategyName::Clustered) {
             64
         } else {
             16
@@ -249,7 +275,7 @@ impl StrategyArgs {
         let tile_size = self.tile_size.unwrap_or(default_tile);
         let coarse = self.coarse.unwrap_or(manylights_cull::DEFAULT_COARSE);
         let slicing = self.slicing.unwrap_or(SlicingName::Exponential).into();
-        let strategy = match self.strategy {
+        let strategy = match self.name() {
             StrategyName::TiledGather => Strategy::TiledGather { tile_size, coarse },
             StrategyName::TiledScatter => Strategy::TiledScatter { tile_size },
             StrategyName::DepthMask => Strategy::DepthMask { tile_size, coarse },
@@ -285,12 +311,12 @@ impl StrategyArgs {
             ("--slicing", self.slicing.is_some(), &[Clustered, Zbin]),
         ];
         for (option, set, readers) in given {
-            if set && !readers.contains(&self.strategy) {
+            if set && !readers.contains(&self.name()) {
                 let names: Vec<String> = readers.iter().map(|r| r.cli_name()).collect();
                 bail!(
                     "{option} is read only by --strategy {}; --strategy {} would ignore it",
                     names.join(" and "),
-                    self.strategy.cli_name()
+                    self.name().cli_name()
                 );
             }
         }

@@ -54,11 +54,12 @@ pub(crate) struct RenderArgs {
     /// --backend reference.
     #[arg(long, value_enum, default_value_t = HdrName::F32)]
     pub(crate) hdr: HdrName,
-    /// How --backend visibility finds each pixel's triangle: compute (a compute rasteriser,
-    /// where it can: one sample a pixel, no glass, 64-bit atomic max on the device; the raster
-    /// pass elsewhere) or raster (the raster pass always).
-    #[arg(long, value_enum, default_value_t = VisibilityPassName::Compute)]
-    pub(crate) visibility_pass: VisibilityPassName,
+    /// How --backend visibility finds each pixel's triangle: compute (the default: a compute
+    /// rasteriser, where it can: one sample a pixel, no glass, 64-bit atomic max on the device;
+    /// the raster pass elsewhere) or raster (the raster pass always). Only with --backend
+    /// visibility.
+    #[arg(long, value_enum)]
+    pub(crate) visibility_pass: Option<VisibilityPassName>,
 }
 
 /// `--visibility-pass`'s values.
@@ -179,6 +180,8 @@ struct Run<'a> {
 
 /// The options that cannot go together, refused before any work.
 fn validate(args: &RenderArgs) -> Result<()> {
+    // The strategy's own options first: those it would ignore name the strategies that read them.
+    args.cull.strategy()?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("invalid --exposure {}: a finite value > 0", args.exposure);
     }
@@ -191,8 +194,7 @@ fn validate(args: &RenderArgs) -> Result<()> {
         bail!(
             "--export needs lists: use --backend forward, deferred or deferred-stored-position \
              (--backend {} culls nothing)",
-            clap::ValueEnum::to_possible_value(&args.backend)
-                .map_or_else(String::new, |v| v.get_name().to_owned())
+            backend_name(args.backend)
         );
     }
     if args.hdr == HdrName::F16 && args.backend == BackendName::Reference {
@@ -212,6 +214,22 @@ fn validate(args: &RenderArgs) -> Result<()> {
             args.msaa
         );
     }
+    if args.visibility_pass.is_some() && args.backend != BackendName::Visibility {
+        bail!(
+            "--visibility-pass is read only by --backend visibility; --backend {} would ignore it",
+            backend_name(args.backend)
+        );
+    }
+    if matches!(
+        args.backend,
+        BackendName::Reference | BackendName::NaiveForward
+    ) && let Some(option) = args.cull.culling_option_given()
+    {
+        bail!(
+            "{option} is read only by a backend that culls (forward, deferred,              deferred-stored-position, visibility); --backend {} culls nothing and would ignore it",
+            backend_name(args.backend)
+        );
+    }
     if args.msaa > 1 && args.backend == BackendName::DeferredStoredPosition {
         bail!(
             "invalid --msaa {} with --backend deferred-stored-position: the stored \
@@ -221,6 +239,12 @@ fn validate(args: &RenderArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `backend` as `--backend` names it.
+fn backend_name(backend: BackendName) -> String {
+    clap::ValueEnum::to_possible_value(&backend)
+        .map_or_else(String::new, |v| v.get_name().to_owned())
 }
 
 impl Run<'_> {
@@ -257,8 +281,8 @@ impl Run<'_> {
         let mut renderer = Renderer::with_format(ctx, gpu_scene, samples, hdr)
             .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
         renderer.visibility_pass = match args.visibility_pass {
-            VisibilityPassName::Compute => VisibilityPass::Compute,
-            VisibilityPassName::Raster => VisibilityPass::Raster,
+            None | Some(VisibilityPassName::Compute) => VisibilityPass::Compute,
+            Some(VisibilityPassName::Raster) => VisibilityPass::Raster,
         };
         // With --accumulate, the frames' mean; lists, counts and exports are the last
         // frame's (whose ranges the lights hold afterwards).

@@ -449,6 +449,31 @@ fn cull_rejects_bad_parameters() {
             rejects_cmd(cmd, extra, 1, &[option, readers, "would ignore it"]);
         }
     }
+    // Culling's options where nothing culls, and the visibility buffer's elsewhere.
+    for (extra, option, why) in [
+        (
+            &["--backend", "reference", "--strategy", "clustered"][..],
+            "--strategy",
+            "--backend reference culls nothing",
+        ),
+        (
+            &["--backend", "naive-forward", "--tile-size", "8"][..],
+            "--tile-size",
+            "--backend naive-forward culls nothing",
+        ),
+        (
+            &["--capacity", "4"][..],
+            "--capacity",
+            "--backend reference culls nothing",
+        ),
+        (
+            &["--backend", "forward", "--visibility-pass", "raster"][..],
+            "--visibility-pass",
+            "--backend forward would ignore it",
+        ),
+    ] {
+        rejects_cmd("render", extra, 1, &[option, why]);
+    }
     rejects_cmd(
         "cull",
         &["--strategy", "zbin", "--capacity", "4"],
@@ -481,6 +506,12 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("r");
     for backend in ["forward", "deferred", "naive-forward", "visibility"] {
+        // Naive forward culls nothing: a strategy for it is an error.
+        let (strategy, value) = if backend == "naive-forward" {
+            ("--exposure", "1")
+        } else {
+            ("--strategy", "depth-mask")
+        };
         let stdout = succeeds(
             &[
                 "render",
@@ -490,8 +521,8 @@ fn render_with_a_backend_compares_and_writes_heatmap_and_flip_map() {
                 "64",
                 "--backend",
                 backend,
-                "--strategy",
-                "depth-mask",
+                strategy,
+                value,
                 "--width",
                 "40",
                 "--height",
