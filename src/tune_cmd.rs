@@ -326,6 +326,6 @@ pub(crate) fn candidate_ranges(args: &TuneArgs) -> Result<Vec<RadiusRule>> {
 fn range_of(r: &manylights_lab::Row) -> String {
     manylights_lab::RADIUS_AXES
         .iter()
-        .find_map(|k| r.parameters.get(*k).map(|v| format!(" {k}={v}")))
+        .find_map(|k| r.sweep.parameters.get(*k).map(|v| format!(" {k}={v}")))
         .unwrap_or_default()
 }

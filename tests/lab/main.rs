@@ -275,6 +275,7 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
             // (A value may hold commas, a camera pose's: each `name=value` is in the name,
             // and together with the commas between them they are all of it.)
             let parameters: Vec<String> = r
+                .sweep
                 .parameters
                 .iter()
                 .map(|(k, v)| format!("{k}={v}"))
@@ -286,17 +287,21 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
                         && len + parameters.len() - 1 == r.cell.len(),
                     "{name} {}: parameters {:?}",
                     r.cell,
-                    r.parameters
+                    r.sweep.parameters
                 );
             }
             assert_eq!(
-                r.setting,
-                r.parameters.get("setting").cloned().unwrap_or_default(),
+                r.sweep.setting,
+                r.sweep
+                    .parameters
+                    .get("setting")
+                    .cloned()
+                    .unwrap_or_default(),
                 "{name} {}",
                 r.cell
             );
             assert!(
-                r.radius_value.is_some(),
+                r.sweep.radius_value.is_some(),
                 "{name} {}: no radius_value",
                 r.cell
             );

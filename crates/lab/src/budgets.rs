@@ -79,10 +79,10 @@ pub(crate) fn findings(rows: &[Row]) -> Vec<String> {
     // scene's: a hierarchy's cells count the nodes they shade, `Row::setting_lights`).
     let mut settings: BTreeMap<(String, String, u32, u32, u32), Vec<&Row>> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.flip_mean_infinite.is_some()) {
-        let label = if r.setting.is_empty() {
+        let label = if r.sweep.setting.is_empty() {
             format!("{:020}", r.setting_lights())
         } else {
-            r.setting.clone()
+            r.sweep.setting.clone()
         };
         settings
             .entry((r.scene.clone(), label, r.width, r.height, r.msaa))

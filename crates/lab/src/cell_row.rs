@@ -12,7 +12,7 @@ use manylights_shade::Backend;
 use crate::evaluate::{PoseEval, temporal_stability};
 use crate::experiment::{Cell, Config, Experiment, params_label};
 use crate::noise::{Draws, Noise};
-use crate::results::{Row, percentiles};
+use crate::results::{Row, SweepColumns, percentiles};
 use crate::runner::now;
 use crate::steady::{PassMedian, SteadyCull};
 
@@ -100,7 +100,6 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
     let med = |s: Option<(f64, f64, f64)>| s.map(|x| x.0);
     let p10 = |s: Option<(f64, f64, f64)>| s.map(|x| x.1);
     let p90 = |s: Option<(f64, f64, f64)>| s.map(|x| x.2);
-    let rule = RuleColumns::of(&c.lights.radius);
     Row {
         experiment: exp.name.clone(),
         cell: cell.name.clone(),
@@ -199,23 +198,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         lights_needed_per_pixel_mean: worst.needed_per_pixel_mean,
         gpu_ms_light_update: med(light_update),
         cpu_ms_upload: percentiles(uploads).map(|x| x.0),
-        setting: cell
-            .parameters
-            .iter()
-            .find(|(k, _)| k == "setting")
-            .map(|(_, v)| v.clone())
-            .unwrap_or_default(),
-        radius_value: rule.value,
-        hierarchy_spacing: rule.spacing,
-        hierarchy_finest_nodes: rule.finest_nodes,
-        hierarchy_growth: rule.growth,
-        hierarchy_ramp: rule.ramp,
-        hierarchy_sample_from: rule.sample_from,
-        stochastic_bound: rule.bound,
-        stochastic_draw: rule.draw,
-        interleave: rule.interleave,
-        stochastic_exposure: rule.exposure,
-        parameters: cell.parameters.iter().cloned().collect(),
+        sweep: sweep_columns(cell, &c.lights.radius),
         passes,
         index: cell.index,
         id,
@@ -223,62 +206,56 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
     }
 }
 
-/// A radius rule's parameters as the row's columns.
-#[derive(Default)]
-struct RuleColumns {
-    value: Option<f64>,
-    spacing: Option<f64>,
-    finest_nodes: Option<f64>,
-    growth: Option<f64>,
-    ramp: Option<f64>,
-    sample_from: Option<u32>,
-    bound: Option<String>,
-    draw: Option<String>,
-    interleave: Option<u32>,
-    exposure: Option<f64>,
-}
-
-impl RuleColumns {
-    fn of(rule: &RadiusRule) -> Self {
-        // As the rule's f32 is written (0.1, not 0.10000000149011612).
-        let col = |v: f32| v.to_string().parse::<f64>().ok();
-        match *rule {
-            RadiusRule::Fixed(v) | RadiusRule::Threshold(v) => Self {
-                value: col(v),
-                ..Self::default()
-            },
-            RadiusRule::Hierarchy {
-                alpha,
-                spacing,
-                finest_nodes,
-                growth,
-                ramp,
-                sample_from,
-            } => Self {
-                value: col(alpha),
-                spacing: col(spacing),
-                finest_nodes: col(finest_nodes),
-                growth: col(growth),
-                ramp: col(ramp),
-                sample_from,
-                ..Self::default()
-            },
-            RadiusRule::Stochastic {
-                error,
-                bound,
-                exposure,
-                interleave,
-                draw,
-                ..
-            } => Self {
-                value: col(error),
-                bound: Some(bound.name().into()),
-                draw: Some(draw.name().into()),
-                interleave: Some(interleave),
-                exposure: col(exposure),
-                ..Self::default()
-            },
-        }
+/// The cell's parameters and its light range's as the row's columns.
+fn sweep_columns(cell: &Cell, rule: &RadiusRule) -> SweepColumns {
+    // As the rule's f32 is written (0.1, not 0.10000000149011612).
+    let col = |v: f32| v.to_string().parse::<f64>().ok();
+    let sweep = SweepColumns {
+        setting: cell
+            .parameters
+            .iter()
+            .find(|(k, _)| k == "setting")
+            .map(|(_, v)| v.clone())
+            .unwrap_or_default(),
+        parameters: cell.parameters.iter().cloned().collect(),
+        ..SweepColumns::default()
+    };
+    match *rule {
+        RadiusRule::Fixed(v) | RadiusRule::Threshold(v) => SweepColumns {
+            radius_value: col(v),
+            ..sweep
+        },
+        RadiusRule::Hierarchy {
+            alpha,
+            spacing,
+            finest_nodes,
+            growth,
+            ramp,
+            sample_from,
+        } => SweepColumns {
+            radius_value: col(alpha),
+            hierarchy_spacing: col(spacing),
+            hierarchy_finest_nodes: col(finest_nodes),
+            hierarchy_growth: col(growth),
+            hierarchy_ramp: col(ramp),
+            hierarchy_sample_from: sample_from,
+            ..sweep
+        },
+        RadiusRule::Stochastic {
+            error,
+            bound,
+            exposure,
+            interleave,
+            draw,
+            ..
+        } => SweepColumns {
+            radius_value: col(error),
+            stochastic_bound: Some(bound.name().into()),
+            stochastic_draw: Some(draw.name().into()),
+            interleave: Some(interleave),
+            stochastic_exposure: col(exposure),
+            ..sweep
+        },
     }
 }
 

@@ -14,9 +14,9 @@ use crate::results::Row;
 /// (`radius_value`, `hierarchy_*`, `stochastic_*`, `interleave`) from the cell name, `setting`
 /// from its `setting=` part, then `scene_lights` ([`backfill_scene_lights`]).
 pub fn backfill(rows: &mut [Row]) {
-    for r in rows.iter_mut().filter(|r| r.parameters.is_empty()) {
+    for r in rows.iter_mut().filter(|r| r.sweep.parameters.is_empty()) {
         if r.cell != "base" {
-            r.parameters = r
+            r.sweep.parameters = r
                 .cell
                 .split(',')
                 .map(|p| {
@@ -25,10 +25,10 @@ pub fn backfill(rows: &mut [Row]) {
                 })
                 .collect();
         }
-        if let Some(s) = r.parameters.get("setting") {
-            r.setting = s.clone();
+        if let Some(s) = r.sweep.parameters.get("setting") {
+            r.sweep.setting = s.clone();
         }
-        if r.radius_value.is_none() {
+        if r.sweep.radius_value.is_none() {
             range_columns(r);
         }
     }
@@ -41,46 +41,46 @@ pub fn backfill(rows: &mut [Row]) {
 fn range_columns(r: &mut Row) {
     let Some((axis, value)) = RADIUS_AXES
         .iter()
-        .find_map(|k| r.parameters.get(*k).map(|v| (*k, v.clone())))
+        .find_map(|k| r.sweep.parameters.get(*k).map(|v| (*k, v.clone())))
     else {
         return;
     };
     // The name's rule (rows before `radius_rule` have none).
     r.radius_rule = if axis == "radius" { "fixed" } else { axis }.to_owned();
     let mut pieces = value.split('/');
-    r.radius_value = pieces.next().and_then(|v| v.parse().ok());
+    r.sweep.radius_value = pieces.next().and_then(|v| v.parse().ok());
     let defaults = r.radius_rule == "hierarchy";
     if defaults {
         use manylights_scene::hierarchy::{FINEST_NODES, GROWTH, RAMP};
-        r.hierarchy_finest_nodes = Some(FINEST_NODES);
-        r.hierarchy_growth = Some(GROWTH);
-        r.hierarchy_ramp = Some(RAMP);
+        r.sweep.hierarchy_finest_nodes = Some(FINEST_NODES);
+        r.sweep.hierarchy_growth = Some(GROWTH);
+        r.sweep.hierarchy_ramp = Some(RAMP);
     }
     let pieces: Vec<String> = pieces.map(str::to_owned).collect();
     for p in &pieces {
         let num = |prefix: &str| p.strip_prefix(prefix).and_then(|v| v.parse::<f64>().ok());
         if r.radius_rule == "hierarchy" {
             if let Some(h) = num("h") {
-                r.hierarchy_spacing = Some(h);
+                r.sweep.hierarchy_spacing = Some(h);
             } else if let Some(n) = num("n") {
-                r.hierarchy_finest_nodes = Some(n);
+                r.sweep.hierarchy_finest_nodes = Some(n);
             } else if let Some(k) = num("g") {
-                r.hierarchy_growth = Some(k);
+                r.sweep.hierarchy_growth = Some(k);
             } else if let Some(c) = num("c") {
-                r.hierarchy_ramp = Some(c);
+                r.sweep.hierarchy_ramp = Some(c);
             } else if let Some(l) = num("s") {
-                r.hierarchy_sample_from = Some(l as u32);
+                r.sweep.hierarchy_sample_from = Some(l as u32);
             }
         } else if let Some(k) = num("acc") {
             r.accumulate = Some(k as u32);
         } else if let Some(n) = num("il") {
-            r.interleave = Some(n as u32);
+            r.sweep.interleave = Some(n as u32);
         } else if let Some(x) = num("exposure") {
-            r.stochastic_exposure = Some(x);
+            r.sweep.stochastic_exposure = Some(x);
         } else if p == "albedo" {
-            r.stochastic_bound = Some(p.clone());
+            r.sweep.stochastic_bound = Some(p.clone());
         } else if p == "independent" {
-            r.stochastic_draw = Some(p.clone());
+            r.sweep.stochastic_draw = Some(p.clone());
         }
     }
 }
@@ -90,7 +90,8 @@ fn range_columns(r: &mut Row) {
 /// (`setting=hall,hierarchy=1/h0.25,variant=v` and `setting=hall,threshold=1,variant=v`).
 pub fn backfill_scene_lights(rows: &mut [Row]) {
     fn without_range(r: &Row) -> Vec<(&String, &String)> {
-        r.parameters
+        r.sweep
+            .parameters
             .iter()
             .filter(|(k, _)| !RADIUS_AXES.contains(&k.as_str()))
             .collect()

@@ -276,6 +276,33 @@ pub struct Row {
     /// buffer's triangle fetch), as `bytes_written_per_pixel` models it.
     #[serde(default)]
     pub bytes_read_per_pixel: Option<u64>,
+    /// The cell's swept parameters and its light range's, as columns (flattened: each is a
+    /// column of its own).
+    #[serde(flatten)]
+    pub sweep: SweepColumns,
+    /// Per-pass median GPU times, ms, by pass name.
+    pub passes: BTreeMap<String, f64>,
+    /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s,
+    /// `gpu_ms_cull_shade`'s and `gpu_ms_hierarchy_steady`'s back-to-back runs, each pass's
+    /// median over the runs, ms (empty where they were not timed). JSON only.
+    #[serde(default)]
+    pub passes_steady: BTreeMap<String, f64>,
+    /// The category of each pass of `passes` and `passes_steady` (`prepass`, `cull`, `shade`
+    /// or `light_update`: the frame plan's and culling's), by name. JSON only; empty in rows
+    /// written before it ([`Row::pass_category`]).
+    #[serde(default)]
+    pub pass_categories: BTreeMap<String, String>,
+    /// Cell index in sweep order.
+    pub index: usize,
+    /// Cell id (hash of its configuration).
+    pub id: String,
+    /// UTC time the cell finished (seconds since 1970).
+    pub finished_unix: u64,
+}
+
+/// A row's parameters: its sweep's (`setting`, `parameters`) and its light range's.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SweepColumns {
     /// The `setting=` label of the sweep's setting the cell is in; empty outside settings.
     #[serde(default)]
     pub setting: String,
@@ -314,24 +341,6 @@ pub struct Row {
     /// `lights`, `threshold`, `strategy`, `variant`, ...), what its name is made of. JSON only.
     #[serde(default)]
     pub parameters: BTreeMap<String, String>,
-    /// Per-pass median GPU times, ms, by pass name.
-    pub passes: BTreeMap<String, f64>,
-    /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s,
-    /// `gpu_ms_cull_shade`'s and `gpu_ms_hierarchy_steady`'s back-to-back runs, each pass's
-    /// median over the runs, ms (empty where they were not timed). JSON only.
-    #[serde(default)]
-    pub passes_steady: BTreeMap<String, f64>,
-    /// The category of each pass of `passes` and `passes_steady` (`prepass`, `cull`, `shade`
-    /// or `light_update`: the frame plan's and culling's), by name. JSON only; empty in rows
-    /// written before it ([`Row::pass_category`]).
-    #[serde(default)]
-    pub pass_categories: BTreeMap<String, String>,
-    /// Cell index in sweep order.
-    pub index: usize,
-    /// Cell id (hash of its configuration).
-    pub id: String,
-    /// UTC time the cell finished (seconds since 1970).
-    pub finished_unix: u64,
 }
 
 impl Row {

@@ -10,7 +10,9 @@ use crate::results::Row;
 /// Whether the row's cell sweeps its light range (one of [`RADIUS_AXES`] among its parameters):
 /// then its range's value is its place in its family's sweep.
 pub(super) fn sweeps_range(r: &Row) -> bool {
-    RADIUS_AXES.iter().any(|k| r.parameters.contains_key(*k))
+    RADIUS_AXES
+        .iter()
+        .any(|k| r.sweep.parameters.contains_key(*k))
 }
 
 /// A row's method family and its place in the family's sweep (the threshold, radius, error
@@ -25,7 +27,7 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
         };
         return (name.into(), None);
     }
-    let v = r.radius_value;
+    let v = r.sweep.radius_value;
     match r.radius_rule.as_str() {
         "threshold" => ("cut-off thresholds".into(), v),
         "hierarchy" => (hierarchy_family(r), v),
@@ -38,21 +40,21 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
 /// ramps and first sampled level where they are not the defaults; swept over alpha.
 fn hierarchy_family(r: &Row) -> String {
     use manylights_scene::hierarchy::{FINEST_NODES, GROWTH, RAMP};
-    let mut name = match r.hierarchy_spacing {
+    let mut name = match r.sweep.hierarchy_spacing {
         Some(h) => format!("lighting grid hierarchy, spacing {h} m"),
         None => "lighting grid hierarchy".into(),
     };
     let not = |v: Option<f64>, default: f64| v.filter(|&v| v != default);
-    if let Some(n) = not(r.hierarchy_finest_nodes, FINEST_NODES) {
+    if let Some(n) = not(r.sweep.hierarchy_finest_nodes, FINEST_NODES) {
         name += &format!(", {n} nodes a light");
     }
-    if let Some(k) = not(r.hierarchy_growth, GROWTH) {
+    if let Some(k) = not(r.sweep.hierarchy_growth, GROWTH) {
         name += &format!(", growth {k}");
     }
-    if let Some(c) = not(r.hierarchy_ramp, RAMP) {
+    if let Some(c) = not(r.sweep.hierarchy_ramp, RAMP) {
         name += &format!(", ramps {c}");
     }
-    if let Some(l) = r.hierarchy_sample_from {
+    if let Some(l) = r.sweep.hierarchy_sample_from {
         name += &format!(", sampled from level {l}");
     }
     name
@@ -62,20 +64,30 @@ fn hierarchy_family(r: &Row) -> String {
 /// draw and exposure where they are not the defaults.
 fn stochastic_family(r: &Row) -> String {
     let acc = r.accumulate.filter(|&k| k > 1);
-    let il = r.interleave.filter(|&n| n > 1);
+    let il = r.sweep.interleave.filter(|&n| n > 1);
     let mut name = match (acc, il) {
         (None, None) => "stochastic, one frame".to_owned(),
         (Some(k), None) => format!("stochastic, {k} frames accumulated"),
         (None, Some(n)) => format!("stochastic, {n}x{n} interleaved"),
         (Some(k), Some(n)) => format!("stochastic, {n}x{n} interleaved, {k} frames"),
     };
-    if let Some(b) = r.stochastic_bound.as_deref().filter(|b| *b != "light") {
+    if let Some(b) = r
+        .sweep
+        .stochastic_bound
+        .as_deref()
+        .filter(|b| *b != "light")
+    {
         name += &format!(" ({b})");
     }
-    if let Some(d) = r.stochastic_draw.as_deref().filter(|d| *d != "stratified") {
+    if let Some(d) = r
+        .sweep
+        .stochastic_draw
+        .as_deref()
+        .filter(|d| *d != "stratified")
+    {
         name += &format!(" ({d})");
     }
-    if let Some(x) = r.stochastic_exposure.filter(|&x| x != 1.0) {
+    if let Some(x) = r.sweep.stochastic_exposure.filter(|&x| x != 1.0) {
         name += &format!(" (exposure{x})");
     }
     name
@@ -109,13 +121,14 @@ mod tests {
     fn families_come_from_the_columns() {
         let mut r = crate::results::tests::sample_row();
         r.radius_rule = "hierarchy".into();
-        r.radius_value = Some(2.0);
-        r.hierarchy_spacing = Some(0.25);
-        r.hierarchy_finest_nodes = Some(2.0);
-        r.hierarchy_growth = Some(1.15);
+        r.sweep.radius_value = Some(2.0);
+        r.sweep.hierarchy_spacing = Some(0.25);
+        r.sweep.hierarchy_finest_nodes = Some(2.0);
+        r.sweep.hierarchy_growth = Some(1.15);
         // Not swept: the rule's family alone.
         assert_eq!(family(&r), ("lighting grid hierarchy".into(), None));
-        r.parameters
+        r.sweep
+            .parameters
             .insert("hierarchy".into(), "whatever the name says".into());
         assert_eq!(
             family(&r),
@@ -125,12 +138,14 @@ mod tests {
             )
         );
         r.radius_rule = "stochastic".into();
-        r.parameters.clear();
-        r.parameters.insert("stochastic".into(), String::new());
-        r.radius_value = Some(0.5);
-        r.interleave = Some(2);
+        r.sweep.parameters.clear();
+        r.sweep
+            .parameters
+            .insert("stochastic".into(), String::new());
+        r.sweep.radius_value = Some(0.5);
+        r.sweep.interleave = Some(2);
         r.accumulate = Some(1);
-        r.stochastic_draw = Some("independent".into());
+        r.sweep.stochastic_draw = Some("independent".into());
         assert_eq!(
             family(&r),
             (

@@ -76,6 +76,7 @@ pub(crate) fn write_svg(
 /// The configuration of a row without its light count: one series of the scaling figure.
 pub(crate) fn series_key(r: &Row) -> String {
     let parts: Vec<String> = r
+        .sweep
         .parameters
         .iter()
         .filter(|(k, _)| *k != "lights" && *k != "seed")

@@ -145,7 +145,8 @@ fn is_panel_or_marker(name: &str) -> bool {
 
 /// The row's parameters but its light range's, as `name=value` parts.
 fn without_range(r: &Row) -> impl Iterator<Item = (&str, String)> {
-    r.parameters
+    r.sweep
+        .parameters
         .iter()
         .filter(|(k, _)| !RADIUS_AXES.contains(&k.as_str()))
         .map(|(k, v)| (k.as_str(), format!("{k}={v}")))
@@ -188,9 +189,10 @@ pub(crate) struct Spec<'a> {
 
 /// The panels of `rows`: each row's panel index and the panels' titles.
 fn panels_of(rows: &[&Row]) -> (Vec<usize>, Vec<String>) {
-    let setting = |r: &Row| (!r.setting.is_empty()).then(|| r.setting.clone());
+    let setting = |r: &Row| (!r.sweep.setting.is_empty()).then(|| r.sweep.setting.clone());
     let scene = |r: &Row| {
-        r.parameters
+        r.sweep
+            .parameters
             .get("scene")
             .map_or_else(|| r.scene.clone(), String::clone)
     };
