@@ -23,13 +23,7 @@ fn all_shaders() -> Vec<ShaderDef> {
 }
 
 fn validate(def: &ShaderDef) -> naga::Module {
-    validate_samples(def, 1)
-}
-
-/// `def` composed over a depth buffer of `samples` samples a pixel.
-fn validate_samples(def: &ShaderDef, samples: u32) -> naga::Module {
-    let src = manylights_gpu::shaders::with_samples(def.compose(), samples, def.name);
-    validate_source(def.name, &src)
+    validate_source(def.name, &def.compose())
 }
 
 /// The WGSL `src` of shader `name`, parsed and validated.
@@ -57,31 +51,46 @@ fn every_shader_validates_with_naga() {
     }
 }
 
-/// Every culling shader also over multisampled depth (MSAA 2, 4, 8: `DEPTH_SAMPLES` and a
-/// `texture_depth_multisampled_2d`), as `Culler::with_samples` builds it.
+/// Every shader that reads the depth buffer also over a multisampled one (MSAA 2, 4, 8), as
+/// `Culler::with_samples` and the backends' pipelines build it: `MSAA_SWAPS` in place of the
+/// single-sample files, `DEPTH_SAMPLES` an override constant, no single-sample texture left.
 #[test]
-fn every_culling_shader_validates_over_multisampled_depth() {
-    for def in manylights_cull::shaders::SHADERS {
-        if !def.compose().contains("const DEPTH_SAMPLES: u32 = 1u;") {
+fn every_depth_reading_shader_validates_over_multisampled_depth() {
+    use manylights_cull::shaders::{reads_depth, sample_swaps};
+    let mut over_msaa = 0;
+    for def in all_shaders() {
+        if !reads_depth(&def) {
+            assert!(
+                !def.compose().contains("DEPTH_SAMPLES") || def.name == "prepass.depth_bounds",
+                "{}: reads DEPTH_SAMPLES but composes no depth input",
+                def.name
+            );
             continue;
         }
-        let one = manylights_gpu::shaders::with_samples(def.compose(), 1, def.name);
-        assert!(
-            !one.contains(manylights_gpu::shaders::SAMPLE_LOOP),
-            "{}: a loop over one sample left in",
-            def.name
-        );
+        assert!(sample_swaps(1).is_empty());
         for samples in [2, 4, 8] {
-            let src = manylights_gpu::shaders::with_samples(def.compose(), samples, def.name);
-            if src.contains("var depth_tex: texture_depth_2d;") {
-                panic!(
-                    "{}: a single-sample depth_tex left at {samples} samples",
-                    def.name
-                );
-            }
-            validate_samples(def, samples);
+            let src = def.compose_swapped(sample_swaps(samples));
+            assert!(
+                src.contains("override DEPTH_SAMPLES: u32;")
+                    && src.contains("var depth_tex: texture_depth_multisampled_2d;")
+                    && !src.contains("texture_depth_2d"),
+                "{}: not multisampled at {samples} samples",
+                def.name
+            );
+            let module = validate_source(def.name, &src);
+            assert!(
+                module
+                    .overrides
+                    .iter()
+                    .any(|(_, o)| o.name.as_deref() == Some("DEPTH_SAMPLES")),
+                "{}: no DEPTH_SAMPLES override",
+                def.name
+            );
         }
+        over_msaa += 1;
     }
+    // The culling strategies' five modules, the per-pixel consumers and the backends'.
+    assert!(over_msaa >= 10, "{over_msaa} shaders read the depth buffer");
 }
 
 /// Every culling shader that reads depth also over lookup bounds, as `Culler::with_bounds`
@@ -94,8 +103,7 @@ fn every_culling_shader_validates_over_lookup_bounds() {
         if !def.files.iter().any(|f| f.path == DEPTH_INPUT.path) {
             continue;
         }
-        let src =
-            manylights_gpu::shaders::with_samples(def.compose_swapped(BOUNDS_SWAPS), 2, def.name);
+        let src = def.compose_swapped(BOUNDS_SWAPS);
         assert!(
             src.contains("var depth_tex: texture_2d<f32>;") && !src.contains("texture_depth"),
             "{}: still reads a depth texture",
@@ -118,8 +126,7 @@ fn every_culling_shader_validates_over_a_float_depth() {
         if !def.files.iter().any(|f| f.path == DEPTH_INPUT.path) {
             continue;
         }
-        let src =
-            manylights_gpu::shaders::with_samples(def.compose_swapped(FLOAT_SWAPS), 1, def.name);
+        let src = def.compose_swapped(FLOAT_SWAPS);
         assert!(
             src.contains("var depth_tex: texture_2d<f32>;") && !src.contains("texture_depth"),
             "{}: still reads a depth texture",
@@ -136,6 +143,7 @@ fn every_culling_shader_validates_over_a_float_depth() {
 /// (`lookup_depth_float.wgsl`) or the depth buffer, and with MSAA.
 #[test]
 fn deferred_lighting_validates_in_every_variant() {
+    use manylights_cull::shaders::sample_swaps;
     use manylights_shade::HdrFormat;
     use manylights_shade::shaders::{DEFERRED, DEFERRED_MSAA, deferred_swaps};
     for (def, samples, float) in [
@@ -145,11 +153,8 @@ fn deferred_lighting_validates_in_every_variant() {
     ] {
         for hdr in [HdrFormat::F32, HdrFormat::F16] {
             let what = format!("{} {samples}x {hdr:?} float depth {float}", def.name);
-            let src = manylights_gpu::shaders::with_samples(
-                def.compose_swapped(&deferred_swaps(hdr, float)),
-                samples,
-                def.name,
-            );
+            let swaps = [&deferred_swaps(hdr, float), sample_swaps(samples)].concat();
+            let src = def.compose_swapped(&swaps);
             assert_eq!(
                 src.contains("texture_storage_2d<rgba16float, write>"),
                 hdr == HdrFormat::F16,
@@ -177,6 +182,7 @@ fn every_wgsl_file_is_used_by_a_shader() {
             .iter()
             .chain(manylights_cull::shaders::FLOAT_SWAPS)
             .chain(manylights_cull::shaders::LOOKUP_FLOAT_SWAPS)
+            .chain(manylights_cull::shaders::MSAA_SWAPS)
             .chain(&manylights_shade::shaders::deferred_swaps(
                 manylights_shade::HdrFormat::F16,
                 true,

@@ -168,8 +168,6 @@ const _: () = assert!(MASK_FILL_TILES <= TILE_SLOTS);
 
 /// Constants of the culling shaders, generated into their prelude.
 pub const CULL_CONSTS: &[WgslConst] = &[
-    // Samples a pixel of the depth buffer culled (`ShaderDef::create_samples` sets it).
-    WgslConst::U32("DEPTH_SAMPLES", 1),
     WgslConst::U32("GROUPS_X", GROUPS_X),
     WgslConst::U32("DEPTH_TILES", DEPTH_TILES),
     WgslConst::U32("MASK_FILL_TILES", MASK_FILL_TILES),

@@ -7,7 +7,9 @@
 use manylights_gpu::{GpuContext, GpuError, GpuScene, pipeline, readback};
 
 use crate::program::{DepthInput, Program};
-use crate::shaders::{EXACT, EXACT_TRANSPARENT, LIGHTS_PER_PIXEL};
+use crate::shaders::{
+    EXACT, EXACT_TRANSPARENT, LIGHTS_PER_PIXEL, create_over_samples, sample_constants,
+};
 use crate::{CullOutput, Culler};
 
 /// The consumers' pipelines, over group 1 of [`Culler::lists_layout`].
@@ -40,14 +42,15 @@ impl PerPixel {
             lights_per_pixel: program(&LIGHTS_PER_PIXEL).pipeline(d, "lights_per_pixel"),
             depth_samples: program(&LIGHTS_PER_PIXEL).pipeline(d, "depth_samples"),
             exact: program(&EXACT).pipeline(d, "exact_counts"),
-            exact_transparent: pipeline::raster_msaa(
+            exact_transparent: pipeline::raster_with(
                 d,
                 "cull.exact_transparent",
-                &EXACT_TRANSPARENT.create_samples(d, samples),
+                &create_over_samples(d, &EXACT_TRANSPARENT, samples, &[]),
                 &[scene_layout, lists_layout],
                 Some(("fs_exact_transparent", &[])),
                 pipeline::DepthTest::Less,
                 samples,
+                &sample_constants(samples),
             ),
         }
     }

@@ -4,7 +4,9 @@
 use manylights_gpu::pipeline;
 use manylights_gpu::shaders::ShaderDef;
 
-use crate::shaders::{BOUNDS_SWAPS, FLOAT_SWAPS};
+use crate::shaders::{
+    BOUNDS_SWAPS, FLOAT_SWAPS, create_over_samples, reads_depth, sample_constants,
+};
 
 /// What culling reads its depth from (`shaders/cull/common/depth_input.wgsl`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,6 +23,9 @@ pub(crate) enum DepthInput {
 pub(crate) struct Program {
     module: wgpu::ShaderModule,
     layout: wgpu::PipelineLayout,
+    /// The override constants of its depth input (`DEPTH_SAMPLES` over MSAA), which every
+    /// pipeline of it takes.
+    depth_constants: Vec<(&'static str, f64)>,
 }
 
 impl Program {
@@ -32,20 +37,26 @@ impl Program {
         scene_layout: &wgpu::BindGroupLayout,
         group1: &wgpu::BindGroupLayout,
     ) -> Self {
+        let (module, depth_constants) = match input {
+            DepthInput::Samples(samples) if reads_depth(def) => (
+                create_over_samples(d, def, samples, &[]),
+                sample_constants(samples),
+            ),
+            // A module of passes that read no depth (tiled scatter's, the sorts').
+            DepthInput::Samples(_) => (def.create(d), Vec::new()),
+            DepthInput::Bounds => (def.create_swapped(d, BOUNDS_SWAPS), Vec::new()),
+            DepthInput::Float => (def.create_swapped(d, FLOAT_SWAPS), Vec::new()),
+        };
         Self {
-            module: match input {
-                DepthInput::Samples(samples) => def.create_samples(d, samples),
-                // Two "samples": the nearest and the farthest.
-                DepthInput::Bounds => def.create_swapped(d, 2, BOUNDS_SWAPS),
-                DepthInput::Float => def.create_swapped(d, 1, FLOAT_SWAPS),
-            },
+            module,
             layout: pipeline::layout(d, def.name, &[scene_layout, group1]),
+            depth_constants,
         }
     }
 
     /// The pipeline of entry point `entry`.
     pub fn pipeline(&self, d: &wgpu::Device, entry: &str) -> wgpu::ComputePipeline {
-        pipeline::compute(d, &self.module, &self.layout, entry)
+        self.pipeline_with(d, entry, &[])
     }
 
     /// The pipelines of `entries`.
@@ -57,15 +68,21 @@ impl Program {
         entries.map(|e| self.pipeline(d, e))
     }
 
-    /// The pipeline of `entry` with values of the shader's `override` constants.
+    /// The pipeline of `entry` with values of the shader's `override` constants (its depth
+    /// input's besides).
     pub fn pipeline_with(
         &self,
         d: &wgpu::Device,
         entry: &str,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
+        let all: Vec<(&str, f64)> = constants
+            .iter()
+            .copied()
+            .chain(self.depth_constants.iter().copied())
+            .collect();
         let options = wgpu::PipelineCompilationOptions {
-            constants,
+            constants: &all,
             ..Default::default()
         };
         pipeline::compute_with(d, &self.module, &self.layout, entry, &options)

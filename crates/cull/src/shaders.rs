@@ -18,14 +18,18 @@ pub const GEOMETRY: ShaderFile = shader_file!("cull/common/geometry.wgsl");
 pub const LISTS: ShaderFile = shader_file!("cull/common/lists.wgsl");
 /// The pixel-to-list lookup of every list consumer.
 pub const LOOKUP: ShaderFile = shader_file!("cull/common/lookup.wgsl");
-/// The depth [`LOOKUP`] looks lists up at: the depth buffer.
+/// The depth [`LOOKUP`] looks lists up at: the depth buffer, one sample a pixel.
 pub const LOOKUP_DEPTH: ShaderFile = shader_file!("cull/common/lookup_depth.wgsl");
+/// [`LOOKUP_DEPTH`]'s place over a multisampled depth buffer ([`MSAA_SWAPS`]).
+pub const LOOKUP_DEPTH_MSAA: ShaderFile = shader_file!("cull/common/lookup_depth_msaa.wgsl");
 /// [`LOOKUP_DEPTH`]'s place over a float depth a compute pass wrote.
 pub const LOOKUP_DEPTH_FLOAT: ShaderFile = shader_file!("cull/common/lookup_depth_float.wgsl");
 /// The files that take another's place where a list consumer reads a float depth.
 pub const LOOKUP_FLOAT_SWAPS: &[(ShaderFile, ShaderFile)] = &[(LOOKUP_DEPTH, LOOKUP_DEPTH_FLOAT)];
-/// The depth culling reads (`depth_at`, binding 1): the depth buffer's samples.
+/// The depth culling reads (`depth_span`, binding 1): the depth buffer, one sample a pixel.
 pub const DEPTH_INPUT: ShaderFile = shader_file!("cull/common/depth_input.wgsl");
+/// [`DEPTH_INPUT`]'s place over a multisampled depth buffer ([`MSAA_SWAPS`]).
+pub const DEPTH_INPUT_MSAA: ShaderFile = shader_file!("cull/common/depth_input_msaa.wgsl");
 /// [`DEPTH_INPUT`]'s place where culling reads lookup bounds (`Culler::with_bounds`).
 pub const DEPTH_INPUT_BOUNDS: ShaderFile = shader_file!("cull/common/depth_input_bounds.wgsl");
 /// The files that take another's place where culling reads lookup bounds (`Culler::with_bounds`;
@@ -37,6 +41,57 @@ pub const DEPTH_INPUT_FLOAT: ShaderFile = shader_file!("cull/common/depth_input_
 /// The files that take another's place where culling reads a float depth
 /// (validated as [`BOUNDS_SWAPS`]' are).
 pub const FLOAT_SWAPS: &[(ShaderFile, ShaderFile)] = &[(DEPTH_INPUT, DEPTH_INPUT_FLOAT)];
+/// The files that take others' places over a multisampled depth buffer (MSAA): each declares
+/// `DEPTH_SAMPLES` an `override` constant, whose value a pipeline takes from
+/// [`sample_constants`].
+pub const MSAA_SWAPS: &[(ShaderFile, ShaderFile)] = &[
+    (DEPTH_INPUT, DEPTH_INPUT_MSAA),
+    (LOOKUP_DEPTH, LOOKUP_DEPTH_MSAA),
+];
+
+/// The files a shader over a depth buffer of `samples` samples a pixel takes in others' places:
+/// [`MSAA_SWAPS`] with more than one, none with one.
+pub fn sample_swaps(samples: u32) -> &'static [(ShaderFile, ShaderFile)] {
+    if samples > 1 { MSAA_SWAPS } else { &[] }
+}
+
+/// The values of the override constants of a shader composed with [`sample_swaps`]`(samples)`:
+/// `DEPTH_SAMPLES` with more than one sample, none with one (the single-sample files declare
+/// it a `const`, and a pipeline given a constant its module lacks fails).
+pub fn sample_constants(samples: u32) -> Vec<(&'static str, f64)> {
+    if samples > 1 {
+        vec![("DEPTH_SAMPLES", f64::from(samples))]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Whether `def` reads the depth buffer (composes [`DEPTH_INPUT`] or [`LOOKUP_DEPTH`]), so that
+/// it has a variant over a multisampled one.
+pub fn reads_depth(def: &ShaderDef) -> bool {
+    def.has_file(DEPTH_INPUT) || def.has_file(LOOKUP_DEPTH)
+}
+
+/// [`ShaderDef::create_swapped`] over a depth buffer of `samples` samples a pixel, with `swaps`
+/// besides.
+///
+/// # Panics
+/// For `samples` > 1 where `def` composes neither [`DEPTH_INPUT`] nor [`LOOKUP_DEPTH`]: it
+/// could not read a multisampled depth buffer.
+pub fn create_over_samples(
+    d: &wgpu::Device,
+    def: &ShaderDef,
+    samples: u32,
+    swaps: &[(ShaderFile, ShaderFile)],
+) -> wgpu::ShaderModule {
+    assert!(
+        samples == 1 || reads_depth(def),
+        "shader {} reads no depth it could read multisampled",
+        def.name
+    );
+    let all: Vec<_> = swaps.iter().chain(sample_swaps(samples)).copied().collect();
+    def.create_swapped(d, &all)
+}
 /// Tile masks and their fill ([`crate::blocks::tile_masks`]; composed into gather's module,
 /// which holds the workgroup scan the fill uses; tiled scatter's count pass that sets them is in
 /// its own module).

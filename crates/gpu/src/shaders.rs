@@ -178,32 +178,23 @@ impl ShaderDef {
     /// When `MANYLIGHTS_SHADER_DIR` is set but is not a directory, or a file there cannot be
     /// read: a measurement must not silently run other shaders than asked for.
     pub fn create(&self, device: &wgpu::Device) -> wgpu::ShaderModule {
-        self.create_samples(device, 1)
+        self.create_swapped(device, &[])
     }
 
-    /// [`ShaderDef::create`] over a depth buffer of `samples` samples a pixel (MSAA): the
-    /// constant `DEPTH_SAMPLES` (which the definition must have among its constants, as 1)
-    /// becomes `samples`, and where that is more than one, `depth_tex` is declared a
-    /// `texture_depth_multisampled_2d`. Its `textureLoad` takes a sample index where a
-    /// single-sample texture's takes a level, so one loop over `DEPTH_SAMPLES` reads both.
-    ///
-    /// # Panics
-    /// As [`ShaderDef::create`]; and for `samples` > 1 when the definition has no
-    /// `DEPTH_SAMPLES`.
-    pub fn create_samples(&self, device: &wgpu::Device, samples: u32) -> wgpu::ShaderModule {
-        self.create_swapped(device, samples, &[])
-    }
-
-    /// [`ShaderDef::create_samples`] with each file `from` of `swaps` replaced by its `to` (see
-    /// [`ShaderDef::compose_swapped`]).
+    /// [`ShaderDef::create`] with each file `from` of `swaps` replaced by its `to` (see
+    /// [`ShaderDef::compose_swapped`]): a variant, such as culling over a multisampled depth
+    /// buffer (`manylights_cull::shaders::DepthVariant`).
     pub fn create_swapped(
         &self,
         device: &wgpu::Device,
-        samples: u32,
         swaps: &[(ShaderFile, ShaderFile)],
     ) -> wgpu::ShaderModule {
-        let source = with_samples(self.source(&self.swapped(swaps)), samples, self.name);
-        self.module(device, source)
+        self.module(device, self.source(&self.swapped(swaps)))
+    }
+
+    /// Whether this shader composes `file`.
+    pub fn has_file(&self, file: ShaderFile) -> bool {
+        self.files.iter().any(|f| f.path == file.path)
     }
 
     /// The module of `source`, labelled with this shader's name.
@@ -259,33 +250,6 @@ fn hoist_enables(text: &str, enables: &mut String) -> String {
         out.push_str(line);
     }
     out
-}
-
-/// The loop over a pixel's depth samples, as every shader writes it (its body reads sample
-/// `sample_k`, and neither breaks nor continues).
-pub const SAMPLE_LOOP: &str = "for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {";
-
-/// `source` (a composed shader named `name`) over a depth buffer of `samples` samples a pixel
-/// (see [`ShaderDef::create_samples`]).
-pub fn with_samples(source: String, samples: u32, name: &str) -> String {
-    if samples == 1 {
-        // A single sample: each loop over a pixel's samples becomes a block with the sample
-        // index a constant, as the shader read before MSAA (a loop there, even of one
-        // iteration, cost culling up to 5% on an H100: naga bounds its loops and checks a
-        // texture level that is not a constant).
-        return source.replace(SAMPLE_LOOP, "{ const sample_k = 0u;");
-    }
-    let one = "const DEPTH_SAMPLES: u32 = 1u;";
-    assert!(
-        source.contains(one),
-        "shader {name} has no DEPTH_SAMPLES: it cannot read a multisampled depth buffer"
-    );
-    source
-        .replace(one, &format!("const DEPTH_SAMPLES: u32 = {samples}u;"))
-        .replace(
-            "var depth_tex: texture_depth_2d;",
-            "var depth_tex: texture_depth_multisampled_2d;",
-        )
 }
 
 /// The depth prepass: the shared vertex stage alone.

@@ -1,6 +1,7 @@
 //! The pipelines of every backend (`Renderer::build`), from the shaders of [`crate::shaders`].
 
 use manylights_cull::Culler;
+use manylights_cull::shaders::{create_over_samples, sample_constants};
 use manylights_gpu::lookup_bounds::LookupBounds;
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::DepthPrepass;
@@ -271,7 +272,7 @@ impl Pipelines {
 
     fn forward_module(&self) -> &wgpu::ShaderModule {
         self.forward_module
-            .get_or_init(|| FORWARD.create_samples(&self.device, self.samples))
+            .get_or_init(|| create_over_samples(&self.device, &FORWARD, self.samples, &[]))
     }
 
     /// A forward raster pipeline over the lists, of `entry` into `targets`.
@@ -291,7 +292,7 @@ impl Pipelines {
             Some((entry, targets)),
             depth,
             self.samples,
-            constants,
+            &[constants, &sample_constants(self.samples)].concat(),
         )
     }
 
@@ -345,7 +346,7 @@ impl Pipelines {
     pub fn naive(&self) -> &Naive {
         self.naive.get_or_init(|| {
             let raster = |label, entry, target, depth| {
-                pipeline::raster_msaa(
+                pipeline::raster_with(
                     &self.device,
                     label,
                     self.forward_module(),
@@ -353,6 +354,7 @@ impl Pipelines {
                     Some((entry, &[target])),
                     depth,
                     self.samples,
+                    &sample_constants(self.samples),
                 )
             };
             Naive {
@@ -380,15 +382,19 @@ impl Pipelines {
             } else {
                 &DEFERRED
             };
-            def.create_swapped(&self.device, self.samples, &deferred_swaps(self.hdr, false))
+            create_over_samples(
+                &self.device,
+                def,
+                self.samples,
+                &deferred_swaps(self.hdr, false),
+            )
         })
     }
 
     /// The deferred lighting module over a depth in an `R32Float` texture (one sample).
     fn deferred_float_module(&self) -> &wgpu::ShaderModule {
-        self.deferred_float_module.get_or_init(|| {
-            DEFERRED.create_swapped(&self.device, 1, &deferred_swaps(self.hdr, true))
-        })
+        self.deferred_float_module
+            .get_or_init(|| DEFERRED.create_swapped(&self.device, &deferred_swaps(self.hdr, true)))
     }
 
     /// A deferred backend's pipelines over `surfaces` (a stored position takes no MSAA:
@@ -470,6 +476,9 @@ impl Pipelines {
         ));
         if self.samples > 1 {
             constants.push(("GLASS", f64::from(u8::from(self.glass_layer))));
+        }
+        if !float {
+            constants.extend(sample_constants(self.samples));
         }
         let options = wgpu::PipelineCompilationOptions {
             constants: &constants,

@@ -84,16 +84,11 @@ fn run_widen(run: ptr<function, SliceRun>, s: u32, d0: f32, d1: f32) {
 // uncovered.
 fn tile_pixel_depths(origin: vec2<u32>, i: u32, size: vec2<u32>) -> vec2<f32> {
     let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
-    var z = vec2<f32>(1.0, 0.0);
     if i < cull.tile_size * cull.tile_size && all(p < size) {
-        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-            let d = depth_at(p, sample_k);
-            if d < 1.0 {
-                z = vec2<f32>(min(z.x, d), max(z.y, d));
-            }
-        }
+        let z = depth_span(p);
+        return vec2<f32>(z.near, z.far);
     }
-    return z;
+    return vec2<f32>(1.0, 0.0);
 }
 
 // A pixel's depths into the run: every slice from its nearest sample's to its farthest's, as

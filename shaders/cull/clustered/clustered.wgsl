@@ -465,13 +465,9 @@ fn pixel_depths(p: vec2<u32>) -> PixelDepths {
     var z0 = 1.0;
     var z1 = 0.0;
     if inside {
-        for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-            let z = depth_at(p, sample_k);
-            if z < 1.0 {
-                z0 = min(z0, z);
-                z1 = max(z1, z);
-            }
-        }
+        let z = depth_span(p);
+        z0 = z.near;
+        z1 = z.far;
     }
     let b0 = bin_of(p, z0);
     let d0 = linear_depth(z0);

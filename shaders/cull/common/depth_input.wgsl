@@ -1,10 +1,23 @@
-// The depth culling reads (binding 1 of the culling group), through depth_at: the depth buffer,
-// DEPTH_SAMPLES samples a pixel (a texture_depth_multisampled_2d where more than one:
-// manylights_gpu::shaders::with_samples). Where culling reads lookup bounds instead
-// (Culler::with_bounds), depth_input_bounds.wgsl takes this file's place.
+// The depth culling reads (binding 1 of the culling group): the depth buffer, one sample a
+// pixel. Its variants take this file's place (manylights_cull::shaders::depth_swaps):
+// depth_input_msaa.wgsl over a multisampled depth buffer, depth_input_bounds.wgsl over lookup
+// bounds (Culler::with_bounds), depth_input_float.wgsl over a depth a compute pass wrote.
+const DEPTH_SAMPLES: u32 = 1u;
+
 @group(1) @binding(1) var depth_tex: texture_depth_2d;
 
-// Sample k's depth of pixel p: 1.0 (the clear value) where nothing covers it.
-fn depth_at(p: vec2<u32>, k: u32) -> f32 {
-    return textureLoad(depth_tex, p, k);
+// A pixel's nearest and farthest covered depth (NDC) and its covered samples; (1, 0, 0) where
+// nothing covers it (the depth buffer's clear value is 1.0).
+struct DepthSpan {
+    near: f32,
+    far: f32,
+    covered: u32,
+}
+
+fn depth_span(p: vec2<u32>) -> DepthSpan {
+    let z = textureLoad(depth_tex, p, 0);
+    if z < 1.0 {
+        return DepthSpan(z, z, 1u);
+    }
+    return DepthSpan(1.0, 0.0, 0u);
 }

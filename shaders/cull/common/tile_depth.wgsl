@@ -5,7 +5,7 @@
 // 1.0, the clear value) are not covered and need no lights, so they do not widen the bounds.
 // With MSAA every sample counts (DEPTH_SAMPLES a pixel; `covered` then counts samples), and
 // the mask holds every cell between a pixel's samples.
-// The module composes depth_input.wgsl (depth_at) and declares tile_depth (binding 2).
+// The module composes depth_input.wgsl (depth_span) and declares tile_depth (binding 2).
 
 var<workgroup> wg_tile_zmin: array<atomic<u32>, TILE_SLOTS>;
 var<workgroup> wg_tile_zmax: array<atomic<u32>, TILE_SLOTS>;
@@ -34,12 +34,13 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
     for (var i = li; i < n; i += threads) {
         let p = origin + vec2<u32>(i % cull.tile_size, i / cull.tile_size);
         if all(p < size) {
-            for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-                let z = depth_at(p, sample_k);
-                if z < 1.0 {
-                    let bits = bitcast<u32>(z);
-                    own = vec3<u32>(min(own.x, bits), max(own.y, bits), own.z + 1u);
-                }
+            let z = depth_span(p);
+            if z.covered > 0u {
+                own = vec3<u32>(
+                    min(own.x, bitcast<u32>(z.near)),
+                    max(own.y, bitcast<u32>(z.far)),
+                    own.z + z.covered,
+                );
             }
         }
     }
@@ -60,21 +61,13 @@ fn tile_bounds(wg: vec3<u32>, index: u32, with_mask: bool, tiles: u32, threads: 
                     // Every cell from the pixel's nearest covered sample to its farthest: with
                     // MSAA a fragment is looked up at its centroid, whose depth lies between
                     // its samples' (one sample: the cell of its depth).
-                    var z0 = 1.0;
-                    var z1 = 0.0;
-                    for (var sample_k = 0u; sample_k < DEPTH_SAMPLES; sample_k++) {
-                        let z = depth_at(p, sample_k);
-                        if z < 1.0 {
-                            z0 = min(z0, z);
-                            z1 = max(z1, z);
-                        }
-                    }
-                    if z0 < 1.0 {
-                        let c0 = depth_cell(linear_depth(z0), t.dmin, scale);
+                    let z = depth_span(p);
+                    if z.covered > 0u {
+                        let c0 = depth_cell(linear_depth(z.near), t.dmin, scale);
                         if DEPTH_SAMPLES == 1u {
                             cells |= 1u << c0;
                         } else {
-                            cells |= bit_range(c0, depth_cell(linear_depth(z1), t.dmin, scale));
+                            cells |= bit_range(c0, depth_cell(linear_depth(z.far), t.dmin, scale));
                         }
                     }
                 }
