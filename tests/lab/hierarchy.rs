@@ -61,7 +61,11 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
             "{cell}: {} lights, the levels' besides",
             r.lights
         );
-        assert_eq!(r.false_negatives, Some(0), "{cell}: false negatives");
+        assert_eq!(
+            r.false_negatives,
+            (r.backend != "naive_forward").then_some(0),
+            "{cell}: false negatives"
+        );
         let flip = r.flip_mean.expect("the same hierarchy's reference");
         // As for every strategy against the brute-force reference: forward sums a pixel's
         // lists as the reference sums every light (z-binning in depth order), deferred rebuilds
@@ -124,7 +128,11 @@ fn a_hierarchy_of_moving_lights_is_built_each_frame() {
     assert_eq!(s.rows.len(), 3);
     for r in &s.rows {
         let cell = &r.cell;
-        assert_eq!(r.false_negatives, Some(0), "{cell}: false negatives");
+        assert_eq!(
+            r.false_negatives,
+            (r.backend != "naive_forward").then_some(0),
+            "{cell}: false negatives"
+        );
         let tolerance = if r.backend == "forward" { 1e-6 } else { 1e-3 };
         let flip = r.flip_mean.expect("the same hierarchy's reference");
         assert!(flip <= tolerance, "{cell}: mean FLIP {flip}");
@@ -186,7 +194,11 @@ fn sampled_bands_match_their_reference_with_shorter_lists() {
     assert_eq!(s.rows.len(), 6);
     for r in &s.rows {
         let cell = &r.cell;
-        assert_eq!(r.false_negatives, Some(0), "{cell}: false negatives");
+        assert_eq!(
+            r.false_negatives,
+            (r.backend != "naive_forward").then_some(0),
+            "{cell}: false negatives"
+        );
         let flip = r.flip_mean.expect("the same hierarchy's reference");
         let tolerance = if r.backend == "deferred" { 1e-3 } else { 2e-4 };
         assert!(
@@ -248,7 +260,11 @@ fn band_points_match_their_reference_on_every_path() {
     assert_eq!(s.rows.len(), 6);
     for r in &s.rows {
         let cell = &r.cell;
-        assert_eq!(r.false_negatives, Some(0), "{cell}: false negatives");
+        assert_eq!(
+            r.false_negatives,
+            (r.backend != "naive_forward").then_some(0),
+            "{cell}: false negatives"
+        );
         assert_eq!(r.nonfinite_pixels, 0, "{cell}: a pipeline for other lights");
         let flip = r.flip_mean.expect("the same hierarchy's reference");
         let tolerance = if r.backend == "forward" { 1e-6 } else { 1e-3 };

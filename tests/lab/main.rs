@@ -222,9 +222,12 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
         let cells = tiny.cells().len();
         assert_eq!(s.rows.len(), (cells - i).div_ceil(n), "{name}: rows");
         for r in &s.rows {
+            // Naive forward has no lists to count false negatives of; its image is checked
+            // against the reference (tests/lab/msaa.rs, hierarchy.rs, stochastic.rs).
+            let naive = r.backend == "naive_forward";
             assert_eq!(
                 r.false_negatives,
-                Some(0),
+                (!naive).then_some(0),
                 "{name} {}: false negatives",
                 r.cell
             );
@@ -365,7 +368,7 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
             // exact oracle), and a conservative list holds at least as many.
             assert_eq!(
                 r.lights_needed_per_pixel_mean.is_some(),
-                r.false_negatives.is_some(),
+                r.false_negatives.is_some() || (naive && r.exact_stride > 0),
                 "{name} {}: lights needed",
                 r.cell
             );

@@ -40,7 +40,11 @@ fn msaa_cells_resolve_match_their_reference_and_count_every_sample() {
     let mut needed = Vec::new();
     for r in &s.rows {
         let what = &r.cell;
-        assert_eq!(r.false_negatives, Some(0), "{what}");
+        assert_eq!(
+            r.false_negatives,
+            (r.backend != "naive_forward").then_some(0),
+            "{what}"
+        );
         assert_eq!(r.dropped_lights, 0, "{what}");
         // Forward and naive forward against the reference at the same sample count: forward's
         // tolerance (tests/shade), as PSNR over this scene's peak. Deferred lights an edge's

@@ -43,7 +43,11 @@ fn interleaved_stochastic_cells_match_their_reference_with_no_false_negatives() 
     for r in &s.rows {
         let cell = &r.cell;
         assert_eq!(r.radius_rule, "stochastic", "{cell}");
-        assert_eq!(r.false_negatives, Some(0), "{cell}: false negatives");
+        assert_eq!(
+            r.false_negatives,
+            (r.backend != "naive_forward").then_some(0),
+            "{cell}: false negatives"
+        );
         let flip = r.flip_mean.expect("the same-draw reference");
         // Forward shades each pixel's list as the reference shades every light, in the same
         // order (bit for bit) but for z-binning's, summed in depth order: its rounding differs,

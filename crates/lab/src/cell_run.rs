@@ -13,13 +13,14 @@ use manylights_scene::{Camera, Scene};
 use manylights_shade::{InfiniteReference, ReferenceRenderer, Renderer};
 
 use crate::cell_row::{RowParts, cell_row};
-use crate::dynamic::{Movers, hierarchy_plan};
-use crate::evaluate::{Pose, PoseEval, References, Steady, evaluate};
+use crate::evaluate::{Pose, PoseEval, References, evaluate, steady_hierarchy_build};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment};
-use crate::noise::{Draws, Noise, measure};
+use crate::frame_lights::{FrameLights, LightsOf, hierarchy_plan};
+use crate::noise::{Noise, measure};
 use crate::renderers::{ReferenceFrames, Renderers};
 use crate::results::Row;
 use crate::runner::stage;
+use crate::steady::SteadyCull;
 use crate::{LabError, write_atomic};
 
 /// The cell's scene with its generated lights after its own, and how many lights it has of
@@ -107,6 +108,10 @@ impl CellScene {
     }
 }
 
+/// Runs one cell, top to bottom: its scene, lights and hierarchy built and uploaded, its
+/// renderer taken; its warm-up and measured frames rendered; each checked pose measured (the
+/// exact oracle, steady-state timings at the first, accuracy) and a stochastic cell's seeds;
+/// its images written and its row made.
 pub(crate) fn run_cell(
     ctx: &GpuContext,
     exp: &Experiment,
@@ -119,6 +124,7 @@ pub(crate) fn run_cell(
     let c = &resolved;
     let id = cell.id();
     let name = cell.name.as_str();
+    // Build: the scene, its lights and hierarchy on the GPU, the renderer.
     let CellScene {
         scene,
         own_lights,
@@ -129,7 +135,13 @@ pub(crate) fn run_cell(
         hierarchy,
     } = CellScene::upload(ctx, c, base, name)?;
     let (w, h) = c.resolution;
-    let draws = Draws::new(ctx, c, &gpu_scene, &scene, own_lights)?;
+    let of = LightsOf {
+        scene: &scene,
+        gpu_scene: &gpu_scene,
+        first: own_lights,
+        as_they_are: as_they_are.as_ref(),
+    };
+    let mut lights = FrameLights::new(ctx, c, &of, hierarchy)?;
     let renderer = stage(name, "pipelines built", || {
         renderers.get(ctx, &gpu_scene, c.msaa, c.hdr, c.visibility_pass)
     })
@@ -141,30 +153,20 @@ pub(crate) fn run_cell(
         tile_boxes: c.tile_boxes,
         ..CullSettings::for_camera(cam)
     };
-    let mut movers = Movers::new(
-        ctx,
-        c,
-        (&gpu_scene, &scene, own_lights),
-        hierarchy,
-        as_they_are.as_ref(),
-    )?;
-    let moving = movers.as_ref().is_some_and(Movers::moving);
-    let Measured {
-        frames,
-        encode,
-        uploads,
-        timed,
-    } = render_frames(
+    let run = CellFrames {
         ctx,
         c,
         name,
-        &poses,
-        (&gpu_scene, renderer),
-        (draws.as_ref(), &mut movers),
-        &settings,
-    )?;
-    // Metrics and accuracy at every pose (a path's poses are all checked), images at the first;
-    // with moving lights, at every measured frame, the lights where that frame had them.
+        poses: &poses,
+        gpu_scene: &gpu_scene,
+        renderer,
+        settings: &settings,
+    };
+    // Render: the warm-up and measured frames.
+    let measured = render_frames(&run, &mut lights)?;
+    // Measure: every checked pose (a path's poses are all checked; with moving lights, every
+    // measured frame, the lights where that frame had them), images at the first.
+    let moving = lights.moving();
     let reference = c
         .accuracy
         .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
@@ -177,57 +179,35 @@ pub(crate) fn run_cell(
             inf,
             cache: (!moving).then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
             // Kept frames hold one build's lights: not for lights that move. Sampled bands are
-            // drawn for frame 0 before the checks (below), the same draws in every build.
+            // drawn for frame 0 before the checks, the same draws in every build.
             frames: (!moving).then_some(kept_frames),
             lights_as_they_are: as_they_are.as_ref(),
         }),
         _ => None,
     };
     let checks = checked_frames(c, poses.len(), moving);
-    if let (true, false, Some(m)) = (sampled_bands(c), moving, &mut movers) {
-        // Static lights with sampled bands: every check sees frame 0's draws (the timed frames
-        // drew their own, as many as the steady-state warm-up took).
-        m.update(ctx, 0)?;
-    }
-    let mut evals = evaluate_checks(
-        &PoseChecks {
-            ctx,
-            renderer,
+    let checked = check_poses(
+        &run,
+        &Checks {
             refs: refs.as_ref(),
-            gpu_scene: &gpu_scene,
-            c,
-            poses: &poses,
-            name,
-            timed,
+            timed: measured.timed,
             export: c.export.then(|| out.join("cells").join(&id)),
+            frames: &checks,
         },
-        &checks,
-        (draws.as_ref(), &mut movers),
-        &settings,
+        &mut lights,
     )?;
-    if let Some(m) = &movers {
-        m.check(ctx)?;
-    }
-    // The hierarchy's build was timed back to back at the first check (`evaluate`).
-    let hierarchy_steady = evals.first_mut().and_then(|e| e.steady_build.take());
+    lights.check(ctx)?;
+    let evals = checked.evals;
     let first = &evals[0];
-    save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
     // Stochastic cells: each seed's image against infinite range (static lights only).
-    let noise: Option<Noise> = match (&draws, &first.infinite) {
+    let noise: Option<Noise> = match (lights.draws(), &first.infinite) {
         (Some(d), Some(inf)) if !moving => Some(stage(name, "seeds measured", || {
-            let at = Pose {
-                ctx,
-                renderer,
-                gpu_scene: &gpu_scene,
-                c,
-                cam: &poses[0],
-                settings: &settings(&poses[0]),
-                name,
-            };
-            measure(&at, d, inf)
+            measure(&run.pose(&poses[0], name, &settings(&poses[0])), d, inf)
         })?),
         _ => None,
     };
+    // Write: the images and the row.
+    save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
     Ok(cell_row(RowParts {
         exp,
         cell,
@@ -239,10 +219,15 @@ pub(crate) fn run_cell(
         light_count: shaded_lights as u64,
         evals: &evals,
         poses: checks.len() as u32,
-        draws: draws.as_ref(),
+        draws: lights.draws(),
         noise,
-        hierarchy_steady,
-        measured: (&frames, &encode, &uploads, timed),
+        hierarchy_steady: checked.hierarchy_steady,
+        measured: (
+            &measured.frames,
+            &measured.encode,
+            &measured.uploads,
+            measured.timed,
+        ),
     }))
 }
 
@@ -258,81 +243,98 @@ fn checked_frames(c: &Config, poses: usize, moving: bool) -> Vec<(usize, Option<
     }
 }
 
-/// Whether the cell's lights are a hierarchy with sampled bands.
-fn sampled_bands(c: &Config) -> bool {
-    matches!(
-        c.lights.radius,
-        manylights_scene::RadiusRule::Hierarchy {
-            sample_from: Some(_),
-            ..
-        }
-    )
+/// What a cell's frames are rendered with: its configuration, poses, scene and renderer.
+struct CellFrames<'a> {
+    ctx: &'a GpuContext,
+    c: &'a Config,
+    /// The cell's name in the log.
+    name: &'a str,
+    poses: &'a [Camera],
+    gpu_scene: &'a GpuScene,
+    renderer: &'a Renderer,
+    /// Culling's settings for a camera.
+    settings: &'a dyn Fn(&Camera) -> CullSettings,
 }
 
-/// What each checked pose (or measured frame of moving lights) of a cell is evaluated with.
-struct PoseChecks<'a> {
-    ctx: &'a GpuContext,
-    renderer: &'a Renderer,
+impl<'a> CellFrames<'a> {
+    /// Pose `cam`, named `name` in the log, culled with `settings`.
+    fn pose<'p>(&'p self, cam: &'p Camera, name: &'p str, settings: &'p CullSettings) -> Pose<'p>
+    where
+        'a: 'p,
+    {
+        Pose {
+            ctx: self.ctx,
+            renderer: self.renderer,
+            gpu_scene: self.gpu_scene,
+            c: self.c,
+            cam,
+            settings,
+            name,
+        }
+    }
+}
+
+/// What a cell's checks are measured against and where their results go.
+struct Checks<'a> {
     refs: Option<&'a References<'a>>,
-    gpu_scene: &'a GpuScene,
-    c: &'a Config,
-    poses: &'a [Camera],
-    name: &'a str,
-    /// Whether the frames were timed (steady-state culling is measured at the first check).
+    /// Whether the frames were timed (steady state is measured at the first check).
     timed: bool,
     /// Where the first check's export goes (`export: true`).
     export: Option<PathBuf>,
+    /// Each check's pose and the frame whose lights it sees ([`checked_frames`]).
+    frames: &'a [(usize, Option<u32>)],
 }
 
-/// Evaluates each check `(pose, frame)`, the lights moved to the frame's places and its
-/// stochastic ranges drawn first.
-fn evaluate_checks(
-    p: &PoseChecks<'_>,
-    checks: &[(usize, Option<u32>)],
-    (draws, movers): (Option<&Draws>, &mut Option<Movers>),
-    settings: &dyn Fn(&Camera) -> CullSettings,
-) -> Result<Vec<PoseEval>, LabError> {
-    let (ctx, name) = (p.ctx, p.name);
-    let mut evals = Vec::with_capacity(checks.len());
-    for (k, &(pose_index, frame)) in checks.iter().enumerate() {
-        let cam = &p.poses[pose_index];
-        let pose = match (frame, &mut *movers) {
-            (Some(f), Some(m)) => {
-                m.update(ctx, f)?;
-                format!("{name} frame {f} (pose {pose_index})")
-            }
-            _ => format!("{name} pose {pose_index}"),
+/// What a cell's checks measured.
+struct Checked {
+    evals: Vec<PoseEval>,
+    /// The hierarchy's build back to back, timed at the first check.
+    hierarchy_steady: Option<SteadyCull>,
+}
+
+/// Measures each check `(pose, frame)`, the lights as the frame had them: the frame and its GPU
+/// measures, at the first of a timed cell its steady state and the hierarchy's build back to
+/// back, then its accuracy.
+fn check_poses(
+    run: &CellFrames<'_>,
+    checks: &Checks<'_>,
+    lights: &mut FrameLights,
+) -> Result<Checked, LabError> {
+    let ctx = run.ctx;
+    let mut evals = Vec::with_capacity(checks.frames.len());
+    let mut hierarchy_steady = None;
+    for (k, &(pose_index, frame)) in checks.frames.iter().enumerate() {
+        let cam = &run.poses[pose_index];
+        let pose = match frame.filter(|_| lights.moving()) {
+            Some(f) => format!("{} frame {f} (pose {pose_index})", run.name),
+            None => format!("{} pose {pose_index}", run.name),
         };
-        if let Some(d) = draws {
-            // Each check sees the ranges of its frame (the first frame's where none moves).
-            d.draw(ctx, frame.unwrap_or(0))?;
-        }
-        let at = Pose {
-            ctx,
-            renderer: p.renderer,
-            gpu_scene: p.gpu_scene,
-            c: p.c,
-            cam,
-            settings: &settings(cam),
-            name: &pose,
-        };
-        evals.push(evaluate(
+        lights.before_check(ctx, k, frame)?;
+        let settings = (run.settings)(cam);
+        let at = run.pose(cam, &pose, &settings);
+        // Steady state at the first pose, over as many runs as measured frames.
+        let steady_runs = (k == 0 && checks.timed).then_some(run.c.frames);
+        let mut eval = evaluate(
             &at,
-            p.refs,
-            // Steady-state culling (and the hierarchy's build) at the first pose, over as many
-            // runs as measured frames.
-            (k == 0 && p.timed).then(|| Steady {
-                runs: p.c.frames,
-                hierarchy: movers.as_ref().and_then(Movers::hierarchy),
-            }),
-            p.export.as_deref().filter(|_| k == 0),
-        )?);
+            steady_runs,
+            checks.export.as_deref().filter(|_| k == 0),
+        )?;
+        if let (Some(runs), Some(hier)) = (steady_runs, lights.hierarchy()) {
+            hierarchy_steady = steady_hierarchy_build(ctx, hier, runs, &pose)?;
+        }
+        if let Some(refs) = checks.refs {
+            eval.score(&at, refs)?;
+        }
+        evals.push(eval);
     }
-    Ok(evals)
+    Ok(Checked {
+        evals,
+        hierarchy_steady,
+    })
 }
 
-/// A cell's measured frames: each one's passes (the lights' move and draws first), the host's
-/// encode times, the lights' upload times; `timed` false where the device has no timestamps.
+/// A cell's measured frames: each one's passes (the lights' work first), the host's encode
+/// times, the lights' upload times; `timed` false where the device has no timestamps.
 struct Measured {
     frames: Vec<Vec<PassTiming>>,
     encode: Vec<f64>,
@@ -341,17 +343,18 @@ struct Measured {
 }
 
 /// Renders a cell's warm-up and measured frames, a pose each in turn, as an application's
-/// frames go: the lights moved (and the hierarchy built) first, stochastic ranges drawn, then
-/// the frame.
-fn render_frames(
-    ctx: &GpuContext,
-    c: &Config,
-    name: &str,
-    poses: &[Camera],
-    (gpu_scene, renderer): (&GpuScene, &Renderer),
-    (draws, movers): (Option<&Draws>, &mut Option<Movers>),
-    settings: &dyn Fn(&Camera) -> CullSettings,
-) -> Result<Measured, LabError> {
+/// frames go: the lights' work first (moved, the hierarchy built, stochastic ranges drawn),
+/// then the frame.
+fn render_frames(run: &CellFrames<'_>, lights: &mut FrameLights) -> Result<Measured, LabError> {
+    let CellFrames {
+        ctx,
+        c,
+        name,
+        poses,
+        gpu_scene,
+        renderer,
+        settings,
+    } = *run;
     let (w, h) = c.resolution;
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();
     let mut encode = Vec::new();
@@ -359,18 +362,9 @@ fn render_frames(
     let mut timed = true;
     for f in 0..(c.warmup + c.frames) as usize {
         let cam = &poses[f % poses.len()];
-        // Moving lights move first, as a frame of an application would move them.
-        let update = match movers {
-            Some(m) => Some(stage(name, &format!("frame {f} lights moved"), || {
-                m.update(ctx, f as u32)
-            })?),
-            None => None,
-        };
-        // Stochastic ranges are drawn afresh each frame, timed with it.
-        let drawn = match draws {
-            Some(d) => d.draw(ctx, f as u32)?,
-            None => None,
-        };
+        let before = stage(name, &format!("frame {f} lights"), || {
+            lights.before_frame(ctx, f as u32)
+        })?;
         gpu_scene.set_view(ctx, cam, w, h, 0);
         ctx.take_encode_ms();
         let o = stage(name, &format!("frame {f} rendered"), || {
@@ -387,10 +381,7 @@ fn render_frames(
         if f >= c.warmup as usize {
             match o.timings {
                 Some(mut t) => {
-                    if let Some(g) = drawn {
-                        t.splice(0..0, g);
-                    }
-                    if let Some(g) = update.as_ref().and_then(|u| u.gpu.clone()) {
+                    if let Some(g) = before.gpu {
                         t.splice(0..0, g);
                     }
                     frames.push(t);
@@ -398,7 +389,7 @@ fn render_frames(
                 None => timed = false,
             }
             encode.push(enc);
-            uploads.extend(update.and_then(|u| u.host_ms));
+            uploads.extend(before.host_ms);
         }
     }
     Ok(Measured {

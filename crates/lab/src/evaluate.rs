@@ -1,8 +1,9 @@
-//! What a camera pose of an experiment cell measures ([`evaluate`]): one frame of the backend,
-//! the list metrics from the exact per-pixel oracle (on the GPU, on every `exact_stride`-th
-//! pixel), lights per pixel, steady-state culling at the first pose, and with `accuracy` the
-//! image error against the reference and the infinite-range reference; naive forward's metrics
-//! (every light at every pixel); and the temporal stability of a camera path's poses.
+//! What a camera pose of an experiment cell measures: [`evaluate`] renders one frame of the
+//! backend and measures it on the GPU (the list metrics from the exact per-pixel oracle, on
+//! every `exact_stride`-th pixel; lights per pixel; naive forward's metrics, every light at
+//! every pixel; steady-state culling, shading and geometry at the first pose), then
+//! [`PoseEval::score`] with `accuracy` the image error against the reference and the
+//! infinite-range reference.
 
 use manylights_cull::ListPass as _;
 use manylights_cull::metrics::{ListMetrics, from_gpu_counts};
@@ -56,15 +57,6 @@ pub(crate) struct PoseEval {
     /// Each pass of the geometry's and of culling and shading's back-to-back runs: its
     /// median, ms.
     pub(crate) steady_passes: Vec<PassMedian>,
-    /// The lighting grid hierarchy's build back to back, where it was timed.
-    pub(crate) steady_build: Option<SteadyCull>,
-}
-
-/// What the first pose of a timed cell times back to back: culling, shading and the geometry
-/// over `runs` runs, and the hierarchy's build where the cell has one.
-pub(crate) struct Steady<'a> {
-    pub(crate) runs: u32,
-    pub(crate) hierarchy: Option<&'a GpuHierarchy>,
 }
 
 /// What one pose of a cell is rendered and measured with.
@@ -81,13 +73,13 @@ pub(crate) struct Pose<'a> {
     pub(crate) name: &'a str,
 }
 
-/// Renders the pose once and measures it: list metrics from the exact oracle, lights per
-/// pixel, and (with `reference`) the error against the reference and the infinite-range
-/// reference; with `timed`, steady-state timings; with `export`, the pose's data exported there.
+/// Renders the pose once and measures it on the GPU: list metrics from the exact oracle and
+/// lights per pixel; with `steady_runs`, culling, shading and the geometry back to back over
+/// that many runs; with `export`, the pose's data exported there. Its accuracy is
+/// [`PoseEval::score`]'s.
 pub(crate) fn evaluate(
     p: &Pose<'_>,
-    reference: Option<&References<'_>>,
-    timed: Option<Steady<'_>>,
+    steady_runs: Option<u32>,
     export: Option<&std::path::Path>,
 ) -> Result<PoseEval, LabError> {
     let Pose {
@@ -99,7 +91,6 @@ pub(crate) fn evaluate(
         settings,
         name: pose,
     } = *p;
-    let steady_runs = timed.as_ref().map(|t| t.runs);
     let light_count = u64::from(gpu_scene.light_count);
     let (w, h) = c.resolution;
     gpu_scene.set_view(ctx, cam, w, h, 0);
@@ -171,13 +162,11 @@ pub(crate) fn evaluate(
                 .collect()
         }
     };
-    let (steady_geometry, steady_build) = match (timed, &o.timings) {
-        (Some(t), Some(timings)) => steady_after_frame(p, &o, timings, t, &mut steady_passes)?,
-        _ => (None, None),
-    };
-    let accuracy = match reference {
-        Some(refs) => against_references(p, refs, &o.color)?,
-        None => Accuracy::default(),
+    let steady_geometry = match (steady_runs, &o.timings) {
+        (Some(runs), Some(timings)) => {
+            steady_geometry_after(p, &o, timings, runs, &mut steady_passes)?
+        }
+        _ => None,
     };
     Ok(PoseEval {
         metrics,
@@ -187,11 +176,11 @@ pub(crate) fn evaluate(
         per_pixel,
         nonfinite: o.color.non_finite_count() as u64,
         color: o.color,
-        reference: accuracy.reference,
-        infinite: accuracy.infinite,
-        infinite_cached: accuracy.infinite_cached,
-        acc: accuracy.acc,
-        acc_inf: accuracy.acc_inf,
+        reference: None,
+        infinite: None,
+        infinite_cached: None,
+        acc: None,
+        acc_inf: None,
         list_bytes,
         gbuffer_bytes: o.gbuffer_bytes,
         msaa_target_bytes: o.msaa_target_bytes,
@@ -201,21 +190,19 @@ pub(crate) fn evaluate(
         steady_frame,
         steady_geometry,
         steady_passes,
-        steady_build,
     })
 }
 
 /// What the first pose of a timed cell times after culling and shading (`timings`: its single
-/// frame's passes): the frame's geometry back to back (with culling and shading, the frame in
-/// steady state; its passes put first in `steady_passes`), then the hierarchy's build where
-/// the cell has one.
-fn steady_after_frame(
+/// frame's passes): the frame's geometry back to back over `runs` runs (with culling and
+/// shading, the frame in steady state; its passes put first in `steady_passes`).
+fn steady_geometry_after(
     p: &Pose<'_>,
     o: &ShadeOutput,
     timings: &[PassTiming],
-    timed: Steady<'_>,
+    runs: u32,
     steady_passes: &mut Vec<PassMedian>,
-) -> Result<(Option<f64>, Option<SteadyCull>), LabError> {
+) -> Result<Option<f64>, LabError> {
     let Pose {
         ctx,
         renderer,
@@ -229,23 +216,43 @@ fn steady_after_frame(
         .filter(|p| p.category == Category::Prepass || c.backend == Backend::NaiveForward)
         .count() as u32;
     let geometry = stage(pose, "geometry timed back to back", || {
-        steady_geometry(ctx, renderer, gpu_scene, o, passes, timed.runs)
+        steady_geometry(ctx, renderer, gpu_scene, o, passes, runs)
     })?
     .map(|s| {
         steady_passes.splice(0..0, s.passes.iter().cloned());
         s.total_ms
     });
-    // The hierarchy's build back to back right after the frame's passes, at the clock they ran
-    // at: timed after the host's accuracy work, the GPU's clock could fall so far that the
-    // warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times
-    // slow, every pass alike). Every build of the same lights is the same hierarchy.
-    let build = match timed.hierarchy {
-        Some(hier) => stage(pose, "hierarchy built back to back", || {
-            steady_build(ctx, hier, hier.pass_count(), timed.runs)
-        })?,
-        None => None,
-    };
-    Ok((geometry, build))
+    Ok(geometry)
+}
+
+/// The lighting grid hierarchy's build back to back over `runs` runs. Timed right after a
+/// timed pose's [`evaluate`], before its [`PoseEval::score`], at the clock the frame's passes
+/// ran at: timed after the host's accuracy work, the GPU's clock could fall so far that the
+/// warm-up did not raise it (an H200 read two of seven million-light builds 2.5-2.7 times slow,
+/// every pass alike). Every build of the same lights is the same hierarchy.
+pub(crate) fn steady_hierarchy_build(
+    ctx: &GpuContext,
+    hier: &GpuHierarchy,
+    runs: u32,
+    pose: &str,
+) -> Result<Option<SteadyCull>, LabError> {
+    Ok(stage(pose, "hierarchy built back to back", || {
+        steady_build(ctx, hier, hier.pass_count(), runs)
+    })?)
+}
+
+impl PoseEval {
+    /// The pose's image against the windowed reference (where the cell renders it) and the
+    /// infinite-range one.
+    pub(crate) fn score(&mut self, p: &Pose<'_>, refs: &References<'_>) -> Result<(), LabError> {
+        let a = against_references(p, refs, &self.color)?;
+        self.reference = a.reference;
+        self.infinite = a.infinite;
+        self.infinite_cached = a.infinite_cached;
+        self.acc = a.acc;
+        self.acc_inf = a.acc_inf;
+        Ok(())
+    }
 }
 
 /// What a pose measured against the references.
@@ -456,6 +463,7 @@ pub(crate) fn naive_metrics(
     let needed: u64 = counts.iter().map(|k| u64::from(k[1])).sum();
     Ok(ListMetrics {
         covered_pixels: sampled,
+        // Not reported (the row's false_negatives is empty for naive forward: it has no lists).
         false_negatives: 0,
         evaluated: sampled * light_count,
         needed,

@@ -107,8 +107,7 @@ pub fn backfill_scene_lights(rows: &mut [Row]) {
             ((r.scene.clone(), rest), r.lights)
         })
         .collect();
-    for i in 0..rows.len() {
-        let r = &rows[i];
+    for r in rows.iter_mut() {
         if r.radius_rule != "hierarchy" || r.scene_lights.is_some() {
             continue;
         }
@@ -116,7 +115,7 @@ pub fn backfill_scene_lights(rows: &mut [Row]) {
             .into_iter()
             .map(|(k, v)| (k.clone(), v.clone()))
             .collect();
-        rows[i].scene_lights = known.get(&(rows[i].scene.clone(), rest)).copied();
+        r.scene_lights = known.get(&(r.scene.clone(), rest)).copied();
     }
 }
 

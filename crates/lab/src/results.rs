@@ -47,7 +47,9 @@ pub struct Row {
     pub gpu_ms_prepass: Option<f64>,
     /// Median CPU time recording command buffers, ms.
     pub cpu_ms_encode: f64,
-    /// False negatives (pixel, light pairs).
+    /// False negatives (pixel, light pairs) of the cell's lists against the exact oracle;
+    /// empty where the oracle did not run (`exact_stride: 0`) and for naive forward, which has
+    /// no lists.
     pub false_negatives: Option<u64>,
     /// Lights evaluated / lights needed.
     pub false_positive_ratio: Option<f64>,
