@@ -314,7 +314,8 @@ pub(crate) fn run_gpu(
     out
 }
 
-/// A run's declared steps (`CullOutput::passes`): every buffer a pass reads is an input of the
+/// A run's declared steps (`CullOutput::passes`): each pass's reads and writes are what its
+/// entry point reads and writes (`global_use`), every buffer a pass reads is an input of the
 /// run or written by an earlier step of it, and the timer recorded exactly the declared passes,
 /// in order, `runs` times (besides the scan's and the sort's own).
 pub(crate) fn check_plan(
@@ -327,6 +328,7 @@ pub(crate) fn check_plan(
         passes.iter().any(|s| s.name.starts_with("cull.")),
         "{what}: no culling pass declared"
     );
+    crate::global_use::check_global_use(what, passes);
     let mut written: HashSet<Buf> = Buf::INPUTS.into_iter().collect();
     for s in passes {
         for b in &s.reads {

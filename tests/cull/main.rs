@@ -6,6 +6,7 @@ mod common;
 
 mod cases;
 mod exactness;
+mod global_use;
 mod lists;
 mod msaa;
 mod order;

@@ -49,6 +49,7 @@ pub mod strategies;
 
 pub use culler::Culler;
 pub use output::{BinLists, CullOutput, ListForm, zbin_cells, zbin_lengths, zbin_range};
+pub use program::Kernel;
 pub use record::ListPass;
 pub use settings::CullSettings;
 

@@ -4,6 +4,7 @@
 //! for the CPU's O(pixels x lights); [`crate::metrics`]), and over transparent surfaces
 //! `cull.exact_transparent`, a raster pass adding each visible transparent fragment's counts.
 
+use crate::Kernel;
 use manylights_gpu::{GpuContext, GpuError, GpuScene, pipeline, readback};
 
 use crate::program::{DepthInput, Program};
@@ -14,9 +15,9 @@ use crate::{CullOutput, Culler};
 
 /// The consumers' pipelines, over group 1 of [`Culler::lists_layout`].
 pub(crate) struct PerPixel {
-    lights_per_pixel: wgpu::ComputePipeline,
-    exact: wgpu::ComputePipeline,
-    depth_samples: wgpu::ComputePipeline,
+    lights_per_pixel: Kernel,
+    exact: Kernel,
+    depth_samples: Kernel,
     /// `cull.exact_transparent`, over the transparent geometry.
     exact_transparent: wgpu::RenderPipeline,
 }
@@ -149,7 +150,7 @@ impl Culler {
         scene: &GpuScene,
         depth: &wgpu::Texture,
         lists: &CullOutput,
-        pipeline: &wgpu::ComputePipeline,
+        pipeline: &Kernel,
         stride: u64,
         uniform: &[u8],
         transparent: Option<&wgpu::RenderPipeline>,
@@ -191,7 +192,7 @@ impl Culler {
                 label: Some("cull.per_pixel"),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(pipeline);
+            pass.set_pipeline(&pipeline.pipeline);
             pass.set_bind_group(0, &scene.bind_group, &[]);
             pass.set_bind_group(1, &group, &[]);
             pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1);

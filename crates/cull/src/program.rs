@@ -19,9 +19,22 @@ pub(crate) enum DepthInput {
     Float,
 }
 
+/// A compute pipeline and the code it runs: its shader and entry point, which a test checks a
+/// step's declared reads and writes against (naga's use of each global by that entry point).
+pub struct Kernel {
+    /// The pipeline.
+    pub pipeline: wgpu::ComputePipeline,
+    /// Its shader's name (a [`ShaderDef`] of [`crate::shaders::SHADERS`]).
+    pub shader: &'static str,
+    /// Its entry point.
+    pub entry: &'static str,
+}
+
 /// A compiled shader over bind group 0 (the scene) and one group 1.
 pub(crate) struct Program {
     module: wgpu::ShaderModule,
+    /// The shader's name.
+    shader: &'static str,
     layout: wgpu::PipelineLayout,
     /// The override constants of its depth input (`DEPTH_SAMPLES` over MSAA), which every
     /// pipeline of it takes.
@@ -49,13 +62,14 @@ impl Program {
         };
         Self {
             module,
+            shader: def.name,
             layout: pipeline::layout(d, def.name, &[scene_layout, group1]),
             depth_constants,
         }
     }
 
     /// The pipeline of entry point `entry`.
-    pub fn pipeline(&self, d: &wgpu::Device, entry: &str) -> wgpu::ComputePipeline {
+    pub fn pipeline(&self, d: &wgpu::Device, entry: &'static str) -> Kernel {
         self.pipeline_with(d, entry, &[])
     }
 
@@ -63,8 +77,8 @@ impl Program {
     pub fn pipelines<const N: usize>(
         &self,
         d: &wgpu::Device,
-        entries: [&str; N],
-    ) -> [wgpu::ComputePipeline; N] {
+        entries: [&'static str; N],
+    ) -> [Kernel; N] {
         entries.map(|e| self.pipeline(d, e))
     }
 
@@ -73,9 +87,9 @@ impl Program {
     pub fn pipeline_with(
         &self,
         d: &wgpu::Device,
-        entry: &str,
+        entry: &'static str,
         constants: &[(&str, f64)],
-    ) -> wgpu::ComputePipeline {
+    ) -> Kernel {
         let all: Vec<(&str, f64)> = constants
             .iter()
             .copied()
@@ -85,6 +99,10 @@ impl Program {
             constants: &all,
             ..Default::default()
         };
-        pipeline::compute_with(d, &self.module, &self.layout, entry, &options)
+        Kernel {
+            pipeline: pipeline::compute_with(d, &self.module, &self.layout, entry, &options),
+            shader: self.shader,
+            entry,
+        }
     }
 }

@@ -9,15 +9,19 @@
 //! they stay exactly as they are.
 //!
 //! The buffers a step reads and writes ([`Buf`]) are what [`crate::CullOutput::passes`] reports
-//! and what a test checks: every buffer a pass reads is an input of the run or written by an
-//! earlier step of it. A pass "writes" a buffer it only updates atomically from a known state
-//! (the counts, the cursors, the tile masks that every fill leaves zero).
+//! and what tests check: every buffer a pass reads is an input of the run or written by an
+//! earlier step of it; and a pass's declared buffers are what its entry point reads and writes,
+//! by naga's use of each global ([`Kernel`] names the shader and entry point;
+//! `tests/cull/global_use.rs`). A pass "writes" a buffer it only updates atomically from a known
+//! state (the counts, the cursors, the tile masks that every fill leaves zero). A pass declares
+//! what its entry point may write under this run's flags, and reads what it reads under them.
 
 use std::borrow::Cow;
 
 use manylights_gpu::timing::{Category, GpuTimer};
 use manylights_gpu::{GpuContext, GpuError, pipeline};
 
+use crate::program::Kernel;
 use crate::radix_sort::RadixSort;
 use crate::scan::Scan;
 
@@ -102,8 +106,8 @@ impl Buf {
 pub enum Dispatch<'a> {
     /// A grid of workgroups.
     Grid([u32; 3]),
-    /// Arguments written by an earlier pass, at a byte offset.
-    Indirect(&'a wgpu::Buffer, u64),
+    /// Arguments written by an earlier pass into the buffer of that role, at a byte offset.
+    Indirect(Buf, &'a wgpu::Buffer, u64),
 }
 
 impl From<(u32, u32)> for Dispatch<'_> {
@@ -122,8 +126,8 @@ impl From<[u32; 3]> for Dispatch<'_> {
 pub struct Pass<'a> {
     /// Profiler scope and result column, such as `cull.tiled_gather.count`.
     pub name: Cow<'static, str>,
-    /// Its pipeline.
-    pub pipeline: &'a wgpu::ComputePipeline,
+    /// Its pipeline and the code it runs.
+    pub kernel: &'a Kernel,
     /// Bind group 1.
     pub group: &'a wgpu::BindGroup,
     /// Its workgroups.
@@ -181,7 +185,7 @@ impl<'a> Step<'a> {
     /// A compute pass of `pipeline` over `group`.
     pub fn pass(
         name: impl Into<Cow<'static, str>>,
-        pipeline: &'a wgpu::ComputePipeline,
+        kernel: &'a Kernel,
         group: &'a wgpu::BindGroup,
         dispatch: impl Into<Dispatch<'a>>,
         reads: &'static [Buf],
@@ -189,7 +193,7 @@ impl<'a> Step<'a> {
     ) -> Self {
         Self::Pass(Pass {
             name: name.into(),
-            pipeline,
+            kernel,
             group,
             dispatch: dispatch.into(),
             reads,
@@ -209,6 +213,17 @@ impl<'a> Step<'a> {
 
     /// What the step is called, reads and writes.
     pub fn info(&self) -> StepInfo {
+        let kernel = match self {
+            Self::Pass(p) => Some((p.kernel.shader, p.kernel.entry)),
+            _ => None,
+        };
+        let indirect = match self {
+            Self::Pass(Pass {
+                dispatch: Dispatch::Indirect(args, ..),
+                ..
+            }) => Some(*args),
+            _ => None,
+        };
         let (name, reads, writes): (Cow<'static, str>, &[Buf], &[Buf]) = match self {
             Self::Pass(p) => (p.name.clone(), p.reads, p.writes),
             Self::Clear { what, .. } => ("clear".into(), &[], std::slice::from_ref(what)),
@@ -221,6 +236,8 @@ impl<'a> Step<'a> {
         };
         StepInfo {
             name: name.into_owned(),
+            kernel,
+            indirect,
             reads: reads.to_vec(),
             writes: writes.to_vec(),
         }
@@ -233,6 +250,11 @@ impl<'a> Step<'a> {
 pub struct StepInfo {
     /// The pass's name.
     pub name: String,
+    /// A pass's shader and entry point (none for the other steps).
+    pub kernel: Option<(&'static str, &'static str)>,
+    /// The buffer of a pass's indirect dispatch arguments (read by the dispatch, not by a
+    /// global of its entry point).
+    pub indirect: Option<Buf>,
     /// Buffers it reads.
     pub reads: Vec<Buf>,
     /// Buffers it writes.
@@ -311,16 +333,16 @@ impl Recorder<'_> {
                 enc,
                 timer,
                 &p.name,
-                p.pipeline,
+                &p.kernel.pipeline,
                 &[self.scene, p.group],
                 groups,
             ),
-            Dispatch::Indirect(args, offset) => {
+            Dispatch::Indirect(_, args, offset) => {
                 let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(&p.name),
                     timestamp_writes: timer.compute_pass(&p.name),
                 });
-                pass.set_pipeline(p.pipeline);
+                pass.set_pipeline(&p.kernel.pipeline);
                 pass.set_bind_group(0, self.scene, &[]);
                 pass.set_bind_group(1, p.group, &[]);
                 pass.dispatch_workgroups_indirect(args, offset);

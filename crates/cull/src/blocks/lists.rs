@@ -5,6 +5,7 @@
 //! `cull.cap` then caps each count and counts the dropped lights (`cull_stats[0]`), and
 //! `cull.finalize` writes each bin's `(offset, count)`.
 
+use crate::Kernel;
 use crate::frame::Frame;
 use crate::layout::GROUPS_X;
 use crate::program::Program;
@@ -14,8 +15,8 @@ use crate::scan::groups_2d;
 /// The pipelines of `cull.cap` and `cull.finalize` (in gather's program, which composes
 /// `lists.wgsl`).
 pub(crate) struct Lists {
-    finalize: wgpu::ComputePipeline,
-    cap: wgpu::ComputePipeline,
+    finalize: Kernel,
+    cap: Kernel,
 }
 
 impl Lists {

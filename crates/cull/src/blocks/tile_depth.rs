@@ -7,6 +7,7 @@
 //! of tiles (tiled scatter with tile masks): one pass, not two, as each pass has a fixed cost
 //! larger than this work.
 
+use crate::Kernel;
 use manylights_gpu::{GpuContext, GpuError};
 
 use crate::layout::{DEPTH_TILES, GpuCullParams};
@@ -15,8 +16,8 @@ use crate::record::{Buf, Step};
 
 /// The pass's pipelines.
 pub(crate) struct TileDepth {
-    depth_bounds: wgpu::ComputePipeline,
-    depth_bounds_blocks: wgpu::ComputePipeline,
+    depth_bounds: Kernel,
+    depth_bounds_blocks: Kernel,
     /// The device's most workgroups along a dispatch dimension.
     max_groups: u32,
 }

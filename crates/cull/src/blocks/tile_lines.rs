@@ -14,6 +14,7 @@
 //!
 //! The oracle is [`crate::cpu::tile_lines`]; docs/STRATEGIES.md has the method and its figures.
 
+use crate::Kernel;
 use manylights_gpu::GpuError;
 
 use crate::frame::{Frame, Outputs};
@@ -29,9 +30,9 @@ use crate::strategies::Plan;
 /// The lines path's pipelines: `cull.tile_lines`, and its list passes for each of
 /// [`LINE_THREAD_COUNTS`] threads a tile.
 pub(crate) struct TileLines {
-    lines: wgpu::ComputePipeline,
-    count: [wgpu::ComputePipeline; 3],
-    fill: [wgpu::ComputePipeline; 3],
+    lines: Kernel,
+    count: [Kernel; 3],
+    fill: [Kernel; 3],
 }
 
 impl TileLines {
@@ -67,14 +68,14 @@ impl TileLines {
 
 /// Entry point `entry` of `program` built once for each of [`LINE_THREAD_COUNTS`] (the
 /// shader's `LINE_THREADS` override).
-fn line_pipelines(d: &wgpu::Device, program: &Program, entry: &str) -> [wgpu::ComputePipeline; 3] {
+fn line_pipelines(d: &wgpu::Device, program: &Program, entry: &'static str) -> [Kernel; 3] {
     // (Without zeroing workgroup memory, which these passes do not need, measured the same on
     // an H100.)
     LINE_THREAD_COUNTS.map(|t| program.pipeline_with(d, entry, &[("LINE_THREADS", f64::from(t))]))
 }
 
 /// The pipeline of `set` for `light_count` lights ([`line_threads`]).
-fn line_pipeline(set: &[wgpu::ComputePipeline; 3], light_count: u32) -> &wgpu::ComputePipeline {
+fn line_pipeline(set: &[Kernel; 3], light_count: u32) -> &Kernel {
     let t = line_threads(light_count);
     let i = LINE_THREAD_COUNTS
         .iter()
@@ -141,7 +142,8 @@ impl Plan for LinesPlan<'_> {
                 &self.group_a,
                 list_groups(p),
                 &[Buf::Depth, Buf::TileLines],
-                &[Buf::Stats],
+                // Its tiles' depth data, as the fill pass writes them (tile_bounds).
+                &[Buf::TileDepth, Buf::Stats],
             ));
         }
         steps

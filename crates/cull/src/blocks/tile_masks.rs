@@ -6,6 +6,7 @@
 //! (no scan), writes its range, and leaves the words zero for the next count pass.
 //! Used where the masks fit [`crate::Culler::mask_budget`] (`fits`).
 
+use crate::Kernel;
 use manylights_gpu::{GpuContext, GpuError};
 
 use crate::frame::Frame;
@@ -15,7 +16,7 @@ use crate::record::{Buf, Step};
 
 /// The fill's pipeline (in gather's program, which holds the workgroup scan it uses).
 pub(crate) struct TileMasks {
-    fill: wgpu::ComputePipeline,
+    fill: Kernel,
 }
 
 impl TileMasks {

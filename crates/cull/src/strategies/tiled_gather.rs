@@ -15,6 +15,7 @@
 //!
 //! The chunk of lights a workgroup takes is fitted to the device by [`crate::fit_chunks`].
 
+use crate::Kernel;
 use manylights_gpu::GpuError;
 
 use crate::blocks::tile_depth::{self, Rows};
@@ -29,11 +30,11 @@ use crate::{CullError, CullOutput};
 
 /// Gather's own pipelines (2.5D's too: the same entry points with its flag).
 pub(crate) struct Pipelines {
-    count: wgpu::ComputePipeline,
-    fill: wgpu::ComputePipeline,
-    count_masks: wgpu::ComputePipeline,
-    count_flat: wgpu::ComputePipeline,
-    fill_flat: wgpu::ComputePipeline,
+    count: Kernel,
+    fill: Kernel,
+    count_masks: Kernel,
+    count_flat: Kernel,
+    fill_flat: Kernel,
 }
 
 impl Pipelines {
@@ -269,7 +270,8 @@ impl Plan for BinnedPlan<'_> {
                 group,
                 self.groups(),
                 &[Buf::TileDepth, Buf::Lights, Buf::Offsets],
-                &[Buf::Indices, Buf::Cursors],
+                // Each workgroup writes its tile's list from its offset, with no cursor.
+                &[Buf::Indices],
             ),
             q.lists.finalize(f, group),
         ]

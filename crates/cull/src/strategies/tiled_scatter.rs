@@ -11,6 +11,7 @@
 //!    (`cull.tiled_scatter.pairs`), [`crate::radix_sort`] orders them by tile, and
 //!    `cull.tiled_scatter.ranges` and `cull.finalize` find each tile's start and end.
 
+use crate::Kernel;
 use manylights_gpu::GpuError;
 
 use crate::blocks::tile_depth::{self, Rows};
@@ -29,11 +30,11 @@ use crate::{CullError, CullOutput};
 
 /// Tiled scatter's pipelines.
 pub(crate) struct Pipelines {
-    count: wgpu::ComputePipeline,
-    pairs: wgpu::ComputePipeline,
-    ranges: wgpu::ComputePipeline,
-    finalize: wgpu::ComputePipeline,
-    masks: wgpu::ComputePipeline,
+    count: Kernel,
+    pairs: Kernel,
+    ranges: Kernel,
+    finalize: Kernel,
+    masks: Kernel,
 }
 
 impl Pipelines {

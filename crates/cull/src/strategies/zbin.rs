@@ -20,6 +20,7 @@
 //!      light: its bit in each tile of its rectangle that keeps it): work as the (light, tile)
 //!      pairs.
 
+use crate::Kernel;
 use manylights_gpu::GpuError;
 
 use crate::blocks::tile_depth::{self, Rows};
@@ -41,11 +42,11 @@ const SCATTER_LANES: u32 = 4;
 
 /// Z-binning's pipelines.
 pub(crate) struct Pipelines {
-    keys: wgpu::ComputePipeline,
-    bins: wgpu::ComputePipeline,
-    masks: wgpu::ComputePipeline,
-    covers: wgpu::ComputePipeline,
-    scatter: wgpu::ComputePipeline,
+    keys: Kernel,
+    bins: Kernel,
+    masks: Kernel,
+    covers: Kernel,
+    scatter: Kernel,
 }
 
 impl Pipelines {

@@ -324,7 +324,8 @@ impl Plan for ClusterPlan<'_> {
                 &self.group_a,
                 groups_2d(f.params.bins.div_ceil(64), GROUPS_X),
                 &[Buf::Occupancy],
-                &[Buf::ClusterBoxes],
+                // With CULL_FLAG_SLICE_MASKS the tiles' slice masks too, in the occupancy.
+                &[Buf::ClusterBoxes, Buf::Occupancy],
             ));
         }
         steps.extend([
@@ -351,7 +352,7 @@ impl Plan for ClusterPlan<'_> {
                 "cull.clustered.count_wide",
                 &g.per_light[self.cells()].count_wide,
                 &self.group_a,
-                Dispatch::Indirect(&self.wide_args, 0),
+                Dispatch::Indirect(Buf::WideArgs, &self.wide_args, 0),
                 self.reads(
                     &[Buf::WideLights, Buf::WideArgs, Buf::Lights, Buf::Occupancy],
                     &[
@@ -432,7 +433,7 @@ impl Plan for ClusterPlan<'_> {
                 "cull.clustered.fill_wide",
                 &g.per_light[self.cells()].fill_wide,
                 group,
-                Dispatch::Indirect(&self.wide_args, 0),
+                Dispatch::Indirect(Buf::WideArgs, &self.wide_args, 0),
                 self.reads(
                     &[
                         Buf::WideLights,
@@ -482,7 +483,7 @@ impl Plan for ClusterPlan<'_> {
                     name,
                     pipeline,
                     group,
-                    Dispatch::Indirect(&self.wide_args, offset),
+                    Dispatch::Indirect(Buf::WideArgs, &self.wide_args, offset),
                     &[
                         Buf::WideLights,
                         Buf::WideArgs,

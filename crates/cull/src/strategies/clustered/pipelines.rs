@@ -1,5 +1,6 @@
 //! The clusters' pipelines, built once from their program (`shaders/cull/clustered/`).
 
+use crate::Kernel;
 use crate::program::Program;
 
 /// The clusters' pipelines.
@@ -8,33 +9,33 @@ pub(crate) struct Pipelines {
     /// each pipeline, so that the clusters without cells run the code they ran before them
     /// (testing the flag at every (light, cluster) took 1.2% longer a frame at 1M lights).
     pub(super) per_light: [PerLight; 2],
-    pub(super) wide_args: wgpu::ComputePipeline,
-    pub(super) order: wgpu::ComputePipeline,
+    pub(super) wide_args: Kernel,
+    pub(super) order: Kernel,
     /// `cull.clustered.order`'s lists by the bitmap's rank sort, run in its place with
     /// `CULL_FLAG_ORDER_BITS`.
-    pub(super) order_bits: wgpu::ComputePipeline,
-    pub(super) order_short: wgpu::ComputePipeline,
-    pub(super) order_lists: wgpu::ComputePipeline,
-    pub(super) order_args: wgpu::ComputePipeline,
-    pub(super) occupancy: wgpu::ComputePipeline,
-    pub(super) light_rects: wgpu::ComputePipeline,
-    pub(super) boxes: wgpu::ComputePipeline,
+    pub(super) order_bits: Kernel,
+    pub(super) order_short: Kernel,
+    pub(super) order_lists: Kernel,
+    pub(super) order_args: Kernel,
+    pub(super) occupancy: Kernel,
+    pub(super) light_rects: Kernel,
+    pub(super) boxes: Kernel,
     /// `cull.clustered.cells`: each cluster's 2.5D cells (`Strategy::Clustered::cells`).
-    pub(super) cells: wgpu::ComputePipeline,
-    pub(super) tiles_count: wgpu::ComputePipeline,
+    pub(super) cells: Kernel,
+    pub(super) tiles_count: Kernel,
     /// The same, reading `cull.clustered.rects`' rectangles (`CLUSTER_TILE_RECTS`).
-    pub(super) tiles_count_rects: wgpu::ComputePipeline,
-    pub(super) masks_fill: wgpu::ComputePipeline,
+    pub(super) tiles_count_rects: Kernel,
+    pub(super) masks_fill: Kernel,
     /// The same, its ranges from a cursor (`CLUSTER_FILL_CURSOR`: no scan).
-    pub(super) masks_fill_cursor: wgpu::ComputePipeline,
+    pub(super) masks_fill_cursor: Kernel,
 }
 
 /// `cull.clustered.count`, `.fill`, `.count_wide` and `.fill_wide`.
 pub(crate) struct PerLight {
-    pub(super) count: wgpu::ComputePipeline,
-    pub(super) fill: wgpu::ComputePipeline,
-    pub(super) count_wide: wgpu::ComputePipeline,
-    pub(super) fill_wide: wgpu::ComputePipeline,
+    pub(super) count: Kernel,
+    pub(super) fill: Kernel,
+    pub(super) count_wide: Kernel,
+    pub(super) fill_wide: Kernel,
 }
 
 impl PerLight {
@@ -114,7 +115,7 @@ impl Pipelines {
 }
 
 /// A long lists' order pass, with [`order_threads`] threads.
-fn order_pipeline(d: &wgpu::Device, program: &Program, entry: &str) -> wgpu::ComputePipeline {
+fn order_pipeline(d: &wgpu::Device, program: &Program, entry: &'static str) -> Kernel {
     program.pipeline_with(d, entry, &[("ORDER_THREADS", f64::from(order_threads(d)))])
 }
 
