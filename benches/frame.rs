@@ -134,7 +134,7 @@ fn settings() -> Vec<Setting> {
             strategy: zbin(8),
             hdr: HdrFormat::F32,
         },
-        // Issue 21's clusters at 500 lights (the clusters' tile path).
+        // The CIS 5650 hall's clusters at 500 lights (the clusters' tile path).
         Setting {
             name: "cis5650_500_clustered64x24",
             scene: cis5650(500),
