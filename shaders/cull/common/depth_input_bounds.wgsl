@@ -8,12 +8,6 @@ const DEPTH_SAMPLES: u32 = 2u;
 
 // A pixel's nearest and farthest lookup depth and how many of the two are covered; (1, 0, 0)
 // where nothing covers it.
-struct DepthSpan {
-    near: f32,
-    far: f32,
-    covered: u32,
-}
-
 fn depth_span(p: vec2<u32>) -> DepthSpan {
     let b = textureLoad(depth_tex, p, 0).xy;
     var s = DepthSpan(1.0, 0.0, 0u);

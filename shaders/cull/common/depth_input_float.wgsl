@@ -8,12 +8,6 @@ const DEPTH_SAMPLES: u32 = 1u;
 
 // A pixel's depth as its nearest and farthest, one sample covered; (1, 0, 0) where nothing
 // covers it.
-struct DepthSpan {
-    near: f32,
-    far: f32,
-    covered: u32,
-}
-
 fn depth_span(p: vec2<u32>) -> DepthSpan {
     let z = textureLoad(depth_tex, p, 0).x;
     if z < 1.0 {

@@ -6,12 +6,6 @@ override DEPTH_SAMPLES: u32;
 
 // A pixel's nearest and farthest covered sample (NDC) and how many are covered; (1, 0, 0) where
 // none is (the depth buffer's clear value is 1.0).
-struct DepthSpan {
-    near: f32,
-    far: f32,
-    covered: u32,
-}
-
 fn depth_span(p: vec2<u32>) -> DepthSpan {
     var s = DepthSpan(1.0, 0.0, 0u);
     for (var k = 0u; k < DEPTH_SAMPLES; k++) {

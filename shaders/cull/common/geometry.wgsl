@@ -324,6 +324,14 @@ fn mask_words() -> u32 {
     return (cull.light_count + 63u) / 64u * 2u;
 }
 
+// A pixel's nearest and farthest covered depth (NDC) and how many of its samples are covered,
+// as the depth input (depth_input*.wgsl) gives it (depth_span); (1, 0, 0) where none is.
+struct DepthSpan {
+    near: f32,
+    far: f32,
+    covered: u32,
+}
+
 // Depth slice in [0, slices - 1] of linear depth d.
 fn depth_slice(d: f32) -> u32 {
     var s: f32;
