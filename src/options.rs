@@ -23,7 +23,9 @@ const DEFAULT_SLICES: u32 = 24;
 /// Scene, lights, resolution and adapter: shared by every subcommand.
 #[derive(clap::Args, Debug)]
 pub(crate) struct SceneArgs {
-    /// A procedural scene (atrium, pillars, topdown, city) or a path to a .gltf/.glb file.
+    /// A procedural scene (atrium, pillars, topdown, city, cis5650), a real scene of scenes/
+    /// (sponza, staircase, dining-room, bathroom, kitchen: scenes/NOTICE.md), or a path to a
+    /// .gltf/.glb file (compressed where it ends in .xz).
     #[arg(long, default_value = "atrium")]
     pub(crate) scene: String,
     /// Add the procedural scene's glass (transparent surfaces): the atrium's gallery railings,
@@ -405,33 +407,39 @@ impl From<SlicingName> for Slicing {
 }
 
 pub(crate) fn load_scene(name: &str) -> Result<Scene> {
-    let looks_like_file = name.ends_with(".gltf") || name.ends_with(".glb") || name.contains('/');
-    if looks_like_file {
-        let (scene, report) = gltf_import::load(Path::new(name), &GltfOptions::default())?;
-        if report.skipped_primitives + report.skipped_directional_lights > 0 {
-            eprintln!(
-                "note: {name}: skipped {} point/line primitives and {} directional lights (not supported)",
-                report.skipped_primitives, report.skipped_directional_lights
-            );
-        }
-        if report.unread_textures > 0 {
-            eprintln!(
-                "warning: {name}: {} material textures are not read (their factors are)",
-                report.unread_textures
-            );
-        }
-        Ok(scene)
+    let looks_like_file = name.ends_with(".gltf")
+        || name.ends_with(".glb")
+        || name.ends_with(".xz")
+        || name.contains('/');
+    let (scene, report) = if looks_like_file {
+        gltf_import::load(Path::new(name), &GltfOptions::default())?
+    } else if manylights_scene::real::find(name).is_some() {
+        manylights_scene::real::load(name, &GltfOptions::default())?
     } else {
-        ProceduralScene::from_name(name)
+        return ProceduralScene::from_name(name)
             .with_context(|| {
                 format!(
-                    "--scene {name}: not a file path (.gltf/.glb) and not one of {}",
+                    "--scene {name}: not a file path (.gltf, .glb, .xz), not a real scene ({}) and not a procedural one ({})",
+                    manylights_scene::real::names(),
                     procedural::NAMES.join(", ")
                 )
             })?
             .build()
-            .map_err(Into::into)
+            .map_err(Into::into);
+    };
+    if report.skipped_primitives + report.skipped_directional_lights > 0 {
+        eprintln!(
+            "note: {name}: skipped {} point/line primitives and {} directional lights (not supported)",
+            report.skipped_primitives, report.skipped_directional_lights
+        );
     }
+    if report.unread_textures > 0 {
+        eprintln!(
+            "warning: {name}: {} material textures are not read (their factors are)",
+            report.unread_textures
+        );
+    }
+    Ok(scene)
 }
 
 impl SceneArgs {

@@ -156,6 +156,45 @@ fn missing_and_malformed_gltf_are_errors() {
     let bad = "/usr/share/assimp/models/glTF2/RecursiveNodes/RecursiveNodes.gltf";
     assert!(Path::new(bad).exists(), "install assimp-testmodels");
     rejects(&["--scene", bad], 1, &[bad, "cycle"]);
+    rejects(
+        &["--scene", "sponsa"],
+        1,
+        &["--scene sponsa", "sponza, staircase", "atrium"],
+    );
+}
+
+/// `--scene sponza` renders the vendored scene by name, and its compressed file by path, within
+/// forward's tolerance of the reference.
+#[test]
+fn real_scenes_render_by_name_and_by_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/sponza.glb.xz");
+    for scene in ["sponza", file] {
+        let out = tmp.path().join("render");
+        let stdout = succeeds(
+            &[
+                "render",
+                "--scene",
+                scene,
+                "--backend",
+                "forward",
+                "--lights",
+                "64",
+                "--radius",
+                "4",
+                "--width",
+                "64",
+                "--height",
+                "36",
+                "--compare",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+            scene,
+        );
+        assert!(psnr_vs_reference(&stdout) > 80.0, "{scene}: {stdout}");
+        assert!(out.join("forward.png").is_file(), "{scene}");
+    }
 }
 
 #[test]

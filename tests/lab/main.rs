@@ -1072,3 +1072,57 @@ fn hdr_sweeps_the_lit_image_format() {
     // pixel off by a thousandth of the peak at 2,560 pixels is 94 dB (f16's rounding: 103).
     assert!(half.psnr_db.unwrap() >= 95.0, "{:?}", half.psnr_db);
 }
+
+/// A real scene by name (`Real("sponza")`): its camera, no false negatives, the image within
+/// forward's tolerance of the reference, and its name in the rows.
+#[test]
+fn a_real_scene_runs_by_name() {
+    let ctx = common::gpu();
+    let tmp = tempfile::tempdir().unwrap();
+    let src = r#"Experiment(
+        name: "real",
+        config: Config(
+            scene: Real("sponza"),
+            lights: (generator: Uniform, count: 64, seed: 3, radius: Fixed(4.0)),
+            resolution: (64, 36),
+            frames: 1,
+            warmup: 0,
+        ),
+        sweep: (
+            variants: [
+                (label: "forward+gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
+                (label: "visibility+clusters", backend: Visibility, strategy: Clustered(tile_size: 16, slices: 16)),
+            ],
+        ),
+    )"#;
+    let path = tmp.path().join("real.ron");
+    // An unknown name is an error at its place, naming the scenes there are.
+    let bad = src.replace("Real(\"sponza\")", "Real(\"sponsa\")");
+    let err = Experiment::parse(&bad, &path).unwrap_err().to_string();
+    assert!(
+        err.contains("real.ron:")
+            && err.contains("Real(\"sponsa\")")
+            && err.contains("sponza, staircase"),
+        "{err}"
+    );
+    let e = Experiment::parse(src, &path).unwrap();
+    let s = run_parsed(&ctx, &e, src, tmp.path(), &tmp.path().join("out"), &opts()).unwrap();
+    assert_eq!(s.rows.len(), 2);
+    for r in &s.rows {
+        assert_eq!(r.scene, "sponza", "{}", r.cell);
+        assert_eq!(r.false_negatives, Some(0), "{}", r.cell);
+        assert!(
+            r.lights_needed_per_pixel_mean.is_some_and(|n| n > 0.0),
+            "{}: no light reaches the view",
+            r.cell
+        );
+        assert_eq!(r.nonfinite_pixels, 0, "{}", r.cell);
+        let bound = if r.backend == "forward" { 1e-6 } else { 1e-3 };
+        assert!(
+            r.flip_mean.is_some_and(|f| f <= bound),
+            "{}: {:?}",
+            r.cell,
+            r.flip_mean
+        );
+    }
+}

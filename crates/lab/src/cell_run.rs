@@ -26,28 +26,36 @@ use crate::{LabError, write_atomic};
 /// The cell's scene with its generated lights after its own, and how many lights it has of
 /// its own.
 fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
-    let mut scene = match c.scene.procedural() {
-        Some(p) => p.build()?,
-        None => {
-            let crate::experiment::SceneSpec::Gltf(p) = &c.scene else {
-                unreachable!("procedural handled")
-            };
+    use crate::experiment::SceneSpec;
+    let (from, loaded) = match &c.scene {
+        SceneSpec::Gltf(p) => {
             let path: PathBuf = if Path::new(p).is_absolute() {
                 p.into()
             } else {
                 base.join(p)
             };
-            let (scene, report) = gltf_import::load(&path, &GltfOptions::default())?;
-            if report.unread_textures > 0 {
-                tracing::warn!(
-                    "{}: {} material textures are not read (their factors are)",
-                    path.display(),
-                    report.unread_textures
-                );
-            }
-            scene
+            let loaded = gltf_import::load(&path, &GltfOptions::default())?;
+            (path.display().to_string(), loaded)
+        }
+        SceneSpec::Real(name) => (
+            name.clone(),
+            manylights_scene::real::load(name, &GltfOptions::default())?,
+        ),
+        _ => {
+            let p = c
+                .scene
+                .procedural()
+                .expect("every other scene is procedural");
+            (String::new(), (p.build()?, Default::default()))
         }
     };
+    let (mut scene, report) = loaded;
+    if report.unread_textures > 0 {
+        tracing::warn!(
+            "{from}: {} material textures are not read (their factors are)",
+            report.unread_textures
+        );
+    }
     scene.assign_models(&c.materials);
     let lights = c.lights.generate(&scene)?;
     let own = scene.lights.len();

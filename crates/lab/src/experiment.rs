@@ -32,8 +32,12 @@ pub enum SceneSpec {
     City(#[serde(default)] CityParams),
     /// The CIS 5650 hall: Sponza's extents, two rows of pillars.
     Cis5650(#[serde(default)] Cis5650Params),
-    /// A glTF file (relative paths are relative to the experiment file).
+    /// A glTF file (relative paths are relative to the experiment file; read compressed where
+    /// it ends in `.xz`).
     Gltf(String),
+    /// A real scene of the repository's `scenes/` by name (`sponza`, `staircase`,
+    /// `dining-room`, `bathroom`, `kitchen`; `manylights_scene::real`), its checksum checked.
+    Real(String),
 }
 
 impl SceneSpec {
@@ -45,9 +49,17 @@ impl SceneSpec {
             Self::Topdown(_) => "topdown".into(),
             Self::City(_) => "city".into(),
             Self::Cis5650(_) => "cis5650".into(),
-            Self::Gltf(p) => Path::new(p)
-                .file_stem()
-                .map_or_else(|| p.clone(), |s| s.to_string_lossy().into_owned()),
+            Self::Gltf(p) => {
+                let stem = |p: &Path| p.file_stem().map(|s| s.to_string_lossy().into_owned());
+                // `sponza.glb.xz` is `sponza`, as `sponza.glb` is.
+                let p = Path::new(p);
+                match p.extension() {
+                    Some(x) if x == "xz" => stem(&p.with_extension("")),
+                    _ => stem(p),
+                }
+                .unwrap_or_else(|| p.display().to_string())
+            }
+            Self::Real(name) => name.clone(),
         }
     }
 
@@ -76,6 +88,7 @@ impl SceneSpec {
             Ok(ProceduralScene::Topdown(p)) => Self::Topdown(p),
             Ok(ProceduralScene::City(p)) => Self::City(p),
             Ok(ProceduralScene::Cis5650(p)) => Self::Cis5650(p),
+            Err(_) if manylights_scene::real::find(name).is_some() => Self::Real(name.to_owned()),
             Err(_) => Self::Gltf(name.to_owned()),
         }
     }
@@ -88,7 +101,7 @@ impl SceneSpec {
             Self::Topdown(p) => ProceduralScene::Topdown(*p),
             Self::City(p) => ProceduralScene::City(*p),
             Self::Cis5650(p) => ProceduralScene::Cis5650(*p),
-            Self::Gltf(_) => return None,
+            Self::Gltf(_) | Self::Real(_) => return None,
         })
     }
 }
@@ -466,6 +479,17 @@ impl Config {
         }
         if self.frames == 0 {
             return Err(("frames", "frames = 0: at least one measured frame".into()));
+        }
+        if let SceneSpec::Real(name) = &self.scene
+            && manylights_scene::real::find(name).is_none()
+        {
+            return Err((
+                "scene",
+                format!(
+                    "scene Real(\"{name}\"): no such real scene; accepted: {}",
+                    manylights_scene::real::names()
+                ),
+            ));
         }
         if ![1, 2, 4, 8, 16].contains(&self.msaa) {
             return Err((

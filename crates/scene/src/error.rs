@@ -31,6 +31,20 @@ pub enum SceneError {
         /// What is wrong with it.
         problem: String,
     },
+    /// A vendored scene whose file is not the one committed.
+    #[error(
+        "{}: SHA-256 {found}, but scenes/SHA256SUMS has {expected}: the file is damaged or \
+         another one (restore it from the repository)",
+        path.display()
+    )]
+    Checksum {
+        /// The file.
+        path: PathBuf,
+        /// The committed checksum.
+        expected: String,
+        /// The file's.
+        found: String,
+    },
 }
 
 impl SceneError {

@@ -56,22 +56,51 @@ pub struct ImportReport {
     pub skipped_directional_lights: usize,
     /// Textures that materials name, none of which is read (their factors are).
     pub unread_textures: usize,
+    /// Whether the file has no camera node, so that the camera frames the scene's box.
+    pub framed_camera: bool,
 }
 
 /// Deepest node hierarchy accepted; deeper files are reported as malformed.
 const MAX_NODE_DEPTH: usize = 256;
 
-/// Imports a glTF file into a [`Scene`].
+/// Imports a glTF file into a [`Scene`] (compressed where its name ends in `.xz`, as the
+/// vendored scenes are: [`crate::real`]).
 pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport), SceneError> {
+    if !path.is_file() {
+        return Err(SceneError::Gltf {
+            path: path.to_path_buf(),
+            problem: "no such file".into(),
+        });
+    }
+    let bytes = std::fs::read(path).map_err(|e| SceneError::Gltf {
+        path: path.to_path_buf(),
+        problem: format!("cannot read: {e}"),
+    })?;
+    load_bytes(path, &bytes, options)
+}
+
+/// [`load`] of the file `path` already read as `bytes`; where `path` ends in `.xz` the bytes
+/// are xz-compressed (a `.glb.xz`, or a `.gltf.xz` whose other files lie beside it).
+pub fn load_bytes(
+    path: &Path,
+    bytes: &[u8],
+    options: &GltfOptions,
+) -> Result<(Scene, ImportReport), SceneError> {
     let err = |problem: String| SceneError::Gltf {
         path: path.to_path_buf(),
         problem,
     };
-    if !path.is_file() {
-        return Err(err("no such file".into()));
-    }
-    let bytes = std::fs::read(path).map_err(|e| err(format!("cannot read: {e}")))?;
-    let raw = gltf::Gltf::from_slice_without_validation(&bytes)
+    let decompressed;
+    let bytes = if path.extension().is_some_and(|x| x == "xz") {
+        let mut out = Vec::new();
+        lzma_rs::xz_decompress(&mut std::io::BufReader::new(bytes), &mut out)
+            .map_err(|e| err(format!("cannot decompress (xz): {e}")))?;
+        decompressed = out;
+        &decompressed[..]
+    } else {
+        bytes
+    };
+    let raw = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| err(format!("cannot parse: {e}")))?;
     let root = raw.document.into_json();
     validate_schema(&root)
@@ -138,8 +167,15 @@ pub fn load(path: &Path, options: &GltfOptions) -> Result<(Scene, ImportReport),
         .iter()
         .flat_map(|p| p.positions.iter())
         .fold(Aabb::EMPTY, |b, &p| b.union_point(p));
+    out.report.framed_camera = out.camera.is_none();
     let camera = out.camera.unwrap_or_else(|| framing_camera(bounds));
-    let name = path
+    // `sponza.glb.xz` is `sponza`, as `sponza.glb` is.
+    let stem_of = if path.extension().is_some_and(|x| x == "xz") {
+        path.with_extension("")
+    } else {
+        path.to_path_buf()
+    };
+    let name = stem_of
         .file_stem()
         .map_or_else(|| "gltf".into(), |s| s.to_string_lossy().into_owned());
     let result = Scene {

@@ -20,6 +20,7 @@ pub mod mesh;
 pub mod motion;
 pub mod procedural;
 pub mod radius;
+pub mod real;
 pub mod stochastic;
 
 pub use camera::{Camera, Projection};
