@@ -119,7 +119,7 @@ pub(crate) fn run_suite(args: &RunArgs) -> Result<()> {
         eprintln!("case {name}");
         let dir = out.join(&name);
         let rows = manylights_lab::runner::run(&ctx, f, &dir, &opts)
-            .map(|s| s.rows)
+            .and_then(|s| s.check().map(|()| s.rows))
             .map_err(|e| e.to_string());
         if let Err(e) = &rows {
             eprintln!("  failed: {e}");
@@ -231,7 +231,7 @@ pub(crate) fn run_experiment(args: &RunArgs) -> Result<()> {
             "{left} cells not run (--time-limit reached); run the same command again to resume them"
         );
     }
-    if !args.no_report && !s.rows.is_empty() {
+    if !args.no_report && s.rows.iter().any(|r| r.error.is_none()) {
         let html = manylights_lab::report::write_report(&out)?;
         eprintln!(
             "report: {} and {}",
@@ -239,5 +239,7 @@ pub(crate) fn run_experiment(args: &RunArgs) -> Result<()> {
             html.display()
         );
     }
+    // Failed cells are in the results and the report; the run says so and fails.
+    s.check()?;
     Ok(())
 }

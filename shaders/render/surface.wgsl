@@ -47,7 +47,10 @@ fn visibility_surface(ndc: vec2<f32>, tri: u32) -> Surface {
     let o = (frame.world_from_view * vec4<f32>(view_point(ndc, -1.0), 1.0)).xyz;
     let d = (frame.world_from_view * vec4<f32>(view_point(ndc, -2.0), 1.0)).xyz - o;
     let q = cross(d, e2);
-    let inv = 1.0 / dot(e1, q);
+    // A triangle the ray runs along (a sliver seen edge on, which the rasteriser can still
+    // cover a pixel centre of) gives no intersection: its first vertex stands in.
+    let det = dot(e1, q);
+    let inv = select(0.0, 1.0 / det, det != 0.0);
     let s = o - p0;
     let b1 = dot(s, q) * inv;
     let r = cross(s, e1);

@@ -464,7 +464,7 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
                  bytes_written_per_pixel,bytes_read_per_pixel,gpu_ms_hierarchy_steady,setting,\
                  radius_value,hierarchy_spacing,hierarchy_finest_nodes,hierarchy_growth,\
                  hierarchy_ramp,hierarchy_sample_from,stochastic_bound,stochastic_draw,interleave,\
-                 stochastic_exposure"
+                 stochastic_exposure,error"
     ));
 }
 
@@ -1125,4 +1125,57 @@ fn a_real_scene_runs_by_name() {
             r.flip_mean
         );
     }
+}
+
+/// A cell that fails (here a glTF file that is not there) is recorded with its error in the
+/// results and the report, the sweep goes on, the run says which failed, and a rerun runs that
+/// cell alone again.
+#[test]
+fn a_failed_cell_is_recorded_and_the_sweep_goes_on() {
+    let ctx = common::gpu();
+    let tmp = tempfile::tempdir().unwrap();
+    let src = r#"Experiment(
+        name: "fails",
+        config: Config(
+            scene: Pillars(),
+            lights: (count: 16, radius: Fixed(2.0)),
+            resolution: (32, 18),
+            frames: 1,
+            warmup: 0,
+        ),
+        sweep: (scene: [Gltf("nope.glb"), Pillars()]),
+    )"#;
+    let path = tmp.path().join("fails.ron");
+    let e = Experiment::parse(src, &path).unwrap();
+    let out = tmp.path().join("out");
+    let s = run_parsed(&ctx, &e, src, tmp.path(), &out, &opts()).unwrap();
+    assert_eq!((s.ran, s.rows.len()), (2, 2));
+    let failed = s.failed();
+    assert_eq!(failed.len(), 1);
+    let error = failed[0].error.as_deref().unwrap();
+    assert!(
+        error.contains("cell 0") && error.contains("nope.glb") && error.contains("no such file"),
+        "{error}"
+    );
+    assert!(failed[0].gpu_ms_total.is_none() && failed[0].scene == "nope");
+    let ran = s.rows.iter().find(|r| r.error.is_none()).unwrap();
+    assert_eq!(ran.scene, "pillars");
+    assert!(ran.gpu_ms_total.is_some() || ran.flip_mean.is_some());
+    let checked = s.check().unwrap_err().to_string();
+    assert!(
+        checked.contains("1 cells failed") && checked.contains("nope.glb"),
+        "{checked}"
+    );
+    let csv = std::fs::read_to_string(out.join("results.csv")).unwrap();
+    assert!(csv.lines().next().unwrap().ends_with(",error"), "{csv}");
+    assert!(csv.contains("no such file"), "{csv}");
+    let json = std::fs::read_to_string(out.join("results.json")).unwrap();
+    assert!(json.contains("\"error\": \"cell 0"), "{json}");
+    manylights_lab::report::write_report(&out).unwrap();
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("1 of 2 (1 failed: cell 0"), "{md}");
+    // A rerun runs the failed cell again, and only it.
+    let again = run_parsed(&ctx, &e, src, tmp.path(), &out, &opts()).unwrap();
+    assert_eq!((again.ran, again.skipped), (1, 1));
+    assert_eq!(again.failed().len(), 1);
 }

@@ -59,6 +59,14 @@ pub enum LabError {
         /// Why.
         message: String,
     },
+    /// Cells of a run that failed (each recorded with its error in the results).
+    #[error("{count} cells failed: {cells} (their rows hold why; run again to retry them)")]
+    CellsFailed {
+        /// How many.
+        count: usize,
+        /// Each one's error, `; ` between them.
+        cells: String,
+    },
     /// A cell that failed to run.
     #[error("cell {index} `{name}` failed: {message}")]
     Cell {

@@ -300,6 +300,11 @@ pub struct Row {
     pub id: String,
     /// UTC time the cell finished (seconds since 1970).
     pub finished_unix: u64,
+    /// Why the cell failed, where it did (`cell N `name` failed: ...`): its row then holds its
+    /// identity and parameters alone, the report lists it, and a rerun runs it again. Empty
+    /// for a cell that ran.
+    #[serde(default)]
+    pub error: Option<String>,
 }
 
 /// A row's parameters: its sweep's (`setting`, `parameters`) and its light range's.
@@ -508,6 +513,7 @@ pub const COLUMNS: &[&str] = &[
     "stochastic_draw",
     "interleave",
     "stochastic_exposure",
+    "error",
 ];
 
 fn one() -> u32 {

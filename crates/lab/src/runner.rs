@@ -46,8 +46,32 @@ pub struct RunSummary {
     pub skipped: usize,
     /// Cells of this shard.
     pub in_shard: usize,
-    /// Every finished row of the experiment in the output directory.
+    /// Every finished row of the experiment in the output directory, the failed cells' among
+    /// them (`Row::error`).
     pub rows: Vec<Row>,
+}
+
+impl RunSummary {
+    /// The cells whose rows hold an error: this run's failures and earlier runs' not retried.
+    pub fn failed(&self) -> Vec<&Row> {
+        self.rows.iter().filter(|r| r.error.is_some()).collect()
+    }
+
+    /// An error naming every failed cell and why, where any failed.
+    pub fn check(&self) -> Result<(), LabError> {
+        let failed = self.failed();
+        if failed.is_empty() {
+            return Ok(());
+        }
+        Err(LabError::CellsFailed {
+            count: failed.len(),
+            cells: failed
+                .iter()
+                .map(|r| r.error.clone().unwrap_or_default())
+                .collect::<Vec<_>>()
+                .join("; "),
+        })
+    }
 }
 
 fn io(path: &Path, e: impl ToString) -> LabError {
@@ -122,7 +146,12 @@ pub fn run_parsed(
         .iter()
         .filter(|c| opts.shard.is_none_or(|(i, n)| c.index % n == i))
         .collect();
-    let done: BTreeSet<String> = load_cells(out)?.into_iter().map(|r| r.id).collect();
+    // A failed cell is run again.
+    let done: BTreeSet<String> = load_cells(out)?
+        .into_iter()
+        .filter(|r| r.error.is_none())
+        .map(|r| r.id)
+        .collect();
     let todo: Vec<&&Cell> = mine.iter().filter(|c| !done.contains(&c.id())).collect();
     let skipped = mine.len() - todo.len();
     let bar = if opts.progress {
@@ -148,6 +177,7 @@ pub fn run_parsed(
             break;
         }
         bar.set_message(cell.name.clone());
+        // A cell that fails is recorded with its error, and the sweep goes on.
         let row = crate::cell_run::run_cell(
             ctx,
             exp,
@@ -156,11 +186,16 @@ pub fn run_parsed(
             &opts.commit,
             (&mut renderers, &frames),
         )
-        .map_err(|e| LabError::Cell {
-            index: cell.index,
-            name: cell.name.clone(),
-            message: e.to_string(),
-        })?;
+        .unwrap_or_else(|e| {
+            let error = LabError::Cell {
+                index: cell.index,
+                name: cell.name.clone(),
+                message: e.to_string(),
+            }
+            .to_string();
+            bar.suspend(|| eprintln!("{error}"));
+            crate::cell_row::failed_row(exp, cell, ctx, &opts.commit, &error)
+        });
         save_cell(out, &row)?;
         ran += 1;
         bar.inc(1);

@@ -328,6 +328,9 @@ pub fn tune(
 /// for culling and shading (no timestamps, or naive forward), or with an error budget an error
 /// against infinite range above it.
 fn why_not(r: &Row, max_error: Option<f64>, rank: Rank) -> Option<String> {
+    if let Some(e) = &r.error {
+        return Some(e.clone());
+    }
     match r.false_negatives {
         Some(0) => {}
         Some(n) => return Some(format!("{n} false negatives")),

@@ -223,23 +223,31 @@ fn cells_not_run(exp: &crate::Experiment, dir: &Path, rows: &[Row]) -> Vec<Strin
         .collect()
 }
 
-/// The setup's cell count, naming the cells not run.
-fn cells_line(done: usize, not_run: &[String]) -> String {
-    if not_run.is_empty() {
+/// The setup's cell count, naming the cells that failed (with why) and those not run.
+fn cells_line(done: usize, failed: &[Row], not_run: &[String]) -> String {
+    if failed.is_empty() && not_run.is_empty() {
         return done.to_string();
     }
+    let mut parts = Vec::new();
+    if !failed.is_empty() {
+        let why: Vec<&str> = failed.iter().filter_map(|r| r.error.as_deref()).collect();
+        parts.push(format!("{} failed: {}", failed.len(), why.join("; ")));
+    }
+    if !not_run.is_empty() {
+        parts.push(format!("{} not run: {}", not_run.len(), not_run.join("; ")));
+    }
     format!(
-        "{done} of {} ({} not run: {})",
-        done + not_run.len(),
-        not_run.len(),
-        not_run.join("; ")
+        "{done} of {} ({})",
+        done + failed.len() + not_run.len(),
+        parts.join("; ")
     )
 }
 
 /// Writes `report.md`, `report.html` and `figures/` for the run in `dir`; returns the HTML path.
 pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     register_font();
-    let mut rows = load_rows(dir)?;
+    let (failed, mut rows): (Vec<Row>, Vec<Row>) =
+        load_rows(dir)?.into_iter().partition(|r| r.error.is_some());
     if rows.is_empty() {
         return Err(LabError::refused(
             dir.display().to_string(),
@@ -256,9 +264,9 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         crate::results::in_experiment_order(e, &mut rows);
     }
     crate::results::backfill(&mut rows);
-    let not_run = exp
-        .as_ref()
-        .map_or_else(Vec::new, |e| cells_not_run(e, dir, &rows));
+    let not_run = exp.as_ref().map_or_else(Vec::new, |e| {
+        cells_not_run(e, dir, &[&rows[..], &failed[..]].concat())
+    });
     let figs = draw_figures(&rows, &dir.join("figures"))?;
     let name = rows[0].experiment.clone();
     // The rows say what ran each cell: a resumed run may mix commits (or machines), and the
@@ -286,7 +294,7 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
         driver: &driver,
         commit: &commit,
         date,
-        cells: cells_line(rows.len(), &not_run),
+        cells: cells_line(rows.len(), &failed, &not_run),
         exp_src: &exp_src,
         findings: &findings,
         head: &head,
