@@ -364,6 +364,12 @@ pub(crate) enum Generator {
     Clustered,
     /// A stratified field through the whole volume (the Forward+ paper's demo).
     Field,
+    /// On the scene's surfaces, area-weighted, lifted 0.05 to 0.5 m along the shading normal
+    /// (spots aim along it): lights stay in a real interior's rooms.
+    OnSurfaces,
+    /// Fixtures: hanging 0.15 m under downward-facing surfaces (spots aim down) and, half of
+    /// them, 0.15 m out from walls (spots aim out and 30 degrees down).
+    Fixtures,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -503,6 +509,13 @@ impl SceneArgs {
                     spread: 1.5,
                 },
                 Generator::Field => LightGenerator::LightField,
+                Generator::OnSurfaces => LightGenerator::OnSurfaces {
+                    offset: (0.05, 0.5),
+                },
+                Generator::Fixtures => LightGenerator::Fixtures {
+                    drop: 0.15,
+                    on_walls: 0.5,
+                },
             },
             count: self.lights,
             seed: self.seed,

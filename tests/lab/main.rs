@@ -1073,8 +1073,8 @@ fn hdr_sweeps_the_lit_image_format() {
     assert!(half.psnr_db.unwrap() >= 95.0, "{:?}", half.psnr_db);
 }
 
-/// A real scene by name (`Real("sponza")`): its camera, no false negatives, the image within
-/// forward's tolerance of the reference, and its name in the rows.
+/// A real scene by name (`Real("sponza")`) lit by fixtures: its camera, no false negatives, the
+/// image within forward's tolerance of the reference, and its name in the rows.
 #[test]
 fn a_real_scene_runs_by_name() {
     let ctx = common::gpu();
@@ -1083,7 +1083,7 @@ fn a_real_scene_runs_by_name() {
         name: "real",
         config: Config(
             scene: Real("sponza"),
-            lights: (generator: Uniform, count: 64, seed: 3, radius: Fixed(4.0)),
+            lights: (generator: Fixtures(drop: 0.15, on_walls: 0.5), count: 64, seed: 3, radius: Fixed(4.0), spot_fraction: 0.5),
             resolution: (64, 36),
             frames: 1,
             warmup: 0,

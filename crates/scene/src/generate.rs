@@ -6,6 +6,7 @@ use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 use serde::{Deserialize, Serialize};
 
+use crate::placement;
 pub use crate::radius::RadiusRule;
 use crate::stochastic::StochasticParams;
 use crate::{Light, LightKind, Motion, Scene, SceneError};
@@ -30,6 +31,24 @@ pub enum LightGenerator {
     /// A stratified field filling the light volume, one jittered light per cell, as in the
     /// Forward+ paper's demo (3,072 point lights scattered through the scene).
     LightField,
+    /// On the scene's surfaces, area-weighted, each lifted along its surface's shading normal
+    /// (the vertex normals there) by a distance drawn uniformly in `offset`, metres; a spot
+    /// aims along that normal. Lights stay in the rooms a real interior has.
+    OnSurfaces {
+        /// The range of the lift, `(lowest, highest)`, metres, `0 <= lowest <= highest`.
+        offset: (f32, f32),
+    },
+    /// Fixtures as designers place them: hanging `drop` metres under downward-facing surfaces
+    /// (ceilings, beams: normals within 45 degrees of down), spots aimed straight down, and
+    /// mounted `drop` out from walls (normals within 30 degrees of horizontal), spots aimed out
+    /// of the wall and 30 degrees down; `on_walls` of them (a fraction) on walls. Each kind is
+    /// area-weighted over its surfaces; a scene without one kind puts every light on the other.
+    Fixtures {
+        /// Distance from the surface, metres, >= 0.
+        drop: f32,
+        /// The fraction on walls, in [0, 1].
+        on_walls: f32,
+    },
 }
 
 /// A complete description of a generated light set. Every field has a default (see
@@ -110,6 +129,21 @@ impl LightSpec {
                     "a finite value >= 0",
                 ))
             }
+            LightGenerator::OnSurfaces { offset: (lo, hi) }
+                if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) =>
+            {
+                Err(SceneError::invalid(
+                    "lights.offset",
+                    format!("({lo}, {hi})"),
+                    "(lowest, highest) metres with 0 <= lowest <= highest",
+                ))
+            }
+            LightGenerator::Fixtures { drop, .. } if !(drop.is_finite() && drop >= 0.0) => Err(
+                SceneError::invalid("lights.drop", drop, "a finite value >= 0 (metres)"),
+            ),
+            LightGenerator::Fixtures { on_walls, .. } if !(0.0..=1.0).contains(&on_walls) => Err(
+                SceneError::invalid("lights.on_walls", on_walls, "a fraction in [0, 1]"),
+            ),
             LightGenerator::Clustered { clusters, .. } if clusters == 0 => Err(
                 SceneError::invalid("lights.clusters", clusters, "an integer >= 1"),
             ),
@@ -138,36 +172,29 @@ impl LightSpec {
         let mut rng = Pcg64::seed_from_u64(self.seed);
         let stochastic = self.stochastic(scene);
         let n = self.count as usize;
-        let uniform = |rng: &mut Pcg64| {
-            b.min
-                + b.extent()
-                    * Vec3::new(
-                        rng.random::<f32>(),
-                        rng.random::<f32>(),
-                        rng.random::<f32>(),
-                    )
-        };
-        let positions: Vec<Vec3> = match self.generator {
-            LightGenerator::Uniform => (0..n).map(|_| uniform(&mut rng)).collect(),
-            LightGenerator::SurfaceHugging { offset } => {
-                surface_points(scene, n, offset, &mut rng)?
-            }
-            LightGenerator::Clustered { clusters, spread } => {
-                let centres: Vec<Vec3> = (0..clusters).map(|_| uniform(&mut rng)).collect();
-                (0..n)
-                    .map(|i| {
-                        let c = centres[i % centres.len()];
-                        let g =
-                            Vec3::new(gaussian(&mut rng), gaussian(&mut rng), gaussian(&mut rng));
-                        (c + g * spread).clamp(b.min, b.max)
-                    })
+        // Each light's place, and for the surface placements the direction a spot aims along.
+        let placed: Vec<(Vec3, Option<Vec3>)> = match self.generator {
+            LightGenerator::OnSurfaces { offset } => {
+                placement::on_surfaces(scene, n, offset, &mut rng)?
+                    .into_iter()
+                    .map(|(p, aim)| (p, Some(aim)))
                     .collect()
             }
-            LightGenerator::LightField => light_field(b.min, b.extent(), n, &mut rng),
+            LightGenerator::Fixtures { drop, on_walls } => {
+                placement::fixtures(scene, n, drop, on_walls, &mut rng)?
+                    .into_iter()
+                    .map(|(p, aim)| (p, Some(aim)))
+                    .collect()
+            }
+            g => self
+                .positions(g, scene, n, &mut rng)?
+                .into_iter()
+                .map(|p| (p, None))
+                .collect(),
         };
-        let lights = positions
+        let lights = placed
             .into_iter()
-            .map(|position| {
+            .map(|(position, aim)| {
                 let color = hue_to_rgb(rng.random::<f32>());
                 let radius = match self.radius {
                     RadiusRule::Fixed(r) => r,
@@ -178,11 +205,12 @@ impl LightSpec {
                     RadiusRule::Hierarchy { alpha, spacing, .. } => 2.0 * alpha * spacing,
                 };
                 let kind = if rng.random::<f32>() < self.spot_fraction {
-                    // Mostly downward axes, tilted up to 60 degrees.
-                    let tilt = rng.random::<f32>() * 60f32.to_radians();
-                    let az = rng.random::<f32>() * std::f32::consts::TAU;
-                    let direction =
-                        Vec3::new(tilt.sin() * az.cos(), -tilt.cos(), tilt.sin() * az.sin());
+                    let direction = aim.unwrap_or_else(|| {
+                        // Mostly downward axes, tilted up to 60 degrees.
+                        let tilt = rng.random::<f32>() * 60f32.to_radians();
+                        let az = rng.random::<f32>() * std::f32::consts::TAU;
+                        Vec3::new(tilt.sin() * az.cos(), -tilt.cos(), tilt.sin() * az.sin())
+                    });
                     let outer = self.spot_outer_deg.to_radians();
                     LightKind::Spot {
                         direction,
@@ -210,6 +238,44 @@ impl LightSpec {
             })
             .collect();
         Ok(lights)
+    }
+
+    /// The places of the volume and surface-hugging generators' `n` lights.
+    fn positions(
+        &self,
+        g: LightGenerator,
+        scene: &Scene,
+        n: usize,
+        rng: &mut Pcg64,
+    ) -> Result<Vec<Vec3>, SceneError> {
+        let b = scene.light_bounds;
+        let uniform = |rng: &mut Pcg64| {
+            b.min
+                + b.extent()
+                    * Vec3::new(
+                        rng.random::<f32>(),
+                        rng.random::<f32>(),
+                        rng.random::<f32>(),
+                    )
+        };
+        Ok(match g {
+            LightGenerator::Uniform => (0..n).map(|_| uniform(rng)).collect(),
+            LightGenerator::SurfaceHugging { offset } => surface_points(scene, n, offset, rng)?,
+            LightGenerator::Clustered { clusters, spread } => {
+                let centres: Vec<Vec3> = (0..clusters).map(|_| uniform(rng)).collect();
+                (0..n)
+                    .map(|i| {
+                        let c = centres[i % centres.len()];
+                        let g = Vec3::new(gaussian(rng), gaussian(rng), gaussian(rng));
+                        (c + g * spread).clamp(b.min, b.max)
+                    })
+                    .collect()
+            }
+            LightGenerator::LightField => light_field(b.min, b.extent(), n, rng),
+            LightGenerator::OnSurfaces { .. } | LightGenerator::Fixtures { .. } => {
+                unreachable!("placed on surfaces by generate")
+            }
+        })
     }
 
     /// The parameters of the stochastic ranges in `scene`, where the radius rule is

@@ -18,6 +18,7 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod motion;
+mod placement;
 pub mod procedural;
 pub mod radius;
 pub mod real;

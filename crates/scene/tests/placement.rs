@@ -1,0 +1,210 @@
+//! Lights placed on surfaces (`OnSurfaces`) and as fixtures (`Fixtures`) in a closed room of
+//! known planes: each where its rule puts it, spots aimed as it says, the same lights for the
+//! same seed, and bad values named.
+
+use glam::Vec3;
+use manylights_scene::{
+    Aabb, Camera, LightGenerator, LightKind, LightSpec, Material, Primitive, RadiusRule, Scene,
+};
+
+/// A quad's two triangles with `normal` at every vertex.
+fn quad(c: [Vec3; 4], normal: Vec3) -> Primitive {
+    Primitive {
+        positions: c.to_vec(),
+        normals: vec![normal; 4],
+        indices: vec![0, 1, 2, 0, 2, 3],
+        material: 0,
+    }
+}
+
+/// A room 8 x 3 x 6 m (x, y, z from 0), its normals facing in: floor, ceiling, four walls.
+fn room() -> Scene {
+    let (x, y, z) = (8.0, 3.0, 6.0);
+    let v = Vec3::new;
+    let primitives = vec![
+        quad(
+            [v(0., 0., 0.), v(x, 0., 0.), v(x, 0., z), v(0., 0., z)],
+            Vec3::Y,
+        ),
+        quad(
+            [v(0., y, 0.), v(0., y, z), v(x, y, z), v(x, y, 0.)],
+            Vec3::NEG_Y,
+        ),
+        quad(
+            [v(0., 0., 0.), v(0., y, 0.), v(x, y, 0.), v(x, 0., 0.)],
+            Vec3::Z,
+        ),
+        quad(
+            [v(0., 0., z), v(x, 0., z), v(x, y, z), v(0., y, z)],
+            Vec3::NEG_Z,
+        ),
+        quad(
+            [v(0., 0., 0.), v(0., 0., z), v(0., y, z), v(0., y, 0.)],
+            Vec3::X,
+        ),
+        quad(
+            [v(x, 0., 0.), v(x, y, 0.), v(x, y, z), v(x, 0., z)],
+            Vec3::NEG_X,
+        ),
+    ];
+    Scene {
+        name: "room".into(),
+        primitives,
+        materials: vec![Material::new(Vec3::splat(0.7), 0.0)],
+        lights: Vec::new(),
+        camera: Camera::perspective(v(4., 1.5, 5.5), v(4., 1.5, 0.), 60.0, 0.1, 50.0),
+        light_bounds: Aabb {
+            min: Vec3::ZERO,
+            max: v(x, y, z),
+        },
+    }
+}
+
+/// The distance from `p` to the room's plane whose inward normal is `n`.
+fn from_plane(p: Vec3, n: Vec3) -> f32 {
+    let d = [
+        (Vec3::Y, p.y),
+        (Vec3::NEG_Y, 3.0 - p.y),
+        (Vec3::Z, p.z),
+        (Vec3::NEG_Z, 6.0 - p.z),
+        (Vec3::X, p.x),
+        (Vec3::NEG_X, 8.0 - p.x),
+    ];
+    d.iter()
+        .find(|(m, _)| m.dot(n) > 0.999)
+        .map_or(f32::NAN, |&(_, d)| d)
+}
+
+/// The room's inward normal nearest `dir` horizontally (a wall's).
+fn wall_of(dir: Vec3) -> Vec3 {
+    let h = Vec3::new(dir.x, 0.0, dir.z).normalize();
+    [Vec3::X, Vec3::NEG_X, Vec3::Z, Vec3::NEG_Z]
+        .into_iter()
+        .max_by(|a, b| a.dot(h).total_cmp(&b.dot(h)))
+        .unwrap()
+}
+
+fn spec(generator: LightGenerator) -> LightSpec {
+    LightSpec {
+        generator,
+        count: 2000,
+        seed: 9,
+        radius: RadiusRule::Fixed(1.0),
+        spot_fraction: 1.0,
+        ..LightSpec::default()
+    }
+}
+
+#[test]
+fn on_surfaces_lifts_every_light_within_its_range_and_aims_spots_out_of_the_surface() {
+    let g = LightGenerator::OnSurfaces { offset: (0.1, 0.4) };
+    let lights = spec(g).generate(&room()).unwrap();
+    assert_eq!(lights.len(), 2000);
+    assert_eq!(lights, spec(g).generate(&room()).unwrap(), "the same seed");
+    let mut floor = 0;
+    for l in &lights {
+        // Its spot aims along its surface's normal, and it stands off that surface.
+        let LightKind::Spot { direction: n, .. } = l.kind else {
+            panic!("every light a spot")
+        };
+        let d = from_plane(l.position, n);
+        assert!(
+            (0.1 - 1e-4..=0.4 + 1e-4).contains(&d),
+            "{:?}: {d} from its surface {n}",
+            l.position
+        );
+        floor += usize::from(n.dot(Vec3::Y) > 0.999);
+    }
+    // Area-weighted: the floor is 48 of the room's 180 square metres.
+    let share = floor as f64 / 2000.0;
+    assert!((share - 48.0 / 180.0).abs() < 0.04, "{share}");
+}
+
+#[test]
+fn fixtures_hang_under_ceilings_and_mount_on_walls() {
+    let g = LightGenerator::Fixtures {
+        drop: 0.2,
+        on_walls: 0.25,
+    };
+    let lights = spec(g).generate(&room()).unwrap();
+    assert_eq!(lights.len(), 2000);
+    let (mut ceiling, mut walls) = (0, 0);
+    for l in &lights {
+        let LightKind::Spot { direction, .. } = l.kind else {
+            panic!("every light a spot")
+        };
+        if direction.dot(Vec3::NEG_Y) > 0.999 {
+            // Hanging under the ceiling.
+            ceiling += 1;
+            let d = from_plane(l.position, Vec3::NEG_Y);
+            assert!(
+                (d - 0.2).abs() < 1e-4,
+                "{:?}: {d} under the ceiling",
+                l.position
+            );
+        } else {
+            // On a wall, aimed out of it and 30 degrees down.
+            walls += 1;
+            let n = wall_of(direction);
+            let d = from_plane(l.position, n);
+            assert!(
+                (d - 0.2).abs() < 1e-4,
+                "{:?}: {d} from its wall",
+                l.position
+            );
+            assert!(
+                (direction.dot(n) - 30f32.to_radians().cos()).abs() < 1e-4,
+                "{direction}"
+            );
+            assert!((direction.y + 0.5).abs() < 1e-4, "{direction}");
+        }
+    }
+    assert_eq!((ceiling, walls), (1500, 500));
+}
+
+#[test]
+fn surface_placements_name_bad_values() {
+    for (g, field) in [
+        (
+            LightGenerator::OnSurfaces { offset: (0.5, 0.1) },
+            "lights.offset",
+        ),
+        (
+            LightGenerator::OnSurfaces {
+                offset: (-0.1, 0.1),
+            },
+            "lights.offset",
+        ),
+        (
+            LightGenerator::Fixtures {
+                drop: -1.0,
+                on_walls: 0.5,
+            },
+            "lights.drop",
+        ),
+        (
+            LightGenerator::Fixtures {
+                drop: 0.1,
+                on_walls: 1.5,
+            },
+            "lights.on_walls",
+        ),
+    ] {
+        let e = spec(g).generate(&room()).unwrap_err().to_string();
+        assert!(e.contains(field), "{g:?}: {e}");
+    }
+    // A floor alone has neither ceilings nor walls.
+    let mut floor = room();
+    floor.primitives.truncate(1);
+    let e = spec(LightGenerator::Fixtures {
+        drop: 0.1,
+        on_walls: 0.5,
+    })
+    .generate(&floor)
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("Fixtures") && e.contains("downward-facing"),
+        "{e}"
+    );
+}
