@@ -657,7 +657,7 @@ fn bad_ron_gives_its_location_and_writes_nothing() {
         ),
         (
             "empty-sweep",
-            good.replace("backend: [Forward, Deferred]", "backend: []"),
+            good.replace("backend: [Forward, Deferred, Visibility]", "backend: []"),
             vec!["empty-sweep.ron:", "sweep.backend is empty"],
         ),
         (
