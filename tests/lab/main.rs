@@ -1179,3 +1179,35 @@ fn a_failed_cell_is_recorded_and_the_sweep_goes_on() {
     assert_eq!((again.ran, again.skipped), (1, 1));
     assert_eq!(again.failed().len(), 1);
 }
+
+/// A walkthrough of Sponza from its own camera (`camera: Walkthrough(...)`): every pose checked
+/// (no false negatives at any), the path's temporal change measured, the cell named for it.
+#[test]
+fn a_walkthrough_checks_every_pose_of_a_real_scene() {
+    let ctx = common::gpu();
+    let tmp = tempfile::tempdir().unwrap();
+    let src = r#"Experiment(
+        name: "walk",
+        config: Config(
+            scene: Real("sponza"),
+            lights: (generator: OnSurfaces(offset: (0.1, 1.0)), count: 128, seed: 4, radius: Fixed(4.0)),
+            resolution: (48, 27),
+            frames: 3,
+            warmup: 0,
+            strategy: Clustered(tile_size: 16, slices: 16),
+        ),
+        sweep: (camera: [Walkthrough(poses: 3, toward: 0.5, pan_deg: 20.0)]),
+    )"#;
+    let path = tmp.path().join("walk.ron");
+    let e = Experiment::parse(src, &path).unwrap();
+    let s = run_parsed(&ctx, &e, src, tmp.path(), &tmp.path().join("out"), &opts()).unwrap();
+    let r = &s.rows[0];
+    assert!(r.cell.contains("camera=walk3"), "{}", r.cell);
+    assert_eq!(r.poses, 3);
+    assert_eq!(r.false_negatives, Some(0));
+    assert!(r.temporal_change.is_some_and(|t| t > 0.0), "{:?}", r.temporal_change);
+    // A bad walk is an error at its place.
+    let bad = src.replace("poses: 3", "poses: 1");
+    let err = Experiment::parse(&bad, &path).unwrap_err().to_string();
+    assert!(err.contains("walk.ron:") && err.contains("at least 2 poses"), "{err}");
+}

@@ -89,6 +89,7 @@ impl CellScene {
             CameraSpec::Default => vec![scene.camera],
             CameraSpec::Pose(p) => vec![p.camera()],
             CameraSpec::Path(ps) => ps.iter().map(|p| p.camera()).collect(),
+            CameraSpec::Walkthrough(w) => w.cameras(&scene.camera),
         };
         let (w, h) = c.resolution;
         ctx.check_resolution(w, h)?;

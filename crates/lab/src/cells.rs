@@ -316,6 +316,7 @@ impl Experiment {
                 CameraSpec::Default => "default".to_string(),
                 CameraSpec::Pose(p) => format!("pose({:?})", p.position),
                 CameraSpec::Path(p) => format!("path{}", p.len()),
+                CameraSpec::Walkthrough(w) => format!("walk{}", w.poses),
             };
             c.camera = v;
             ("camera", label)

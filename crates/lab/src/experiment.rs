@@ -563,6 +563,7 @@ impl Config {
                         .map_err(|e| ("camera", e.to_string()))?;
                 }
             }
+            CameraSpec::Walkthrough(w) => w.validate().map_err(|e| ("camera", e))?,
         }
         Ok(())
     }
