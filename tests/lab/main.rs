@@ -1205,9 +1205,16 @@ fn a_walkthrough_checks_every_pose_of_a_real_scene() {
     assert!(r.cell.contains("camera=walk3"), "{}", r.cell);
     assert_eq!(r.poses, 3);
     assert_eq!(r.false_negatives, Some(0));
-    assert!(r.temporal_change.is_some_and(|t| t > 0.0), "{:?}", r.temporal_change);
+    assert!(
+        r.temporal_change.is_some_and(|t| t > 0.0),
+        "{:?}",
+        r.temporal_change
+    );
     // A bad walk is an error at its place.
     let bad = src.replace("poses: 3", "poses: 1");
     let err = Experiment::parse(&bad, &path).unwrap_err().to_string();
-    assert!(err.contains("walk.ron:") && err.contains("at least 2 poses"), "{err}");
+    assert!(
+        err.contains("walk.ron:") && err.contains("at least 2 poses"),
+        "{err}"
+    );
 }

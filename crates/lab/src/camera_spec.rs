@@ -178,7 +178,10 @@ mod tests {
         for (k, c) in cams.iter().enumerate() {
             // On the line from the eye to the target, 4 m of its 10 at the last pose.
             let z = 10.0 - 4.0 * k as f32 / 4.0;
-            assert!((c.position - glam::Vec3::new(0.0, 1.5, z)).length() < 1e-5, "{k}");
+            assert!(
+                (c.position - glam::Vec3::new(0.0, 1.5, z)).length() < 1e-5,
+                "{k}"
+            );
             assert_eq!(c.projection, start.projection);
             // The view turned about +Y by 30 degrees times sin(2 pi k / 5), level.
             let d = (c.target - c.position).normalize();
@@ -190,7 +193,13 @@ mod tests {
         for (bad, what) in [
             (Walkthrough { poses: 1, ..w }, "poses: 1"),
             (Walkthrough { toward: 1.0, ..w }, "toward: 1"),
-            (Walkthrough { pan_deg: 120.0, ..w }, "pan_deg: 120"),
+            (
+                Walkthrough {
+                    pan_deg: 120.0,
+                    ..w
+                },
+                "pan_deg: 120",
+            ),
         ] {
             let e = bad.validate().unwrap_err();
             assert!(e.contains(what), "{e}");
