@@ -100,7 +100,7 @@ fn every_culling_shader_validates_over_lookup_bounds() {
     use manylights_cull::shaders::{BOUNDS_SWAPS, DEPTH_INPUT};
     let mut over_bounds = 0;
     for def in manylights_cull::shaders::SHADERS {
-        if !def.files.iter().any(|f| f.path == DEPTH_INPUT.path) {
+        if !def.has_file(DEPTH_INPUT) {
             continue;
         }
         let src = def.compose_swapped(BOUNDS_SWAPS);
@@ -123,7 +123,7 @@ fn every_culling_shader_validates_over_a_float_depth() {
     use manylights_cull::shaders::{DEPTH_INPUT, FLOAT_SWAPS};
     let mut over_float = 0;
     for def in manylights_cull::shaders::SHADERS {
-        if !def.files.iter().any(|f| f.path == DEPTH_INPUT.path) {
+        if !def.has_file(DEPTH_INPUT) {
             continue;
         }
         let src = def.compose_swapped(FLOAT_SWAPS);

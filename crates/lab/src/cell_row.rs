@@ -107,11 +107,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         lights: light_count,
         width: w,
         height: h,
-        strategy: if c.backend == Backend::NaiveForward {
-            "none".into()
-        } else {
-            c.strategy.name().into()
-        },
+        strategy: strategy_column(c).into(),
         backend: c.backend.name().into(),
         params: params_label(c),
         gpu_ms_total: med(total),
@@ -211,6 +207,15 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
     }
 }
 
+/// The `strategy` column: `none` for naive forward, which culls nothing.
+fn strategy_column(c: &Config) -> &'static str {
+    if c.backend == Backend::NaiveForward {
+        "none"
+    } else {
+        c.strategy.name()
+    }
+}
+
 /// The row of a cell that failed with `error`: its identity, parameters and where it ran, no
 /// measurement, and the error (`Row::error`).
 pub(crate) fn failed_row(
@@ -222,27 +227,9 @@ pub(crate) fn failed_row(
 ) -> Row {
     let c = &cell.config;
     let (w, h) = c.resolution;
-    // The columns a row must have, unmeasured (null, or 0 where they are plain numbers).
-    let mut v = serde_json::json!({
-        "gpu_ms_total": null, "gpu_ms_cull": null, "gpu_ms_shade": null,
-        "gpu_ms_prepass": null, "cpu_ms_encode": 0.0, "false_negatives": null,
-        "false_positive_ratio": null, "lights_per_pixel_mean": null,
-        "max_lights_per_tile": null, "dropped_lights": 0, "list_bytes": 0, "gbuffer_bytes": 0,
-        "psnr_db": null, "flip_mean": null, "max_abs_error": null,
-        "gpu_ms_total_p10": null, "gpu_ms_total_p90": null,
-        "gpu_ms_cull_p10": null, "gpu_ms_cull_p90": null, "gpu_ms_shade_p10": null,
-        "gpu_ms_shade_p90": null, "gpu_ms_prepass_p10": null, "gpu_ms_prepass_p90": null,
-        "gpu_ms_raster": null, "gpu_ms_compute": null, "psnr_db_infinite": null,
-        "flip_mean_infinite": null, "max_abs_error_infinite": null, "passes": {},
-    });
-    let strategy = if c.backend == Backend::NaiveForward {
-        "none"
-    } else {
-        c.strategy.name()
-    };
     let identity = serde_json::json!({
         "experiment": exp.name, "cell": cell.name, "scene": c.scene.name(),
-        "lights": c.lights.count, "width": w, "height": h, "strategy": strategy,
+        "lights": c.lights.count, "width": w, "height": h, "strategy": strategy_column(c),
         "backend": c.backend.name(), "params": params_label(c),
         "adapter": ctx.info.name,
         "driver": format!("{} {}", ctx.info.driver, ctx.info.driver_info).trim(),
@@ -250,10 +237,7 @@ pub(crate) fn failed_row(
         "index": cell.index, "id": cell.id(), "finished_unix": now(),
         "msaa": c.msaa, "radius_rule": c.lights.radius.kind(),
     });
-    v.as_object_mut()
-        .expect("an object")
-        .extend(identity.as_object().expect("an object").clone());
-    let mut row: Row = serde_json::from_value(v).expect("a failed row's columns");
+    let mut row = Row::unmeasured(identity);
     row.sweep = sweep_columns(cell, &c.lights.radius);
     row.error = Some(error.to_owned());
     row

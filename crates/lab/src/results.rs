@@ -520,6 +520,31 @@ fn one() -> u32 {
     1
 }
 
+impl Row {
+    /// A row of nothing measured: `identity`'s columns (a JSON object: at least the cell's
+    /// experiment, name, scene, lights, size, strategy, backend, params, adapter, driver,
+    /// commit, exact_stride, frames, index, id and finished_unix), every measurement empty (0
+    /// where a column is a plain number), the rest at their defaults.
+    pub(crate) fn unmeasured(identity: serde_json::Value) -> Row {
+        let mut v = serde_json::json!({
+            "gpu_ms_total": null, "gpu_ms_cull": null, "gpu_ms_shade": null,
+            "gpu_ms_prepass": null, "cpu_ms_encode": 0.0, "false_negatives": null,
+            "false_positive_ratio": null, "lights_per_pixel_mean": null,
+            "max_lights_per_tile": null, "dropped_lights": 0, "list_bytes": 0, "gbuffer_bytes": 0,
+            "psnr_db": null, "flip_mean": null, "max_abs_error": null,
+            "gpu_ms_total_p10": null, "gpu_ms_total_p90": null,
+            "gpu_ms_cull_p10": null, "gpu_ms_cull_p90": null, "gpu_ms_shade_p10": null,
+            "gpu_ms_shade_p90": null, "gpu_ms_prepass_p10": null, "gpu_ms_prepass_p90": null,
+            "gpu_ms_raster": null, "gpu_ms_compute": null, "psnr_db_infinite": null,
+            "flip_mean_infinite": null, "max_abs_error_infinite": null, "passes": {},
+        });
+        v.as_object_mut()
+            .expect("an object")
+            .extend(identity.as_object().expect("identity is an object").clone());
+        serde_json::from_value(v).expect("an unmeasured row's columns")
+    }
+}
+
 /// Median, p10 and p90 (nearest rank) of `v`.
 pub fn percentiles(v: &[f64]) -> Option<(f64, f64, f64)> {
     if v.is_empty() {
@@ -539,21 +564,12 @@ pub(crate) mod tests {
 
     /// A row with every column the JSON requires, the rest at their defaults.
     pub(crate) fn sample_row() -> Row {
-        let json = r#"{"experiment": "e", "cell": "", "scene": "s", "lights": 1, "width": 1,
-                "height": 1, "strategy": "x", "backend": "forward", "params": "",
-                "gpu_ms_total": null, "gpu_ms_cull": null, "gpu_ms_shade": null,
-                "gpu_ms_prepass": null, "cpu_ms_encode": 0.0, "false_negatives": null,
-                "false_positive_ratio": null, "lights_per_pixel_mean": null,
-                "max_lights_per_tile": null, "dropped_lights": 0, "list_bytes": 0,
-                "gbuffer_bytes": 0, "psnr_db": null, "flip_mean": null, "max_abs_error": null,
-                "adapter": "", "driver": "", "commit": "", "gpu_ms_total_p10": null,
-                "gpu_ms_total_p90": null, "gpu_ms_cull_p10": null, "gpu_ms_cull_p90": null,
-                "gpu_ms_shade_p10": null, "gpu_ms_shade_p90": null, "gpu_ms_prepass_p10": null,
-                "gpu_ms_prepass_p90": null, "gpu_ms_raster": null, "gpu_ms_compute": null,
-                "psnr_db_infinite": null, "flip_mean_infinite": null,
-                "max_abs_error_infinite": null, "exact_stride": 1, "frames": 1, "passes": {},
-                "index": 0, "id": "", "finished_unix": 0}"#;
-        serde_json::from_str(json).unwrap()
+        Row::unmeasured(serde_json::json!({
+            "experiment": "e", "cell": "", "scene": "s", "lights": 1, "width": 1, "height": 1,
+            "strategy": "x", "backend": "forward", "params": "", "adapter": "", "driver": "",
+            "commit": "", "exact_stride": 1, "frames": 1, "index": 0, "id": "",
+            "finished_unix": 0,
+        }))
     }
 
     #[test]
