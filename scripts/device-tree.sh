@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The GPU machine takes a copy of the working tree of at most 64 MiB (its carried paths
-# included), and scenes/ alone is 19 MB. Before a device run, this leaves only the real scenes
-# the run needs in the working tree (git sparse-checkout: the others stay committed, out of the
-# folder); afterwards `--restore` puts every file back.
+# included); scenes/ alone is 19 MB and docs/reports/ 42 MB. Before a device run, this leaves
+# only the real scenes the run needs in the working tree and no committed report (git
+# sparse-checkout: the rest stays committed, out of the folder); afterwards `--restore` puts
+# every file back.
 #
 # usage: scripts/device-tree.sh SCENE...     (names of scenes/: sponza staircase dining-room
 #                                            bathroom kitchen; none: no real scene)
@@ -19,6 +20,7 @@ for s in "$@"; do
 done
 {
   echo '/*'
+  echo '!/docs/reports/'
   for f in $(git ls-files 'scenes/*.glb.xz'); do
     name=$(basename "$f" .glb.xz)
     case " $* " in

@@ -64,8 +64,14 @@ pub struct LightSpec {
     pub seed: u64,
     /// Radius rule.
     pub radius: RadiusRule,
-    /// Intensity of every light, >= 0.
+    /// Intensity of every light, >= 0 (unused where `irradiance` is set).
     pub intensity: f32,
+    /// Where set, > 0: every light's intensity is the one at which the median surface point of
+    /// the scene receives this irradiance from the lights (the exposure rule,
+    /// [`crate::exposure`]); it replaces `intensity`. Left out of the serialised form where
+    /// unset, so that earlier experiments keep their cell identifiers.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub irradiance: Option<f32>,
     /// Fraction of the lights that are spots, in [0, 1].
     pub spot_fraction: f32,
     /// Outer half-angle of generated spots in degrees, in (0, 180]; the inner one is 80% of it.
@@ -88,6 +94,7 @@ impl Default for LightSpec {
             seed: 1,
             radius: RadiusRule::Fixed(3.0),
             intensity: 4.0,
+            irradiance: None,
             spot_fraction: 0.0,
             spot_outer_deg: 35.0,
             motion: Motion::Static,
@@ -104,6 +111,15 @@ impl LightSpec {
                 "lights.intensity",
                 self.intensity,
                 "a finite value >= 0",
+            ));
+        }
+        if let Some(e) = self.irradiance
+            && !(e.is_finite() && e > 0.0)
+        {
+            return Err(SceneError::invalid(
+                "lights.irradiance",
+                e,
+                "a finite irradiance > 0 (the median surface point's; 1 is a sensible exposure)",
             ));
         }
         self.radius.validate()?;
@@ -192,18 +208,10 @@ impl LightSpec {
                 .map(|p| (p, None))
                 .collect(),
         };
-        let lights = placed
+        let mut lights: Vec<Light> = placed
             .into_iter()
             .map(|(position, aim)| {
                 let color = hue_to_rgb(rng.random::<f32>());
-                let radius = match self.radius {
-                    RadiusRule::Fixed(r) => r,
-                    RadiusRule::Threshold(t) => {
-                        (self.intensity * color.max_element() / t).sqrt().max(1e-3)
-                    }
-                    RadiusRule::Stochastic { .. } => 0.0,
-                    RadiusRule::Hierarchy { alpha, spacing, .. } => 2.0 * alpha * spacing,
-                };
                 let kind = if rng.random::<f32>() < self.spot_fraction {
                     let direction = aim.unwrap_or_else(|| {
                         // Mostly downward axes, tilted up to 60 degrees.
@@ -220,24 +228,47 @@ impl LightSpec {
                 } else {
                     LightKind::Point
                 };
-                let light = Light {
+                Light {
                     kind,
                     position,
-                    radius,
+                    radius: 0.0,
                     color,
                     intensity: self.intensity,
-                };
-                match &stochastic {
-                    // The shortest range, at xi = 1.
-                    Some(p) => Light {
-                        radius: StochasticParams::range(p.alpha(&light), 1.0),
-                        ..light
-                    },
-                    None => light,
                 }
             })
             .collect();
+        if let Some(e) = self.irradiance
+            && !lights.is_empty()
+        {
+            for l in &mut lights {
+                l.intensity = 1.0;
+            }
+            let e1 = crate::exposure::median_unit_irradiance(scene, &lights, self.seed)?;
+            let intensity = (f64::from(e) / e1) as f32;
+            for l in &mut lights {
+                l.intensity = intensity;
+            }
+        }
+        for l in &mut lights {
+            l.radius = self.radius_of(l, stochastic.as_ref());
+        }
         Ok(lights)
+    }
+
+    /// The radius the spec's rule gives light `l` (its intensity and colour set).
+    fn radius_of(&self, l: &Light, stochastic: Option<&StochasticParams>) -> f32 {
+        match stochastic {
+            // The shortest range, at xi = 1.
+            Some(p) => StochasticParams::range(p.alpha(l), 1.0),
+            None => match self.radius {
+                RadiusRule::Fixed(r) => r,
+                RadiusRule::Threshold(t) => {
+                    (l.intensity * l.color.max_element() / t).sqrt().max(1e-3)
+                }
+                RadiusRule::Stochastic { .. } => 0.0,
+                RadiusRule::Hierarchy { alpha, spacing, .. } => 2.0 * alpha * spacing,
+            },
+        }
     }
 
     /// The places of the volume and surface-hugging generators' `n` lights.

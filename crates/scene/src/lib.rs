@@ -11,6 +11,7 @@ pub mod brdf;
 mod builder;
 pub mod camera;
 pub mod error;
+pub mod exposure;
 pub mod generate;
 pub mod gltf_import;
 pub mod hierarchy;

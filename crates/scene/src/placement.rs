@@ -104,6 +104,16 @@ pub(crate) fn on_surfaces(
         .collect())
 }
 
+/// `n` area-weighted points on every surface of the scene, each with its shading normal (none
+/// where the scene has no triangle of positive area).
+pub(crate) fn surface_points(scene: &Scene, n: usize, rng: &mut Pcg64) -> Vec<(Vec3, Vec3)> {
+    let tris = triangles(scene, |_| true);
+    if tris.is_empty() {
+        return Vec::new();
+    }
+    sample(&tris, n, rng)
+}
+
 /// Below this `y` of a mean shading normal a surface faces down (a ceiling, a beam, a shelf's
 /// underside): within 45 degrees of straight down.
 const FACES_DOWN: f32 = -std::f32::consts::FRAC_1_SQRT_2;

@@ -208,3 +208,106 @@ fn surface_placements_name_bad_values() {
         "{e}"
     );
 }
+
+/// The room's median irradiance from `lights`, measured apart from the rule: a regular grid of
+/// points 10 cm apart on each of its six planes (every point of equal area, so the median is
+/// area-weighted), each light's luminance over the squared distance (at least 1 cm) times the
+/// cosine at the plane.
+fn room_median_irradiance(lights: &[manylights_scene::Light]) -> f64 {
+    let mut e = Vec::new();
+    let planes = [
+        (Vec3::Y, [Vec3::X, Vec3::Z], Vec3::ZERO),
+        (Vec3::NEG_Y, [Vec3::X, Vec3::Z], Vec3::new(0., 3., 0.)),
+        (Vec3::Z, [Vec3::X, Vec3::Y], Vec3::ZERO),
+        (Vec3::NEG_Z, [Vec3::X, Vec3::Y], Vec3::new(0., 0., 6.)),
+        (Vec3::X, [Vec3::Y, Vec3::Z], Vec3::ZERO),
+        (Vec3::NEG_X, [Vec3::Y, Vec3::Z], Vec3::new(8., 0., 0.)),
+    ];
+    let extent = Vec3::new(8., 3., 6.);
+    for (n, [a, b], origin) in planes {
+        let (na, nb) = ((a.dot(extent) * 10.0) as u32, (b.dot(extent) * 10.0) as u32);
+        for i in 0..na {
+            for j in 0..nb {
+                let p = origin + a * (i as f32 + 0.5) * 0.1 + b * (j as f32 + 0.5) * 0.1;
+                let sum: f64 = lights
+                    .iter()
+                    .map(|l| {
+                        let to = (l.position - p).as_dvec3();
+                        let d2 = to.length_squared();
+                        let cos = (to / d2.sqrt()).dot(n.as_dvec3()).max(0.0);
+                        let c = l.color.as_dvec3() * f64::from(l.intensity);
+                        (0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z) * cos / d2.max(1e-4)
+                    })
+                    .sum();
+                e.push(sum);
+            }
+        }
+    }
+    e.sort_by(f64::total_cmp);
+    e[e.len() / 2]
+}
+
+/// The exposure rule (`irradiance`): one intensity for every light, at which the room's median
+/// surface point, measured apart on a grid of its planes, receives about the irradiance asked
+/// for, at 2,000 lights (each measured) and at 16,000 (4,096 drawn); the intensity falls as one
+/// over the count; radii by threshold follow the intensity; the lights' places are those of the
+/// spec without the rule, and a spec without it serialises as before.
+#[test]
+fn the_exposure_rule_lights_the_median_surface_point_as_asked() {
+    let base = LightSpec {
+        spot_fraction: 0.0,
+        radius: RadiusRule::Threshold(0.05),
+        ..spec(LightGenerator::OnSurfaces {
+            offset: (0.05, 0.3),
+        })
+    };
+    let mut intensities = Vec::new();
+    for (count, irradiance) in [(2000, 1.0), (16000, 1.0), (2000, 0.25)] {
+        let s = LightSpec {
+            count,
+            irradiance: Some(irradiance),
+            ..base
+        };
+        let lights = s.generate(&room()).unwrap();
+        let i = lights[0].intensity;
+        assert!(lights.iter().all(|l| l.intensity == i), "one intensity");
+        let e = room_median_irradiance(&lights);
+        assert!(
+            (0.85..1.15).contains(&(e / f64::from(irradiance))),
+            "{count} lights, irradiance {irradiance}: the median point has {e}"
+        );
+        for l in &lights {
+            assert_eq!(
+                l.radius,
+                (i * l.color.max_element() / 0.05).sqrt().max(1e-3)
+            );
+        }
+        let plain = LightSpec { count, ..base }.generate(&room()).unwrap();
+        assert!(
+            plain
+                .iter()
+                .zip(&lights)
+                .all(|(a, b)| a.position == b.position && a.color == b.color),
+            "the rule moves no light"
+        );
+        intensities.push(i);
+    }
+    let ratio = intensities[0] / intensities[1];
+    assert!(
+        (7.0..9.0).contains(&ratio),
+        "2,000 against 16,000 lights: {ratio}"
+    );
+    assert!((intensities[0] / intensities[2] - 4.0).abs() < 1e-3);
+    let ron = ron::to_string(&base).unwrap();
+    assert!(!ron.contains("irradiance"), "{ron}");
+    for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let e = LightSpec {
+            irradiance: Some(bad),
+            ..base
+        }
+        .generate(&room())
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("lights.irradiance"), "{bad}: {e}");
+    }
+}
