@@ -105,7 +105,7 @@ impl SceneArgs {
             });
         };
         let params = rule.hierarchy_params().expect("a hierarchy rule");
-        let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, 0.0)?;
+        let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, None)?;
         let (levels, h_used, points, spots) = (plan.levels, plan.h, plan.points, plan.spots);
         let gpu_scene =
             GpuScene::upload_with(ctx, &shaded, plan.light_model(), &scene.camera, w, h)?;

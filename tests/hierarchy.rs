@@ -131,7 +131,7 @@ fn built_level(
 }
 
 /// `built` against the oracle's level: the same total power (to 1e-5), and every light of
-/// either that carries at least 1e-6 of it matched in the other by a light at its position (to
+/// either that carries at least `least` of it (1e-6 where not said otherwise) matched in the other by a light at its position (to
 /// 1e-4 of the spacing) with its power (to 1e-5 of the total). Several nodes may sit at one
 /// position (the 8 around a lone light on a grid finer than the lights each gather only it),
 /// so a match is any light that agrees in both. Nodes that gather a vanishing weight (a light's
@@ -141,6 +141,16 @@ fn same_level(
     built: &[(DVec3, DVec3)],
     oracle: &[hierarchy::LevelLight],
     spacing: f64,
+    what: &str,
+) {
+    same_level_above(built, oracle, spacing, 1e-6, what);
+}
+
+fn same_level_above(
+    built: &[(DVec3, DVec3)],
+    oracle: &[hierarchy::LevelLight],
+    spacing: f64,
+    least: f64,
     what: &str,
 ) {
     let total: f64 = oracle.iter().map(|l| l.power.element_sum()).sum();
@@ -154,7 +164,7 @@ fn same_level(
         (built, &oracle[..], "built"),
         (&oracle[..], built, "oracle"),
     ] {
-        for (position, power) in from.iter().filter(|l| l.1.element_sum() >= 1e-6 * total) {
+        for (position, power) in from.iter().filter(|l| l.1.element_sum() >= least * total) {
             let there: Vec<&(DVec3, DVec3)> = to
                 .iter()
                 .filter(|(p, _)| p.distance(*position) < 1e-4 * spacing)
@@ -372,7 +382,7 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
         top_lights: 16,
         sample_from: Some(1),
     };
-    let (plan, shaded) = HierarchyPlan::for_scene(&original, params, 0.0).unwrap();
+    let (plan, shaded) = HierarchyPlan::for_scene(&original, params, None).unwrap();
     assert!(plan.levels >= 3, "{} levels", plan.levels);
     let gpu_scene =
         GpuScene::upload_with(&ctx, &shaded, plan.light_model(), &original.camera, 32, 32).unwrap();
@@ -475,4 +485,184 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
     }
     assert!(checked > 20, "{checked} sampled lights");
     assert_eq!(build.dropped(&ctx).unwrap(), (0, 0));
+}
+
+/// Builds `plan` on the GPU from `home` (the lights uploaded with it), then for each light set
+/// of `frames` in turn writes it into the build's source and builds: each frame's levels
+/// against the oracle's where `check` says, and the splats dropped over all of them.
+fn build_frames(
+    ctx: &manylights_gpu::GpuContext,
+    plan: &manylights_gpu::hierarchy::HierarchyPlan,
+    shaded: &Scene,
+    home: &[manylights_scene::Light],
+    frames: &[Vec<manylights_scene::Light>],
+    check: bool,
+    what: &str,
+) -> (u64, u64) {
+    use manylights_gpu::hierarchy::GpuHierarchy;
+    use manylights_gpu::layout::GpuLight;
+    let gpu_scene =
+        GpuScene::upload_with(ctx, shaded, plan.light_model(), &shaded.camera, 16, 16).unwrap();
+    let build = GpuHierarchy::new(ctx, plan.clone(), home, &gpu_scene).unwrap();
+    for (f, lights) in frames.iter().enumerate() {
+        let gpu: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
+        ctx.queue
+            .write_buffer(build.source(), 0, bytemuck::cast_slice(&gpu));
+        build.build(ctx).unwrap();
+        if !check {
+            continue;
+        }
+        let bytes = manylights_gpu::readback::read_buffer(
+            ctx,
+            &gpu_scene.lights,
+            0,
+            plan.shaded_count() * 64,
+        )
+        .unwrap();
+        let out: &[GpuLight] = bytemuck::cast_slice(&bytes);
+        let oracle = Hierarchy::build_fixed(lights, plan.params, plan.h, plan.levels);
+        // Lights packed into a few cells leave nodes of 1e-6 of the power whose weights come
+        // from a light at a cell's far face: f32 holds those weights to a few bits (a node's
+        // position to 1e-4 of the spacing). They are left out above 1e-5.
+        for level in 1..plan.levels {
+            same_level_above(
+                &built_level(out, plan, level),
+                &oracle.levels[level],
+                plan.h * f64::from(1u32 << (level - 1)),
+                1e-5,
+                &format!("{what}, frame {f}: level {level}"),
+            );
+        }
+    }
+    build.dropped(ctx).unwrap()
+}
+
+fn params_at(spacing: f64) -> HierarchyParams {
+    HierarchyParams {
+        alpha: 1.0,
+        spacing,
+        finest_nodes: hierarchy::FINEST_NODES,
+        growth: hierarchy::GROWTH,
+        ramp: hierarchy::RAMP,
+        top_lights: 16,
+        sample_from: None,
+    }
+}
+
+/// The tables hold what the lights need at any spacing: from 5 cm (a grid far finer than the
+/// lights, 8 nodes a light until the finest-grid rule doubles it) to 4 m (a few nodes in all),
+/// the GPU build drops nothing and is its oracle, in a scene of uniform lights and in one of
+/// tight clusters (most cells empty, a few crowded: where open addressing's runs grow long).
+#[test]
+fn the_hierarchy_drops_nothing_at_any_spacing() {
+    let ctx = common::gpu();
+    let uniform = atrium(1500, 0.0);
+    let mut clustered = uniform.clone();
+    clustered.lights = LightSpec {
+        generator: LightGenerator::Clustered {
+            clusters: 6,
+            spread: 0.3,
+        },
+        count: 1500,
+        seed: 5,
+        radius: RadiusRule::Fixed(2.0),
+        ..LightSpec::default()
+    }
+    .generate(&clustered)
+    .unwrap();
+    for (name, scene) in [("uniform", &uniform), ("clustered", &clustered)] {
+        for spacing in [0.05, 0.1, 0.25, 0.5, 1.0, 2.0, 4.0] {
+            let (plan, shaded) = manylights_gpu::hierarchy::HierarchyPlan::for_scene(
+                scene,
+                params_at(spacing),
+                None,
+            )
+            .unwrap();
+            let what = format!("{name}, spacing {spacing} (h {})", plan.h);
+            let dropped = build_frames(
+                &ctx,
+                &plan,
+                &shaded,
+                &scene.lights,
+                std::slice::from_ref(&scene.lights),
+                true,
+                &what,
+            );
+            assert_eq!(dropped, (0, 0), "{what}");
+        }
+    }
+}
+
+/// Moving lights get tables for every frame they are rendered at: lights packed tightly at
+/// home (a few grid cells) that wander up to 4 m reach far more nodes than home has. Planned
+/// for the frames, the build drops nothing at any of them and is its oracle; tables of twice
+/// home's nodes (the rule before) drop splats into full tables at the same frames.
+#[test]
+fn moving_lights_get_tables_for_every_frame() {
+    use manylights_gpu::hierarchy::{HierarchyPlan, Moving};
+    let ctx = common::gpu();
+    let mut scene = atrium(1, 0.0);
+    let motion = manylights_scene::Motion::Noise(6.0);
+    scene.lights = LightSpec {
+        generator: LightGenerator::Clustered {
+            clusters: 1,
+            spread: 0.05,
+        },
+        count: 1200,
+        seed: 7,
+        radius: RadiusRule::Fixed(4.0),
+        motion,
+        ..LightSpec::default()
+    }
+    .generate(&scene)
+    .unwrap();
+    let frames = 6;
+    let moved: Vec<Vec<manylights_scene::Light>> = (0..frames)
+        .map(|f| {
+            scene
+                .lights
+                .iter()
+                .enumerate()
+                .map(|(i, l)| manylights_scene::Light {
+                    position: motion.position(i as u32, l.position, l.radius, f),
+                    ..*l
+                })
+                .collect()
+        })
+        .collect();
+    let params = params_at(0.25);
+    let moving = Moving {
+        motion: &motion,
+        first: 0,
+        frames,
+    };
+    let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, Some(moving)).unwrap();
+    let home = Hierarchy::build(&scene.lights, params);
+    assert!(
+        plan.slots[0] as usize > 4 * home.levels[1].len(),
+        "the lights spread: {} slots for {} nodes at home",
+        plan.slots[0],
+        home.levels[1].len()
+    );
+    let dropped = build_frames(&ctx, &plan, &shaded, &scene.lights, &moved, true, "planned");
+    assert_eq!(dropped, (0, 0));
+    // Twice home's nodes, in a box that covers the motion.
+    let b = scene.bounds();
+    let margin = glam::Vec3::splat(6.0);
+    let (old, _) = HierarchyPlan::new(
+        &scene.lights,
+        params,
+        (b.min - margin, b.max + margin),
+        hierarchy::reach(&scene) + 8.0,
+        2.0,
+    )
+    .unwrap();
+    let old_shaded = Scene {
+        lights: old.placeholder(&scene.lights),
+        ..scene.clone()
+    };
+    let (outside, full) =
+        build_frames(&ctx, &old, &old_shaded, &scene.lights, &moved, false, "old");
+    assert_eq!(outside, 0);
+    assert!(full > 0, "tables of twice home's nodes held every frame");
 }

@@ -71,16 +71,19 @@ struct Step {
 
 const NO_CELL: u32 = 0xffffffffu;
 
+// The most slots cell_of probes before a light is spread at once instead (nothing is lost).
 const MAX_PROBES: u32 = 256u;
 
-// The slot of `key` in the next level's table (inserting it), or none.
+// The slot of `key` in the next level's table (inserting it), or none where every slot holds
+// another key: it probes the whole table, so a table with room always takes a node (the plan
+// sizes each with a quarter more slots than its level's nodes).
 fn slot_of(key: u32) -> i32 {
     let count = step.b.w;
     var probe = (key * 2654435769u) ^ (key >> 15u);
     probe = probe % count;
     var tries = 0u;
     loop {
-        if tries >= min(count, MAX_PROBES) {
+        if tries >= count {
             return -1;
         }
         let at = step.b.z + probe;

@@ -82,7 +82,7 @@ impl Sums {
 }
 
 mod plan;
-pub use plan::{HierarchyPlan, NodeBox, Step};
+pub use plan::{HierarchyPlan, Moving, NodeBox, Step};
 
 const WORKGROUP: u32 = 256;
 

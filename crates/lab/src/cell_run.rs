@@ -83,7 +83,9 @@ struct CellScene {
 impl CellScene {
     fn upload(ctx: &GpuContext, c: &Config, base: &Path, name: &str) -> Result<Self, LabError> {
         let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
-        let hier = stage(name, "hierarchy planned", || hierarchy_plan(c, &scene))?;
+        let hier = stage(name, "hierarchy planned", || {
+            hierarchy_plan(c, &scene, own_lights)
+        })?;
         let shaded = hier.as_ref().map_or(&scene, |(_, s)| s);
         let poses: Vec<Camera> = match &c.camera {
             CameraSpec::Default => vec![scene.camera],

@@ -8,7 +8,7 @@
 //! check of every measured frame (the exact oracle, accuracy) sees the lights as that frame had
 //! them.
 
-use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
+use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan, Moving};
 use manylights_gpu::motion::{LightMotion, UpdateCost};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::{RadiusRule, Scene};
@@ -20,20 +20,22 @@ use crate::noise::Draws;
 /// With `radius: Hierarchy`, the plan of the cell's lighting grid hierarchy and the scene it
 /// shades: the scene's geometry with the plan's layout of lights in place of its own (points,
 /// every level's table slots, spots), which the GPU build fills each frame; none otherwise.
+/// Moving lights (the scene's from `first` on) are planned for where they are at every frame
+/// the cell renders.
 pub(crate) fn hierarchy_plan(
     c: &Config,
     scene: &Scene,
+    first: usize,
 ) -> Result<Option<(HierarchyPlan, Scene)>, LabError> {
     let Some(params) = c.lights.radius.hierarchy_params() else {
         return Ok(None);
     };
-    // A moving light goes at most its radius from home (manylights_scene::motion).
-    let moving = if c.lights.motion.is_static() {
-        0.0
-    } else {
-        scene.lights.iter().map(|l| l.radius).fold(0.0, f32::max)
+    let moving = Moving {
+        motion: &c.lights.motion,
+        first,
+        frames: c.warmup + c.frames,
     };
-    HierarchyPlan::for_scene(scene, params, moving)
+    HierarchyPlan::for_scene(scene, params, Some(moving))
         .map(Some)
         .map_err(LabError::from)
 }

@@ -107,8 +107,8 @@ pub enum LabError {
     /// for the frame's lights.
     #[error(
         "the lighting grid hierarchy dropped {outside} splats outside its grids' boxes and {full} \
-         into full tables (its shape is planned from the first frame's lights, with room for \
-         moving lights to go their radius from home): a larger spacing needs fewer nodes"
+         into full tables (its shape is planned from the lights at every frame the cell renders, \
+         its boxes with room for moving lights to go their radius from home)"
     )]
     HierarchyDropped {
         /// Splats outside the grids' boxes.

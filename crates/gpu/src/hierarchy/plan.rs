@@ -4,7 +4,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use manylights_scene::hierarchy::{Hierarchy, HierarchyParams};
-use manylights_scene::{Light, LightKind, Scene};
+use manylights_scene::{Light, LightKind, Motion, Scene};
 
 use crate::GpuError;
 
@@ -32,6 +32,43 @@ pub struct Step {
     /// The frame's seed, 1 where this level's bands are sampled, the level, the bands' ramp
     /// (bits).
     pub s: [u32; 4],
+}
+
+/// How the lights a hierarchy is planned for move ([`HierarchyPlan::for_scene`]): the scene's
+/// lights from index `first` on, over frames `0..frames`.
+#[derive(Clone, Copy, Debug)]
+pub struct Moving<'a> {
+    /// Their motion.
+    pub motion: &'a Motion,
+    /// The first light that moves.
+    pub first: usize,
+    /// The frames they are rendered at.
+    pub frames: u32,
+}
+
+impl Moving<'_> {
+    /// `lights` where the motion puts them at `frame` (as `manylights_gpu::motion` moves them).
+    fn lights_at(&self, lights: &[Light], frame: u32) -> Vec<Light> {
+        lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                if i < self.first {
+                    *l
+                } else {
+                    Light {
+                        position: self.motion.position(i as u32, l.position, l.radius, frame),
+                        ..*l
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// A level's table for `nodes` nodes: `slack` times as many slots (at least 1.25) and 64 more.
+fn table_slots(nodes: usize, slack: f64) -> u32 {
+    (nodes as f64 * slack.max(1.25)).ceil() as u32 + 64
 }
 
 /// A level's grid: its spacing and the box of nodes its table keys.
@@ -106,7 +143,7 @@ impl HierarchyPlan {
                 first: lo.to_array(),
                 dims: dims.to_array(),
             });
-            slots.push((level.len() as f64 * slack.max(1.25)).ceil() as u32 + 64);
+            slots.push(table_slots(level.len(), slack));
         }
         let total: f64 = hier.levels[0]
             .iter()
@@ -159,27 +196,50 @@ impl HierarchyPlan {
     }
 
     /// The plan for `scene`'s lights and the scene to upload in their place: its geometry with
-    /// [`HierarchyPlan::placeholder`]'s lights, which the build fills. `moving`: the farthest
-    /// any light goes from where it is now (0 where none moves); the grids' boxes, the
-    /// unbounded bands' reach and the tables' room cover that too. The last level holds at
+    /// [`HierarchyPlan::placeholder`]'s lights, which the build fills. `moving`: how the
+    /// scene's lights from index `first` on move and over how many frames (`None`: they stay
+    /// home); the grids' boxes and the unbounded bands' reach cover the farthest any goes from
+    /// home (its radius, `manylights_scene::motion`), and each level's table is sized to the
+    /// most nodes that level holds at any of those frames (the CPU build of the lights where
+    /// the motion puts them), with a quarter more room and 64 slots. The last level holds at
     /// most `params.top_lights` lights.
     pub fn for_scene(
         scene: &Scene,
         params: HierarchyParams,
-        moving: f32,
+        moving: Option<Moving<'_>>,
     ) -> Result<(Self, Scene), GpuError> {
-        let margin = 1.0 + moving.max(0.0);
+        let moving = moving.filter(|m| !m.motion.is_static() && m.frames > 0);
+        let farthest = moving.map_or(0.0, |m| {
+            scene.lights[m.first.min(scene.lights.len())..]
+                .iter()
+                .map(|l| l.radius)
+                .fold(0.0, f32::max)
+        });
+        let margin = 1.0 + farthest;
         let b = scene
             .lights
             .iter()
             .fold(scene.bounds(), |b, l| b.union_point(l.position));
-        let (plan, _) = Self::new(
+        let (mut plan, home) = Self::new(
             &scene.lights,
             params,
             (b.min - margin, b.max + margin),
-            manylights_scene::hierarchy::reach(scene) + 2.0 * (margin - 1.0),
-            if moving > 0.0 { 2.0 } else { 1.25 },
+            manylights_scene::hierarchy::reach(scene) + 2.0 * farthest,
+            1.25,
         )?;
+        if let Some(m) = moving {
+            let mut most: Vec<usize> = home.levels.iter().map(Vec::len).collect();
+            for frame in 0..m.frames {
+                let moved = m.lights_at(&scene.lights, frame);
+                let at = Hierarchy::build_fixed(&moved, params, plan.h, plan.levels);
+                for (most, level) in most.iter_mut().zip(&at.levels) {
+                    *most = (*most).max(level.len());
+                }
+            }
+            for (slots, &nodes) in plan.slots.iter_mut().zip(&most[1..]) {
+                *slots = (*slots).max(table_slots(nodes, 1.25));
+            }
+        }
         let shaded = Scene {
             lights: plan.placeholder(&scene.lights),
             ..scene.clone()
