@@ -14,7 +14,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 29] = [
+const SHIPPED: [&str; 30] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -44,6 +44,7 @@ const SHIPPED: [&str; 29] = [
     "hierarchy-ramps",
     "hierarchy-ramps-hall",
     "real-scenes",
+    "real-scenes-goals",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -190,8 +191,9 @@ fn every_documented_ron_example_parses() {
 /// infinite-range experiments (180, 13 and 40 cells, each stochastic one rendered for several
 /// seeds) run one cell in 17, 4 and 5 (a shard: every variant, and most kinds of radius rule,
 /// among them),
-/// material variety one in 11, stochastic materials one in 7 and the real scenes one in 45
-/// (a cell of each scene and placement), so that the suite stays within its time.
+/// material variety one in 11, stochastic materials one in 7, the real scenes one in 45 (a
+/// cell of each scene and placement) and their goals one in 15 (a cell of each scene), so that
+/// the suite stays within its time.
 #[test]
 fn a_tiny_variant_of_each_shipped_experiment_runs() {
     let ctx = common::gpu();
@@ -216,6 +218,8 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
             "infinite-range-halls" => Some((0, 5)),
             // 450 cells, 45 a setting: the first of each, every scene with both placements.
             "real-scenes" => Some((0, 45)),
+            // 75 cells, 15 a scene: the first of each.
+            "real-scenes-goals" => Some((0, 15)),
             _ => None,
         };
         let options = RunOptions { shard, ..opts() };

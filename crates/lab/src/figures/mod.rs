@@ -112,6 +112,20 @@ pub(crate) fn time_vs_lights(rows: &[Row], path: &Path) -> Result<Option<Layout>
     if counts.len() < 2 || series.is_empty() {
         return Ok(None);
     }
+    // More configurations than a legend holds (a sweep over settings, strategies and
+    // backends): small multiples, a panel a setting, marker and fill for strategy and backend.
+    if series.len() > panels::MAX_LEGEND {
+        return panels::draw(
+            rows,
+            path,
+            &panels::Spec {
+                title: "GPU time per frame against light count",
+                x: ("lights", &|r| Some(r.setting_lights() as f64)),
+                y: ("GPU ms, median", &|r| r.gpu_ms_total),
+                front: false,
+            },
+        );
+    }
     let x = Scale::fit(counts.iter().map(|c| *c as f64));
     let y = Scale::fit(series.values().flatten().map(|p| p.1));
     let labels: Vec<String> = series.keys().cloned().collect();
