@@ -5,6 +5,7 @@
 mod common;
 mod hierarchy;
 mod msaa;
+mod report;
 mod stochastic;
 
 use std::path::{Path, PathBuf};
@@ -14,7 +15,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 30] = [
+const SHIPPED: [&str; 31] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -45,6 +46,7 @@ const SHIPPED: [&str; 30] = [
     "hierarchy-ramps-hall",
     "real-scenes",
     "real-scenes-goals",
+    "real-scenes-gallery",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -220,6 +222,8 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
             "real-scenes" => Some((0, 45)),
             // 75 cells, 15 a scene: the first of each.
             "real-scenes-goals" => Some((0, 15)),
+            // 10 cells: the surface lighting of Sponza and the fixtures of the bathroom.
+            "real-scenes-gallery" => Some((0, 7)),
             _ => None,
         };
         let options = RunOptions { shard, ..opts() };

@@ -218,7 +218,13 @@ pub(crate) fn run_cell(
         _ => None,
     };
     // Write: the images and the row.
-    save_images(out, &id, &first.color, &first.per_pixel, w, h)?;
+    save_images(
+        out,
+        &id,
+        (&first.color, first.infinite.as_ref()),
+        &first.per_pixel,
+        (w, h),
+    )?;
     Ok(cell_row(RowParts {
         exp,
         cell,
@@ -411,14 +417,18 @@ fn render_frames(run: &CellFrames<'_>, lights: &mut FrameLights) -> Result<Measu
     })
 }
 
-/// The render and the lights-per-pixel heatmap, at most 480 pixels wide, for the report.
+/// The render, the lights-per-pixel heatmap and, where the infinite-range reference was
+/// rendered, the FLIP map against it (at the reference's exposure, as `flip_mean_infinite`),
+/// each at most 480 pixels wide, for the report.
 fn save_images(
     out: &Path,
     id: &str,
-    color: &manylights_shade::HdrImage,
+    (color, infinite): (
+        &manylights_shade::HdrImage,
+        Option<&manylights_shade::HdrImage>,
+    ),
     per_pixel: &[u32],
-    w: u32,
-    h: u32,
+    (w, h): (u32, u32),
 ) -> Result<(), LabError> {
     let small = |img: image::RgbImage| {
         if w > 480 {
@@ -429,10 +439,15 @@ fn save_images(
         }
     };
     let max = per_pixel.iter().copied().max().unwrap_or(0).max(1);
-    for (name, img) in [
+    let mut images = vec![
         ("render", small(color.tonemap(1.0))),
         ("heat", small(heatmap::pixels(per_pixel, w, h, max))),
-    ] {
+    ];
+    if let Some(inf) = infinite {
+        use manylights_shade::accuracy::{exposure_of, flip_map};
+        images.push(("flip", small(flip_map(color, inf, exposure_of(inf)))));
+    }
+    for (name, img) in images {
         let mut bytes = Vec::new();
         img.write_to(
             &mut std::io::Cursor::new(&mut bytes),

@@ -277,14 +277,22 @@ pub fn write_report(dir: &Path) -> Result<PathBuf, LabError> {
     let date = rows.iter().map(|r| r.finished_unix).max().unwrap_or(0);
     let findings = summary(&rows);
     let (head, table) = results_table(&rows);
-    let images: Vec<&Row> = rows
+    // The gallery: a cell a setting where the sweep has settings (the first with a render),
+    // else the first cells with one; 12 at most.
+    let mut settings = std::collections::BTreeSet::new();
+    let images: Vec<(&Row, bool)> = rows
         .iter()
         .filter(|r| {
             dir.join("images")
                 .join(format!("{}_render.png", r.id))
                 .exists()
         })
+        .filter(|r| r.sweep.setting.is_empty() || settings.insert(r.sweep.setting.clone()))
         .take(12)
+        .map(|r| {
+            let flip = dir.join("images").join(format!("{}_flip.png", r.id));
+            (r, flip.exists())
+        })
         .collect();
 
     let page = Page {

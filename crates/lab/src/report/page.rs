@@ -20,7 +20,8 @@ pub(super) struct Page<'a> {
     pub(super) head: &'a [&'static str],
     pub(super) table: &'a [Vec<String>],
     pub(super) figs: &'a [(&'a str, String)],
-    pub(super) images: &'a [&'a Row],
+    /// The gallery: a cell each, and whether it has a FLIP map against infinite range.
+    pub(super) images: &'a [(&'a Row, bool)],
 }
 
 /// The results table's header and rows (the moving lights' columns where cells moved them).
@@ -148,16 +149,30 @@ pub(super) fn markdown(p: &Page<'_>) -> String {
         let _ = writeln!(md, "![{caption}](figures/{f})\n\n{caption}\n");
     }
     if !p.images.is_empty() {
-        let _ = writeln!(md, "## Renders and lights-per-pixel heatmaps\n");
-        for r in p.images.iter() {
+        let _ = writeln!(md, "## {}\n", gallery_title(p.images));
+        for (r, flip) in p.images.iter() {
+            let flip = if *flip {
+                format!(" ![FLIP against infinite range](images/{}_flip.png)", r.id)
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 md,
-                "`{}`\n\n![render](images/{}_render.png) ![lights per pixel](images/{}_heat.png)\n",
+                "`{}`\n\n![render](images/{}_render.png) ![lights per pixel](images/{}_heat.png){flip}\n",
                 r.cell, r.id, r.id
             );
         }
     }
     md
+}
+
+/// The gallery's heading: what its images are.
+fn gallery_title(images: &[(&Row, bool)]) -> &'static str {
+    if images.iter().any(|(_, flip)| *flip) {
+        "Renders, lights-per-pixel heatmaps and FLIP maps against infinite range"
+    } else {
+        "Renders and lights-per-pixel heatmaps"
+    }
 }
 
 /// `report.html`.
@@ -219,11 +234,19 @@ pub(super) fn html(p: &Page<'_>) -> String {
         );
     }
     if !p.images.is_empty() {
-        let _ = writeln!(html, "<h2>Renders and lights-per-pixel heatmaps</h2>");
-        for r in p.images.iter() {
+        let _ = writeln!(html, "<h2>{}</h2>", gallery_title(p.images));
+        for (r, flip) in p.images.iter() {
+            let flip = if *flip {
+                format!(
+                    " <img src=\"images/{}_flip.png\" alt=\"FLIP against infinite range\">",
+                    r.id
+                )
+            } else {
+                String::new()
+            };
             let _ = writeln!(
                 html,
-                "<p>{}</p><img src=\"images/{}_render.png\" alt=\"render\"> <img src=\"images/{}_heat.png\" alt=\"lights per pixel\">",
+                "<p>{}</p><img src=\"images/{}_render.png\" alt=\"render\"> <img src=\"images/{}_heat.png\" alt=\"lights per pixel\">{flip}",
                 esc(&r.cell),
                 r.id,
                 r.id
