@@ -17,15 +17,15 @@ use crate::evaluate::{Pose, PoseEval, References, evaluate, steady_hierarchy_bui
 use crate::experiment::{CameraSpec, Cell, Config, Experiment};
 use crate::frame_lights::{FrameLights, LightsOf, hierarchy_plan};
 use crate::noise::{Noise, measure};
-use crate::renderers::{ReferenceFrames, Renderers};
+use crate::renderers::{LoadedScenes, ReferenceFrames, Renderers};
 use crate::results::Row;
 use crate::runner::stage;
 use crate::steady::SteadyCull;
 use crate::{LabError, write_atomic};
 
 /// The cell's scene with its generated lights after its own, and how many lights it has of
-/// its own.
-fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
+/// its own; a scene file the cell before loaded is taken from `loaded`.
+fn build_scene(c: &Config, base: &Path, loaded: &LoadedScenes) -> Result<(Scene, usize), LabError> {
     use crate::experiment::SceneSpec;
     let (from, loaded) = match &c.scene {
         SceneSpec::Gltf(p) => {
@@ -34,13 +34,18 @@ fn build_scene(c: &Config, base: &Path) -> Result<(Scene, usize), LabError> {
             } else {
                 base.join(p)
             };
-            let loaded = gltf_import::load(&path, &GltfOptions::default())?;
-            (path.display().to_string(), loaded)
+            let from = path.display().to_string();
+            let scene = loaded.get(&from, || {
+                gltf_import::load(&path, &GltfOptions::default()).map_err(LabError::from)
+            })?;
+            (from, scene)
         }
-        SceneSpec::Real(name) => (
-            name.clone(),
-            manylights_scene::real::load(name, &GltfOptions::default())?,
-        ),
+        SceneSpec::Real(name) => {
+            let scene = loaded.get(&format!("real:{name}"), || {
+                manylights_scene::real::load(name, &GltfOptions::default()).map_err(LabError::from)
+            })?;
+            (name.clone(), scene)
+        }
         _ => {
             let p = c
                 .scene
@@ -81,8 +86,13 @@ struct CellScene {
 }
 
 impl CellScene {
-    fn upload(ctx: &GpuContext, c: &Config, base: &Path, name: &str) -> Result<Self, LabError> {
-        let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base))?;
+    fn upload(
+        ctx: &GpuContext,
+        c: &Config,
+        (base, loaded): (&Path, &LoadedScenes),
+        name: &str,
+    ) -> Result<Self, LabError> {
+        let (scene, own_lights) = stage(name, "scene built", || build_scene(c, base, loaded))?;
         let hier = stage(name, "hierarchy planned", || {
             hierarchy_plan(c, &scene, own_lights)
         })?;
@@ -129,7 +139,7 @@ pub(crate) fn run_cell(
     cell: &Cell,
     (base, out): (&Path, &Path),
     commit: &str,
-    (renderers, kept_frames): (&mut Renderers, &ReferenceFrames),
+    (renderers, kept_frames, loaded): (&mut Renderers, &ReferenceFrames, &LoadedScenes),
 ) -> Result<Row, LabError> {
     let resolved = cell.config.at_limits(ctx);
     let c = &resolved;
@@ -144,7 +154,7 @@ pub(crate) fn run_cell(
         gpu_scene,
         as_they_are,
         hierarchy,
-    } = CellScene::upload(ctx, c, base, name)?;
+    } = CellScene::upload(ctx, c, (base, loaded), name)?;
     let (w, h) = c.resolution;
     let of = LightsOf {
         scene: &scene,

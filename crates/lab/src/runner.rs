@@ -18,7 +18,7 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 use manylights_gpu::GpuContext;
 
 use crate::experiment::{Cell, Experiment};
-use crate::renderers::{ReferenceFrames, Renderers};
+use crate::renderers::{LoadedScenes, ReferenceFrames, Renderers};
 use crate::results::{Row, load_cells, save_cell, write_results};
 use crate::{LabError, write_atomic};
 
@@ -170,6 +170,7 @@ pub fn run_parsed(
     let mut ran = 0;
     let mut renderers = Renderers::default();
     let frames = ReferenceFrames::default();
+    let loaded = LoadedScenes::default();
     for cell in todo {
         if opts.max_cells.is_some_and(|m| ran >= m)
             || opts.deadline.is_some_and(|d| Instant::now() >= d)
@@ -184,7 +185,7 @@ pub fn run_parsed(
             cell,
             (base, out),
             &opts.commit,
-            (&mut renderers, &frames),
+            (&mut renderers, &frames, &loaded),
         )
         .unwrap_or_else(|e| {
             let error = LabError::Cell {
