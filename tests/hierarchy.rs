@@ -116,6 +116,18 @@ fn hierarchy_lights_shade_as_their_oracle_with(ctx: &manylights_gpu::GpuContext,
     );
 }
 
+/// The lights a GPU build of `plan` wrote into `gpu_scene`.
+fn shaded_lights(
+    ctx: &manylights_gpu::GpuContext,
+    gpu_scene: &GpuScene,
+    plan: &manylights_gpu::hierarchy::HierarchyPlan,
+) -> Vec<manylights_gpu::layout::GpuLight> {
+    let bytes =
+        manylights_gpu::readback::read_buffer(ctx, &gpu_scene.lights, 0, plan.shaded_count() * 64)
+            .unwrap();
+    bytemuck::cast_slice(&bytes).to_vec()
+}
+
 /// The lights a GPU build wrote for level `level` of `plan`: the live ones (power and reach).
 fn built_level(
     lights: &[manylights_gpu::layout::GpuLight],
@@ -297,14 +309,8 @@ fn gpu_build_is_its_oracle(
         ctx.queue
             .write_buffer(build.source(), 0, bytemuck::cast_slice(&gpu));
         build.build(ctx).unwrap();
-        let bytes = manylights_gpu::readback::read_buffer(
-            ctx,
-            &gpu_scene.lights,
-            0,
-            plan.shaded_count() * 64,
-        )
-        .unwrap();
-        let out: &[GpuLight] = bytemuck::cast_slice(&bytes);
+        let shaded = shaded_lights(ctx, &gpu_scene, &plan);
+        let out: &[GpuLight] = &shaded;
         let oracle = Hierarchy::build_fixed(lights, params, plan.h, plan.levels);
         let (flat, bands) = oracle.flatten(reach);
         // Level 0 and the spots: the lights themselves, with their bands.
@@ -512,14 +518,8 @@ fn build_frames(
         if !check {
             continue;
         }
-        let bytes = manylights_gpu::readback::read_buffer(
-            ctx,
-            &gpu_scene.lights,
-            0,
-            plan.shaded_count() * 64,
-        )
-        .unwrap();
-        let out: &[GpuLight] = bytemuck::cast_slice(&bytes);
+        let shaded = shaded_lights(ctx, &gpu_scene, plan);
+        let out: &[GpuLight] = &shaded;
         let oracle = Hierarchy::build_fixed(lights, plan.params, plan.h, plan.levels);
         // Lights packed into a few cells leave nodes of 1e-6 of the power whose weights come
         // from a light at a cell's far face: f32 holds those weights to a few bits (a node's
