@@ -15,7 +15,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 31] = [
+const SHIPPED: [&str; 32] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -47,6 +47,7 @@ const SHIPPED: [&str; 31] = [
     "real-scenes",
     "real-scenes-goals",
     "real-scenes-gallery",
+    "real-scenes-infinite",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -224,6 +225,8 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
             "real-scenes-goals" => Some((0, 15)),
             // 10 cells: the surface lighting of Sponza and the fixtures of the bathroom.
             "real-scenes-gallery" => Some((0, 7)),
+            // 24 cells: one in 5 has both scenes and every family.
+            "real-scenes-infinite" => Some((0, 5)),
             _ => None,
         };
         let options = RunOptions { shard, ..opts() };
