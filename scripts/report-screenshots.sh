@@ -23,7 +23,9 @@ for d in "${dirs[@]}"; do
     if [ "$w" -gt 968 ]; then fh=$((fh * 968 / w)); fi
     h=$((h + fh + 60))
   done
+  # The results table's first 40 rows (a large sweep's table would make a page-long file).
   rows=$(($(wc -l < "$d/results.csv") - 1))
+  [ "$rows" -le 40 ] || rows=40
   h=$((h + 20 * rows))
   "$chromium" --headless --no-sandbox --disable-gpu --hide-scrollbars --window-size=1000,"$h" \
     --screenshot="$d/screenshot.png" "file://$PWD/$d/report.html" 2>/dev/null
