@@ -10,6 +10,7 @@ mod lab_cmds;
 mod options;
 mod render_cmd;
 mod score_cmd;
+mod strategy_opts;
 mod tune_cmd;
 
 use std::path::{Path, PathBuf};

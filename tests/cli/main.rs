@@ -5,6 +5,7 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 mod hierarchy;
+mod lights;
 mod msaa;
 mod outputs;
 mod score;
