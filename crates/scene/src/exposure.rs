@@ -21,18 +21,13 @@ use glam::Vec3;
 use rand::{RngExt, SeedableRng};
 use rand_pcg::Pcg64;
 
-use crate::light::{D_MIN, spot};
-use crate::{Light, LightKind, Scene, SceneError, placement};
+use crate::light::{falloff_infinite, luminance};
+use crate::{Light, Scene, SceneError, placement};
 
 /// Surface points the rule measures at.
 pub const POINTS: usize = 1024;
 /// Lights each point's irradiance is measured from (all of them, where there are fewer).
 pub const LIGHTS: usize = 4096;
-
-/// Rec. 709 luminance of a colour.
-fn luminance(c: Vec3) -> f64 {
-    0.2126 * f64::from(c.x) + 0.7152 * f64::from(c.y) + 0.0722 * f64::from(c.z)
-}
 
 /// The irradiance at `p` (normal `n`) from `l` at unit intensity, as the rule measures it.
 fn unit_irradiance(l: &Light, p: Vec3, n: Vec3) -> f64 {
@@ -46,19 +41,7 @@ fn unit_irradiance(l: &Light, p: Vec3, n: Vec3) -> f64 {
     if cos <= 0.0 {
         return 0.0;
     }
-    let cone = match l.kind {
-        LightKind::Point => 1.0,
-        LightKind::Spot {
-            direction,
-            inner_angle,
-            outer_angle,
-        } => spot(
-            (-w).dot(direction.as_dvec3().normalize_or_zero()),
-            f64::from(inner_angle).cos(),
-            f64::from(outer_angle).cos(),
-        ),
-    };
-    luminance(l.color) * cos * cone / (d * d).max(D_MIN * D_MIN)
+    luminance(l.color) * cos * l.cone_toward(w) * falloff_infinite(d)
 }
 
 /// The median over the scene's surface points of the irradiance `lights` give at unit

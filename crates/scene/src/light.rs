@@ -164,6 +164,19 @@ impl Light {
         }
     }
 
+    /// The spot factor toward unit direction `l` from the lit point to the light (1 for a
+    /// point light).
+    pub fn cone_toward(&self, l: DVec3) -> f64 {
+        match self.cone() {
+            None => 1.0,
+            Some((axis, cos_inner, cos_outer)) => spot(
+                -l.dot(axis.as_dvec3()),
+                f64::from(cos_inner),
+                f64::from(cos_outer),
+            ),
+        }
+    }
+
     /// Whether this light contributes anything at point `p` (inside the radius and, for a spot,
     /// strictly inside the outer cone). This defines the *exact set* of a surface point.
     pub fn reaches(&self, p: DVec3) -> bool {
@@ -206,6 +219,11 @@ pub fn falloff(d: f64, r: f64) -> f64 {
 /// Infinite-range falloff (no window): the reference that measures what the cut-off costs.
 pub fn falloff_infinite(d: f64) -> f64 {
     1.0 / (d * d).max(D_MIN * D_MIN)
+}
+
+/// Rec. 709 luminance of a linear colour.
+pub fn luminance(c: Vec3) -> f64 {
+    0.2126 * f64::from(c.x) + 0.7152 * f64::from(c.y) + 0.0722 * f64::from(c.z)
 }
 
 /// The spot factor for `cos_theta` between the axis and the light-to-point direction.
@@ -262,14 +280,7 @@ pub fn shade_with(
             continue;
         }
         let l = if d > 0.0 { to_light / d } else { n };
-        let cone = match light.cone() {
-            None => 1.0,
-            Some((axis, cos_inner, cos_outer)) => spot(
-                -l.dot(axis.as_dvec3()),
-                f64::from(cos_inner),
-                f64::from(cos_outer),
-            ),
-        };
+        let cone = light.cone_toward(l);
         if cone == 0.0 {
             continue;
         }

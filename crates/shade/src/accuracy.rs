@@ -55,7 +55,7 @@ pub const KEY: f64 = 0.18;
 
 /// Rec. 709 luminance of an RGB texel.
 pub fn luminance(t: [f32; 4]) -> f64 {
-    0.2126 * f64::from(t[0]) + 0.7152 * f64::from(t[1]) + 0.0722 * f64::from(t[2])
+    manylights_scene::light::luminance(glam::Vec3::new(t[0], t[1], t[2]))
 }
 
 /// The exposure adapted to `reference`: [`KEY`] over the log-average luminance of its covered
