@@ -635,6 +635,7 @@ fn moving_lights_get_tables_for_every_frame() {
         motion: &motion,
         first: 0,
         frames,
+        anchors: &[],
     };
     let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, Some(moving)).unwrap();
     let home = Hierarchy::build(&scene.lights, params);

@@ -10,16 +10,18 @@ use manylights_gpu::motion::LightMotion;
 use manylights_lab::Experiment;
 use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_scene::procedural::ProceduralScene;
+use glam::Vec3;
 use manylights_scene::{LightGenerator, LightSpec, Motion, RadiusRule, Scene};
 
-/// The atrium with `n` generated lights (a third of them spots) after three of its own.
-fn scene(n: u32) -> Scene {
+/// The atrium with `n` lights on its surfaces (a third of them spots) after three of its own,
+/// and every light's anchor normal.
+fn scene(n: u32) -> (Scene, Vec<Vec3>) {
     let mut s = ProceduralScene::from_name("atrium")
         .unwrap()
         .build()
         .unwrap();
     let spec = LightSpec {
-        generator: LightGenerator::Uniform,
+        generator: LightGenerator::OnSurfaces { offset: (0.05, 0.5) },
         count: n + 3,
         seed: 11,
         radius: RadiusRule::Fixed(1.5),
@@ -27,7 +29,8 @@ fn scene(n: u32) -> Scene {
         ..LightSpec::default()
     };
     s.lights = spec.generate(&s).unwrap();
-    s
+    let anchors = spec.anchors(&s).unwrap();
+    (s, anchors)
 }
 
 fn read_lights(ctx: &manylights_gpu::GpuContext, gs: &GpuScene) -> Vec<GpuLight> {
@@ -47,11 +50,20 @@ fn read_lights(ctx: &manylights_gpu::GpuContext, gs: &GpuScene) -> Vec<GpuLight>
 #[test]
 fn animation_pass_and_upload_put_every_light_where_the_oracle_does() {
     let ctx = common::gpu();
-    let s = scene(5000);
+    let (s, anchors) = scene(5000);
     let gs = GpuScene::upload(&ctx, &s, &s.camera, 32, 18).unwrap();
     let first = 3usize;
-    for motion in [Motion::Orbit(3.0), Motion::Noise(2.0)] {
-        let mut m = LightMotion::new(&ctx, &gs, &s.lights[first..], first as u32, motion).unwrap();
+    let glide = Motion::Glide { speed: 1.0, extent: 0.4 };
+    // A glide without its anchors is an error that says what it needs.
+    let e = LightMotion::new(&ctx, &gs, &s.lights[first..], &[], first as u32, glide)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.contains("anchor normal"), "{e}");
+    for motion in [Motion::Orbit(3.0), Motion::Noise(2.0), glide] {
+        let anchors = &anchors[first..];
+        let mut m =
+            LightMotion::new(&ctx, &gs, &s.lights[first..], anchors, first as u32, motion).unwrap();
         for frame in [0u32, 1, 37, 600] {
             let want: Vec<GpuLight> = s
                 .lights
@@ -60,7 +72,8 @@ fn animation_pass_and_upload_put_every_light_where_the_oracle_does() {
                 .map(|(i, l)| {
                     let mut g = GpuLight::from(l);
                     if i >= first {
-                        g.position = motion.position(i as u32, l.position, l.radius, frame);
+                        let n = anchors[i - first];
+                        g.position = motion.position_on(i as u32, l.position, l.radius, n, frame);
                     }
                     g
                 })
@@ -117,7 +130,7 @@ fn moving_lights_stay_conservatively_culled_at_every_measured_frame() {
         name: "moving",
         config: Config(
             scene: Atrium(bays: 2),
-            lights: (generator: Uniform, count: 160, seed: 3, radius: Fixed(1.5), motion: Orbit(30.0)),
+            lights: (generator: OnSurfaces(offset: (0.05, 0.5)), count: 160, seed: 3, radius: Fixed(1.5), motion: Orbit(30.0)),
             resolution: (64, 36),
             strategy: TiledGather(tile_size: 8),
             frames: 3,
@@ -126,7 +139,7 @@ fn moving_lights_stay_conservatively_culled_at_every_measured_frame() {
         ),
         sweep: (
             strategy: [TiledGather(tile_size: 8), Clustered(tile_size: 16, slices: 8), ZBin(tile_size: 8)],
-            motion: [Orbit(30.0), Noise(30.0)],
+            motion: [Orbit(30.0), Noise(30.0), Glide(speed: 30.0, extent: 0.5)],
             light_update: [Gpu, Upload],
         ),
     )"#;
@@ -144,7 +157,7 @@ fn moving_lights_stay_conservatively_culled_at_every_measured_frame() {
         },
     )
     .unwrap();
-    assert_eq!(s.rows.len(), 12);
+    assert_eq!(s.rows.len(), 18);
     for r in &s.rows {
         assert_eq!(r.false_negatives, Some(0), "{}", r.cell);
         assert_eq!(r.dropped_lights, 0, "{}", r.cell);

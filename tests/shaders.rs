@@ -274,7 +274,7 @@ fn host_structs_match_wgsl_layout() {
         covered => "covered"]);
     let motion = validate(&manylights_gpu::motion::MOTION);
     check!(&motion, MotionParams, "MotionParams", [kind => "kind", first => "first", count => "count",
-        row => "row", speed => "speed", time => "time"]);
+        row => "row", speed => "speed", time => "time", extent => "extent"]);
     let stochastic = validate(&manylights_gpu::stochastic::STOCHASTIC);
     check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
         row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",

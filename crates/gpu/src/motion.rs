@@ -7,7 +7,8 @@
 //! [`manylights_scene::motion`], their oracle, says.
 
 use bytemuck::{Pod, Zeroable};
-use manylights_scene::motion::{MOTION_NOISE, MOTION_ORBIT, MOTION_STATIC, frame_time};
+use glam::Vec3;
+use manylights_scene::motion::{MOTION_GLIDE, MOTION_NOISE, MOTION_ORBIT, MOTION_STATIC, frame_time};
 use manylights_scene::{Light, Motion};
 use wgpu::util::DeviceExt;
 
@@ -24,6 +25,7 @@ pub const MOTION: ShaderDef = ShaderDef {
         WgslConst::U32("MOTION_STATIC", MOTION_STATIC),
         WgslConst::U32("MOTION_ORBIT", MOTION_ORBIT),
         WgslConst::U32("MOTION_NOISE", MOTION_NOISE),
+        WgslConst::U32("MOTION_GLIDE", MOTION_GLIDE),
     ],
     files: &[LIGHT, crate::shader_file!("lights/motion.wgsl")],
 };
@@ -48,8 +50,10 @@ pub struct MotionParams {
     pub speed: f32,
     /// Seconds (`frame_time`).
     pub time: f32,
+    /// A glide's circle radius, world units (`Motion::extent`).
+    pub extent: f32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 2],
+    pub _pad: u32,
 }
 
 /// What one light update cost.
@@ -68,6 +72,8 @@ pub struct LightMotion {
     first: u32,
     /// The moving lights at home, as the GPU holds them.
     home: Vec<GpuLight>,
+    /// Their anchor normals where the motion reads them (`Motion::uses_anchors`), else empty.
+    anchors: Vec<Vec3>,
     params: wgpu::Buffer,
     pipeline: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
@@ -82,15 +88,17 @@ pub struct LightMotion {
 
 impl LightMotion {
     /// `lights` are the scene's lights from index `first` on, at home (as uploaded), that move
-    /// with `motion`.
+    /// with `motion`; `anchors` their anchor normals (`LightSpec::anchors`), one a light where
+    /// the motion reads them (`Motion::uses_anchors`; empty otherwise: an error for a glide).
     pub fn new(
         ctx: &GpuContext,
         scene: &GpuScene,
         lights: &[Light],
+        anchors: &[Vec3],
         first: u32,
         motion: Motion,
     ) -> Result<Self, GpuError> {
-        Self::on_buffer(ctx, &scene.lights, scene.light_count, lights, first, motion)
+        Self::on_buffer(ctx, &scene.lights, scene.light_count, lights, anchors, first, motion)
     }
 
     /// [`LightMotion::new`] for a buffer of `light_count` lights other than a scene's (the
@@ -100,10 +108,24 @@ impl LightMotion {
         buffer: &wgpu::Buffer,
         light_count: u32,
         lights: &[Light],
+        anchors: &[Vec3],
         first: u32,
         motion: Motion,
     ) -> Result<Self, GpuError> {
         let count = lights.len() as u32;
+        let anchors: Vec<Vec3> = if motion.uses_anchors() {
+            if anchors.len() != lights.len() {
+                return Err(GpuError::Unsupported(format!(
+                    "lights.motion {motion:?} moves lights across their surfaces and needs one \
+                     anchor normal a moving light (LightSpec::anchors): {} for {} lights",
+                    anchors.len(),
+                    lights.len()
+                )));
+            }
+            anchors.to_vec()
+        } else {
+            Vec::new()
+        };
         if u64::from(first) + u64::from(count) > u64::from(light_count) {
             return Err(GpuError::OverLimit {
                 what: "moving lights".into(),
@@ -126,6 +148,16 @@ impl LightMotion {
             },
             usage: wgpu::BufferUsages::STORAGE,
         });
+        let anchor_xyz: Vec<[f32; 4]> = anchors.iter().map(|n| [n.x, n.y, n.z, 0.0]).collect();
+        let anchor_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lights.anchors"),
+            contents: if anchor_xyz.is_empty() {
+                &[0u8; 16]
+            } else {
+                bytemuck::cast_slice(&anchor_xyz)
+            },
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let groups_needed = count.div_ceil(WORKGROUP).max(1);
         let max = ctx.limits.max_compute_workgroups_per_dimension;
         let groups = (groups_needed.min(max), groups_needed.div_ceil(max));
@@ -136,7 +168,8 @@ impl LightMotion {
             row: groups.0 * WORKGROUP,
             speed: motion.speed(),
             time: 0.0,
-            _pad: [0; 2],
+            extent: motion.extent(),
+            _pad: 0,
         };
         let params_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("lights.motion"),
@@ -150,6 +183,7 @@ impl LightMotion {
                 entry(0, c, UNIFORM),
                 entry(1, c, storage(true)),
                 entry(2, c, storage(false)),
+                entry(3, c, storage(true)),
             ],
         });
         let module = MOTION.create(d);
@@ -163,12 +197,13 @@ impl LightMotion {
             d,
             "lights.animate",
             &layout,
-            &[&params_buf, &home_buf, buffer],
+            &[&params_buf, &home_buf, buffer, &anchor_buf],
         );
         Ok(Self {
             motion,
             first,
             home: lights.iter().map(GpuLight::from).collect(),
+            anchors,
             params: params_buf,
             pipeline,
             group,
@@ -219,7 +254,7 @@ impl LightMotion {
     fn fill(&self, out: &mut [GpuLight], frame: u32) {
         let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
         let chunk = out.len().div_ceil(threads).max(4096);
-        let (motion, first) = (self.motion, self.first);
+        let (motion, first, anchors) = (self.motion, self.first, &self.anchors);
         std::thread::scope(|s| {
             for (c, (lights, home)) in out
                 .chunks_mut(chunk)
@@ -228,9 +263,11 @@ impl LightMotion {
             {
                 s.spawn(move || {
                     for (j, (l, h)) in lights.iter_mut().zip(home).enumerate() {
-                        let index = first + (c * chunk + j) as u32;
+                        let k = c * chunk + j;
+                        let index = first + k as u32;
+                        let anchor = anchors.get(k).copied().unwrap_or(Vec3::Y);
                         *l = GpuLight {
-                            position: motion.position(index, h.position, h.radius, frame),
+                            position: motion.position_on(index, h.position, h.radius, anchor, frame),
                             ..*h
                         };
                     }

@@ -30,14 +30,26 @@ pub(crate) fn hierarchy_plan(
     let Some(params) = c.lights.radius.hierarchy_params() else {
         return Ok(None);
     };
+    let anchors = anchors(c, scene)?;
     let moving = Moving {
         motion: &c.lights.motion,
         first,
         frames: c.warmup + c.frames,
+        anchors: &anchors,
     };
     HierarchyPlan::for_scene(scene, params, Some(moving))
         .map(Some)
         .map_err(LabError::from)
+}
+
+/// The anchor normals of the cell's generated lights where its motion reads them
+/// (`Motion::Glide`: `LightSpec::anchors` over the scene's geometry), else none.
+fn anchors(c: &Config, scene: &Scene) -> Result<Vec<glam::Vec3>, LabError> {
+    if c.lights.motion.uses_anchors() {
+        Ok(c.lights.anchors(scene)?)
+    } else {
+        Ok(Vec::new())
+    }
 }
 
 /// A cell's moving lights.
@@ -81,16 +93,25 @@ impl FrameLights {
             None
         } else {
             let moving = &scene.lights[first..];
+            let anchors = anchors(c, scene)?;
             let motion = match &hierarchy {
                 Some(h) => LightMotion::on_buffer(
                     ctx,
                     h.source(),
                     scene.lights.len() as u32,
                     moving,
+                    &anchors,
                     first as u32,
                     c.lights.motion,
                 ),
-                None => LightMotion::new(ctx, of.gpu_scene, moving, first as u32, c.lights.motion),
+                None => LightMotion::new(
+                    ctx,
+                    of.gpu_scene,
+                    moving,
+                    &anchors,
+                    first as u32,
+                    c.lights.motion,
+                ),
             }?;
             Some(Motion {
                 motion,

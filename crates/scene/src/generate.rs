@@ -187,30 +187,10 @@ impl LightSpec {
         }
         let mut rng = Pcg64::seed_from_u64(self.seed);
         let stochastic = self.stochastic(scene);
-        let n = self.count as usize;
-        // Each light's place, and for the surface placements the direction a spot aims along.
-        let placed: Vec<(Vec3, Option<Vec3>)> = match self.generator {
-            LightGenerator::OnSurfaces { offset } => {
-                placement::on_surfaces(scene, n, offset, &mut rng)?
-                    .into_iter()
-                    .map(|(p, aim)| (p, Some(aim)))
-                    .collect()
-            }
-            LightGenerator::Fixtures { drop, on_walls } => {
-                placement::fixtures(scene, n, drop, on_walls, &mut rng)?
-                    .into_iter()
-                    .map(|(p, aim)| (p, Some(aim)))
-                    .collect()
-            }
-            g => self
-                .positions(g, scene, n, &mut rng)?
-                .into_iter()
-                .map(|p| (p, None))
-                .collect(),
-        };
+        let placed = self.place(scene, &mut rng)?;
         let mut lights: Vec<Light> = placed
             .into_iter()
-            .map(|(position, aim)| {
+            .map(|(position, aim, _)| {
                 let color = hue_to_rgb(rng.random::<f32>());
                 let kind = if rng.random::<f32>() < self.spot_fraction {
                     let direction = aim.unwrap_or_else(|| {
@@ -253,6 +233,43 @@ impl LightSpec {
             l.radius = self.radius_of(l, stochastic.as_ref());
         }
         Ok(lights)
+    }
+
+    /// The anchor normal of each light [`LightSpec::generate`] makes for `scene`, in its order:
+    /// the normal of the surface it was placed on (`OnSurfaces`, `Fixtures`), up for the volume
+    /// generators. What `Motion::Glide` moves the lights across; the lights themselves carry no
+    /// normal, as shading needs none.
+    pub fn anchors(&self, scene: &Scene) -> Result<Vec<Vec3>, SceneError> {
+        self.validate()?;
+        let mut rng = Pcg64::seed_from_u64(self.seed);
+        Ok(self.place(scene, &mut rng)?.into_iter().map(|(_, _, n)| n).collect())
+    }
+
+    /// Each light's place, for the surface placements the direction a spot aims along, and its
+    /// anchor normal (up for the volume generators): the first draws of `rng`.
+    fn place(
+        &self,
+        scene: &Scene,
+        rng: &mut Pcg64,
+    ) -> Result<Vec<(Vec3, Option<Vec3>, Vec3)>, SceneError> {
+        let n = self.count as usize;
+        Ok(match self.generator {
+            LightGenerator::OnSurfaces { offset } => placement::on_surfaces(scene, n, offset, rng)?
+                .into_iter()
+                .map(|(p, aim, normal)| (p, Some(aim), normal))
+                .collect(),
+            LightGenerator::Fixtures { drop, on_walls } => {
+                placement::fixtures(scene, n, drop, on_walls, rng)?
+                    .into_iter()
+                    .map(|(p, aim, normal)| (p, Some(aim), normal))
+                    .collect()
+            }
+            g => self
+                .positions(g, scene, n, rng)?
+                .into_iter()
+                .map(|p| (p, None, Vec3::Y))
+                .collect(),
+        })
     }
 
     /// The radius the spec's rule gives light `l` (its intensity and colour set).

@@ -12,11 +12,17 @@
 //!     offset = a (cos(p + w t) - cos p, 0, sin(p + w t) - sin p),      w = speed / a
 //! Noise(speed): a smooth pseudo-random wander, one sine per axis,
 //!     offset_k = a (sin(f_k w t + p_k) - sin p_k),   f_k in [0.5, 1.5)
+//! Glide { speed, extent }: a circle of radius e = extent through home in the plane of the
+//!     surface the light was placed on (its anchor normal n, with the tangents t, b of
+//!     `tangents(n)`), so that the light keeps its distance from that plane,
+//!     offset = e ((cos(p + w t) - cos p) t + (sin(p + w t) - sin p) b),  w = speed / e
 //! ```
 //!
 //! with `speed` in world units per second along the path, and the phases `p` and frequency
 //! factors `f_k` hashed from the light's index (PCG). Spot axes, radii and colours do not
-//! change.
+//! change. The anchor normals come from the generator (`LightSpec::anchors`: the surface's
+//! normal for `OnSurfaces` and `Fixtures`, up for the volume generators, where a glide is a
+//! horizontal circle); only `Glide` reads them.
 
 use std::f32::consts::TAU;
 
@@ -40,6 +46,15 @@ pub enum Motion {
     /// Each light wanders smoothly about its home position at about this speed (world units
     /// per second).
     Noise(f32),
+    /// Each light circles its home position in the plane of the surface it was placed on, at
+    /// `speed` (world units per second) on a circle of radius `extent` (world units), so lights
+    /// placed on surfaces stay at their distance from them.
+    Glide {
+        /// World units per second along the circle.
+        speed: f32,
+        /// The circle's radius, world units (> 0).
+        extent: f32,
+    },
 }
 
 /// [`Motion`]'s kind as the GPU pass reads it.
@@ -48,6 +63,8 @@ pub const MOTION_STATIC: u32 = 0;
 pub const MOTION_ORBIT: u32 = 1;
 /// See [`MOTION_STATIC`].
 pub const MOTION_NOISE: u32 = 2;
+/// See [`MOTION_STATIC`].
+pub const MOTION_GLIDE: u32 = 3;
 
 impl Motion {
     /// Whether lights move.
@@ -59,8 +76,21 @@ impl Motion {
     pub fn speed(&self) -> f32 {
         match *self {
             Self::Static => 0.0,
-            Self::Orbit(s) | Self::Noise(s) => s,
+            Self::Orbit(s) | Self::Noise(s) | Self::Glide { speed: s, .. } => s,
         }
+    }
+
+    /// The radius of a glide's circle (0 for the other motions).
+    pub fn extent(&self) -> f32 {
+        match *self {
+            Self::Glide { extent, .. } => extent,
+            _ => 0.0,
+        }
+    }
+
+    /// Whether the motion reads the lights' anchor normals (`Glide`).
+    pub fn uses_anchors(&self) -> bool {
+        matches!(self, Self::Glide { .. }) && !self.is_static()
     }
 
     /// The kind as the GPU pass reads it ([`MOTION_STATIC`], ...).
@@ -69,19 +99,23 @@ impl Motion {
             Self::Static => MOTION_STATIC,
             Self::Orbit(_) => MOTION_ORBIT,
             Self::Noise(_) => MOTION_NOISE,
+            Self::Glide { .. } => MOTION_GLIDE,
         }
     }
 
     /// Checks the speed; the error names the field and what is accepted.
     pub fn validate(&self) -> Result<(), SceneError> {
         let s = self.speed();
-        if s.is_finite() && s >= 0.0 {
+        let e = self.extent();
+        let extent_ok = !matches!(self, Self::Glide { .. }) || (e.is_finite() && e > 0.0);
+        if s.is_finite() && s >= 0.0 && extent_ok {
             Ok(())
         } else {
             Err(SceneError::invalid(
                 "lights.motion",
                 format!("{self:?}"),
-                "Static, Orbit(speed) or Noise(speed) with a finite speed >= 0 (world units per second)",
+                "Static, Orbit(speed), Noise(speed) or Glide(speed: s, extent: e) with a finite speed >= 0 \
+                 (world units per second) and a glide's finite extent > 0 (world units)",
             ))
         }
     }
@@ -92,24 +126,40 @@ impl Motion {
             Self::Static => "static".into(),
             Self::Orbit(s) => format!("orbit{s}"),
             Self::Noise(s) => format!("noise{s}"),
+            Self::Glide { speed, extent } => format!("glide{speed}x{extent}"),
         }
     }
 
     /// Where the light of index `index`, at `home` with radius of influence `radius`, is at
-    /// frame `frame`.
+    /// frame `frame`, its anchor normal up (see [`Motion::position_on`]).
     pub fn position(&self, index: u32, home: Vec3, radius: f32, frame: u32) -> Vec3 {
-        home + self.offset(index, radius, frame_time(frame))
+        self.position_on(index, home, radius, Vec3::Y, frame)
+    }
+
+    /// [`Motion::position`] for a light whose anchor normal (the normal of the surface it was
+    /// placed on, unit length) is `anchor`; only `Glide` reads it.
+    pub fn position_on(&self, index: u32, home: Vec3, radius: f32, anchor: Vec3, frame: u32) -> Vec3 {
+        home + self.offset(index, radius, anchor, frame_time(frame))
     }
 
     /// The offset from home at time `t` seconds (see the module docs).
-    fn offset(&self, index: u32, radius: f32, t: f32) -> Vec3 {
-        let a = 0.5 * radius;
+    fn offset(&self, index: u32, radius: f32, anchor: Vec3, t: f32) -> Vec3 {
+        let a = match self {
+            Self::Glide { extent, .. } => *extent,
+            _ => 0.5 * radius,
+        };
         if self.is_static() || a <= 0.0 {
             return Vec3::ZERO;
         }
         let w = self.speed() / a;
         match self {
             Self::Static => Vec3::ZERO,
+            Self::Glide { .. } => {
+                let (u, v) = tangents(anchor);
+                let p = TAU * hash01(index, 0);
+                let q = p + w * t;
+                a * ((q.cos() - p.cos()) * u + (q.sin() - p.sin()) * v)
+            }
             Self::Orbit(_) => {
                 let p = TAU * hash01(index, 0);
                 let q = p + w * t;
@@ -125,6 +175,18 @@ impl Motion {
             }
         }
     }
+}
+
+/// Two unit tangents of the unit normal `n`, orthogonal to it and to each other (Duff et al.
+/// 2017, "Building an orthonormal basis, revisited"), as the WGSL twin builds them.
+pub fn tangents(n: Vec3) -> (Vec3, Vec3) {
+    let sign = if n.z >= 0.0 { 1.0 } else { -1.0 };
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
 }
 
 /// The time of frame `frame`, seconds, on the [`MOTION_FPS`] clock (as the GPU pass gets it).
@@ -182,9 +244,50 @@ mod tests {
         assert_eq!(Motion::Orbit(1.0).position(3, Vec3::Y, 1.0, 17).y, 1.0);
     }
 
+    /// A glide keeps its light in the plane through home across the anchor normal, within the
+    /// circle's diameter of home, at its speed; with the anchor up it is a horizontal circle.
+    #[test]
+    fn a_glide_stays_in_its_surface_plane_at_its_speed() {
+        let m = Motion::Glide { speed: 0.5, extent: 0.25 };
+        let normals = [
+            Vec3::Y,
+            Vec3::NEG_Y,
+            Vec3::X,
+            Vec3::NEG_Z,
+            Vec3::Z,
+            Vec3::new(0.3, -0.8, 0.52).normalize(),
+            Vec3::new(-1e-4, 0.0, -1.0).normalize(),
+        ];
+        for n in normals {
+            let (u, v) = tangents(n);
+            for (x, y) in [(u, v), (u, n), (v, n)] {
+                assert!(x.dot(y).abs() < 1e-5, "{n}: {x} {y}");
+            }
+            assert!((u.length() - 1.0).abs() < 1e-5 && (v.length() - 1.0).abs() < 1e-5);
+            let home = Vec3::new(1.0, 2.0, -3.0);
+            for i in [0u32, 9, 1 << 20] {
+                assert_eq!(m.position_on(i, home, 5.0, n, 0), home);
+                for f in [1u32, 17, 400, 90_000] {
+                    let d = m.position_on(i, home, 5.0, n, f) - home;
+                    assert!(d.dot(n).abs() < 1e-5, "{n} {i} {f}: {d} leaves the plane");
+                    assert!(d.length() <= 0.5 + 1e-5, "{n} {i} {f}: {d}");
+                }
+                let step = (m.position_on(i, home, 5.0, n, 1) - home).length() * MOTION_FPS;
+                assert!((step - 0.5).abs() < 0.01, "{n}: {step} units/s");
+            }
+        }
+        assert!(m.uses_anchors() && !Motion::Orbit(1.0).uses_anchors());
+        assert!(!Motion::Glide { speed: 0.0, extent: 1.0 }.uses_anchors());
+    }
+
     #[test]
     fn bad_speeds_are_rejected_with_the_field() {
-        for m in [Motion::Orbit(-1.0), Motion::Noise(f32::NAN)] {
+        for m in [
+            Motion::Orbit(-1.0),
+            Motion::Noise(f32::NAN),
+            Motion::Glide { speed: 1.0, extent: 0.0 },
+            Motion::Glide { speed: -1.0, extent: 1.0 },
+        ] {
             let e = m.validate().unwrap_err().to_string();
             assert!(e.contains("lights.motion"), "{e}");
         }

@@ -2,7 +2,7 @@
 //! uniform lights lands inside walls, furniture and other rooms: [`on_surfaces`] (area-weighted
 //! points lifted along their surface's shading normal by a distance in a range) and
 //! [`fixtures`] (hanging under downward-facing surfaces and mounted on walls). Each light comes
-//! with the direction a spot of it aims along.
+//! with the direction a spot of it aims along and the normal of its surface (its anchor).
 
 use glam::Vec3;
 use rand::RngExt;
@@ -10,8 +10,9 @@ use rand_pcg::Pcg64;
 
 use crate::{Scene, SceneError};
 
-/// A light's place and the direction a spot there aims along (unit).
-pub(crate) type Placed = (Vec3, Vec3);
+/// A light's place, the direction a spot there aims along and its surface's shading normal
+/// (both unit).
+pub(crate) type Placed = (Vec3, Vec3, Vec3);
 
 /// A triangle of the scene: its corners, their normals and its area.
 struct Tri {
@@ -99,7 +100,7 @@ pub(crate) fn on_surfaces(
         .into_iter()
         .map(|(p, normal)| {
             let lift = lo + (hi - lo) * rng.random::<f32>();
-            (p + normal * lift, normal)
+            (p + normal * lift, normal, normal)
         })
         .collect())
 }
@@ -148,13 +149,13 @@ pub(crate) fn fixtures(
     };
     let mut out: Vec<Placed> = sample(&ceilings, n - walls_n, rng)
         .into_iter()
-        .map(|(p, normal)| (p + normal * drop, Vec3::NEG_Y))
+        .map(|(p, normal)| (p + normal * drop, Vec3::NEG_Y, normal))
         .collect();
     let down = 30f32.to_radians();
     out.extend(sample(&walls, walls_n, rng).into_iter().map(|(p, normal)| {
         let out_of_wall = Vec3::new(normal.x, 0.0, normal.z).normalize_or(normal);
         let aim = (out_of_wall * down.cos() - Vec3::Y * down.sin()).normalize();
-        (p + normal * drop, aim)
+        (p + normal * drop, aim, normal)
     }));
     Ok(out)
 }

@@ -1,10 +1,12 @@
 //! Lights placed on surfaces (`OnSurfaces`) and as fixtures (`Fixtures`) in a closed room of
 //! known planes: each where its rule puts it, spots aimed as it says, the same lights for the
-//! same seed, and bad values named.
+//! same seed, their anchor normals those of their planes and gliding lights keeping their
+//! distance from them, and bad values named.
 
 use glam::Vec3;
 use manylights_scene::{
-    Aabb, Camera, LightGenerator, LightKind, LightSpec, Material, Primitive, RadiusRule, Scene,
+    Aabb, Camera, LightGenerator, LightKind, LightSpec, Material, Motion, Primitive, RadiusRule,
+    Scene,
 };
 
 /// A quad's two triangles with `normal` at every vertex.
@@ -310,4 +312,39 @@ fn the_exposure_rule_lights_the_median_surface_point_as_asked() {
         .to_string();
         assert!(e.contains("lights.irradiance"), "{bad}: {e}");
     }
+}
+
+/// Each light's anchor is the inward normal of the plane it was placed on (one of the room's,
+/// the light at its lift or drop from it), and a glide moves it only across that plane: at every frame it is as far
+/// from the plane as at home, within the circle's diameter of home. Volume generators anchor up.
+#[test]
+fn gliding_lights_keep_their_distance_from_the_surface_they_were_placed_on() {
+    let glide = Motion::Glide { speed: 0.4, extent: 0.3 };
+    for (g, lo, hi) in [
+        (LightGenerator::OnSurfaces { offset: (0.1, 0.4) }, 0.1, 0.4),
+        (LightGenerator::Fixtures { drop: 0.15, on_walls: 0.5 }, 0.15, 0.15),
+    ] {
+        let room = room();
+        let lights = spec(g).generate(&room).unwrap();
+        let anchors = spec(g).anchors(&room).unwrap();
+        assert_eq!(anchors.len(), lights.len(), "{g:?}");
+        for (i, (l, n)) in lights.iter().zip(&anchors).enumerate() {
+            let home = from_plane(l.position, *n);
+            assert!(
+                home >= lo - 1e-4 && home <= hi + 1e-4,
+                "{g:?} light {i}: anchor {n}, {home} m from its plane"
+            );
+            for frame in [1u32, 20, 333, 5000] {
+                let p = glide.position_on(i as u32, l.position, l.radius, *n, frame);
+                assert!(
+                    (from_plane(p, *n) - home).abs() < 1e-4,
+                    "{g:?} light {i} frame {frame}: {} m from its plane, {home} at home",
+                    from_plane(p, *n)
+                );
+                assert!((p - l.position).length() <= 0.6 + 1e-4);
+            }
+        }
+    }
+    let uniform = spec(LightGenerator::Uniform).anchors(&room()).unwrap();
+    assert!(uniform.len() == 2000 && uniform.iter().all(|&n| n == Vec3::Y));
 }

@@ -44,6 +44,9 @@ pub struct Moving<'a> {
     pub first: usize,
     /// The frames they are rendered at.
     pub frames: u32,
+    /// The moving lights' anchor normals where the motion reads them (`Motion::uses_anchors`;
+    /// else empty: up).
+    pub anchors: &'a [glam::Vec3],
 }
 
 impl Moving<'_> {
@@ -56,8 +59,9 @@ impl Moving<'_> {
                 if i < self.first {
                     *l
                 } else {
+                    let anchor = self.anchors.get(i - self.first).copied().unwrap_or(glam::Vec3::Y);
                     Light {
-                        position: self.motion.position(i as u32, l.position, l.radius, frame),
+                        position: self.motion.position_on(i as u32, l.position, l.radius, anchor, frame),
                         ..*l
                     }
                 }
