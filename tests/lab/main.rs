@@ -15,7 +15,7 @@ use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_lab::{Experiment, Row};
 
 /// The experiment files the issue names.
-const SHIPPED: [&str; 32] = [
+const SHIPPED: [&str; 33] = [
     "quickstart",
     "harada2012",
     "cis5650-scaling",
@@ -48,6 +48,7 @@ const SHIPPED: [&str; 32] = [
     "real-scenes-goals",
     "real-scenes-gallery",
     "real-scenes-infinite",
+    "real-scenes-dynamic",
 ];
 
 fn shipped(name: &str) -> (Experiment, String, PathBuf) {
@@ -227,6 +228,8 @@ fn a_tiny_variant_of_each_shipped_experiment_runs() {
             "real-scenes-gallery" => Some((0, 7)),
             // 24 cells: one in 5 has both scenes and every family.
             "real-scenes-infinite" => Some((0, 5)),
+            // 24 cells: one in 5 has both scenes, both placements and every variant.
+            "real-scenes-dynamic" => Some((0, 5)),
             _ => None,
         };
         let options = RunOptions { shard, ..opts() };
