@@ -330,25 +330,37 @@ fn vis_scan(@builtin(local_invocation_index) li: u32) {
     }
 }
 
-// Every queued triangle's blocks, a block at a time over vc_params.z workgroups (block b the
-// (b - first)-th of the entry whose first block is the last at or before b, found by bisection);
-// blocks outside an edge are skipped; each of the 256 threads tests VC_BLOCK^2 / 256 of its pixels.
+// Every queued triangle's blocks, a block at a time over vc_params.z workgroups, each taking a
+// run of consecutive blocks in the blocks' numbering: it finds the entry of its first block by
+// bisection (the last entry whose first block is at or before it) and then steps from entry to
+// entry as its blocks pass their first blocks, so that a block costs no search; blocks outside
+// an edge are skipped; each of the 256 threads tests VC_BLOCK^2 / 256 of its pixels.
 @compute @workgroup_size(256)
 fn vis_blocks(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let count = min(atomicLoad(&vc_queue_count[0]), vc_params.y);
     let total = vc_first[count];
-    for (var b = wg.x; b < total; b += vc_params.z) {
-        var lo = 0u;
-        var hi = count;
-        while hi - lo > 1u {
-            let mid = (lo + hi) / 2u;
-            if vc_first[mid] <= b {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
+    let run = (total + vc_params.z - 1u) / vc_params.z;
+    let start = wg.x * run;
+    let end = min(start + run, total);
+    if start >= end {
+        return;
+    }
+    var lo = 0u;
+    var hi = count;
+    while hi - lo > 1u {
+        let mid = (lo + hi) / 2u;
+        if vc_first[mid] <= start {
+            lo = mid;
+        } else {
+            hi = mid;
         }
-        let e = lo;
+    }
+    var e = lo;
+    for (var b = start; b < end; b++) {
+        // (vc_first[count] is the total, past every block: the step stops at the last entry.)
+        while vc_first[e + 1u] <= b {
+            e += 1u;
+        }
         let rect = bitcast<vec4<u32>>(vc_queue[4u * e + 3u]);
         let k = b - vc_first[e];
         let q0 = vc_queue[4u * e];

@@ -42,7 +42,8 @@ pub const VISIBILITY_DEPTH: ShaderDef = ShaderDef {
     files: &[shader_file!("render/visibility_depth.wgsl")],
 };
 
-/// Workgroups of the blocks' pass, each taking every this-many-th entry.
+/// Workgroups of the blocks' pass; each takes an equal share of the queued blocks, a run of
+/// consecutive ones.
 const BLOCK_GROUPS: u32 = 2048;
 
 /// How the compute visibility pass shares out its triangles.
