@@ -56,6 +56,19 @@ pub struct MotionParams {
     pub _pad: u32,
 }
 
+/// A storage buffer of `data` (one unused vec4 where it is empty: a binding is never empty).
+fn vec4_buffer(d: &wgpu::Device, label: &str, data: &[[f32; 4]]) -> wgpu::Buffer {
+    d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: if data.is_empty() {
+            &[0u8; 16]
+        } else {
+            bytemuck::cast_slice(data)
+        },
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
 /// What one light update cost.
 #[derive(Clone, Debug, Default)]
 pub struct UpdateCost {
@@ -139,25 +152,9 @@ impl LightMotion {
             .iter()
             .map(|l| [l.position.x, l.position.y, l.position.z, l.radius])
             .collect();
-        let home_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lights.home"),
-            contents: if home_xyzr.is_empty() {
-                &[0u8; 16]
-            } else {
-                bytemuck::cast_slice(&home_xyzr)
-            },
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let home_buf = vec4_buffer(d, "lights.home", &home_xyzr);
         let anchor_xyz: Vec<[f32; 4]> = anchors.iter().map(|n| [n.x, n.y, n.z, 0.0]).collect();
-        let anchor_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("lights.anchors"),
-            contents: if anchor_xyz.is_empty() {
-                &[0u8; 16]
-            } else {
-                bytemuck::cast_slice(&anchor_xyz)
-            },
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let anchor_buf = vec4_buffer(d, "lights.anchors", &anchor_xyz);
         let groups_needed = count.div_ceil(WORKGROUP).max(1);
         let max = ctx.limits.max_compute_workgroups_per_dimension;
         let groups = (groups_needed.min(max), groups_needed.div_ceil(max));
