@@ -4,13 +4,13 @@
 
 mod common;
 
+use glam::Vec3;
 use manylights_gpu::GpuScene;
 use manylights_gpu::layout::GpuLight;
 use manylights_gpu::motion::LightMotion;
 use manylights_lab::Experiment;
 use manylights_lab::runner::{RunOptions, run_parsed};
 use manylights_scene::procedural::ProceduralScene;
-use glam::Vec3;
 use manylights_scene::{LightGenerator, LightSpec, Motion, RadiusRule, Scene};
 
 /// The atrium with `n` lights on its surfaces (a third of them spots) after three of its own,
@@ -21,7 +21,9 @@ fn scene(n: u32) -> (Scene, Vec<Vec3>) {
         .build()
         .unwrap();
     let spec = LightSpec {
-        generator: LightGenerator::OnSurfaces { offset: (0.05, 0.5) },
+        generator: LightGenerator::OnSurfaces {
+            offset: (0.05, 0.5),
+        },
         count: n + 3,
         seed: 11,
         radius: RadiusRule::Fixed(1.5),
@@ -53,7 +55,10 @@ fn animation_pass_and_upload_put_every_light_where_the_oracle_does() {
     let (s, anchors) = scene(5000);
     let gs = GpuScene::upload(&ctx, &s, &s.camera, 32, 18).unwrap();
     let first = 3usize;
-    let glide = Motion::Glide { speed: 1.0, extent: 0.4 };
+    let glide = Motion::Glide {
+        speed: 1.0,
+        extent: 0.4,
+    };
     // A glide without its anchors is an error that says what it needs.
     let e = LightMotion::new(&ctx, &gs, &s.lights[first..], &[], first as u32, glide)
         .err()

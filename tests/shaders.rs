@@ -275,6 +275,10 @@ fn host_structs_match_wgsl_layout() {
     let motion = validate(&manylights_gpu::motion::MOTION);
     check!(&motion, MotionParams, "MotionParams", [kind => "kind", first => "first", count => "count",
         row => "row", speed => "speed", time => "time", extent => "extent"]);
+    let rays = validate(&manylights_gpu::bvh::SHADOW_RAYS);
+    check!(&rays, manylights_gpu::bvh::BvhNode, "BvhNode", [lo => "lo", count => "count",
+        hi => "hi", first => "first"]);
+    check!(&rays, manylights_gpu::bvh::BvhTriangle, "BvhTriangle", [v0 => "v0", v1 => "v1", v2 => "v2"]);
     let stochastic = validate(&manylights_gpu::stochastic::STOCHASTIC);
     check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
         row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",

@@ -8,6 +8,7 @@
 //!
 //! Depends on the scene crate and wgpu; knows nothing of culling strategies or backends.
 
+pub mod bvh;
 pub mod context;
 pub mod hierarchy;
 pub mod layout;

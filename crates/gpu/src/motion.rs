@@ -8,7 +8,9 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use manylights_scene::motion::{MOTION_GLIDE, MOTION_NOISE, MOTION_ORBIT, MOTION_STATIC, frame_time};
+use manylights_scene::motion::{
+    MOTION_GLIDE, MOTION_NOISE, MOTION_ORBIT, MOTION_STATIC, frame_time,
+};
 use manylights_scene::{Light, Motion};
 use wgpu::util::DeviceExt;
 
@@ -111,7 +113,15 @@ impl LightMotion {
         first: u32,
         motion: Motion,
     ) -> Result<Self, GpuError> {
-        Self::on_buffer(ctx, &scene.lights, scene.light_count, lights, anchors, first, motion)
+        Self::on_buffer(
+            ctx,
+            &scene.lights,
+            scene.light_count,
+            lights,
+            anchors,
+            first,
+            motion,
+        )
     }
 
     /// [`LightMotion::new`] for a buffer of `light_count` lights other than a scene's (the
@@ -264,7 +274,8 @@ impl LightMotion {
                         let index = first + k as u32;
                         let anchor = anchors.get(k).copied().unwrap_or(Vec3::Y);
                         *l = GpuLight {
-                            position: motion.position_on(index, h.position, h.radius, anchor, frame),
+                            position: motion
+                                .position_on(index, h.position, h.radius, anchor, frame),
                             ..*h
                         };
                     }

@@ -269,6 +269,7 @@ pub const SHADERS: &[ShaderDef] = &[
     crate::stochastic::STOCHASTIC,
     crate::hierarchy::HIERARCHY,
     crate::hierarchy::HIERARCHY64,
+    crate::bvh::SHADOW_RAYS,
 ];
 
 #[cfg(test)]

@@ -242,7 +242,11 @@ impl LightSpec {
     pub fn anchors(&self, scene: &Scene) -> Result<Vec<Vec3>, SceneError> {
         self.validate()?;
         let mut rng = Pcg64::seed_from_u64(self.seed);
-        Ok(self.place(scene, &mut rng)?.into_iter().map(|(_, _, n)| n).collect())
+        Ok(self
+            .place(scene, &mut rng)?
+            .into_iter()
+            .map(|(_, _, n)| n)
+            .collect())
     }
 
     /// Each light's place, for the surface placements the direction a spot aims along, and its

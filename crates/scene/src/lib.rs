@@ -22,6 +22,7 @@ pub mod motion;
 mod placement;
 pub mod procedural;
 pub mod radius;
+pub mod ray;
 pub mod real;
 pub mod stochastic;
 

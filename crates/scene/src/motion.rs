@@ -138,7 +138,14 @@ impl Motion {
 
     /// [`Motion::position`] for a light whose anchor normal (the normal of the surface it was
     /// placed on, unit length) is `anchor`; only `Glide` reads it.
-    pub fn position_on(&self, index: u32, home: Vec3, radius: f32, anchor: Vec3, frame: u32) -> Vec3 {
+    pub fn position_on(
+        &self,
+        index: u32,
+        home: Vec3,
+        radius: f32,
+        anchor: Vec3,
+        frame: u32,
+    ) -> Vec3 {
         home + self.offset(index, radius, anchor, frame_time(frame))
     }
 
@@ -248,7 +255,10 @@ mod tests {
     /// circle's diameter of home, at its speed; with the anchor up it is a horizontal circle.
     #[test]
     fn a_glide_stays_in_its_surface_plane_at_its_speed() {
-        let m = Motion::Glide { speed: 0.5, extent: 0.25 };
+        let m = Motion::Glide {
+            speed: 0.5,
+            extent: 0.25,
+        };
         let normals = [
             Vec3::Y,
             Vec3::NEG_Y,
@@ -277,7 +287,13 @@ mod tests {
             }
         }
         assert!(m.uses_anchors() && !Motion::Orbit(1.0).uses_anchors());
-        assert!(!Motion::Glide { speed: 0.0, extent: 1.0 }.uses_anchors());
+        assert!(
+            !Motion::Glide {
+                speed: 0.0,
+                extent: 1.0
+            }
+            .uses_anchors()
+        );
     }
 
     #[test]
@@ -285,8 +301,14 @@ mod tests {
         for m in [
             Motion::Orbit(-1.0),
             Motion::Noise(f32::NAN),
-            Motion::Glide { speed: 1.0, extent: 0.0 },
-            Motion::Glide { speed: -1.0, extent: 1.0 },
+            Motion::Glide {
+                speed: 1.0,
+                extent: 0.0,
+            },
+            Motion::Glide {
+                speed: -1.0,
+                extent: 1.0,
+            },
         ] {
             let e = m.validate().unwrap_err().to_string();
             assert!(e.contains("lights.motion"), "{e}");

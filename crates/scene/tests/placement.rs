@@ -319,10 +319,20 @@ fn the_exposure_rule_lights_the_median_surface_point_as_asked() {
 /// from the plane as at home, within the circle's diameter of home. Volume generators anchor up.
 #[test]
 fn gliding_lights_keep_their_distance_from_the_surface_they_were_placed_on() {
-    let glide = Motion::Glide { speed: 0.4, extent: 0.3 };
+    let glide = Motion::Glide {
+        speed: 0.4,
+        extent: 0.3,
+    };
     for (g, lo, hi) in [
         (LightGenerator::OnSurfaces { offset: (0.1, 0.4) }, 0.1, 0.4),
-        (LightGenerator::Fixtures { drop: 0.15, on_walls: 0.5 }, 0.15, 0.15),
+        (
+            LightGenerator::Fixtures {
+                drop: 0.15,
+                on_walls: 0.5,
+            },
+            0.15,
+            0.15,
+        ),
     ] {
         let room = room();
         let lights = spec(g).generate(&room).unwrap();

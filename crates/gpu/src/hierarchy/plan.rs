@@ -59,9 +59,15 @@ impl Moving<'_> {
                 if i < self.first {
                     *l
                 } else {
-                    let anchor = self.anchors.get(i - self.first).copied().unwrap_or(glam::Vec3::Y);
+                    let anchor = self
+                        .anchors
+                        .get(i - self.first)
+                        .copied()
+                        .unwrap_or(glam::Vec3::Y);
                     Light {
-                        position: self.motion.position_on(i as u32, l.position, l.radius, anchor, frame),
+                        position: self
+                            .motion
+                            .position_on(i as u32, l.position, l.radius, anchor, frame),
                         ..*l
                     }
                 }
