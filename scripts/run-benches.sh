@@ -37,6 +37,9 @@ for c in "${checks[@]}"; do
 done
 if [ "${GOALS_ONLY:-0}" = 0 ]; then
   CRITERION_HOME="$OUT_DIR/criterion-cpu" "$B/cpu" --bench > "$OUT_DIR/cpu.log" 2>&1
+  # Shadow rays a second (benches/rays.rs; Sponza and the kitchen: scripts/device-tree.sh
+  # sponza kitchen before the call).
+  CRITERION_HOME="$OUT_DIR/criterion-gpu" "$B/rays" --bench > "$OUT_DIR/rays.log" 2>&1
   python3 "$B/bench_cub.py" "$OUT_DIR/cub.json" > "$OUT_DIR/cub.log" 2>&1 || echo "CUB script failed: see cub.log"
 fi
 echo "done: python3 scripts/goals.py $OUT_DIR"
