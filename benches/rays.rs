@@ -15,26 +15,15 @@ use std::time::Duration;
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::Vec3;
 use manylights_gpu::bvh::{GpuBvh, SceneBvh, ShadowRays};
+use manylights_scene::generate::places;
 use manylights_scene::gltf_import::GltfOptions;
 use manylights_scene::procedural::ProceduralScene;
-use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene, real};
+use manylights_scene::{LightGenerator, Scene, real};
 
 use common::{configure, gpu, quick};
 
-/// `n` places of `generator` in `scene`.
-fn places(scene: &Scene, generator: LightGenerator, n: u32, seed: u64) -> Vec<Vec3> {
-    let spec = LightSpec {
-        generator,
-        count: n,
-        seed,
-        radius: RadiusRule::Fixed(1.0),
-        ..LightSpec::default()
-    };
-    spec.generate(scene)
-        .expect("lights")
-        .iter()
-        .map(|l| l.position)
-        .collect()
+fn points(scene: &Scene, generator: LightGenerator, n: u32, seed: u64) -> Vec<Vec3> {
+    places(scene, generator, n, seed).expect("lights")
 }
 
 fn shadow(c: &mut Criterion) {
@@ -64,7 +53,7 @@ fn shadow(c: &mut Criterion) {
     for scene in &scenes {
         let bvh = SceneBvh::build(scene).expect("the BVH");
         let gpu_bvh = GpuBvh::upload(&ctx, &bvh).expect("the BVH's upload");
-        let from = places(
+        let from = points(
             scene,
             LightGenerator::OnSurfaces {
                 offset: (0.01, 0.05),
@@ -72,7 +61,7 @@ fn shadow(c: &mut Criterion) {
             rays_n,
             1,
         );
-        let lights = places(
+        let lights = points(
             scene,
             LightGenerator::Fixtures {
                 drop: 0.15,

@@ -9,25 +9,14 @@ mod common;
 
 use glam::Vec3;
 use manylights_gpu::bvh::{GpuBvh, SceneBvh, ShadowRays};
+use manylights_scene::generate::places;
 use manylights_scene::gltf_import::GltfOptions;
 use manylights_scene::procedural::{NAMES, ProceduralScene};
 use manylights_scene::ray::{Blocked, opaque_triangles, segment};
 use manylights_scene::{LightGenerator, LightSpec, RadiusRule, Scene, real};
 
-/// `n` points of `generator` in `scene` (the light generators' places).
 fn points(scene: &Scene, generator: LightGenerator, n: u32, seed: u64) -> Vec<Vec3> {
-    let spec = LightSpec {
-        generator,
-        count: n,
-        seed,
-        radius: RadiusRule::Fixed(1.0),
-        ..LightSpec::default()
-    };
-    spec.generate(scene)
-        .unwrap()
-        .iter()
-        .map(|l| l.position)
-        .collect()
+    places(scene, generator, n, seed).unwrap()
 }
 
 /// `n` segments: a half from 1-5 cm off the surfaces, a quarter from anywhere in the box, each

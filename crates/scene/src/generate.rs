@@ -355,6 +355,25 @@ impl LightSpec {
 }
 
 /// Standard normal sample (Box-Muller).
+/// The places of the `n` lights `generator` makes in `scene` with `seed` (radius and intensity
+/// at their defaults): points off the surfaces, in the box or at fixtures, for what needs the
+/// generators' places rather than lights (the shadow rays' tests and benchmark).
+pub fn places(
+    scene: &Scene,
+    generator: LightGenerator,
+    n: u32,
+    seed: u64,
+) -> Result<Vec<Vec3>, SceneError> {
+    let spec = LightSpec {
+        generator,
+        count: n,
+        seed,
+        radius: RadiusRule::Fixed(1.0),
+        ..LightSpec::default()
+    };
+    Ok(spec.generate(scene)?.iter().map(|l| l.position).collect())
+}
+
 fn gaussian(rng: &mut Pcg64) -> f32 {
     let u1 = rng.random::<f32>().max(1e-7);
     let u2 = rng.random::<f32>();
