@@ -1,8 +1,9 @@
 // The BVH of the scene's opaque triangles (manylights_gpu::bvh) and the any-hit shadow ray
 // through it: whether the segment from `a` to `b` crosses an opaque triangle strictly
-// between its ends (manylights_scene::ray states it in f64). An includer sets BVH_GROUP, the
-// bind group of the two buffers, and BVH_STACK, the stack's depth (the build checks the tree's
-// depth against it).
+// between its ends (manylights_scene::ray states it in f64). An includer sets BVH_GROUP and
+// BVH_BINDING, the bind group and first binding of the two buffers (the shading passes: group 0,
+// bindings 3 and 4, scene.wgsl); BVH_STACK, the stack's depth, is the prelude's (the build
+// checks the tree's depth against it).
 
 struct BvhNode {
     // The box, slightly enlarged on upload so that the box test keeps every crossing the
@@ -20,8 +21,8 @@ struct BvhTriangle {
     v2: vec4<f32>,
 }
 
-@group(BVH_GROUP) @binding(0) var<storage, read> bvh_nodes: array<BvhNode>;
-@group(BVH_GROUP) @binding(1) var<storage, read> bvh_triangles: array<BvhTriangle>;
+@group(BVH_GROUP) @binding(BVH_BINDING) var<storage, read> bvh_nodes: array<BvhNode>;
+@group(BVH_GROUP) @binding(BVH_BINDING + 1u) var<storage, read> bvh_triangles: array<BvhTriangle>;
 
 // Whether the segment o + t d, t in [0, 1], meets box n (its inverse direction inv, finite).
 fn bvh_box(n: BvhNode, o: vec3<f32>, inv: vec3<f32>) -> bool {

@@ -18,3 +18,7 @@ struct Material {
 
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(0) @binding(2) var<storage, read> materials: array<Material>;
+// Bindings 3 and 4: the BVH of the opaque triangles that shadow rays walk (bvh.wgsl; a BVH of
+// one empty leaf where the scene has none built).
+const BVH_GROUP: u32 = 0u;
+const BVH_BINDING: u32 = 3u;

@@ -62,10 +62,35 @@ fn light_band(light: Light, d: f32) -> f32 {
     return min(rising, clamp((frame.band_ramp - d / r) * frame.band_slope, 0.0, 1.0));
 }
 
-// Radiance towards `v` from surface point `p` (unit normal `n`) lit by one light.
+// Radiance towards `v` from surface point `p` (unit normal `n`) lit by one light (shadowed
+// where the pipeline is built with SHADOWS).
 fn shade_light(light: Light, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let to_light = light.position - p;
-    return shade_light_at(light, to_light, length(to_light), n, v, m);
+    return shadowed(shade_light_at(light, to_light, length(to_light), n, v, m), light, p, n);
+}
+
+// SHADOWS: every light that adds radiance at a point is tested with a shadow ray (`shadows:
+// Exact`): from the point lifted off its surface along the shading normal (SHADOW_OFFSET times
+// its largest coordinate's magnitude, at least 1: manylights_scene::ray::shadow_origin) to the
+// light, through the BVH of the opaque triangles (bvh.wgsl); a blocked light adds nothing.
+// Lights that add nothing (out of range, outside a cone, behind the surface) cast no ray.
+// Transparent surfaces cast no shadow (the BVH holds only opaque triangles) and receive shadows
+// as opaque ones do. manylights_shade::Renderer::with_shadows builds the pipelines with it.
+override SHADOWS: bool = false;
+
+// Whether the segment from surface point `p` (shading normal `n`) to `light` is blocked.
+fn shadow_blocked(light: Light, p: vec3<f32>, n: vec3<f32>) -> bool {
+    let a = abs(p);
+    let origin = p + n * (SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0)));
+    return bvh_blocked(origin, light.position);
+}
+
+// `c`, the radiance one light adds at `p`, or zero where SHADOWS and its shadow ray is blocked.
+fn shadowed(c: vec3<f32>, light: Light, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    if SHADOWS && any(c != vec3<f32>(0.0)) && shadow_blocked(light, p, n) {
+        return vec3<f32>(0.0);
+    }
+    return c;
 }
 
 // shade_light for a caller that already has `to_light = light.position - p` and
@@ -109,12 +134,13 @@ fn point_lights_only() -> bool {
 }
 
 // A listed light the per-pixel reject kept (d < radius, or any d with the infinite-range
-// falloff): shade_point_light in a POINT_LIGHTS pipeline, else shade_light_at.
-fn shade_listed(light: Light, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
+// falloff) at surface point `p` (`to_light` = its position - p): shade_point_light in a
+// POINT_LIGHTS pipeline, else shade_light_at; shadowed with SHADOWS.
+fn shade_listed(light: Light, p: vec3<f32>, to_light: vec3<f32>, d: f32, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     if POINT_LIGHTS {
-        return shade_point_light(light, to_light, d, n, v, m);
+        return shadowed(shade_point_light(light, to_light, d, n, v, m), light, p, n);
     }
-    return shade_light_at(light, to_light, d, n, v, m);
+    return shadowed(shade_light_at(light, to_light, d, n, v, m), light, p, n);
 }
 
 // A loop's sum `c`, or NaN where a POINT_LIGHTS pipeline shades a frame whose lights are not

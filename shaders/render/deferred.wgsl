@@ -274,16 +274,16 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                     let d = vec4<f32>(length(t0), length(t1), length(t2), length(t3));
                     let keep = vec4<bool>(infinite) | !(d >= vec4<f32>(q[0].w, q[1].w, q[2].w, q[3].w));
                     if keep.x {
-                        c += shade_listed(point_light(q[0], wg_points[k][1], slot_band(k)), t0, d.x, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[0], wg_points[k][1], slot_band(k)), s.p, t0, d.x, s.n, s.v, s.m);
                     }
                     if keep.y {
-                        c += shade_listed(point_light(q[1], wg_points[k + 1u][1], slot_band(k + 1u)), t1, d.y, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[1], wg_points[k + 1u][1], slot_band(k + 1u)), s.p, t1, d.y, s.n, s.v, s.m);
                     }
                     if keep.z {
-                        c += shade_listed(point_light(q[2], wg_points[k + 2u][1], slot_band(k + 2u)), t2, d.z, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[2], wg_points[k + 2u][1], slot_band(k + 2u)), s.p, t2, d.z, s.n, s.v, s.m);
                     }
                     if keep.w {
-                        c += shade_listed(point_light(q[3], wg_points[k + 3u][1], slot_band(k + 3u)), t3, d.w, s.n, s.v, s.m);
+                        c += shade_listed(point_light(q[3], wg_points[k + 3u][1], slot_band(k + 3u)), s.p, t3, d.w, s.n, s.v, s.m);
                     }
                 }
             }
@@ -300,7 +300,7 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                 if !infinite && d >= light.radius {
                     continue;
                 }
-                c += shade_listed(light, to_light, d, s.n, s.v, s.m);
+                c += shade_listed(light, s.p, to_light, d, s.n, s.v, s.m);
             }
         }
         workgroupBarrier();
@@ -412,7 +412,7 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
                 if !infinite && d >= light.radius {
                     continue;
                 }
-                c += shade_listed(light, to_light, d, s.n, s.v, s.m);
+                c += shade_listed(light, s.p, to_light, d, s.n, s.v, s.m);
             }
         }
         workgroupBarrier();

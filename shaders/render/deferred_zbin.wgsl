@@ -67,7 +67,7 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
                 if !infinite && d >= lights[i].radius {
                     continue;
                 }
-                c += shade_listed(lights[i], to_light, d, s.n, s.v, s.m);
+                c += shade_listed(lights[i], s.p, to_light, d, s.n, s.v, s.m);
             }
         }
     }
@@ -198,7 +198,7 @@ fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: S
             if !infinite && d >= light.radius {
                 continue;
             }
-            c += shade_listed(light, to_light, d, s.n, s.v, s.m);
+            c += shade_listed(light, s.p, to_light, d, s.n, s.v, s.m);
         }
         workgroupBarrier();
         if more == 0u {

@@ -22,7 +22,7 @@ fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mate
         if !infinite && d >= lights[i].radius {
             continue;
         }
-        c += shade_listed(lights[i], to_light, d, n, v, m);
+        c += shade_listed(lights[i], p, to_light, d, n, v, m);
     }
     return lights_checked(c);
 }
@@ -46,7 +46,7 @@ fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mater
             if !infinite && d >= lights[i].radius {
                 continue;
             }
-            c += shade_listed(lights[i], to_light, d, n, v, m);
+            c += shade_listed(lights[i], p, to_light, d, n, v, m);
         }
     }
     return lights_checked(c);

@@ -22,6 +22,7 @@ mod hdr_f16;
 mod materials;
 mod msaa;
 mod point_lights;
+mod shadows;
 mod steady;
 mod transparent;
 mod visibility;

@@ -27,10 +27,10 @@ pub const SHADOW_RAYS: ShaderDef = ShaderDef {
     name: "shadow_rays.trace",
     consts: &[
         WgslConst::U32("BVH_GROUP", 1),
-        WgslConst::U32("BVH_STACK", BVH_STACK),
+        WgslConst::U32("BVH_BINDING", 0),
     ],
     files: &[
-        crate::shader_file!("common/bvh.wgsl"),
+        crate::shaders::BVH,
         crate::shader_file!("rays/shadow_rays.wgsl"),
     ],
 };
@@ -91,9 +91,13 @@ impl SceneBvh {
     pub fn of_triangles(tris: &[[Vec3; 3]]) -> Result<Self, GpuError> {
         let start = std::time::Instant::now();
         if tris.is_empty() {
-            // One empty leaf: every ray passes.
+            // One leaf of one degenerate triangle (of no source), which no segment crosses.
             return Ok(Self {
-                nodes: vec![BvhNode::default()],
+                nodes: vec![BvhNode {
+                    count: 1,
+                    ..BvhNode::default()
+                }],
+                triangles: vec![BvhTriangle::default()],
                 depth: 1,
                 build: start.elapsed(),
                 ..Self::default()

@@ -77,7 +77,9 @@ pub fn wgsl_prelude() -> String {
          const PHI_BITS: u32 = {phi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
          const F0_DIELECTRIC: f32 = {f0:?};\n\
-         const VERTEX_WORDS: u32 = {vertex_words}u;\n{models}",
+         const VERTEX_WORDS: u32 = {vertex_words}u;\n\
+         const BVH_STACK: u32 = {bvh_stack}u;\n\
+         const SHADOW_OFFSET: f32 = {shadow_offset:?};\n{models}",
         pi = std::f32::consts::PI,
         d_min = light::D_MIN as f32,
         spot_eps = light::SPOT_EPS as f32,
@@ -87,6 +89,8 @@ pub fn wgsl_prelude() -> String {
         min_roughness = manylights_scene::brdf::MIN_ROUGHNESS as f32,
         f0 = manylights_scene::brdf::F0_DIELECTRIC as f32,
         vertex_words = size_of::<GpuVertex>() / 4,
+        bvh_stack = crate::bvh::BVH_STACK,
+        shadow_offset = manylights_scene::ray::SHADOW_OFFSET,
         models = manylights_scene::Model::ALL
             .iter()
             .map(|m| format!(

@@ -1,6 +1,8 @@
 //! The scene on the GPU: one vertex buffer and one index buffer for all primitives (the material
 //! index travels per vertex), the lights and materials as storage buffers, and the frame uniform.
-//! Group 0 of every pass binds: 0 = frame, 1 = lights, 2 = materials.
+//! Group 0 of every pass binds: 0 = frame, 1 = lights, 2 = materials, 3 and 4 = the BVH of the
+//! opaque triangles that shadow rays walk ([`GpuScene::build_bvh`]; until it is built, a BVH of
+//! no triangle).
 
 use bytemuck::cast_slice;
 use glam::Vec3;
@@ -8,6 +10,7 @@ use manylights_scene::hierarchy::Band;
 use manylights_scene::{Camera, Light, Scene};
 use wgpu::util::DeviceExt;
 
+use crate::bvh::{GpuBvh, SceneBvh};
 use crate::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT};
 use crate::light_model::{LightModel, LightPath, Ranges};
 use crate::{GpuContext, GpuError};
@@ -45,6 +48,11 @@ pub struct GpuScene {
     pub layout: wgpu::BindGroupLayout,
     /// Group 0.
     pub bind_group: wgpu::BindGroup,
+    /// The BVH group 0 binds: the scene's, once built ([`GpuScene::build_bvh`]), or one of no
+    /// triangle.
+    bvh: GpuBvh,
+    /// Whether `bvh` is the scene's.
+    has_bvh: bool,
 }
 
 /// The layout of group 0, which every pass binds: the frame uniform, the lights and the
@@ -77,6 +85,8 @@ fn group0_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
             },
             storage(1),
             storage(2),
+            storage(3),
+            storage(4),
         ],
     })
 }
@@ -214,11 +224,12 @@ impl GpuScene {
             wgpu::BufferUsages::UNIFORM | copy,
         );
         let layout = group0_layout(d);
+        let bvh = GpuBvh::upload(ctx, &SceneBvh::of_triangles(&[])?)?;
         let bind_group = crate::pipeline::buffers_group(
             d,
             "scene.group0",
             &layout,
-            &[&frame_buf, &lights_buf, &materials_buf],
+            &[&frame_buf, &lights_buf, &materials_buf, &bvh.nodes, &bvh.triangles],
         );
         Ok(Self {
             vertices: vertices_buf,
@@ -236,7 +247,42 @@ impl GpuScene {
             path,
             layout,
             bind_group,
+            bvh,
+            has_bvh: false,
         })
+    }
+
+    /// Builds the BVH of `scene`'s opaque triangles (the scene this was uploaded from) on the
+    /// CPU, uploads it and binds it in group 0, for shading with shadow rays; returns it. An
+    /// error where its tree is deeper than the traversal's stack or a buffer exceeds the
+    /// device's storage bindings.
+    pub fn build_bvh(&mut self, ctx: &GpuContext, scene: &Scene) -> Result<SceneBvh, GpuError> {
+        let built = SceneBvh::build(scene)?;
+        self.bvh = GpuBvh::upload(ctx, &built)?;
+        self.has_bvh = true;
+        self.bind_group = crate::pipeline::buffers_group(
+            &ctx.device,
+            "scene.group0",
+            &self.layout,
+            &[
+                &self.frame,
+                &self.lights,
+                &self.materials,
+                &self.bvh.nodes,
+                &self.bvh.triangles,
+            ],
+        );
+        Ok(built)
+    }
+
+    /// Whether the scene's BVH is built and bound ([`GpuScene::build_bvh`]).
+    pub fn has_bvh(&self) -> bool {
+        self.has_bvh
+    }
+
+    /// The BVH group 0 binds (of no triangle until [`GpuScene::build_bvh`]).
+    pub fn bvh(&self) -> &GpuBvh {
+        &self.bvh
     }
 
     /// The frame uniform of `camera` rendering a `width` x `height` target with the view's

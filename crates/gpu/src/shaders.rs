@@ -84,8 +84,11 @@ pub const VERTEX: ShaderFile = shader_file!("common/vertex.wgsl");
 pub const LIGHT: ShaderFile = shader_file!("common/light.wgsl");
 /// Material struct and the scene's light and material buffers (after LIGHT).
 pub const SCENE: ShaderFile = shader_file!("common/scene.wgsl");
-/// Material and shading model.
+/// Material and shading model (after [`BVH`], whose shadow rays it casts with `SHADOWS`).
 pub const SHADING: ShaderFile = shader_file!("common/shading.wgsl");
+/// The BVH of the opaque triangles and the any-hit shadow ray through it (after [`SCENE`],
+/// which places its buffers in group 0, or with `BVH_GROUP` and `BVH_BINDING` of its own).
+pub const BVH: ShaderFile = shader_file!("common/bvh.wgsl");
 /// The material models (`shaders/common/brdf.wgsl`), composed before [`SHADING`].
 pub const BRDF: ShaderFile = shader_file!("common/brdf.wgsl");
 

@@ -22,6 +22,18 @@ pub const MARGIN: f64 = 1e-5;
 /// Below this cosine between a segment and a triangle's normal the segment runs in its plane.
 pub const PARALLEL: f64 = 1e-6;
 
+/// How far a shadow ray's origin is lifted off its surface along the shading normal, relative
+/// to the point's magnitude (at least 1): [`shadow_origin`].
+pub const SHADOW_OFFSET: f32 = 1e-3;
+
+/// The origin of a shadow ray from surface point `p` of unit shading normal `n` (turned towards
+/// the viewer), in f32 as the GPU computes it (`shadow_blocked` in shaders/common/shading.wgsl):
+/// `p + n * SHADOW_OFFSET * max(1, |p|)`, `|p|` the largest coordinate's magnitude, so that the
+/// ray leaves the surface's own triangle at any scale.
+pub fn shadow_origin(p: Vec3, n: Vec3) -> Vec3 {
+    p + n * (SHADOW_OFFSET * p.abs().max_element().max(1.0))
+}
+
 /// Whether a segment is blocked, as far as f64 decides against f32 rounding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Blocked {

@@ -23,6 +23,7 @@ use manylights_gpu::timing::{Category, GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene, LightPath, readback};
 
 use crate::frame_plan::{self, FramePass, PassInfo, Recording, Resource, Work};
+use crate::kinds::Shadows;
 use crate::pipelines::Surfaces;
 use crate::raster::Draw;
 pub(crate) use crate::raster::Loads;
@@ -110,6 +111,8 @@ pub struct Renderer {
     pub(crate) int64_atomics: bool,
     /// The compute rasteriser, built at its first frame.
     pub(crate) compute_visibility: OnceLock<ComputeVisibility>,
+    /// Whether its shading casts shadow rays ([`Renderer::with_shadows`]).
+    pub(crate) shadows: Shadows,
 }
 
 impl Renderer {
@@ -149,6 +152,20 @@ impl Renderer {
             ],
         )?;
         Ok(Self::build(ctx, scene, samples, hdr))
+    }
+
+    /// The renderer with its shading pipelines built to cast `shadows` (none built yet: its
+    /// earlier frames' pipelines are dropped). Frames with shadows need the scene's BVH
+    /// ([`GpuScene::build_bvh`]); [`Renderer::render`] refuses a scene without one.
+    pub fn with_shadows(mut self, shadows: Shadows) -> Self {
+        self.shadows = shadows;
+        self.pipelines.with_shadows(self.light_path, shadows);
+        self
+    }
+
+    /// Whether its shading casts shadow rays.
+    pub fn shadows(&self) -> Shadows {
+        self.shadows
     }
 
     /// The path its shading pipelines are built for ([`GpuScene::light_path`]). A renderer of
@@ -231,6 +248,11 @@ impl Renderer {
         (width, height): (u32, u32),
     ) -> Result<ShadeOutput, ShadeError> {
         ctx.check_resolution(width, height)?;
+        if self.shadows.casts() && !scene.has_bvh() {
+            return Err(ShadeError::NoBvh {
+                shadows: self.shadows,
+            });
+        }
         if self.light_path.point_lights() && self.light_path != scene.light_path() {
             return Err(ShadeError::LightPath {
                 built: self.light_path,

@@ -25,6 +25,16 @@ pub enum ShadeError {
         /// The scene's.
         scene: LightPath,
     },
+    /// Shadows asked of a scene whose BVH is not built.
+    #[error(
+        "shadows {}: the scene has no BVH of its opaque triangles to trace shadow rays through; \
+         build it after the upload (GpuScene::build_bvh)",
+        shadows.name()
+    )]
+    NoBvh {
+        /// The renderer's shadows.
+        shadows: crate::Shadows,
+    },
     /// The backend cannot render this frame as asked.
     #[error("backend {backend}: {why}")]
     Backend {

@@ -13,7 +13,7 @@
 //! blended over the opaque one.
 
 use manylights_gpu::pipeline::{self, entry, storage};
-use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef};
+use manylights_gpu::shaders::{BRDF, BVH, FRAME, LIGHT, SCENE, SHADING, ShaderDef};
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback};
 use wgpu::util::DeviceExt;
 
@@ -27,6 +27,7 @@ pub const SHADER: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BVH,
         BRDF,
         SHADING,
         manylights_gpu::shader_file!("render/reference_infinite.wgsl"),

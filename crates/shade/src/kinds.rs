@@ -106,6 +106,35 @@ impl Backend {
     }
 }
 
+/// Whether shading casts shadow rays (`shadows` of experiments, `--shadows` of the CLI).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Shadows {
+    /// No shadow: every light shines through walls (the default, as every figure before).
+    #[default]
+    Off,
+    /// A shadow ray for every (pixel, light) pair the shading evaluates with a nonzero
+    /// contribution, from the surface point lifted along its shading normal to the light,
+    /// through the scene's BVH of opaque triangles (`SHADOWS`, shaders/common/shading.wgsl), in
+    /// the shading pass itself: forward's fragment shader, deferred's and the visibility
+    /// buffer's lighting pass. The scene's BVH must be built (`GpuScene::build_bvh`).
+    Exact,
+}
+
+impl Shadows {
+    /// Its name (`off`, `exact`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Exact => "exact",
+        }
+    }
+
+    /// Whether it casts shadow rays.
+    pub fn casts(self) -> bool {
+        self != Self::Off
+    }
+}
+
 /// How the visibility backend finds each pixel's triangle.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub enum VisibilityPass {

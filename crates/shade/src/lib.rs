@@ -23,6 +23,7 @@ pub mod vis_compute;
 pub mod visibility;
 
 pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput, VisibilityPass};
+pub use kinds::Shadows;
 pub use error::ShadeError;
 pub use image_out::HdrImage;
 pub use infinite::InfiniteReference;

@@ -11,7 +11,7 @@ use std::sync::OnceLock;
 use crate::backends::{
     Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer, VISIBILITY_ID,
 };
-use crate::kinds::VisibilityPass;
+use crate::kinds::{Shadows, VisibilityPass};
 use crate::shaders::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, VISIBILITY, deferred_swaps};
 pub use crate::shaders::{LIST_SHADING, SURFACE};
 
@@ -29,6 +29,12 @@ fn texture(sample_type: wgpu::TextureSampleType, samples: u32) -> wgpu::BindingT
         view_dimension: wgpu::TextureViewDimension::D2,
         multisampled: samples > 1,
     }
+}
+
+/// The shading pipelines' override constants of `path` and `shadows`.
+fn shading_constants(path: manylights_gpu::LightPath, shadows: Shadows) -> [(&'static str, f64); 4] {
+    let [a, b, c] = path.constants();
+    [a, b, c, ("SHADOWS", f64::from(u8::from(shadows.casts())))]
 }
 
 impl Renderer {
@@ -101,7 +107,7 @@ impl Renderer {
             hdr,
             opaque_models: scene.opaque_models.iter().map(|&(m, _)| m).collect(),
             opaque_model_mask: scene.opaque_model_mask(),
-            lights: light_path.constants(),
+            lights: shading_constants(light_path, Shadows::Off),
             glass_layer: samples > 1 && transparent,
             forward_lists,
             deferred_lists,
@@ -129,6 +135,7 @@ impl Renderer {
             visibility_pass: VisibilityPass::default(),
             int64_atomics: ctx.features.int64_atomics,
             compute_visibility: OnceLock::new(),
+            shadows: Shadows::Off,
             lookup_bounds,
             pipelines,
         }
@@ -225,8 +232,9 @@ pub(crate) struct Pipelines {
     /// The material model of each of the scene's opaque draws (`GpuScene::opaque_models`).
     opaque_models: Vec<u32>,
     opaque_model_mask: u32,
-    /// `POINT_LIGHTS`, `STOCHASTIC_POINTS` and `BAND_POINTS`, as the renderer was built for.
-    lights: [(&'static str, f64); 3],
+    /// `POINT_LIGHTS`, `STOCHASTIC_POINTS` and `BAND_POINTS`, as the renderer was built for,
+    /// and `SHADOWS` (shading.wgsl).
+    lights: [(&'static str, f64); 4],
     /// With MSAA over transparent surfaces: deferred composites them from a layer of their own.
     glass_layer: bool,
     pub forward_lists: wgpu::BindGroupLayout,
@@ -246,6 +254,15 @@ pub(crate) struct Pipelines {
 }
 
 impl Pipelines {
+    /// The same pipelines, none built yet, shading with `shadows`.
+    pub fn with_shadows(&mut self, path: manylights_gpu::LightPath, shadows: Shadows) {
+        self.lights = shading_constants(path, shadows);
+        self.forward = OnceLock::new();
+        self.glass = OnceLock::new();
+        self.naive = OnceLock::new();
+        self.deferred = Default::default();
+    }
+
     /// Builds what a frame of `backend` draws with, where not built yet: before a frame's
     /// encoder opens, so that its recording time holds no compiling.
     pub fn prepare(&self, backend: Backend, transparent: bool, compute: bool) {
@@ -354,7 +371,8 @@ impl Pipelines {
                     Some((entry, &[target])),
                     depth,
                     self.samples,
-                    &sample_constants(self.samples),
+                    // SHADOWS, the shading's last constant.
+                    &[&sample_constants(self.samples)[..], &self.lights[3..]].concat(),
                 )
             };
             Naive {

@@ -6,11 +6,12 @@
 
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
-use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
+use manylights_gpu::shaders::{BRDF, BVH, FRAME, LIGHT, SCENE, SHADING, ShaderDef, VERTEX};
 use manylights_gpu::timing::{GpuTimer, PassTiming};
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback, shader_file};
 
 use crate::HdrImage;
+use crate::kinds::Shadows;
 
 /// The reference shader.
 pub const SHADER: ShaderDef = ShaderDef {
@@ -20,6 +21,7 @@ pub const SHADER: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BVH,
         BRDF,
         SHADING,
         VERTEX,
@@ -55,12 +57,25 @@ pub struct ReferenceRenderer {
     /// Transparent surfaces, blended into the colour target.
     transparent: wgpu::RenderPipeline,
     samples: u32,
+    shadows: Shadows,
 }
 
 impl ReferenceRenderer {
     /// Builds the pipelines.
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
-        Self::build(ctx, scene, 1)
+        Self::build(ctx, scene, 1, Shadows::Off)
+    }
+
+    /// The pipelines again, shading with `shadows`: `Shadows::Exact`, a shadow ray for every
+    /// light that adds radiance at a pixel (the shadowed reference at the scene's light ranges;
+    /// its frames need the scene's BVH, `GpuScene::build_bvh`).
+    pub fn with_shadows(self, ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
+        Self::build(ctx, scene, self.samples, shadows)
+    }
+
+    /// Whether its shading casts shadow rays.
+    pub fn shadows(&self) -> Shadows {
+        self.shadows
     }
 
     /// The pipelines for frames of `samples` samples a pixel (MSAA where more than one); an
@@ -71,13 +86,14 @@ impl ReferenceRenderer {
         samples: u32,
     ) -> Result<Self, GpuError> {
         ctx.check_msaa_of(samples, &[manylights_gpu::prepass::DEPTH_FORMAT, HDR])?;
-        Ok(Self::build(ctx, scene, samples))
+        Ok(Self::build(ctx, scene, samples, Shadows::Off))
     }
 
-    fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32) -> Self {
+    fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32, shadows: Shadows) -> Self {
         let module = SHADER.create(&ctx.device);
         let t = pipeline::target(HDR);
-        let pipeline = pipeline::raster_msaa(
+        let constants = [("SHADOWS", f64::from(u8::from(shadows.casts())))];
+        let pipeline = pipeline::raster_with(
             &ctx.device,
             "shade.reference",
             &module,
@@ -85,6 +101,7 @@ impl ReferenceRenderer {
             Some(("fs_reference", &[t.clone(), t.clone(), t.clone()])),
             pipeline::DepthTest::Equal,
             samples,
+            &constants,
         );
         let surface = pipeline::raster_msaa(
             &ctx.device,
@@ -101,7 +118,7 @@ impl ReferenceRenderer {
             blend: None,
             write_mask: wgpu::ColorWrites::empty(),
         });
-        let transparent = pipeline::raster_msaa(
+        let transparent = pipeline::raster_with(
             &ctx.device,
             "shade.reference_transparent",
             &module,
@@ -112,6 +129,7 @@ impl ReferenceRenderer {
             )),
             pipeline::DepthTest::Less,
             samples,
+            &constants,
         );
         Self {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
@@ -119,6 +137,7 @@ impl ReferenceRenderer {
             surface,
             transparent,
             samples,
+            shadows,
         }
     }
 
@@ -186,6 +205,13 @@ impl ReferenceRenderer {
     ) -> Result<ReferenceFrame, GpuError> {
         let surfaces_only = std::ptr::eq(opaque, &self.surface);
         ctx.check_resolution(width, height)?;
+        if self.shadows.casts() && !surfaces_only && !scene.has_bvh() {
+            return Err(GpuError::Unsupported(format!(
+                "the reference with shadows {}: the scene has no BVH of its opaque triangles to \
+                 trace shadow rays through; build it after the upload (GpuScene::build_bvh)",
+                self.shadows.name()
+            )));
+        }
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let target = |label| pipeline::texture_2d(&ctx.device, label, (width, height), HDR, usage);
         let (color, position, normal) = (

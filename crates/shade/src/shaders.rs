@@ -4,7 +4,7 @@
 use manylights_cull::layout::CULL_CONSTS;
 use manylights_cull::shaders::{GEOMETRY, LOOKUP, LOOKUP_DEPTH, LOOKUP_FLOAT_SWAPS};
 use manylights_gpu::shader_file;
-use manylights_gpu::shaders::{BRDF, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
+use manylights_gpu::shaders::{BRDF, BVH, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
 
 use crate::kinds::HdrFormat;
 
@@ -24,6 +24,7 @@ pub const FORWARD: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BVH,
         BRDF,
         SHADING,
         VERTEX,
@@ -42,6 +43,7 @@ pub const GBUFFER: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BVH,
         BRDF,
         SHADING,
         VERTEX,
@@ -64,6 +66,7 @@ pub const DEFERRED: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BVH,
         BRDF,
         SHADING,
         GEOMETRY,
@@ -86,6 +89,7 @@ pub const DEFERRED_MSAA: ShaderDef = ShaderDef {
         FRAME,
         LIGHT,
         SCENE,
+        BVH,
         BRDF,
         SHADING,
         GEOMETRY,

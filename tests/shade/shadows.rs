@@ -1,0 +1,193 @@
+//! Shadows (`Shadows::Exact`): a shadow ray for every light that adds radiance at a pixel,
+//! through the scene's BVH. The shadowed reference against the shading model and the rays in
+//! f64 at its own surface points; every backend over every strategy, and naive forward, against
+//! the shadowed reference at the tolerances of the unshadowed tests; a frame asked for shadows
+//! of a scene without a BVH is an error.
+
+use glam::DVec3;
+use manylights_cull::CullSettings;
+use manylights_gpu::GpuScene;
+use manylights_scene::light::{Range, shade};
+use manylights_scene::ray::{Blocked, opaque_triangles, segment, shadow_origin};
+use manylights_shade::accuracy::compare;
+use manylights_shade::{Backend, ReferenceRenderer, Renderer, ShadeError, Shadows};
+
+use super::{CULLED, common, naive_against, scene, strategies, within_tolerance};
+
+/// The shadowed reference (`shade.reference` with `SHADOWS`) at every third pixel of the atrium
+/// and the pillars: its colour is the f64 shading model summed over the lights whose shadow ray
+/// from the pixel's surface point (lifted as `ray::shadow_origin` lifts it) is not blocked in
+/// f64, within 1e-3 of the peak (as the unshadowed reference's f64 tests); pixels with a ray f32
+/// cannot decide (`Blocked::Ambiguous`) are skipped, at most one in 20 (none on lavapipe). Shadows
+/// darken at least one pixel in 25, and brighten none.
+#[test]
+fn the_shadowed_reference_matches_the_rays_in_f64() {
+    let ctx = common::gpu();
+    let (w, h) = (48, 32);
+    for name in ["atrium", "pillars"] {
+        let s = scene(name);
+        let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        gpu_scene.build_bvh(&ctx, &s).unwrap();
+        let plain = ReferenceRenderer::new(&ctx, &gpu_scene);
+        let unshadowed = plain.render(&ctx, &gpu_scene, w, h).unwrap();
+        let shadowed = plain
+            .with_shadows(&ctx, &gpu_scene, Shadows::Exact)
+            .render(&ctx, &gpu_scene, w, h)
+            .unwrap();
+        let tris = opaque_triangles(&s);
+        let eye = s.camera.position.as_dvec3();
+        let peak = f64::from(unshadowed.color.peak());
+        let (mut checked, mut undecided, mut darker, mut blocked_rays) = (0, 0, 0, 0);
+        let mut worst = 0.0f64;
+        for y in (0..h).step_by(3) {
+            for x in (0..w).step_by(3) {
+                let k = (y * w + x) as usize;
+                let (pos, nrm) = (shadowed.position.data[k], shadowed.normal.data[k]);
+                if pos[3] == 0.0 {
+                    continue;
+                }
+                let p32 = glam::Vec3::new(pos[0], pos[1], pos[2]);
+                let n32 = glam::Vec3::new(nrm[0], nrm[1], nrm[2]);
+                let (p, n) = (p32.as_dvec3(), n32.as_dvec3());
+                let v = (eye - p).normalize();
+                let m = &s.materials[nrm[3] as usize];
+                let origin = shadow_origin(p32, n32);
+                let mut want = m.emissive.as_dvec3();
+                let mut decided = true;
+                for light in &s.lights {
+                    let c = shade(p, n, v, m, std::slice::from_ref(light), Range::Windowed)
+                        - m.emissive.as_dvec3();
+                    if c == DVec3::ZERO {
+                        continue;
+                    }
+                    match segment(&tris, origin, light.position) {
+                        Blocked::No => want += c,
+                        Blocked::Yes => blocked_rays += 1,
+                        Blocked::Ambiguous => decided = false,
+                    }
+                }
+                let got = shadowed.color.data[k];
+                let plain_px = unshadowed.color.data[k];
+                for c in 0..3 {
+                    assert!(
+                        got[c] <= plain_px[c] * (1.0 + 1e-5) + 1e-12,
+                        "{name} ({x}, {y}): a shadow brightens the pixel: {got:?} vs {plain_px:?}"
+                    );
+                }
+                if got[..3].iter().zip(&plain_px[..3]).any(|(a, b)| *a < b * 0.99) {
+                    darker += 1;
+                }
+                if !decided {
+                    undecided += 1;
+                    continue;
+                }
+                checked += 1;
+                let err = (DVec3::new(got[0].into(), got[1].into(), got[2].into()) - want)
+                    .abs()
+                    .max_element();
+                worst = worst.max(err / peak);
+                assert!(
+                    err <= 1e-3 * peak,
+                    "{name} ({x}, {y}): shadowed reference {got:?}, f64 {want:?} (peak {peak})"
+                );
+            }
+        }
+        println!(
+            "{name}: {checked} pixels checked, {undecided} undecided, {darker} darkened, \
+             {blocked_rays} rays blocked; worst error {worst:.2e} of the peak"
+        );
+        assert!(checked > 100, "{name}: only {checked} pixels checked");
+        assert!(
+            undecided * 20 <= checked,
+            "{name}: {undecided} undecided pixels of {checked}"
+        );
+        assert!(
+            blocked_rays > 0 && darker * 25 >= checked,
+            "{name}: shadows must darken a share of the pixels: {darker} of {checked}"
+        );
+    }
+}
+
+/// Every strategy x backend (forward, deferred, the stored-position deferred, the visibility
+/// buffer rasterised in compute) and naive forward with `Shadows::Exact`, against the shadowed
+/// reference at the tolerances of the unshadowed frames; the unshadowed frame differs from it.
+#[test]
+fn every_strategy_and_backend_casts_the_reference_shadows() {
+    let ctx = common::gpu();
+    let (w, h) = (64, 48);
+    let s = scene("atrium");
+    let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    gpu_scene.build_bvh(&ctx, &s).unwrap();
+    let reference = ReferenceRenderer::new(&ctx, &gpu_scene)
+        .with_shadows(&ctx, &gpu_scene, Shadows::Exact)
+        .render(&ctx, &gpu_scene, w, h)
+        .unwrap()
+        .color;
+    let renderer = Renderer::new(&ctx, &gpu_scene).with_shadows(Shadows::Exact);
+    assert_eq!(renderer.shadows(), Shadows::Exact);
+    let settings = CullSettings::for_camera(&s.camera);
+    let (_, e) = naive_against(&ctx, &renderer, &gpu_scene, &settings, (w, h), &reference);
+    assert!(
+        within_tolerance(&e, Backend::NaiveForward),
+        "naive: {e:?}"
+    );
+    let unshadowed = Renderer::new(&ctx, &gpu_scene);
+    for strategy in strategies() {
+        for backend in CULLED {
+            let what = format!("{} {}", strategy.name(), backend.name());
+            let out = renderer
+                .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
+                .unwrap();
+            let e = compare(&out.color, &reference, 1.0);
+            assert!(within_tolerance(&e, backend), "{what}: {e:?}");
+            assert_eq!(out.color.non_finite_count(), 0, "{what}");
+        }
+    }
+    let lit = unshadowed
+        .render(
+            &ctx,
+            &gpu_scene,
+            Backend::Deferred,
+            &strategies()[0],
+            &settings,
+            (w, h),
+        )
+        .unwrap();
+    let e = compare(&lit.color, &reference, 1.0);
+    assert!(
+        !within_tolerance(&e, Backend::Deferred),
+        "the unshadowed frame must differ from the shadowed reference: {e:?}"
+    );
+}
+
+/// A renderer with shadows refuses a scene whose BVH is not built, and says how to build it;
+/// so does the shadowed reference.
+#[test]
+fn shadows_without_a_bvh_are_an_error() {
+    let ctx = common::gpu();
+    let (w, h) = (32, 18);
+    let s = scene("atrium");
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    assert!(!gpu_scene.has_bvh());
+    let renderer = Renderer::new(&ctx, &gpu_scene).with_shadows(Shadows::Exact);
+    let settings = CullSettings::for_camera(&s.camera);
+    let err = renderer
+        .render(
+            &ctx,
+            &gpu_scene,
+            Backend::Forward,
+            &strategies()[0],
+            &settings,
+            (w, h),
+        )
+        .err()
+        .expect("shadows without a BVH must be refused");
+    assert!(matches!(err, ShadeError::NoBvh { .. }), "{err}");
+    assert!(err.to_string().contains("build_bvh"), "{err}");
+    let err = ReferenceRenderer::new(&ctx, &gpu_scene)
+        .with_shadows(&ctx, &gpu_scene, Shadows::Exact)
+        .render(&ctx, &gpu_scene, w, h)
+        .err()
+        .expect("the shadowed reference without a BVH must be refused");
+    assert!(err.to_string().contains("build_bvh"), "{err}");
+}
