@@ -9,8 +9,8 @@ use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::RadiusRule;
 use manylights_shade::image_out::{ImageSum, write_atomic};
 use manylights_shade::{
-    Backend, HdrFormat, HdrImage, ReferenceFrame, ReferenceRenderer, Renderer, VisibilityPass,
-    accuracy,
+    Backend, HdrFormat, HdrImage, ReferenceFrame, ReferenceRenderer, Renderer, Shadows,
+    VisibilityPass, accuracy,
 };
 
 use crate::options::{BackendName, SceneArgs, StrategyArgs, print_timings};
@@ -60,6 +60,28 @@ pub(crate) struct RenderArgs {
     /// visibility.
     #[arg(long, value_enum)]
     pub(crate) visibility_pass: Option<VisibilityPassName>,
+    /// Shadows: off (the default: every light shines through walls) or exact (a shadow ray for
+    /// every light that adds radiance at a pixel, through the BVH of the scene's opaque
+    /// triangles, built after the upload), with every backend and the reference; --compare's
+    /// reference is shadowed alike, its infinite-range reference not.
+    #[arg(long, value_enum, default_value_t = ShadowsName::Off)]
+    pub(crate) shadows: ShadowsName,
+}
+
+/// `--shadows`'s values.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ShadowsName {
+    Off,
+    Exact,
+}
+
+impl ShadowsName {
+    pub(crate) fn shadows(self) -> Shadows {
+        match self {
+            Self::Off => Shadows::Off,
+            Self::Exact => Shadows::Exact,
+        }
+    }
 }
 
 /// `--visibility-pass`'s values.
@@ -88,9 +110,20 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
     // With --hierarchy, its lights in place of the scene's, built on the GPU.
     let crate::hierarchy_opt::Shaded {
         scene,
-        gpu_scene,
+        mut gpu_scene,
         as_they_are,
     } = a.upload(&ctx, scene)?;
+    let shadows = args.shadows.shadows();
+    if shadows.casts() {
+        let bvh = gpu_scene.build_bvh(&ctx, &scene)?;
+        println!(
+            "shadows {}: the BVH of {} opaque triangles (depth {}) built in {:.1} ms",
+            shadows.name(),
+            bvh.triangles.len(),
+            bvh.depth,
+            bvh.build.as_secs_f64() * 1e3
+        );
+    }
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();
     let draw = |f: u32| -> Result<()> {
@@ -127,7 +160,8 @@ pub(crate) fn render(args: &RenderArgs) -> Result<()> {
         stochastic: draws.is_some(),
     };
     let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, samples)
-        .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
+        .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?
+        .with_shadows(&ctx, &gpu_scene, shadows);
     let mut outputs: Vec<(PathBuf, image::RgbImage)> = Vec::new();
     let (name, image) = if args.backend == BackendName::Reference {
         let (mean, last) = reference_frames(&ctx, &reference, &gpu_scene, (w, h), frames, &draw)?;
@@ -279,7 +313,8 @@ impl Run<'_> {
             BackendName::NaiveForward | BackendName::Reference => Backend::NaiveForward,
         };
         let mut renderer = Renderer::with_format(ctx, gpu_scene, samples, hdr)
-            .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?;
+            .map_err(|e| anyhow::anyhow!("invalid --msaa {samples}: {e}"))?
+            .with_shadows(args.shadows.shadows());
         renderer.visibility_pass = match args.visibility_pass {
             None | Some(VisibilityPassName::Compute) => VisibilityPass::Compute,
             Some(VisibilityPassName::Raster) => VisibilityPass::Raster,

@@ -28,6 +28,10 @@ pub(crate) struct TuneArgs {
     /// shading: what users pay), or culling and shading alone (for culling studies).
     #[arg(long, value_enum, default_value_t = TuneRank::Frame)]
     pub(crate) rank: TuneRank,
+    /// Shadows of every candidate: off (the default) or exact (a shadow ray for every light
+    /// that adds radiance at a pixel; the candidates ranked by their frames with shadows).
+    #[arg(long, value_enum, default_value_t = crate::render_cmd::ShadowsName::Off)]
+    pub(crate) shadows: crate::render_cmd::ShadowsName,
     /// Start no candidate after this many seconds (those left are listed as untried); a rerun
     /// with the same options and --out resumes where it stopped.
     #[arg(long, default_value_t = 600)]
@@ -122,6 +126,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         msaa: 1,
         hdr: Default::default(),
         visibility_pass: Default::default(),
+        shadows: args.shadows.shadows(),
         materials: a.models()?,
         slack: DEFAULT_SLACK,
         frames: args.frames,

@@ -638,6 +638,34 @@ fn render_visibility_pass_picks_the_raster_or_the_compute_pass() {
     }
 }
 
+/// `render --shadows exact` builds the BVH, shades with shadow rays (darker than `off` against
+/// the unshadowed infinite-range reference, and within tolerance of its own shadowed reference);
+/// a value it does not take is an error naming the option and the values it takes.
+#[test]
+fn render_shadows_exact_casts_shadow_rays() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut energy = Vec::new();
+    for shadows in ["off", "exact"] {
+        let out = tmp.path().join(shadows);
+        let stdout = succeeds(
+            &[
+                "render", "--scene", "pillars", "--lights", "64", "--radius", "4", "--backend",
+                "deferred", "--shadows", shadows, "--compare", "--width", "48", "--height", "32",
+                "--out", out.to_str().unwrap(),
+            ],
+            shadows,
+        );
+        assert_eq!(stdout.contains("BVH of"), shadows == "exact", "{shadows}: {stdout}");
+        assert!(psnr_vs_reference(&stdout) > 60.0, "{shadows}: {stdout}");
+        energy.push(number_after(&stdout, "vs infinite-range reference", "energy "));
+    }
+    assert!(
+        energy[1] < energy[0] - 1e-3,
+        "shadows must take light away: {energy:?}"
+    );
+    rejects(&["--shadows", "soft"], 2, &["--shadows", "off", "exact"]);
+}
+
 /// More lights than the device holds: an error stating the limit. On lavapipe the limit is its
 /// loop limit (llvmpipe ends loops silently after 65,535 iterations per invocation, so it holds
 /// 32,767 lights for the exact oracle's two loops); elsewhere the storage binding (64 bytes a

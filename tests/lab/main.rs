@@ -6,6 +6,7 @@ mod common;
 mod hierarchy;
 mod msaa;
 mod report;
+mod shadows;
 mod stochastic;
 
 use std::path::{Path, PathBuf};

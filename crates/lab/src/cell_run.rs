@@ -106,9 +106,12 @@ impl CellScene {
         let (w, h) = c.resolution;
         ctx.check_resolution(w, h)?;
         let model = LightModel::of_rule(&c.lights.radius, own_lights as u32);
-        let gpu_scene = stage(name, "scene uploaded", || {
+        let mut gpu_scene = stage(name, "scene uploaded", || {
             GpuScene::upload_with(ctx, shaded, model, &poses[0], w, h)
         })?;
+        if c.shadows.casts() {
+            stage(name, "BVH built", || gpu_scene.build_bvh(ctx, shaded))?;
+        }
         let as_they_are = match (&hier, c.accuracy) {
             (Some(_), true) => Some(GpuScene::upload(ctx, &scene, &poses[0], w, h)?),
             _ => None,
@@ -164,7 +167,7 @@ pub(crate) fn run_cell(
     };
     let mut lights = FrameLights::new(ctx, c, &of, hierarchy)?;
     let renderer = stage(name, "pipelines built", || {
-        renderers.get(ctx, &gpu_scene, c.msaa, c.hdr, c.visibility_pass)
+        renderers.get(ctx, &gpu_scene, (c.msaa, c.hdr, c.shadows), c.visibility_pass)
     })
     .map_err(|e| LabError::from(e).during(format!("msaa = {}", c.msaa)))?;
     let settings = |cam: &Camera| CullSettings {
@@ -190,7 +193,10 @@ pub(crate) fn run_cell(
     let moving = lights.moving();
     let reference = c
         .accuracy
-        .then(|| ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa))
+        .then(|| {
+            ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa)
+                .map(|r| r.with_shadows(ctx, &gpu_scene, c.shadows))
+        })
         .transpose()?;
     let infinite = c.accuracy.then(|| InfiniteReference::new(ctx, &gpu_scene));
     // The infinite-range reference is cached in the run folder, except for moving lights.

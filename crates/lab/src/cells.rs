@@ -159,6 +159,9 @@ pub fn params_label(c: &Config) -> String {
     if c.visibility_pass != manylights_shade::VisibilityPass::Compute {
         p.push_str(&format!(";visibility_pass={}", c.visibility_pass.name()));
     }
+    if c.shadows.casts() {
+        p.push_str(&format!(";shadows={}", c.shadows.name()));
+    }
     if !c.materials.is_empty() {
         p.push_str(&format!(";materials={}", models_label(&c.materials)));
     }
@@ -553,6 +556,9 @@ fn apply_variant(c: &mut Config, v: Variant) -> (&'static str, String) {
     }
     if let Some(pass) = v.visibility_pass {
         c.visibility_pass = pass;
+    }
+    if let Some(s) = v.shadows {
+        c.shadows = s;
     }
     let auto = format!(
         "{}+{}",

@@ -13,7 +13,7 @@ use manylights_scene::procedural::{
     AtriumParams, Cis5650Params, CityParams, PillarsParams, ProceduralScene, TopdownParams,
 };
 use manylights_scene::{LightGenerator, LightSpec, Model, Motion, RadiusRule};
-use manylights_shade::{Backend, HdrFormat, VisibilityPass};
+use manylights_shade::{Backend, HdrFormat, Shadows, VisibilityPass};
 use serde::{Deserialize, Serialize};
 
 pub use crate::camera_spec::{CameraSpec, Pose};
@@ -140,6 +140,9 @@ pub struct Variant {
     /// The visibility backend's pass override (`Compute` or `Raster`).
     #[serde(default)]
     pub visibility_pass: Option<VisibilityPass>,
+    /// Shadows override (`Off` or `Exact`).
+    #[serde(default)]
+    pub shadows: Option<Shadows>,
 }
 
 /// One value of the `settings` sweep axis: a scene, lights, camera and resolution (and how
@@ -301,6 +304,14 @@ pub struct Config {
     /// `visibility_pass=raster` in its `params`.)
     #[serde(default, skip_serializing_if = "is_compute")]
     pub visibility_pass: VisibilityPass,
+    /// Shadows: `Off` (the default: every light shines through walls) or `Exact`, a shadow ray
+    /// for every light that adds radiance at a shaded point, through the BVH of the scene's
+    /// opaque triangles, built for the cell (`manylights_shade::Shadows`); the windowed
+    /// reference is shadowed alike, so PSNR and FLIP stay the implementation check (the
+    /// infinite-range reference is not shadowed yet). (Left out of a cell's identity when
+    /// `Off`; `shadows=exact` in its `params`.)
+    #[serde(default, skip_serializing_if = "is_off")]
+    pub shadows: Shadows,
     /// Material models to give the scene's surfaces, in turns (`manylights_scene::material::
     /// assign_models`): `[Ggx]` makes every surface GGX; `[BlinnPhong, Ggx, Sheen, ClearCoat,
     /// Wrap]` mixes five models in one frame, each material's parameters carried over
@@ -430,6 +441,10 @@ fn is_one(n: &u32) -> bool {
 
 fn is_f32(h: &HdrFormat) -> bool {
     *h == HdrFormat::F32
+}
+
+fn is_off(s: &Shadows) -> bool {
+    *s == Shadows::Off
 }
 
 fn is_compute(p: &VisibilityPass) -> bool {

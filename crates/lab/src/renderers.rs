@@ -10,13 +10,13 @@
 use manylights_gpu::{GpuContext, GpuError, GpuScene, LightPath};
 use manylights_scene::gltf_import::ImportReport;
 use manylights_scene::{Camera, Scene};
-use manylights_shade::{HdrFormat, ReferenceFrame, Renderer, VisibilityPass};
+use manylights_shade::{HdrFormat, ReferenceFrame, Renderer, Shadows, VisibilityPass};
 
 use crate::experiment::Config;
 
 /// What a renderer is built for: samples a pixel, glass, the opaque material models in order,
-/// the lights' path, the lit image's format.
-type Key = (u32, bool, Vec<u32>, LightPath, HdrFormat);
+/// the lights' path, the lit image's format, shadows.
+type Key = (u32, bool, Vec<u32>, LightPath, HdrFormat, Shadows);
 
 /// The renderers built so far in a run (the most recent [`Renderers::KEEP`]).
 #[derive(Default)]
@@ -27,14 +27,13 @@ impl Renderers {
     const KEEP: usize = 4;
 
     /// A renderer for `scene` at `samples` samples a pixel into a lit image of format `hdr`
-    /// (one built before for a scene laid out alike, or a new one), its visibility backend
-    /// drawn by `visibility_pass`.
+    /// (one built before for a scene laid out alike, or a new one), casting `shadows`, its
+    /// visibility backend drawn by `visibility_pass`.
     pub fn get(
         &mut self,
         ctx: &GpuContext,
         scene: &GpuScene,
-        samples: u32,
-        hdr: HdrFormat,
+        (samples, hdr, shadows): (u32, HdrFormat, Shadows),
         visibility_pass: VisibilityPass,
     ) -> Result<&Renderer, GpuError> {
         let key = (
@@ -47,11 +46,12 @@ impl Renderers {
                 .collect(),
             scene.light_path(),
             hdr,
+            shadows,
         );
         let i = match self.0.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let renderer = Renderer::with_format(ctx, scene, samples, hdr)?;
+                let renderer = Renderer::with_format(ctx, scene, samples, hdr)?.with_shadows(shadows);
                 if self.0.len() == Self::KEEP {
                     self.0.remove(0);
                 }
