@@ -191,3 +191,71 @@ fn shadows_without_a_bvh_are_an_error() {
         .expect("the shadowed reference without a BVH must be refused");
     assert!(err.to_string().contains("build_bvh"), "{err}");
 }
+
+/// Glass receives shadows and casts none, with and without MSAA: over the pillars with their
+/// glass panes, forward at 1 and 4 samples a pixel and deferred at one within tolerance of the
+/// shadowed reference at the same count (deferred at 4 within a FLIP of 0.1: shadows double its
+/// error of edges lit apart, tests/shade/msaa.rs); and wherever the glass covers nothing (the unshadowed references
+/// with and without the panes agree), the shadowed references agree too: no pane blocks a ray.
+#[test]
+fn glass_receives_shadows_and_casts_none_with_msaa() {
+    let ctx = common::gpu();
+    let (w, h) = (64, 36);
+    let glass = super::transparent::glass_scene("pillars");
+    let plain = scene("pillars");
+    let settings = CullSettings::for_camera(&glass.camera);
+    let reference = |s: &manylights_scene::Scene, samples: u32, shadows: Shadows| {
+        let mut gpu_scene = GpuScene::upload(&ctx, s, &s.camera, w, h).unwrap();
+        gpu_scene.build_bvh(&ctx, s).unwrap();
+        let image = ReferenceRenderer::with_samples(&ctx, &gpu_scene, samples)
+            .unwrap()
+            .with_shadows(&ctx, &gpu_scene, shadows)
+            .render(&ctx, &gpu_scene, w, h)
+            .unwrap()
+            .color;
+        (gpu_scene, image)
+    };
+    let (_, plain_lit) = reference(&plain, 1, Shadows::Off);
+    let (_, plain_shadowed) = reference(&plain, 1, Shadows::Exact);
+    let (_, glass_lit) = reference(&glass, 1, Shadows::Off);
+    for samples in [1, 4] {
+        let (gpu_scene, shadowed) = reference(&glass, samples, Shadows::Exact);
+        if samples == 1 {
+            let clear: Vec<usize> = (0..plain_lit.data.len())
+                .filter(|&k| plain_lit.data[k] == glass_lit.data[k])
+                .collect();
+            assert!(clear.len() > 100, "{} pixels without glass", clear.len());
+            let dark = clear
+                .iter()
+                .filter(|&&k| plain_shadowed.data[k] != plain_lit.data[k])
+                .count();
+            assert!(dark > 10, "shadows must fall where no glass is: {dark}");
+            for &k in &clear {
+                assert_eq!(
+                    shadowed.data[k], plain_shadowed.data[k],
+                    "pixel {k}: a pane casts a shadow"
+                );
+            }
+        }
+        let renderer = Renderer::with_samples(&ctx, &gpu_scene, samples)
+            .unwrap()
+            .with_shadows(Shadows::Exact);
+        for backend in [Backend::Forward, Backend::Deferred] {
+            for strategy in [&strategies()[0], &strategies()[4]] {
+                let what = format!("{samples}x {} {}", backend.name(), strategy.name());
+                let out = renderer
+                    .render(&ctx, &gpu_scene, backend, strategy, &settings, (w, h))
+                    .unwrap();
+                let e = compare(&out.color, &shadowed, 1.0);
+                if backend == Backend::Deferred && samples > 1 {
+                    // Measured on lavapipe: FLIP 0.062, energy +0.43 (unshadowed 0.034, +0.07):
+                    // shadow boundaries double deferred MSAA's error (its cause not yet
+                    // established; docs/bench/HISTORY.md, session 48).
+                    assert!(e.flip_mean < 0.1, "{what}: {e:?}");
+                } else {
+                    assert!(within_tolerance(&e, backend), "{what}: {e:?}");
+                }
+            }
+        }
+    }
+}
