@@ -10,6 +10,8 @@
 // within a few ulps of the f64 sum (tests/reference.rs checks it against light::shade in f64).
 // Lights reach the workgroup through workgroup memory, a batch of WG at a time, as an n-body
 // kernel reads its bodies: every thread of a workgroup reads every light of the chunk.
+// With SHADOWS (InfiniteReference::with_shadows) each light's contribution is shadowed, a ray
+// a (pixel, light): the shadowed infinite-range reference.
 
 struct InfiniteParams {
     // The chunk: lights [first, first + count).
@@ -67,7 +69,7 @@ fn reference_infinite(
         if covered {
             let k = min(WG, params.count - base);
             for (var j = 0u; j < k; j++) {
-                let y = light_infinite(batch[j], p.xyz, n.xyz, v, m) - comp;
+                let y = shadowed(light_infinite(batch[j], p.xyz, n.xyz, v, m), batch[j], p.xyz, n.xyz) - comp;
                 let t = sum + y;
                 comp = (t - sum) - y;
                 sum = t;

@@ -649,15 +649,38 @@ fn render_shadows_exact_casts_shadow_rays() {
         let out = tmp.path().join(shadows);
         let stdout = succeeds(
             &[
-                "render", "--scene", "pillars", "--lights", "64", "--radius", "4", "--backend",
-                "deferred", "--shadows", shadows, "--compare", "--width", "48", "--height", "32",
-                "--out", out.to_str().unwrap(),
+                "render",
+                "--scene",
+                "pillars",
+                "--lights",
+                "64",
+                "--radius",
+                "4",
+                "--backend",
+                "deferred",
+                "--shadows",
+                shadows,
+                "--compare",
+                "--width",
+                "48",
+                "--height",
+                "32",
+                "--out",
+                out.to_str().unwrap(),
             ],
             shadows,
         );
-        assert_eq!(stdout.contains("BVH of"), shadows == "exact", "{shadows}: {stdout}");
+        assert_eq!(
+            stdout.contains("BVH of"),
+            shadows == "exact",
+            "{shadows}: {stdout}"
+        );
         assert!(psnr_vs_reference(&stdout) > 60.0, "{shadows}: {stdout}");
-        energy.push(number_after(&stdout, "vs infinite-range reference", "energy "));
+        energy.push(number_after(
+            &stdout,
+            "vs infinite-range reference",
+            "energy ",
+        ));
     }
     assert!(
         energy[1] < energy[0] - 1e-3,

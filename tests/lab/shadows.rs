@@ -105,6 +105,9 @@ fn shadows_work_with_every_light_and_material_model() {
         assert_eq!(r.false_negatives, Some(0), "{cell}");
         let flip = r.flip_mean.expect("its shadowed reference");
         let tolerance = if r.backend == "forward" { 1e-6 } else { 1e-3 };
-        assert!(flip <= tolerance, "{cell}: mean FLIP {flip} against its reference");
+        assert!(
+            flip <= tolerance,
+            "{cell}: mean FLIP {flip} against its reference"
+        );
     }
 }

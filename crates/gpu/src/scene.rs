@@ -229,7 +229,13 @@ impl GpuScene {
             d,
             "scene.group0",
             &layout,
-            &[&frame_buf, &lights_buf, &materials_buf, &bvh.nodes, &bvh.triangles],
+            &[
+                &frame_buf,
+                &lights_buf,
+                &materials_buf,
+                &bvh.nodes,
+                &bvh.triangles,
+            ],
         );
         Ok(Self {
             vertices: vertices_buf,

@@ -167,7 +167,12 @@ pub(crate) fn run_cell(
     };
     let mut lights = FrameLights::new(ctx, c, &of, hierarchy)?;
     let renderer = stage(name, "pipelines built", || {
-        renderers.get(ctx, &gpu_scene, (c.msaa, c.hdr, c.shadows), c.visibility_pass)
+        renderers.get(
+            ctx,
+            &gpu_scene,
+            (c.msaa, c.hdr, c.shadows),
+            c.visibility_pass,
+        )
     })
     .map_err(|e| LabError::from(e).during(format!("msaa = {}", c.msaa)))?;
     let settings = |cam: &Camera| CullSettings {

@@ -51,7 +51,8 @@ impl Renderers {
         let i = match self.0.iter().position(|(k, _)| *k == key) {
             Some(i) => i,
             None => {
-                let renderer = Renderer::with_format(ctx, scene, samples, hdr)?.with_shadows(shadows);
+                let renderer =
+                    Renderer::with_format(ctx, scene, samples, hdr)?.with_shadows(shadows);
                 if self.0.len() == Self::KEEP {
                     self.0.remove(0);
                 }

@@ -17,6 +17,7 @@ use manylights_gpu::shaders::{BRDF, BVH, FRAME, LIGHT, SCENE, SHADING, ShaderDef
 use manylights_gpu::{GpuContext, GpuError, GpuScene, readback};
 use wgpu::util::DeviceExt;
 
+use crate::kinds::Shadows;
 use crate::{HdrImage, ReferenceFrame};
 
 /// The pass's shader.
@@ -60,7 +61,14 @@ pub struct InfiniteReference {
     /// Lights a dispatch, where set ([`InfiniteReference::with_chunk`]); [`chunk_lights`]
     /// otherwise.
     chunk: Option<u32>,
+    /// Whether each light's contribution is shadowed ([`InfiniteReference::with_shadows`]).
+    shadows: Shadows,
 }
+
+/// What a shadowed evaluation costs against an unshadowed one, in the chunks' sizing: a
+/// shadow ray through the BVH is some tens of light evaluations (so that a shadowed dispatch
+/// runs about as long as an unshadowed one).
+const SHADOW_RAY_COST: u64 = 64;
 
 /// The lights of one dispatch over `pixels` pixels: [`DISPATCH_EVALUATIONS`] / pixels, a
 /// multiple of the workgroup's batch, between 64 and 65,536.
@@ -72,6 +80,21 @@ pub fn chunk_lights(pixels: u64) -> u32 {
 impl InfiniteReference {
     /// Builds the pipeline.
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
+        Self::build(ctx, scene, Shadows::Off)
+    }
+
+    /// The pass again with `shadows`: `Shadows::Exact`, a shadow ray for every light at every
+    /// covered pixel (with the infinite-range falloff every light in front of a surface adds
+    /// radiance), through the scene's BVH (`GpuScene::build_bvh`): the shadowed infinite-range
+    /// reference, the light as it arrives.
+    pub fn with_shadows(self, ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
+        Self {
+            chunk: self.chunk,
+            ..Self::build(ctx, scene, shadows)
+        }
+    }
+
+    fn build(ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
         let d = &ctx.device;
         let c = wgpu::ShaderStages::COMPUTE;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -91,16 +114,22 @@ impl InfiniteReference {
             ],
         });
         let module = SHADER.create(d);
-        let pipeline = pipeline::compute(
+        let constants = [("SHADOWS", f64::from(u8::from(shadows.casts())))];
+        let pipeline = pipeline::compute_with(
             d,
             &module,
             &pipeline::layout(d, "shade.reference_infinite", &[&scene.layout, &layout]),
             "reference_infinite",
+            &wgpu::PipelineCompilationOptions {
+                constants: &constants,
+                ..Default::default()
+            },
         );
         Self {
             pipeline,
             layout,
             chunk: None,
+            shadows,
         }
     }
 
@@ -126,6 +155,20 @@ impl InfiniteReference {
     ) -> Result<HdrImage, GpuError> {
         let (w, h) = (surfaces.position.width, surfaces.position.height);
         let pixels = u64::from(w) * u64::from(h);
+        if self.shadows.casts() && !scene.has_bvh() {
+            return Err(GpuError::Unsupported(format!(
+                "the infinite-range reference with shadows {}: the scene has no BVH of its \
+                 opaque triangles to trace shadow rays through; build it after the upload \
+                 (GpuScene::build_bvh)",
+                self.shadows.name()
+            )));
+        }
+        // A shadowed evaluation weighs as SHADOW_RAY_COST unshadowed ones in the chunks.
+        let cost = if self.shadows.casts() {
+            SHADOW_RAY_COST
+        } else {
+            1
+        };
         let bytes = pixels * 32;
         ctx.check_storage("infinite-range reference surface bytes", bytes)?;
         let d = &ctx.device;
@@ -148,7 +191,7 @@ impl InfiniteReference {
             mapped_at_creation: false,
         });
         let lights = scene.light_count;
-        let chunk = self.chunk.unwrap_or_else(|| chunk_lights(pixels));
+        let chunk = self.chunk.unwrap_or_else(|| chunk_lights(pixels * cost));
         let chunks = lights.div_ceil(chunk).max(1);
         let groups_needed = u32::try_from(pixels.div_ceil(u64::from(WORKGROUP))).map_err(|_| {
             GpuError::OverLimit {
@@ -193,7 +236,7 @@ impl InfiniteReference {
             ],
         );
         let per_submit =
-            (SUBMIT_EVALUATIONS / (pixels * u64::from(chunk)).max(1)).clamp(1, 4096) as u32;
+            (SUBMIT_EVALUATIONS / (pixels * cost * u64::from(chunk)).max(1)).clamp(1, 4096) as u32;
         let start = std::time::Instant::now();
         let mut k = 0;
         while k < chunks {

@@ -23,10 +23,10 @@ pub mod vis_compute;
 pub mod visibility;
 
 pub use backends::{Backend, HdrFormat, Renderer, ShadeOutput, VisibilityPass};
-pub use kinds::Shadows;
 pub use error::ShadeError;
 pub use image_out::HdrImage;
 pub use infinite::InfiniteReference;
+pub use kinds::Shadows;
 pub use reference::{ReferenceFrame, ReferenceRenderer};
 pub use shade_pass::ShadePass;
 

@@ -32,7 +32,10 @@ fn texture(sample_type: wgpu::TextureSampleType, samples: u32) -> wgpu::BindingT
 }
 
 /// The shading pipelines' override constants of `path` and `shadows`.
-fn shading_constants(path: manylights_gpu::LightPath, shadows: Shadows) -> [(&'static str, f64); 4] {
+fn shading_constants(
+    path: manylights_gpu::LightPath,
+    shadows: Shadows,
+) -> [(&'static str, f64); 4] {
     let [a, b, c] = path.constants();
     [a, b, c, ("SHADOWS", f64::from(u8::from(shadows.casts())))]
 }

@@ -4,7 +4,9 @@
 use manylights_cull::layout::CULL_CONSTS;
 use manylights_cull::shaders::{GEOMETRY, LOOKUP, LOOKUP_DEPTH, LOOKUP_FLOAT_SWAPS};
 use manylights_gpu::shader_file;
-use manylights_gpu::shaders::{BRDF, BVH, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX};
+use manylights_gpu::shaders::{
+    BRDF, BVH, FRAME, LIGHT, SCENE, SHADING, ShaderDef, ShaderFile, VERTEX,
+};
 
 use crate::kinds::HdrFormat;
 
