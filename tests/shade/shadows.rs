@@ -14,6 +14,37 @@ use manylights_shade::{Backend, ReferenceRenderer, Renderer, ShadeError, Shadows
 
 use super::{CULLED, common, naive_against, scene, strategies, within_tolerance};
 
+/// What the f64 model gives at a reference's surface texel (`pos`: the point, w 1 where covered;
+/// `nrm`: the shading normal, the material index in w) with `range`'s falloff, each light that
+/// adds radiance shadowed by its f64 ray from `ray::shadow_origin`: the radiance and the rays
+/// blocked, or `None` where a ray is undecided (`Blocked::Ambiguous`).
+fn f64_shadowed(
+    s: &manylights_scene::Scene,
+    tris: &[[glam::Vec3; 3]],
+    (pos, nrm): ([f32; 4], [f32; 4]),
+    range: Range,
+) -> Option<(DVec3, u32)> {
+    let p32 = glam::Vec3::new(pos[0], pos[1], pos[2]);
+    let n32 = glam::Vec3::new(nrm[0], nrm[1], nrm[2]);
+    let (p, n) = (p32.as_dvec3(), n32.as_dvec3());
+    let v = (s.camera.position.as_dvec3() - p).normalize();
+    let m = &s.materials[nrm[3] as usize];
+    let origin = shadow_origin(p32, n32);
+    let (mut want, mut blocked, mut decided) = (m.emissive.as_dvec3(), 0, true);
+    for light in &s.lights {
+        let c = shade(p, n, v, m, std::slice::from_ref(light), range) - m.emissive.as_dvec3();
+        if c == DVec3::ZERO {
+            continue;
+        }
+        match segment(tris, origin, light.position) {
+            Blocked::No => want += c,
+            Blocked::Yes => blocked += 1,
+            Blocked::Ambiguous => decided = false,
+        }
+    }
+    decided.then_some((want, blocked))
+}
+
 /// The shadowed reference (`shade.reference` with `SHADOWS`) at every third pixel of the atrium
 /// and the pillars: its colour is the f64 shading model summed over the lights whose shadow ray
 /// from the pixel's surface point (lifted as `ray::shadow_origin` lifts it) is not blocked in
@@ -35,7 +66,6 @@ fn the_shadowed_reference_matches_the_rays_in_f64() {
             .render(&ctx, &gpu_scene, w, h)
             .unwrap();
         let tris = opaque_triangles(&s);
-        let eye = s.camera.position.as_dvec3();
         let peak = f64::from(unshadowed.color.peak());
         let (mut checked, mut undecided, mut darker, mut blocked_rays) = (0, 0, 0, 0);
         let mut worst = 0.0f64;
@@ -46,26 +76,7 @@ fn the_shadowed_reference_matches_the_rays_in_f64() {
                 if pos[3] == 0.0 {
                     continue;
                 }
-                let p32 = glam::Vec3::new(pos[0], pos[1], pos[2]);
-                let n32 = glam::Vec3::new(nrm[0], nrm[1], nrm[2]);
-                let (p, n) = (p32.as_dvec3(), n32.as_dvec3());
-                let v = (eye - p).normalize();
-                let m = &s.materials[nrm[3] as usize];
-                let origin = shadow_origin(p32, n32);
-                let mut want = m.emissive.as_dvec3();
-                let mut decided = true;
-                for light in &s.lights {
-                    let c = shade(p, n, v, m, std::slice::from_ref(light), Range::Windowed)
-                        - m.emissive.as_dvec3();
-                    if c == DVec3::ZERO {
-                        continue;
-                    }
-                    match segment(&tris, origin, light.position) {
-                        Blocked::No => want += c,
-                        Blocked::Yes => blocked_rays += 1,
-                        Blocked::Ambiguous => decided = false,
-                    }
-                }
+                let expected = f64_shadowed(&s, &tris, (pos, nrm), Range::Windowed);
                 let got = shadowed.color.data[k];
                 let plain_px = unshadowed.color.data[k];
                 for c in 0..3 {
@@ -81,10 +92,11 @@ fn the_shadowed_reference_matches_the_rays_in_f64() {
                 {
                     darker += 1;
                 }
-                if !decided {
+                let Some((want, blocked)) = expected else {
                     undecided += 1;
                     continue;
-                }
+                };
+                blocked_rays += blocked;
                 checked += 1;
                 let err = (DVec3::new(got[0].into(), got[1].into(), got[2].into()) - want)
                     .abs()
@@ -283,7 +295,6 @@ fn the_shadowed_infinite_reference_matches_the_rays_in_f64() {
         .render(&ctx, &gpu_scene, &surfaces)
         .unwrap();
     let tris = opaque_triangles(&s);
-    let eye = s.camera.position.as_dvec3();
     let peak = f64::from(unshadowed.peak());
     let (mut checked, mut undecided, mut darker) = (0, 0, 0);
     for k in 0..shadowed.data.len() {
@@ -305,30 +316,10 @@ fn the_shadowed_infinite_reference_matches_the_rays_in_f64() {
         if k % 4 != 0 || pos[3] == 0.0 {
             continue;
         }
-        let p32 = glam::Vec3::new(pos[0], pos[1], pos[2]);
-        let n32 = glam::Vec3::new(nrm[0], nrm[1], nrm[2]);
-        let (p, n) = (p32.as_dvec3(), n32.as_dvec3());
-        let v = (eye - p).normalize();
-        let m = &s.materials[nrm[3] as usize];
-        let origin = shadow_origin(p32, n32);
-        let mut want = m.emissive.as_dvec3();
-        let mut decided = true;
-        for light in &s.lights {
-            let c = shade(p, n, v, m, std::slice::from_ref(light), Range::Infinite)
-                - m.emissive.as_dvec3();
-            if c == DVec3::ZERO {
-                continue;
-            }
-            match segment(&tris, origin, light.position) {
-                Blocked::No => want += c,
-                Blocked::Yes => {}
-                Blocked::Ambiguous => decided = false,
-            }
-        }
-        if !decided {
+        let Some((want, _)) = f64_shadowed(&s, &tris, (pos, nrm), Range::Infinite) else {
             undecided += 1;
             continue;
-        }
+        };
         checked += 1;
         let err = (DVec3::new(got[0].into(), got[1].into(), got[2].into()) - want)
             .abs()
