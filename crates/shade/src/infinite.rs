@@ -88,6 +88,9 @@ impl InfiniteReference {
     /// radiance), through the scene's BVH (`GpuScene::build_bvh`): the shadowed infinite-range
     /// reference, the light as it arrives.
     pub fn with_shadows(self, ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
+        if shadows == self.shadows {
+            return self;
+        }
         Self {
             chunk: self.chunk,
             ..Self::build(ctx, scene, shadows)

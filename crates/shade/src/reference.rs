@@ -66,10 +66,14 @@ impl ReferenceRenderer {
         Self::build(ctx, scene, 1, Shadows::Off)
     }
 
-    /// The pipelines again, shading with `shadows`: `Shadows::Exact`, a shadow ray for every
-    /// light that adds radiance at a pixel (the shadowed reference at the scene's light ranges;
-    /// its frames need the scene's BVH, `GpuScene::build_bvh`).
+    /// The renderer shading with `shadows` (its pipelines built again unless it already
+    /// does): `Shadows::Exact`, a shadow ray for every light that adds radiance at a pixel (the
+    /// shadowed reference at the scene's light ranges; its frames need the scene's BVH,
+    /// `GpuScene::build_bvh`).
     pub fn with_shadows(self, ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
+        if shadows == self.shadows {
+            return self;
+        }
         Self::build(ctx, scene, self.samples, shadows)
     }
 
