@@ -110,5 +110,6 @@ fn bvh_blocked(a: vec3<f32>, b: vec3<f32>) -> bool {
         top -= 1u;
         n = bvh_nodes[stack[top]];
     }
+    // (Not reached: naga asks for a return after the loop.)
     return false;
 }

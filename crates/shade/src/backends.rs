@@ -159,7 +159,7 @@ impl Renderer {
     /// ([`GpuScene::build_bvh`]); [`Renderer::render`] refuses a scene without one.
     pub fn with_shadows(mut self, shadows: Shadows) -> Self {
         self.shadows = shadows;
-        self.pipelines.with_shadows(self.light_path, shadows);
+        self.pipelines.with_shadows(shadows);
         self
     }
 

@@ -117,7 +117,7 @@ impl InfiniteReference {
             ],
         });
         let module = SHADER.create(d);
-        let constants = [("SHADOWS", f64::from(u8::from(shadows.casts())))];
+        let constants = [shadows.constant()];
         let pipeline = pipeline::compute_with(
             d,
             &module,
@@ -158,14 +158,8 @@ impl InfiniteReference {
     ) -> Result<HdrImage, GpuError> {
         let (w, h) = (surfaces.position.width, surfaces.position.height);
         let pixels = u64::from(w) * u64::from(h);
-        if self.shadows.casts() && !scene.has_bvh() {
-            return Err(GpuError::Unsupported(format!(
-                "the infinite-range reference with shadows {}: the scene has no BVH of its \
-                 opaque triangles to trace shadow rays through; build it after the upload \
-                 (GpuScene::build_bvh)",
-                self.shadows.name()
-            )));
-        }
+        self.shadows
+            .check_scene(scene, "the infinite-range reference")?;
         // A shadowed evaluation weighs as SHADOW_RAY_COST unshadowed ones in the chunks.
         let cost = if self.shadows.casts() {
             SHADOW_RAY_COST

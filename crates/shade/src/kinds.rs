@@ -133,6 +133,28 @@ impl Shadows {
     pub fn casts(self) -> bool {
         self != Self::Off
     }
+
+    /// The `SHADOWS` override of shaders/common/shading.wgsl that shading with it is built with.
+    pub fn constant(self) -> (&'static str, f64) {
+        ("SHADOWS", f64::from(u8::from(self.casts())))
+    }
+
+    /// An error naming `what` where it casts shadow rays and `scene` has no BVH to trace them
+    /// through ([`manylights_gpu::GpuScene::build_bvh`]).
+    pub fn check_scene(
+        self,
+        scene: &manylights_gpu::GpuScene,
+        what: &str,
+    ) -> Result<(), manylights_gpu::GpuError> {
+        if self.casts() && !scene.has_bvh() {
+            return Err(manylights_gpu::GpuError::Unsupported(format!(
+                "{what} with shadows {}: the scene has no BVH of its opaque triangles to trace \
+                 shadow rays through; build it after the upload (GpuScene::build_bvh)",
+                self.name()
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// How the visibility backend finds each pixel's triangle.

@@ -31,15 +31,6 @@ fn texture(sample_type: wgpu::TextureSampleType, samples: u32) -> wgpu::BindingT
     }
 }
 
-/// The shading pipelines' override constants of `path` and `shadows`.
-fn shading_constants(
-    path: manylights_gpu::LightPath,
-    shadows: Shadows,
-) -> [(&'static str, f64); 4] {
-    let [a, b, c] = path.constants();
-    [a, b, c, ("SHADOWS", f64::from(u8::from(shadows.casts())))]
-}
-
 impl Renderer {
     pub(crate) fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32, hdr: HdrFormat) -> Self {
         let d = &ctx.device;
@@ -110,7 +101,8 @@ impl Renderer {
             hdr,
             opaque_models: scene.opaque_models.iter().map(|&(m, _)| m).collect(),
             opaque_model_mask: scene.opaque_model_mask(),
-            lights: shading_constants(light_path, Shadows::Off),
+            lights: light_path.constants(),
+            shadows: Shadows::Off,
             glass_layer: samples > 1 && transparent,
             forward_lists,
             deferred_lists,
@@ -235,9 +227,10 @@ pub(crate) struct Pipelines {
     /// The material model of each of the scene's opaque draws (`GpuScene::opaque_models`).
     opaque_models: Vec<u32>,
     opaque_model_mask: u32,
-    /// `POINT_LIGHTS`, `STOCHASTIC_POINTS` and `BAND_POINTS`, as the renderer was built for,
-    /// and `SHADOWS` (shading.wgsl).
-    lights: [(&'static str, f64); 4],
+    /// `POINT_LIGHTS`, `STOCHASTIC_POINTS` and `BAND_POINTS`, as the renderer was built for.
+    lights: [(&'static str, f64); 3],
+    /// Whether the shading casts shadow rays (`SHADOWS`, shading.wgsl).
+    shadows: Shadows,
     /// With MSAA over transparent surfaces: deferred composites them from a layer of their own.
     glass_layer: bool,
     pub forward_lists: wgpu::BindGroupLayout,
@@ -258,8 +251,8 @@ pub(crate) struct Pipelines {
 
 impl Pipelines {
     /// The same pipelines, none built yet, shading with `shadows`.
-    pub fn with_shadows(&mut self, path: manylights_gpu::LightPath, shadows: Shadows) {
-        self.lights = shading_constants(path, shadows);
+    pub fn with_shadows(&mut self, shadows: Shadows) {
+        self.shadows = shadows;
         self.forward = OnceLock::new();
         self.glass = OnceLock::new();
         self.naive = OnceLock::new();
@@ -284,6 +277,12 @@ impl Pipelines {
         if transparent {
             self.glass();
         }
+    }
+
+    /// The shading passes' override constants: the light path's and `SHADOWS`.
+    fn shading_constants(&self) -> [(&'static str, f64); 4] {
+        let [a, b, c] = self.lights;
+        [a, b, c, self.shadows.constant()]
     }
 
     fn color(&self) -> wgpu::TextureFormat {
@@ -323,7 +322,7 @@ impl Pipelines {
                     .iter()
                     .map(|&model| {
                         let mut constants = vec![("MATERIAL_MODELS", f64::from(1u32 << model))];
-                        constants.extend(self.lights);
+                        constants.extend(self.shading_constants());
                         self.forward_raster(
                             "shade.forward",
                             entry,
@@ -350,7 +349,7 @@ impl Pipelines {
                         entry,
                         std::slice::from_ref(&target),
                         pipeline::DepthTest::Less,
-                        &self.lights,
+                        &self.shading_constants(),
                     )
                 })
             };
@@ -374,8 +373,11 @@ impl Pipelines {
                     Some((entry, &[target])),
                     depth,
                     self.samples,
-                    // SHADOWS, the shading's last constant.
-                    &[&sample_constants(self.samples)[..], &self.lights[3..]].concat(),
+                    &[
+                        &sample_constants(self.samples)[..],
+                        &[self.shadows.constant()],
+                    ]
+                    .concat(),
                 )
             };
             Naive {
@@ -487,7 +489,7 @@ impl Pipelines {
         // One lighting pass over every model of the opaque triangles, branching on each
         // pixel's. With MSAA, GLASS: the lighting composites the glass layer over each sample.
         let mut constants = vec![("MATERIAL_MODELS", f64::from(self.opaque_model_mask))];
-        constants.extend(self.lights);
+        constants.extend(self.shading_constants());
         constants.push((
             "VISIBILITY",
             f64::from(u8::from(matches!(

@@ -96,7 +96,7 @@ impl ReferenceRenderer {
     fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32, shadows: Shadows) -> Self {
         let module = SHADER.create(&ctx.device);
         let t = pipeline::target(HDR);
-        let constants = [("SHADOWS", f64::from(u8::from(shadows.casts())))];
+        let constants = [shadows.constant()];
         let pipeline = pipeline::raster_with(
             &ctx.device,
             "shade.reference",
@@ -209,12 +209,8 @@ impl ReferenceRenderer {
     ) -> Result<ReferenceFrame, GpuError> {
         let surfaces_only = std::ptr::eq(opaque, &self.surface);
         ctx.check_resolution(width, height)?;
-        if self.shadows.casts() && !surfaces_only && !scene.has_bvh() {
-            return Err(GpuError::Unsupported(format!(
-                "the reference with shadows {}: the scene has no BVH of its opaque triangles to \
-                 trace shadow rays through; build it after the upload (GpuScene::build_bvh)",
-                self.shadows.name()
-            )));
+        if !surfaces_only {
+            self.shadows.check_scene(scene, "the reference")?;
         }
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
         let target = |label| pipeline::texture_2d(&ctx.device, label, (width, height), HDR, usage);
