@@ -127,6 +127,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         hdr: Default::default(),
         visibility_pass: Default::default(),
         shadows: args.shadows.shadows(),
+        shadowed_reference: false,
         materials: a.models()?,
         slack: DEFAULT_SLACK,
         frames: args.frames,

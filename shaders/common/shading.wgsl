@@ -85,10 +85,25 @@ fn shadow_blocked(light: Light, p: vec3<f32>, n: vec3<f32>) -> bool {
     return bvh_blocked(origin, light.position);
 }
 
+// Group 0, binding 5: RAY_COUNT_SLOTS counters of the shadow rays a frame with
+// FRAME_FLAG_COUNT_RAYS casts (manylights_gpu::GpuScene::count_rays), a ray adding one to the
+// slot its surface point hashes to. Frames that are timed leave the flag off.
+@group(0) @binding(5) var<storage, read_write> ray_counts: array<atomic<u32>>;
+
+fn count_ray(p: vec3<f32>) {
+    if (frame.flags & FRAME_FLAG_COUNT_RAYS) != 0u {
+        let h = (bitcast<u32>(p.x) * 0x9e3779b1u) ^ (bitcast<u32>(p.y) * 0x85ebca6bu) ^ bitcast<u32>(p.z);
+        atomicAdd(&ray_counts[(h ^ (h >> 15u)) % RAY_COUNT_SLOTS], 1u);
+    }
+}
+
 // `c`, the radiance one light adds at `p`, or zero where SHADOWS and its shadow ray is blocked.
 fn shadowed(c: vec3<f32>, light: Light, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    if SHADOWS && any(c != vec3<f32>(0.0)) && shadow_blocked(light, p, n) {
-        return vec3<f32>(0.0);
+    if SHADOWS && any(c != vec3<f32>(0.0)) {
+        count_ray(p);
+        if shadow_blocked(light, p, n) {
+            return vec3<f32>(0.0);
+        }
     }
     return c;
 }

@@ -3,6 +3,9 @@
 // bit-identical, so each pixel is shaded once), and each fragment loops over the list its pixel
 // reads through lookup.wgsl. shade.naive: the same pass over every light, no culling (the
 // baseline). With MSAA each fragment is shaded once, at its centroid, and resolved.
+// Every entry point forces the depth test before it (`@early_depth_test(force)`): a shader that
+// writes storage (the shadow-ray counters, shading.wgsl) is otherwise tested after it runs, and
+// every fragment drawn, hidden ones too, would be shaded.
 
 // The NDC depth a fragment's list is looked up at: with one sample a pixel the depth buffer's
 // own (the pixel centre's, bit-identical to the prepass's); with MSAA that of the shaded point,
@@ -16,7 +19,7 @@ fn lookup_depth(in: VertexOut) -> f32 {
     return c.z / c.w;
 }
 
-@fragment
+@fragment @early_depth_test(force)
 fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
@@ -27,7 +30,7 @@ fn fs_forward(in: VertexOut) -> @location(0) vec4<f32> {
 }
 
 // shade.forward over z-binning's lists.
-@fragment
+@fragment @early_depth_test(force)
 fn fs_forward_zbin(in: VertexOut) -> @location(0) vec4<f32> {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
@@ -37,7 +40,7 @@ fn fs_forward_zbin(in: VertexOut) -> @location(0) vec4<f32> {
     return vec4<f32>(shade_zbin(cell, in.world, n, v, m), 1.0);
 }
 
-@fragment
+@fragment @early_depth_test(force)
 fn fs_naive(in: VertexOut) -> @location(0) vec4<f32> {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
@@ -47,7 +50,7 @@ fn fs_naive(in: VertexOut) -> @location(0) vec4<f32> {
 
 // shade.naive over transparent surfaces: after the opaque ones, back to front, tested against
 // the opaque depth without writing it, blended with the surface's opacity.
-@fragment
+@fragment @early_depth_test(force)
 fn fs_naive_transparent(in: VertexOut) -> @location(0) vec4<f32> {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
@@ -61,7 +64,7 @@ fn fs_naive_transparent(in: VertexOut) -> @location(0) vec4<f32> {
 // writing it, blended with the surface's opacity. Each fragment is looked up where the lookup
 // bounds hold it (manylights_gpu::lookup_bounds): culling for it covers the transparent
 // surfaces' depths as well as the opaque ones'.
-@fragment
+@fragment @early_depth_test(force)
 fn fs_forward_transparent(in: VertexOut) -> @location(0) vec4<f32> {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
@@ -71,7 +74,7 @@ fn fs_forward_transparent(in: VertexOut) -> @location(0) vec4<f32> {
     return vec4<f32>(shade_list(list, in.world, n, v, m), m.opacity);
 }
 
-@fragment
+@fragment @early_depth_test(force)
 fn fs_forward_transparent_zbin(in: VertexOut) -> @location(0) vec4<f32> {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);

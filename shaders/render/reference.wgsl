@@ -11,7 +11,7 @@ struct ReferenceOut {
     @location(2) normal: vec4<f32>,
 }
 
-@fragment
+@fragment @early_depth_test(force)
 fn fs_reference(in: VertexOut) -> ReferenceOut {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);
@@ -33,7 +33,7 @@ fn fs_surface(in: VertexOut) -> ReferenceOut {
 // against the opaque depth without writing it; the surface's radiance with its opacity as the
 // blend weight, into the colour target only (the position and normal stay the opaque
 // surface's).
-@fragment
+@fragment @early_depth_test(force)
 fn fs_reference_transparent(in: VertexOut) -> @location(0) vec4<f32> {
     shading_pixel = vec2<u32>(in.clip.xy);
     let v = view_dir(in.world);

@@ -1,6 +1,7 @@
 //! Shadows in experiments (`shadows: Exact`): cells with and without shadows, end to end: the
 //! BVH built for the cell, `shadows=exact` in its params, no false negative, the frame within
-//! tolerance of its shadowed reference, and darker than the unshadowed cell's.
+//! tolerance of its shadowed reference, and darker than the unshadowed cell's; the shadow
+//! columns (the shadowed infinite-range reference's error, rays, their cost).
 
 use std::path::Path;
 
@@ -20,6 +21,7 @@ fn shadowed_cells_match_their_shadowed_reference() {
             resolution: (64, 36),
             frames: 1,
             warmup: 0,
+            shadowed_reference: true,
         ),
         sweep: (
             variants: [
@@ -66,6 +68,91 @@ fn shadowed_cells_match_their_shadowed_reference() {
         energy("exact"),
         energy("off")
     );
+    shadow_columns(&s.rows);
+}
+
+/// Light leaking through walls, measured: in the atrium (whose bays' walls stand between the
+/// lights and much of the floor) at long ranges, the unshadowed frame is brighter than the
+/// shadowed infinite-range reference, and further from it than the shadowed frame.
+#[test]
+fn unshadowed_frames_leak_light_through_walls() {
+    let ctx = common::gpu();
+    let src = r#"Experiment(
+        name: "leaks",
+        config: Config(
+            scene: Atrium(bays: 2),
+            lights: (generator: Uniform, count: 200, seed: 3, radius: Fixed(30.0), intensity: 2.0),
+            resolution: (48, 32),
+            frames: 1,
+            warmup: 0,
+            backend: Deferred,
+            strategy: ZBin(tile_size: 16),
+            shadowed_reference: true,
+        ),
+        sweep: (
+            variants: [(label: "off"), (label: "exact", shadows: Exact)],
+        ),
+    )"#;
+    let e = Experiment::parse(src, Path::new("leaks.ron")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
+    let [off, exact] = [0, 1].map(|i| &s.rows[i].shadow);
+    let leak = off.energy_error_shadowed.unwrap();
+    assert!(
+        leak > exact.energy_error_shadowed.unwrap() + 0.05 && leak > 0.05,
+        "light must leak through walls without shadows: off {off:?}, exact {exact:?}"
+    );
+    assert!(
+        off.flip_mean_shadowed > exact.flip_mean_shadowed,
+        "off {off:?}, exact {exact:?}"
+    );
+}
+
+/// The shadow columns of the cells above: every cell scored against the shadowed light (the
+/// unshadowed one too: `shadowed_reference`), the reference rendered once and then taken from
+/// the run's cache; the shadowed cells' rays counted, the same rays in every
+/// backend over conservative lists, and their cost timed.
+fn shadow_columns(rows: &[manylights_lab::results::Row]) {
+    let row = |label: &str| {
+        rows.iter()
+            .find(|r| r.cell.ends_with(&format!("variant={label}")))
+            .unwrap_or_else(|| panic!("no cell {label}"))
+    };
+    for r in rows {
+        let (what, sh) = (&r.cell, &r.shadow);
+        assert_eq!(
+            sh.shadows,
+            if what.contains("exact") {
+                "exact"
+            } else {
+                "off"
+            },
+            "{what}"
+        );
+        assert!(sh.flip_mean_shadowed.is_some(), "{what}: {sh:?}");
+        assert_eq!(
+            sh.reference_shadowed_cached,
+            Some(r.index > 0),
+            "{what}: the shadowed reference is rendered once a view"
+        );
+        match sh.shadows.as_str() {
+            "exact" => {
+                let rays = sh.rays_per_pixel.expect("rays counted");
+                assert!(rays > 1.0, "{what}: {rays} rays a pixel");
+                assert!(sh.gpu_ms_shadow.is_some(), "{what}: {sh:?}");
+            }
+            _ => assert!(sh.rays_per_pixel.is_none() && sh.gpu_ms_shadow.is_none()),
+        }
+    }
+    let exact = &row("exact").shadow;
+    let rays = exact.rays_per_pixel.unwrap();
+    for label in ["exact-forward", "exact-visibility"] {
+        let other = row(label).shadow.rays_per_pixel.unwrap();
+        assert!(
+            (other - rays).abs() <= 2e-3 * rays,
+            "{label}: {other} rays a pixel, deferred {rays}"
+        );
+    }
 }
 
 /// Shadows with every light model and material model: the hierarchy's lights (each level's

@@ -124,9 +124,36 @@ fn the_shadowed_reference_matches_the_rays_in_f64() {
     }
 }
 
+/// The shadow rays the f64 model casts over a reference frame's covered pixels: a ray for every
+/// (pixel, light) pair whose light adds radiance with `range`'s falloff.
+fn f64_rays(s: &manylights_scene::Scene, frame: &manylights_shade::ReferenceFrame) -> u64 {
+    let mut rays = 0;
+    for (pos, nrm) in frame.position.data.iter().zip(&frame.normal.data) {
+        if pos[3] == 0.0 {
+            continue;
+        }
+        let p = DVec3::new(pos[0].into(), pos[1].into(), pos[2].into());
+        let n = DVec3::new(nrm[0].into(), nrm[1].into(), nrm[2].into());
+        let v = (s.camera.position.as_dvec3() - p).normalize();
+        let m = &s.materials[nrm[3] as usize];
+        rays += s
+            .lights
+            .iter()
+            .filter(|l| {
+                shade(p, n, v, m, std::slice::from_ref(*l), Range::Windowed)
+                    != m.emissive.as_dvec3()
+            })
+            .count() as u64;
+    }
+    rays
+}
+
 /// Every strategy x backend (forward, deferred, the stored-position deferred, the visibility
 /// buffer rasterised in compute) and naive forward with `Shadows::Exact`, against the shadowed
 /// reference at the tolerances of the unshadowed frames; the unshadowed frame differs from it.
+/// The rays each culled frame casts (`GpuScene::count_rays`) are the f64 model's over the
+/// reference's pixels within 0.2% (lights at the edge of a pixel's hemisphere or range may fall
+/// either way in f32); a frame not counted counts nothing.
 #[test]
 fn every_strategy_and_backend_casts_the_reference_shadows() {
     let ctx = common::gpu();
@@ -134,11 +161,13 @@ fn every_strategy_and_backend_casts_the_reference_shadows() {
     let s = scene("atrium");
     let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
     gpu_scene.build_bvh(&ctx, &s).unwrap();
-    let reference = ReferenceRenderer::new(&ctx, &gpu_scene)
+    let reference_frame = ReferenceRenderer::new(&ctx, &gpu_scene)
         .with_shadows(&ctx, &gpu_scene, Shadows::Exact)
         .render(&ctx, &gpu_scene, w, h)
-        .unwrap()
-        .color;
+        .unwrap();
+    let want_rays = f64_rays(&s, &reference_frame);
+    assert!(want_rays > 2_000, "{want_rays} rays");
+    let reference = reference_frame.color;
     let renderer = Renderer::new(&ctx, &gpu_scene).with_shadows(Shadows::Exact);
     assert_eq!(renderer.shadows(), Shadows::Exact);
     let settings = CullSettings::for_camera(&s.camera);
@@ -148,14 +177,25 @@ fn every_strategy_and_backend_casts_the_reference_shadows() {
     for strategy in strategies() {
         for backend in CULLED {
             let what = format!("{} {}", strategy.name(), backend.name());
-            let out = renderer
-                .render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h))
+            let render =
+                || renderer.render(&ctx, &gpu_scene, backend, &strategy, &settings, (w, h));
+            let rays = gpu_scene
+                .count_rays(&ctx, (&s.camera, w, h), || render().map(|_| ()))
                 .unwrap();
+            assert!(
+                rays.abs_diff(want_rays) * 500 <= want_rays,
+                "{what}: {rays} rays counted, the f64 model casts {want_rays}"
+            );
+            let out = render().unwrap();
             let e = compare(&out.color, &reference, 1.0);
             assert!(within_tolerance(&e, backend), "{what}: {e:?}");
             assert_eq!(out.color.non_finite_count(), 0, "{what}");
         }
     }
+    let uncounted = gpu_scene
+        .count_rays(&ctx, (&s.camera, w, h), || Ok::<(), ShadeError>(()))
+        .unwrap();
+    assert_eq!(uncounted, 0, "nothing rendered, nothing counted");
     let lit = unshadowed
         .render(
             &ctx,

@@ -216,6 +216,9 @@ impl GpuContext {
             wgpu::Features::SHADER_INT64_ATOMIC_MIN_MAX,
             // The hierarchy build's sums.
             wgpu::Features::SHADER_INT64_ATOMIC_ALL_OPS,
+            // Forward's and the reference's shading, which writes the shadow-ray counters,
+            // depth-tested before it runs (`@early_depth_test(force)`; every Vulkan device).
+            wgpu::Features::SHADER_EARLY_DEPTH_TEST,
         ] {
             if offered.contains(f) {
                 required |= f;

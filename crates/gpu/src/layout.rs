@@ -53,6 +53,10 @@ pub const FRAME_FLAG_STOCHASTIC_POINTS: u32 = 4;
 /// check it, and those without check its absence.
 pub const FRAME_FLAG_BAND_POINTS: u32 = 8;
 
+/// `Frame.flags`: shading with `SHADOWS` counts each shadow ray it casts in group 0's ray
+/// counters ([`crate::GpuScene::count_rays`] sets it for one frame).
+pub const FRAME_FLAG_COUNT_RAYS: u32 = 16;
+
 /// WGSL constants generated from their Rust definitions; prepended to every composed shader.
 pub fn wgsl_prelude() -> String {
     format!(
@@ -73,6 +77,8 @@ pub fn wgsl_prelude() -> String {
          const FRAME_FLAG_POINT_LIGHTS: u32 = {FRAME_FLAG_POINT_LIGHTS}u;\n\
          const FRAME_FLAG_STOCHASTIC_POINTS: u32 = {FRAME_FLAG_STOCHASTIC_POINTS}u;\n\
          const FRAME_FLAG_BAND_POINTS: u32 = {FRAME_FLAG_BAND_POINTS}u;\n\
+         const FRAME_FLAG_COUNT_RAYS: u32 = {FRAME_FLAG_COUNT_RAYS}u;\n\
+         const RAY_COUNT_SLOTS: u32 = {ray_count_slots}u;\n\
          const XI_BITS: u32 = {xi_bits}u;\n\
          const PHI_BITS: u32 = {phi_bits}u;\n\
          const MIN_ROUGHNESS: f32 = {min_roughness:?};\n\
@@ -90,6 +96,7 @@ pub fn wgsl_prelude() -> String {
         f0 = manylights_scene::brdf::F0_DIELECTRIC as f32,
         vertex_words = size_of::<GpuVertex>() / 4,
         bvh_stack = crate::bvh::BVH_STACK,
+        ray_count_slots = crate::scene::RAY_COUNT_SLOTS,
         shadow_offset = manylights_scene::ray::SHADOW_OFFSET,
         models = manylights_scene::Model::ALL
             .iter()

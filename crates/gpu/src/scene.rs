@@ -2,7 +2,7 @@
 //! index travels per vertex), the lights and materials as storage buffers, and the frame uniform.
 //! Group 0 of every pass binds: 0 = frame, 1 = lights, 2 = materials, 3 and 4 = the BVH of the
 //! opaque triangles that shadow rays walk ([`GpuScene::build_bvh`]; until it is built, a BVH of
-//! no triangle).
+//! no triangle), 5 = the counters of the shadow rays shading casts ([`GpuScene::count_rays`]).
 
 use bytemuck::cast_slice;
 use glam::Vec3;
@@ -53,7 +53,13 @@ pub struct GpuScene {
     bvh: GpuBvh,
     /// Whether `bvh` is the scene's.
     has_bvh: bool,
+    /// [`RAY_COUNT_SLOTS`] counters of shadow rays, group 0's binding 5.
+    ray_counts: wgpu::Buffer,
 }
+
+/// Counters the shadow rays of a counted frame are spread over (a ray adds one to the slot its
+/// surface point hashes to, so that a frame's millions of rays do not contend for one word).
+pub const RAY_COUNT_SLOTS: u32 = 16_384;
 
 /// The layout of group 0, which every pass binds: the frame uniform, the lights and the
 /// materials, seen by every stage.
@@ -87,6 +93,17 @@ fn group0_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
             storage(2),
             storage(3),
             storage(4),
+            // The ray counters: written by shading only (no vertex stage writes storage).
+            wgpu::BindGroupLayoutEntry {
+                binding: 5,
+                visibility: wgpu::ShaderStages::FRAGMENT | wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only: false },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
         ],
     })
 }
@@ -225,6 +242,11 @@ impl GpuScene {
         );
         let layout = group0_layout(d);
         let bvh = GpuBvh::upload(ctx, &SceneBvh::of_triangles(&[])?)?;
+        let ray_counts = init(
+            "scene.ray_counts",
+            &vec![0u8; RAY_COUNT_SLOTS as usize * 4],
+            wgpu::BufferUsages::STORAGE | copy,
+        );
         let bind_group = crate::pipeline::buffers_group(
             d,
             "scene.group0",
@@ -235,6 +257,7 @@ impl GpuScene {
                 &materials_buf,
                 &bvh.nodes,
                 &bvh.triangles,
+                &ray_counts,
             ],
         );
         Ok(Self {
@@ -255,6 +278,7 @@ impl GpuScene {
             bind_group,
             bvh,
             has_bvh: false,
+            ray_counts,
         })
     }
 
@@ -276,9 +300,41 @@ impl GpuScene {
                 &self.materials,
                 &self.bvh.nodes,
                 &self.bvh.triangles,
+                &self.ray_counts,
             ],
         );
         Ok(built)
+    }
+
+    /// The shadow rays `render` casts: the counters cleared, the frame uniform set for
+    /// `camera` at `width` x `height` with [`crate::layout::FRAME_FLAG_COUNT_RAYS`] (shading
+    /// with `SHADOWS` then adds one for each ray it casts), `render` run, the counters read back
+    /// and summed, the frame set again without the flag. A frame that is timed must not count:
+    /// each ray then writes to memory.
+    pub fn count_rays<E: From<GpuError>>(
+        &self,
+        ctx: &GpuContext,
+        (camera, width, height): (&Camera, u32, u32),
+        render: impl FnOnce() -> Result<(), E>,
+    ) -> Result<u64, E> {
+        let bytes = u64::from(RAY_COUNT_SLOTS) * 4;
+        ctx.queue
+            .write_buffer(&self.ray_counts, 0, &vec![0u8; bytes as usize]);
+        self.set_view(
+            ctx,
+            camera,
+            width,
+            height,
+            crate::layout::FRAME_FLAG_COUNT_RAYS,
+        );
+        let rendered = render();
+        self.set_view(ctx, camera, width, height, 0);
+        rendered?;
+        let counts = crate::readback::read_buffer(ctx, &self.ray_counts, 0, bytes)?;
+        Ok(bytemuck::cast_slice::<u8, u32>(&counts)
+            .iter()
+            .map(|&n| u64::from(n))
+            .sum())
     }
 
     /// Whether the scene's BVH is built and bound ([`GpuScene::build_bvh`]).

@@ -12,7 +12,7 @@ use manylights_shade::Backend;
 use crate::evaluate::{PoseEval, temporal_stability};
 use crate::experiment::{Cell, Config, Experiment, params_label};
 use crate::noise::{Draws, Noise};
-use crate::results::{Row, SweepColumns, percentiles};
+use crate::results::{Row, ShadowColumns, SweepColumns, percentiles};
 use crate::runner::now;
 use crate::steady::{PassMedian, SteadyCull};
 
@@ -199,11 +199,34 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         gpu_ms_light_update: med(light_update),
         cpu_ms_upload: percentiles(uploads).map(|x| x.0),
         sweep: sweep_columns(cell, &c.lights.radius),
+        shadow: shadow_columns(c, first, &worst),
         passes,
         index: cell.index,
         id,
         finished_unix: now(),
         error: None,
+    }
+}
+
+/// The shadow columns: the first pose's rays and their cost, the worst pose's error against the
+/// shadowed light (a stochastic cell's: its seeds' mean).
+fn shadow_columns(c: &Config, first: &PoseEval, worst: &Worst) -> ShadowColumns {
+    let rays = first.rays.map(|n| n as f64);
+    let gpu_ms_shadow = match (first.steady_frame, first.steady_frame_unshadowed) {
+        (Some((with, _)), Some(without)) => Some(with - without),
+        _ => None,
+    };
+    ShadowColumns {
+        shadows: c.shadows.name().to_owned(),
+        flip_mean_shadowed: worst.flip_shadowed,
+        energy_error_shadowed: worst.energy_shadowed,
+        rays_per_pixel: rays.map(|n| n / first.covered.max(1) as f64),
+        gpu_ms_shadow,
+        grays_per_s: match (rays, gpu_ms_shadow) {
+            (Some(n), Some(ms)) if ms > 0.0 => Some(n / (ms * 1e-3) / 1e9),
+            _ => None,
+        },
+        reference_shadowed_cached: first.shadowed_cached,
     }
 }
 
@@ -414,6 +437,8 @@ struct Worst {
     rmse_inf: Option<f64>,
     energy_inf: Option<f64>,
     exposure_inf: Option<f64>,
+    flip_shadowed: Option<f64>,
+    energy_shadowed: Option<f64>,
 }
 
 impl Worst {
@@ -451,6 +476,15 @@ impl Worst {
             .filter_map(|e| e.acc_inf.map(|a| a.energy_error))
             .reduce(|a, b| if b.abs() > a.abs() { b } else { a });
         let mut exposure_inf = first.acc_inf.map(|a| f64::from(a.exposure));
+        let mut flip_shadowed = max_f64(&|e| e.acc_shadowed.map(|a| a.flip_mean));
+        let mut energy_shadowed = evals
+            .iter()
+            .filter_map(|e| e.acc_shadowed.map(|a| a.energy_error))
+            .reduce(|a, b| if b.abs() > a.abs() { b } else { a });
+        if let Some((flip, energy)) = noise.and_then(|n| n.shadowed) {
+            // A stochastic cell's error is its seeds' mean.
+            (flip_shadowed, energy_shadowed) = (Some(flip), Some(energy));
+        }
         if let Some(n) = noise {
             // A stochastic cell's image error is its seeds' mean.
             flip_inf = Some(n.flip_mean);
@@ -477,6 +511,8 @@ impl Worst {
             rmse_inf,
             energy_inf,
             exposure_inf,
+            flip_shadowed,
+            energy_shadowed,
         }
     }
 }

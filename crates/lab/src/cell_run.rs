@@ -10,13 +10,14 @@ use manylights_gpu::timing::PassTiming;
 use manylights_gpu::{GpuContext, GpuScene, LightModel};
 use manylights_scene::gltf_import::{self, GltfOptions};
 use manylights_scene::{Camera, Scene};
-use manylights_shade::{InfiniteReference, ReferenceRenderer, Renderer};
+use manylights_shade::Renderer;
 
 use crate::cell_row::{RowParts, cell_row};
-use crate::evaluate::{Pose, PoseEval, References, evaluate, steady_hierarchy_build};
+use crate::evaluate::{Pose, PoseEval, evaluate, steady_hierarchy_build};
 use crate::experiment::{CameraSpec, Cell, Config, Experiment};
 use crate::frame_lights::{FrameLights, LightsOf, hierarchy_plan};
 use crate::noise::{Noise, measure};
+use crate::references::{ReferenceSet, References};
 use crate::renderers::{LoadedScenes, ReferenceFrames, Renderers};
 use crate::results::Row;
 use crate::runner::stage;
@@ -109,11 +110,21 @@ impl CellScene {
         let mut gpu_scene = stage(name, "scene uploaded", || {
             GpuScene::upload_with(ctx, shaded, model, &poses[0], w, h)
         })?;
-        if c.shadows.casts() {
+        // Rays are cast by the cell's shading and by the shadowed references.
+        let rays = c.shadows.casts() || c.shadowed_truth();
+        if rays {
             stage(name, "BVH built", || gpu_scene.build_bvh(ctx, shaded))?;
         }
         let as_they_are = match (&hier, c.accuracy) {
-            (Some(_), true) => Some(GpuScene::upload(ctx, &scene, &poses[0], w, h)?),
+            (Some(_), true) => {
+                let mut s = GpuScene::upload(ctx, &scene, &poses[0], w, h)?;
+                if c.shadowed_truth() {
+                    stage(name, "BVH of the lights as they are built", || {
+                        s.build_bvh(ctx, &scene)
+                    })?;
+                }
+                Some(s)
+            }
             _ => None,
         };
         let shaded_lights = shaded.lights.len();
@@ -166,8 +177,8 @@ pub(crate) fn run_cell(
         as_they_are: as_they_are.as_ref(),
     };
     let mut lights = FrameLights::new(ctx, c, &of, hierarchy)?;
-    let renderer = stage(name, "pipelines built", || {
-        renderers.get(
+    let (renderer, unshadowed) = stage(name, "pipelines built", || {
+        renderers.get_with_unshadowed(
             ctx,
             &gpu_scene,
             (c.msaa, c.hdr, c.shadows),
@@ -189,6 +200,7 @@ pub(crate) fn run_cell(
         poses: &poses,
         gpu_scene: &gpu_scene,
         renderer,
+        unshadowed,
         settings: &settings,
     };
     // Render: the warm-up and measured frames.
@@ -196,27 +208,19 @@ pub(crate) fn run_cell(
     // Measure: every checked pose (a path's poses are all checked; with moving lights, every
     // measured frame, the lights where that frame had them), images at the first.
     let moving = lights.moving();
-    let reference = c
+    let set = c
         .accuracy
-        .then(|| {
-            ReferenceRenderer::with_samples(ctx, &gpu_scene, c.msaa)
-                .map(|r| r.with_shadows(ctx, &gpu_scene, c.shadows))
-        })
+        .then(|| ReferenceSet::new(ctx, &gpu_scene, c))
         .transpose()?;
-    let infinite = c.accuracy.then(|| InfiniteReference::new(ctx, &gpu_scene));
-    // The infinite-range reference is cached in the run folder, except for moving lights.
-    let refs = match (&reference, &infinite) {
-        (Some(rr), Some(inf)) => Some(References {
-            rr,
-            inf,
-            cache: (!moving).then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
-            // Kept frames hold one build's lights: not for lights that move. Sampled bands are
-            // drawn for frame 0 before the checks, the same draws in every build.
-            frames: (!moving).then_some(kept_frames),
-            lights_as_they_are: as_they_are.as_ref(),
-        }),
-        _ => None,
-    };
+    // The infinite-range references are cached in the run folder, except for moving lights.
+    let refs = set.as_ref().map(|set| References {
+        set,
+        cache: (!moving).then(|| (out, crate::reference_cache::scene_fingerprint(&scene))),
+        // Kept frames hold one build's lights: not for lights that move. Sampled bands are
+        // drawn for frame 0 before the checks, the same draws in every build.
+        frames: (!moving).then_some(kept_frames),
+        lights_as_they_are: as_they_are.as_ref(),
+    });
     let checks = checked_frames(c, poses.len(), moving);
     let checked = check_poses(
         &run,
@@ -234,7 +238,9 @@ pub(crate) fn run_cell(
     // Stochastic cells: each seed's image against infinite range (static lights only).
     let noise: Option<Noise> = match (lights.draws(), &first.infinite) {
         (Some(d), Some(inf)) if !moving => Some(stage(name, "seeds measured", || {
-            measure(&run.pose(&poses[0], name, &settings(&poses[0])), d, inf)
+            let at_first = settings(&poses[0]);
+            let at = run.pose(&poses[0], name, &at_first);
+            measure(&at, d, (inf, first.shadowed.as_ref()))
         })?),
         _ => None,
     };
@@ -290,6 +296,8 @@ struct CellFrames<'a> {
     poses: &'a [Camera],
     gpu_scene: &'a GpuScene,
     renderer: &'a Renderer,
+    /// With shadows, the renderer without them.
+    unshadowed: Option<&'a Renderer>,
     /// Culling's settings for a camera.
     settings: &'a dyn Fn(&Camera) -> CullSettings,
 }
@@ -303,6 +311,7 @@ impl<'a> CellFrames<'a> {
         Pose {
             ctx: self.ctx,
             renderer: self.renderer,
+            unshadowed: self.unshadowed,
             gpu_scene: self.gpu_scene,
             c: self.c,
             cam,
@@ -392,6 +401,7 @@ fn render_frames(run: &CellFrames<'_>, lights: &mut FrameLights) -> Result<Measu
         gpu_scene,
         renderer,
         settings,
+        ..
     } = *run;
     let (w, h) = c.resolution;
     let mut frames: Vec<Vec<PassTiming>> = Vec::new();

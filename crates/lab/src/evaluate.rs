@@ -14,14 +14,11 @@ use manylights_gpu::timing::{Category, PassTiming};
 use manylights_gpu::{GpuContext, GpuScene};
 use manylights_scene::Camera;
 use manylights_shade::accuracy::{ImageError, compare, compare_adapted};
-use manylights_shade::infinite::infinite_image;
-use manylights_shade::{
-    Backend, HdrImage, InfiniteReference, ReferenceRenderer, Renderer, ShadeOutput,
-};
+use manylights_shade::{Backend, HdrImage, Renderer, ShadeOutput, Shadows};
 
 use crate::LabError;
 use crate::experiment::Config;
-use crate::renderers::ReferenceFrames;
+use crate::references::References;
 use crate::runner::stage;
 use crate::steady::{
     PassMedian, Repeated, SteadyCull, steady_build, steady_cull, steady_cull_shade, steady_geometry,
@@ -40,8 +37,15 @@ pub(crate) struct PoseEval {
     pub(crate) infinite: Option<HdrImage>,
     /// Whether it came from the run folder's cache.
     pub(crate) infinite_cached: Option<bool>,
+    /// The shadowed infinite-range reference (with accuracy, `Config::shadowed_truth`).
+    pub(crate) shadowed: Option<HdrImage>,
+    /// Whether it came from the run folder's cache.
+    pub(crate) shadowed_cached: Option<bool>,
     pub(crate) acc: Option<ImageError>,
     pub(crate) acc_inf: Option<ImageError>,
+    pub(crate) acc_shadowed: Option<ImageError>,
+    /// The shadow rays the frame casts (with shadows; counted in a frame of its own).
+    pub(crate) rays: Option<u64>,
     pub(crate) list_bytes: u64,
     pub(crate) gbuffer_bytes: u64,
     pub(crate) msaa_target_bytes: u64,
@@ -52,6 +56,9 @@ pub(crate) struct PoseEval {
     pub(crate) steady: Option<(f64, Option<f64>)>,
     /// The same with the shading pass after each run (run median, span), ms.
     pub(crate) steady_frame: Option<(f64, Option<f64>)>,
+    /// With shadows, the same runs' median with the shading pass of the renderer without
+    /// them, ms.
+    pub(crate) steady_frame_unshadowed: Option<f64>,
     /// The frame's geometry back to back (run median), ms.
     pub(crate) steady_geometry: Option<f64>,
     /// Each pass of the geometry's and of culling and shading's back-to-back runs: its
@@ -63,6 +70,8 @@ pub(crate) struct PoseEval {
 pub(crate) struct Pose<'a> {
     pub(crate) ctx: &'a GpuContext,
     pub(crate) renderer: &'a Renderer,
+    /// With shadows, the renderer of the same frame without them (`gpu_ms_shadow`).
+    pub(crate) unshadowed: Option<&'a Renderer>,
     pub(crate) gpu_scene: &'a GpuScene,
     /// The cell's configuration.
     pub(crate) c: &'a Config,
@@ -90,13 +99,19 @@ pub(crate) fn evaluate(
         cam,
         settings,
         name: pose,
+        ..
     } = *p;
     let light_count = u64::from(gpu_scene.light_count);
     let (w, h) = c.resolution;
     gpu_scene.set_view(ctx, cam, w, h, 0);
-    let o = stage(pose, "rendered", || {
-        renderer.render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h))
-    })?;
+    let render = || renderer.render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h));
+    let rays = match c.shadows.casts() {
+        true => Some(stage(pose, "shadow rays counted", || {
+            gpu_scene.count_rays(ctx, (cam, w, h), || render().map(|_| ()))
+        })?),
+        false => None,
+    };
+    let o = stage(pose, "rendered", render)?;
     let frame = GpuFrame::new(cam, w, h, gpu_scene.light_count);
     let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
     let mut metrics: Option<ListMetrics> = None;
@@ -104,6 +119,7 @@ pub(crate) fn evaluate(
     let mut tile_masks = None;
     let mut steady = None;
     let mut steady_frame = None;
+    let mut steady_frame_unshadowed = None;
     let mut steady_passes = Vec::new();
     let per_pixel: Vec<u32> = match &o.lists {
         Some(lists) => {
@@ -127,6 +143,7 @@ pub(crate) fn evaluate(
             if let (Some(runs), Some(t)) = (steady_runs, &o.timings) {
                 let timed = steady_lists(p, &o, t, runs)?;
                 (steady, steady_frame) = (timed.cull, timed.frame);
+                steady_frame_unshadowed = timed.frame_unshadowed;
                 steady_passes.extend(timed.passes);
             }
             if let Some(dir) = export {
@@ -179,8 +196,12 @@ pub(crate) fn evaluate(
         reference: None,
         infinite: None,
         infinite_cached: None,
+        shadowed: None,
+        shadowed_cached: None,
         acc: None,
         acc_inf: None,
+        acc_shadowed: None,
+        rays,
         list_bytes,
         gbuffer_bytes: o.gbuffer_bytes,
         msaa_target_bytes: o.msaa_target_bytes,
@@ -188,6 +209,7 @@ pub(crate) fn evaluate(
         tile_masks,
         steady,
         steady_frame,
+        steady_frame_unshadowed,
         steady_geometry,
         steady_passes,
     })
@@ -242,15 +264,18 @@ pub(crate) fn steady_hierarchy_build(
 }
 
 impl PoseEval {
-    /// The pose's image against the windowed reference (where the cell renders it) and the
-    /// infinite-range one.
+    /// The pose's image against the windowed reference (where the cell renders it), the
+    /// infinite-range one and the shadowed infinite-range one (where the cell renders it).
     pub(crate) fn score(&mut self, p: &Pose<'_>, refs: &References<'_>) -> Result<(), LabError> {
         let a = against_references(p, refs, &self.color)?;
         self.reference = a.reference;
         self.infinite = a.infinite;
         self.infinite_cached = a.infinite_cached;
+        self.shadowed = a.shadowed;
+        self.shadowed_cached = a.shadowed_cached;
         self.acc = a.acc;
         self.acc_inf = a.acc_inf;
+        self.acc_shadowed = a.acc_shadowed;
         Ok(())
     }
 }
@@ -260,9 +285,12 @@ impl PoseEval {
 struct Accuracy {
     acc: Option<ImageError>,
     acc_inf: Option<ImageError>,
+    acc_shadowed: Option<ImageError>,
     reference: Option<HdrImage>,
     infinite: Option<HdrImage>,
     infinite_cached: Option<bool>,
+    shadowed: Option<HdrImage>,
+    shadowed_cached: Option<bool>,
 }
 
 /// `color`, the pose's image, against the windowed reference (where the cell renders it) and the
@@ -290,12 +318,21 @@ fn against_references(
     } else {
         None
     };
+    let view = (cam, c.resolution);
     let (ri, cached) = stage(pose, "infinite-range reference", || {
-        refs.infinite(ctx, gpu_scene, cam, c.resolution, windowed.as_ref())
+        refs.infinite(ctx, gpu_scene, view, windowed.as_ref(), Shadows::Off)
     })?;
     out.acc_inf = Some(compare_adapted(color, &ri));
     out.infinite = Some(ri);
     out.infinite_cached = Some(cached);
+    if refs.set.has_shadowed() && c.shadowed_truth() {
+        let (rs, cached) = stage(pose, "shadowed infinite-range reference", || {
+            refs.infinite(ctx, gpu_scene, view, windowed.as_ref(), Shadows::Exact)
+        })?;
+        out.acc_shadowed = Some(compare_adapted(color, &rs));
+        out.shadowed = Some(rs);
+        out.shadowed_cached = Some(cached);
+    }
     out.reference = windowed.map(|r| r.color);
     Ok(out)
 }
@@ -308,6 +345,8 @@ struct SteadyLists {
     frame: Option<(f64, Option<f64>)>,
     /// Each pass of culling and shading's runs: its median, ms.
     passes: Vec<PassMedian>,
+    /// With shadows, culling and the shading pass without them (run median), ms.
+    frame_unshadowed: Option<f64>,
 }
 
 /// The lists of `o` (a frame whose single run timed `t`) culled again `runs` times back to
@@ -347,6 +386,7 @@ fn steady_lists(
         cull: timed.map(|s| (s.total_ms, s.span_ms)),
         frame: None,
         passes: Vec::new(),
+        frame_unshadowed: None,
     };
     if let Some(mut pass) = renderer.shade_pass(ctx, gpu_scene, o) {
         let timed = stage(pose, "culling and shading timed back to back", || {
@@ -357,76 +397,15 @@ fn steady_lists(
         }
         out.frame = timed.map(|s| (s.total_ms, s.span_ms));
     }
+    if let Some(mut pass) = p.unshadowed.and_then(|r| r.shade_pass(ctx, gpu_scene, o)) {
+        let timed = stage(
+            pose,
+            "culling and unshadowed shading timed back to back",
+            || steady_cull_shade(&repeated, passes + pass.passes(), runs, &mut pass),
+        )?;
+        out.frame_unshadowed = timed.map(|s| s.total_ms);
+    }
     Ok(out)
-}
-
-/// The references of a cell: the brute-force raster reference, the infinite-range compute
-/// reference, and where the infinite-range image may be cached (the run folder and the scene's
-/// fingerprint; none for moving lights).
-pub(crate) struct References<'a> {
-    pub(crate) rr: &'a ReferenceRenderer,
-    pub(crate) inf: &'a InfiniteReference,
-    pub(crate) cache: Option<(&'a std::path::Path, u64)>,
-    /// The run's brute-force reference frames, which the cells of one view share (none for
-    /// moving lights).
-    pub(crate) frames: Option<&'a ReferenceFrames>,
-    /// The scene of the lights as they are, where the cell shades others in their place (the
-    /// lighting grid hierarchy's): the infinite-range reference is theirs.
-    pub(crate) lights_as_they_are: Option<&'a GpuScene>,
-}
-
-impl References<'_> {
-    /// The brute-force reference frame of the view, from the run's kept frames where a cell of
-    /// the same view rendered it.
-    pub(crate) fn windowed(
-        &self,
-        ctx: &GpuContext,
-        gpu_scene: &GpuScene,
-        c: &Config,
-        cam: &Camera,
-    ) -> Result<manylights_shade::ReferenceFrame, manylights_gpu::GpuError> {
-        let (w, h) = c.resolution;
-        let render = || self.rr.render(ctx, gpu_scene, w, h);
-        match self.frames {
-            Some(kept) => kept.get_or(ReferenceFrames::key(c, cam).as_deref(), render),
-            None => render(),
-        }
-    }
-
-    /// The infinite-range image of the view, from the cache where it holds it under the same
-    /// key, and whether it did.
-    pub(crate) fn infinite(
-        &self,
-        ctx: &GpuContext,
-        gpu_scene: &GpuScene,
-        cam: &Camera,
-        size: (u32, u32),
-        windowed: Option<&manylights_shade::ReferenceFrame>,
-    ) -> Result<(HdrImage, bool), LabError> {
-        use crate::reference_cache as cache;
-        let key = self.cache.map(|(dir, scene)| {
-            (
-                dir,
-                cache::ReferenceKey::new(scene, cam, size, self.rr.samples()),
-            )
-        });
-        if let Some((dir, key)) = &key {
-            if let Some(img) = cache::load(dir, key) {
-                return Ok((img, true));
-            }
-        }
-        let img = match self.lights_as_they_are {
-            Some(scene) => {
-                scene.set_view(ctx, cam, size.0, size.1, 0);
-                infinite_image(ctx, (self.rr, self.inf), scene, cam, size, windowed)
-            }
-            None => infinite_image(ctx, (self.rr, self.inf), gpu_scene, cam, size, windowed),
-        }?;
-        if let Some((dir, key)) = &key {
-            cache::save(dir, key, &img)?;
-        }
-        Ok((img, false))
-    }
 }
 
 /// Naive forward evaluates every light; the exact oracle (run over any conservative lists)

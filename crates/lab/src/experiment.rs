@@ -307,11 +307,20 @@ pub struct Config {
     /// Shadows: `Off` (the default: every light shines through walls) or `Exact`, a shadow ray
     /// for every light that adds radiance at a shaded point, through the BVH of the scene's
     /// opaque triangles, built for the cell (`manylights_shade::Shadows`); the windowed
-    /// reference is shadowed alike, so PSNR and FLIP stay the implementation check (the
-    /// infinite-range reference is not shadowed yet). (Left out of a cell's identity when
-    /// `Off`; `shadows=exact` in its `params`.)
+    /// reference is shadowed alike, so PSNR and FLIP stay the implementation check, the
+    /// infinite-range reference is not (`flip_mean_infinite`), and with `accuracy` the
+    /// shadowed infinite-range reference scores the image (`flip_mean_shadowed`). (Left out of
+    /// a cell's identity when `Off`; `shadows=exact` in its `params`.)
     #[serde(default, skip_serializing_if = "is_off")]
     pub shadows: Shadows,
+    /// With `accuracy`, whether to render the shadowed infinite-range reference (a ray from
+    /// every covered pixel to every light, through the scene's BVH, built for it) and score the
+    /// image against it (`flip_mean_shadowed`, `energy_error_shadowed`) where the cell casts no
+    /// shadows itself: how much light leaks through walls. Cells with shadows always do.
+    /// Cached in the run folder as the unshadowed one is. (Left out of a cell's identity when
+    /// false.)
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub shadowed_reference: bool,
     /// Material models to give the scene's surfaces, in turns (`manylights_scene::material::
     /// assign_models`): `[Ggx]` makes every surface GGX; `[BlinnPhong, Ggx, Sheen, ClearCoat,
     /// Wrap]` mixes five models in one frame, each material's parameters carried over
@@ -392,6 +401,12 @@ pub enum DeviceLimit {
 }
 
 impl Config {
+    /// Whether the cell renders the shadowed infinite-range reference: with `accuracy`, where
+    /// it casts shadows or asks for it (`shadowed_reference`).
+    pub fn shadowed_truth(&self) -> bool {
+        self.accuracy && (self.shadows.casts() || self.shadowed_reference)
+    }
+
     /// This configuration with its `device_limit` resolved against the device `ctx`.
     pub fn at_limits(&self, ctx: &manylights_gpu::GpuContext) -> Config {
         let limits = &ctx.limits;

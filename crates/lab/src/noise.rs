@@ -6,7 +6,8 @@
 //!   `s K + K - 1`, each with fresh draws, and averages them into one image, as a renderer that
 //!   accumulates temporally shows it;
 //! - error: each seed's image against the infinite-range reference (mean FLIP at the adapted
-//!   exposure, RMSE, energy error), averaged over the seeds: what a single image costs;
+//!   exposure, RMSE, energy error), averaged over the seeds: what a single image costs; and
+//!   where the cell renders it, against the shadowed infinite-range reference alike;
 //! - bias: each lit pixel's mean over the seeds less the reference, as the root mean square over
 //!   lit pixels with the part the noise contributes taken out (`mean((m - R)^2) - mean(s^2) / M`
 //!   for M seeds, an unbiased estimate of the mean squared bias, floored at 0), relative to the
@@ -92,14 +93,16 @@ pub(crate) struct Noise {
     pub(crate) noise: Option<f64>,
     /// None with one seed.
     pub(crate) flicker_mean: Option<f64>,
+    /// Mean FLIP and energy error against the shadowed infinite-range reference, where given.
+    pub(crate) shadowed: Option<(f64, f64)>,
 }
 
-/// Renders each seed's image of the cell at the pose and measures it against `reference` (see
-/// the module docs).
+/// Renders each seed's image of the cell at the pose and measures it against `reference` and
+/// `shadowed`, the shadowed infinite-range reference where given (see the module docs).
 pub(crate) fn measure(
     p: &Pose<'_>,
     draws: &Draws,
-    reference: &HdrImage,
+    (reference, shadowed): (&HdrImage, Option<&HdrImage>),
 ) -> Result<Noise, LabError> {
     let Pose {
         ctx,
@@ -137,6 +140,14 @@ pub(crate) fn measure(
     }
     let mean = mean_over(&total, reference)?;
     let (bias, noise, flicker_mean) = spread(&images, &mean, reference);
+    let shadowed = shadowed.map(|s| {
+        let errors: Vec<_> = images.iter().map(|i| compare_adapted(i, s)).collect();
+        let n = errors.len() as f64;
+        (
+            errors.iter().map(|e| e.flip_mean).sum::<f64>() / n,
+            errors.iter().map(|e| e.energy_error).sum::<f64>() / n,
+        )
+    });
     Ok(Noise {
         flip_mean: avg(&|e| e.flip_mean),
         rmse: avg(&|e| e.rmse),
@@ -145,6 +156,7 @@ pub(crate) fn measure(
         bias,
         noise,
         flicker_mean,
+        shadowed,
     })
 }
 

@@ -12,7 +12,8 @@ use crate::results::Row;
 
 /// Fills what rows written before them lack: `parameters` and the light-range columns
 /// (`radius_value`, `hierarchy_*`, `stochastic_*`, `interleave`) from the cell name, `setting`
-/// from its `setting=` part, then `scene_lights` ([`backfill_scene_lights`]).
+/// from its `setting=` part, `shadows` from its `params`, then `scene_lights`
+/// ([`backfill_scene_lights`]).
 pub fn backfill(rows: &mut [Row]) {
     for r in rows.iter_mut().filter(|r| r.sweep.parameters.is_empty()) {
         if r.cell != "base" {
@@ -31,6 +32,15 @@ pub fn backfill(rows: &mut [Row]) {
         if r.sweep.radius_value.is_none() {
             range_columns(r);
         }
+    }
+    for r in rows.iter_mut().filter(|r| r.shadow.shadows.is_empty()) {
+        // Rows before the column: `shadows=exact` in their params where they cast rays.
+        r.shadow.shadows = if r.params.contains("shadows=exact") {
+            "exact"
+        } else {
+            "off"
+        }
+        .to_owned();
     }
     backfill_scene_lights(rows);
 }
@@ -136,5 +146,21 @@ pub(crate) fn category_before_plans(label: &str) -> Category {
         Category::LightUpdate
     } else {
         Category::Shade
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::results::tests::sample_row;
+
+    /// Rows written before the `shadows` column take it from their `params`.
+    #[test]
+    fn old_rows_take_shadows_from_their_params() {
+        let mut rows = vec![sample_row(), sample_row()];
+        rows[0].params = "tile=16;shadows=exact".into();
+        rows[1].params = "tile=16".into();
+        super::backfill(&mut rows);
+        assert_eq!(rows[0].shadow.shadows, "exact");
+        assert_eq!(rows[1].shadow.shadows, "off");
     }
 }

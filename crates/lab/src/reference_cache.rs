@@ -1,8 +1,8 @@
 //! The infinite-range reference, cached on disk in the run folder so that a sweep pays for it
 //! once per view: every cell of the same scene geometry, lights (positions, colours,
 //! intensities and cones; not their radii, which the infinite range ignores), camera,
-//! resolution and sample count shares one file, `references/<hash>.bin`, whatever its strategy,
-//! backend or radius rule.
+//! resolution, sample count and shadows (the shadowed reference is a file of its own) shares one
+//! file, `references/<hash>.bin`, whatever its strategy, backend or radius rule.
 //!
 //! A file holds its whole key (a line of JSON, [`ReferenceKey`]) before the image, and is used
 //! only when that key equals the cell's: a hash collision, a file of another version of the
@@ -14,7 +14,7 @@ use std::hash::Hasher as _;
 use std::path::{Path, PathBuf};
 
 use manylights_scene::{Camera, LightKind, Scene};
-use manylights_shade::HdrImage;
+use manylights_shade::{HdrImage, Shadows};
 
 use crate::{LabError, write_atomic};
 
@@ -103,14 +103,29 @@ pub struct ReferenceKey(String);
 impl ReferenceKey {
     /// The key of the reference of a scene with fingerprint `scene` ([`scene_fingerprint`])
     /// seen by `camera` at `width` x `height` with `samples` samples a pixel.
-    pub fn new(scene: u64, camera: &Camera, (width, height): (u32, u32), samples: u32) -> Self {
-        let json = serde_json::json!({
+    pub fn new(scene: u64, camera: &Camera, size: (u32, u32), samples: u32) -> Self {
+        Self::with_shadows(scene, camera, size, samples, Shadows::Off)
+    }
+
+    /// The key of the reference as [`ReferenceKey::new`]'s, shaded with `shadows` (`Off`: the
+    /// same key as `new`'s).
+    pub fn with_shadows(
+        scene: u64,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        samples: u32,
+        shadows: Shadows,
+    ) -> Self {
+        let mut json = serde_json::json!({
             "version": VERSION,
             "scene": format!("{scene:016x}"),
             "camera": camera,
             "resolution": [width, height],
             "samples": samples,
         });
+        if shadows.casts() {
+            json["shadows"] = shadows.name().into();
+        }
         Self(json.to_string())
     }
 
@@ -219,12 +234,18 @@ mod tests {
             100.0,
         );
         let key = ReferenceKey::new(7, &cam, (3, 2), 1);
+        assert_eq!(
+            key,
+            ReferenceKey::with_shadows(7, &cam, (3, 2), 1, Shadows::Off),
+            "unshadowed keys are those of files written before shadows"
+        );
         assert!(load(dir.path(), &key).is_none(), "nothing cached yet");
         save(dir.path(), &key, &image(0.5)).unwrap();
         assert_eq!(load(dir.path(), &key), Some(image(0.5)));
         for other in [
             ReferenceKey::new(8, &cam, (3, 2), 1),
             ReferenceKey::new(7, &cam, (3, 2), 4),
+            ReferenceKey::with_shadows(7, &cam, (3, 2), 1, Shadows::Exact),
             ReferenceKey::new(
                 7,
                 &Camera {

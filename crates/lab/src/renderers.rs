@@ -28,14 +28,32 @@ impl Renderers {
 
     /// A renderer for `scene` at `samples` samples a pixel into a lit image of format `hdr`
     /// (one built before for a scene laid out alike, or a new one), casting `shadows`, its
-    /// visibility backend drawn by `visibility_pass`.
-    pub fn get(
+    /// visibility backend drawn by `visibility_pass`; and where it casts shadows, the same
+    /// renderer without them (what the rays cost is the difference of their frames).
+    pub fn get_with_unshadowed(
         &mut self,
         ctx: &GpuContext,
         scene: &GpuScene,
         (samples, hdr, shadows): (u32, HdrFormat, Shadows),
         visibility_pass: VisibilityPass,
-    ) -> Result<&Renderer, GpuError> {
+    ) -> Result<(&Renderer, Option<&Renderer>), GpuError> {
+        let key = self.built(ctx, scene, (samples, hdr, shadows), visibility_pass)?;
+        let plain = shadows
+            .casts()
+            .then(|| self.built(ctx, scene, (samples, hdr, Shadows::Off), visibility_pass))
+            .transpose()?;
+        // Both are kept: KEEP > 1, and the second built pushes out only the oldest.
+        Ok((self.kept(&key), plain.map(|k| self.kept(&k))))
+    }
+
+    /// The key of the renderer for `scene` and its settings, built and kept unless it was.
+    fn built(
+        &mut self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        (samples, hdr, shadows): (u32, HdrFormat, Shadows),
+        visibility_pass: VisibilityPass,
+    ) -> Result<Key, GpuError> {
         let key = (
             samples,
             scene.has_transparent(),
@@ -56,13 +74,17 @@ impl Renderers {
                 if self.0.len() == Self::KEEP {
                     self.0.remove(0);
                 }
-                self.0.push((key, renderer));
+                self.0.push((key.clone(), renderer));
                 self.0.len() - 1
             }
         };
-        let renderer = &mut self.0[i].1;
-        renderer.visibility_pass = visibility_pass;
-        Ok(renderer)
+        self.0[i].1.visibility_pass = visibility_pass;
+        Ok(key)
+    }
+
+    /// The kept renderer of `key`.
+    fn kept(&self, key: &Key) -> &Renderer {
+        &self.0.iter().find(|(k, _)| k == key).expect("a kept key").1
     }
 }
 

@@ -13,6 +13,7 @@ use std::collections::BTreeMap;
 use manylights_gpu::timing::Category;
 use serde::{Deserialize, Serialize};
 
+pub use crate::columns::COLUMNS;
 pub use crate::old_rows::backfill;
 pub use crate::result_files::{load_cells, load_rows, merge, save_cell, to_csv, write_results};
 
@@ -282,6 +283,10 @@ pub struct Row {
     /// column of its own).
     #[serde(flatten)]
     pub sweep: SweepColumns,
+    /// Shadows: the cell's mode, its rays and their cost, and its image against the shadowed
+    /// light (flattened).
+    #[serde(flatten)]
+    pub shadow: ShadowColumns,
     /// Per-pass median GPU times, ms, by pass name.
     pub passes: BTreeMap<String, f64>,
     /// The same in steady state: the passes of `gpu_ms_geometry_steady`'s,
@@ -348,6 +353,43 @@ pub struct SweepColumns {
     /// `lights`, `threshold`, `strategy`, `variant`, ...), what its name is made of. JSON only.
     #[serde(default)]
     pub parameters: BTreeMap<String, String>,
+}
+
+/// A row's shadow columns: what the cell cast and what its image is worth against the light as
+/// it arrives, shadowed.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ShadowColumns {
+    /// The cell's `shadows`: `off` or `exact`.
+    #[serde(default)]
+    pub shadows: String,
+    /// Mean FLIP against the shadowed infinite-range reference (a shadow ray from every covered
+    /// pixel to every light that adds radiance there), both images tonemapped at the exposure
+    /// adapted to it; stochastic cells: the mean over seeds. Unshadowed cells are scored
+    /// against it too (with `shadowed_reference`): what light leaking through walls costs.
+    /// Empty where it was not rendered.
+    #[serde(default)]
+    pub flip_mean_shadowed: Option<f64>,
+    /// The signed mean relative luminance error over lit pixels against the same reference
+    /// (as `energy_error_infinite`): positive where light leaks through walls.
+    #[serde(default)]
+    pub energy_error_shadowed: Option<f64>,
+    /// Shadow rays the frame casts per covered pixel (counted on the GPU in a frame of its
+    /// own, `manylights_gpu::GpuScene::count_rays`: one for every (pixel, light) pair the
+    /// shading evaluates with a nonzero contribution); the first pose. Empty without shadows.
+    #[serde(default)]
+    pub rays_per_pixel: Option<f64>,
+    /// What the rays cost: `gpu_ms_cull_shade` less the same culling and shading without
+    /// shadow rays, timed back to back in the same cell, ms. Empty without shadows, for naive
+    /// forward, and where it was not timed.
+    #[serde(default)]
+    pub gpu_ms_shadow: Option<f64>,
+    /// Shadow rays a second the frame traces, billions: the frame's rays over
+    /// `gpu_ms_shadow`.
+    #[serde(default)]
+    pub grays_per_s: Option<f64>,
+    /// Whether the shadowed infinite-range reference came from the run folder's cache.
+    #[serde(default)]
+    pub reference_shadowed_cached: Option<bool>,
 }
 
 impl Row {
@@ -419,102 +461,6 @@ mod inf_f64 {
         })
     }
 }
-
-/// The CSV columns, in order: the contract first.
-pub const COLUMNS: &[&str] = &[
-    "experiment",
-    "cell",
-    "scene",
-    "lights",
-    "width",
-    "height",
-    "strategy",
-    "backend",
-    "params",
-    "gpu_ms_total",
-    "gpu_ms_cull",
-    "gpu_ms_shade",
-    "gpu_ms_prepass",
-    "cpu_ms_encode",
-    "false_negatives",
-    "false_positive_ratio",
-    "lights_per_pixel_mean",
-    "max_lights_per_tile",
-    "dropped_lights",
-    "list_bytes",
-    "gbuffer_bytes",
-    "psnr_db",
-    "flip_mean",
-    "max_abs_error",
-    "adapter",
-    "driver",
-    "commit",
-    "gpu_ms_total_p10",
-    "gpu_ms_total_p90",
-    "gpu_ms_cull_p10",
-    "gpu_ms_cull_p90",
-    "gpu_ms_shade_p10",
-    "gpu_ms_shade_p90",
-    "gpu_ms_prepass_p10",
-    "gpu_ms_prepass_p90",
-    "gpu_ms_raster",
-    "gpu_ms_compute",
-    "psnr_db_infinite",
-    "flip_mean_infinite",
-    "max_abs_error_infinite",
-    "exact_stride",
-    "frames",
-    "index",
-    "id",
-    "nonfinite_pixels",
-    "poses",
-    "temporal_change",
-    "temporal_change_reference",
-    "temporal_flicker",
-    "tile_masks",
-    "gpu_ms_cull_steady",
-    "gpu_ms_cull_span",
-    "gpu_ms_cull_shade",
-    "gpu_ms_cull_shade_span",
-    "lights_needed_per_pixel_mean",
-    "gpu_ms_light_update",
-    "cpu_ms_upload",
-    "msaa",
-    "msaa_target_bytes",
-    "transparent",
-    "gpu_ms_geometry_steady",
-    "gpu_ms_frame_steady",
-    "radius_rule",
-    "exposure_infinite",
-    "rmse_infinite",
-    "energy_error_infinite",
-    "seeds",
-    "accumulate",
-    "bias_infinite",
-    "noise_infinite",
-    "temporal_flicker_mean",
-    "reference_infinite_cached",
-    "materials",
-    "covered_pixels",
-    "ns_per_light_eval",
-    "gpu_ms_hierarchy",
-    "scene_lights",
-    "bytes_written_per_pixel",
-    "bytes_read_per_pixel",
-    "gpu_ms_hierarchy_steady",
-    "setting",
-    "radius_value",
-    "hierarchy_spacing",
-    "hierarchy_finest_nodes",
-    "hierarchy_growth",
-    "hierarchy_ramp",
-    "hierarchy_sample_from",
-    "stochastic_bound",
-    "stochastic_draw",
-    "interleave",
-    "stochastic_exposure",
-    "error",
-];
 
 fn one() -> u32 {
     1
