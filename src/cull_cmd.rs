@@ -57,6 +57,12 @@ pub(crate) struct CullArgs {
     /// counts printed are then per sample.
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub(crate) msaa: u32,
+    /// `exact`: also count the shadow rays that shading these lists casts (a ray for every
+    /// (pixel, listed light) pair with a nonzero contribution): the scene's BVH built, one
+    /// deferred frame over the same strategy shaded with shadows and its rays counted on the
+    /// GPU. `off` (the default): none.
+    #[arg(long, value_enum, default_value_t = crate::render_cmd::ShadowsName::Off)]
+    pub(crate) shadows: crate::render_cmd::ShadowsName,
 }
 
 pub(crate) fn cull(args: &CullArgs) -> Result<()> {
@@ -69,8 +75,13 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let (w, h) = (a.width, a.height);
     // With --hierarchy, its lights in place of the scene's, built on the GPU.
     let crate::hierarchy_opt::Shaded {
-        scene, gpu_scene, ..
+        scene,
+        mut gpu_scene,
+        ..
     } = a.upload(&ctx, scene)?;
+    if args.shadows.shadows().casts() {
+        gpu_scene.build_bvh(&ctx, &scene)?;
+    }
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();
     let mut timer = GpuTimer::new(&ctx, 64);
@@ -175,6 +186,19 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     }
     print_earlier(&earlier, frames);
     print_lists(&m, &out);
+    if args.shadows.shadows().casts() {
+        let rays = shadow_rays(
+            &ctx,
+            &gpu_scene,
+            &scene.camera,
+            (&strategy, &settings),
+            args,
+        )?;
+        println!(
+            "  shadow rays             {rays} ({:.2} a covered point; deferred shading of the lists)",
+            rays as f64 / m.covered_pixels.max(1) as f64
+        );
+    }
     print_timings(timings.as_deref());
     print!("{repeated}");
     println!(
@@ -208,6 +232,33 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The shadow rays one deferred frame shading `strategy`'s lists with `Shadows::Exact` casts
+/// (counted on the GPU, `GpuScene::count_rays`), over the stochastic ranges the lights hold.
+fn shadow_rays(
+    ctx: &GpuContext,
+    gpu_scene: &GpuScene,
+    camera: &manylights_scene::Camera,
+    (strategy, settings): (&manylights_cull::Strategy, &CullSettings),
+    args: &CullArgs,
+) -> Result<u64> {
+    use manylights_shade::{Backend, Renderer};
+    let (w, h) = (args.scene.width, args.scene.height);
+    let renderer =
+        Renderer::with_samples(ctx, gpu_scene, args.msaa)?.with_shadows(args.shadows.shadows());
+    Ok(gpu_scene.count_rays(ctx, (camera, w, h), || {
+        renderer
+            .render(
+                ctx,
+                gpu_scene,
+                Backend::Deferred,
+                strategy,
+                settings,
+                (w, h),
+            )
+            .map(|_| ())
+    })?)
 }
 
 /// Draws the stochastic ranges of frames `0..frames` in turn (none without `draws`) and

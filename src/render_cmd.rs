@@ -381,6 +381,18 @@ impl Run<'_> {
         let max = per_pixel.iter().copied().max().unwrap_or(0).max(1);
         let mean = per_pixel.iter().map(|&n| f64::from(n)).sum::<f64>() / covered as f64;
         println!("  lights per pixel        {mean:.2} (mean over covered pixels), {max} at most");
+        if renderer.shadows().casts() {
+            // The last frame again, its rays counted (frames that are timed count none).
+            let rays = gpu_scene.count_rays(ctx, (&scene.camera, w, h), || {
+                renderer
+                    .render(ctx, gpu_scene, backend, strategy, settings, (w, h))
+                    .map(|_| ())
+            })?;
+            println!(
+                "  shadow rays             {rays} ({:.2} a covered pixel)",
+                rays as f64 / covered as f64
+            );
+        }
         if let (Some(export), Some(lists)) = (&args.export, &out.lists) {
             let frame = manylights_gpu::layout::GpuFrame::new(
                 &scene.camera,

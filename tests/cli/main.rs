@@ -676,6 +676,42 @@ fn render_shadows_exact_casts_shadow_rays() {
             "{shadows}: {stdout}"
         );
         assert!(psnr_vs_reference(&stdout) > 60.0, "{shadows}: {stdout}");
+        assert_eq!(
+            stdout.contains("shadow rays"),
+            shadows == "exact",
+            "{shadows}: {stdout}"
+        );
+        if shadows == "exact" {
+            // `cull --shadows exact` counts the rays that deferred shading of its lists casts:
+            // the same rays as the render's.
+            let rays = number_after(&stdout, "shadow rays", "shadow rays");
+            let culled = succeeds(
+                &[
+                    "cull",
+                    "--scene",
+                    "pillars",
+                    "--lights",
+                    "64",
+                    "--radius",
+                    "4",
+                    "--shadows",
+                    "exact",
+                    "--width",
+                    "48",
+                    "--height",
+                    "32",
+                    "--out",
+                    out.join("cull").to_str().unwrap(),
+                ],
+                "cull --shadows exact",
+            );
+            assert!(rays > 100.0, "{stdout}");
+            assert_eq!(
+                number_after(&culled, "shadow rays", "shadow rays"),
+                rays,
+                "{culled}"
+            );
+        }
         energy.push(number_after(
             &stdout,
             "vs infinite-range reference",
@@ -687,6 +723,12 @@ fn render_shadows_exact_casts_shadow_rays() {
         "shadows must take light away: {energy:?}"
     );
     rejects(&["--shadows", "soft"], 2, &["--shadows", "off", "exact"]);
+    rejects_cmd(
+        "cull",
+        &["--shadows", "soft"],
+        2,
+        &["--shadows", "off", "exact"],
+    );
 }
 
 /// More lights than the device holds: an error stating the limit. On lavapipe the limit is its
