@@ -96,6 +96,12 @@ fn unshadowed_frames_leak_light_through_walls() {
     let e = Experiment::parse(src, Path::new("leaks.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
+    manylights_lab::report::write_report(tmp.path()).unwrap();
+    let md = std::fs::read_to_string(tmp.path().join("report.md")).unwrap();
+    assert!(
+        md.contains("| FLIP shadowed | energy shadowed | rays/px | shadow ms | Grays/s |"),
+        "the report's table has the shadow columns"
+    );
     let [off, exact] = [0, 1].map(|i| &s.rows[i].shadow);
     let leak = off.energy_error_shadowed.unwrap();
     assert!(

@@ -24,12 +24,16 @@ pub(super) struct Page<'a> {
     pub(super) images: &'a [(&'a Row, bool)],
 }
 
-/// The results table's header and rows (the moving lights' columns where cells moved them).
+/// The results table's header and rows (the moving lights' columns where cells moved them, the
+/// shadow columns where cells cast shadows or were scored against the shadowed light).
 pub(super) fn results_table(rows: &[Row]) -> (Vec<&'static str>, Vec<Vec<String>>) {
     // Moving lights' update columns, in reports of runs that have them.
     let moving = rows
         .iter()
         .any(|r| r.gpu_ms_light_update.is_some() || r.cpu_ms_upload.is_some());
+    let shadowed = rows
+        .iter()
+        .any(|r| r.shadow.flip_mean_shadowed.is_some() || r.shadow.rays_per_pixel.is_some());
     let mut head = vec![
         "cell",
         "lights",
@@ -58,6 +62,16 @@ pub(super) fn results_table(rows: &[Row]) -> (Vec<&'static str>, Vec<Vec<String>
     ];
     if moving {
         head.extend(["light update ms", "upload host ms"]);
+    }
+    if shadowed {
+        head.extend([
+            "shadows",
+            "FLIP shadowed",
+            "energy shadowed",
+            "rays/px",
+            "shadow ms",
+            "Grays/s",
+        ]);
     }
     let table: Vec<Vec<String>> = rows
         .iter()
@@ -99,6 +113,17 @@ pub(super) fn results_table(rows: &[Row]) -> (Vec<&'static str>, Vec<Vec<String>
                     fmt_opt(r.cpu_ms_upload, 3),
                 ]);
             }
+            if shadowed {
+                let sh = &r.shadow;
+                row.extend([
+                    sh.shadows.clone(),
+                    fmt_opt(sh.flip_mean_shadowed, 4),
+                    fmt_opt(sh.energy_error_shadowed, 4),
+                    fmt_opt(sh.rays_per_pixel, 2),
+                    fmt_opt(sh.gpu_ms_shadow, 3),
+                    fmt_opt(sh.grays_per_s, 2),
+                ]);
+            }
             row
         })
         .collect();
@@ -121,7 +146,7 @@ pub(super) fn markdown(p: &Page<'_>) -> String {
     );
     let _ = writeln!(
         md,
-        "GPU times are medians over each cell's measured frames (timestamp queries), with p10 and p90 in the results. Accuracy is against the brute-force reference with the same falloff (PSNR, FLIP: the implementation check) and against the infinite-range reference, the light as it is (FLIP inf at the reference's exposure, energy inf: the signed mean relative error over lit pixels); list metrics against the exact per-pixel oracle.\n"
+        "GPU times are medians over each cell's measured frames (timestamp queries), with p10 and p90 in the results. Accuracy is against the brute-force reference with the same falloff (PSNR, FLIP: the implementation check) and against the infinite-range reference, the light as it is (FLIP inf at the reference's exposure, energy inf: the signed mean relative error over lit pixels), and where cells have them against the shadowed infinite-range reference, the light as it arrives (FLIP shadowed, energy shadowed; with shadows also the rays a covered pixel, what they cost, shadow ms, and the rays a second, Grays/s); list metrics against the exact per-pixel oracle.\n"
     );
     let _ = writeln!(md, "```ron\n{}\n```\n", p.exp_src.trim_end());
     let _ = writeln!(md, "## Findings\n");
