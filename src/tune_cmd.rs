@@ -29,7 +29,8 @@ pub(crate) struct TuneArgs {
     #[arg(long, value_enum, default_value_t = TuneRank::Frame)]
     pub(crate) rank: TuneRank,
     /// Shadows of every candidate: off (the default) or exact (a shadow ray for every light
-    /// that adds radiance at a pixel; the candidates ranked by their frames with shadows).
+    /// that adds radiance at a pixel; the candidates ranked by their frames with shadows, and
+    /// with --max-error held to mean FLIP against the shadowed infinite-range reference).
     #[arg(long, value_enum, default_value_t = crate::render_cmd::ShadowsName::Off)]
     pub(crate) shadows: crate::render_cmd::ShadowsName,
     /// Start no candidate after this many seconds (those left are listed as untried); a rerun
@@ -181,7 +182,11 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         "lights/px",
         "needed",
         "per need",
-        "FLIP inf"
+        if args.shadows.shadows().casts() {
+            "FLIP shad"
+        } else {
+            "FLIP inf"
+        }
     );
     for (i, r) in report.ranked.iter().enumerate() {
         println!(
@@ -197,8 +202,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
                 .map_or("-".into(), |v| format!("{v:.1}")),
             r.false_positive_ratio
                 .map_or("-".into(), |v| format!("{v:.2}")),
-            r.flip_mean_infinite
-                .map_or("-".into(), |v| format!("{v:.4}")),
+            manylights_lab::tune::budget_error(r).map_or("-".into(), |v| format!("{v:.4}")),
         );
     }
     for (r, why) in &report.rejected {

@@ -90,6 +90,68 @@ fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
     );
 }
 
+/// `tune --shadows exact --max-error F`: every candidate casts shadows and is held to mean
+/// FLIP against the shadowed infinite-range reference (the table's last column is it), only
+/// those within F ranked; the best has shadows.
+#[test]
+fn tune_with_shadows_holds_candidates_to_the_shadowed_light() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("tune");
+    let o = manylights(&[
+        "tune",
+        "--out",
+        out.to_str().unwrap(),
+        "--max-error",
+        "0.6",
+        "--shadows",
+        "exact",
+        "--scene",
+        "atrium",
+        "--lights",
+        "96",
+        "--width",
+        "40",
+        "--height",
+        "24",
+        "--frames",
+        "1",
+        "--warmup",
+        "0",
+        "--thresholds",
+        "1",
+        "--errors",
+        "0.5",
+        "--alphas",
+        "1",
+        "--spacing",
+        "0.5",
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(stdout.contains("FLIP shad"), "{stdout}");
+    let rows = manylights_lab::results::load_rows(&out).unwrap();
+    assert!(rows.iter().all(|r| r.shadow.shadows == "exact"));
+    let ranked: Vec<f64> = stdout
+        .lines()
+        .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
+        .map(|l| l.split_whitespace().last().unwrap().parse().unwrap())
+        .collect();
+    assert!(!ranked.is_empty(), "{stdout}");
+    for flip in &ranked {
+        assert!(*flip <= 0.6, "{stdout}");
+        // Each printed error is a row's error against the shadowed light.
+        assert!(
+            rows.iter().any(|r| r
+                .shadow
+                .flip_mean_shadowed
+                .is_some_and(|f| (f - flip).abs() < 1e-4)),
+            "{flip} is no row's flip_mean_shadowed"
+        );
+    }
+    let (e, _) = manylights_lab::Experiment::load(&out.join("best.ron")).unwrap();
+    assert!(e.config.shadows.casts(), "the best casts shadows");
+}
+
 /// `tune --max-error F`: light ranges are candidates too, every candidate is scored against
 /// the infinite-range reference, and only those within mean FLIP F are ranked; the best is
 /// written with its radius rule; the lighting grid hierarchy is among them (--alphas, with

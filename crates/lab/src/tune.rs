@@ -15,7 +15,9 @@
 //! [`cost`]), every candidate is scored against the infinite-range reference (computed
 //! once and cached in the output folder), and only those within the budget of mean FLIP
 //! against it (`flip_mean_infinite`) are ranked: the fastest configuration that is accurate
-//! enough against the light as it is.
+//! enough against the light as it is. With shadows (`shadows: Exact`) the budget is against the
+//! shadowed infinite-range reference (`flip_mean_shadowed`, [`budget_error`]): the light as it
+//! arrives.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -263,11 +265,12 @@ pub fn tune(
     let best = ranked.first().ok_or_else(|| {
         let closest = rejected
             .iter()
-            .filter_map(|(r, _)| r.flip_mean_infinite)
+            .filter_map(|(r, _)| budget_error(r))
             .reduce(f64::min);
+        let against = against(base.shadows.casts());
         let error = match (opts.max_error, closest) {
             (Some(f), Some(c)) => format!(
-                "; the lowest mean FLIP against infinite range was {c:.4}, against --max-error {f}: \
+                "; the lowest mean FLIP against {against} was {c:.4}, against --max-error {f}: \
                  raise it, or try longer ranges (--thresholds, --errors, --alphas)"
             ),
             _ => String::new(),
@@ -304,9 +307,11 @@ pub fn tune(
             } else {
                 ""
             },
-            match (opts.max_error, best.flip_mean_infinite) {
-                (Some(b), Some(f)) =>
-                    format!(", mean FLIP {f:.4} against infinite range within {b}"),
+            match (opts.max_error, budget_error(best)) {
+                (Some(b), Some(f)) => format!(
+                    ", mean FLIP {f:.4} against {} within {b}",
+                    against(base.shadows.casts())
+                ),
                 _ => String::new(),
             }
         ),
@@ -346,15 +351,36 @@ fn why_not(r: &Row, max_error: Option<f64>, rank: Rank) -> Option<String> {
         ));
     }
     if let Some(budget) = max_error {
-        match r.flip_mean_infinite {
+        let against = against(r.shadow.shadows == "exact");
+        match budget_error(r) {
             Some(f) if f <= budget => {}
             Some(f) => {
                 return Some(format!(
-                    "mean FLIP {f:.4} against infinite range, above --max-error {budget}"
+                    "mean FLIP {f:.4} against {against}, above --max-error {budget}"
                 ));
             }
-            None => return Some("no accuracy against infinite range".into()),
+            None => return Some(format!("no accuracy against {against}")),
         }
     }
     None
+}
+
+/// The error `--max-error` holds a candidate to: with shadows, mean FLIP against the shadowed
+/// infinite-range reference (`flip_mean_shadowed`), else against the infinite-range one
+/// (`flip_mean_infinite`).
+pub fn budget_error(r: &Row) -> Option<f64> {
+    if r.shadow.shadows == "exact" {
+        r.shadow.flip_mean_shadowed
+    } else {
+        r.flip_mean_infinite
+    }
+}
+
+/// What [`budget_error`] measures against, for a candidate with or without shadows.
+fn against(shadows: bool) -> &'static str {
+    if shadows {
+        "the shadowed infinite range"
+    } else {
+        "infinite range"
+    }
 }

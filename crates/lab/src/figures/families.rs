@@ -1,8 +1,9 @@
 //! A figure's method families, from each row's light-range columns (`radius_rule`,
 //! `radius_value`, `hierarchy_*`, `stochastic_*`, `accumulate`, `interleave`): cut-off
 //! thresholds, fixed radii, stochastic light culling in one frame, accumulated or interleaved,
-//! and the lighting grid hierarchy a finest spacing (and a first sampled level); each row's
-//! place in its family's sweep, and which way that sweep runs.
+//! and the lighting grid hierarchy a finest spacing (and a first sampled level), each with
+//! shadows a family apart; each row's place in its family's sweep, and which way that sweep
+//! runs.
 
 use crate::cells::RADIUS_AXES;
 use crate::results::Row;
@@ -18,6 +19,16 @@ pub(super) fn sweeps_range(r: &Row) -> bool {
 /// A row's method family and its place in the family's sweep (the threshold, radius, error
 /// bound or alpha) where its cell sweeps the range; else the rule's family alone.
 pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
+    let (name, place) = range_family(r);
+    // A shadow mode is a family of its own (`, shadowed`): the same ranges cost more with rays.
+    match r.shadow.shadows.as_str() {
+        "exact" => (format!("{name}, shadowed"), place),
+        _ => (name, place),
+    }
+}
+
+/// [`family`] by the light range alone.
+fn range_family(r: &Row) -> (String, Option<f64>) {
     if !sweeps_range(r) {
         let name = match r.radius_rule.as_str() {
             "threshold" => "cut-off thresholds",

@@ -421,6 +421,9 @@ mod tests {
             let fp: Axis<'_> = ("false-positive ratio", &|r| r.false_positive_ratio);
             let frame: Axis<'_> = ("culling + shading", &|r| r.gpu_ms_cull_shade);
             let flip_inf: Axis<'_> = ("mean FLIP vs infinite range", &|r| r.flip_mean_infinite);
+            let flip_shadowed: Axis<'_> = ("mean FLIP vs the shadowed light", &|r| {
+                r.shadow.flip_mean_shadowed
+            });
             let figures = [
                 ("time_vs_lights", time_vs_lights(&rows, &svg).unwrap()),
                 ("passes", passes(&rows, &svg).unwrap()),
@@ -431,6 +434,10 @@ mod tests {
                 (
                     "frame_infinite",
                     speed_accuracy(&rows, &svg, frame, flip_inf).unwrap(),
+                ),
+                (
+                    "frame_shadowed",
+                    speed_accuracy(&rows, &svg, frame, flip_shadowed).unwrap(),
                 ),
                 ("shade_vs_lights", shade_vs_lights(&rows, &svg).unwrap()),
             ];

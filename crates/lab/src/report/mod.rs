@@ -425,6 +425,22 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
             &|p| speed_accuracy(rows, p, whole, flip_inf),
         )?;
     }
+    if rows.iter().any(|r| r.shadow.flip_mean_shadowed.is_some()) {
+        let whole: Axis<'_> = ("frame, GPU ms (steady state)", &|r| {
+            r.gpu_ms_frame_steady
+                .map(|t| t + r.hierarchy_build_ms().unwrap_or(0.0))
+        });
+        let shadowed: Axis<'_> = ("mean FLIP vs the shadowed light", &|r| {
+            r.shadow.flip_mean_shadowed
+        });
+        draw(
+            "frame_shadowed.svg",
+            &format!(
+                "The whole frame against accuracy against the light as it arrives: the frame in steady state (gpu_ms_frame_steady){with_build} against mean FLIP against the shadowed infinite-range reference (flip_mean_shadowed, a ray from every pixel to every light). A panel a setting; colour: the method family, with shadows (`, shadowed`) a family apart, a line through its sweep; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front."
+            ),
+            &|p| speed_accuracy(rows, p, whole, shadowed),
+        )?;
+    }
     draw(
         "shade_vs_lights.svg",
         "What a loose list costs: the shading pass against the lights it evaluates per pixel, one point per cell.",
