@@ -148,23 +148,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let m = metrics::from_gpu_counts(&counts, &lengths);
     // Lights evaluated a pixel (with MSAA, the mean over its covered samples).
     let per_pixel: Vec<u32> = counts.iter().map(|c| c[0] / c[3].max(1)).collect();
-    let tiles = heatmap::tile_counts(&out.params, &lengths, args.slice);
-    let max = args
-        .heat_max
-        .unwrap_or_else(|| tiles.iter().copied().max().unwrap_or(0).max(1));
-    let dir = a.out.clone().unwrap_or_else(|| PathBuf::from("out/cull"));
-    let tile_png = dir.join(format!("heatmap_tiles_{}.png", strategy.name()));
-    let pixel_png = dir.join(format!("heatmap_pixels_{}.png", strategy.name()));
-    let (tile_img, pixel_img) = (
-        heatmap::tiles(&out.params, &tiles, w, h, max),
-        heatmap::pixels(&per_pixel, w, h, max),
-    );
-    for (path, img) in [(&tile_png, tile_img), (&pixel_png, pixel_img)] {
-        write_atomic(path, |f| {
-            img.write_to(f, image::ImageFormat::Png)
-                .map_err(|e| e.to_string())
-        })?;
-    }
+    let heat = write_heatmaps(args, &strategy, &out, (&lengths, &per_pixel))?;
     println!(
         "{}: {} triangles, {} lights, {w}x{h}{}, {strategy:?}",
         scene.name,
@@ -201,11 +185,7 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     }
     print_timings(timings.as_deref());
     print!("{repeated}");
-    println!(
-        "heat scale 0..{max} lights; wrote {} and {}",
-        tile_png.display(),
-        pixel_png.display()
-    );
+    println!("{heat}");
     if let Some(export) = &args.export {
         let run = manylights_lab::export::RunToExport {
             ctx: &ctx,
@@ -232,6 +212,43 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The tile and pixel heatmaps of a run's lists (`lengths`: each bin's; `per_pixel`: lights
+/// evaluated a pixel), written under `--out`, on one scale: what the output line says of them.
+fn write_heatmaps(
+    args: &CullArgs,
+    strategy: &manylights_cull::Strategy,
+    out: &CullOutput,
+    (lengths, per_pixel): (&[u32], &[u32]),
+) -> Result<String> {
+    let (w, h) = (args.scene.width, args.scene.height);
+    let tiles = heatmap::tile_counts(&out.params, lengths, args.slice);
+    let max = args
+        .heat_max
+        .unwrap_or_else(|| tiles.iter().copied().max().unwrap_or(0).max(1));
+    let dir = args
+        .scene
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/cull"));
+    let tile_png = dir.join(format!("heatmap_tiles_{}.png", strategy.name()));
+    let pixel_png = dir.join(format!("heatmap_pixels_{}.png", strategy.name()));
+    let (tile_img, pixel_img) = (
+        heatmap::tiles(&out.params, &tiles, w, h, max),
+        heatmap::pixels(per_pixel, w, h, max),
+    );
+    for (path, img) in [(&tile_png, tile_img), (&pixel_png, pixel_img)] {
+        write_atomic(path, |f| {
+            img.write_to(f, image::ImageFormat::Png)
+                .map_err(|e| e.to_string())
+        })?;
+    }
+    Ok(format!(
+        "heat scale 0..{max} lights; wrote {} and {}",
+        tile_png.display(),
+        pixel_png.display()
+    ))
 }
 
 /// The shadow rays one deferred frame shading `strategy`'s lists with `Shadows::Exact` casts

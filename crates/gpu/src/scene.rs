@@ -108,6 +108,29 @@ fn group0_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
     })
 }
 
+/// Group 0 over the frame uniform, the lights and the materials (`scene`), the BVH and the ray
+/// counters.
+fn group0(
+    d: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    [frame, lights, materials]: [&wgpu::Buffer; 3],
+    (bvh, ray_counts): (&GpuBvh, &wgpu::Buffer),
+) -> wgpu::BindGroup {
+    crate::pipeline::buffers_group(
+        d,
+        "scene.group0",
+        layout,
+        &[
+            frame,
+            lights,
+            materials,
+            &bvh.nodes,
+            &bvh.triangles,
+            ray_counts,
+        ],
+    )
+}
+
 impl GpuScene {
     /// Uploads `scene` (which must validate) with each light's own radius
     /// ([`LightModel::CUT_OFF`]) and sets the frame for `camera` at `width` x `height`.
@@ -247,18 +270,11 @@ impl GpuScene {
             &vec![0u8; RAY_COUNT_SLOTS as usize * 4],
             wgpu::BufferUsages::STORAGE | copy,
         );
-        let bind_group = crate::pipeline::buffers_group(
+        let bind_group = group0(
             d,
-            "scene.group0",
             &layout,
-            &[
-                &frame_buf,
-                &lights_buf,
-                &materials_buf,
-                &bvh.nodes,
-                &bvh.triangles,
-                &ray_counts,
-            ],
+            [&frame_buf, &lights_buf, &materials_buf],
+            (&bvh, &ray_counts),
         );
         Ok(Self {
             vertices: vertices_buf,
@@ -290,18 +306,11 @@ impl GpuScene {
         let built = SceneBvh::build(scene)?;
         self.bvh = GpuBvh::upload(ctx, &built)?;
         self.has_bvh = true;
-        self.bind_group = crate::pipeline::buffers_group(
+        self.bind_group = group0(
             &ctx.device,
-            "scene.group0",
             &self.layout,
-            &[
-                &self.frame,
-                &self.lights,
-                &self.materials,
-                &self.bvh.nodes,
-                &self.bvh.triangles,
-                &self.ray_counts,
-            ],
+            [&self.frame, &self.lights, &self.materials],
+            (&self.bvh, &self.ray_counts),
         );
         Ok(built)
     }
