@@ -20,9 +20,10 @@ pub(super) fn sweeps_range(r: &Row) -> bool {
 /// bound or alpha) where its cell sweeps the range; else the rule's family alone.
 pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
     let (name, place) = range_family(r);
-    // A shadow mode is a family of its own (`, shadowed`): the same ranges cost more with rays.
+    // A shadow mode is a family of its own (`shadowed: `, first, so that a legend that
+    // shortens a long name keeps it): the same ranges cost more with rays.
     match r.shadow.shadows.as_str() {
-        "exact" => (format!("{name}, shadowed"), place),
+        "exact" => (format!("shadowed: {name}"), place),
         _ => (name, place),
     }
 }

@@ -436,7 +436,7 @@ fn draw_figures(rows: &[Row], figures: &Path) -> Result<Vec<(&'static str, Strin
         draw(
             "frame_shadowed.svg",
             &format!(
-                "The whole frame against accuracy against the light as it arrives: the frame in steady state (gpu_ms_frame_steady){with_build} against mean FLIP against the shadowed infinite-range reference (flip_mean_shadowed, a ray from every pixel to every light). A panel a setting; colour: the method family, with shadows (`, shadowed`) a family apart, a line through its sweep; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front."
+                "The whole frame against accuracy against the light as it arrives: the frame in steady state (gpu_ms_frame_steady){with_build} against mean FLIP against the shadowed infinite-range reference (flip_mean_shadowed, a ray from every pixel to every light). A panel a setting; colour: the method family, with shadows (`shadowed: `) a family apart, a line through its sweep; marker: the strategy; filled: deferred or visibility, open: forward. Black: each panel's Pareto front."
             ),
             &|p| speed_accuracy(rows, p, whole, shadowed),
         )?;
