@@ -325,7 +325,7 @@ fn against_references(
     out.acc_inf = Some(compare_adapted(color, &ri));
     out.infinite = Some(ri);
     out.infinite_cached = Some(cached);
-    if refs.set.has_shadowed() && c.shadowed_truth() {
+    if refs.set.has_shadowed() {
         let (rs, cached) = stage(pose, "shadowed infinite-range reference", || {
             refs.infinite(ctx, gpu_scene, view, windowed.as_ref(), Shadows::Exact)
         })?;

@@ -29,7 +29,8 @@ pub(crate) struct ReferenceSet {
 impl ReferenceSet {
     /// The renderers `c` needs over `scene` (whose BVH is built where shadows are wanted).
     pub(crate) fn new(ctx: &GpuContext, scene: &GpuScene, c: &Config) -> Result<Self, GpuError> {
-        let shadowed = c.shadows.casts() || c.shadowed_truth();
+        // With accuracy a cell with shadows renders the shadowed truth too.
+        let shadowed = c.shadowed_truth();
         Ok(Self {
             plain: ReferenceRenderer::with_samples(ctx, scene, c.msaa)?,
             infinite: InfiniteReference::new(ctx, scene),
