@@ -57,16 +57,16 @@ pub(crate) struct CullArgs {
     /// counts printed are then per sample.
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub(crate) msaa: u32,
-    /// `exact`: also count the shadow rays that shading these lists casts (a ray for every
-    /// (pixel, listed light) pair with a nonzero contribution): the scene's BVH built, one
-    /// deferred frame over the same strategy shaded with shadows and its rays counted on the
-    /// GPU. `off` (the default): none.
-    #[arg(long, value_enum, default_value_t = crate::render_cmd::ShadowsName::Off)]
-    pub(crate) shadows: crate::render_cmd::ShadowsName,
+    /// With shadows (--shadows exact or stochastic), also count the shadow rays that shading
+    /// these lists casts: the scene's BVH built, one deferred frame over the same strategy
+    /// shaded with the shadows and its rays counted on the GPU.
+    #[command(flatten)]
+    pub(crate) shadows: crate::render_cmd::ShadowArgs,
 }
 
 pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let a = &args.scene;
+    args.shadows.check()?;
     let strategy = args.cull.strategy()?;
     let scene = a.build()?;
     let ctx = a.gpu()?;

@@ -60,12 +60,47 @@ pub(crate) struct RenderArgs {
     /// visibility.
     #[arg(long, value_enum)]
     pub(crate) visibility_pass: Option<VisibilityPassName>,
-    /// Shadows: off (the default: every light shines through walls) or exact (a shadow ray for
-    /// every light that adds radiance at a pixel, through the BVH of the scene's opaque
-    /// triangles, built after the upload), with every backend and the reference; --compare's
-    /// reference is shadowed alike, its infinite-range reference not.
-    #[arg(long, value_enum, default_value_t = ShadowsName::Off)]
-    pub(crate) shadows: ShadowsName,
+    /// Shadows (--shadows, --shadow-rays); --compare's reference is shadowed exactly, its
+    /// infinite-range reference not.
+    #[command(flatten)]
+    pub(crate) shadows: ShadowArgs,
+}
+
+/// `--shadows` and `--shadow-rays`, of `render`, `cull` and `tune`.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub(crate) struct ShadowArgs {
+    /// Shadows: off (the default: every light shines through walls), exact (a shadow ray for
+    /// every light that adds radiance at a pixel) or stochastic (--shadow-rays rays a pixel to
+    /// lights drawn in proportion to their unshadowed luminance, the ratio estimator: biased,
+    /// consistent), through the BVH of the scene's opaque triangles, built after the upload.
+    #[arg(long = "shadows", value_enum, default_value_t = ShadowsName::Off)]
+    pub(crate) mode: ShadowsName,
+    /// Rays a pixel of --shadows stochastic: 1 to 16 (default 4).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub(crate) shadow_rays: Option<u32>,
+}
+
+impl ShadowArgs {
+    /// The shadows asked for (stochastic: one frame, frame 0's draws).
+    pub(crate) fn shadows(self) -> Shadows {
+        match self.mode {
+            ShadowsName::Off => Shadows::Off,
+            ShadowsName::Exact => Shadows::Exact,
+            ShadowsName::Stochastic => Shadows::stochastic(self.shadow_rays.unwrap_or(4)),
+        }
+    }
+
+    /// An error where --shadow-rays is given without --shadows stochastic.
+    pub(crate) fn check(self) -> Result<()> {
+        if let (Some(k), ShadowsName::Off | ShadowsName::Exact) = (self.shadow_rays, self.mode) {
+            anyhow::bail!(
+                "--shadow-rays {k} with --shadows {}: rays a pixel are only for --shadows \
+                 stochastic",
+                self.shadows().name()
+            );
+        }
+        Ok(())
+    }
 }
 
 /// `--shadows`'s values.
@@ -73,15 +108,7 @@ pub(crate) struct RenderArgs {
 pub(crate) enum ShadowsName {
     Off,
     Exact,
-}
-
-impl ShadowsName {
-    pub(crate) fn shadows(self) -> Shadows {
-        match self {
-            Self::Off => Shadows::Off,
-            Self::Exact => Shadows::Exact,
-        }
-    }
+    Stochastic,
 }
 
 /// `--visibility-pass`'s values.
@@ -216,6 +243,7 @@ struct Run<'a> {
 fn validate(args: &RenderArgs) -> Result<()> {
     // The strategy's own options first: those it would ignore name the strategies that read them.
     args.cull.strategy()?;
+    args.shadows.check()?;
     if !(args.exposure.is_finite() && args.exposure > 0.0) {
         bail!("invalid --exposure {}: a finite value > 0", args.exposure);
     }

@@ -28,11 +28,11 @@ pub(crate) struct TuneArgs {
     /// shading: what users pay), or culling and shading alone (for culling studies).
     #[arg(long, value_enum, default_value_t = TuneRank::Frame)]
     pub(crate) rank: TuneRank,
-    /// Shadows of every candidate: off (the default) or exact (a shadow ray for every light
-    /// that adds radiance at a pixel; the candidates ranked by their frames with shadows, and
-    /// with --max-error held to mean FLIP against the shadowed infinite-range reference).
-    #[arg(long, value_enum, default_value_t = crate::render_cmd::ShadowsName::Off)]
-    pub(crate) shadows: crate::render_cmd::ShadowsName,
+    /// Shadows of every candidate (--shadows, --shadow-rays): with shadows the candidates are
+    /// ranked by their frames with them, and with --max-error held to mean FLIP against the
+    /// shadowed infinite-range reference.
+    #[command(flatten)]
+    pub(crate) shadows: crate::render_cmd::ShadowArgs,
     /// Start no candidate after this many seconds (those left are listed as untried); a rerun
     /// with the same options and --out resumes where it stopped.
     #[arg(long, default_value_t = 600)]
@@ -104,6 +104,7 @@ pub(crate) enum TuneRank {
 
 pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     let a = &args.scene;
+    args.shadows.check()?;
     // The scene and its lights, checked before any GPU work.
     let scene = a.build()?;
     let radii = candidate_ranges(args)?;

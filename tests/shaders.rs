@@ -260,7 +260,7 @@ fn host_structs_match_wgsl_layout() {
     }
     check!(GpuFrame, "Frame", [clip_from_world => "clip_from_world", view_from_world => "view_from_world",
         clip_from_view => "clip_from_view", world_from_view => "world_from_view", eye => "eye", viewport => "viewport", light_count => "light_count", flags => "flags",
-        band_ramp => "band_ramp", band_slope => "band_slope"]);
+        band_ramp => "band_ramp", band_slope => "band_slope", shadow_frame => "shadow_frame"]);
     check!(GpuLight, "Light", [position => "position", radius => "radius", color => "color", intensity => "intensity",
         direction => "direction", kind => "kind", cos_inner => "cos_inner", cos_outer => "cos_outer", alpha => "alpha", interleave => "interleave"]);
     check!(GpuMaterial, "Material", [base_color => "base_color", model => "model", emissive => "emissive", opacity => "opacity", params => "params"]);

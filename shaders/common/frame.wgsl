@@ -19,6 +19,8 @@ struct Frame {
     // 1 / (band_ramp - 1).
     band_ramp: f32,
     band_slope: f32,
+    // The frame number stochastic shadow rays draw their lights by (shadow_draws_begin).
+    shadow_frame: u32,
 }
 
 @group(0) @binding(0) var<uniform> frame: Frame;

@@ -15,7 +15,7 @@ fn shade_all(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32>
     for (var i = 0u; i < frame.light_count; i++) {
         c += shade_light(lights[i], p, n, v, m);
     }
-    return c;
+    return shadow_estimate(c);
 }
 
 // The material's emitted radiance: where each loop over lights starts its sum.
@@ -98,14 +98,104 @@ fn count_ray(p: vec3<f32>) {
 }
 
 // `c`, the radiance one light adds at `p`, or zero where SHADOWS and its shadow ray is blocked.
+// With SHADOW_RAYS the light is offered to the pixel's draws instead and `c` returned whole: the
+// loop's sum is the unshadowed one until shadow_estimate scales it.
 fn shadowed(c: vec3<f32>, light: Light, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     if SHADOWS && any(c != vec3<f32>(0.0)) {
+        if SHADOW_RAYS > 0u {
+            shadow_offer(c, light.position, p, n);
+            return c;
+        }
         count_ray(p);
         if shadow_blocked(light, p, n) {
             return vec3<f32>(0.0);
         }
     }
     return c;
+}
+
+// SHADOW_RAYS = K > 0 (with SHADOWS): stochastic shadows (`shadows: Stochastic`), K rays a
+// pixel. Every light the loop evaluates is offered (shadow_offer) with its unshadowed radiance
+// c_i; K weighted reservoirs keep one light each in proportion to luminance(c_i) (one uniform
+// number a light, shifted by k / K for reservoir k, so that each reservoir's draw has the right
+// marginal and the K together are stratified); shadow_estimate traces the K rays and returns
+// the ratio estimator (Heitz et al. 2018): the analytic unshadowed sum U times, per channel,
+// sum_k s_k V_k / sum_k s_k, where s_k = c_k / luminance(c_k) and V_k is 1 where ray k is
+// clear. Biased for finite K (a ratio of estimates), consistent as K grows; exact where every
+// drawn light is clear or every one blocked, and, where the lights' colours are alike, U times
+// the fraction of clear rays, whose expectation is the shadowed sum (manylights_scene::
+// shadow_estimate, the CPU twin). The numbers hash the pixel, the frame's shadow_frame and the
+// loops run so far in the invocation (MSAA shades several sample groups a pixel).
+override SHADOW_RAYS: u32 = 0u;
+// The most rays a pixel (manylights_shade::Shadows::MAX_RAYS).
+const SHADOW_RAYS_MAX: u32 = 16u;
+
+var<private> shadow_targets: array<vec3<f32>, SHADOW_RAYS_MAX>;
+var<private> shadow_shares: array<vec3<f32>, SHADOW_RAYS_MAX>;
+// The luminance and the radiance offered so far, the random state, the surface point and normal.
+var<private> shadow_total: f32;
+var<private> shadow_lit: vec3<f32>;
+var<private> shadow_rng: u32;
+var<private> shadow_p: vec3<f32>;
+var<private> shadow_n: vec3<f32>;
+// The loops this invocation has estimated (a term of each loop's seed).
+var<private> shadow_loops: u32;
+
+fn shading_luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// Offers light radiance `c` from `towards` at point `p` (normal `n`) to the K reservoirs.
+fn shadow_offer(c: vec3<f32>, towards: vec3<f32>, p: vec3<f32>, n: vec3<f32>) {
+    let w = shading_luminance(c);
+    if !(w > 0.0) {
+        return;
+    }
+    if shadow_total == 0.0 {
+        shadow_rng = pcg(shading_pixel.x ^ pcg(shading_pixel.y ^ pcg(frame.shadow_frame ^ pcg(shadow_loops))));
+        shadow_p = p;
+        shadow_n = n;
+    }
+    shadow_total += w;
+    shadow_lit += c;
+    shadow_rng = pcg(shadow_rng);
+    let u = f32(shadow_rng >> 8u) * (1.0 / 16777216.0);
+    let keep = w / shadow_total;
+    let share = c / w;
+    for (var k = 0u; k < SHADOW_RAYS; k++) {
+        if fract(u + f32(k) / f32(SHADOW_RAYS)) < keep {
+            shadow_targets[k] = towards;
+            shadow_shares[k] = share;
+        }
+    }
+}
+
+// The loop's sum `c` with its offered lights' part scaled by the K rays' ratio (see
+// SHADOW_RAYS), and the draws cleared for the next loop; `c` itself without SHADOW_RAYS or where
+// nothing was offered.
+fn shadow_estimate(c: vec3<f32>) -> vec3<f32> {
+    if !SHADOWS || SHADOW_RAYS == 0u || shadow_total == 0.0 {
+        return c;
+    }
+    var drawn = vec3<f32>(0.0);
+    var clear = vec3<f32>(0.0);
+    var seen = 0u;
+    let a = abs(shadow_p);
+    let origin = shadow_p + shadow_n * (SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0)));
+    for (var k = 0u; k < SHADOW_RAYS; k++) {
+        count_ray(shadow_p);
+        drawn += shadow_shares[k];
+        if !bvh_blocked(origin, shadow_targets[k]) {
+            clear += shadow_shares[k];
+            seen++;
+        }
+    }
+    let ratio = select(vec3<f32>(f32(seen) / f32(SHADOW_RAYS)), clear / drawn, drawn > vec3<f32>(0.0));
+    let out = c - shadow_lit * (vec3<f32>(1.0) - ratio);
+    shadow_total = 0.0;
+    shadow_lit = vec3<f32>(0.0);
+    shadow_loops++;
+    return out;
 }
 
 // shade_light for a caller that already has `to_light = light.position - p` and
@@ -158,7 +248,7 @@ fn shade_listed(light: Light, p: vec3<f32>, to_light: vec3<f32>, d: f32, n: vec3
     return shadowed(shade_light_at(light, to_light, d, n, v, m), light, p, n);
 }
 
-// A loop's sum `c`, or NaN where a POINT_LIGHTS pipeline shades a frame whose lights are not
+// A loop's sum `c` (with SHADOW_RAYS, shadow_estimate's), or NaN where a POINT_LIGHTS pipeline shades a frame whose lights are not
 // all windowed point lights: a count of non-finite pixels in the results, never a plausible
 // image. (Renderer::render refuses that combination first.) The NaN's bits are or-ed with a
 // runtime zero, so that it is not a constant expression for the shader compiler to refuse.
@@ -166,7 +256,7 @@ fn lights_checked(c: vec3<f32>) -> vec3<f32> {
     if POINT_LIGHTS && !point_lights_only() {
         return vec3<f32>(bitcast<f32>(0x7fc00000u | (frame.flags & 0u)));
     }
-    return c;
+    return shadow_estimate(c);
 }
 
 // shade_light_at for a point light with the windowed falloff and no stochastic alpha: the same

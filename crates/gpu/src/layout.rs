@@ -135,8 +135,14 @@ pub struct GpuFrame {
     pub band_ramp: f32,
     /// `1 / (band_ramp - 1)`.
     pub band_slope: f32,
+    /// The frame number stochastic shadow rays draw their lights by (`shadow_frame`,
+    /// shaders/common/shading.wgsl; [`crate::GpuScene::set_shadow_frame`]): each frame's draws
+    /// differ, the same number draws the same.
+    pub shadow_frame: u32,
+    /// Padding to the uniform's 16-byte size.
+    pub _pad: [u32; 3],
 }
-const _: () = assert!(size_of::<GpuFrame>() == 304);
+const _: () = assert!(size_of::<GpuFrame>() == 320);
 
 impl GpuFrame {
     /// The frame constants of `camera` rendering a `width` x `height` target.
@@ -160,6 +166,8 @@ impl GpuFrame {
             flags: 0,
             band_ramp: manylights_scene::hierarchy::RAMP as f32,
             band_slope: (1.0 / (manylights_scene::hierarchy::RAMP - 1.0)) as f32,
+            shadow_frame: 0,
+            _pad: [0; 3],
         }
     }
 }

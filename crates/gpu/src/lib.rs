@@ -25,4 +25,4 @@ pub mod timing;
 
 pub use context::{GpuContext, GpuError, GpuOptions};
 pub use light_model::{LightModel, LightPath};
-pub use scene::GpuScene;
+pub use scene::{GpuScene, ShadowFrames};

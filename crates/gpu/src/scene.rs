@@ -53,6 +53,8 @@ pub struct GpuScene {
     bvh: GpuBvh,
     /// Whether `bvh` is the scene's.
     has_bvh: bool,
+    /// The frame number stochastic shadow rays draw by ([`GpuScene::set_shadow_frame`]).
+    shadow_frame: std::sync::Arc<std::sync::atomic::AtomicU32>,
     /// [`RAY_COUNT_SLOTS`] counters of shadow rays, group 0's binding 5.
     ray_counts: wgpu::Buffer,
 }
@@ -294,6 +296,7 @@ impl GpuScene {
             bind_group,
             bvh,
             has_bvh: false,
+            shadow_frame: Default::default(),
             ray_counts,
         })
     }
@@ -346,6 +349,22 @@ impl GpuScene {
             .sum())
     }
 
+    /// Sets the frame number stochastic shadow rays draw their lights by (0 after the upload):
+    /// the frame uniform's `shadow_frame`, kept by later [`GpuScene::set_view`]s. Frames of
+    /// one number draw the same lights; a renderer that accumulates frames gives each its own.
+    pub fn set_shadow_frame(&self, ctx: &GpuContext, frame: u32) {
+        self.shadow_frames().set(ctx, frame);
+    }
+
+    /// What sets the scene's shadow frame ([`GpuScene::set_shadow_frame`]), for a holder that
+    /// does not hold the scene.
+    pub fn shadow_frames(&self) -> ShadowFrames {
+        ShadowFrames {
+            frame: self.frame.clone(),
+            value: self.shadow_frame.clone(),
+        }
+    }
+
     /// Whether the scene's BVH is built and bound ([`GpuScene::build_bvh`]).
     pub fn has_bvh(&self) -> bool {
         self.has_bvh
@@ -379,14 +398,17 @@ impl GpuScene {
     /// light path's flags are the scene's own, whatever `flags` holds), and sorts the
     /// transparent triangles back to front for the camera.
     pub fn set_view(&self, ctx: &GpuContext, camera: &Camera, width: u32, height: u32, flags: u32) {
-        let frame = Self::frame(
-            self.model,
-            self.path,
-            camera,
-            (width, height),
-            self.light_count,
-            flags,
-        );
+        let frame = GpuFrame {
+            shadow_frame: self.shadow_frame.load(std::sync::atomic::Ordering::Relaxed),
+            ..Self::frame(
+                self.model,
+                self.path,
+                camera,
+                (width, height),
+                self.light_count,
+                flags,
+            )
+        };
         ctx.queue
             .write_buffer(&self.frame, 0, bytemuck::bytes_of(&frame));
         if !self.transparent.is_empty() {
@@ -516,4 +538,24 @@ fn back_to_front(triangles: &[[u32; 3]], centroids: &[Vec3], camera: &Camera) ->
     // View space looks down -Z: the most negative z is the farthest.
     order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     order.into_iter().map(|(_, k)| triangles[k]).collect()
+}
+
+/// Sets a scene's shadow frame ([`GpuScene::shadow_frames`]).
+#[derive(Clone, Debug)]
+pub struct ShadowFrames {
+    frame: wgpu::Buffer,
+    value: std::sync::Arc<std::sync::atomic::AtomicU32>,
+}
+
+impl ShadowFrames {
+    /// As [`GpuScene::set_shadow_frame`].
+    pub fn set(&self, ctx: &GpuContext, frame: u32) {
+        self.value
+            .store(frame, std::sync::atomic::Ordering::Relaxed);
+        ctx.queue.write_buffer(
+            &self.frame,
+            std::mem::offset_of!(GpuFrame, shadow_frame) as u64,
+            bytemuck::bytes_of(&frame),
+        );
+    }
 }

@@ -162,6 +162,20 @@ pub fn params_label(c: &Config) -> String {
     if c.shadows.casts() {
         p.push_str(&format!(";shadows={}", c.shadows.name()));
     }
+    if let manylights_shade::Shadows::Stochastic {
+        rays,
+        accumulate,
+        seeds,
+    } = c.shadows
+    {
+        p.push_str(&format!(";shadow_rays={rays}"));
+        if accumulate > 1 {
+            p.push_str(&format!(";shadow_accumulate={accumulate}"));
+        }
+        if seeds != 4 {
+            p.push_str(&format!(";shadow_seeds={seeds}"));
+        }
+    }
     if !c.materials.is_empty() {
         p.push_str(&format!(";materials={}", models_label(&c.materials)));
     }

@@ -304,13 +304,16 @@ pub struct Config {
     /// `visibility_pass=raster` in its `params`.)
     #[serde(default, skip_serializing_if = "is_compute")]
     pub visibility_pass: VisibilityPass,
-    /// Shadows: `Off` (the default: every light shines through walls) or `Exact`, a shadow ray
+    /// Shadows: `Off` (the default: every light shines through walls), `Exact`, a shadow ray
     /// for every light that adds radiance at a shaded point, through the BVH of the scene's
-    /// opaque triangles, built for the cell (`manylights_shade::Shadows`); the windowed
-    /// reference is shadowed alike, so PSNR and FLIP stay the implementation check, the
-    /// infinite-range reference is not (`flip_mean_infinite`), and with `accuracy` the
-    /// shadowed infinite-range reference scores the image (`flip_mean_shadowed`). (Left out of
-    /// a cell's identity when `Off`; `shadows=exact` in its `params`.)
+    /// opaque triangles, built for the cell, or `Stochastic(rays: K)`, K rays a pixel to lights
+    /// drawn in proportion to their unshadowed luminance, combined as the ratio estimator, its
+    /// noise measured over `seeds` (`manylights_shade::Shadows`); the windowed reference is
+    /// shadowed exactly, so PSNR and FLIP stay the implementation check (for `Stochastic` they
+    /// carry its noise), the infinite-range reference is not (`flip_mean_infinite`), and with
+    /// `accuracy` the shadowed infinite-range reference scores the image
+    /// (`flip_mean_shadowed`). (Left out of a cell's identity when `Off`; `shadows=exact` or
+    /// `shadows=stochastic;shadow_rays=K` in its `params`.)
     #[serde(default, skip_serializing_if = "is_off")]
     pub shadows: Shadows,
     /// With `accuracy`, whether to render the shadowed infinite-range reference (a ray from
@@ -562,6 +565,7 @@ impl Config {
         self.lights
             .validate()
             .map_err(|e| ("lights", e.to_string()))?;
+        self.shadows.validate().map_err(|e| ("shadows", e))?;
         self.strategy
             .validate()
             .map_err(|e| ("strategy", e.to_string()))?;

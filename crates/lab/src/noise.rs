@@ -1,6 +1,9 @@
-//! Stochastic light culling in a run: a cell whose radius rule is `Stochastic` draws its
-//! generated lights' ranges before every frame (`manylights_gpu::stochastic`, timed with the
-//! frame as `lights.stochastic`), and its noise is measured honestly over seeds ([`measure`]):
+//! Stochastic light culling and stochastic shadows in a run: a cell whose radius rule is
+//! `Stochastic` draws its generated lights' ranges before every frame
+//! (`manylights_gpu::stochastic`, timed with the frame as `lights.stochastic`); a cell with
+//! `shadows: Stochastic` sets the frame its shadow rays draw by
+//! (`manylights_gpu::GpuScene::set_shadow_frame`). Either's noise is measured honestly over
+//! seeds ([`measure`]; a cell with both takes its culling's `seeds` and `accumulate`):
 //!
 //! - each seed `s` of `seeds` renders `K` frames (`accumulate`, 1 without), frames `s K` to
 //!   `s K + K - 1`, each with fresh draws, and averages them into one image, as a renderer that
@@ -8,7 +11,9 @@
 //! - error: each seed's image against the infinite-range reference (mean FLIP at the adapted
 //!   exposure, RMSE, energy error), averaged over the seeds: what a single image costs; and
 //!   where the cell renders it, against the shadowed infinite-range reference alike;
-//! - bias: each lit pixel's mean over the seeds less the reference, as the root mean square over
+//! - bias: each lit pixel's mean over the seeds less the reference (the shadowed infinite-range
+//!   reference where the cell casts shadows, the infinite-range one otherwise; so are noise and
+//!   flicker below), as the root mean square over
 //!   lit pixels with the part the noise contributes taken out (`mean((m - R)^2) - mean(s^2) / M`
 //!   for M seeds, an unbiased estimate of the mean squared bias, floored at 0), relative to the
 //!   mean reference luminance: zero within its own noise for an unbiased method, where the
@@ -22,7 +27,7 @@
 
 use manylights_gpu::stochastic::StochasticRanges;
 use manylights_gpu::timing::PassTiming;
-use manylights_gpu::{GpuContext, GpuScene};
+use manylights_gpu::{GpuContext, GpuScene, ShadowFrames};
 use manylights_scene::{RadiusRule, Scene};
 use manylights_shade::HdrImage;
 use manylights_shade::accuracy::{LIT_FRACTION, compare_adapted, luminance};
@@ -32,9 +37,11 @@ use crate::LabError;
 use crate::evaluate::Pose;
 use crate::experiment::Config;
 
-/// The stochastic ranges of a cell.
+/// The stochastic ranges and shadow frames of a cell.
 pub(crate) struct Draws {
-    ranges: StochasticRanges,
+    ranges: Option<StochasticRanges>,
+    /// With stochastic shadows, the shaded scene's shadow frame.
+    shadow_frames: Option<ShadowFrames>,
     /// Frames averaged into one image (1: none).
     pub(crate) accumulate: u32,
     /// Seeds measured.
@@ -42,8 +49,9 @@ pub(crate) struct Draws {
 }
 
 impl Draws {
-    /// The draws of `scene` (uploaded as `gpu_scene`), whose lights from `first` on are the
-    /// generated ones; `None` where the radius rule is not stochastic.
+    /// The draws of `scene` (uploaded as `gpu_scene`, the scene shaded), whose lights from
+    /// `first` on are the generated ones; `None` where neither the radius rule nor the shadows
+    /// are stochastic.
     pub(crate) fn new(
         ctx: &GpuContext,
         c: &Config,
@@ -51,32 +59,48 @@ impl Draws {
         scene: &Scene,
         first: usize,
     ) -> Result<Option<Self>, LabError> {
-        let (
-            Some(params),
-            RadiusRule::Stochastic {
-                accumulate, seeds, ..
-            },
-        ) = (c.lights.stochastic(scene), c.lights.radius)
+        let shadow_frames = c.shadows.rays().map(|_| gpu_scene.shadow_frames());
+        let (Some(params), RadiusRule::Stochastic {
+            accumulate, seeds, ..
+        }) = (c.lights.stochastic(scene), c.lights.radius)
         else {
-            return Ok(None);
+            return Ok(match c.shadows {
+                manylights_shade::Shadows::Stochastic {
+                    accumulate, seeds, ..
+                } => Some(Self {
+                    ranges: None,
+                    shadow_frames,
+                    accumulate: accumulate.max(1),
+                    seeds,
+                }),
+                _ => None,
+            });
         };
         let count = (scene.lights.len() - first) as u32;
         let strata = manylights_scene::stochastic::strata(&scene.lights[first..]);
         let ranges = StochasticRanges::new(ctx, gpu_scene, first as u32, count, &params, &strata)?;
         Ok(Some(Self {
-            ranges,
+            ranges: Some(ranges),
+            shadow_frames,
             accumulate: accumulate.max(1),
             seeds,
         }))
     }
 
-    /// Draws the ranges of frame `frame`; the pass's time where timed.
+    /// Draws the ranges of frame `frame` and sets it as the shadow frame; the ranges' pass's
+    /// time where timed.
     pub(crate) fn draw(
         &self,
         ctx: &GpuContext,
         frame: u32,
     ) -> Result<Option<Vec<PassTiming>>, LabError> {
-        self.ranges.draw(ctx, frame).map_err(LabError::from)
+        if let Some(s) = &self.shadow_frames {
+            s.set(ctx, frame);
+        }
+        match &self.ranges {
+            Some(r) => r.draw(ctx, frame).map_err(LabError::from),
+            None => Ok(None),
+        }
     }
 }
 
@@ -139,7 +163,11 @@ pub(crate) fn measure(
         total.add(i);
     }
     let mean = mean_over(&total, reference)?;
-    let (bias, noise, flicker_mean) = spread(&images, &mean, reference);
+    let truth = match shadowed {
+        Some(s) if c.shadows.casts() => s,
+        _ => reference,
+    };
+    let (bias, noise, flicker_mean) = spread(&images, &mean, truth);
     let shadowed = shadowed.map(|s| {
         let errors: Vec<_> = images.iter().map(|i| compare_adapted(i, s)).collect();
         let n = errors.len() as f64;

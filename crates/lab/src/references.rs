@@ -46,7 +46,7 @@ impl ReferenceSet {
                     ))
                 })
                 .transpose()?,
-            windowed_shadows: c.shadows,
+            windowed_shadows: c.shadows.truth(),
         })
     }
 

@@ -117,6 +117,7 @@ impl ReferenceFrames {
             warmup: 0,
             exact_stride: 1,
             export: false,
+            shadows: c.shadows.truth(),
             ..c.clone()
         };
         Some(format!(

@@ -351,7 +351,7 @@ fn why_not(r: &Row, max_error: Option<f64>, rank: Rank) -> Option<String> {
         ));
     }
     if let Some(budget) = max_error {
-        let against = against(r.shadow.shadows == "exact");
+        let against = against(!matches!(r.shadow.shadows.as_str(), "" | "off"));
         match budget_error(r) {
             Some(f) if f <= budget => {}
             Some(f) => {
@@ -369,7 +369,7 @@ fn why_not(r: &Row, max_error: Option<f64>, rank: Rank) -> Option<String> {
 /// infinite-range reference (`flip_mean_shadowed`), else against the infinite-range one
 /// (`flip_mean_infinite`).
 pub fn budget_error(r: &Row) -> Option<f64> {
-    if r.shadow.shadows == "exact" {
+    if !matches!(r.shadow.shadows.as_str(), "" | "off") {
         r.shadow.flip_mean_shadowed
     } else {
         r.flip_mean_infinite

@@ -23,6 +23,7 @@ mod placement;
 pub mod procedural;
 pub mod radius;
 pub mod ray;
+pub mod shadow_estimate;
 pub mod real;
 pub mod stochastic;
 

@@ -86,8 +86,9 @@ impl InfiniteReference {
     /// The pass again with `shadows`: `Shadows::Exact`, a shadow ray for every light at every
     /// covered pixel (with the infinite-range falloff every light in front of a surface adds
     /// radiance), through the scene's BVH (`GpuScene::build_bvh`): the shadowed infinite-range
-    /// reference, the light as it arrives.
+    /// reference, the light as it arrives. `Stochastic` shades as `Exact` ([`Shadows::truth`]).
     pub fn with_shadows(self, ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
+        let shadows = shadows.truth();
         if shadows == self.shadows {
             return self;
         }
@@ -117,7 +118,7 @@ impl InfiniteReference {
             ],
         });
         let module = SHADER.create(d);
-        let constants = [shadows.constant()];
+        let constants = shadows.constants();
         let pipeline = pipeline::compute_with(
             d,
             &module,

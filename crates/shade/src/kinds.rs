@@ -118,14 +118,51 @@ pub enum Shadows {
     /// the shading pass itself: forward's fragment shader, deferred's and the visibility
     /// buffer's lighting pass. The scene's BVH must be built (`GpuScene::build_bvh`).
     Exact,
+    /// `rays` shadow rays a pixel to lights drawn from those the shading evaluates, in
+    /// proportion to their unshadowed luminance, combined as the ratio estimator (`SHADOW_RAYS`,
+    /// shaders/common/shading.wgsl; [`manylights_scene::shadow_estimate`]): the unshadowed sum
+    /// times the drawn lights' shadowed over unshadowed share, per channel. Biased for finite
+    /// `rays`, consistent as they grow. Each frame draws anew
+    /// ([`manylights_gpu::GpuScene::set_shadow_frame`]).
+    Stochastic {
+        /// Rays a pixel, 1 to [`Shadows::MAX_RAYS`].
+        rays: u32,
+        /// Frames averaged into one image, each with its own draws, as a renderer accumulates
+        /// temporally: 0 (the default) none, otherwise at least 2 (a cell that culls
+        /// stochastically too takes its culling's).
+        #[serde(default)]
+        accumulate: u32,
+        /// Independent draws measured for the noise and bias columns, >= 1 (default 4; a cell
+        /// that culls stochastically too takes its culling's).
+        #[serde(default = "four")]
+        seeds: u32,
+    },
+}
+
+fn four() -> u32 {
+    4
 }
 
 impl Shadows {
-    /// Its name (`off`, `exact`).
+    /// The most rays a pixel [`Shadows::Stochastic`] casts (`SHADOW_RAYS_MAX`,
+    /// shaders/common/shading.wgsl).
+    pub const MAX_RAYS: u32 = 16;
+
+    /// Stochastic shadows of `rays` a pixel, one frame an image, four seeds.
+    pub fn stochastic(rays: u32) -> Self {
+        Self::Stochastic {
+            rays,
+            accumulate: 0,
+            seeds: 4,
+        }
+    }
+
+    /// Its name (`off`, `exact`, `stochastic`).
     pub fn name(self) -> &'static str {
         match self {
             Self::Off => "off",
             Self::Exact => "exact",
+            Self::Stochastic { .. } => "stochastic",
         }
     }
 
@@ -134,9 +171,54 @@ impl Shadows {
         self != Self::Off
     }
 
-    /// The `SHADOWS` override of shaders/common/shading.wgsl that shading with it is built with.
-    pub fn constant(self) -> (&'static str, f64) {
-        ("SHADOWS", f64::from(u8::from(self.casts())))
+    /// The rays a pixel of stochastic shadows.
+    pub fn rays(self) -> Option<u32> {
+        match self {
+            Self::Stochastic { rays, .. } => Some(rays),
+            _ => None,
+        }
+    }
+
+    /// What its references shade with: `Exact` where it casts rays (a reference traces every
+    /// light's ray), else `Off`.
+    pub fn truth(self) -> Self {
+        if self.casts() { Self::Exact } else { Self::Off }
+    }
+
+    /// Checks its values: the error names the field (`shadows.rays`, ...), the value and what
+    /// is accepted.
+    pub fn validate(self) -> Result<(), String> {
+        if let Self::Stochastic {
+            rays,
+            accumulate,
+            seeds,
+        } = self
+        {
+            if !(1..=Self::MAX_RAYS).contains(&rays) {
+                return Err(format!(
+                    "shadows.rays = {rays}: stochastic shadows cast 1 to {} rays a pixel",
+                    Self::MAX_RAYS
+                ));
+            }
+            if accumulate == 1 {
+                return Err(
+                    "shadows.accumulate = 1: 0 (no accumulation) or at least 2 frames".into(),
+                );
+            }
+            if seeds == 0 {
+                return Err("shadows.seeds = 0: at least 1 seed".into());
+            }
+        }
+        Ok(())
+    }
+
+    /// The `SHADOWS` and `SHADOW_RAYS` overrides of shaders/common/shading.wgsl that shading
+    /// with it is built with.
+    pub fn constants(self) -> [(&'static str, f64); 2] {
+        [
+            ("SHADOWS", f64::from(u8::from(self.casts()))),
+            ("SHADOW_RAYS", f64::from(self.rays().unwrap_or(0))),
+        ]
     }
 
     /// An error naming `what` where it casts shadow rays and `scene` has no BVH to trace them

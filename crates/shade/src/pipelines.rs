@@ -279,10 +279,11 @@ impl Pipelines {
         }
     }
 
-    /// The shading passes' override constants: the light path's and `SHADOWS`.
-    fn shading_constants(&self) -> [(&'static str, f64); 4] {
+    /// The shading passes' override constants: the light path's, `SHADOWS` and `SHADOW_RAYS`.
+    fn shading_constants(&self) -> [(&'static str, f64); 5] {
         let [a, b, c] = self.lights;
-        [a, b, c, self.shadows.constant()]
+        let [s, k] = self.shadows.constants();
+        [a, b, c, s, k]
     }
 
     fn color(&self) -> wgpu::TextureFormat {
@@ -375,7 +376,7 @@ impl Pipelines {
                     self.samples,
                     &[
                         &sample_constants(self.samples)[..],
-                        &[self.shadows.constant()],
+                        &self.shadows.constants(),
                     ]
                     .concat(),
                 )

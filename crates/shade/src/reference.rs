@@ -69,8 +69,10 @@ impl ReferenceRenderer {
     /// The renderer shading with `shadows` (its pipelines built again unless it already
     /// does): `Shadows::Exact`, a shadow ray for every light that adds radiance at a pixel (the
     /// shadowed reference at the scene's light ranges; its frames need the scene's BVH,
-    /// `GpuScene::build_bvh`).
+    /// `GpuScene::build_bvh`). A reference traces every light's ray: `Stochastic` shades as
+    /// `Exact` ([`Shadows::truth`]).
     pub fn with_shadows(self, ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
+        let shadows = shadows.truth();
         if shadows == self.shadows {
             return self;
         }
@@ -96,7 +98,7 @@ impl ReferenceRenderer {
     fn build(ctx: &GpuContext, scene: &GpuScene, samples: u32, shadows: Shadows) -> Self {
         let module = SHADER.create(&ctx.device);
         let t = pipeline::target(HDR);
-        let constants = [shadows.constant()];
+        let constants = shadows.constants();
         let pipeline = pipeline::raster_with(
             &ctx.device,
             "shade.reference",

@@ -22,8 +22,17 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
     let (name, place) = range_family(r);
     // A shadow mode is a family of its own (`shadowed: `, first, so that a legend that
     // shortens a long name keeps it): the same ranges cost more with rays.
+    // Stochastic shadows are a family a ray count (`K shadow rays: `).
     match r.shadow.shadows.as_str() {
         "exact" => (format!("shadowed: {name}"), place),
+        "stochastic" => {
+            let rays = r
+                .params
+                .split(';')
+                .find_map(|p| p.strip_prefix("shadow_rays="))
+                .unwrap_or("?");
+            (format!("{rays} shadow rays: {name}"), place)
+        }
         _ => (name, place),
     }
 }
