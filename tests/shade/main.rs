@@ -23,6 +23,7 @@ mod materials;
 mod msaa;
 mod point_lights;
 mod shadows;
+mod shadows_stochastic;
 mod steady;
 mod transparent;
 mod visibility;
