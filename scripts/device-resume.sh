@@ -10,7 +10,7 @@
 #   copies RUN_DIR/cells (a committed or fetched run; none: a fresh run) into
 #   .device/resume/NAME/ (NAME defaults to RUN_DIR's folder name; carry .device; with
 #   scripts/device-tree.sh SCENE... for the scenes it needs).
-# There, in the call:   bash scripts/device-resume.sh run EXPERIMENT SECONDS [STRATEGY BACKEND]
+# There, in the call:   [HARD_S=S] bash scripts/device-resume.sh run EXPERIMENT SECONDS [STRATEGY BACKEND]
 #   (.device/manylights, or .device/manylights.xz unpacked) runs EXPERIMENT with -v and
 #   --time-limit SECONDS into /tmp/resume/NAME over the cells of .device/resume/NAME, and
 #   writes $OUT/NAME.tgz: results.csv, results.json, meta.json, run.log, every cell's JSON and
@@ -33,7 +33,11 @@ case "${1:-}" in
     [ -x .device/manylights ] || { unxz -k .device/manylights.xz && chmod +x .device/manylights; }
     mkdir -p "$out/cells"
     if compgen -G "$from/*.json" > /dev/null; then cp "$from"/*.json "$out/cells/"; fi
-    ( time ./.device/manylights -v run "$exp" --out "$out" --time-limit "$limit" ) > "$out/run.log" 2>&1 || true
+    # HARD_S (seconds, optional): kill the run then, so that what it finished still comes back
+    # before the call's own limit (a cell started before --time-limit runs to its end).
+    hard=()
+    if [ -n "${HARD_S:-}" ]; then hard=(timeout -k 5 "$HARD_S"); fi
+    ( time "${hard[@]}" ./.device/manylights -v run "$exp" --out "$out" --time-limit "$limit" ) > "$out/run.log" 2>&1 || true
     keep=$(python3 - "$out" "$strategy" "$backend" <<'PY'
 import csv, os, sys
 out, strategy, backend = sys.argv[1:]
@@ -48,7 +52,7 @@ for r in rows:
 PY
 )
     # shellcheck disable=SC2086
-    (cd "$out" && tar czf "$OUT/$name.tgz" results.csv results.json meta.json run.log cells $keep)
+    (cd "$out" && tar czf "$OUT/$name.tgz" --ignore-failed-read results.csv results.json meta.json run.log cells $keep)
     tail -n 4 "$out/run.log"
     ;;
   *)

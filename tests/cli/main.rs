@@ -722,13 +722,54 @@ fn render_shadows_exact_casts_shadow_rays() {
         energy[1] < energy[0] - 1e-3,
         "shadows must take light away: {energy:?}"
     );
-    rejects(&["--shadows", "soft"], 2, &["--shadows", "off", "exact"]);
+    rejects(&["--shadows", "soft"], 2, &["--shadows", "off", "exact", "stochastic"]);
     rejects_cmd(
         "cull",
         &["--shadows", "soft"],
         2,
-        &["--shadows", "off", "exact"],
+        &["--shadows", "off", "exact", "stochastic"],
     );
+}
+
+/// `render --shadows stochastic --shadow-rays 3` casts three rays a lit pixel (at most three a
+/// covered pixel), and `cull` counts the same; its image is scored
+/// against the exact shadowed reference, near it but not equal. --shadow-rays out of 1 to 16,
+/// or without --shadows stochastic, is an error naming the option.
+#[test]
+fn render_shadows_stochastic_casts_k_rays_a_pixel() {
+    let tmp = tempfile::tempdir().unwrap();
+    let args = |cmd: &'static str, out: &str| -> Vec<String> {
+        let mut v: Vec<String> = [
+            cmd, "--scene", "pillars", "--lights", "64", "--radius", "4", "--shadows",
+            "stochastic", "--shadow-rays", "3", "--width", "48", "--height", "32", "--out",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        v.push(tmp.path().join(out).to_str().unwrap().to_owned());
+        v
+    };
+    let mut render = args("render", "render");
+    render.extend(["--backend", "deferred", "--compare"].map(String::from));
+    let render: Vec<&str> = render.iter().map(String::as_str).collect();
+    let stdout = succeeds(&render, "render --shadows stochastic");
+    let per_pixel = number_after(&stdout, "shadow rays", "(");
+    let rays = number_after(&stdout, "shadow rays", "shadow rays");
+    assert!(per_pixel > 0.5 && per_pixel <= 3.0 && rays % 3.0 == 0.0, "{stdout}");
+    let flip = number_after(&stdout, "vs reference", "mean FLIP");
+    assert!(flip > 1e-3 && flip < 0.2, "noisy but near the exact shadows: {stdout}");
+    let cull = args("cull", "cull");
+    let cull: Vec<&str> = cull.iter().map(String::as_str).collect();
+    let culled = succeeds(&cull, "cull --shadows stochastic");
+    assert_eq!(
+        number_after(&culled, "shadow rays", "shadow rays"),
+        number_after(&stdout, "shadow rays", "shadow rays"),
+        "{culled}"
+    );
+    rejects(&["--shadows", "stochastic", "--shadow-rays", "17"], 2, &["--shadow-rays", "17"]);
+    rejects(&["--shadows", "exact", "--shadow-rays", "4"], 1, &["--shadow-rays 4", "--shadows stochastic"]);
+    rejects_cmd("cull", &["--shadow-rays", "0"], 2, &["--shadow-rays", "0"]);
+    rejects_cmd("tune", &["--shadow-rays", "2"], 1, &["--shadow-rays 2", "--shadows stochastic"]);
 }
 
 /// More lights than the device holds: an error stating the limit. On lavapipe the limit is its

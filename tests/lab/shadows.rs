@@ -204,3 +204,77 @@ fn shadows_work_with_every_light_and_material_model() {
         );
     }
 }
+
+/// Stochastic shadows in a run: `shadows=stochastic;shadow_rays=K` in the params, K rays a lit
+/// pixel counted, the noise over the seeds measured against the shadowed light and falling with
+/// K, as the error does; the shadowed figure draws each K as a family of its own; bad values
+/// are errors naming the field.
+#[test]
+fn stochastic_shadow_cells_measure_their_noise() {
+    let ctx = common::gpu();
+    let src = r#"Experiment(
+        name: "stochastic-shadows",
+        config: Config(
+            scene: Atrium(bays: 2),
+            lights: (generator: Uniform, count: 200, seed: 3, radius: Fixed(30.0), intensity: 2.0),
+            resolution: (48, 32),
+            frames: 1,
+            warmup: 0,
+            backend: Deferred,
+            strategy: ZBin(tile_size: 16),
+        ),
+        sweep: (
+            variants: [
+                (label: "exact", shadows: Exact),
+                (label: "rays-1", shadows: Stochastic(rays: 1, seeds: 3)),
+                (label: "rays-8", shadows: Stochastic(rays: 8, seeds: 3)),
+            ],
+        ),
+    )"#;
+    let e = Experiment::parse(src, Path::new("stochastic-shadows.ron")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
+    let [exact, one, eight] = [0, 1, 2].map(|i| &s.rows[i]);
+    assert_eq!(exact.shadow.shadows, "exact");
+    for (r, k) in [(one, 1.0), (eight, 8.0)] {
+        let what = &r.cell;
+        assert_eq!(r.shadow.shadows, "stochastic", "{what}");
+        assert!(
+            r.params.contains(&format!("shadows=stochastic;shadow_rays={k}")) && r.params.contains("shadow_seeds=3"),
+            "{what}: {}",
+            r.params
+        );
+        let rays = r.shadow.rays_per_pixel.unwrap();
+        assert!(rays <= k && rays >= 0.9 * k, "{what}: {rays} rays a pixel");
+        assert_eq!(r.seeds, Some(3), "{what}");
+        assert!(r.noise_infinite.is_some_and(|n| n > 0.0), "{what}: {:?}", r.noise_infinite);
+        assert!(r.shadow.gpu_ms_shadow.is_some(), "{what}");
+    }
+    assert!(exact.shadow.rays_per_pixel.unwrap() > 8.0, "{:?}", exact.shadow);
+    assert!(
+        eight.noise_infinite < one.noise_infinite,
+        "noise: 8 rays {:?}, 1 ray {:?}",
+        eight.noise_infinite,
+        one.noise_infinite
+    );
+    assert!(
+        eight.shadow.flip_mean_shadowed < one.shadow.flip_mean_shadowed,
+        "8 rays {:?}, 1 ray {:?}",
+        eight.shadow,
+        one.shadow
+    );
+    manylights_lab::report::write_report(tmp.path()).unwrap();
+    let svg = std::fs::read_to_string(tmp.path().join("figures/frame_shadowed.svg")).unwrap();
+    assert!(svg.contains("1 ray: ") && svg.contains("8 rays: ") && svg.contains("shadowed: "));
+
+    let bad = src.replace("Stochastic(rays: 1, seeds: 3)", "Stochastic(rays: 17)");
+    let err = Experiment::parse(&bad, Path::new("bad.ron"))
+        .map(|_| ())
+        .and_then(|()| {
+            let e = Experiment::parse(&bad, Path::new("bad.ron")).unwrap();
+            run_parsed(&ctx, &e, &bad, Path::new("."), tmp.path(), &opts()).map(|_| ())
+        })
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("shadows.rays = 17") && err.contains("1 to 16"), "{err}");
+}

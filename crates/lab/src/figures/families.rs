@@ -22,7 +22,7 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
     let (name, place) = range_family(r);
     // A shadow mode is a family of its own (`shadowed: `, first, so that a legend that
     // shortens a long name keeps it): the same ranges cost more with rays.
-    // Stochastic shadows are a family a ray count (`K shadow rays: `).
+    // Stochastic shadows are a family a ray count (`K rays: `).
     match r.shadow.shadows.as_str() {
         "exact" => (format!("shadowed: {name}"), place),
         "stochastic" => {
@@ -31,7 +31,8 @@ pub(crate) fn family(r: &Row) -> (String, Option<f64>) {
                 .split(';')
                 .find_map(|p| p.strip_prefix("shadow_rays="))
                 .unwrap_or("?");
-            (format!("{rays} shadow rays: {name}"), place)
+            let plural = if rays == "1" { "" } else { "s" };
+            (format!("{rays} ray{plural}: {name}"), place)
         }
         _ => (name, place),
     }

@@ -40,7 +40,7 @@ fn err(e: impl std::fmt::Display) -> LabError {
     LabError::Figure(e.to_string())
 }
 
-const PALETTE: [RGBColor; 8] = [
+const PALETTE: [RGBColor; 12] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -49,6 +49,10 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
     RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+    RGBColor(31, 31, 120),
+    RGBColor(184, 134, 11),
 ];
 
 /// Writes a figure drawn into `svg` to `path`, through a temporary file and a rename, with the
