@@ -90,21 +90,28 @@ fn tune_ranks_candidates_and_writes_the_best_as_an_experiment() {
     );
 }
 
-/// `tune --shadows exact --max-error F`: every candidate casts shadows and is held to mean
-/// FLIP against the shadowed infinite-range reference (the table's last column is it), only
-/// those within F ranked; the best has shadows.
+/// `tune --shadows exact --max-error F` (and `stochastic --shadow-rays 2`): every candidate
+/// casts shadows and is held to mean FLIP against the shadowed infinite-range reference (the
+/// table's last column is it), only those within F ranked; the best has the same shadows.
 #[test]
 fn tune_with_shadows_holds_candidates_to_the_shadowed_light() {
+    for (mode, rays) in [("exact", None), ("stochastic", Some(2))] {
+        tune_with_shadows(mode, rays);
+    }
+}
+
+fn tune_with_shadows(mode: &str, rays: Option<u32>) {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("tune");
-    let o = manylights(&[
+    let rays_arg = rays.map(|k| k.to_string());
+    let mut args = vec![
         "tune",
         "--out",
         out.to_str().unwrap(),
         "--max-error",
         "0.6",
         "--shadows",
-        "exact",
+        mode,
         "--scene",
         "atrium",
         "--lights",
@@ -125,12 +132,16 @@ fn tune_with_shadows_holds_candidates_to_the_shadowed_light() {
         "1",
         "--spacing",
         "0.5",
-    ]);
+    ];
+    if let Some(k) = &rays_arg {
+        args.extend(["--shadow-rays", k]);
+    }
+    let o = manylights(&args);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("FLIP shad"), "{stdout}");
     let rows = manylights_lab::results::load_rows(&out).unwrap();
-    assert!(rows.iter().all(|r| r.shadow.shadows == "exact"));
+    assert!(rows.iter().all(|r| r.shadow.shadows == mode), "{mode}");
     let ranked: Vec<f64> = stdout
         .lines()
         .filter(|l| l.trim_start().starts_with(|c: char| c.is_ascii_digit()))
@@ -150,6 +161,7 @@ fn tune_with_shadows_holds_candidates_to_the_shadowed_light() {
     }
     let (e, _) = manylights_lab::Experiment::load(&out.join("best.ron")).unwrap();
     assert!(e.config.shadows.casts(), "the best casts shadows");
+    assert_eq!(e.config.shadows.rays(), rays, "{mode}: the best's rays");
 }
 
 /// `tune --max-error F`: light ranges are candidates too, every candidate is scored against
