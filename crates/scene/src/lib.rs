@@ -19,6 +19,7 @@ pub mod light;
 pub mod material;
 pub mod mesh;
 pub mod motion;
+pub mod occluders;
 mod placement;
 pub mod procedural;
 pub mod radius;
