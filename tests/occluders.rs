@@ -1,5 +1,5 @@
 //! Culling by visibility's occluder test against the f64 shadow-ray oracle
-//! (`manylights_scene::occluders`, issue 67 item 8): over every procedural scene with random
+//! (`manylights_scene::occluders`): over every procedural scene with random
 //! lights and random cells about its surfaces, wherever an occluder is said to hide a light
 //! from a cell, no point of the cell (nor one lifted off it as a shadow ray's origin is) has a
 //! segment to the light that the f64 oracle calls clear. The test must fire: a share of the

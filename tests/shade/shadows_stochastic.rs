@@ -58,13 +58,7 @@ fn naive_forward_draws_as_the_cpu_twin() {
     let (w, h) = (48, 32);
     let rays = 8;
     let frame = 3;
-    let s = scene("atrium");
-    let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    gpu_scene.build_bvh(&ctx, &s).unwrap();
-    let reference = ReferenceRenderer::new(&ctx, &gpu_scene)
-        .with_shadows(&ctx, &gpu_scene, Shadows::Exact)
-        .render(&ctx, &gpu_scene, w, h)
-        .unwrap();
+    let (s, gpu_scene, reference) = atrium(&ctx, (w, h));
     gpu_scene.set_shadow_frame(&ctx, frame);
     let settings = CullSettings::for_camera(&s.camera);
     let out = Renderer::new(&ctx, &gpu_scene)
@@ -127,6 +121,21 @@ fn naive_forward_draws_as_the_cpu_twin() {
     );
 }
 
+/// The atrium of `scene` at `size` with its BVH, and its exact shadowed reference frame.
+fn atrium(
+    ctx: &manylights_gpu::GpuContext,
+    (w, h): (u32, u32),
+) -> (manylights_scene::Scene, GpuScene, manylights_shade::ReferenceFrame) {
+    let s = scene("atrium");
+    let mut gpu_scene = GpuScene::upload(ctx, &s, &s.camera, w, h).unwrap();
+    gpu_scene.build_bvh(ctx, &s).unwrap();
+    let reference = ReferenceRenderer::new(ctx, &gpu_scene)
+        .with_shadows(ctx, &gpu_scene, Shadows::Exact)
+        .render(ctx, &gpu_scene, w, h)
+        .unwrap();
+    (s, gpu_scene, reference)
+}
+
 /// The mean of `frames` frames of `render`, each with its own shadow frame.
 fn mean_of(
     ctx: &manylights_gpu::GpuContext,
@@ -153,13 +162,7 @@ fn mean_of(
 fn stochastic_shadows_converge_to_the_shadowed_reference() {
     let ctx = common::gpu();
     let (w, h) = (64, 48);
-    let s = scene("atrium");
-    let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    gpu_scene.build_bvh(&ctx, &s).unwrap();
-    let reference = ReferenceRenderer::new(&ctx, &gpu_scene)
-        .with_shadows(&ctx, &gpu_scene, Shadows::Exact)
-        .render(&ctx, &gpu_scene, w, h)
-        .unwrap();
+    let (s, gpu_scene, reference) = atrium(&ctx, (w, h));
     let lit = reference
         .position
         .data
@@ -222,14 +225,8 @@ fn stochastic_shadows_converge_to_the_shadowed_reference() {
 fn every_strategy_and_backend_casts_stochastic_shadows() {
     let ctx = common::gpu();
     let (w, h) = (48, 32);
-    let s = scene("atrium");
-    let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    gpu_scene.build_bvh(&ctx, &s).unwrap();
-    let reference = ReferenceRenderer::new(&ctx, &gpu_scene)
-        .with_shadows(&ctx, &gpu_scene, Shadows::Exact)
-        .render(&ctx, &gpu_scene, w, h)
-        .unwrap()
-        .color;
+    let (s, gpu_scene, reference) = atrium(&ctx, (w, h));
+    let reference = reference.color;
     let settings = CullSettings::for_camera(&s.camera);
     let renderer = Renderer::new(&ctx, &gpu_scene).with_shadows(Shadows::stochastic(4));
     let plain = Renderer::new(&ctx, &gpu_scene);

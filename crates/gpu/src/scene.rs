@@ -158,54 +158,14 @@ impl GpuScene {
         height: u32,
     ) -> Result<Self, GpuError> {
         check_model(&model, scene)?;
-        let mut vertices = Vec::with_capacity(scene.vertex_count());
-        let mut by_model: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
-        let mut transparent: Vec<u32> = Vec::new();
-        for p in &scene.primitives {
-            let base = vertices.len() as u32;
-            let material = &scene.materials[p.material as usize];
-            let out = if material.is_transparent() {
-                &mut transparent
-            } else {
-                by_model.entry(material.brdf.model().id()).or_default()
-            };
-            out.extend(p.indices.iter().map(|i| base + i));
-            vertices.extend(
-                p.positions
-                    .iter()
-                    .zip(&p.normals)
-                    .map(|(&position, &normal)| GpuVertex {
-                        position,
-                        normal,
-                        material: p.material,
-                    }),
-            );
-        }
-        // Opaque triangles first, a model at a time, then the transparent ones, sorted for the
-        // camera.
-        let mut indices = Vec::with_capacity(scene.triangle_count() * 3);
-        let mut opaque_models = Vec::new();
-        for (model, ix) in by_model {
-            let start = indices.len() as u32;
-            indices.extend(ix);
-            opaque_models.push((model, start..indices.len() as u32));
-        }
-        let opaque_index_count = indices.len() as u32;
-        let centroids: Vec<Vec3> = transparent
-            .chunks(3)
-            .map(|t| {
-                t.iter()
-                    .map(|&i| vertices[i as usize].position)
-                    .sum::<Vec3>()
-                    / 3.0
-            })
-            .collect();
-        let triangles: Vec<[u32; 3]> = transparent.chunks(3).map(|t| [t[0], t[1], t[2]]).collect();
-        indices.extend(
-            back_to_front(&triangles, &centroids, camera)
-                .into_iter()
-                .flatten(),
-        );
+        let Geometry {
+            vertices,
+            indices,
+            opaque_models,
+            opaque_index_count,
+            triangles,
+            centroids,
+        } = Geometry::of(scene, camera);
         let light_count = u32::try_from(scene.lights.len()).map_err(|_| GpuError::OverLimit {
             what: "light count".into(),
             value: scene.lights.len() as u64,
@@ -538,6 +498,79 @@ fn back_to_front(triangles: &[[u32; 3]], centroids: &[Vec3], camera: &Camera) ->
     // View space looks down -Z: the most negative z is the farthest.
     order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
     order.into_iter().map(|(_, k)| triangles[k]).collect()
+}
+
+/// A scene's triangles as uploaded: its vertices, the opaque triangles' indices first, a
+/// material model at a time, then the transparent ones sorted back to front for the camera.
+struct Geometry {
+    vertices: Vec<GpuVertex>,
+    indices: Vec<u32>,
+    opaque_models: Vec<(u32, std::ops::Range<u32>)>,
+    opaque_index_count: u32,
+    /// The transparent triangles and their centroids.
+    triangles: Vec<[u32; 3]>,
+    centroids: Vec<Vec3>,
+}
+
+impl Geometry {
+    fn of(scene: &Scene, camera: &Camera) -> Self {
+            let mut vertices = Vec::with_capacity(scene.vertex_count());
+            let mut by_model: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+            let mut transparent: Vec<u32> = Vec::new();
+            for p in &scene.primitives {
+                let base = vertices.len() as u32;
+                let material = &scene.materials[p.material as usize];
+                let out = if material.is_transparent() {
+                    &mut transparent
+                } else {
+                    by_model.entry(material.brdf.model().id()).or_default()
+                };
+                out.extend(p.indices.iter().map(|i| base + i));
+                vertices.extend(
+                    p.positions
+                        .iter()
+                        .zip(&p.normals)
+                        .map(|(&position, &normal)| GpuVertex {
+                            position,
+                            normal,
+                            material: p.material,
+                        }),
+                );
+            }
+            // Opaque triangles first, a model at a time, then the transparent ones, sorted for the
+            // camera.
+            let mut indices = Vec::with_capacity(scene.triangle_count() * 3);
+            let mut opaque_models = Vec::new();
+            for (model, ix) in by_model {
+                let start = indices.len() as u32;
+                indices.extend(ix);
+                opaque_models.push((model, start..indices.len() as u32));
+            }
+            let opaque_index_count = indices.len() as u32;
+            let centroids: Vec<Vec3> = transparent
+                .chunks(3)
+                .map(|t| {
+                    t.iter()
+                        .map(|&i| vertices[i as usize].position)
+                        .sum::<Vec3>()
+                        / 3.0
+                })
+                .collect();
+            let triangles: Vec<[u32; 3]> = transparent.chunks(3).map(|t| [t[0], t[1], t[2]]).collect();
+            indices.extend(
+                back_to_front(&triangles, &centroids, camera)
+                    .into_iter()
+                    .flatten(),
+            );
+        Self {
+            vertices,
+            indices,
+            opaque_models,
+            opaque_index_count,
+            triangles,
+            centroids,
+        }
+    }
 }
 
 /// Sets a scene's shadow frame ([`GpuScene::shadow_frames`]).
