@@ -116,3 +116,76 @@ fn occluders_never_hide_a_light_a_point_of_the_cell_sees() {
     }
     assert!(total_hidden > 1000, "the test must fire: {total_hidden} pairs hidden");
 }
+
+/// The occluder test on the GPU (`occluder_hides`, f32, with `occlusion::margin`) against the
+/// f64 test with no margin, over the cells and lights of the procedural scenes above: where the
+/// GPU says an occluder hides a light from a cell, the f64 test says that occluder does (never
+/// a light hidden that f64 geometry leaves in sight), and it finds at least 95% of the pairs the
+/// f64 test finds with a margin of 1e-3 of the coordinates' size.
+#[test]
+fn the_gpu_occluder_test_is_conservative_against_f64() {
+    use manylights_cull::occlusion::{GpuOccluder, OccluderTest, Query};
+    let ctx = manylights_gpu::GpuContext::new(&manylights_gpu::GpuOptions::default())
+        .expect("a Vulkan adapter (lavapipe is enough): run scripts/ensure-vulkan.sh");
+    let test = OccluderTest::new(&ctx);
+    let mut found = 0;
+    for (s_i, name) in NAMES.iter().enumerate() {
+        let mut scene = ProceduralScene::from_name(name).unwrap().build().unwrap();
+        let extent = scene.light_bounds.extent().max_element();
+        scene.lights = LightSpec {
+            generator: LightGenerator::Uniform,
+            count: 60,
+            seed: 70 + s_i as u64,
+            radius: RadiusRule::Fixed(extent),
+            intensity: 1.0,
+            ..LightSpec::default()
+        }
+        .generate(&scene)
+        .unwrap();
+        let tris = opaque_triangles(&scene);
+        let occ = occluders(&tris, f64::from(extent * extent) * 1e-3, 64);
+        let gpu_occ: Vec<GpuOccluder> = occ.iter().map(GpuOccluder::from).collect();
+        let mut rng = Rng(0xcafe + s_i as u64);
+        let mut queries = Vec::new();
+        for _ in 0..100 {
+            let t = tris[(rng.next() * tris.len() as f64) as usize % tris.len()];
+            let centre = ((t[0] + t[1] + t[2]) / 3.0).as_dvec3();
+            let half = f64::from(extent) * (0.002 + 0.02 * rng.next());
+            let cell: [DVec3; 8] = std::array::from_fn(|c| {
+                centre
+                    + DVec3::new(
+                        if c & 1 == 0 { -half } else { half },
+                        if c & 2 == 0 { -half } else { half },
+                        if c & 4 == 0 { -half } else { half },
+                    )
+            });
+            for l in &scene.lights {
+                queries.push((l.position.as_dvec3(), cell));
+            }
+        }
+        let q: Vec<Query> = queries.iter().map(|(l, c)| Query::new(*l, c)).collect();
+        let hidden = test.run(&ctx, &gpu_occ, &q).unwrap();
+        let (mut gpu, mut wide) = (0, 0);
+        for ((l, cell), h) in queries.iter().zip(&hidden) {
+            let margin = 1e-3 * l.abs().max_element().max(cell[0].abs().max_element()).max(1.0);
+            if occ.iter().any(|o| hides(o, *l, cell, margin)) {
+                wide += 1;
+                assert!(*h > 0, "{name}: f64 hides {l} from the cell at {} with a margin, the GPU does not", cell[0]);
+            }
+            if *h > 0 {
+                gpu += 1;
+                let o = &occ[*h as usize - 1];
+                assert!(
+                    hides(o, *l, cell, 0.0),
+                    "{name}: the GPU hides {l} from the cell at {} behind occluder {}, f64 geometry does not",
+                    cell[0],
+                    h - 1
+                );
+            }
+        }
+        println!("{name}: {} queries, {gpu} hidden on the GPU, {wide} by f64 with a wide margin", q.len());
+        assert!(gpu >= wide, "{name}");
+        found += gpu;
+    }
+    assert!(found > 1000, "the test must fire: {found}");
+}

@@ -279,6 +279,9 @@ fn host_structs_match_wgsl_layout() {
     check!(&rays, manylights_gpu::bvh::BvhNode, "BvhNode", [lo => "lo", count => "count",
         hi => "hi", first => "first"]);
     check!(&rays, manylights_gpu::bvh::BvhTriangle, "BvhTriangle", [v0 => "v0", v1 => "v1", v2 => "v2"]);
+    let occlusion = validate(&manylights_cull::occlusion::OCCLUDER_TEST);
+    check!(&occlusion, manylights_cull::occlusion::GpuOccluder, "Occluder", [corners => "corners",
+        normal => "normal"]);
     let stochastic = validate(&manylights_gpu::stochastic::STOCHASTIC);
     check!(&stochastic, GpuStochasticParams, "StochasticParams", [first => "first", count => "count",
         row => "row", seed => "seed", frame => "frame", biased => "biased", error => "error",

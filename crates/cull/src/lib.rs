@@ -37,6 +37,7 @@ pub mod heatmap;
 mod input_pipelines;
 pub mod layout;
 pub mod metrics;
+pub mod occlusion;
 mod output;
 pub mod per_pixel;
 mod program;

@@ -276,4 +276,5 @@ pub const SHADERS: &[ShaderDef] = &[
     crate::scan::SUBGROUP_SHADER,
     crate::radix_sort::SHADER,
     crate::radix_sort::ONESWEEP_SHADER,
+    crate::occlusion::OCCLUDER_TEST,
 ];
