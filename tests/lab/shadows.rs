@@ -207,8 +207,8 @@ fn shadows_work_with_every_light_and_material_model() {
 
 /// Stochastic shadows in a run: `shadows=stochastic;shadow_rays=K` in the params, K rays a lit
 /// pixel counted, the noise over the seeds measured against the shadowed light and falling with
-/// K, as the error does; the shadowed figure draws each K as a family of its own; bad values
-/// are errors naming the field.
+/// K, as the error does, and with four frames accumulated a seed; the shadowed figure draws
+/// each K as a family of its own; bad values are errors naming the field.
 #[test]
 fn stochastic_shadow_cells_measure_their_noise() {
     let ctx = common::gpu();
@@ -228,13 +228,22 @@ fn stochastic_shadow_cells_measure_their_noise() {
                 (label: "exact", shadows: Exact),
                 (label: "rays-1", shadows: Stochastic(rays: 1, seeds: 3)),
                 (label: "rays-8", shadows: Stochastic(rays: 8, seeds: 3)),
+                (label: "rays-1-x4", shadows: Stochastic(rays: 1, accumulate: 4, seeds: 3)),
             ],
         ),
     )"#;
     let e = Experiment::parse(src, Path::new("stochastic-shadows.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
-    let [exact, one, eight] = [0, 1, 2].map(|i| &s.rows[i]);
+    let [exact, one, eight, accumulated] = [0, 1, 2, 3].map(|i| &s.rows[i]);
+    assert_eq!(accumulated.accumulate, Some(4), "{}", accumulated.params);
+    assert!(accumulated.params.contains("shadow_accumulate=4"), "{}", accumulated.params);
+    assert!(
+        accumulated.noise_infinite < one.noise_infinite,
+        "four frames a seed: noise {:?}, one frame {:?}",
+        accumulated.noise_infinite,
+        one.noise_infinite
+    );
     assert_eq!(exact.shadow.shadows, "exact");
     for (r, k) in [(one, 1.0), (eight, 8.0)] {
         let what = &r.cell;
@@ -267,14 +276,13 @@ fn stochastic_shadow_cells_measure_their_noise() {
     let svg = std::fs::read_to_string(tmp.path().join("figures/frame_shadowed.svg")).unwrap();
     assert!(svg.contains("1 ray: ") && svg.contains("8 rays: ") && svg.contains("shadowed: "));
 
-    let bad = src.replace("Stochastic(rays: 1, seeds: 3)", "Stochastic(rays: 17)");
-    let err = Experiment::parse(&bad, Path::new("bad.ron"))
-        .map(|_| ())
-        .and_then(|()| {
-            let e = Experiment::parse(&bad, Path::new("bad.ron")).unwrap();
-            run_parsed(&ctx, &e, &bad, Path::new("."), tmp.path(), &opts()).map(|_| ())
-        })
-        .unwrap_err()
-        .to_string();
-    assert!(err.contains("shadows.rays = 17") && err.contains("1 to 16"), "{err}");
+    for (value, want) in [
+        ("Stochastic(rays: 17)", "shadows.rays = 17: stochastic shadows cast 1 to 16"),
+        ("Stochastic(rays: 2, accumulate: 1)", "shadows.accumulate = 1"),
+        ("Stochastic(rays: 2, seeds: 0)", "shadows.seeds = 0"),
+    ] {
+        let bad = src.replace("Stochastic(rays: 1, seeds: 3)", value);
+        let err = Experiment::parse(&bad, Path::new("bad.ron")).unwrap_err().to_string();
+        assert!(err.contains("bad.ron") && err.contains(want), "{value}: {err}");
+    }
 }
