@@ -24,24 +24,35 @@ impl Rng {
     }
 }
 
+/// Procedural scene `name` with `count` uniform lights of `seed` reaching across it, its
+/// extent, its opaque triangles and its occluders (64 of at least 1e-3 of the extent squared).
+fn lit_scene(
+    name: &str,
+    count: u32,
+    seed: u64,
+) -> (manylights_scene::Scene, f32, Vec<[glam::Vec3; 3]>, Vec<manylights_scene::occluders::Occluder>) {
+    let mut scene = ProceduralScene::from_name(name).unwrap().build().unwrap();
+    let extent = scene.light_bounds.extent().max_element();
+    scene.lights = LightSpec {
+        generator: LightGenerator::Uniform,
+        count,
+        seed,
+        radius: RadiusRule::Fixed(extent),
+        intensity: 1.0,
+        ..LightSpec::default()
+    }
+    .generate(&scene)
+    .unwrap();
+    let tris = opaque_triangles(&scene);
+    let occ = occluders(&tris, f64::from(extent * extent) * 1e-3, 64);
+    (scene, extent, tris, occ)
+}
+
 #[test]
 fn occluders_never_hide_a_light_a_point_of_the_cell_sees() {
     let mut total_hidden = 0;
     for (s_i, name) in NAMES.iter().enumerate() {
-        let mut scene = ProceduralScene::from_name(name).unwrap().build().unwrap();
-        let extent = scene.light_bounds.extent().max_element();
-        scene.lights = LightSpec {
-            generator: LightGenerator::Uniform,
-            count: 120,
-            seed: 7 + s_i as u64,
-            radius: RadiusRule::Fixed(extent),
-            intensity: 1.0,
-            ..LightSpec::default()
-        }
-        .generate(&scene)
-        .unwrap();
-        let tris = opaque_triangles(&scene);
-        let occ = occluders(&tris, f64::from(extent * extent) * 1e-3, 64);
+        let (scene, extent, tris, occ) = lit_scene(name, 120, 7 + s_i as u64);
         let areas: Vec<f64> = tris
             .iter()
             .map(|t| f64::from((t[1] - t[0]).cross(t[2] - t[0]).length()))
@@ -130,20 +141,7 @@ fn the_gpu_occluder_test_is_conservative_against_f64() {
     let test = OccluderTest::new(&ctx);
     let mut found = 0;
     for (s_i, name) in NAMES.iter().enumerate() {
-        let mut scene = ProceduralScene::from_name(name).unwrap().build().unwrap();
-        let extent = scene.light_bounds.extent().max_element();
-        scene.lights = LightSpec {
-            generator: LightGenerator::Uniform,
-            count: 60,
-            seed: 70 + s_i as u64,
-            radius: RadiusRule::Fixed(extent),
-            intensity: 1.0,
-            ..LightSpec::default()
-        }
-        .generate(&scene)
-        .unwrap();
-        let tris = opaque_triangles(&scene);
-        let occ = occluders(&tris, f64::from(extent * extent) * 1e-3, 64);
+        let (scene, extent, tris, occ) = lit_scene(name, 60, 70 + s_i as u64);
         let gpu_occ: Vec<GpuOccluder> = occ.iter().map(GpuOccluder::from).collect();
         let mut rng = Rng(0xcafe + s_i as u64);
         let mut queries = Vec::new();
