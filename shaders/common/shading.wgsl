@@ -248,9 +248,9 @@ fn shade_listed(light: Light, p: vec3<f32>, to_light: vec3<f32>, d: f32, n: vec3
     return shadowed(shade_light_at(light, to_light, d, n, v, m), light, p, n);
 }
 
-// A loop's sum `c` (with SHADOW_RAYS, shadow_estimate's), or NaN where a POINT_LIGHTS pipeline shades a frame whose lights are not
-// all windowed point lights: a count of non-finite pixels in the results, never a plausible
-// image. (Renderer::render refuses that combination first.) The NaN's bits are or-ed with a
+// A loop's sum `c` (with SHADOW_RAYS, shadow_estimate's), or NaN where a POINT_LIGHTS
+// pipeline shades a frame whose lights are not all windowed point lights: a count of
+// non-finite pixels in the results, never a plausible image. (Renderer::render refuses that combination first.) The NaN's bits are or-ed with a
 // runtime zero, so that it is not a constant expression for the shader compiler to refuse.
 fn lights_checked(c: vec3<f32>) -> vec3<f32> {
     if POINT_LIGHTS && !point_lights_only() {

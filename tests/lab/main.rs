@@ -80,6 +80,17 @@ fn every_shipped_experiment_parses() {
         })
         .collect();
     found.sort();
+    // Every file in experiments/ parses, under its own name, into cells of distinct names
+    // (those SHIPPED also run tiny, below).
+    for name in found.iter().filter(|n| dir.join(format!("{n}.ron")).is_file()) {
+        let (e, _, _) = shipped(name);
+        assert_eq!(&e.name, name, "experiments/{name}.ron names itself {}", e.name);
+        let cells = e.cells();
+        let mut names: Vec<&str> = cells.iter().map(|c| c.name.as_str()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert!(!cells.is_empty() && names.len() == cells.len(), "{name}: {} cells, {} names", cells.len(), names.len());
+    }
     for name in SHIPPED {
         assert!(
             found.contains(&name.to_string()),
