@@ -15,7 +15,9 @@
 #   --time-limit SECONDS into /tmp/resume/NAME over the cells of .device/resume/NAME, and
 #   writes $OUT/NAME.tgz: results.csv, results.json, meta.json, run.log, every cell's JSON and
 #   the renders, heatmaps and FLIP maps of the cells of STRATEGY with BACKEND (default zbin,
-#   deferred; `all` keeps every cell's).
+#   deferred; `all` keeps every cell's; KINDS="render" keeps only the renders). An archive over
+#   15 MiB comes back in parts, NAME.tgz.part-aa, -ab, ... (a file that comes back is at most
+#   16 MiB): cat them in order into NAME.tgz.
 # Here, after it:       untar NAME.tgz into RUN_DIR, copy the experiment file in as
 #   experiment.ron, `manylights report RUN_DIR`, commit.
 set -euo pipefail
@@ -38,14 +40,14 @@ case "${1:-}" in
     hard=()
     if [ -n "${HARD_S:-}" ]; then hard=(timeout -k 5 "$HARD_S"); fi
     ( time "${hard[@]}" ./.device/manylights -v run "$exp" --out "$out" --time-limit "$limit" ) > "$out/run.log" 2>&1 || true
-    keep=$(python3 - "$out" "$strategy" "$backend" <<'PY'
+    keep=$(python3 - "$out" "$strategy" "$backend" "${KINDS:-render heat flip}" <<'PY'
 import csv, os, sys
-out, strategy, backend = sys.argv[1:]
+out, strategy, backend, kinds = sys.argv[1:]
 path = os.path.join(out, 'results.csv')
 rows = list(csv.DictReader(open(path))) if os.path.exists(path) else []
 for r in rows:
     if strategy == 'all' or (r['strategy'] == strategy and r['backend'] == backend):
-        for kind in ('render', 'heat', 'flip'):
+        for kind in kinds.split():
             f = f"images/{r['id']}_{kind}.png"
             if os.path.exists(os.path.join(out, f)):
                 print(f)
@@ -53,6 +55,11 @@ PY
 )
     # shellcheck disable=SC2086
     (cd "$out" && tar czf "$OUT/$name.tgz" --ignore-failed-read results.csv results.json meta.json run.log cells $keep)
+    # A file that comes back is at most 16 MiB: a larger archive comes back in parts
+    # (NAME.tgz.part-aa, -ab, ...; here: cat them in order into NAME.tgz).
+    if [ "$(stat -c %s "$OUT/$name.tgz")" -gt $((15 * 1024 * 1024)) ]; then
+      split -b 15M "$OUT/$name.tgz" "$OUT/$name.tgz.part-" && rm "$OUT/$name.tgz"
+    fi
     tail -n 4 "$out/run.log"
     ;;
   *)
