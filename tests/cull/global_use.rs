@@ -39,6 +39,7 @@ fn bound_to(global: &str) -> Option<&'static [Buf]> {
         "cluster_aux" => &[WideArgs, ClusterBoxes, LightRects],
         "zbin_aux" => &[PairKeys, LightRects],
         "zbin_covers" => &[ZBinCovers],
+        "occluders" => &[Occluders],
         // Tiled scatter's mask pass reads the lights' rectangles there.
         "pair_keys" => &[PairKeys, LightRects],
         other => panic!("global `{other}` of a culling shader: which buffer is it?"),

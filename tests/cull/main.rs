@@ -9,6 +9,7 @@ mod exactness;
 mod global_use;
 mod lists;
 mod msaa;
+mod occlusion;
 mod order;
 mod paths;
 mod transparent;

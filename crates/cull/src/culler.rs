@@ -10,6 +10,7 @@ use std::sync::OnceLock;
 
 use manylights_gpu::{GpuContext, GpuError, GpuScene};
 
+use crate::blocks::occlusion::Occlusion;
 use crate::frame::{self, Done, Frame, Repeat};
 use crate::input_pipelines::InputPipelines;
 use crate::layout::{GpuCullParams, LINE_THREADS_MIN};
@@ -112,6 +113,8 @@ pub struct Culler {
     pub(crate) per_pixel: PerPixel,
     scan: Scan,
     pub(crate) sort: RadixSort,
+    /// Culling by visibility's pass over the scene's occluders ([`Culler::set_occluders`]).
+    pub(crate) occlusion: Option<Occlusion>,
     /// Bound where a strategy has no buffer for a binding (made once, not per run).
     pub(crate) placeholder: wgpu::Buffer,
 }
@@ -202,7 +205,18 @@ impl Culler {
             scan: Scan::new(ctx),
             sort: RadixSort::new(ctx),
             placeholder: frame::storage_buf(ctx, "cull.placeholder", 16),
+            occlusion: None,
         }
+    }
+
+    /// The scene's occluders for culling by visibility (`CullSettings::occlusion`), as
+    /// [`manylights_scene::occluders::occluders`] chooses them; none drops nothing.
+    pub fn set_occluders(
+        &mut self,
+        ctx: &GpuContext,
+        occluders: &[manylights_scene::occluders::Occluder],
+    ) {
+        self.occlusion = Some(Occlusion::new(ctx, &self.scene_layout, occluders));
     }
 
     /// The pipelines over `depth`: its own input's, or where it is an `R32Float` depth a
@@ -313,6 +327,23 @@ impl Culler {
     ) -> Result<CullOutput, CullError> {
         strategy.validate()?;
         settings.validate()?;
+        if settings.occlusion {
+            if matches!(strategy, Strategy::ZBin { .. }) {
+                return Err(CullError::InvalidParameter {
+                    field: "occlusion",
+                    value: "true with z-binning".into(),
+                    accepted: "culling by visibility over lists of a list a bin: tiled gather, \
+                               2.5D, tiled scatter or clusters",
+                });
+            }
+            if self.occlusion.is_none() {
+                return Err(CullError::InvalidParameter {
+                    field: "occlusion",
+                    value: "true before Culler::set_occluders".into(),
+                    accepted: "culling by visibility once the scene's occluders are set",
+                });
+            }
+        }
         let params = strategy.params(depth.width(), depth.height(), scene.light_count, settings);
         let inputs = RunInputs {
             culler: self,
@@ -383,7 +414,8 @@ impl RunInputs<'_> {
         plan: P,
         t: Timing<'_>,
     ) -> Result<Done, CullError> {
-        frame::execute(f, &self.rec, plan, t.timer, self.repeat, t.then)
+        let occlusion = self.culler.occlusion.as_ref().filter(|_| self.settings.occlusion);
+        frame::execute(f, &self.rec, plan, t.timer, self.repeat, t.then, occlusion)
     }
 
     /// Checks that the bins' ranges fit a storage binding.

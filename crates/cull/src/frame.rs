@@ -5,6 +5,7 @@ use manylights_gpu::timing::{Category, GpuTimer};
 use manylights_gpu::{GpuContext, GpuError, pipeline, readback};
 
 use crate::layout::GpuCullParams;
+use crate::blocks::occlusion::Occlusion;
 use crate::record::{Buf, ListPass, Recorder, Step, StepInfo};
 use crate::strategies::Plan;
 use crate::{CullError, CullOutput, Strategy};
@@ -71,6 +72,16 @@ impl<'a> Frame<'a> {
             stats: storage_buf(ctx, Buf::Stats.name(), 48),
             span: format!("cull.{}", strategy.name()),
         }
+    }
+
+    /// The `CullParams` uniform.
+    pub fn params_buf(&self) -> &wgpu::Buffer {
+        &self.params_buf
+    }
+
+    /// `bin_ranges`.
+    pub fn ranges(&self) -> &wgpu::Buffer {
+        &self.ranges
     }
 
     /// A storage buffer of this run.
@@ -181,14 +192,17 @@ impl<'a> Frame<'a> {
             outputs,
             total,
             passes,
+            occlusion,
         } = run;
         let dropped = if self.params.capacity != 0 {
             self.stats(0, 1)?[0]
         } else {
             0
         };
+        let occluded = if occlusion { self.stats(10, 1)?[0] } else { 0 };
         Ok(CullOutput {
             dropped,
+            occluded,
             params: self.params,
             params_buf: self.params_buf,
             ranges: self.ranges,
@@ -208,6 +222,8 @@ pub(crate) struct Done {
     outputs: Outputs,
     total: u32,
     passes: Vec<StepInfo>,
+    /// Whether `cull.occlusion` ran after the lists.
+    occlusion: bool,
 }
 
 /// What a plan hands to the output besides the shared buffers.
@@ -255,6 +271,10 @@ impl Repeat {
 /// submissions). With it, `repeat.runs` times back to back in one submission (each run a span
 /// `cull.<strategy>` for a timer of spans), sized from the earlier run and checked against it,
 /// each run followed by `then` (inside its span) where there is one.
+#[expect(
+    clippy::too_many_arguments,
+    reason = "a run's plan, its recorder and timer, the repeat, the pass after it and the occlusion pass"
+)]
 pub(crate) fn execute<P: Plan>(
     f: &Frame<'_>,
     rec: &Recorder<'_>,
@@ -262,7 +282,10 @@ pub(crate) fn execute<P: Plan>(
     timer: &mut GpuTimer,
     repeat: Option<Repeat>,
     mut then: Option<&mut dyn ListPass>,
+    occlusion: Option<&Occlusion>,
 ) -> Result<Done, CullError> {
+    // Culling by visibility after the lists (none where the scene has no occluder).
+    let occlusion = occlusion.filter(|o| o.count() > 0);
     let ctx = f.ctx;
     let (total, passes) = match repeat {
         None => {
@@ -275,7 +298,11 @@ pub(crate) fn execute<P: Plan>(
             let (what_bytes, what) = plan.total_names();
             let total = checked_entries(ctx, what_bytes, what, plan.total()?)?;
             plan.size(total);
-            let fill = plan.fill(false);
+            let occlusion_group = occlusion.map(|o| o.group(f, plan.indices()));
+            let mut fill = plan.fill(false);
+            if let (Some(o), Some(g)) = (occlusion, &occlusion_group) {
+                fill.push(o.step(f, g));
+            }
             let mut enc = ctx.encoder("cull.fill");
             rec.record(&mut enc, timer, &fill)?;
             timer.resolve(&mut enc);
@@ -297,10 +324,16 @@ pub(crate) fn execute<P: Plan>(
                     crate::ListForm::of(&f.params),
                 );
             }
+            let occlusion_group = occlusion.map(|o| o.group(f, plan.indices()));
             let steps: Vec<Step<'_>> = plan
                 .count(true)
                 .into_iter()
                 .chain(plan.fill(true))
+                .chain(
+                    occlusion
+                        .zip(occlusion_group.as_ref())
+                        .map(|(o, g)| o.step(f, g)),
+                )
                 .collect();
             let mut enc = ctx.encoder("cull.repeated");
             for _ in 0..r.runs {
@@ -325,6 +358,7 @@ pub(crate) fn execute<P: Plan>(
         outputs: plan.outputs(),
         total,
         passes,
+        occlusion: occlusion.is_some(),
     })
 }
 

@@ -255,8 +255,10 @@ pub struct GpuExactParams {
     pub world_from_clip: glam::Mat4,
     /// Pixel sampling stride (1: every pixel).
     pub stride: u32,
+    /// 1: the exact set is shadowed (a light needed only where its shadow ray is clear).
+    pub shadows: u32,
     /// Padding to 16 bytes.
-    pub _pad: [u32; 3],
+    pub _pad: [u32; 2],
 }
 const _: () = assert!(size_of::<GpuExactParams>() == 80);
 

@@ -529,6 +529,7 @@ mod tests {
                 capacity: None,
                 mask_budget: None,
                 tile_boxes: true,
+                occlusion: false,
             },
         )
     }

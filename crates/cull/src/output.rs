@@ -84,6 +84,9 @@ pub struct CullOutput {
     pub total: u32,
     /// Lights dropped by a deliberate capacity (0 without one).
     pub dropped: u32,
+    /// (Bin, light) pairs culling by visibility dropped, a light an occluder hides from every
+    /// point of the bin's cell (0 without `CullSettings::occlusion`).
+    pub occluded: u32,
     /// Per-tile depth data (tiled strategies).
     pub tile_depth: wgpu::Buffer,
     /// Cluster occupancy (clusters with `skip_empty`).

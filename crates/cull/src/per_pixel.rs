@@ -116,10 +116,32 @@ impl Culler {
         world_from_clip: glam::Mat4,
         stride: u32,
     ) -> Result<Vec<[u32; 4]>, GpuError> {
+        self.exact_counts_with(ctx, scene, depth, lists, world_from_clip, stride, false)
+    }
+
+    /// As [`Culler::exact_counts`], with `shadowed` the exact set shadowed: a light is needed
+    /// where it reaches the point and its shadow ray (from the point lifted towards it, through
+    /// the scene's BVH, `GpuScene::build_bvh`) is clear, as culling by visibility is tested
+    /// against (`crate::blocks::occlusion`).
+    #[expect(
+        clippy::too_many_arguments,
+        reason = "exact_counts' inputs and the shadowed set"
+    )]
+    pub fn exact_counts_with(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        depth: &wgpu::Texture,
+        lists: &CullOutput,
+        world_from_clip: glam::Mat4,
+        stride: u32,
+        shadowed: bool,
+    ) -> Result<Vec<[u32; 4]>, GpuError> {
         let params = crate::layout::GpuExactParams {
             world_from_clip,
             stride: stride.max(1),
-            _pad: [0; 3],
+            shadows: u32::from(shadowed),
+            _pad: [0; 2],
         };
         let flat = self.per_pixel(
             ctx,

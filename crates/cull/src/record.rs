@@ -68,6 +68,8 @@ pub enum Buf {
     PairKeys,
     /// Z-binning's covers: each tile's range of sorted lights (its scatter path).
     ZBinCovers,
+    /// The scene's occluders (culling by visibility).
+    Occluders,
 }
 
 impl Buf {
@@ -97,6 +99,7 @@ impl Buf {
             Self::ClusterBoxes => "cull.clustered.boxes",
             Self::PairKeys => "cull.pair_keys",
             Self::ZBinCovers => "cull.zbin.covers",
+            Self::Occluders => "cull.occluders",
         }
     }
 }

@@ -27,6 +27,12 @@ pub struct CullSettings {
     /// sphere as if it were a cube: false keeps the planes alone, for ablations.
     #[serde(default = "default_tile_boxes")]
     pub tile_boxes: bool,
+    /// Culling by visibility: after the lists, `cull.occlusion` drops from each bin's list the
+    /// lights one of the scene's occluders hides from every point of the bin's cell
+    /// ([`crate::blocks::occlusion`]; the occluders from [`crate::Culler::set_occluders`]).
+    /// Lists of a list a bin only (not z-binning's). False by default.
+    #[serde(default)]
+    pub occlusion: bool,
 }
 
 fn default_tile_boxes() -> bool {
@@ -44,6 +50,7 @@ impl CullSettings {
             capacity: None,
             mask_budget: None,
             tile_boxes: true,
+            occlusion: false,
         }
     }
 

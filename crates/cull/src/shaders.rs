@@ -7,7 +7,7 @@
 //! entry points call a building block's functions composes that block's file.
 
 use manylights_gpu::shader_file;
-use manylights_gpu::shaders::{FRAME, LIGHT, SCENE, ShaderDef, ShaderFile, VERTEX};
+use manylights_gpu::shaders::{BVH, FRAME, LIGHT, SCENE, ShaderDef, ShaderFile, VERTEX};
 
 use crate::layout::CULL_CONSTS;
 
@@ -236,6 +236,7 @@ pub const EXACT: ShaderDef = ShaderDef {
         GEOMETRY,
         LOOKUP,
         LOOKUP_DEPTH,
+        BVH,
         EXACT_POINT,
         shader_file!("cull/per_pixel/exact.wgsl"),
     ],
@@ -255,6 +256,7 @@ pub const EXACT_TRANSPARENT: ShaderDef = ShaderDef {
         GEOMETRY,
         LOOKUP,
         LOOKUP_DEPTH,
+        BVH,
         EXACT_POINT,
         shader_file!("cull/per_pixel/exact_transparent.wgsl"),
     ],
@@ -277,4 +279,5 @@ pub const SHADERS: &[ShaderDef] = &[
     crate::radix_sort::SHADER,
     crate::radix_sort::ONESWEEP_SHADER,
     crate::occlusion::OCCLUDER_TEST,
+    crate::blocks::occlusion::SHADER,
 ];

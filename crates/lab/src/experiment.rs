@@ -576,6 +576,7 @@ impl Config {
             capacity: self.capacity,
             mask_budget: self.mask_budget,
             tile_boxes: self.tile_boxes,
+            occlusion: false,
         };
         settings.validate().map_err(|e| ("slack", e.to_string()))?;
         match &self.camera {

@@ -148,6 +148,7 @@ pub fn fitting(ctx: &GpuContext, base: &Config) -> (Vec<Strategy>, Vec<(Strategy
         capacity: None,
         mask_budget: None,
         tile_boxes: true,
+        occlusion: false,
     };
     let mut fit = Vec::new();
     let mut left_out = Vec::new();

@@ -3,7 +3,7 @@
 // standard position), cull.exact_transparent (exact_transparent.wgsl) at every visible
 // transparent fragment. At each surface point (reconstructed from the depth buffer as the CPU
 // oracle does, but in f32; a transparent fragment's interpolated point): the number of lights
-// reaching it (needed), the length of its list (evaluated) and how many list entries reach it
+// reaching it (needed; with shadows, reaching and seen), the length of its list (evaluated) and how many list entries reach it
 // (found). Lists hold no duplicates (tested), so false negatives = needed - found. Decisions
 // within f32 rounding of a light's radius or cone may differ from the f64 CPU oracle; a test
 // bounds that difference.
@@ -13,7 +13,8 @@ struct ExactParams {
     // Only pixels whose x and y are multiples of stride are evaluated (1: every pixel); the
     // others report as not covered. Lets large experiments sample the O(pixels x lights) oracle.
     stride: u32,
-    _pad0: u32,
+    // 1: the exact set is shadowed (seen).
+    shadows: u32,
     _pad1: u32,
     _pad2: u32,
 }
@@ -33,12 +34,30 @@ fn reaches(l: Light, p: vec3<f32>) -> bool {
     return true;
 }
 
+// Whether light `l`, reaching p, is seen from it: always without shadows; with them
+// (exact.shadows), where the segment to the light from p lifted towards it by a shadow ray's lift
+// (SHADOW_OFFSET times p's largest coordinate's magnitude, at least 1: the normal is not at
+// hand; culling by visibility spares that lift in every direction) is clear through the BVH.
+fn seen(l: Light, p: vec3<f32>) -> bool {
+    if exact.shadows == 0u {
+        return true;
+    }
+    let a = abs(p);
+    let origin = p + normalize(l.position - p) * (SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0)));
+    return !bvh_blocked(origin, l.position);
+}
+
+// Whether light `l` is in the exact set of p: it reaches p and, with shadows, is seen.
+fn needs(l: Light, p: vec3<f32>) -> bool {
+    return reaches(l, p) && seen(l, p);
+}
+
 // A surface point p of a pixel, whose list is looked up at NDC depth z: (evaluated, needed,
 // found).
 fn point_counts(pixel: vec2<u32>, z: f32, p: vec3<f32>) -> vec3<u32> {
     var needed = 0u;
     for (var k = 0u; k < frame.light_count; k++) {
-        if reaches(lights[k], p) {
+        if needs(lights[k], p) {
             needed += 1u;
         }
     }
@@ -53,7 +72,7 @@ fn point_counts(pixel: vec2<u32>, z: f32, p: vec3<f32>) -> vec3<u32> {
                     let k = w * 32u + firstTrailingBit(bits);
                     bits &= bits - 1u;
                     evaluated += 1u;
-                    if reaches(lights[light_indices[k]], p) {
+                    if needs(lights[light_indices[k]], p) {
                         found += 1u;
                     }
                 }
@@ -63,7 +82,7 @@ fn point_counts(pixel: vec2<u32>, z: f32, p: vec3<f32>) -> vec3<u32> {
         let list = light_list(pixel, z);
         evaluated = list.y;
         for (var k = 0u; k < list.y; k++) {
-            if reaches(lights[light_indices[list.x + k]], p) {
+            if needs(lights[light_indices[list.x + k]], p) {
                 found += 1u;
             }
         }

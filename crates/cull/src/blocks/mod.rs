@@ -8,9 +8,12 @@
 //!   lists by one fill (gather's and 2.5D's stored masks, tiled scatter's masks);
 //! - [`tile_lines`]: gather's and 2.5D's lines path, a bit per (column or row of tiles or depth
 //!   bin, light), ANDed per tile by the list passes;
-//! - [`lists`]: the capacity cap and `cull.finalize`, which every strategy's lists end with.
+//! - [`lists`]: the capacity cap and `cull.finalize`, which every strategy's lists end with;
+//! - [`occlusion`]: `cull.occlusion`, culling by visibility after any strategy's lists of a
+//!   list a bin (`CullSettings::occlusion`).
 
 pub mod lists;
+pub mod occlusion;
 pub mod tile_depth;
 pub mod tile_lines;
 pub mod tile_masks;

@@ -1,0 +1,125 @@
+// cull.occlusion: after any strategy's lists of a list a bin (every strategy but z-binning),
+// drops from each bin's list the lights an occluder hides from every point of the bin's cell,
+// in place and in order (manylights_cull::blocks::occlusion). A bin's cell is its tile's
+// frustum, widened by a pixel on each side, between the tile's depth bounds (tiled strategies)
+// or its slice's boundaries (clusters), each widened by 1e-4 of its depth: the convex hull of
+// its eight corners holds every surface point its pixels shade. A workgroup a bin takes its
+// list 64 entries at a time, each thread a light against every occluder (occluder_hides), then
+// writes the kept ones at their rank among the kept; cull_stats[10] counts the dropped.
+
+@group(1) @binding(2) var<storage, read> tile_depth: array<TileDepth>;
+@group(1) @binding(6) var<storage, read_write> out_ranges: array<vec2<u32>>;
+@group(1) @binding(7) var<storage, read_write> out_indices: array<u32>;
+@group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
+@group(1) @binding(12) var<storage, read> occluders: array<Occluder>;
+// x: the occluders.
+@group(1) @binding(13) var<uniform> occlusion: vec4<u32>;
+
+var<workgroup> wg_cell: array<vec3<f32>, 8>;
+var<workgroup> wg_range: vec2<u32>;
+var<workgroup> wg_scan: array<u32, 64>;
+
+// The world-space corners of bin `bin`'s cell, or false where it has no covered pixel.
+fn occlusion_cell(bin: u32) -> bool {
+    let tiles = cull.tiles_x * cull.tiles_y;
+    let t = bin % tiles;
+    let s = bin / tiles;
+    var d: vec2<f32>;
+    if cull.slices <= 1u {
+        let td = tile_depth[t];
+        if td.covered == 0u {
+            return false;
+        }
+        d = vec2<f32>(td.dmin, td.dmax);
+    } else {
+        d = vec2<f32>(cull.near, cull.far);
+        if s > 0u {
+            d.x = slice_edge(s);
+        }
+        if s + 1u < cull.slices {
+            d.y = slice_edge(s + 1u);
+        }
+    }
+    d *= vec2<f32>(1.0 - 1e-4, 1.0 + 1e-4);
+    let r = tile_ndc(vec2<u32>(t % cull.tiles_x, t / cull.tiles_x));
+    let pad = 2.0 * frame.viewport.zw;
+    let x = vec2<f32>(r.x - pad.x, r.z + pad.x);
+    let y = vec2<f32>(r.y - pad.y, r.w + pad.y);
+    for (var c = 0u; c < 8u; c++) {
+        let v = view_point(vec2<f32>(x[c & 1u], y[(c >> 1u) & 1u]), -d[c >> 2u]);
+        wg_cell[c] = (frame.world_from_view * vec4<f32>(v, 1.0)).xyz;
+    }
+    return true;
+}
+
+// Whether an occluder hides light `l` from every point of the workgroup's cell.
+fn occlusion_hidden(l: u32) -> bool {
+    let p = lights[l].position;
+    var cell: array<vec3<f32>, 8>;
+    var far = 1.0;
+    for (var c = 0u; c < 8u; c++) {
+        cell[c] = wg_cell[c];
+        let a = abs(cell[c]);
+        far = max(far, max(a.x, max(a.y, a.z)));
+    }
+    let a = abs(p);
+    let margin = 1e-4 * max(far, max(a.x, max(a.y, a.z)));
+    for (var k = 0u; k < occlusion.x; k++) {
+        if occluder_hides(occluders[k], p, cell, margin) {
+            return true;
+        }
+    }
+    return false;
+}
+
+@compute @workgroup_size(64)
+fn occlusion_filter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) i: u32) {
+    let bin = wid.y * GROUPS_X + wid.x;
+    if i == 0u {
+        var range = vec2<u32>(0u);
+        if bin < cull.bins {
+            range = out_ranges[bin];
+            if range.y != 0u && !occlusion_cell(bin) {
+                range.y = 0u;
+            }
+        }
+        wg_range = range;
+    }
+    let range = workgroupUniformLoad(&wg_range);
+    if range.y == 0u {
+        return;
+    }
+    var kept_total = 0u;
+    for (var base = 0u; base < range.y; base += 64u) {
+        let k = base + i;
+        var light = 0u;
+        var keep = 0u;
+        if k < range.y {
+            light = out_indices[range.x + k];
+            keep = select(1u, 0u, occlusion_hidden(light));
+        }
+        // Inclusive scan of the kept flags (Hillis and Steele).
+        wg_scan[i] = keep;
+        workgroupBarrier();
+        for (var step = 1u; step < 64u; step <<= 1u) {
+            var v = wg_scan[i];
+            if i >= step {
+                v += wg_scan[i - step];
+            }
+            workgroupBarrier();
+            wg_scan[i] = v;
+            workgroupBarrier();
+        }
+        if keep != 0u {
+            out_indices[range.x + kept_total + wg_scan[i] - 1u] = light;
+        }
+        kept_total += wg_scan[63];
+        workgroupBarrier();
+    }
+    if i == 0u {
+        out_ranges[bin] = vec2<u32>(range.x, kept_total);
+        if kept_total < range.y {
+            atomicAdd(&cull_stats[10], range.y - kept_total);
+        }
+    }
+}
