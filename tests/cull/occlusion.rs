@@ -41,7 +41,7 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
         let extent = scene.light_bounds.extent().max_element();
         scene.lights = LightSpec {
             generator: LightGenerator::Uniform,
-            count: 300,
+            count: 200,
             seed: 41 + s_i as u64,
             radius: RadiusRule::Fixed(extent * 0.3),
             intensity: 1.0,

@@ -137,6 +137,17 @@ impl Culler {
         stride: u32,
         shadowed: bool,
     ) -> Result<Vec<[u32; 4]>, GpuError> {
+        if shadowed && !shadowed_exact_fits(ctx, scene.light_count) {
+            return Err(GpuError::Unsupported(format!(
+                "the shadowed exact oracle at {} lights: its rays' loops would pass the driver's \
+                 silent loop limit ({:?} iterations an invocation; at most {} lights at {} \
+                 traversal steps a ray)",
+                scene.light_count,
+                ctx.loop_limit,
+                ctx.loop_light_limit().unwrap_or(0) / SHADOWED_EXACT_STEPS,
+                SHADOWED_EXACT_STEPS
+            )));
+        }
         let params = crate::layout::GpuExactParams {
             world_from_clip,
             stride: stride.max(1),
@@ -242,4 +253,17 @@ impl Culler {
             ctx, &out, 0, bytes,
         )?))
     }
+}
+
+/// The traversal steps a shadow ray of the shadowed exact oracle is budgeted under a driver's
+/// loop limit ([`shadowed_exact_fits`]).
+pub const SHADOWED_EXACT_STEPS: u64 = 128;
+
+/// Whether the shadowed exact oracle ([`Culler::exact_counts_with`]) fits the driver's loop
+/// limit at `lights` lights: everywhere without one; under llvmpipe's, where every light's ray
+/// at [`SHADOWED_EXACT_STEPS`] steps, over every light and then a list, stays within it (a loop
+/// past it stops short silently and would miscount).
+pub fn shadowed_exact_fits(ctx: &GpuContext, lights: u32) -> bool {
+    ctx.loop_light_limit()
+        .is_none_or(|l| u64::from(lights) * SHADOWED_EXACT_STEPS <= l)
 }

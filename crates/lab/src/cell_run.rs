@@ -111,7 +111,7 @@ impl CellScene {
             GpuScene::upload_with(ctx, shaded, model, &poses[0], w, h)
         })?;
         // Rays are cast by the cell's shading and by the shadowed references.
-        let rays = c.shadows.casts() || c.shadowed_truth();
+        let rays = c.shadows.casts() || c.shadowed_truth() || c.occlusion;
         if rays {
             stage(name, "BVH built", || gpu_scene.build_bvh(ctx, shaded))?;
         }
@@ -177,6 +177,20 @@ pub(crate) fn run_cell(
         as_they_are: as_they_are.as_ref(),
     };
     let mut lights = FrameLights::new(ctx, c, &of, hierarchy)?;
+    if c.occlusion {
+        // The renderers are built first, then given the scene's occluders.
+        stage(name, "pipelines built", || {
+            renderers.get_with_unshadowed(ctx, &gpu_scene, (c.msaa, c.hdr, c.shadows), c.visibility_pass)
+        })?;
+        let extent = f64::from(scene.light_bounds.extent().max_element());
+        let occ = manylights_scene::occluders::occluders(
+            &manylights_scene::ray::opaque_triangles(&scene),
+            extent * extent * 1e-3,
+            64,
+        );
+        tracing::debug!(cell = name, occluders = occ.len(), "occluders chosen");
+        renderers.set_occluders(ctx, &occ);
+    }
     let (renderer, unshadowed) = stage(name, "pipelines built", || {
         renderers.get_with_unshadowed(
             ctx,
@@ -191,6 +205,7 @@ pub(crate) fn run_cell(
         capacity: c.capacity,
         mask_budget: c.mask_budget,
         tile_boxes: c.tile_boxes,
+        occlusion: c.occlusion,
         ..CullSettings::for_camera(cam)
     };
     let run = CellFrames {

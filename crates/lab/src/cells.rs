@@ -150,6 +150,9 @@ pub fn params_label(c: &Config) -> String {
     if !c.tile_boxes {
         p.push_str(";tile_boxes=false");
     }
+    if c.occlusion {
+        p.push_str(";occlusion=true");
+    }
     if c.msaa > 1 {
         p.push_str(&format!(";msaa={}", c.msaa));
     }
@@ -558,6 +561,9 @@ fn apply_variant(c: &mut Config, v: Variant) -> (&'static str, String) {
     }
     if let Some(b) = v.tile_boxes {
         c.tile_boxes = b;
+    }
+    if let Some(b) = v.occlusion {
+        c.occlusion = b;
     }
     if let Some(m) = v.motion {
         c.lights.motion = m;

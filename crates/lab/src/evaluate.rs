@@ -129,13 +129,19 @@ pub(crate) fn evaluate(
             if c.exact_stride > 0 {
                 let bins = stage(pose, "list lengths read back", || lists.bin_lengths(ctx))?;
                 let counts = stage(pose, "exact oracle", || {
-                    renderer.culler.exact_counts(
+                    renderer.culler.exact_counts_with(
                         ctx,
                         gpu_scene,
                         &o.depth,
                         lists,
                         frame.clip_from_world.inverse(),
                         c.exact_stride,
+                        c.occlusion
+                            || (c.shadowed_exact()
+                                && manylights_cull::per_pixel::shadowed_exact_fits(
+                                    ctx,
+                                    gpu_scene.light_count,
+                                )),
                     )
                 })?;
                 metrics = Some(from_gpu_counts(&counts, &bins));

@@ -128,6 +128,9 @@ pub struct Variant {
     /// Box test override.
     #[serde(default)]
     pub tile_boxes: Option<bool>,
+    /// Culling by visibility override.
+    #[serde(default)]
+    pub occlusion: Option<bool>,
     /// Light motion override.
     #[serde(default)]
     pub motion: Option<Motion>,
@@ -324,6 +327,13 @@ pub struct Config {
     /// false.)
     #[serde(default, skip_serializing_if = "is_false")]
     pub shadowed_reference: bool,
+    /// Culling by visibility (`CullSettings::occlusion`): after the strategy's lists, each
+    /// bin's list loses the lights one of the scene's 64 largest opaque convex polygons hides
+    /// from its whole cell (`manylights_cull::blocks::occlusion`); not with z-binning. The
+    /// scene's BVH is built for it: its false negatives count against the shadowed exact set.
+    /// (Left out of a cell's identity when false.)
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub occlusion: bool,
     /// Material models to give the scene's surfaces, in turns (`manylights_scene::material::
     /// assign_models`): `[Ggx]` makes every surface GGX; `[BlinnPhong, Ggx, Sheen, ClearCoat,
     /// Wrap]` mixes five models in one frame, each material's parameters carried over
@@ -408,6 +418,14 @@ impl Config {
     /// it casts shadows or asks for it (`shadowed_reference`).
     pub fn shadowed_truth(&self) -> bool {
         self.accuracy && (self.shadows.casts() || self.shadowed_reference)
+    }
+
+    /// Whether the exact oracle's set is shadowed (a light needed where its shadow ray is
+    /// clear): where the cell culls by visibility, and where it casts shadows on a driver
+    /// whose loop limit lets the oracle trace every light's ray
+    /// (`manylights_cull::per_pixel::shadowed_exact_fits`; otherwise unshadowed there).
+    pub fn shadowed_exact(&self) -> bool {
+        self.shadows.casts() || self.occlusion
     }
 
     /// This configuration with its `device_limit` resolved against the device `ctx`.
@@ -543,6 +561,15 @@ impl Config {
                 ),
             ));
         }
+        if self.occlusion && matches!(self.strategy, Strategy::ZBin { .. }) {
+            return Err((
+                "occlusion",
+                "occlusion = true with strategy ZBin: culling by visibility drops lights from \
+                 lists of a list a bin (TiledGather, DepthMask, TiledScatter or Clustered), \
+                 not from z-binning's"
+                    .into(),
+            ));
+        }
         if self.msaa > 1 && self.export {
             return Err((
                 "msaa",
@@ -576,7 +603,7 @@ impl Config {
             capacity: self.capacity,
             mask_budget: self.mask_budget,
             tile_boxes: self.tile_boxes,
-            occlusion: false,
+            occlusion: self.occlusion,
         };
         settings.validate().map_err(|e| ("slack", e.to_string()))?;
         match &self.camera {

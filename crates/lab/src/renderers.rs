@@ -26,6 +26,18 @@ impl Renderers {
     /// The most renderers kept: a sweep's cells rarely need more kinds.
     const KEEP: usize = 4;
 
+    /// Gives every renderer kept the occluders of the scene it renders next (culling by
+    /// visibility).
+    pub fn set_occluders(
+        &mut self,
+        ctx: &GpuContext,
+        occluders: &[manylights_scene::occluders::Occluder],
+    ) {
+        for (_, r) in &mut self.0 {
+            r.culler.set_occluders(ctx, occluders);
+        }
+    }
+
     /// A renderer for `scene` at `samples` samples a pixel into a lit image of format `hdr`
     /// (one built before for a scene laid out alike, or a new one), casting `shadows`, its
     /// visibility backend drawn by `visibility_pass`; and where it casts shadows, the same
