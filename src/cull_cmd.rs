@@ -57,6 +57,12 @@ pub(crate) struct CullArgs {
     /// counts printed are then per sample.
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub(crate) msaa: u32,
+    /// Culling by visibility after the lists: each bin's list loses the lights one of the
+    /// scene's 64 largest opaque convex polygons hides from its whole cell (not with --strategy
+    /// zbin). Prints the pairs dropped; the false negatives count against the shadowed exact
+    /// set (a light needed where its shadow ray is clear), for which the BVH is built.
+    #[arg(long)]
+    pub(crate) occlusion: bool,
     /// With shadows (--shadows exact or stochastic), also count the shadow rays that shading
     /// these lists casts: the scene's BVH built, one deferred frame over the same strategy
     /// shaded with the shadows and its rays counted on the GPU.
@@ -79,36 +85,48 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
         mut gpu_scene,
         ..
     } = a.upload(&ctx, scene)?;
-    if args.shadows.shadows().casts() {
+    if args.shadows.shadows().casts() || args.occlusion {
         gpu_scene.build_bvh(&ctx, &scene)?;
     }
     let draws = a.draws(&ctx, &gpu_scene, &scene)?;
     let frames = a.frames();
     let mut timer = GpuTimer::new(&ctx, 64);
     let (depth, bounds) = depth_prepass(&ctx, &gpu_scene, (w, h), samples, &mut timer)?;
-    let (culler, cull_depth) = match &bounds {
+    let (mut culler, cull_depth) = match &bounds {
         Some((_, t)) => (Culler::with_bounds(&ctx, &gpu_scene, samples), &t.bounds),
         None => (Culler::with_samples(&ctx, &gpu_scene, samples), &depth),
     };
+    if args.occlusion {
+        let extent = f64::from(scene.light_bounds.extent().max_element());
+        let occluders = manylights_scene::occluders::occluders(
+            &manylights_scene::ray::opaque_triangles(&scene),
+            extent * extent * 1e-3,
+            64,
+        );
+        culler.set_occluders(&ctx, &occluders);
+    }
+    let culler = culler;
     let settings = CullSettings {
         mask_budget: if args.no_tile_masks {
             Some(0)
         } else {
             args.mask_budget
         },
+        occlusion: args.occlusion,
         ..args.cull.settings(&scene.camera)?
     };
     let frame =
         manylights_gpu::layout::GpuFrame::new(&scene.camera, w, h, scene.lights.len() as u32);
     // The exact oracle's counts of a run's lists, at every pixel.
     let exact_counts = |out: &CullOutput| {
-        culler.exact_counts(
+        culler.exact_counts_with(
             &ctx,
             &gpu_scene,
             &depth,
             out,
             frame.clip_from_world.inverse(),
             1,
+            args.occlusion,
         )
     };
     // With --stochastic, each frame's draws culled and checked; the last frame's lists are
@@ -170,6 +188,13 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     }
     print_earlier(&earlier, frames);
     print_lists(&m, &out);
+    if args.occlusion {
+        println!(
+            "  occluded pairs          {} (bin, light) pairs dropped by culling by visibility \
+             (the false negatives above: against the shadowed exact set)",
+            out.occluded
+        );
+    }
     if args.shadows.shadows().casts() {
         let rays = shadow_rays(
             &ctx,

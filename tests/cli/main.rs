@@ -722,7 +722,11 @@ fn render_shadows_exact_casts_shadow_rays() {
         energy[1] < energy[0] - 1e-3,
         "shadows must take light away: {energy:?}"
     );
-    rejects(&["--shadows", "soft"], 2, &["--shadows", "off", "exact", "stochastic"]);
+    rejects(
+        &["--shadows", "soft"],
+        2,
+        &["--shadows", "off", "exact", "stochastic"],
+    );
     rejects_cmd(
         "cull",
         &["--shadows", "soft"],
@@ -740,8 +744,22 @@ fn render_shadows_stochastic_casts_k_rays_a_pixel() {
     let tmp = tempfile::tempdir().unwrap();
     let args = |cmd: &'static str, out: &str| -> Vec<String> {
         let mut v: Vec<String> = [
-            cmd, "--scene", "pillars", "--lights", "64", "--radius", "4", "--shadows",
-            "stochastic", "--shadow-rays", "3", "--width", "48", "--height", "32", "--out",
+            cmd,
+            "--scene",
+            "pillars",
+            "--lights",
+            "64",
+            "--radius",
+            "4",
+            "--shadows",
+            "stochastic",
+            "--shadow-rays",
+            "3",
+            "--width",
+            "48",
+            "--height",
+            "32",
+            "--out",
         ]
         .iter()
         .map(|s| s.to_string())
@@ -755,9 +773,15 @@ fn render_shadows_stochastic_casts_k_rays_a_pixel() {
     let stdout = succeeds(&render, "render --shadows stochastic");
     let per_pixel = number_after(&stdout, "shadow rays", "(");
     let rays = number_after(&stdout, "shadow rays", "shadow rays");
-    assert!(per_pixel > 0.5 && per_pixel <= 3.0 && rays % 3.0 == 0.0, "{stdout}");
+    assert!(
+        per_pixel > 0.5 && per_pixel <= 3.0 && rays % 3.0 == 0.0,
+        "{stdout}"
+    );
     let flip = number_after(&stdout, "vs reference", "mean FLIP");
-    assert!(flip > 1e-3 && flip < 0.2, "noisy but near the exact shadows: {stdout}");
+    assert!(
+        flip > 1e-3 && flip < 0.2,
+        "noisy but near the exact shadows: {stdout}"
+    );
     let cull = args("cull", "cull");
     let cull: Vec<&str> = cull.iter().map(String::as_str).collect();
     let culled = succeeds(&cull, "cull --shadows stochastic");
@@ -766,10 +790,23 @@ fn render_shadows_stochastic_casts_k_rays_a_pixel() {
         number_after(&stdout, "shadow rays", "shadow rays"),
         "{culled}"
     );
-    rejects(&["--shadows", "stochastic", "--shadow-rays", "17"], 2, &["--shadow-rays", "17"]);
-    rejects(&["--shadows", "exact", "--shadow-rays", "4"], 1, &["--shadow-rays 4", "--shadows stochastic"]);
+    rejects(
+        &["--shadows", "stochastic", "--shadow-rays", "17"],
+        2,
+        &["--shadow-rays", "17"],
+    );
+    rejects(
+        &["--shadows", "exact", "--shadow-rays", "4"],
+        1,
+        &["--shadow-rays 4", "--shadows stochastic"],
+    );
     rejects_cmd("cull", &["--shadow-rays", "0"], 2, &["--shadow-rays", "0"]);
-    rejects_cmd("tune", &["--shadow-rays", "2"], 1, &["--shadow-rays 2", "--shadows stochastic"]);
+    rejects_cmd(
+        "tune",
+        &["--shadow-rays", "2"],
+        1,
+        &["--shadow-rays 2", "--shadows stochastic"],
+    );
 }
 
 /// More lights than the device holds: an error stating the limit. On lavapipe the limit is its
@@ -981,4 +1018,45 @@ fn the_bathroom_renders_no_nan_with_the_visibility_buffer() {
         );
         assert!(out.join("visibility.png").is_file(), "{pass}");
     }
+}
+
+/// `cull --occlusion`: culling by visibility drops (bin, light) pairs in the city (lights of
+/// 60 m among its buildings) and none the shadowed exact set needs; with z-binning it is an
+/// error naming the option's field.
+#[test]
+fn cull_occlusion_drops_hidden_pairs_and_misses_none() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cull");
+    let base = [
+        "cull",
+        "--scene",
+        "city",
+        "--lights",
+        "200",
+        "--radius",
+        "60",
+        "--width",
+        "96",
+        "--height",
+        "64",
+        "--occlusion",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let stdout = succeeds(&base, "cull --occlusion");
+    let dropped = number_after(&stdout, "occluded pairs", "occluded pairs");
+    assert!(dropped > 50.0, "{stdout}");
+    assert_eq!(
+        number_after(&stdout, "false negatives", "false negatives"),
+        0.0,
+        "{stdout}"
+    );
+    let mut zbin = base.to_vec();
+    zbin.extend(["--strategy", "zbin"]);
+    let o = manylights(&zbin);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && stderr.contains("occlusion") && stderr.contains("z-binning"),
+        "{stderr}"
+    );
 }

@@ -50,7 +50,11 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
         .generate(&scene)
         .unwrap();
         let camera = scene.camera;
-        let occ = occluders(&opaque_triangles(&scene), f64::from(extent * extent) * 1e-3, 64);
+        let occ = occluders(
+            &opaque_triangles(&scene),
+            f64::from(extent * extent) * 1e-3,
+            64,
+        );
         let (mut gs, depth, _) = common::depth_prepass(&ctx, &scene, &camera, w, h);
         gs.build_bvh(&ctx, &scene).unwrap();
         let mut culler = Culler::new(&ctx, &gs);
@@ -69,8 +73,12 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
         };
         for strategy in list_strategies() {
             let what = format!("{name}, {}", strategy.name());
-            let off = culler.run(&ctx, &gs, &depth, &strategy, &plain, &mut timer).unwrap();
-            let on = culler.run(&ctx, &gs, &depth, &strategy, &occluding, &mut timer).unwrap();
+            let off = culler
+                .run(&ctx, &gs, &depth, &strategy, &plain, &mut timer)
+                .unwrap();
+            let on = culler
+                .run(&ctx, &gs, &depth, &strategy, &occluding, &mut timer)
+                .unwrap();
             assert_eq!(
                 on.passes.iter().any(|p| p.name == "cull.occlusion"),
                 !occ.is_empty(),
@@ -86,17 +94,25 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
                 // Kept in order: a subsequence of the list without occlusion.
                 let mut it = all.iter();
                 for l in kept {
-                    assert!(it.any(|x| x == l), "{what}: bin {bin} keeps {l}, not in order of its list");
+                    assert!(
+                        it.any(|x| x == l),
+                        "{what}: bin {bin} keeps {l}, not in order of its list"
+                    );
                 }
                 if all.len() == kept.len() {
                     continue;
                 }
-                let cell = cell_corners(&on.params, &view, &td, bin)
-                    .unwrap_or_else(|| panic!("{what}: bin {bin} drops lights with no covered pixel"));
+                let cell = cell_corners(&on.params, &view, &td, bin).unwrap_or_else(|| {
+                    panic!("{what}: bin {bin} drops lights with no covered pixel")
+                });
                 let kept: HashSet<u32> = kept.iter().copied().collect();
                 for &l in all {
                     let p = scene.lights[l as usize].position.as_dvec3();
-                    let wide = 1e-3 * p.abs().max_element().max(cell[0].abs().max_element()).max(1.0);
+                    let wide = 1e-3
+                        * p.abs()
+                            .max_element()
+                            .max(cell[0].abs().max_element())
+                            .max(1.0);
                     let hidden = kept.get(&l).is_none();
                     if hidden {
                         dropped += 1;
@@ -112,13 +128,28 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
                     }
                 }
             }
-            assert_eq!(u64::from(on.occluded), dropped, "{what}: dropped pairs counted");
+            assert_eq!(
+                u64::from(on.occluded),
+                dropped,
+                "{what}: dropped pairs counted"
+            );
             let inv = frame.clip_from_world.inverse();
-            let shadowed = culler.exact_counts_with(&ctx, &gs, &depth, &on, inv, 1, true).unwrap();
-            let unshadowed = culler.exact_counts_with(&ctx, &gs, &depth, &off, inv, 1, false).unwrap();
+            let shadowed = culler
+                .exact_counts_with(&ctx, &gs, &depth, &on, inv, 1, true)
+                .unwrap();
+            let unshadowed = culler
+                .exact_counts_with(&ctx, &gs, &depth, &off, inv, 1, false)
+                .unwrap();
             let missed: u64 = shadowed.iter().map(|c| u64::from(c[1] - c[2])).sum();
-            assert_eq!(missed, 0, "{what}: lists miss lights the shadowed exact set needs");
-            let unseen: u64 = unshadowed.iter().zip(&shadowed).map(|(u, s)| u64::from(u[1] - s[1])).sum();
+            assert_eq!(
+                missed, 0,
+                "{what}: lists miss lights the shadowed exact set needs"
+            );
+            let unseen: u64 = unshadowed
+                .iter()
+                .zip(&shadowed)
+                .map(|(u, s)| u64::from(u[1] - s[1]))
+                .sum();
             println!(
                 "{what}: {} occluders, {dropped} pairs dropped of {}; {unseen} (pixel, light) pairs in range unseen",
                 occ.len(),
@@ -128,14 +159,23 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
             unseen_all += unseen;
         }
     }
-    assert!(dropped_all > 1000, "the test must fire: {dropped_all} pairs dropped");
-    assert!(unseen_all > 1000, "the shadowed exact set must differ: {unseen_all}");
+    assert!(
+        dropped_all > 1000,
+        "the test must fire: {dropped_all} pairs dropped"
+    );
+    assert!(
+        unseen_all > 1000,
+        "the shadowed exact set must differ: {unseen_all}"
+    );
 }
 
 #[test]
 fn occlusion_refuses_zbin_and_a_culler_without_occluders() {
     let ctx = common::gpu();
-    let scene = ProceduralScene::from_name("atrium").unwrap().build().unwrap();
+    let scene = ProceduralScene::from_name("atrium")
+        .unwrap()
+        .build()
+        .unwrap();
     let (gs, depth, _) = common::depth_prepass(&ctx, &scene, &scene.camera, 32, 32);
     let mut culler = Culler::new(&ctx, &gs);
     let mut timer = GpuTimer::new(&ctx, 16);
@@ -143,18 +183,41 @@ fn occlusion_refuses_zbin_and_a_culler_without_occluders() {
         occlusion: true,
         ..CullSettings::for_camera(&scene.camera)
     };
-    let err = |culler: &Culler, strategy: &Strategy| match culler.run(&ctx, &gs, &depth, strategy, &settings, &mut GpuTimer::new(&ctx, 16)) {
+    let err = |culler: &Culler, strategy: &Strategy| match culler.run(
+        &ctx,
+        &gs,
+        &depth,
+        strategy,
+        &settings,
+        &mut GpuTimer::new(&ctx, 16),
+    ) {
         Ok(_) => panic!("occlusion ran where it should be refused"),
         Err(e) => e.to_string(),
     };
     let e = err(&culler, &Strategy::tiled_gather(8));
-    assert!(e.contains("occlusion") && e.contains("set_occluders"), "{e}");
+    assert!(
+        e.contains("occlusion") && e.contains("set_occluders"),
+        "{e}"
+    );
     culler.set_occluders(&ctx, &[]);
-    let zbin = Strategy::ZBin { tile_size: 8, bins: 32, slicing: Slicing::Exponential };
+    let zbin = Strategy::ZBin {
+        tile_size: 8,
+        bins: 32,
+        slicing: Slicing::Exponential,
+    };
     let e = err(&culler, &zbin);
     assert!(e.contains("occlusion") && e.contains("z-binning"), "{e}");
     // No occluder: nothing dropped, no pass.
-    let out = culler.run(&ctx, &gs, &depth, &Strategy::tiled_gather(8), &settings, &mut timer).unwrap();
+    let out = culler
+        .run(
+            &ctx,
+            &gs,
+            &depth,
+            &Strategy::tiled_gather(8),
+            &settings,
+            &mut timer,
+        )
+        .unwrap();
     assert_eq!(out.occluded, 0);
     assert!(!out.passes.iter().any(|p| p.name == "cull.occlusion"));
 }

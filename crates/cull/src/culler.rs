@@ -216,7 +216,10 @@ impl Culler {
         ctx: &GpuContext,
         occluders: &[manylights_scene::occluders::Occluder],
     ) {
-        self.occlusion = Some(Occlusion::new(ctx, &self.scene_layout, occluders));
+        match &mut self.occlusion {
+            Some(o) => o.set(ctx, occluders),
+            None => self.occlusion = Some(Occlusion::new(ctx, &self.scene_layout, occluders)),
+        }
     }
 
     /// The pipelines over `depth`: its own input's, or where it is an `R32Float` depth a
@@ -414,7 +417,11 @@ impl RunInputs<'_> {
         plan: P,
         t: Timing<'_>,
     ) -> Result<Done, CullError> {
-        let occlusion = self.culler.occlusion.as_ref().filter(|_| self.settings.occlusion);
+        let occlusion = self
+            .culler
+            .occlusion
+            .as_ref()
+            .filter(|_| self.settings.occlusion);
         frame::execute(f, &self.rec, plan, t.timer, self.repeat, t.then, occlusion)
     }
 

@@ -4,8 +4,8 @@
 use manylights_gpu::timing::{Category, GpuTimer};
 use manylights_gpu::{GpuContext, GpuError, pipeline, readback};
 
-use crate::layout::GpuCullParams;
 use crate::blocks::occlusion::Occlusion;
+use crate::layout::GpuCullParams;
 use crate::record::{Buf, ListPass, Recorder, Step, StepInfo};
 use crate::strategies::Plan;
 use crate::{CullError, CullOutput, Strategy};

@@ -180,7 +180,12 @@ pub(crate) fn run_cell(
     if c.occlusion {
         // The renderers are built first, then given the scene's occluders.
         stage(name, "pipelines built", || {
-            renderers.get_with_unshadowed(ctx, &gpu_scene, (c.msaa, c.hdr, c.shadows), c.visibility_pass)
+            renderers.get_with_unshadowed(
+                ctx,
+                &gpu_scene,
+                (c.msaa, c.hdr, c.shadows),
+                c.visibility_pass,
+            )
         })?;
         let extent = f64::from(scene.light_bounds.extent().max_element());
         let occ = manylights_scene::occluders::occluders(

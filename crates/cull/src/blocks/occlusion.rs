@@ -52,9 +52,13 @@ pub struct Occlusion {
 }
 
 impl Occlusion {
-    /// The pass over `scene_layout` (the scene's group 0) and `occluders` (at least one:
-    /// [`crate::Culler::set_occluders`] keeps none otherwise).
-    pub fn new(ctx: &GpuContext, scene_layout: &wgpu::BindGroupLayout, occluders: &[Occluder]) -> Self {
+    /// The pass over `scene_layout` (the scene's group 0) and `occluders` (none: the pass does
+    /// not run).
+    pub fn new(
+        ctx: &GpuContext,
+        scene_layout: &wgpu::BindGroupLayout,
+        occluders: &[Occluder],
+    ) -> Self {
         let d = &ctx.device;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull.occlusion.group1"),
@@ -69,14 +73,7 @@ impl Occlusion {
             ],
         });
         let program = Program::new(d, &SHADER, DepthInput::Samples(1), scene_layout, &layout);
-        let gpu: Vec<GpuOccluder> = occluders.iter().map(GpuOccluder::from).collect();
-        let count = gpu.len() as u32;
-        let occluders = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("cull.occluders"),
-            contents: bytemuck::cast_slice(&gpu),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let params = pipeline::uniform_buffer(d, "cull.occlusion.params", bytemuck::cast_slice(&[count, 0, 0, 0]));
+        let (occluders, params, count) = Self::buffers(ctx, occluders);
         Self {
             kernel: program.pipeline(d, "occlusion_filter"),
             layout,
@@ -84,6 +81,32 @@ impl Occlusion {
             params,
             count,
         }
+    }
+
+    /// Takes `occluders` in place of the pass's (its pipeline kept).
+    pub fn set(&mut self, ctx: &GpuContext, occluders: &[Occluder]) {
+        (self.occluders, self.params, self.count) = Self::buffers(ctx, occluders);
+    }
+
+    /// The occluders' buffer (a zeroed one where there is none) and the pass's uniform.
+    fn buffers(ctx: &GpuContext, occluders: &[Occluder]) -> (wgpu::Buffer, wgpu::Buffer, u32) {
+        let d = &ctx.device;
+        let mut gpu: Vec<GpuOccluder> = occluders.iter().map(GpuOccluder::from).collect();
+        let count = gpu.len() as u32;
+        if gpu.is_empty() {
+            gpu.push(bytemuck::Zeroable::zeroed());
+        }
+        let buffer = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("cull.occluders"),
+            contents: bytemuck::cast_slice(&gpu),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let params = pipeline::uniform_buffer(
+            d,
+            "cull.occlusion.params",
+            bytemuck::cast_slice(&[count, 0, 0, 0]),
+        );
+        (buffer, params, count)
     }
 
     /// The occluders.
@@ -123,7 +146,13 @@ impl Occlusion {
             &self.kernel,
             group,
             groups_2d(f.params.bins, GROUPS_X),
-            &[Buf::Lights, Buf::TileDepth, Buf::Ranges, Buf::Indices, Buf::Occluders],
+            &[
+                Buf::Lights,
+                Buf::TileDepth,
+                Buf::Ranges,
+                Buf::Indices,
+                Buf::Occluders,
+            ],
             &[Buf::Ranges, Buf::Indices, Buf::Stats],
         )
     }
@@ -162,7 +191,11 @@ pub fn cell_corners(
     } else {
         let edge = |s| f64::from(crate::geometry::slice_edge(p, s));
         let d0 = if s > 0 { edge(s) } else { f64::from(p.near) };
-        let d1 = if s + 1 < p.slices { edge(s + 1) } else { f64::from(p.far) };
+        let d1 = if s + 1 < p.slices {
+            edge(s + 1)
+        } else {
+            f64::from(p.far)
+        };
         (d0, d1)
     };
     d0 *= 1.0 - 1e-4;
@@ -171,8 +204,14 @@ pub fn cell_corners(
     let (tx, ty) = (t % p.tiles_x, t / p.tiles_x);
     let px = |x: u32| f64::from((x * p.tile_size).min(view.size.0));
     let py = |y: u32| f64::from((y * p.tile_size).min(view.size.1));
-    let x = [(px(tx) - 1.0) / w * 2.0 - 1.0, (px(tx + 1) + 1.0) / w * 2.0 - 1.0];
-    let y = [1.0 - (py(ty + 1) + 1.0) / h * 2.0, 1.0 - (py(ty) - 1.0) / h * 2.0];
+    let x = [
+        (px(tx) - 1.0) / w * 2.0 - 1.0,
+        (px(tx + 1) + 1.0) / w * 2.0 - 1.0,
+    ];
+    let y = [
+        1.0 - (py(ty + 1) + 1.0) / h * 2.0,
+        1.0 - (py(ty) - 1.0) / h * 2.0,
+    ];
     let m = view.clip_from_view;
     Some(std::array::from_fn(|c| {
         let (nx, ny, z) = (x[c & 1], y[(c >> 1) & 1], -[d0, d1][c >> 2]);
