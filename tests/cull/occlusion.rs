@@ -14,7 +14,7 @@ use manylights_scene::occluders::{hides, occluders};
 use manylights_scene::procedural::NAMES;
 use manylights_scene::ray::opaque_triangles;
 
-/// The strategies with lists of a list a bin.
+/// The strategies with lists of a list a bin (the clusters fourth).
 fn list_strategies() -> Vec<Strategy> {
     vec![
         Strategy::tiled_gather(8),
@@ -66,13 +66,21 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
             size: (w, h),
         };
         let mut timer = GpuTimer::new(&ctx, 64);
-        let plain = CullSettings::for_camera(&camera);
-        let occluding = CullSettings {
-            occlusion: true,
-            ..plain
-        };
-        for strategy in list_strategies() {
-            let what = format!("{name}, {}", strategy.name());
+        // Clusters with the box test take their pixels' depth bounds, without it their slices'.
+        let runs = list_strategies()
+            .into_iter()
+            .map(|s| (s, true))
+            .chain([(list_strategies()[3], false)]);
+        for (strategy, tile_boxes) in runs {
+            let plain = CullSettings {
+                tile_boxes,
+                ..CullSettings::for_camera(&camera)
+            };
+            let occluding = CullSettings {
+                occlusion: true,
+                ..plain
+            };
+            let what = format!("{name}, {} (box test {tile_boxes})", strategy.name());
             let off = culler
                 .run(&ctx, &gs, &depth, &strategy, &plain, &mut timer)
                 .unwrap();
@@ -88,6 +96,9 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
             let td: Vec<GpuTileDepth> = bytemuck::pod_collect_to_vec(
                 &readback::read_buffer(&ctx, &on.tile_depth, 0, on.tile_depth.size()).unwrap(),
             );
+            let occupancy: Vec<u32> = bytemuck::pod_collect_to_vec(
+                &readback::read_buffer(&ctx, &on.occupancy, 0, on.occupancy.size()).unwrap(),
+            );
             let mut dropped = 0u64;
             for bin in 0..on.params.bins {
                 let (all, kept) = (a.list(bin as usize), b.list(bin as usize));
@@ -102,7 +113,7 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
                 if all.len() == kept.len() {
                     continue;
                 }
-                let cell = cell_corners(&on.params, &view, &td, bin).unwrap_or_else(|| {
+                let cell = cell_corners(&on.params, &view, (&td, &occupancy), bin).unwrap_or_else(|| {
                     panic!("{what}: bin {bin} drops lights with no covered pixel")
                 });
                 let kept: HashSet<u32> = kept.iter().copied().collect();

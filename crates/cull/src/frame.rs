@@ -84,6 +84,11 @@ impl<'a> Frame<'a> {
         &self.ranges
     }
 
+    /// The clusters' occupancy (and, with the box test, their pixels' depth bounds).
+    pub fn occupancy(&self) -> &wgpu::Buffer {
+        &self.occupancy
+    }
+
     /// A storage buffer of this run.
     pub fn buf(&self, label: &str, size: u64) -> wgpu::Buffer {
         storage_buf(self.ctx, label, size)

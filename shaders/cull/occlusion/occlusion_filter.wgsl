@@ -2,12 +2,15 @@
 // drops from each bin's list the lights an occluder hides from every point of the bin's cell,
 // in place and in order (manylights_cull::blocks::occlusion). A bin's cell is its tile's
 // frustum, widened by a pixel on each side, between the tile's depth bounds (tiled strategies)
-// or its slice's boundaries (clusters), each widened by 1e-4 of its depth: the convex hull of
+// or, for clusters, its pixels' depth bounds where the box test stored them (CULL_FLAG_TILE_BOX,
+// the occupancy words; an unoccupied cluster's list is left as it is) or else its slice's
+// boundaries, each widened by 1e-4 of its depth: the convex hull of
 // its eight corners holds every surface point its pixels shade. A workgroup a bin takes its
 // list 64 entries at a time, each thread a light against every occluder (occluder_hides), then
 // writes the kept ones at their rank among the kept; cull_stats[10] counts the dropped.
 
 @group(1) @binding(2) var<storage, read> tile_depth: array<TileDepth>;
+@group(1) @binding(8) var<storage, read> occupancy: array<u32>;
 @group(1) @binding(6) var<storage, read_write> out_ranges: array<vec2<u32>>;
 @group(1) @binding(7) var<storage, read_write> out_indices: array<u32>;
 @group(1) @binding(10) var<storage, read_write> cull_stats: array<atomic<u32>>;
@@ -19,7 +22,8 @@ var<workgroup> wg_cell: array<vec3<f32>, 8>;
 var<workgroup> wg_range: vec2<u32>;
 var<workgroup> wg_scan: array<u32, 64>;
 
-// The world-space corners of bin `bin`'s cell, or false where it has no covered pixel.
+// The world-space corners of bin `bin`'s cell into wg_cell, or false where it has no covered
+// pixel (its list is then left as it is).
 fn occlusion_cell(bin: u32) -> bool {
     let tiles = cull.tiles_x * cull.tiles_y;
     let t = bin % tiles;
@@ -31,6 +35,11 @@ fn occlusion_cell(bin: u32) -> bool {
             return false;
         }
         d = vec2<f32>(td.dmin, td.dmax);
+    } else if (cull.flags & CULL_FLAG_TILE_BOX) != 0u {
+        if occupancy[bin] == 0u {
+            return false;
+        }
+        d = vec2<f32>(from_ordered_bits(~occupancy[cull.bins + 2u * bin]), from_ordered_bits(occupancy[cull.bins + 2u * bin + 1u]));
     } else {
         d = vec2<f32>(cull.near, cull.far);
         if s > 0u {

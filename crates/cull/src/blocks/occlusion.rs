@@ -66,6 +66,7 @@ impl Occlusion {
                 entry(0, UNIFORM),
                 entry(2, storage(true)),
                 entry(6, storage(false)),
+                entry(8, storage(true)),
                 entry(7, storage(false)),
                 entry(10, storage(false)),
                 entry(12, storage(true)),
@@ -120,6 +121,7 @@ impl Occlusion {
             (0, f.params_buf()),
             (2, &f.tile_depth),
             (6, f.ranges()),
+            (8, f.occupancy()),
             (7, indices),
             (10, &f.stats),
             (12, &self.occluders),
@@ -149,6 +151,7 @@ impl Occlusion {
             &[
                 Buf::Lights,
                 Buf::TileDepth,
+                Buf::Occupancy,
                 Buf::Ranges,
                 Buf::Indices,
                 Buf::Occluders,
@@ -171,13 +174,13 @@ pub struct CellView {
 }
 
 /// The world-space corners of bin `bin`'s cell as `cull.occlusion` takes them (its tile's
-/// frustum widened by a pixel, between `tile_depth`'s bounds with one slice or the slice's
-/// boundaries, widened by 1e-4 of their depth), or `None` where the tile has no covered pixel
-/// (tiled strategies).
+/// frustum widened by a pixel, between `tile_depth`'s bounds with one slice, the cluster's
+/// pixels' depth bounds in `occupancy` with the box test, or else the slice's boundaries,
+/// widened by 1e-4 of their depth), or `None` where the bin has no covered pixel.
 pub fn cell_corners(
     p: &GpuCullParams,
     view: &CellView,
-    tile_depth: &[GpuTileDepth],
+    (tile_depth, occupancy): (&[GpuTileDepth], &[u32]),
     bin: u32,
 ) -> Option<[DVec3; 8]> {
     let tiles = p.tiles_x * p.tiles_y;
@@ -188,6 +191,16 @@ pub fn cell_corners(
             return None;
         }
         (f64::from(td.dmin), f64::from(td.dmax))
+    } else if p.flags & crate::layout::CULL_FLAG_TILE_BOX != 0 {
+        if occupancy[bin as usize] == 0 {
+            return None;
+        }
+        let near = occupancy[(p.bins + 2 * bin) as usize];
+        let far = occupancy[(p.bins + 2 * bin + 1) as usize];
+        (
+            f64::from(crate::geometry::from_ordered_bits(!near)),
+            f64::from(crate::geometry::from_ordered_bits(far)),
+        )
     } else {
         let edge = |s| f64::from(crate::geometry::slice_edge(p, s));
         let d0 = if s > 0 { edge(s) } else { f64::from(p.near) };
