@@ -227,6 +227,7 @@ fn shadow_columns(c: &Config, first: &PoseEval, worst: &Worst) -> ShadowColumns 
             _ => None,
         },
         reference_shadowed_cached: first.shadowed_cached,
+        occluded_pairs: c.occlusion.then_some(first.occluded),
     }
 }
 

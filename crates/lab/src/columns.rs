@@ -100,5 +100,6 @@ pub const COLUMNS: &[&str] = &[
     "gpu_ms_shadow",
     "grays_per_s",
     "reference_shadowed_cached",
+    "occluded_pairs",
     "error",
 ];

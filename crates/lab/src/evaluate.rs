@@ -50,6 +50,8 @@ pub(crate) struct PoseEval {
     pub(crate) gbuffer_bytes: u64,
     pub(crate) msaa_target_bytes: u64,
     pub(crate) dropped: u64,
+    /// (Bin, light) pairs culling by visibility dropped.
+    pub(crate) occluded: u64,
     pub(crate) nonfinite: u64,
     pub(crate) tile_masks: Option<bool>,
     /// Steady-state culling (run median, span), ms, where it was timed.
@@ -115,7 +117,7 @@ pub(crate) fn evaluate(
     let frame = GpuFrame::new(cam, w, h, gpu_scene.light_count);
     let covered = o.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
     let mut metrics: Option<ListMetrics> = None;
-    let (mut list_bytes, mut dropped) = (0, 0);
+    let (mut list_bytes, mut dropped, mut occluded) = (0, 0, 0);
     let mut tile_masks = None;
     let mut steady = None;
     let mut steady_frame = None;
@@ -126,6 +128,7 @@ pub(crate) fn evaluate(
             list_bytes = lists.list_bytes();
             tile_masks = Some(lists.used_tile_masks());
             dropped = u64::from(lists.dropped);
+            occluded = u64::from(lists.occluded);
             if c.exact_stride > 0 {
                 let bins = stage(pose, "list lengths read back", || lists.bin_lengths(ctx))?;
                 let counts = stage(pose, "exact oracle", || {
@@ -212,6 +215,7 @@ pub(crate) fn evaluate(
         gbuffer_bytes: o.gbuffer_bytes,
         msaa_target_bytes: o.msaa_target_bytes,
         dropped,
+        occluded,
         tile_masks,
         steady,
         steady_frame,

@@ -390,6 +390,10 @@ pub struct ShadowColumns {
     /// Whether the shadowed infinite-range reference came from the run folder's cache.
     #[serde(default)]
     pub reference_shadowed_cached: Option<bool>,
+    /// (Bin, light) pairs culling by visibility dropped from the lists
+    /// (`manylights_cull::CullOutput::occluded`), the first pose. Empty without `occlusion`.
+    #[serde(default)]
+    pub occluded_pairs: Option<u64>,
 }
 
 impl Row {
