@@ -286,3 +286,68 @@ fn stochastic_shadow_cells_measure_their_noise() {
         assert!(err.contains("bad.ron") && err.contains(want), "{value}: {err}");
     }
 }
+
+/// Culling by visibility in an experiment (`occlusion: true`): the city at 200 lights of 60 m,
+/// tiled gather and clusters, each with and without it: `occlusion=true` in the params, pairs
+/// dropped (`occluded_pairs`), no false negative against the shadowed exact set, fewer lights a
+/// pixel and the same image as the cell without it; with z-binning a parse error naming the
+/// field.
+#[test]
+fn occlusion_cells_drop_hidden_pairs_and_keep_the_image() {
+    let ctx = common::gpu();
+    let src = r#"Experiment(
+        name: "occlusion",
+        config: Config(
+            scene: City(),
+            lights: (count: 200, radius: Fixed(60.0), intensity: 2.0),
+            resolution: (96, 64),
+            frames: 1,
+            warmup: 0,
+            backend: Deferred,
+            shadows: Exact,
+            exact_stride: 1,
+        ),
+        sweep: (
+            strategy: [TiledGather(tile_size: 8), Clustered(tile_size: 16, slices: 16)],
+            variants: [
+                (label: "lists"),
+                (label: "occlusion", occlusion: Some(true)),
+            ],
+        ),
+    )"#;
+    let e = Experiment::parse(src, Path::new("occlusion.ron")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
+    assert_eq!(s.rows.len(), 4);
+    for pair in s.rows.chunks(2) {
+        let (off, on) = (&pair[0], &pair[1]);
+        assert!(
+            on.params.contains("occlusion=true") && !off.params.contains("occlusion"),
+            "{}",
+            on.params
+        );
+        assert_eq!(off.shadow.occluded_pairs, None);
+        let dropped = on.shadow.occluded_pairs.expect("occluded_pairs");
+        assert!(dropped > 0, "{}: nothing dropped", on.cell);
+        assert_eq!(on.false_negatives, Some(0), "{}", on.cell);
+        assert!(
+            on.lights_per_pixel_mean < off.lights_per_pixel_mean,
+            "{} evaluates no fewer",
+            on.cell
+        );
+        let (f_on, f_off) = (on.flip_mean.unwrap(), off.flip_mean.unwrap());
+        assert!(
+            (f_on - f_off).abs() < 1e-3,
+            "{}: the image changed with occlusion: FLIP {f_on} against {f_off}",
+            on.cell
+        );
+    }
+    let bad = src.replace(
+        "TiledGather(tile_size: 8), Clustered(tile_size: 16, slices: 16)",
+        "ZBin(tile_size: 16)",
+    );
+    let err = Experiment::parse(&bad, Path::new("occlusion.ron"))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("occlusion") && err.contains("ZBin"), "{err}");
+}
