@@ -92,20 +92,14 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     let frames = a.frames();
     let mut timer = GpuTimer::new(&ctx, 64);
     let (depth, bounds) = depth_prepass(&ctx, &gpu_scene, (w, h), samples, &mut timer)?;
-    let (mut culler, cull_depth) = match &bounds {
-        Some((_, t)) => (Culler::with_bounds(&ctx, &gpu_scene, samples), &t.bounds),
-        None => (Culler::with_samples(&ctx, &gpu_scene, samples), &depth),
-    };
-    if args.occlusion {
-        let extent = f64::from(scene.light_bounds.extent().max_element());
-        let occluders = manylights_scene::occluders::occluders(
-            &manylights_scene::ray::opaque_triangles(&scene),
-            extent * extent * 1e-3,
-            64,
-        );
-        culler.set_occluders(&ctx, &occluders);
-    }
-    let culler = culler;
+    let culler = culler_for(
+        &ctx,
+        &gpu_scene,
+        bounds.is_some(),
+        samples,
+        args.occlusion.then_some(&scene),
+    );
+    let cull_depth = bounds.as_ref().map_or(&depth, |(_, t)| &t.bounds);
     let settings = CullSettings {
         mask_budget: if args.no_tile_masks {
             Some(0)
@@ -178,23 +172,9 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
             String::new()
         }
     );
-    if bounds.is_some() {
-        // The exact oracle's points: covered samples and visible transparent fragments.
-        println!("  shaded points           {}", m.covered_pixels);
-    } else if samples > 1 {
-        println!("  covered samples         {}", m.covered_pixels);
-    } else {
-        println!("  covered pixels          {}", m.covered_pixels);
-    }
+    print_points(m.covered_pixels, bounds.is_some(), samples);
     print_earlier(&earlier, frames);
-    print_lists(&m, &out);
-    if args.occlusion {
-        println!(
-            "  occluded pairs          {} (bin, light) pairs dropped by culling by visibility \
-             (the false negatives above: against the shadowed exact set)",
-            out.occluded
-        );
-    }
+    print_lists(&m, &out, args.occlusion);
     if args.shadows.shadows().casts() {
         let rays = shadow_rays(
             &ctx,
@@ -347,6 +327,38 @@ fn check_samples(ctx: &GpuContext, args: &CullArgs) -> Result<()> {
 /// transparent surfaces with the lookup bounds culling reads, as the forward backend culls
 /// them (from the nearest glass to the opaque surface, where the exact oracle also checks
 /// every visible glass fragment).
+/// The points the exact oracle checked: with lookup bounds (`bounds`) covered samples and
+/// visible transparent fragments, with MSAA covered samples, else covered pixels.
+fn print_points(points: u64, bounds: bool, samples: u32) {
+    if bounds {
+        println!("  shaded points           {points}");
+    } else if samples > 1 {
+        println!("  covered samples         {points}");
+    } else {
+        println!("  covered pixels          {points}");
+    }
+}
+
+/// The culler of a run: over the lookup bounds (`bounds`) or the depth buffer of `samples`
+/// samples, with `occluders_of`'s occluders for culling by visibility.
+fn culler_for(
+    ctx: &GpuContext,
+    gpu_scene: &GpuScene,
+    bounds: bool,
+    samples: u32,
+    occluders_of: Option<&manylights_scene::Scene>,
+) -> Culler {
+    let mut culler = if bounds {
+        Culler::with_bounds(ctx, gpu_scene, samples)
+    } else {
+        Culler::with_samples(ctx, gpu_scene, samples)
+    };
+    if let Some(scene) = occluders_of {
+        culler.set_occluders(ctx, &manylights_scene::occluders::of_scene(scene));
+    }
+    culler
+}
+
 fn depth_prepass(
     ctx: &GpuContext,
     gpu_scene: &GpuScene,
@@ -380,8 +392,9 @@ fn depth_prepass(
     Ok((depth, bounds))
 }
 
-/// The lists' measures: false negatives, false positives, lengths, bytes, drops, tile masks.
-fn print_lists(m: &ListMetrics, out: &CullOutput) {
+/// The lists' measures: false negatives, false positives, lengths, bytes, drops, tile masks
+/// (and, with `occlusion`, the pairs culling by visibility dropped).
+fn print_lists(m: &ListMetrics, out: &CullOutput, occlusion: bool) {
     println!("  false negatives         {}", m.false_negatives);
     match m.false_positive_ratio {
         Some(r) => println!("  false-positive ratio    {r:.3} (lights evaluated / lights needed)"),
@@ -403,6 +416,13 @@ fn print_lists(m: &ListMetrics, out: &CullOutput) {
             (None, None) => "not used".into(),
         }
     );
+    if occlusion {
+        println!(
+            "  occluded pairs          {} (bin, light) pairs dropped by culling by visibility \
+             (the false negatives: against the shadowed exact set)",
+            out.occluded
+        );
+    }
 }
 
 fn print_earlier(earlier: &[ListMetrics], frames: u32) {

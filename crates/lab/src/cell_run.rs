@@ -187,12 +187,7 @@ pub(crate) fn run_cell(
                 c.visibility_pass,
             )
         })?;
-        let extent = f64::from(scene.light_bounds.extent().max_element());
-        let occ = manylights_scene::occluders::occluders(
-            &manylights_scene::ray::opaque_triangles(&scene),
-            extent * extent * 1e-3,
-            64,
-        );
+        let occ = manylights_scene::occluders::of_scene(&scene);
         tracing::debug!(cell = name, occluders = occ.len(), "occluders chosen");
         renderers.set_occluders(ctx, &occ);
     }

@@ -200,3 +200,10 @@ mod tests {
         assert_eq!(l.len(), 2, "{l:?}");
     }
 }
+
+/// A scene's occluders as culling by visibility takes them: the 64 largest opaque convex
+/// polygons of at least 1e-3 of its lights' extent squared.
+pub fn of_scene(scene: &crate::Scene) -> Vec<Occluder> {
+    let extent = f64::from(scene.light_bounds.extent().max_element());
+    occluders(&crate::ray::opaque_triangles(scene), extent * extent * 1e-3, 64)
+}
