@@ -29,3 +29,26 @@ struct Frame {
 fn view_dir(p: vec3<f32>) -> vec3<f32> {
     return normalize(frame.eye.xyz - p * frame.eye.w);
 }
+
+// The view-space point on the ray through NDC (x, y) at view-space z: with rows of
+// clip_from_view, x_c = P00 x + P02 z + P03 and w_c = P32 z + P33, so x = (ndc_x w_c - P02 z -
+// P03) / P00 (and y alike). Exact for perspective and orthographic cameras. (Also the deferred
+// lighting pass's position rebuild.)
+fn view_point(ndc: vec2<f32>, z: f32) -> vec3<f32> {
+    let m = frame.clip_from_view;
+    let w = m[2][3] * z + m[3][3];
+    return vec3<f32>((ndc.x * w - m[2][0] * z - m[3][0]) / m[0][0], (ndc.y * w - m[2][1] * z - m[3][1]) / m[1][1], z);
+}
+
+// NDC of a point of the screen in pixels (x right, y down).
+fn screen_ndc(q: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(q.x * frame.viewport.z * 2.0 - 1.0, 1.0 - q.y * frame.viewport.w * 2.0);
+}
+
+// The world point a fragment coordinate (pixels, NDC depth: `@builtin(position)`) stands for
+// (rows of clip_from_view; both projections).
+fn fragment_world(q: vec3<f32>) -> vec3<f32> {
+    let m = frame.clip_from_view;
+    let z = (m[3][2] - q.z * m[3][3]) / (q.z * m[2][3] - m[2][2]);
+    return (frame.world_from_view * vec4<f32>(view_point(screen_ndc(q.xy), z), 1.0)).xyz;
+}

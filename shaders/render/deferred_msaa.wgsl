@@ -12,8 +12,8 @@
 // of their own (each sample: their contribution in rgb, their transmittance in alpha), and each
 // sample's colour is composited under it before the average, as the reference blends the glass
 // over each sample.
-// With VISIBILITY (surface.wgsl), each distinct triangle of a pixel's samples is lit once
-// (shade_triangles_msaa).
+// With VISIBILITY (surface.wgsl), the same from the triangle ids (shade_triangles_msaa). The
+// MSAA reference (shade.reference_samples) lights every pixel this way.
 @group(2) @binding(0) var gb_normal_depth: texture_multisampled_2d<f32>;
 @group(2) @binding(1) var gb_material: texture_multisampled_2d<u32>;
 @group(2) @binding(3) var glass: texture_multisampled_2d<f32>;
@@ -46,11 +46,6 @@ fn deferred_shade_msaa(@builtin(global_invocation_id) id: vec3<u32>) {
 fn deferred_shade_msaa_zbin(@builtin(global_invocation_id) id: vec3<u32>) {
     shading_pixel = id.xy;
     shade_pixel_msaa(id.xy, true);
-}
-
-// NDC of a point of the screen in pixels (x right, y down).
-fn screen_ndc(q: vec2<f32>) -> vec2<f32> {
-    return vec2<f32>(q.x * frame.viewport.z * 2.0 - 1.0, 1.0 - q.y * frame.viewport.w * 2.0);
 }
 
 // The NDC depth of view-space z (rows of clip_from_view; exact for both projections).
@@ -129,47 +124,37 @@ fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
     textureStore(out_color, pixel, c / f32(DEPTH_SAMPLES));
 }
 
-// A visibility buffer's pixel: each distinct triangle among its samples' ids lit once, as a
-// multisampled raster pass shades a fragment once, at the mean of the positions of the samples
-// it covers (on the triangle, which is convex; the pixel centre where it covers them all),
-// looked up at that point's depth held within its samples' (the culling bounds cover those),
-// and weighted by its samples (each under the glass with GLASS).
+// A visibility buffer's pixel, lit as the G-buffer's is: where one triangle covers every
+// sample, once at the pixel centre (on the triangle: the samples' hull holds the centre), looked
+// up at that point's depth (between the samples'); elsewhere each covered sample at its own
+// position on its triangle, looked up at its depth (each under the glass with GLASS).
 fn shade_triangles_msaa(pixel: vec2<u32>, zbin: bool) {
+    let id0 = textureLoad(gb_material, pixel, 0).x;
+    var one = id0 != 0u;
+    for (var k = 1u; k < DEPTH_SAMPLES; k++) {
+        one = one && textureLoad(gb_material, pixel, k).x == id0;
+    }
+    if one {
+        let s = visibility_surface(screen_ndc(vec2<f32>(pixel) + 0.5), id0 - 1u);
+        var c = vec4<f32>(shade_point(pixel, world_ndc_depth(s.p), s, zbin), 1.0);
+        if GLASS {
+            c = all_under_glass(pixel, c);
+        }
+        textureStore(out_color, pixel, c);
+        return;
+    }
     var c = vec4<f32>(0.0);
-    var done = 0u;
     for (var k = 0u; k < DEPTH_SAMPLES; k++) {
-        if (done & (1u << k)) != 0u {
-            continue;
-        }
         let id = textureLoad(gb_material, pixel, k).x;
-        var mine = 0u;
-        var at = vec2<f32>(0.0);
-        var z_range = vec2<f32>(1.0, 0.0);
-        for (var j = k; j < DEPTH_SAMPLES; j++) {
-            if textureLoad(gb_material, pixel, j).x == id {
-                mine |= 1u << j;
-                at += sample_position(j);
-                let z = textureLoad(depth_tex, pixel, j);
-                z_range = vec2<f32>(min(z_range.x, z), max(z_range.y, z));
-            }
-        }
-        done |= mine;
-        let n = countOneBits(mine);
         var ck = vec4<f32>(0.0);
         if id != 0u {
-            let s = visibility_surface(screen_ndc(vec2<f32>(pixel) + at / f32(n)), id - 1u);
-            let z = clamp(world_ndc_depth(s.p), z_range.x, z_range.y);
-            ck = vec4<f32>(shade_point(pixel, z, s, zbin), 1.0);
+            let s = visibility_surface(screen_ndc(vec2<f32>(pixel) + sample_position(k)), id - 1u);
+            ck = vec4<f32>(shade_point(pixel, textureLoad(depth_tex, pixel, k), s, zbin), 1.0);
         }
         if GLASS {
-            for (var j = k; j < DEPTH_SAMPLES; j++) {
-                if (mine & (1u << j)) != 0u {
-                    c += under_glass(pixel, j, ck);
-                }
-            }
-        } else {
-            c += ck * f32(n);
+            ck = under_glass(pixel, k, ck);
         }
+        c += ck;
     }
     textureStore(out_color, pixel, c / f32(DEPTH_SAMPLES));
 }

@@ -1,7 +1,10 @@
-//! MSAA in the forward backends and the reference: a multisampled depth prepass, culling bounds
-//! over every sample, each fragment shaded once at its centroid and resolved. Forward over every
-//! strategy, and naive forward, match the reference at the same sample count within forward's
-//! tolerance: a light missing from the list of any shaded point would show there.
+//! MSAA in the backends and the reference: a multisampled depth prepass or G-buffer, culling
+//! bounds over every sample, resolved. The reference lights a pixel one fragment covers once,
+//! at its centre, and an edge pixel at each sample (shade.reference_samples), as deferred
+//! lighting and the visibility buffer do; forward shades an edge's fragments once each, at
+//! their centroids. Forward over every strategy matches naive forward within forward's
+//! tolerance (a light missing from the list of any shaded point would show there); deferred and
+//! the visibility buffer match the reference within mean FLIP 0.001.
 
 use manylights_cull::CullSettings;
 use manylights_gpu::GpuScene;
@@ -53,11 +56,11 @@ fn forward_msaa_matches_the_reference_at_its_sample_count() {
         let renderer = Renderer::with_samples(&ctx, &gpu_scene, 4).unwrap();
         assert_eq!(renderer.samples(), 4);
         let settings = CullSettings::for_camera(&s.camera);
-        let (_, e) = naive_against(&ctx, &renderer, &gpu_scene, &settings, (w, h), &reference);
-        assert!(
-            within_tolerance(&e, Backend::Forward),
-            "{name} naive MSAA 4: {e:?}"
-        );
+        // Naive forward's edge fragments, each lit once at its centroid, against the reference's
+        // samples lit one by one: mean FLIP 0.02-0.046 on lavapipe here.
+        let (naive, e) = naive_against(&ctx, &renderer, &gpu_scene, &settings, (w, h), &reference);
+        println!("{name} {w} x {h}: naive forward MSAA 4 against the reference {e:?}");
+        assert!(e.flip_mean < 0.08, "{name} naive MSAA 4: {e:?}");
         for strategy in strategies() {
             let what = format!("{name} {} forward MSAA 4", strategy.name());
             let out = renderer
@@ -70,7 +73,7 @@ fn forward_msaa_matches_the_reference_at_its_sample_count() {
                     (w, h),
                 )
                 .unwrap();
-            let e = compare(&out.color, &reference, 1.0);
+            let e = compare(&out.color, &naive.color, 1.0);
             assert!(within_tolerance(&e, Backend::Forward), "{what}: {e:?}");
             assert_eq!(out.lists.as_ref().unwrap().dropped, 0, "{what}");
             assert_eq!(out.depth.sample_count(), 4, "{what}: the depth buffer");
@@ -83,14 +86,12 @@ fn forward_msaa_matches_the_reference_at_its_sample_count() {
 /// Deferred lighting over a 4x multisampled G-buffer, every strategy: the same image as the
 /// same pass over lists that hold every light everywhere (a slack that grows every light past
 /// the screen), to forward's tolerance: the lists hold every light that reaches a point the
-/// pass shades, a pixel's centre or, at edges, each sample. Against the reference at the same
-/// count it differs where it lights samples apart (an edge's samples lit one by one where the
-/// reference lights each fragment once, at its centroid; next to a light that is much of the
-/// peak): bounded by mean FLIP, and the G-buffer is counted at every sample.
-/// The same for the visibility buffer (`shade_triangles_msaa`: each distinct triangle of an
-/// edge pixel lit once, at the mean of its samples' positions). Measured on lavapipe against the
-/// reference: mean FLIP 0.046 (deferred) and 0.050 (visibility) at 70 x 45 in the atrium, where
-/// lights next to walls make steep gradients within a pixel.
+/// pass shades, a pixel's centre or, at edges, each sample; and the G-buffer is counted at every
+/// sample. The same for the visibility buffer (`shade_triangles_msaa`). Against the reference
+/// at the same count (which lights the same points) both stay within mean FLIP 0.02 here, in
+/// the atrium at 70 x 45, where lights next to curved walls make steep gradients within a
+/// pixel: measured on lavapipe 0.008 (deferred, whose G-buffer holds a fragment's normal at its
+/// centroid where the reference interpolates it at each sample) and 0.006 (visibility).
 #[test]
 fn deferred_msaa_lights_every_sample_its_lists_need() {
     let ctx = common::gpu();
@@ -124,7 +125,7 @@ fn deferred_msaa_lights_every_sample_its_lists_need() {
             let e = compare(&all.color, &reference, 1.0);
             flip_worst[b] = flip_worst[b].max(e.flip_mean);
             assert!(
-                e.flip_mean < 0.06,
+                e.flip_mean < 0.02,
                 "{name}: {} MSAA against the reference {e:?}",
                 backend.name()
             );
@@ -263,4 +264,45 @@ fn sample_counts_the_device_lacks_are_errors() {
         .unwrap_or_else(|| panic!("{} rendered with MSAA", backend.name()))
         .to_string();
     assert!(e.contains("MSAA") && e.contains(backend.name()), "{e}");
+}
+
+/// Issue 68's match: in the pillars, whose thin columns make edges everywhere, deferred lighting
+/// and the visibility buffer with MSAA 4 are within mean FLIP 0.001 of the reference at the
+/// same count at 192 x 108 and 640 x 360 (lavapipe has no MSAA 8; the H200's figures at 8 and
+/// at 1280 x 720 are in docs/BENCHMARKS.md, "MSAA"); forward, which lights an edge's
+/// fragments once each at their centroids, is measured beside them and held within 0.05.
+#[test]
+fn msaa_deferred_and_visibility_match_the_reference() {
+    let ctx = common::gpu();
+    for (w, h) in [(192, 108), (640, 360)] {
+        let s = scene("pillars");
+        let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+        let reference = ReferenceRenderer::with_samples(&ctx, &gpu_scene, 4)
+            .unwrap()
+            .render(&ctx, &gpu_scene, w, h)
+            .unwrap()
+            .color;
+        let renderer = Renderer::with_samples(&ctx, &gpu_scene, 4).unwrap();
+        let settings = CullSettings::for_camera(&s.camera);
+        for backend in [Backend::Forward, Backend::Deferred, Backend::Visibility] {
+            let out = renderer
+                .render(
+                    &ctx,
+                    &gpu_scene,
+                    backend,
+                    &strategies()[3],
+                    &settings,
+                    (w, h),
+                )
+                .unwrap();
+            let e = compare(&out.color, &reference, 1.0);
+            println!("pillars {w} x {h} {} MSAA 4: {e:?}", backend.name());
+            let bound = if backend == Backend::Forward {
+                0.05
+            } else {
+                1e-3
+            };
+            assert!(e.flip_mean <= bound, "{w} x {h} {}: {e:?}", backend.name());
+        }
+    }
 }

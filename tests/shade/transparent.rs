@@ -62,7 +62,8 @@ fn deferred_msaa_error_without_glass(
 }
 
 /// Every strategy, forward, deferred and visibility, with one and 4 samples a pixel, over glass: the image
-/// within forward's (deferred's) tolerance of the reference, and the exact oracle, which checks
+/// within forward's (deferred's) tolerance of the reference (forward with MSAA within its edges'
+/// difference, tests/shade/msaa.rs), and the exact oracle, which checks
 /// every visible transparent fragment as well as the opaque samples, finds no false negative:
 /// culling over the lookup bounds reaches to the nearest glass. Deferred with MSAA draws the
 /// glass into a layer of its own first, which its lighting composites over each sample as the
@@ -102,6 +103,10 @@ fn forward_and_deferred_shade_glass_over_exact_lists() {
                             e.flip_mean < 0.06 && e.flip_mean <= own.flip_mean + 5e-4,
                             "{what}: {e:?}, without the glass {own:?}"
                         );
+                    } else if samples > 1 {
+                        // Forward lights an edge's fragments at their centroids, the reference
+                        // each sample (tests/shade/msaa.rs; measured 0.041 in the atrium).
+                        assert!(e.flip_mean < 0.08, "{what}: {e:?}");
                     } else {
                         assert!(within_tolerance(&e, backend), "{what}: {e:?}");
                     }
@@ -173,7 +178,13 @@ fn naive_forward_blends_glass_as_the_reference_does() {
                 (w, h),
                 &reference.color,
             );
-            assert!(within_tolerance(&e, Backend::Forward), "{what}: {e:?}");
+            // With MSAA naive forward lights an edge's fragments at their centroids, the
+            // reference each sample (tests/shade/msaa.rs).
+            if samples > 1 {
+                assert!(e.flip_mean < 0.08, "{what}: {e:?}");
+            } else {
+                assert!(within_tolerance(&e, Backend::Forward), "{what}: {e:?}");
+            }
             // The glass shows: pixels differ from the scene without it.
             let plain_scene = GpuScene::upload(&ctx, &plain, &plain.camera, w, h).unwrap();
             let without = ReferenceRenderer::with_samples(&ctx, &plain_scene, samples)

@@ -1,8 +1,12 @@
 //! The brute-force reference renderer (`shade.reference`): `prepass.depth`, then forward
 //! shading of every light at every covered pixel, into an `Rgba32Float` HDR target, with the
 //! surface position and shading normal of every pixel for the CPU oracles. With MSAA
-//! ([`ReferenceRenderer::with_samples`]) it shades each fragment once, at its centroid, as the
-//! forward backends do, and resolves: the reference of forward frames at the same sample count.
+//! ([`ReferenceRenderer::with_samples`]) a pixel one fragment covers entirely is shaded once,
+//! at its centre, and every other pixel (an edge) at each covered sample's own position
+//! (`shade.reference_samples`), then resolved: what deferred lighting and the visibility buffer
+//! compute, on any GPU. Forward shading with MSAA shades an edge's fragments once each, at a
+//! centroid of the implementation's choice, and is measured against it (docs/STRATEGIES.md,
+//! "MSAA").
 
 use manylights_gpu::pipeline;
 use manylights_gpu::prepass::{DepthPrepass, depth_target_msaa};
@@ -48,6 +52,100 @@ pub struct ReferenceFrame {
     pub timings: Option<Vec<PassTiming>>,
 }
 
+/// With MSAA: the colour, position and normal targets multisampled, and the image at each
+/// sample (the per-sample pass's, which the glass is blended into).
+fn msaa_targets(ctx: &GpuContext, size: (u32, u32), samples: u32) -> [wgpu::TextureView; 4] {
+    [
+        "reference.color_msaa",
+        "reference.position_msaa",
+        "reference.normal_msaa",
+        "reference.color_samples",
+    ]
+    .map(|label| {
+        pipeline::texture_2d_msaa(
+            &ctx.device,
+            label,
+            size,
+            HDR,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            samples,
+        )
+        .create_view(&Default::default())
+    })
+}
+
+/// A reference render pass: its colour attachments are (view, where it resolves, whether it is
+/// cleared); `transparent`: it draws the transparent surfaces.
+struct ReferencePass<'a> {
+    label: &'a str,
+    pipeline: &'a wgpu::RenderPipeline,
+    group: Option<wgpu::BindGroup>,
+    targets: Vec<(&'a wgpu::TextureView, Option<&'a wgpu::TextureView>, bool)>,
+    transparent: bool,
+}
+
+impl ReferencePass<'_> {
+    /// Encodes the pass over the depth buffer `depth`, timed.
+    fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        timer: &mut GpuTimer,
+        scene: &GpuScene,
+        depth: &wgpu::TextureView,
+    ) {
+        let attachments: Vec<_> = self
+            .targets
+            .iter()
+            .map(|&(view, resolve_target, clear)| {
+                Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target,
+                    ops: wgpu::Operations {
+                        load: if clear {
+                            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
+                        } else {
+                            wgpu::LoadOp::Load
+                        },
+                        store: wgpu::StoreOp::Store,
+                    },
+                })
+            })
+            .collect();
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(self.label),
+            color_attachments: &attachments,
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Load,
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: timer.render_pass(self.label),
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(self.pipeline);
+        if let Some(group) = &self.group {
+            pass.set_bind_group(1, group, &[]);
+        }
+        if self.transparent {
+            scene.draw_transparent(&mut pass);
+        } else {
+            scene.draw(&mut pass);
+        }
+    }
+}
+
+/// `shade.reference_samples` and the layout of what it reads (the opaque pass's multisampled
+/// colour and position).
+struct PerSample {
+    pipeline: wgpu::RenderPipeline,
+    layout: wgpu::BindGroupLayout,
+}
+
 /// Reference renderer pipelines for one uploaded scene layout.
 pub struct ReferenceRenderer {
     prepass: DepthPrepass,
@@ -56,6 +154,8 @@ pub struct ReferenceRenderer {
     surface: wgpu::RenderPipeline,
     /// Transparent surfaces, blended into the colour target.
     transparent: wgpu::RenderPipeline,
+    /// With MSAA: `shade.reference_samples`, the image at each sample.
+    per_sample: Option<PerSample>,
     samples: u32,
     shadows: Shadows,
 }
@@ -124,6 +224,9 @@ impl ReferenceRenderer {
             blend: None,
             write_mask: wgpu::ColorWrites::empty(),
         });
+        // With MSAA the glass is blended into the per-sample image alone (the position and
+        // normal are resolved by the opaque pass).
+        let glass = [pipeline::blended_target(HDR), masked.clone(), masked];
         let transparent = pipeline::raster_with(
             &ctx.device,
             "shade.reference_transparent",
@@ -131,17 +234,46 @@ impl ReferenceRenderer {
             &[&scene.layout],
             Some((
                 "fs_reference_transparent",
-                &[pipeline::blended_target(HDR), masked.clone(), masked],
+                &glass[..if samples > 1 { 1 } else { 3 }],
             )),
             pipeline::DepthTest::Less,
             samples,
             &constants,
         );
+        let per_sample = (samples > 1).then(|| {
+            let texture = wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: true,
+            };
+            let fragment = wgpu::ShaderStages::FRAGMENT;
+            let layout = ctx
+                .device
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some("shade.reference_samples"),
+                    entries: &[
+                        pipeline::entry(0, fragment, texture),
+                        pipeline::entry(1, fragment, texture),
+                    ],
+                });
+            let pipeline = pipeline::raster_per_sample(
+                &ctx.device,
+                "shade.reference_samples",
+                &module,
+                &[&scene.layout, &layout],
+                Some(("fs_reference_samples", &[pipeline::target(HDR)])),
+                pipeline::DepthTest::Equal,
+                samples,
+                &constants,
+            );
+            PerSample { pipeline, layout }
+        });
         Self {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             pipeline,
             surface,
             transparent,
+            per_sample,
             samples,
             shadows,
         }
@@ -224,26 +356,9 @@ impl ReferenceRenderer {
         let samples = self.samples;
         let depth = depth_target_msaa(ctx, width, height, samples);
         let views = [&color, &position, &normal].map(|t| t.create_view(&Default::default()));
-        let msaa = (samples > 1).then(|| {
-            [
-                "reference.color_msaa",
-                "reference.position_msaa",
-                "reference.normal_msaa",
-            ]
-            .map(|label| {
-                pipeline::texture_2d_msaa(
-                    &ctx.device,
-                    label,
-                    (width, height),
-                    HDR,
-                    wgpu::TextureUsages::RENDER_ATTACHMENT,
-                    samples,
-                )
-                .create_view(&Default::default())
-            })
-        });
+        let msaa = (samples > 1).then(|| msaa_targets(ctx, (width, height), samples));
         let depth_view = depth.create_view(&Default::default());
-        let mut timer = GpuTimer::new(ctx, 3);
+        let mut timer = GpuTimer::new(ctx, 4);
         let mut encoder = ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
@@ -251,75 +366,88 @@ impl ReferenceRenderer {
             });
         self.prepass
             .encode(&mut encoder, scene, &depth_view, &mut timer);
-        {
-            // With MSAA, each target drawn multisampled and resolved into the single-sample one
-            // by the last pass (the transparent surfaces' where the scene has them).
-            let transparent = scene.has_transparent() && !surfaces_only;
-            let label = if surfaces_only {
-                "shade.reference_surface"
-            } else {
-                "shade.reference"
-            };
-            let attachment = |k: usize, last: bool, clear: bool| {
-                let (view, resolve_target) = match &msaa {
-                    Some(ms) => (&ms[k], last.then_some(&views[k])),
-                    None => (&views[k], None),
-                };
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target,
-                    ops: wgpu::Operations {
-                        load: if clear {
-                            wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT)
-                        } else {
-                            wgpu::LoadOp::Load
-                        },
-                        store: if resolve_target.is_some() {
-                            wgpu::StoreOp::Discard
-                        } else {
-                            wgpu::StoreOp::Store
-                        },
-                    },
-                })
-            };
-            let passes: &[(&str, &wgpu::RenderPipeline, bool)] = if transparent {
-                &[
-                    (label, opaque, false),
-                    ("shade.reference_transparent", &self.transparent, true),
-                ]
-            } else {
-                &[(label, opaque, false)]
-            };
-            for (k, &(label, pipeline, transparent_pass)) in passes.iter().enumerate() {
-                let last = k + 1 == passes.len();
-                let first = k == 0;
-                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                    label: Some(label),
-                    color_attachments: &[
-                        attachment(0, last, first),
-                        attachment(1, last, first),
-                        attachment(2, last, first),
-                    ],
-                    depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                        view: &depth_view,
-                        depth_ops: Some(wgpu::Operations {
-                            load: wgpu::LoadOp::Load,
-                            store: wgpu::StoreOp::Store,
-                        }),
-                        stencil_ops: None,
-                    }),
-                    timestamp_writes: timer.render_pass(label),
-                    occlusion_query_set: None,
-                    multiview_mask: None,
+        let transparent = scene.has_transparent() && !surfaces_only;
+        let label = if surfaces_only {
+            "shade.reference_surface"
+        } else {
+            "shade.reference"
+        };
+        let per_sample = self.per_sample.as_ref().filter(|_| !surfaces_only);
+        let mut passes: Vec<ReferencePass<'_>> = Vec::new();
+        match (&msaa, per_sample) {
+            (None, _) => {
+                let all = |clear| views.iter().map(|v| (v, None, clear)).collect::<Vec<_>>();
+                passes.push(ReferencePass {
+                    label,
+                    pipeline: opaque,
+                    group: None,
+                    targets: all(true),
+                    transparent: false,
                 });
-                pass.set_pipeline(pipeline);
-                if transparent_pass {
-                    scene.draw_transparent(&mut pass);
-                } else {
-                    scene.draw(&mut pass);
+                if transparent {
+                    passes.push(ReferencePass {
+                        label: "shade.reference_transparent",
+                        pipeline: &self.transparent,
+                        group: None,
+                        targets: all(false),
+                        transparent: true,
+                    });
                 }
             }
+            // The surfaces alone: drawn multisampled and resolved.
+            (Some(ms), None) => {
+                passes.push(ReferencePass {
+                    label,
+                    pipeline: opaque,
+                    group: None,
+                    targets: (0..3).map(|k| (&ms[k], Some(&views[k]), true)).collect(),
+                    transparent: false,
+                });
+            }
+            // The fragments (their colour kept for the per-sample pass, the position and
+            // normal resolved), the image at each sample, the glass over it, resolved.
+            (Some(ms), Some(ps)) => {
+                passes.push(ReferencePass {
+                    label,
+                    pipeline: opaque,
+                    group: None,
+                    targets: vec![
+                        (&ms[0], None, true),
+                        (&ms[1], Some(&views[1]), true),
+                        (&ms[2], Some(&views[2]), true),
+                    ],
+                    transparent: false,
+                });
+                let group = pipeline::group(
+                    &ctx.device,
+                    "shade.reference_samples",
+                    &ps.layout,
+                    &[
+                        wgpu::BindingResource::TextureView(&ms[0]),
+                        wgpu::BindingResource::TextureView(&ms[1]),
+                    ],
+                );
+                let resolve = (!transparent).then_some(&views[0]);
+                passes.push(ReferencePass {
+                    label: "shade.reference_samples",
+                    pipeline: &ps.pipeline,
+                    group: Some(group),
+                    targets: vec![(&ms[3], resolve, true)],
+                    transparent: false,
+                });
+                if transparent {
+                    passes.push(ReferencePass {
+                        label: "shade.reference_transparent",
+                        pipeline: &self.transparent,
+                        group: None,
+                        targets: vec![(&ms[3], Some(&views[0]), false)],
+                        transparent: true,
+                    });
+                }
+            }
+        }
+        for pass in &passes {
+            pass.encode(&mut encoder, &mut timer, scene, &depth_view);
         }
         timer.resolve(&mut encoder);
         ctx.submit_and_wait(encoder, "reference render")?;

@@ -91,16 +91,6 @@ fn linear_depth(z: f32) -> f32 {
     return -(b - d * z) / (c * z - a);
 }
 
-// The view-space point on the ray through NDC (x, y) at view-space z: with rows of
-// clip_from_view, x_c = P00 x + P02 z + P03 and w_c = P32 z + P33, so x = (ndc_x w_c - P02 z -
-// P03) / P00 (and y alike). Exact for perspective and orthographic cameras. (Also the deferred
-// lighting pass's position rebuild.)
-fn view_point(ndc: vec2<f32>, z: f32) -> vec3<f32> {
-    let m = frame.clip_from_view;
-    let w = m[2][3] * z + m[3][3];
-    return vec3<f32>((ndc.x * w - m[2][0] * z - m[3][0]) / m[0][0], (ndc.y * w - m[2][1] * z - m[3][1]) / m[1][1], z);
-}
-
 // NDC rectangle (x0, y0, x1, y1) of tile `tile`, clamped to the image (the last row and
 // column may be partial when the resolution is not a multiple of the tile size).
 fn tile_ndc(tile: vec2<u32>) -> vec4<f32> {
