@@ -354,7 +354,9 @@ fn culler_for(
         Culler::with_samples(ctx, gpu_scene, samples)
     };
     if let Some(scene) = occluders_of {
-        culler.set_occluders(ctx, &manylights_scene::occluders::of_scene(scene));
+        culler
+            .set_occluders(ctx, &manylights_scene::occluders::of_scene(scene))
+            .expect("of_scene takes at most OCCLUDERS_MAX");
     }
     culler
 }

@@ -58,7 +58,7 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
         let (mut gs, depth, _) = common::depth_prepass(&ctx, &scene, &camera, w, h);
         gs.build_bvh(&ctx, &scene).unwrap();
         let mut culler = Culler::new(&ctx, &gs);
-        culler.set_occluders(&ctx, &occ);
+        culler.set_occluders(&ctx, &occ).unwrap();
         let frame = GpuFrame::new(&camera, w, h, scene.lights.len() as u32);
         let view = CellView {
             clip_from_view: frame.clip_from_view.as_dmat4(),
@@ -113,9 +113,10 @@ fn occlusion_drops_only_hidden_lights_and_misses_none_the_shadowed_light_needs()
                 if all.len() == kept.len() {
                     continue;
                 }
-                let cell = cell_corners(&on.params, &view, (&td, &occupancy), bin).unwrap_or_else(|| {
-                    panic!("{what}: bin {bin} drops lights with no covered pixel")
-                });
+                let cell =
+                    cell_corners(&on.params, &view, (&td, &occupancy), bin).unwrap_or_else(|| {
+                        panic!("{what}: bin {bin} drops lights with no covered pixel")
+                    });
                 let kept: HashSet<u32> = kept.iter().copied().collect();
                 for &l in all {
                     let p = scene.lights[l as usize].position.as_dvec3();
@@ -210,7 +211,16 @@ fn occlusion_refuses_zbin_and_a_culler_without_occluders() {
         e.contains("occlusion") && e.contains("set_occluders"),
         "{e}"
     );
-    culler.set_occluders(&ctx, &[]);
+    // More occluders than the pass's workgroup holds: an error naming the field and the bound.
+    let many = manylights_scene::occluders::of_scene(&scene);
+    assert!(!many.is_empty());
+    let many: Vec<_> = many.iter().cycle().take(65).cloned().collect();
+    let e = culler.set_occluders(&ctx, &many).unwrap_err().to_string();
+    assert!(
+        e.contains("occluders = 65") && e.contains("at most 64"),
+        "{e}"
+    );
+    culler.set_occluders(&ctx, &[]).unwrap();
     let zbin = Strategy::ZBin {
         tile_size: 8,
         bins: 32,

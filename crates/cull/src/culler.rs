@@ -10,7 +10,7 @@ use std::sync::OnceLock;
 
 use manylights_gpu::{GpuContext, GpuError, GpuScene};
 
-use crate::blocks::occlusion::Occlusion;
+use crate::blocks::occlusion::{OCCLUDERS_MAX, Occlusion};
 use crate::frame::{self, Done, Frame, Repeat};
 use crate::input_pipelines::InputPipelines;
 use crate::layout::{GpuCullParams, LINE_THREADS_MIN};
@@ -210,16 +210,27 @@ impl Culler {
     }
 
     /// The scene's occluders for culling by visibility (`CullSettings::occlusion`), as
-    /// [`manylights_scene::occluders::occluders`] chooses them; none drops nothing.
+    /// [`manylights_scene::occluders::occluders`] chooses them, at most [`OCCLUDERS_MAX`];
+    /// none drops nothing.
     pub fn set_occluders(
         &mut self,
         ctx: &GpuContext,
         occluders: &[manylights_scene::occluders::Occluder],
-    ) {
+    ) -> Result<(), CullError> {
+        if occluders.len() > OCCLUDERS_MAX {
+            return Err(CullError::InvalidParameter {
+                field: "occluders",
+                value: occluders.len().to_string(),
+                accepted: "at most 64 (cull.occlusion keeps a bin's candidate occluders in \
+                           workgroup memory, one a thread; occluders::of_scene takes the 64 \
+                           largest)",
+            });
+        }
         match &mut self.occlusion {
             Some(o) => o.set(ctx, occluders),
             None => self.occlusion = Some(Occlusion::new(ctx, &self.scene_layout, occluders)),
         }
+        Ok(())
     }
 
     /// The pipelines over `depth`: its own input's, or where it is an `R32Float` depth a

@@ -189,7 +189,7 @@ pub(crate) fn run_cell(
         })?;
         let occ = manylights_scene::occluders::of_scene(&scene);
         tracing::debug!(cell = name, occluders = occ.len(), "occluders chosen");
-        renderers.set_occluders(ctx, &occ);
+        renderers.set_occluders(ctx, &occ)?;
     }
     let (renderer, unshadowed) = stage(name, "pipelines built", || {
         renderers.get_with_unshadowed(

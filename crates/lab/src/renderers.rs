@@ -32,10 +32,11 @@ impl Renderers {
         &mut self,
         ctx: &GpuContext,
         occluders: &[manylights_scene::occluders::Occluder],
-    ) {
+    ) -> Result<(), manylights_cull::CullError> {
         for (_, r) in &mut self.0 {
-            r.culler.set_occluders(ctx, occluders);
+            r.culler.set_occluders(ctx, occluders)?;
         }
+        Ok(())
     }
 
     /// A renderer for `scene` at `samples` samples a pixel into a lit image of format `hdr`

@@ -6,8 +6,12 @@
 // the occupancy words; an unoccupied cluster's list is left as it is) or else its slice's
 // boundaries, each widened by 1e-4 of its depth: the convex hull of
 // its eight corners holds every surface point its pixels shade. A workgroup a bin takes its
-// list 64 entries at a time, each thread a light against every occluder (occluder_hides), then
-// writes the kept ones at their rank among the kept; cull_stats[10] counts the dropped.
+// list 64 entries at a time, each thread a light against the occluders that can hide anything
+// from the cell (occluder_hides), then writes the kept ones at their rank among the kept;
+// cull_stats[10] counts the dropped. The occluders that can: those whose plane has every corner
+// of the cell beyond it on one side by the smallest spare any light's test gives it (a thread
+// an occluder, once a bin, into workgroup memory): occluder_hides asks that of every corner
+// with a spare at least as large, so no occluder left out hides a light.
 
 @group(1) @binding(2) var<storage, read> tile_depth: array<TileDepth>;
 @group(1) @binding(8) var<storage, read> occupancy: array<u32>;
@@ -21,6 +25,10 @@
 var<workgroup> wg_cell: array<vec3<f32>, 8>;
 var<workgroup> wg_range: vec2<u32>;
 var<workgroup> wg_scan: array<u32, 64>;
+// The occluders that can hide a light from the cell (cell_beyond), and how many.
+var<workgroup> wg_occluders: array<Occluder, 64>;
+var<workgroup> wg_useful: atomic<u32>;
+var<workgroup> wg_useful_count: u32;
 
 // The world-space corners of bin `bin`'s cell into wg_cell, or false where it has no covered
 // pixel (its list is then left as it is).
@@ -61,9 +69,13 @@ fn occlusion_cell(bin: u32) -> bool {
     return true;
 }
 
-// Whether an occluder hides light `l` from every point of the workgroup's cell.
-fn occlusion_hidden(l: u32) -> bool {
-    let p = lights[l].position;
+// The workgroup's cell, and the largest magnitude of its corners' coordinates (at least 1).
+struct CellCorners {
+    corners: array<vec3<f32>, 8>,
+    far: f32,
+}
+
+fn cell_corners() -> CellCorners {
     var cell: array<vec3<f32>, 8>;
     var far = 1.0;
     for (var c = 0u; c < 8u; c++) {
@@ -71,10 +83,37 @@ fn occlusion_hidden(l: u32) -> bool {
         let a = abs(cell[c]);
         far = max(far, max(a.x, max(a.y, a.z)));
     }
+    return CellCorners(cell, far);
+}
+
+// Whether every corner of the cell lies beyond occluder o's plane on one side, each by its
+// spare at `margin` (occluder_hides's first test, for any light on the other side).
+fn cell_beyond(o: Occluder, cell: array<vec3<f32>, 8>, margin: f32) -> bool {
+    let n = o.normal.xyz;
+    var side = 0.0;
+    for (var c = 0u; c < 8u; c++) {
+        let q = cell[c];
+        let a = abs(q);
+        let spare = margin + SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0));
+        let sq = dot(n, q - o.corners[0].xyz);
+        if c == 0u {
+            side = sign(sq);
+        }
+        if sq * side <= spare {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Whether an occluder hides light `l` from every point of the workgroup's cell.
+fn occlusion_hidden(l: u32, useful: u32) -> bool {
+    let p = lights[l].position;
+    let cell = cell_corners();
     let a = abs(p);
-    let margin = 1e-4 * max(far, max(a.x, max(a.y, a.z)));
-    for (var k = 0u; k < occlusion.x; k++) {
-        if occluder_hides(occluders[k], p, cell, margin) {
+    let margin = 1e-4 * max(cell.far, max(a.x, max(a.y, a.z)));
+    for (var k = 0u; k < useful; k++) {
+        if occluder_hides(wg_occluders[k], p, cell.corners, margin) {
             return true;
         }
     }
@@ -98,6 +137,20 @@ fn occlusion_filter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
     if range.y == 0u {
         return;
     }
+    // The occluders that can hide a light from the cell: at the smallest margin any light's
+    // test takes (1e-4 of the cell's largest coordinate), occluder_hides's corner test.
+    if i < occlusion.x {
+        let cell = cell_corners();
+        let o = occluders[i];
+        if cell_beyond(o, cell.corners, 1e-4 * cell.far) {
+            wg_occluders[atomicAdd(&wg_useful, 1u)] = o;
+        }
+    }
+    workgroupBarrier();
+    if i == 0u {
+        wg_useful_count = atomicLoad(&wg_useful);
+    }
+    let useful = workgroupUniformLoad(&wg_useful_count);
     var kept_total = 0u;
     for (var base = 0u; base < range.y; base += 64u) {
         let k = base + i;
@@ -105,7 +158,7 @@ fn occlusion_filter(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invoca
         var keep = 0u;
         if k < range.y {
             light = out_indices[range.x + k];
-            keep = select(1u, 0u, occlusion_hidden(light));
+            keep = select(1u, 0u, occlusion_hidden(light, useful));
         }
         // Inclusive scan of the kept flags (Hillis and Steele).
         wg_scan[i] = keep;

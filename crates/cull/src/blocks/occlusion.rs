@@ -21,6 +21,10 @@ use crate::Kernel;
 use crate::culler::entry;
 use crate::frame::Frame;
 use crate::layout::{GROUPS_X, GpuCullParams, GpuTileDepth};
+
+/// The most occluders the pass takes: a thread of its workgroup an occluder, each bin's
+/// candidates in workgroup memory (`occlusion_filter.wgsl`).
+pub const OCCLUDERS_MAX: usize = 64;
 use crate::occlusion::GpuOccluder;
 use crate::program::{DepthInput, Program};
 use crate::record::{Buf, Step};
