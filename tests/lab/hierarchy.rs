@@ -228,7 +228,7 @@ fn sampled_bands_match_their_reference_with_shorter_lists() {
 /// (`BAND_POINTS`: 36 bytes a light in workgroup memory, four rejects at a time) in the loops
 /// over lists that have one (deferred's tiles, clusters and bins, forward's), with MSAA too,
 /// each equal to the brute-force reference of the same hierarchy (which shades every light on
-/// the general path) with no false negatives.
+/// the general path; forward with MSAA within its edges' difference) with no false negatives.
 #[test]
 fn band_points_match_their_reference_on_every_path() {
     let ctx = common::gpu();
@@ -250,6 +250,7 @@ fn band_points_match_their_reference_on_every_path() {
                 (label: "deferred-scatter", backend: Deferred, strategy: TiledScatter(tile_size: 16)),
                 (label: "forward-gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
                 (label: "forward-clusters-msaa", backend: Forward, strategy: Clustered(tile_size: 16, slices: 16), msaa: 4),
+                (label: "deferred-clusters-msaa", backend: Deferred, strategy: Clustered(tile_size: 16, slices: 16), msaa: 4),
                 (label: "visibility-clusters", backend: Visibility, strategy: Clustered(tile_size: 16, slices: 16)),
             ],
         ),
@@ -257,7 +258,7 @@ fn band_points_match_their_reference_on_every_path() {
     let e = Experiment::parse(src, Path::new("band-points.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
-    assert_eq!(s.rows.len(), 6);
+    assert_eq!(s.rows.len(), 7);
     for r in &s.rows {
         let cell = &r.cell;
         assert_eq!(
@@ -267,7 +268,16 @@ fn band_points_match_their_reference_on_every_path() {
         );
         assert_eq!(r.nonfinite_pixels, 0, "{cell}: a pipeline for other lights");
         let flip = r.flip_mean.expect("the same hierarchy's reference");
-        let tolerance = if r.backend == "forward" { 1e-6 } else { 1e-3 };
+        // Forward with MSAA lights an edge's fragments at their centroids where the reference
+        // lights each sample (tests/shade/msaa.rs), and deferred's G-buffer holds a fragment's
+        // normal where the reference interpolates it at each edge sample (0.0026 here on
+        // lavapipe): their lists are checked by the false negatives.
+        let tolerance = match (r.backend.as_str(), r.msaa) {
+            ("forward", 1) => 1e-6,
+            ("forward", _) => 0.05,
+            (_, 1) => 1e-3,
+            _ => 0.01,
+        };
         assert!(
             flip <= tolerance,
             "{cell}: mean FLIP {flip} against its reference"
