@@ -45,10 +45,23 @@ fn screen_ndc(q: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(q.x * frame.viewport.z * 2.0 - 1.0, 1.0 - q.y * frame.viewport.w * 2.0);
 }
 
-// The world point a fragment coordinate (pixels, NDC depth: `@builtin(position)`) stands for
-// (rows of clip_from_view; both projections).
-fn fragment_world(q: vec3<f32>) -> vec3<f32> {
-    let m = frame.clip_from_view;
-    let z = (m[3][2] - q.z * m[3][3]) / (q.z * m[2][3] - m[2][2]);
-    return (frame.world_from_view * vec4<f32>(view_point(screen_ndc(q.xy), z), 1.0)).xyz;
+// Where sample k of a pixel of `samples` samples lies within it: the standard sample positions
+// of Vulkan (standardSampleLocations) and Direct3D for 2, 4 and 8 samples, the centre for one
+// (what the H200 and lavapipe use: examples/sample_positions.rs).
+fn standard_sample_position(samples: u32, k: u32) -> vec2<f32> {
+    if samples == 2u {
+        var p2 = array<vec2<f32>, 2>(vec2<f32>(0.75, 0.75), vec2<f32>(0.25, 0.25));
+        return p2[k];
+    }
+    if samples == 4u {
+        var p4 = array<vec2<f32>, 4>(vec2<f32>(0.375, 0.125), vec2<f32>(0.875, 0.375), vec2<f32>(0.125, 0.625), vec2<f32>(0.625, 0.875));
+        return p4[k];
+    }
+    if samples == 8u {
+        var p8 = array<vec2<f32>, 8>(
+            vec2<f32>(0.5625, 0.3125), vec2<f32>(0.4375, 0.6875), vec2<f32>(0.8125, 0.5625), vec2<f32>(0.3125, 0.1875),
+            vec2<f32>(0.1875, 0.8125), vec2<f32>(0.0625, 0.4375), vec2<f32>(0.6875, 0.9375), vec2<f32>(0.9375, 0.0625));
+        return p8[k];
+    }
+    return vec2<f32>(0.5, 0.5);
 }

@@ -27,23 +27,3 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.material = v.material;
     return out;
 }
-
-// The same stage for a pass shaded at every sample (the MSAA reference's edge samples,
-// shade.reference_samples): the point and normal interpolated at the sample, the position
-// computed as vs_main's (bit-identical depth).
-struct VertexOutSample {
-    @builtin(position) @invariant clip: vec4<f32>,
-    @location(0) @interpolate(perspective, sample) world: vec3<f32>,
-    @location(1) @interpolate(perspective, sample) normal: vec3<f32>,
-    @location(2) @interpolate(flat) material: u32,
-}
-
-@vertex
-fn vs_sample(v: VertexIn) -> VertexOutSample {
-    var out: VertexOutSample;
-    out.clip = frame.clip_from_world * vec4<f32>(v.position, 1.0);
-    out.world = v.position;
-    out.normal = v.normal;
-    out.material = v.material;
-    return out;
-}

@@ -20,36 +20,6 @@ fn fs_reference(in: VertexOut) -> ReferenceOut {
     return ReferenceOut(vec4<f32>(c, 1.0), vec4<f32>(in.world, 1.0), vec4<f32>(n, f32(in.material)));
 }
 
-// shade.reference_samples, with MSAA after shade.reference (tested `Equal`, shaded at every
-// sample: VertexOutSample): the reference's image at each sample. A pixel one fragment covers
-// entirely (every sample holds the same stored point) keeps that fragment's radiance, shaded
-// once at the pixel centre (the centroid of a fragment covering every sample); elsewhere (an
-// edge) each sample is shaded at its own position, with the point and normal interpolated
-// there. This is what deferred lighting and the visibility buffer compute from their surface
-// buffers, and needs no choice the implementation makes: where a `centroid` input is
-// evaluated within a partly covered pixel, and how a rasteriser splits an edge pixel's
-// coverage into fragments (llvmpipe shades some edge samples one by one), differ between GPUs.
-@group(1) @binding(0) var fragment_color: texture_multisampled_2d<f32>;
-@group(1) @binding(1) var fragment_position: texture_multisampled_2d<f32>;
-
-@fragment @early_depth_test(force)
-fn fs_reference_samples(in: VertexOutSample, @builtin(sample_index) k: u32) -> @location(0) vec4<f32> {
-    let pixel = vec2<u32>(in.clip.xy);
-    shading_pixel = pixel;
-    let p0 = textureLoad(fragment_position, pixel, 0);
-    var one = p0.w > 0.0;
-    for (var j = 1u; j < textureNumSamples(fragment_position); j++) {
-        one = one && all(textureLoad(fragment_position, pixel, j) == p0);
-    }
-    if one {
-        return textureLoad(fragment_color, pixel, k);
-    }
-    let p = fragment_world(in.clip.xyz);
-    let v = view_dir(p);
-    let n = facing_normal(normalize(in.normal), v);
-    return vec4<f32>(shade_all(p, n, v, materials[in.material]), 1.0);
-}
-
 // The surfaces alone (no light evaluated; colour 0 where covered): the input of the
 // infinite-range reference's compute pass where the windowed reference is not wanted.
 @fragment

@@ -84,62 +84,13 @@ pub fn raster_with(
     samples: u32,
     constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
-    raster_from(
-        device, label, module, groups, fragment, depth, samples, constants, "vs_main",
-    )
-}
-
-/// [`raster_with`] shaded at every sample: the shared vertex stage's `vs_sample`, whose outputs
-/// are interpolated at each sample (a fragment shader reading them runs once a sample).
-#[allow(
-    clippy::too_many_arguments,
-    reason = "raster_msaa's arguments and the constants"
-)]
-pub fn raster_per_sample(
-    device: &wgpu::Device,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    groups: &[&wgpu::BindGroupLayout],
-    fragment: Option<(&str, &[Option<wgpu::ColorTargetState>])>,
-    depth: DepthTest,
-    samples: u32,
-    constants: &[(&str, f64)],
-) -> wgpu::RenderPipeline {
-    raster_from(
-        device,
-        label,
-        module,
-        groups,
-        fragment,
-        depth,
-        samples,
-        constants,
-        "vs_sample",
-    )
-}
-
-#[allow(
-    clippy::too_many_arguments,
-    reason = "raster_with's arguments and the vertex entry point"
-)]
-fn raster_from(
-    device: &wgpu::Device,
-    label: &str,
-    module: &wgpu::ShaderModule,
-    groups: &[&wgpu::BindGroupLayout],
-    fragment: Option<(&str, &[Option<wgpu::ColorTargetState>])>,
-    depth: DepthTest,
-    samples: u32,
-    constants: &[(&str, f64)],
-    vertex: &str,
-) -> wgpu::RenderPipeline {
     let layout = layout(device, label, groups);
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(label),
         layout: Some(&layout),
         vertex: wgpu::VertexState {
             module,
-            entry_point: Some(vertex),
+            entry_point: Some("vs_main"),
             compilation_options: Default::default(),
             buffers: &[Some(VERTEX_LAYOUT)],
         },

@@ -33,6 +33,7 @@ pub use shade_pass::ShadePass;
 /// Every shader this crate defines (validated by naga in `tests/shaders.rs`).
 pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     reference::SHADER,
+    reference::SAMPLES_SHADER,
     infinite::SHADER,
     shaders::FORWARD,
     shaders::GBUFFER,

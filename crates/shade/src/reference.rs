@@ -2,9 +2,9 @@
 //! shading of every light at every covered pixel, into an `Rgba32Float` HDR target, with the
 //! surface position and shading normal of every pixel for the CPU oracles. With MSAA
 //! ([`ReferenceRenderer::with_samples`]) a pixel one fragment covers entirely is shaded once,
-//! at its centre, and every other pixel (an edge) at each covered sample's own position
-//! (`shade.reference_samples`), then resolved: what deferred lighting and the visibility buffer
-//! compute, on any GPU. Forward shading with MSAA shades an edge's fragments once each, at a
+//! at its centre, and every other pixel (an edge) at each covered sample's own position on its
+//! triangle (`shade.reference_samples`), then resolved: what deferred lighting and the
+//! visibility buffer compute, on any GPU. Forward shading with MSAA shades an edge's fragments once each, at a
 //! centroid of the implementation's choice, and is measured against it (docs/STRATEGIES.md,
 //! "MSAA").
 
@@ -30,6 +30,24 @@ pub const SHADER: ShaderDef = ShaderDef {
         SHADING,
         VERTEX,
         shader_file!("render/reference.wgsl"),
+    ],
+};
+
+/// `shade.reference_samples`: the MSAA reference's image at each sample, its edge samples lit
+/// on their triangles as the visibility buffer lights them.
+pub const SAMPLES_SHADER: ShaderDef = ShaderDef {
+    name: "shade.reference_samples",
+    consts: &[],
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        BVH,
+        BRDF,
+        SHADING,
+        VERTEX,
+        crate::shaders::SURFACE,
+        shader_file!("render/reference_samples.wgsl"),
     ],
 };
 
@@ -79,7 +97,7 @@ fn msaa_targets(ctx: &GpuContext, size: (u32, u32), samples: u32) -> [wgpu::Text
 struct ReferencePass<'a> {
     label: &'a str,
     pipeline: &'a wgpu::RenderPipeline,
-    group: Option<wgpu::BindGroup>,
+    groups: Vec<wgpu::BindGroup>,
     targets: Vec<(&'a wgpu::TextureView, Option<&'a wgpu::TextureView>, bool)>,
     transparent: bool,
 }
@@ -128,8 +146,8 @@ impl ReferencePass<'_> {
             multiview_mask: None,
         });
         pass.set_pipeline(self.pipeline);
-        if let Some(group) = &self.group {
-            pass.set_bind_group(1, group, &[]);
+        for (k, group) in self.groups.iter().enumerate() {
+            pass.set_bind_group(k as u32 + 1, group, &[]);
         }
         if self.transparent {
             scene.draw_transparent(&mut pass);
@@ -139,11 +157,65 @@ impl ReferencePass<'_> {
     }
 }
 
-/// `shade.reference_samples` and the layout of what it reads (the opaque pass's multisampled
-/// colour and position).
+/// `shade.reference_samples` and the layouts of what it reads: the opaque pass's multisampled
+/// colour and position (group 1), the scene's vertices and indices (group 2, as the visibility
+/// buffer's lighting binds them).
 struct PerSample {
     pipeline: wgpu::RenderPipeline,
     layout: wgpu::BindGroupLayout,
+    geometry: wgpu::BindGroupLayout,
+}
+
+impl PerSample {
+    fn new(ctx: &GpuContext, scene: &GpuScene, samples: u32, constants: &[(&str, f64)]) -> Self {
+        let texture = wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: true,
+        };
+        let fragment = wgpu::ShaderStages::FRAGMENT;
+        let layout = |label, entries: &[wgpu::BindGroupLayoutEntry]| {
+            ctx.device
+                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                    label: Some(label),
+                    entries,
+                })
+        };
+        let storage = wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        };
+        let inputs = layout(
+            "shade.reference_samples",
+            &[
+                pipeline::entry(0, fragment, texture),
+                pipeline::entry(1, fragment, texture),
+            ],
+        );
+        let geometry = layout(
+            "shade.reference_samples.geometry",
+            &[
+                pipeline::entry(4, fragment, storage),
+                pipeline::entry(5, fragment, storage),
+            ],
+        );
+        let pipeline = pipeline::raster_with(
+            &ctx.device,
+            "shade.reference_samples",
+            &SAMPLES_SHADER.create(&ctx.device),
+            &[&scene.layout, &inputs, &geometry],
+            Some(("fs_reference_samples", &[pipeline::target(HDR)])),
+            pipeline::DepthTest::Equal,
+            samples,
+            constants,
+        );
+        Self {
+            pipeline,
+            layout: inputs,
+            geometry,
+        }
+    }
 }
 
 /// Reference renderer pipelines for one uploaded scene layout.
@@ -185,13 +257,22 @@ impl ReferenceRenderer {
     }
 
     /// The pipelines for frames of `samples` samples a pixel (MSAA where more than one); an
-    /// error names the counts the device supports.
+    /// error names the counts the device supports. With MSAA the edge samples are lit on their
+    /// triangles, which needs `@builtin(primitive_index)`.
     pub fn with_samples(
         ctx: &GpuContext,
         scene: &GpuScene,
         samples: u32,
     ) -> Result<Self, GpuError> {
         ctx.check_msaa_of(samples, &[manylights_gpu::prepass::DEPTH_FORMAT, HDR])?;
+        if samples > 1 && !ctx.features.primitive_index {
+            return Err(GpuError::Unsupported(format!(
+                "the reference with MSAA lights an edge's samples on their triangles, which needs \
+                 `@builtin(primitive_index)` (wgpu feature PRIMITIVE_INDEX; on Vulkan the \
+                 geometryShader feature), which adapter {} does not offer: use one sample a pixel",
+                ctx.info.name
+            )));
+        }
         Ok(Self::build(ctx, scene, samples, Shadows::Off))
     }
 
@@ -240,34 +321,7 @@ impl ReferenceRenderer {
             samples,
             &constants,
         );
-        let per_sample = (samples > 1).then(|| {
-            let texture = wgpu::BindingType::Texture {
-                sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: true,
-            };
-            let fragment = wgpu::ShaderStages::FRAGMENT;
-            let layout = ctx
-                .device
-                .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-                    label: Some("shade.reference_samples"),
-                    entries: &[
-                        pipeline::entry(0, fragment, texture),
-                        pipeline::entry(1, fragment, texture),
-                    ],
-                });
-            let pipeline = pipeline::raster_per_sample(
-                &ctx.device,
-                "shade.reference_samples",
-                &module,
-                &[&scene.layout, &layout],
-                Some(("fs_reference_samples", &[pipeline::target(HDR)])),
-                pipeline::DepthTest::Equal,
-                samples,
-                &constants,
-            );
-            PerSample { pipeline, layout }
-        });
+        let per_sample = (samples > 1).then(|| PerSample::new(ctx, scene, samples, &constants));
         Self {
             prepass: DepthPrepass::with_samples(ctx, scene, samples),
             pipeline,
@@ -380,7 +434,7 @@ impl ReferenceRenderer {
                 passes.push(ReferencePass {
                     label,
                     pipeline: opaque,
-                    group: None,
+                    groups: Vec::new(),
                     targets: all(true),
                     transparent: false,
                 });
@@ -388,7 +442,7 @@ impl ReferenceRenderer {
                     passes.push(ReferencePass {
                         label: "shade.reference_transparent",
                         pipeline: &self.transparent,
-                        group: None,
+                        groups: Vec::new(),
                         targets: all(false),
                         transparent: true,
                     });
@@ -399,7 +453,7 @@ impl ReferenceRenderer {
                 passes.push(ReferencePass {
                     label,
                     pipeline: opaque,
-                    group: None,
+                    groups: Vec::new(),
                     targets: (0..3).map(|k| (&ms[k], Some(&views[k]), true)).collect(),
                     transparent: false,
                 });
@@ -410,7 +464,7 @@ impl ReferenceRenderer {
                 passes.push(ReferencePass {
                     label,
                     pipeline: opaque,
-                    group: None,
+                    groups: Vec::new(),
                     targets: vec![
                         (&ms[0], None, true),
                         (&ms[1], Some(&views[1]), true),
@@ -427,11 +481,26 @@ impl ReferenceRenderer {
                         wgpu::BindingResource::TextureView(&ms[1]),
                     ],
                 );
+                // Bindings 4 and 5, as surface.wgsl declares them.
+                let geometry = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("shade.reference_samples.geometry"),
+                    layout: &ps.geometry,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 4,
+                            resource: scene.vertices.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 5,
+                            resource: scene.indices.as_entire_binding(),
+                        },
+                    ],
+                });
                 let resolve = (!transparent).then_some(&views[0]);
                 passes.push(ReferencePass {
                     label: "shade.reference_samples",
                     pipeline: &ps.pipeline,
-                    group: Some(group),
+                    groups: vec![group, geometry],
                     targets: vec![(&ms[3], resolve, true)],
                     transparent: false,
                 });
@@ -439,7 +508,7 @@ impl ReferenceRenderer {
                     passes.push(ReferencePass {
                         label: "shade.reference_transparent",
                         pipeline: &self.transparent,
-                        group: None,
+                        groups: Vec::new(),
                         targets: vec![(&ms[3], Some(&views[0]), false)],
                         transparent: true,
                     });
