@@ -126,17 +126,22 @@ fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
 
 // A visibility buffer's pixel, lit as the G-buffer's is: where one triangle covers every
 // sample, once at the pixel centre (on the triangle: the samples' hull holds the centre), looked
-// up at that point's depth (between the samples'); elsewhere each covered sample at its own
-// position on its triangle, looked up at its depth (each under the glass with GLASS).
+// up at that point's depth held within its samples' (which it lies between but for rounding;
+// the culling bounds cover those); elsewhere each covered sample at its own position on its
+// triangle, looked up at its depth (each under the glass with GLASS).
 fn shade_triangles_msaa(pixel: vec2<u32>, zbin: bool) {
     let id0 = textureLoad(gb_material, pixel, 0).x;
     var one = id0 != 0u;
-    for (var k = 1u; k < DEPTH_SAMPLES; k++) {
+    var z_range = vec2<f32>(1.0, 0.0);
+    for (var k = 0u; k < DEPTH_SAMPLES; k++) {
         one = one && textureLoad(gb_material, pixel, k).x == id0;
+        let z = textureLoad(depth_tex, pixel, k);
+        z_range = vec2<f32>(min(z_range.x, z), max(z_range.y, z));
     }
     if one {
         let s = visibility_surface(screen_ndc(vec2<f32>(pixel) + 0.5), id0 - 1u);
-        var c = vec4<f32>(shade_point(pixel, world_ndc_depth(s.p), s, zbin), 1.0);
+        let z = clamp(world_ndc_depth(s.p), z_range.x, z_range.y);
+        var c = vec4<f32>(shade_point(pixel, z, s, zbin), 1.0);
         if GLASS {
             c = all_under_glass(pixel, c);
         }
