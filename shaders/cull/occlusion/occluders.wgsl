@@ -15,6 +15,33 @@ struct Occluder {
     normal: vec4<f32>,
 }
 
+// What a corner q of a cell must clear an occluder's plane and edges by: `margin` plus a shadow
+// ray's lift there.
+fn corner_spare(q: vec3<f32>, margin: f32) -> f32 {
+    let a = abs(q);
+    return margin + SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0));
+}
+
+// Whether every corner of the cell lies beyond occluder o's plane on one side, each by its
+// spare at `margin`: occluder_hides's first test, for any light on the other side, at any
+// margin at least `margin`.
+fn cell_beyond(o: Occluder, cell: array<vec3<f32>, 8>, margin: f32) -> bool {
+    let n = o.normal.xyz;
+    var side = 0.0;
+    for (var c = 0u; c < 8u; c++) {
+        let q = cell[c];
+        let sq = dot(n, q - o.corners[0].xyz);
+        if c == 0u {
+            side = sign(sq);
+        }
+        if sq * side <= corner_spare(q, margin) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Whether o hides the light from every point of the cell (this file's opening comment).
 fn occluder_hides(o: Occluder, light: vec3<f32>, cell: array<vec3<f32>, 8>, margin: f32) -> bool {
     let n = o.normal.xyz;
     let count = u32(o.normal.w);
@@ -24,8 +51,7 @@ fn occluder_hides(o: Occluder, light: vec3<f32>, cell: array<vec3<f32>, 8>, marg
     }
     for (var c = 0u; c < 8u; c++) {
         let q = cell[c];
-        let a = abs(q);
-        let spare = margin + SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0));
+        let spare = corner_spare(q, margin);
         let sq = dot(n, q - o.corners[0].xyz);
         if sq * sign(sl) >= -spare {
             return false;

@@ -86,26 +86,6 @@ fn cell_corners() -> CellCorners {
     return CellCorners(cell, far);
 }
 
-// Whether every corner of the cell lies beyond occluder o's plane on one side, each by its
-// spare at `margin` (occluder_hides's first test, for any light on the other side).
-fn cell_beyond(o: Occluder, cell: array<vec3<f32>, 8>, margin: f32) -> bool {
-    let n = o.normal.xyz;
-    var side = 0.0;
-    for (var c = 0u; c < 8u; c++) {
-        let q = cell[c];
-        let a = abs(q);
-        let spare = margin + SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0));
-        let sq = dot(n, q - o.corners[0].xyz);
-        if c == 0u {
-            side = sign(sq);
-        }
-        if sq * side <= spare {
-            return false;
-        }
-    }
-    return true;
-}
-
 // Whether an occluder hides light `l` from every point of the workgroup's cell.
 fn occlusion_hidden(l: u32, useful: u32) -> bool {
     let p = lights[l].position;
