@@ -43,6 +43,9 @@ impl SceneArgs {
             growth,
             ramp,
             sample_from,
+            spot_bins: self
+                .spot_bins
+                .unwrap_or(manylights_scene::hierarchy::SPOT_BINS),
         }
     }
 
@@ -83,6 +86,9 @@ impl SceneArgs {
         if let (Some(c), None) = (self.ramp, self.hierarchy) {
             bail!("--ramp {c} without --hierarchy: it is the hierarchy's bands'");
         }
+        if let (Some(n), None) = (self.spot_bins, self.hierarchy) {
+            bail!("--spot-bins {n} without --hierarchy: they are the hierarchy's spots' bins");
+        }
         let Some(
             rule @ RadiusRule::Hierarchy {
                 alpha,
@@ -107,6 +113,7 @@ impl SceneArgs {
         let params = rule.hierarchy_params().expect("a hierarchy rule");
         let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, None)?;
         let (levels, h_used, points, spots) = (plan.levels, plan.h, plan.points, plan.spots);
+        let bins = plan.bins.len();
         let gpu_scene =
             GpuScene::upload_with(ctx, &shaded, plan.light_model(), &scene.camera, w, h)?;
         let build = GpuHierarchy::new(ctx, plan, &scene.lights, &gpu_scene)?;
@@ -120,9 +127,10 @@ impl SceneArgs {
         }
         let ms: Option<f64> = timings.map(|t| t.iter().map(|p| p.ms).sum());
         println!(
-            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, bands growing {growth} over ramps of {ramp}, {} lights shaded in place of {} ({points} point lights, {spots} spots as they are){}{} (its sums {})",
+            "  lighting grid hierarchy: alpha {alpha}, finest spacing {h_used} m, {levels} levels, the finest grid at most {finest_nodes} nodes a point light, bands growing {growth} over ramps of {ramp}, {} lights shaded in place of {} ({points} point lights, {spots} spots in {} direction bins){}{} (its sums {})",
             shaded.lights.len(),
             scene.lights.len(),
+            bins,
             sample_from.map_or_else(String::new, |l| format!(", bands sampled from level {l}")),
             ms.map_or_else(String::new, |ms| format!(", built in {ms:.3} ms")),
             build.sums().describe()

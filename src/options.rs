@@ -91,6 +91,11 @@ pub(crate) struct SceneArgs {
     /// the hierarchy, with shorter lists and noise.
     #[arg(long, value_name = "L", requires = "hierarchy")]
     pub(crate) sample_from: Option<u32>,
+    /// With --hierarchy (and tune's --alphas): the spots' direction bins, N cells along each
+    /// side of the octahedral map of their axes (1 to 16; 5 by default): more keep narrower
+    /// cones in the spots' aggregates, and more of them.
+    #[arg(long, value_name = "N")]
+    pub(crate) spot_bins: Option<u32>,
     /// With --stochastic: what E bounds.
     #[arg(long, value_enum, requires = "stochastic")]
     pub(crate) bound: Option<BoundName>,
@@ -303,7 +308,7 @@ impl SceneArgs {
         scene.assign_models(&self.models()?);
         let spec = self.light_spec();
         let generated = spec.generate(&scene).context(
-            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --finest-nodes, --growth, --ramp, --intensity, --spot-fraction)",
+            "invalid light options (--radius, --threshold, --stochastic, --hierarchy, --spacing, --finest-nodes, --growth, --ramp, --spot-bins, --intensity, --spot-fraction)",
         )?;
         scene.lights.extend(generated);
         scene

@@ -62,6 +62,7 @@ fn hierarchy_lights_shade_as_their_oracle_with(ctx: &manylights_gpu::GpuContext,
             ramp,
             top_lights: 16,
             sample_from: None,
+            spot_bins: hierarchy::SPOT_BINS,
         },
     );
     assert!(hier.levels.len() >= 4, "{} levels", hier.levels.len());
@@ -126,6 +127,55 @@ fn shaded_lights(
         manylights_gpu::readback::read_buffer(ctx, &gpu_scene.lights, 0, plan.shaded_count() * 64)
             .unwrap();
     bytemuck::cast_slice(&bytes).to_vec()
+}
+
+/// Level `level`'s live spot aggregates as the GPU built them: each has the cone of one of the
+/// oracle's direction bins (its axis and cosines as a light of that cone holds them), and each
+/// bin's aggregates carry the oracle's power for that bin (to 1e-5 of the level's).
+fn spot_aggregates_have_their_bins_cones(
+    lights: &[manylights_gpu::layout::GpuLight],
+    plan: &manylights_gpu::hierarchy::HierarchyPlan,
+    oracle: &Hierarchy,
+    level: usize,
+    what: &str,
+) {
+    use manylights_gpu::layout::{GpuLight, LIGHT_KIND_SPOT};
+    let cones: Vec<GpuLight> = oracle
+        .bins
+        .iter()
+        .map(|b| GpuLight::from(&b.light(glam::Vec3::ZERO, 1.0, glam::Vec3::ONE)))
+        .collect();
+    let mut built = vec![DVec3::ZERO; cones.len() + 1];
+    let (first, n) = plan.level_range(level);
+    for l in &lights[first as usize..(first + n) as usize] {
+        if l.intensity == 0.0 || l.radius == 0.0 {
+            continue;
+        }
+        let bin = if l.shape() == LIGHT_KIND_SPOT {
+            1 + cones
+                .iter()
+                .position(|c| {
+                    (c.direction, c.cos_inner, c.cos_outer)
+                        == (l.direction, l.cos_inner, l.cos_outer)
+                })
+                .unwrap_or_else(|| panic!("{what}: level {level}: a spot of no bin's cone: {l:?}"))
+        } else {
+            0
+        };
+        built[bin] += (l.color * l.intensity).as_dvec3();
+    }
+    let mut want = vec![DVec3::ZERO; cones.len() + 1];
+    for l in &oracle.levels[level] {
+        want[l.bin as usize] += l.power;
+    }
+    let total: f64 = want.iter().map(|p| p.element_sum()).sum();
+    for (b, (got, want)) in built.iter().zip(&want).enumerate() {
+        assert!(
+            (*got - *want).abs().max_element() < 1e-5 * total,
+            "{what}: level {level}, bin {b}: {got} against {want}"
+        );
+    }
+    assert!(want[1..].iter().any(|p| p.element_sum() > 0.0));
 }
 
 /// The lights a GPU build wrote for level `level` of `plan`: the live ones (power and reach).
@@ -244,6 +294,7 @@ fn gpu_build_is_its_oracle(
         ramp,
         top_lights: 16,
         sample_from: None,
+        spot_bins: hierarchy::SPOT_BINS,
     };
     let b = original
         .lights
@@ -340,8 +391,14 @@ fn gpu_build_is_its_oracle(
                 "{what}: spot"
             );
         }
+        assert!(
+            oracle.bins.len() >= 4,
+            "{} direction bins",
+            oracle.bins.len()
+        );
         for level in 1..plan.levels {
             let spacing = plan.h * f64::from(1u32 << (level - 1));
+            spot_aggregates_have_their_bins_cones(out, &plan, &oracle, level, &what);
             same_level(
                 &built_level(out, &plan, level),
                 &oracle.levels[level],
@@ -387,6 +444,7 @@ fn the_gpu_build_samples_the_bands_it_is_asked_to() {
         ramp: 1.5,
         top_lights: 16,
         sample_from: Some(1),
+        spot_bins: hierarchy::SPOT_BINS,
     };
     let (plan, shaded) = HierarchyPlan::for_scene(&original, params, None).unwrap();
     assert!(plan.levels >= 3, "{} levels", plan.levels);
@@ -546,6 +604,7 @@ fn params_at(spacing: f64) -> HierarchyParams {
         ramp: hierarchy::RAMP,
         top_lights: 16,
         sample_from: None,
+        spot_bins: hierarchy::SPOT_BINS,
     }
 }
 

@@ -4,10 +4,11 @@
 //
 // One dispatch a level, in order:
 // - `points` (mode 0): a thread a source light. A point light is written to the shaded lights
-//   as level 0's light (colour x intensity, its band); a spot as it is (radius `reach`, a band
-//   that never falls). A point light is binned into its cell of level 1's grid (`bin`), or,
-//   where the cell's nodes leave the grid's box or the cells' table is full, spread into level
-//   1's grid at once (`splat`).
+//   as level 0's light (colour x intensity, its band); a spot as it is, with level 0's band. A
+//   point light is binned into its cell of level 1's grid (`bin`), or, where the cell's nodes
+//   leave the grid's box or the cells' table is full, spread into level 1's grid at once
+//   (`splat`); a spot is spread at once into its direction bin's nodes, its power scaled to
+//   the bin's cone (manylights_scene::hierarchy::spots).
 // - `cells_room`, `fill`, `cell_splat` (after each pass that bins, with its step; the cells'
 //   buffer cleared before it): each binned cell takes its lights' room in a list, its lights
 //   write themselves there, and a thread a cell's corner spreads the cell's lights into that
@@ -18,9 +19,11 @@
 // - `finalize` (mode 1): a thread a slot of level l's hash table. A node's sums become its
 //   light (power, power-weighted position), written to the shaded lights with level l's band;
 //   an empty slot becomes a dead light (no power, radius 0, at `far`). It is binned into its
-//   cell of level l + 1's grid (as the points pass bins) unless l is the last level.
-// A grid's nodes are keyed by their index in the level's box of nodes (plus 1; 0 is an empty
-// slot) in an open-addressing hash table of 16 words a slot: the key, then six 64-bit fixed
+//   cell of level l + 1's grid (as the points pass bins) unless l is the last level; a spot
+//   aggregate (a node of a direction bin: a spot of the bin's cone) is spread at once.
+// A grid's nodes are keyed by their index in the level's box of nodes plus the box's size
+// times their direction bin (0: the point lights'), plus 1 (0 is an empty slot), in an
+// open-addressing hash table of 16 words a slot: the key, then six 64-bit fixed
 // point sums (so that they do not hang on the order of the additions): power r, g, b, and the
 // power-weighted offset of the position from the node in units of the spacing, x, y, z, all
 // scaled by `scale` (2^52 over the lights' total power: the sums fit 63 bits, and each term
@@ -57,7 +60,8 @@ struct Step {
 
 @group(0) @binding(0) var<uniform> step: Step;
 @group(0) @binding(1) var<storage, read> source: array<Light>;
-// The shaded light each source light becomes (points pass).
+// The shaded light each source light becomes (points pass), then each source light's direction
+// bin (0: a point light; b: spot_bins[b - 1]).
 @group(0) @binding(2) var<storage, read> target_index: array<u32>;
 @group(0) @binding(3) var<storage, read_write> shaded: array<Light>;
 // [nodes outside their level's box, splats into a full table]
@@ -68,6 +72,25 @@ struct Step {
 // cursor; then each item's cell slot (NO_CELL: spread at once, or no light), then the lists of
 // item indices.
 @group(0) @binding(6) var<storage, read_write> cells: array<atomic<u32>>;
+
+// A direction bin's cone (manylights_scene::hierarchy::SpotBin, as a light holds it): its axis
+// and the cosines of its inner and outer angles, and its flux (spot_flux).
+struct SpotBin {
+    axis: vec3<f32>,
+    cos_inner: f32,
+    cos_outer: f32,
+    flux: f32,
+    pad: vec2<f32>,
+}
+@group(0) @binding(7) var<storage, read> spot_bins: array<SpotBin>;
+
+// The integral over the cosine in [-1, 1] of the cone of cosines (ci, co) (light_spot's):
+// manylights_scene::hierarchy::spots::spot_flux.
+fn spot_flux(ci: f32, co: f32) -> f32 {
+    let w = max(ci - co, 1e-4);
+    let t = max(min(1.0 - co, w), 0.0);
+    return t * t * t / (3.0 * w * w) + max(1.0 - co - w, 0.0);
+}
 
 const NO_CELL: u32 = 0xffffffffu;
 
@@ -109,8 +132,9 @@ fn corner_weight(f: vec3<f32>, bit: vec3<u32>) -> f32 {
     return t.x * t.y * t.z;
 }
 
-// Spreads a light's power over the 8 nodes of its cell of the next level's grid.
-fn splat(position: vec3<f32>, power: vec3<f32>) {
+// Spreads a light's power over the 8 nodes of its cell of the next level's grid, in direction
+// bin `bin` (0: the point lights').
+fn splat(position: vec3<f32>, power: vec3<f32>, bin: u32) {
     let spacing = bitcast<f32>(step.d.w);
     let u = position / spacing;
     let base = floor(u);
@@ -130,7 +154,7 @@ fn splat(position: vec3<f32>, power: vec3<f32>) {
             continue;
         }
         let r = vec3<u32>(rel);
-        let key = (r.z * dims.y + r.y) * dims.x + r.x + 1u;
+        let key = (r.z * dims.y + r.y) * dims.x + r.x + bin * dims.x * dims.y * dims.z + 1u;
         let at = slot_of(key);
         if at < 0 {
             atomicAdd(&dropped[1], 1u);
@@ -203,19 +227,38 @@ fn bin(i: u32, position: vec3<f32>, power: vec3<f32>) {
     }
     atomicStore(&cells[light_cell(i)], c);
     if c == NO_CELL {
-        splat(position, power);
+        splat(position, power, 0u);
         return;
     }
     atomicAdd(&cells[cell_word(c, 1u)], 1u);
 }
 
-// Item i spreads into the next level as the step says (step.a.w): binned, at once, or not.
-fn spread(i: u32, position: vec3<f32>, power: vec3<f32>) {
-    if step.a.w == 2u {
+// Item i of direction bin `b` spreads into the next level as the step says (step.a.w): a
+// point light's binned, at once, or not; a spot's at once, or not.
+fn spread(i: u32, position: vec3<f32>, power: vec3<f32>, b: u32) {
+    if b > 0u {
+        no_cell(i);
+        if step.a.w > 0u {
+            splat(position, power, b);
+        }
+    } else if step.a.w == 2u {
         bin(i, position, power);
     } else if step.a.w == 1u {
-        splat(position, power);
+        splat(position, power, 0u);
     }
+}
+
+// Light l shaped as a spot of direction bin b's cone (b > 0), or as it is.
+fn with_cone(l_in: Light, b: u32) -> Light {
+    var l = l_in;
+    if b > 0u {
+        let cone = spot_bins[b - 1u];
+        l.kind = LIGHT_KIND_SPOT | LIGHT_FALLOFF_BAND;
+        l.direction = cone.axis;
+        l.cos_inner = cone.cos_inner;
+        l.cos_outer = cone.cos_outer;
+    }
+    return l;
 }
 
 // A point light of a level: `power` at `position`, shaded with the level's band.
@@ -277,19 +320,25 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let l = source[i];
-    if light_shape(l) == LIGHT_KIND_SPOT {
-        no_cell(i);
-        var s = l;
+    let power = l.color * l.intensity;
+    let t = target_index[i];
+    var s = level_light(l.position, power);
+    let b = target_index[step.a.y + i];
+    if b > 0u {
+        // A spot as it is, with level 0's band; into its bin with the power the bin's cone
+        // emits as much with.
+        let level = s;
+        s = l;
         s.kind = LIGHT_KIND_SPOT | LIGHT_FALLOFF_BAND;
-        s.radius = step.c.z;
-        s.alpha = step.far.w;
-        s.interleave = 0u;
-        shaded[target_index[i]] = s;
+        s.radius = level.radius;
+        s.alpha = level.alpha;
+        s.interleave = level.interleave;
+        shaded[t] = sampled_light(s, t);
+        spread(i, l.position, power * (spot_flux(l.cos_inner, l.cos_outer) / spot_bins[b - 1u].flux), b);
         return;
     }
-    let power = l.color * l.intensity;
-    shaded[target_index[i]] = sampled_light(level_light(l.position, power), target_index[i]);
-    spread(i, l.position, power);
+    shaded[t] = sampled_light(s, t);
+    spread(i, l.position, power, 0u);
 }
 
 // The lists' room a workgroup of cells_room takes at once (one global atomic a workgroup, not
@@ -428,13 +477,15 @@ fn finalize(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let dims = step.h.xyz;
-    let k = key - 1u;
+    let nodes = dims.x * dims.y * dims.z;
+    let b = (key - 1u) / nodes;
+    let k = (key - 1u) % nodes;
     let node = step.g.xyz
         + vec3<i32>(vec3<u32>(k % dims.x, (k / dims.x) % dims.y, k / (dims.x * dims.y)));
     let offset = vec3<f32>(sum_read_signed(at, 3u), sum_read_signed(at, 4u), sum_read_signed(at, 5u))
         / weight;
     let position = (vec3<f32>(node) + offset) * bitcast<f32>(step.g.w);
     let power = p / step.c.w;
-    shaded[step.b.y + t] = sampled_light(level_light(position, power), node_draw(key));
-    spread(t, position, power);
+    shaded[step.b.y + t] = sampled_light(with_cone(level_light(position, power), b), node_draw(key));
+    spread(t, position, power, b);
 }

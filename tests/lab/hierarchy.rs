@@ -18,7 +18,7 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
         name: "hierarchy",
         config: Config(
             scene: Atrium(bays: 2),
-            lights: (generator: Uniform, count: 400, seed: 4, intensity: 2.0, spot_fraction: 0.1),
+            lights: (generator: Uniform, count: 400, seed: 4, intensity: 2.0, spot_fraction: 0.3),
             materials: [BlinnPhong, Ggx, Sheen, ClearCoat, Wrap],
             resolution: (64, 40),
             frames: 1,

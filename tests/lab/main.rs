@@ -494,7 +494,8 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
                  radius_value,hierarchy_spacing,hierarchy_finest_nodes,hierarchy_growth,\
                  hierarchy_ramp,hierarchy_sample_from,stochastic_bound,stochastic_draw,interleave,\
                  stochastic_exposure,shadows,flip_mean_shadowed,energy_error_shadowed,\
-                 rays_per_pixel,gpu_ms_shadow,grays_per_s,reference_shadowed_cached,occluded_pairs,error"
+                 rays_per_pixel,gpu_ms_shadow,grays_per_s,reference_shadowed_cached,occluded_pairs,\
+                 hierarchy_spot_bins,error"
     ));
 }
 

@@ -131,10 +131,12 @@ fn check_build(
 }
 
 /// The shaded light each of `lights` becomes (the points pass's `target_index`): point lights
-/// from the first, spots after every level's slots; one more entry, so the buffer is never
-/// empty.
+/// from the first, spots after every level's slots; then each light's direction bin (0 for a
+/// point light, `manylights_scene::hierarchy::spot_bins`); one more entry, so the buffer is
+/// never empty.
 fn target_indices(plan: &HierarchyPlan, lights: &[Light]) -> Vec<u32> {
     let (mut next_point, mut next_spot) = (0u32, plan.shaded_count() as u32 - plan.spots);
+    let (_, bins) = manylights_scene::hierarchy::spot_bins(lights, plan.params.spot_bins);
     lights
         .iter()
         .map(|l| {
@@ -146,12 +148,45 @@ fn target_indices(plan: &HierarchyPlan, lights: &[Light]) -> Vec<u32> {
             *slot += 1;
             *slot - 1
         })
+        .chain(bins)
         .chain(std::iter::once(0))
         .collect()
 }
 
-/// The build's bind group layout: its step, the source lights, the target indices, the shaded
-/// lights, the slots, the drop counters and the cells (`shaders/lights/hierarchy.wgsl`).
+/// The direction bins' cones as the shader's `SpotBin`s (axis and cosines as a light of the
+/// cone holds them, the flux), at least one.
+fn bin_cones(plan: &HierarchyPlan) -> Vec<[f32; 8]> {
+    let mut out: Vec<[f32; 8]> = plan
+        .bins
+        .iter()
+        .map(|b| {
+            let l = GpuLight::from(&b.light(glam::Vec3::ZERO, 1.0, glam::Vec3::ONE));
+            let flux = manylights_scene::hierarchy::spots::spot_flux(
+                l.cos_inner.into(),
+                l.cos_outer.into(),
+            );
+            let a = l.direction;
+            [
+                a.x,
+                a.y,
+                a.z,
+                l.cos_inner,
+                l.cos_outer,
+                flux as f32,
+                0.0,
+                0.0,
+            ]
+        })
+        .collect();
+    if out.is_empty() {
+        out.push([0.0; 8]);
+    }
+    out
+}
+
+/// The build's bind group layout: its step, the source lights, the target indices and bins,
+/// the shaded lights, the slots, the drop counters, the cells and the direction bins' cones
+/// (`shaders/lights/hierarchy.wgsl`).
 fn group_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
     let c = wgpu::ShaderStages::COMPUTE;
     d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -164,6 +199,7 @@ fn group_layout(d: &wgpu::Device) -> wgpu::BindGroupLayout {
             entry(4, c, storage(false)),
             entry(5, c, storage(false)),
             entry(6, c, storage(false)),
+            entry(7, c, storage(true)),
         ],
     })
 }
@@ -283,6 +319,11 @@ impl GpuHierarchy {
             contents: bytemuck::cast_slice(&target_indices(&plan, lights)),
             usage: wgpu::BufferUsages::STORAGE,
         });
+        let cones = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("lights.hierarchy.spot_bins"),
+            contents: bytemuck::cast_slice(&bin_cones(&plan)),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let slots = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lights.hierarchy.slots"),
             size: slot_bytes,
@@ -347,6 +388,7 @@ impl GpuHierarchy {
                         &slots,
                         &dropped,
                         &cells,
+                        &cones,
                     ],
                 );
                 steps.push(params);

@@ -293,6 +293,7 @@ fn sweep_columns(cell: &Cell, rule: &RadiusRule) -> SweepColumns {
             growth,
             ramp,
             sample_from,
+            spot_bins,
         } => SweepColumns {
             radius_value: col(alpha),
             hierarchy_spacing: col(spacing),
@@ -300,6 +301,7 @@ fn sweep_columns(cell: &Cell, rule: &RadiusRule) -> SweepColumns {
             hierarchy_growth: col(growth),
             hierarchy_ramp: col(ramp),
             hierarchy_sample_from: sample_from,
+            hierarchy_spot_bins: Some(spot_bins),
             ..sweep
         },
         RadiusRule::Stochastic {

@@ -471,6 +471,7 @@ pub fn radius_parameter(rule: &RadiusRule) -> (&'static str, String) {
             growth,
             ramp,
             sample_from,
+            spot_bins,
         } => {
             let mut s = format!("{alpha}/h{spacing}");
             if f64::from(finest_nodes) != manylights_scene::hierarchy::FINEST_NODES {
@@ -484,6 +485,9 @@ pub fn radius_parameter(rule: &RadiusRule) -> (&'static str, String) {
             }
             if let Some(l) = sample_from {
                 s += &format!("/s{l}");
+            }
+            if spot_bins != manylights_scene::hierarchy::SPOT_BINS {
+                s += &format!("/b{spot_bins}");
             }
             ("hierarchy", s)
         }

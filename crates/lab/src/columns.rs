@@ -101,5 +101,6 @@ pub const COLUMNS: &[&str] = &[
     "grays_per_s",
     "reference_shadowed_cached",
     "occluded_pairs",
+    "hierarchy_spot_bins",
     "error",
 ];

@@ -80,6 +80,8 @@ fn range_columns(r: &mut Row) {
                 r.sweep.hierarchy_ramp = Some(c);
             } else if let Some(l) = num("s") {
                 r.sweep.hierarchy_sample_from = Some(l as u32);
+            } else if let Some(b) = num("b") {
+                r.sweep.hierarchy_spot_bins = Some(b as u32);
             }
         } else if let Some(k) = num("acc") {
             r.accumulate = Some(k as u32);

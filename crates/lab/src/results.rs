@@ -337,6 +337,10 @@ pub struct SweepColumns {
     /// `radius: Hierarchy`: the first level whose bands are sampled; empty for none.
     #[serde(default)]
     pub hierarchy_sample_from: Option<u32>,
+    /// `radius: Hierarchy`: cells along each side of the octahedral map of the spots' axes
+    /// (their direction bins).
+    #[serde(default)]
+    pub hierarchy_spot_bins: Option<u32>,
     /// Stochastic cells: what the error bounds (`light` or `albedo`).
     #[serde(default)]
     pub stochastic_bound: Option<String>,

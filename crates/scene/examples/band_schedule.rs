@@ -58,6 +58,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ramp: manylights_scene::hierarchy::RAMP,
         top_lights: TOP_LIGHTS,
         sample_from: None,
+        spot_bins: manylights_scene::hierarchy::SPOT_BINS,
     };
     // The levels do not hang on alpha, growth or the ramps: one build, its bands set per
     // configuration.

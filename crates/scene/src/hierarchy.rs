@@ -40,8 +40,11 @@
 //! nothing inside `r_(l-1)`; adjacent levels' weights sum to 1, so a single light, which every
 //! level places at its own position with its whole power, is exact at every distance.
 //!
-//! Spot lights are not aggregated: they stay as they are, with their cones, at every distance
-//! (weight 1 at every level's band; what a spot-heavy scene costs is theirs).
+//! Spot lights are level 0's lights too (with its band) and are aggregated by direction: each
+//! falls in a direction bin of its axis, and each bin's spots make nodes of their own in every
+//! level's grid (a node keyed by its bin and its place), shaded as spots of the bin's cone
+//! ([`spots`]). So a spot far away is lit through its level's aggregate as a point light is,
+//! and a lone spot stays exact at every distance.
 
 use std::collections::BTreeMap;
 
@@ -51,7 +54,9 @@ use crate::Material;
 use crate::light::{Light, LightKind, falloff_infinite, shade_with};
 
 mod band;
+pub mod spots;
 pub use band::{Band, band_xi, node_draw};
+pub use spots::{SpotBin, spot_bins};
 
 /// The most lights the last level holds by default: what the experiments' and the command
 /// line's hierarchies are built with.
@@ -64,6 +69,11 @@ pub const GROWTH: f64 = 1.0;
 /// How far each band's ramps run by default ([`HierarchyParams::ramp`]): from a level's `r` to
 /// twice it, the papers' bands.
 pub const RAMP: f64 = 2.0;
+
+/// Cells along each side of the octahedral map of spot axes by default
+/// ([`HierarchyParams::spot_bins`]): 25 direction bins at most, the centre one holding the
+/// axes within 14-20 degrees of straight down.
+pub const SPOT_BINS: u32 = 5;
 
 /// The finest grid holds at most this many nodes a point light by default
 /// ([`HierarchyParams::finest_nodes`]; the authors' implementation: 0.25).
@@ -98,8 +108,12 @@ pub struct HierarchyParams {
     /// Stochastic band selection from this level on: each of these levels'
     /// lights draws its band afresh each frame ([`Band::sampled`]), weight 1 inside it, so the
     /// estimate is the hierarchy's on average and its lists shorter. `None`: every band as it
-    /// is. Spots are never sampled.
+    /// is. Spots and their aggregates are sampled as the point lights and theirs are.
     pub sample_from: Option<usize>,
+    /// The spots' direction bins: cells along each side of the octahedral map of their axes
+    /// ([`SPOT_BINS`] by default; at least 1, one bin for every spot). More bins keep
+    /// narrower cones in the aggregates and put more of them in every level.
+    pub spot_bins: u32,
 }
 
 impl HierarchyParams {
@@ -109,13 +123,17 @@ impl HierarchyParams {
     }
 }
 
-/// A light of a level: its position and its power (colour x intensity).
+/// A light of a level: its position, its power (colour x intensity) and its direction bin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LevelLight {
     /// Where it is: a point light's position, or an aggregate's power-weighted mean.
     pub position: DVec3,
-    /// Its power: a point light's colour x intensity, or the weighted sum of those gathered.
+    /// Its power: a point light's colour x intensity, or the weighted sum of those gathered
+    /// (a spot's scaled to its bin's cone, [`spots::binned_power`]).
     pub power: DVec3,
+    /// 0: a point light or an aggregate of them; `b >= 1`: an aggregate of the spots of
+    /// direction bin `b` ([`Hierarchy::bins`]`[b - 1]`), shaded with its cone.
+    pub bin: u32,
 }
 
 /// The hierarchy of a set of lights.
@@ -127,10 +145,13 @@ pub struct Hierarchy {
     /// `params.finest_nodes` times as many lights as there are point lights.
     pub h: f64,
     /// `levels[0]`: the point lights; `levels[l]`: the aggregates on the grid of spacing
-    /// `h 2^(l-1)`, in the order of their nodes (z, then y, then x, ascending).
+    /// `h 2^(l-1)`, in the order of their bins and then of their nodes (z, then y, then x,
+    /// ascending).
     pub levels: Vec<Vec<LevelLight>>,
-    /// The spot lights, as they are.
+    /// The spot lights, as they are: level 0's too, after its point lights.
     pub spots: Vec<Light>,
+    /// The spots' direction bins ([`spots`]): the cones of their aggregates.
+    pub bins: Vec<SpotBin>,
 }
 
 /// Levels at most (a level's grid doubles its spacing, so 2^24 h spans any scene).
@@ -140,29 +161,52 @@ fn power(light: &Light) -> DVec3 {
     light.color.as_dvec3() * f64::from(light.intensity)
 }
 
-/// The point lights as level 0's lights, and the spots as they are.
-fn split(lights: &[Light]) -> (Vec<LevelLight>, Vec<Light>) {
-    let points = lights
+/// Level 0 split: the point lights as level 0's lights, the spots as they are, the spots'
+/// bins, and what level 1 gathers (the point lights, then every spot with its bin and its
+/// power scaled to the bin's cone).
+struct Split {
+    points: Vec<LevelLight>,
+    spots: Vec<Light>,
+    bins: Vec<SpotBin>,
+    gathered: Vec<LevelLight>,
+}
+
+fn split(lights: &[Light], spot_bins: u32) -> Split {
+    let points: Vec<LevelLight> = lights
         .iter()
         .filter(|l| matches!(l.kind, LightKind::Point))
         .map(|l| LevelLight {
             position: l.position.as_dvec3(),
             power: power(l),
+            bin: 0,
         })
         .collect();
-    let spots = lights
-        .iter()
-        .filter(|l| matches!(l.kind, LightKind::Spot { .. }))
-        .copied()
-        .collect();
-    (points, spots)
+    let (bins, of) = spots::spot_bins(lights, spot_bins);
+    let mut gathered = points.clone();
+    let mut spots = Vec::new();
+    for (l, &b) in lights.iter().zip(&of) {
+        if b > 0 {
+            spots.push(*l);
+            gathered.push(LevelLight {
+                position: l.position.as_dvec3(),
+                power: spots::binned_power(l, &bins[b as usize - 1]),
+                bin: b,
+            });
+        }
+    }
+    Split {
+        points,
+        spots,
+        bins,
+        gathered,
+    }
 }
 
 /// One level's lights: every light of the level below spread over the 8 nodes of its cell of
-/// `spacing`, in the order of their nodes (z, then y, then x).
+/// `spacing` in its bin, in the order of their bins and nodes (z, then y, then x).
 fn level(points: &[LevelLight], spacing: f64) -> Vec<LevelLight> {
     // Per node: the weights' sum (trilinear x power), the weighted position and the power.
-    let mut nodes: BTreeMap<(i64, i64, i64), (f64, DVec3, DVec3)> = BTreeMap::new();
+    let mut nodes: BTreeMap<(u32, i64, i64, i64), (f64, DVec3, DVec3)> = BTreeMap::new();
     for l in points {
         let u = l.position / spacing;
         let base = u.floor();
@@ -175,6 +219,7 @@ fn level(points: &[LevelLight], spacing: f64) -> Vec<LevelLight> {
                 continue;
             }
             let key = (
+                l.bin,
                 base.z as i64 + i64::from(corner & 4 != 0),
                 base.y as i64 + i64::from(corner & 2 != 0),
                 base.x as i64 + i64::from(corner & 1 != 0),
@@ -186,52 +231,73 @@ fn level(points: &[LevelLight], spacing: f64) -> Vec<LevelLight> {
         }
     }
     nodes
-        .into_values()
-        .filter(|(weight, _, _)| *weight > 0.0)
-        .map(|(weight, position, power)| LevelLight {
+        .into_iter()
+        .filter(|(_, (weight, _, _))| *weight > 0.0)
+        .map(|((bin, ..), (weight, position, power))| LevelLight {
             position: position / weight,
             power,
+            bin,
         })
         .collect()
 }
 
+/// The nodes `lights` spread into on the grid of `spacing`, counted by place over every bin:
+/// [`level`]'s lights where every light is of one bin.
+fn node_count(lights: &[LevelLight], spacing: f64) -> usize {
+    let one: Vec<LevelLight> = lights.iter().map(|l| LevelLight { bin: 0, ..*l }).collect();
+    level(&one, spacing).len()
+}
+
 impl Hierarchy {
-    /// The hierarchy of `lights` (their point lights aggregated, their spots kept).
+    /// The hierarchy of `lights` (their point lights aggregated, their spots by direction).
     pub fn build(lights: &[Light], params: HierarchyParams) -> Hierarchy {
-        let (points, spots) = split(lights);
-        // The finest grid kept is the first with at most `finest_nodes` times as many lights
-        // as there are point lights, as the authors' implementation skips finer ones (with a
-        // quarter): `h` doubles until then (or until a grid is the last level's).
+        let Split {
+            points,
+            spots,
+            bins,
+            gathered,
+        } = split(lights, params.spot_bins);
+        // The finest grid kept is the first with at most `finest_nodes` times as many nodes
+        // as level 0 has lights, as the authors' implementation skips finer ones (with a
+        // quarter): `h` doubles until then (or until a grid is the last level's). Nodes are
+        // counted by place, over every bin (a grid's spots of many bins hold one place each
+        // in its count, so the bins do not make the grids coarser).
         let mut h = params.spacing;
-        let mut first = level(&points, h);
+        let mut first = node_count(&gathered, h);
         let mut doublings = 0;
-        while first.len() as f64 > params.finest_nodes * points.len() as f64
-            && first.len() > params.top_lights
+        while first as f64 > params.finest_nodes * gathered.len() as f64
+            && first > params.top_lights
             && doublings < MAX_LEVELS
         {
             h *= 2.0;
             doublings += 1;
-            first = level(&points, h);
+            first = node_count(&gathered, h);
         }
         let mut levels = vec![points];
-        if levels[0].len() > params.top_lights {
-            levels.push(first);
+        // Each level's places: level 0's lights, then each grid's nodes by place.
+        let mut places = vec![gathered.len()];
+        if gathered.len() > params.top_lights {
+            levels.push(level(&gathered, h));
+            places.push(first);
         }
-        while levels.last().unwrap().len() > params.top_lights && levels.len() < MAX_LEVELS {
+        while *places.last().unwrap() > params.top_lights && levels.len() < MAX_LEVELS {
             let spacing = h * f64::from(1u32 << (levels.len() - 1));
-            let next = level(levels.last().unwrap(), spacing);
+            let below = levels.last().unwrap();
+            let next = node_count(below, spacing);
             // Grids coarser than the lights' spread stop shrinking (the lights' cells around a
             // grid line keep their 8 to 27 nodes): the level before is the last.
-            if next.len() >= levels.last().unwrap().len() && levels.len() > 1 {
+            if next >= *places.last().unwrap() && levels.len() > 1 {
                 break;
             }
-            levels.push(next);
+            levels.push(level(below, spacing));
+            places.push(next);
         }
         Hierarchy {
             params,
             h,
             levels,
             spots,
+            bins,
         }
     }
 
@@ -244,17 +310,28 @@ impl Hierarchy {
         h: f64,
         levels: usize,
     ) -> Hierarchy {
-        let (points, spots) = split(lights);
+        let Split {
+            points,
+            spots,
+            bins,
+            gathered,
+        } = split(lights, params.spot_bins);
         let mut all = vec![points];
         while all.len() < levels.clamp(1, MAX_LEVELS) {
             let spacing = h * f64::from(1u32 << (all.len() - 1));
-            all.push(level(all.last().unwrap(), spacing));
+            let below = if all.len() == 1 {
+                &gathered
+            } else {
+                all.last().unwrap()
+            };
+            all.push(level(below, spacing));
         }
         Hierarchy {
             params,
             h,
             levels: all,
             spots,
+            bins,
         }
     }
 
@@ -291,8 +368,9 @@ impl Hierarchy {
     }
 
     /// The hierarchy's estimate at `x` of `sum f(light, d) power`, over every level's light
-    /// with its weight (`f` the falloff and whatever the shading multiplies in), and the spots
-    /// as they are (`spot` evaluates one).
+    /// with its weight and, for a spot aggregate, its bin's cone toward `x` (`f` the falloff
+    /// and whatever the shading multiplies in), and the spots as they are (`spot` evaluates
+    /// one, cone included) with level 0's weight.
     pub fn estimate(
         &self,
         x: DVec3,
@@ -305,11 +383,20 @@ impl Hierarchy {
                 let d = x.distance(l.position);
                 let w = self.band(level, d);
                 if w > 0.0 {
-                    sum += w * f(l, d);
+                    let cone = match l.bin {
+                        0 => 1.0,
+                        b => self.bins[b as usize - 1]
+                            .light(l.position.as_vec3(), 1.0, glam::Vec3::ONE)
+                            .cone_toward((l.position - x).normalize_or_zero()),
+                    };
+                    sum += w * cone * f(l, d);
                 }
             }
         }
-        sum + self.spots.iter().map(spot).sum::<DVec3>()
+        for s in &self.spots {
+            sum += self.band(0, x.distance(s.position.as_dvec3())) * spot(s);
+        }
+        sum
     }
 
     /// Each level's total power.
@@ -323,33 +410,33 @@ impl Hierarchy {
 
 impl Hierarchy {
     /// Every light of every level and every spot as a light of the scene model, each with its
-    /// band: point lights of colour `power` and intensity 1 whose radius is the band's reach,
-    /// at most `reach`, then the spots as they are with radius `reach`. `reach` is where no
-    /// surface lies farther from any light ([`reach`]): an unbounded band ends there with
-    /// nothing lost, and every radius stays finite for culling.
+    /// band: lights of colour `power` and intensity 1 whose radius is the band's reach, at
+    /// most `reach` (point lights, and spots of their bin's cone for the spots' aggregates),
+    /// then the spots as they are with level 0's band and radius. `reach` is where no surface
+    /// lies farther from any light ([`reach`]): an unbounded band ends there with nothing
+    /// lost, and every radius stays finite for culling.
     pub fn flatten(&self, reach: f32) -> (Vec<Light>, Vec<Band>) {
         let mut lights = Vec::new();
         let mut bands = Vec::new();
         for (level, ls) in self.levels.iter().enumerate() {
             let band = self.level_band(level);
+            let radius = (band.outer() as f32).min(reach);
             for l in ls {
-                lights.push(Light::point(
-                    l.position.as_vec3(),
-                    (band.outer() as f32).min(reach),
-                    l.power.as_vec3(),
-                    1.0,
-                ));
+                let (position, power) = (l.position.as_vec3(), l.power.as_vec3());
+                lights.push(match l.bin {
+                    0 => Light::point(position, radius, power, 1.0),
+                    b => self.bins[b as usize - 1].light(position, radius, power),
+                });
                 bands.push(band);
             }
         }
+        let band = self.level_band(0);
         for s in &self.spots {
             lights.push(Light {
-                radius: reach,
+                radius: (band.outer() as f32).min(reach),
                 ..*s
             });
-            // Whole at every distance, whatever the ramp; the hierarchy's, as every band of
-            // one hierarchy shares it (the frame carries it).
-            bands.push(Band::with_ramp(0.0, f64::INFINITY, self.params.ramp));
+            bands.push(band);
         }
         (lights, bands)
     }

@@ -81,7 +81,20 @@ pub enum RadiusRule {
         /// Absent: none.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         sample_from: Option<u32>,
+        /// The spots' direction bins: cells along each side of the octahedral map of their
+        /// axes, 1 to 16 (`HierarchyParams::spot_bins`): 5 by default (left out of the
+        /// serialised form).
+        #[serde(default = "spot_bins", skip_serializing_if = "is_spot_bins")]
+        spot_bins: u32,
     },
+}
+
+fn spot_bins() -> u32 {
+    crate::hierarchy::SPOT_BINS
+}
+
+fn is_spot_bins(n: &u32) -> bool {
+    *n == spot_bins()
 }
 
 fn is_stratified(d: &StochasticDraw) -> bool {
@@ -143,6 +156,7 @@ impl RadiusRule {
             growth,
             ramp,
             sample_from,
+            spot_bins,
         } = *self
         else {
             return None;
@@ -155,6 +169,7 @@ impl RadiusRule {
             ramp: ramp.into(),
             top_lights: crate::hierarchy::TOP_LIGHTS,
             sample_from: sample_from.map(|l| l as usize),
+            spot_bins,
         })
     }
 
@@ -193,8 +208,17 @@ impl RadiusRule {
                 finest_nodes,
                 growth,
                 ramp,
+                spot_bins,
                 ..
             } => {
+                if !(1..=16).contains(&spot_bins) {
+                    return Err(SceneError::invalid(
+                        "lights.radius.spot_bins",
+                        spot_bins,
+                        "1 to 16 cells along each side of the octahedral map of spot axes \
+                         (5 by default)",
+                    ));
+                }
                 if !(growth.is_finite() && (1.0..=4.0).contains(&growth)) {
                     return Err(SceneError::invalid(
                         "lights.radius.growth",
@@ -381,6 +405,7 @@ mod tests {
                     growth,
                     ramp,
                     sample_from: None,
+                    spot_bins: crate::hierarchy::SPOT_BINS,
                 },
                 ..LightSpec::default()
             };

@@ -3,7 +3,7 @@
 
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use manylights_scene::hierarchy::{Hierarchy, HierarchyParams};
+use manylights_scene::hierarchy::{Hierarchy, HierarchyParams, SpotBin};
 use manylights_scene::{Light, LightKind, Motion, Scene};
 
 use crate::GpuError;
@@ -109,11 +109,15 @@ pub struct HierarchyPlan {
     pub points: u32,
     /// Spots.
     pub spots: u32,
+    /// The spots' direction bins (`Hierarchy::bins`): the cones of their aggregates, fixed
+    /// with the plan (motion does not turn a spot).
+    pub bins: Vec<SpotBin>,
     /// Where an unbounded band ends (`manylights_scene::hierarchy::reach`).
     pub reach: f32,
     /// Where dead lights sit.
     pub far: Vec3,
-    /// The sums' scale: 2^52 over the point lights' total power (the channels' sum).
+    /// The sums' scale: 2^52 over the total power level 1 gathers (the channels' sum: the
+    /// point lights' and the spots' scaled to their bins' cones).
     pub scale: f32,
 }
 
@@ -136,16 +140,24 @@ impl HierarchyPlan {
             let lo = (region.0 / spacing).floor().as_ivec3() - 1;
             let hi = (region.1 / spacing).floor().as_ivec3() + 2;
             let dims = (hi - lo + 1).as_uvec3();
-            let nodes = u64::from(dims.x) * u64::from(dims.y) * u64::from(dims.z);
+            // A node's key: its index in the box, plus the box's size times its direction bin.
+            let nodes = u64::from(dims.x)
+                * u64::from(dims.y)
+                * u64::from(dims.z)
+                * (hier.bins.len() as u64 + 1);
             if nodes >= u64::from(u32::MAX) {
                 return Err(GpuError::OverLimit {
                     what: format!(
-                        "hierarchy level {l}'s grid nodes ({} x {} x {} at {spacing} m)",
-                        dims.x, dims.y, dims.z
+                        "hierarchy level {l}'s grid nodes ({} x {} x {} at {spacing} m, times \
+                         {} direction bins and the point lights')",
+                        dims.x,
+                        dims.y,
+                        dims.z,
+                        hier.bins.len()
                     ),
                     value: nodes,
                     limit: u64::from(u32::MAX) - 1,
-                    limit_name: "a 32-bit node key (raise the spacing)",
+                    limit_name: "a 32-bit node key (raise the spacing or lower spot_bins)",
                 });
             }
             grids.push(NodeBox {
@@ -155,7 +167,11 @@ impl HierarchyPlan {
             });
             slots.push(table_slots(level.len(), slack));
         }
-        let total: f64 = hier.levels[0]
+        // What level 1 gathers: its lights' power (a level's whole power, each level's the same).
+        let total: f64 = hier
+            .levels
+            .get(1)
+            .unwrap_or(&hier.levels[0])
             .iter()
             .map(|l| l.power.x + l.power.y + l.power.z)
             .sum();
@@ -167,6 +183,7 @@ impl HierarchyPlan {
             slots,
             points: hier.levels[0].len() as u32,
             spots: hier.spots.len() as u32,
+            bins: hier.bins.clone(),
             reach,
             far: region.1 + Vec3::splat(2.0 * reach),
             scale: if total > 0.0 {
