@@ -91,9 +91,9 @@ pub(crate) struct SceneArgs {
     /// the hierarchy, with shorter lists and noise.
     #[arg(long, value_name = "L", requires = "hierarchy")]
     pub(crate) sample_from: Option<u32>,
-    /// With --hierarchy (and tune's --alphas): the spots' direction bins, N cells along each
-    /// side of the octahedral map of their axes (1 to 16; 5 by default): more keep narrower
-    /// cones in the spots' aggregates, and more of them.
+    /// With --hierarchy: the spots' direction bins, N cells along each side of an octahedral
+    /// map of their axes (1 to 16), each bin's aggregates spots of its cone; 0, the default:
+    /// none, the spots spread into the point lights' nodes with their flux.
     #[arg(long, value_name = "N")]
     pub(crate) spot_bins: Option<u32>,
     /// With --stochastic: what E bounds.

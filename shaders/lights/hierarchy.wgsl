@@ -7,8 +7,9 @@
 //   as level 0's light (colour x intensity, its band); a spot as it is, with level 0's band. A
 //   point light is binned into its cell of level 1's grid (`bin`), or, where the cell's nodes
 //   leave the grid's box or the cells' table is full, spread into level 1's grid at once
-//   (`splat`); a spot is spread at once into its direction bin's nodes, its power scaled to
-//   the bin's cone (manylights_scene::hierarchy::spots).
+//   (`splat`); a spot is spread at once into its direction bin's nodes (the point lights'
+//   without bins), its power scaled to the bin's cone (a point light's)
+//   (manylights_scene::hierarchy::spots).
 // - `cells_room`, `fill`, `cell_splat` (after each pass that bins, with its step; the cells'
 //   buffer cleared before it): each binned cell takes its lights' room in a list, its lights
 //   write themselves there, and a thread a cell's corner spreads the cell's lights into that
@@ -83,6 +84,9 @@ struct SpotBin {
     pad: vec2<f32>,
 }
 @group(0) @binding(7) var<storage, read> spot_bins: array<SpotBin>;
+
+// A point light's flux (manylights_scene::hierarchy::spots::POINT_FLUX).
+const POINT_FLUX: f32 = 2.0;
 
 // The integral over the cosine in [-1, 1] of the cone of cosines (ci, co) (light_spot's):
 // manylights_scene::hierarchy::spots::spot_flux.
@@ -324,9 +328,10 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
     let t = target_index[i];
     var s = level_light(l.position, power);
     let b = target_index[step.a.y + i];
-    if b > 0u {
-        // A spot as it is, with level 0's band; into its bin with the power the bin's cone
-        // emits as much with.
+    if light_shape(l) == LIGHT_KIND_SPOT {
+        // A spot as it is, with level 0's band; spread at once into its bin's nodes (the point
+        // lights' where b is 0) with the power that the bin's cone (a point light's) emits as
+        // much with.
         let level = s;
         s = l;
         s.kind = LIGHT_KIND_SPOT | LIGHT_FALLOFF_BAND;
@@ -334,7 +339,14 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
         s.alpha = level.alpha;
         s.interleave = level.interleave;
         shaded[t] = sampled_light(s, t);
-        spread(i, l.position, power * (spot_flux(l.cos_inner, l.cos_outer) / spot_bins[b - 1u].flux), b);
+        no_cell(i);
+        if step.a.w > 0u {
+            var flux = POINT_FLUX;
+            if b > 0u {
+                flux = spot_bins[b - 1u].flux;
+            }
+            splat(l.position, power * (spot_flux(l.cos_inner, l.cos_outer) / flux), b);
+        }
         return;
     }
     shaded[t] = sampled_light(s, t);

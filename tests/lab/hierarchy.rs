@@ -1,6 +1,6 @@
 //! The lighting grid hierarchy in experiments (`radius: Hierarchy(alpha, spacing)`):
 //! every strategy and backend over the hierarchy's lights (every level's, with its band, and
-//! the spots), on surfaces of all five material models at once, end to end, with zero false negatives against the bands' spheres, each image
+//! the spots, in the point lights' nodes and in direction bins), on surfaces of all five material models at once, end to end, with zero false negatives against the bands' spheres, each image
 //! equal to the brute-force reference of the same hierarchy, and the error against infinite
 //! range falling as alpha grows; and moving lights, the hierarchy built before every frame.
 
@@ -26,7 +26,7 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
         ),
         sweep: (
             radius: [Hierarchy(alpha: 1.0, spacing: 0.25), Hierarchy(alpha: 4.0, spacing: 0.25),
-                Hierarchy(alpha: 1.0, spacing: 0.25, growth: 1.2, ramp: 1.5)],
+                Hierarchy(alpha: 1.0, spacing: 0.25, growth: 1.2, ramp: 1.5, spot_bins: 5)],
             variants: [
                 (label: "forward-gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
                 (label: "forward-zbin", backend: Forward, strategy: ZBin(tile_size: 8)),
@@ -43,11 +43,11 @@ fn hierarchy_cells_match_their_reference_with_no_false_negatives() {
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
     assert_eq!(s.rows.len(), 24);
-    // Growing bands and narrow ramps are named.
+    // Growing bands, narrow ramps and spot bins are named.
     assert_eq!(
         s.rows
             .iter()
-            .filter(|r| r.cell.contains("hierarchy=1/h0.25/g1.2/c1.5,"))
+            .filter(|r| r.cell.contains("hierarchy=1/h0.25/g1.2/c1.5/b5,"))
             .count(),
         8
     );

@@ -40,11 +40,12 @@
 //! nothing inside `r_(l-1)`; adjacent levels' weights sum to 1, so a single light, which every
 //! level places at its own position with its whole power, is exact at every distance.
 //!
-//! Spot lights are level 0's lights too (with its band) and are aggregated by direction: each
-//! falls in a direction bin of its axis, and each bin's spots make nodes of their own in every
-//! level's grid (a node keyed by its bin and its place), shaded as spots of the bin's cone
-//! ([`spots`]). So a spot far away is lit through its level's aggregate as a point light is,
-//! and a lone spot stays exact at every distance.
+//! Spot lights are level 0's lights too (with its band) and are aggregated with their flux
+//! ([`spots`]): by default into the point lights' nodes (an aggregate emits what its spots do,
+//! spread over every direction), or, with direction bins, into nodes of their own bin in every
+//! level's grid (a node keyed by its bin and its place), shaded as spots of the bin's cone, so
+//! that a lone spot stays exact at every distance. Either way a spot far away is lit through
+//! its level's aggregate as a point light is.
 
 use std::collections::BTreeMap;
 
@@ -70,10 +71,10 @@ pub const GROWTH: f64 = 1.0;
 /// twice it, the papers' bands.
 pub const RAMP: f64 = 2.0;
 
-/// Cells along each side of the octahedral map of spot axes by default
-/// ([`HierarchyParams::spot_bins`]): 25 direction bins at most, the centre one holding the
-/// axes within 14-20 degrees of straight down.
-pub const SPOT_BINS: u32 = 5;
+/// The spots' direction bins by default ([`HierarchyParams::spot_bins`]): none, every spot
+/// spread into the point lights' nodes with its flux (an isotropic far field at a point
+/// light's cost; bins multiply the aggregates, [`spots`]).
+pub const SPOT_BINS: u32 = 0;
 
 /// The finest grid holds at most this many nodes a point light by default
 /// ([`HierarchyParams::finest_nodes`]; the authors' implementation: 0.25).
@@ -110,9 +111,10 @@ pub struct HierarchyParams {
     /// estimate is the hierarchy's on average and its lists shorter. `None`: every band as it
     /// is. Spots and their aggregates are sampled as the point lights and theirs are.
     pub sample_from: Option<usize>,
-    /// The spots' direction bins: cells along each side of the octahedral map of their axes
-    /// ([`SPOT_BINS`] by default; at least 1, one bin for every spot). More bins keep
-    /// narrower cones in the aggregates and put more of them in every level.
+    /// The spots' direction bins: 0 ([`SPOT_BINS`], the default), none: every spot spreads
+    /// into the point lights' nodes with its flux; `n >= 1`: the cells along each side of
+    /// an octahedral map of their axes, each bin's aggregates spots of its cone. More bins
+    /// keep narrower cones and put more aggregates in every level.
     pub spot_bins: u32,
 }
 
@@ -185,11 +187,11 @@ fn split(lights: &[Light], spot_bins: u32) -> Split {
     let mut gathered = points.clone();
     let mut spots = Vec::new();
     for (l, &b) in lights.iter().zip(&of) {
-        if b > 0 {
+        if matches!(l.kind, LightKind::Spot { .. }) {
             spots.push(*l);
             gathered.push(LevelLight {
                 position: l.position.as_dvec3(),
-                power: spots::binned_power(l, &bins[b as usize - 1]),
+                power: spots::binned_power(l, b.checked_sub(1).map(|b| &bins[b as usize])),
                 bin: b,
             });
         }

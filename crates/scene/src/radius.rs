@@ -81,9 +81,9 @@ pub enum RadiusRule {
         /// Absent: none.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         sample_from: Option<u32>,
-        /// The spots' direction bins: cells along each side of the octahedral map of their
-        /// axes, 1 to 16 (`HierarchyParams::spot_bins`): 5 by default (left out of the
-        /// serialised form).
+        /// The spots' direction bins (`HierarchyParams::spot_bins`): 0, none, by default (left
+        /// out of the serialised form): the spots spread into the point lights' nodes; 1 to
+        /// 16: cells along each side of an octahedral map of their axes.
         #[serde(default = "spot_bins", skip_serializing_if = "is_spot_bins")]
         spot_bins: u32,
     },
@@ -211,12 +211,12 @@ impl RadiusRule {
                 spot_bins,
                 ..
             } => {
-                if !(1..=16).contains(&spot_bins) {
+                if spot_bins > 16 {
                     return Err(SceneError::invalid(
                         "lights.radius.spot_bins",
                         spot_bins,
-                        "1 to 16 cells along each side of the octahedral map of spot axes \
-                         (5 by default)",
+                        "0 (no direction bins, the default) to 16 cells along each side of \
+                         the octahedral map of spot axes",
                     ));
                 }
                 if !(growth.is_finite() && (1.0..=4.0).contains(&growth)) {

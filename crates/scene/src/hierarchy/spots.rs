@@ -1,6 +1,9 @@
-//! Spot lights in the hierarchy: their axes sorted into direction bins, each bin's levels
-//! built as the point lights' are, and each of its aggregates shaded as a spot of the bin's
-//! cone.
+//! Spot lights in the hierarchy. Without bins (`spot_bins` 0, the default) a spot spreads into
+//! the point lights' nodes with its power times its cone's flux over a point light's
+//! ([`POINT_FLUX`]): the aggregates emit the spots' flux, over every direction, at no more
+//! aggregates than the point lights make. With bins, their axes are sorted into direction
+//! bins, each bin's levels built as the point lights' are, and each of its aggregates shaded
+//! as a spot of the bin's cone:
 //!
 //! - A spot's bin is its axis's cell of an octahedral map of `n x n` cells
 //!   ([`super::HierarchyParams::spot_bins`]; the map's centre straight down, where fixtures
@@ -89,10 +92,13 @@ fn angle(a: DVec3, b: DVec3) -> f64 {
     a.cross(b).length().atan2(a.dot(b))
 }
 
-/// The direction bins of `lights`' spots in an `n x n` octahedral map (`n >= 1`), and each
-/// light's bin: 0 for a point light, else its bin's number (from 1; `bins[number - 1]`).
+/// The direction bins of `lights`' spots in an `n x n` octahedral map, and each light's bin:
+/// 0 for a point light, else its bin's number (from 1; `bins[number - 1]`). `n` 0: no bins,
+/// every light's 0.
 pub fn spot_bins(lights: &[Light], n: u32) -> (Vec<SpotBin>, Vec<u32>) {
-    let n = n.max(1);
+    if n == 0 {
+        return (Vec::new(), vec![0; lights.len()]);
+    }
     let cones: Vec<Option<(DVec3, f64, f64)>> = lights
         .iter()
         .map(|l| match l.kind {
@@ -149,13 +155,17 @@ pub fn spot_bins(lights: &[Light], n: u32) -> (Vec<SpotBin>, Vec<u32>) {
     (bins, of)
 }
 
-/// The power spot `light` spreads into bin `bin`'s nodes: its power times its cone's flux
-/// over the bin's.
-pub fn binned_power(light: &Light, bin: &SpotBin) -> DVec3 {
+/// The power spot `light` spreads into bin `bin`'s nodes (`None`: the point lights'): its
+/// power times its cone's flux over the bin's (a point light's).
+pub fn binned_power(light: &Light, bin: Option<&SpotBin>) -> DVec3 {
     let (_, ci, co) = light.cone().expect("a spot");
     light.color.as_dvec3() * f64::from(light.intensity) * spot_flux(ci.into(), co.into())
-        / bin.flux()
+        / bin.map_or(POINT_FLUX, SpotBin::flux)
 }
+
+/// The flux of a point light (its cone 1 at every cosine): what a spot's power is scaled
+/// against where it spreads into the point lights' nodes (no bins).
+pub const POINT_FLUX: f64 = 2.0;
 
 #[cfg(test)]
 mod tests {
@@ -208,7 +218,7 @@ mod tests {
         assert!((bins[0].outer_angle - 35f32.to_radians()).abs() < 1e-6);
         assert!((bins[0].inner_angle - 28f32.to_radians()).abs() < 1e-6);
         assert!(
-            (binned_power(&down, &bins[0]) - DVec3::ONE)
+            (binned_power(&down, Some(&bins[0])) - DVec3::ONE)
                 .abs()
                 .max_element()
                 < 1e-5
@@ -227,7 +237,7 @@ mod tests {
             let (a, _, _) = l.cone().unwrap();
             let spread = angle(bin.axis.as_dvec3(), a.as_dvec3());
             assert!(spread + f64::from(30f32.to_radians()) <= f64::from(bin.outer_angle) + 1e-6);
-            assert!(binned_power(l, bin).x <= 1.0 + 1e-6);
+            assert!(binned_power(l, Some(bin)).x <= 1.0 + 1e-6);
         }
     }
 }

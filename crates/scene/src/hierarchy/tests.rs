@@ -349,37 +349,58 @@ fn estimate_cones(h: &Hierarchy, x: DVec3) -> DVec3 {
 #[test]
 fn every_level_holds_the_spots_whole_flux() {
     let ls = with_spots(&lights(3000, 60.0, 1), 3, 35.0, 2);
-    let h = Hierarchy::build(&ls, params(2.0));
-    assert!(
-        h.levels.len() >= 4 && h.bins.len() >= 4,
-        "{} levels",
-        h.levels.len()
-    );
     let flux = |l: &Light| match l.cone() {
-        None => 2.0,
+        None => spots::POINT_FLUX,
         Some((_, ci, co)) => spots::spot_flux(ci.into(), co.into()),
     };
     let total: DVec3 = ls.iter().map(|l| power(l) * flux(l)).sum();
-    for (k, level) in h.levels.iter().enumerate().skip(1) {
-        let sum: DVec3 = level
-            .iter()
-            .map(|l| match l.bin {
-                0 => l.power * 2.0,
-                b => l.power * h.bins[b as usize - 1].flux(),
-            })
-            .sum();
-        assert!(
-            (sum - total).abs().max_element() < 1e-6 * total.max_element(),
-            "level {k}: {sum} against {total}"
-        );
-        assert!(level.iter().any(|l| l.bin > 0) && level.iter().any(|l| l.bin == 0));
-        assert!(level.windows(2).all(|w| w[0].bin <= w[1].bin));
+    // No bins (the default: the spots in the point lights' nodes) and 5 a side.
+    for spot_bins in [0, 5] {
+        let p = HierarchyParams {
+            spot_bins,
+            ..params(2.0)
+        };
+        let h = Hierarchy::build(&ls, p);
+        assert!(h.levels.len() >= 4, "{} levels", h.levels.len());
+        assert_eq!(h.bins.is_empty(), spot_bins == 0, "{} bins", h.bins.len());
+        assert!(spot_bins == 0 || h.bins.len() >= 4, "{} bins", h.bins.len());
+        for (k, level) in h.levels.iter().enumerate().skip(1) {
+            let sum: DVec3 = level
+                .iter()
+                .map(|l| match l.bin {
+                    0 => l.power * spots::POINT_FLUX,
+                    b => l.power * h.bins[b as usize - 1].flux(),
+                })
+                .sum();
+            assert!(
+                (sum - total).abs().max_element() < 1e-6 * total.max_element(),
+                "{spot_bins} bins, level {k}: {sum} against {total}"
+            );
+            assert_eq!(level.iter().any(|l| l.bin > 0), spot_bins > 0);
+            assert!(level.windows(2).all(|w| w[0].bin <= w[1].bin));
+        }
+        let f = Hierarchy::build_fixed(&ls, h.params, h.h, h.levels.len());
+        assert_eq!((f.levels, f.bins), (h.levels, h.bins));
     }
-    let f = Hierarchy::build_fixed(&ls, h.params, h.h, h.levels.len());
-    assert_eq!((f.levels, f.bins), (h.levels, h.bins));
+    // Without bins the levels are the point lights' grids: as many aggregates as the same
+    // lights make as point lights.
+    let as_points: Vec<Light> = ls
+        .iter()
+        .map(|l| Light {
+            kind: LightKind::Point,
+            ..*l
+        })
+        .collect();
+    let (a, b) = (
+        Hierarchy::build(&ls, params(2.0)),
+        Hierarchy::build(&as_points, params(2.0)),
+    );
+    let sizes = |h: &Hierarchy| h.levels[1..].iter().map(Vec::len).collect::<Vec<_>>();
+    assert_eq!(sizes(&a), sizes(&b));
 }
 
-/// A lone spot is exact at every distance, inside its cone and at its edge and outside it.
+/// A lone spot in a bin of its own is exact at every distance, inside its cone and at its edge
+/// and outside it.
 #[test]
 fn a_single_spot_is_exact_at_every_distance() {
     let spot = Light {
@@ -396,7 +417,10 @@ fn a_single_spot_is_exact_at_every_distance() {
         )
     };
     let ls = [spot];
-    let pr = params(1.0);
+    let pr = HierarchyParams {
+        spot_bins: 5,
+        ..params(1.0)
+    };
     let h = Hierarchy::build_fixed(&ls, pr, pr.spacing, MAX_LEVELS);
     let axis = spot.cone().unwrap().0.as_dvec3();
     let side = axis.cross(DVec3::X).normalize();
