@@ -61,6 +61,16 @@ fn bad_hierarchy_options_name_the_option() {
         &["lights.radius.ramp = 2.5", "above 1"],
     );
     rejects(&["--ramp", "1.5"], 1, &["--ramp 1.5 without --hierarchy"]);
+    rejects(
+        &["--hierarchy", "1", "--spot-bins", "17"],
+        1,
+        &["lights.radius.spot_bins = 17", "to 16"],
+    );
+    rejects(
+        &["--spot-bins", "3"],
+        1,
+        &["--spot-bins 3 without --hierarchy"],
+    );
 }
 
 /// `render --hierarchy`: forward and deferred shade the hierarchy's lights as the brute-force
@@ -128,6 +138,16 @@ fn render_hierarchy_matches_its_reference_and_nears_infinite_range() {
         default.contains("the finest grid at most 2 nodes a point light"),
         "{default}"
     );
+    // Spots, in the point lights' nodes (no bins) and in direction bins: still the reference.
+    let (_, spots) = run("1.5", "deferred", &["--spot-fraction", "0.3"]);
+    assert!(spots.contains("spots in 0 direction bins"), "{spots}");
+    let (_, binned) = run(
+        "1.5",
+        "forward",
+        &["--spot-fraction", "0.3", "--spot-bins", "3"],
+    );
+    let bins = number_after(&binned, "lighting grid hierarchy", "spots in");
+    assert!(bins >= 2.0, "{binned}");
     let (_, quarter) = run("1.5", "deferred", &["--finest-nodes", "0.25"]);
     assert!(
         quarter.contains("the finest grid at most 0.25 nodes a point light"),
