@@ -269,16 +269,18 @@ fn the_gpu_build_is_its_oracle_and_follows_moving_lights() {
     assert_eq!(Sums::for_context(&ctx), Sums::Bits64);
     // The papers' bands, growing ones and narrow ramps (the bands' radii are the plan's);
     // every level made from cells (0), and none (each light spread at once).
-    // Spots in the point lights' nodes (no bins) and in direction bins of 5 a side.
-    for (sums, growth, ramp, cell_items, spot_bins) in [
-        (Sums::Bits32, 1.0, 2.0, 0, 0),
-        (Sums::Bits32, 1.0, 2.0, u32::MAX, 5),
-        (Sums::Bits64, 1.0, 2.0, 0, 5),
-        (Sums::Bits64, 1.0, 2.0, u32::MAX, 0),
-        (Sums::Bits64, 1.15, 2.0, 0, 0),
-        (Sums::Bits64, 1.15, 1.25, 0, 5),
+    // Spots in the point lights' nodes (no bins) and in direction bins of 5 a side. Every
+    // light moving, or the first 900 or 1,200 or all 1,500 kept still (their level-1 sums
+    // kept from the first build).
+    for (sums, growth, ramp, cell_items, spot_bins, kept) in [
+        (Sums::Bits32, 1.0, 2.0, 0, 0, 0),
+        (Sums::Bits32, 1.0, 2.0, u32::MAX, 5, 900),
+        (Sums::Bits64, 1.0, 2.0, 0, 5, 900),
+        (Sums::Bits64, 1.0, 2.0, u32::MAX, 0, 1500),
+        (Sums::Bits64, 1.15, 2.0, 0, 0, 1200),
+        (Sums::Bits64, 1.15, 1.25, 0, 5, 0),
     ] {
-        gpu_build_is_its_oracle(&ctx, sums, growth, ramp, cell_items, spot_bins);
+        gpu_build_is_its_oracle(&ctx, sums, growth, ramp, cell_items, spot_bins, kept);
     }
 }
 
@@ -289,6 +291,7 @@ fn gpu_build_is_its_oracle(
     ramp: f64,
     cell_items: u32,
     spot_bins: u32,
+    kept: u32,
 ) {
     use manylights_gpu::hierarchy::{GpuHierarchy, HierarchyPlan};
     use manylights_gpu::layout::GpuLight;
@@ -309,7 +312,7 @@ fn gpu_build_is_its_oracle(
         .fold(original.bounds(), |b, l| b.union_point(l.position));
     let margin = glam::Vec3::splat(2.0);
     let reach = hierarchy::reach(&original);
-    let (plan, _) = HierarchyPlan::new(
+    let (mut plan, _) = HierarchyPlan::new(
         &original.lights,
         params,
         (b.min - margin, b.max + margin),
@@ -318,6 +321,8 @@ fn gpu_build_is_its_oracle(
     )
     .unwrap();
     assert!(plan.levels >= 4, "{} levels", plan.levels);
+    assert_eq!(plan.static_lights, 0, "a plan of new keeps no light still");
+    plan.static_lights = kept;
     let shaded = Scene {
         lights: plan.placeholder(&original.lights),
         ..original.clone()
@@ -347,6 +352,7 @@ fn gpu_build_is_its_oracle(
     )
     .unwrap();
     assert_eq!(build.sums(), sums);
+    assert_eq!(build.kept_lights(), kept);
     // Spots among the lights: every light takes the general path.
     assert_eq!(gpu_scene.light_path(), manylights_gpu::LightPath::General);
     let moved: Vec<manylights_scene::Light> = original
@@ -354,15 +360,18 @@ fn gpu_build_is_its_oracle(
         .iter()
         .enumerate()
         .map(|(i, l)| manylights_scene::Light {
-            position: l.position
-                + glam::Vec3::new((i % 7) as f32 * 0.2 - 0.6, 0.5, (i % 3) as f32 * -0.4),
+            position: if i < kept as usize {
+                l.position
+            } else {
+                l.position + glam::Vec3::new((i % 7) as f32 * 0.2 - 0.6, 0.5, (i % 3) as f32 * -0.4)
+            },
             ..*l
         })
         .collect();
     for (place, lights) in [("at home", &original.lights), ("moved", &moved)] {
         let what = format!(
             "{sums:?}, growth {growth}, ramp {ramp}, cells from {cell_items} items, \
-             {spot_bins} spot bins, {place}"
+             {spot_bins} spot bins, {kept} lights kept still, {place}"
         );
         let gpu: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         ctx.queue
@@ -576,6 +585,13 @@ fn build_frames(
     let gpu_scene =
         GpuScene::upload_with(ctx, shaded, plan.light_model(), &shaded.camera, 16, 16).unwrap();
     let build = GpuHierarchy::new(ctx, plan.clone(), home, &gpu_scene).unwrap();
+    // The lights that never move are splatted once (every one, where none moves).
+    let kept = if plan.levels > 1 {
+        plan.static_lights
+    } else {
+        0
+    };
+    assert_eq!(build.kept_lights(), kept, "{what}");
     for (f, lights) in frames.iter().enumerate() {
         let gpu: Vec<GpuLight> = lights.iter().map(GpuLight::from).collect();
         ctx.queue
@@ -733,4 +749,49 @@ fn moving_lights_get_tables_for_every_frame() {
         build_frames(&ctx, &old, &old_shaded, &scene.lights, &moved, false, "old");
     assert_eq!(outside, 0);
     assert!(full > 0, "tables of twice home's nodes held every frame");
+}
+
+/// Lights that never move are splatted into level 1 once: planned with the lights from 1,000
+/// on moving (`Moving::first`), the build keeps the first 1,000's sums, and at every frame,
+/// the others wherever the motion puts them, it is its oracle of every light, nothing dropped.
+/// A plan of lights that stay home keeps them all.
+#[test]
+fn lights_that_stay_are_splatted_once() {
+    use manylights_gpu::hierarchy::{HierarchyPlan, Moving};
+    let ctx = common::gpu();
+    let scene = atrium(1500, 0.2);
+    let motion = manylights_scene::Motion::Noise(3.0);
+    let first = 1000;
+    let frames = 4;
+    let moved: Vec<Vec<manylights_scene::Light>> = (0..frames)
+        .map(|f| {
+            scene
+                .lights
+                .iter()
+                .enumerate()
+                .map(|(i, l)| manylights_scene::Light {
+                    position: if i < first {
+                        l.position
+                    } else {
+                        motion.position(i as u32, l.position, l.radius, f)
+                    },
+                    ..*l
+                })
+                .collect()
+        })
+        .collect();
+    assert_ne!(moved[2][first].position, scene.lights[first].position);
+    let params = params_at(0.5);
+    let moving = Moving {
+        motion: &motion,
+        first,
+        frames,
+        anchors: &[],
+    };
+    let (plan, shaded) = HierarchyPlan::for_scene(&scene, params, Some(moving)).unwrap();
+    assert_eq!(plan.static_lights, first as u32);
+    let dropped = build_frames(&ctx, &plan, &shaded, &scene.lights, &moved, true, "kept");
+    assert_eq!(dropped, (0, 0));
+    let (home, _) = HierarchyPlan::for_scene(&scene, params, None).unwrap();
+    assert_eq!(home.static_lights, 1500);
 }

@@ -293,7 +293,7 @@ fn host_structs_match_wgsl_layout() {
     ] {
         let hierarchy = validate(def);
         check!(&hierarchy, manylights_gpu::hierarchy::Step, "Step", [a => "a", b => "b", c => "c", d => "d",
-            e => "e", g => "g", h => "h", far => "far", s => "s"]);
+            e => "e", g => "g", h => "h", far => "far", s => "s", o => "o"]);
     }
     // VertexIn is a vertex-input struct (no host-shareable layout); check its attribute
     // locations and formats against VERTEX_LAYOUT instead.

@@ -3,7 +3,8 @@
 // bands; that module is the oracle of this pass). Host side: manylights_gpu::hierarchy.
 //
 // One dispatch a level, in order:
-// - `points` (mode 0): a thread a source light. A point light is written to the shaded lights
+// - `points` (mode 0): a thread a source light (from step.o.x on: a build that keeps the
+//   sums of the lights that never move splats only the others each frame). A point light is written to the shaded lights
 //   as level 0's light (colour x intensity, its band); a spot as it is, with level 0's band. A
 //   point light is binned into its cell of level 1's grid (`bin`), or, where the cell's nodes
 //   leave the grid's box or the cells' table is full, spread into level 1's grid at once
@@ -57,6 +58,9 @@ struct Step {
     // the frame's seed, 1 where this level's bands are sampled (band_xi, sampled_light), the
     // level (node_draw), the bands' ramp (bits; manylights_scene::hierarchy::Band::ramp)
     s: vec4<u32>,
+    // the points pass: its first source light (item k is source light o.x + k), the source
+    // lights in all (where target_index's direction bins start)
+    o: vec4<u32>,
 }
 
 @group(0) @binding(0) var<uniform> step: Step;
@@ -319,15 +323,16 @@ fn item(id: vec3<u32>) -> u32 {
 
 @compute @workgroup_size(256)
 fn points(@builtin(global_invocation_id) id: vec3<u32>) {
-    let i = item(id);
-    if i >= step.a.y {
+    let k = item(id);
+    if k >= step.a.y {
         return;
     }
+    let i = step.o.x + k;
     let l = source[i];
     let power = l.color * l.intensity;
     let t = target_index[i];
     var s = level_light(l.position, power);
-    let b = target_index[step.a.y + i];
+    let b = target_index[step.o.y + i];
     if light_shape(l) == LIGHT_KIND_SPOT {
         // A spot as it is, with level 0's band; spread at once into its bin's nodes (the point
         // lights' where b is 0) with the power that the bin's cone (a point light's) emits as
@@ -339,7 +344,7 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
         s.alpha = level.alpha;
         s.interleave = level.interleave;
         shaded[t] = sampled_light(s, t);
-        no_cell(i);
+        no_cell(k);
         if step.a.w > 0u {
             var flux = POINT_FLUX;
             if b > 0u {
@@ -350,7 +355,7 @@ fn points(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     shaded[t] = sampled_light(s, t);
-    spread(i, l.position, power, 0u);
+    spread(k, l.position, power, 0u);
 }
 
 // The lists' room a workgroup of cells_room takes at once (one global atomic a workgroup, not
@@ -405,7 +410,7 @@ fn fill(@builtin(global_invocation_id) id: vec3<u32>) {
 // power bin had.
 fn cell_item(i: u32) -> Light {
     if step.a.x == 0u {
-        return source[i];
+        return source[step.o.x + i];
     }
     return shaded[step.b.y + i];
 }

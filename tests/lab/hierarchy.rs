@@ -108,13 +108,20 @@ fn a_hierarchy_of_moving_lights_is_built_each_frame() {
         name: "hierarchy-moving",
         config: Config(
             scene: Atrium(bays: 2),
-            lights: (generator: Uniform, count: 300, seed: 4, intensity: 2.0, spot_fraction: 0.1,
-                radius: Hierarchy(alpha: 2.0, spacing: 0.25), motion: Orbit(2.0)),
             resolution: (48, 30),
             frames: 3,
             warmup: 0,
         ),
         sweep: (
+            // Every light moving, and a quarter of them gliding over the surfaces' planes
+            // (the others still: the build keeps their sums).
+            lights: [
+                (generator: Uniform, count: 300, seed: 4, intensity: 2.0, spot_fraction: 0.1,
+                    radius: Hierarchy(alpha: 2.0, spacing: 0.25), motion: Orbit(2.0)),
+                (generator: Uniform, count: 300, seed: 4, intensity: 2.0, spot_fraction: 0.1,
+                    radius: Hierarchy(alpha: 2.0, spacing: 0.25),
+                    motion: Glide(speed: 2.0, extent: 0.5), moving: 0.25),
+            ],
             variants: [
                 (label: "forward-gather", backend: Forward, strategy: TiledGather(tile_size: 8)),
                 (label: "deferred-clusters", backend: Deferred, strategy: Clustered(tile_size: 16, slices: 16)),
@@ -125,7 +132,14 @@ fn a_hierarchy_of_moving_lights_is_built_each_frame() {
     let e = Experiment::parse(src, Path::new("moving.ron")).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
-    assert_eq!(s.rows.len(), 3);
+    assert_eq!(s.rows.len(), 6);
+    assert_eq!(
+        s.rows
+            .iter()
+            .filter(|r| r.params.contains(";moving=0.25"))
+            .count(),
+        3
+    );
     for r in &s.rows {
         let cell = &r.cell;
         assert_eq!(
@@ -148,6 +162,18 @@ fn a_hierarchy_of_moving_lights_is_built_each_frame() {
             r.gpu_ms_cull_steady.is_some(),
             "{cell}"
         );
+        // And timed with the frame: culling, shading and the build back to back.
+        assert_eq!(
+            r.gpu_ms_frame_build_steady.is_some(),
+            r.gpu_ms_frame_steady.is_some(),
+            "{cell}"
+        );
+        if let (Some(with), Some(g)) = (r.gpu_ms_frame_build_steady, r.gpu_ms_geometry_steady) {
+            assert!(
+                with > g,
+                "{cell}: the frame with its build {with} ms, geometry {g} ms"
+            );
+        }
         if let Some(ms) = r.gpu_ms_hierarchy_steady {
             let points = r.passes_steady.get("lights.hierarchy.points");
             assert!(

@@ -82,14 +82,26 @@ fn every_shipped_experiment_parses() {
     found.sort();
     // Every file in experiments/ parses, under its own name, into cells of distinct names
     // (those SHIPPED also run tiny, below).
-    for name in found.iter().filter(|n| dir.join(format!("{n}.ron")).is_file()) {
+    for name in found
+        .iter()
+        .filter(|n| dir.join(format!("{n}.ron")).is_file())
+    {
         let (e, _, _) = shipped(name);
-        assert_eq!(&e.name, name, "experiments/{name}.ron names itself {}", e.name);
+        assert_eq!(
+            &e.name, name,
+            "experiments/{name}.ron names itself {}",
+            e.name
+        );
         let cells = e.cells();
         let mut names: Vec<&str> = cells.iter().map(|c| c.name.as_str()).collect();
         names.sort_unstable();
         names.dedup();
-        assert!(!cells.is_empty() && names.len() == cells.len(), "{name}: {} cells, {} names", cells.len(), names.len());
+        assert!(
+            !cells.is_empty() && names.len() == cells.len(),
+            "{name}: {} cells, {} names",
+            cells.len(),
+            names.len()
+        );
     }
     for name in SHIPPED {
         assert!(
@@ -495,7 +507,7 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
                  hierarchy_ramp,hierarchy_sample_from,stochastic_bound,stochastic_draw,interleave,\
                  stochastic_exposure,shadows,flip_mean_shadowed,energy_error_shadowed,\
                  rays_per_pixel,gpu_ms_shadow,grays_per_s,reference_shadowed_cached,occluded_pairs,\
-                 hierarchy_spot_bins,error"
+                 hierarchy_spot_bins,gpu_ms_frame_build_steady,error"
     ));
 }
 

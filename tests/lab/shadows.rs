@@ -237,7 +237,11 @@ fn stochastic_shadow_cells_measure_their_noise() {
     let s = run_parsed(&ctx, &e, src, Path::new("."), tmp.path(), &opts()).unwrap();
     let [exact, one, eight, accumulated] = [0, 1, 2, 3].map(|i| &s.rows[i]);
     assert_eq!(accumulated.accumulate, Some(4), "{}", accumulated.params);
-    assert!(accumulated.params.contains("shadow_accumulate=4"), "{}", accumulated.params);
+    assert!(
+        accumulated.params.contains("shadow_accumulate=4"),
+        "{}",
+        accumulated.params
+    );
     assert!(
         accumulated.noise_infinite < one.noise_infinite,
         "four frames a seed: noise {:?}, one frame {:?}",
@@ -249,17 +253,27 @@ fn stochastic_shadow_cells_measure_their_noise() {
         let what = &r.cell;
         assert_eq!(r.shadow.shadows, "stochastic", "{what}");
         assert!(
-            r.params.contains(&format!("shadows=stochastic;shadow_rays={k}")) && r.params.contains("shadow_seeds=3"),
+            r.params
+                .contains(&format!("shadows=stochastic;shadow_rays={k}"))
+                && r.params.contains("shadow_seeds=3"),
             "{what}: {}",
             r.params
         );
         let rays = r.shadow.rays_per_pixel.unwrap();
         assert!(rays <= k && rays >= 0.9 * k, "{what}: {rays} rays a pixel");
         assert_eq!(r.seeds, Some(3), "{what}");
-        assert!(r.noise_infinite.is_some_and(|n| n > 0.0), "{what}: {:?}", r.noise_infinite);
+        assert!(
+            r.noise_infinite.is_some_and(|n| n > 0.0),
+            "{what}: {:?}",
+            r.noise_infinite
+        );
         assert!(r.shadow.gpu_ms_shadow.is_some(), "{what}");
     }
-    assert!(exact.shadow.rays_per_pixel.unwrap() > 8.0, "{:?}", exact.shadow);
+    assert!(
+        exact.shadow.rays_per_pixel.unwrap() > 8.0,
+        "{:?}",
+        exact.shadow
+    );
     assert!(
         eight.noise_infinite < one.noise_infinite,
         "noise: 8 rays {:?}, 1 ray {:?}",
@@ -277,13 +291,24 @@ fn stochastic_shadow_cells_measure_their_noise() {
     assert!(svg.contains("1 ray: ") && svg.contains("8 rays: ") && svg.contains("shadowed: "));
 
     for (value, want) in [
-        ("Stochastic(rays: 17)", "shadows.rays = 17: stochastic shadows cast 1 to 16"),
-        ("Stochastic(rays: 2, accumulate: 1)", "shadows.accumulate = 1"),
+        (
+            "Stochastic(rays: 17)",
+            "shadows.rays = 17: stochastic shadows cast 1 to 16",
+        ),
+        (
+            "Stochastic(rays: 2, accumulate: 1)",
+            "shadows.accumulate = 1",
+        ),
         ("Stochastic(rays: 2, seeds: 0)", "shadows.seeds = 0"),
     ] {
         let bad = src.replace("Stochastic(rays: 1, seeds: 3)", value);
-        let err = Experiment::parse(&bad, Path::new("bad.ron")).unwrap_err().to_string();
-        assert!(err.contains("bad.ron") && err.contains(want), "{value}: {err}");
+        let err = Experiment::parse(&bad, Path::new("bad.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bad.ron") && err.contains(want),
+            "{value}: {err}"
+        );
     }
 }
 

@@ -10,6 +10,12 @@
 //! no node that frame is a dead light (no power, radius 0, far from the scene), so the light
 //! count stays fixed while the lights move. Splats that find no room (a node outside its
 //! level's box, a full table) are counted ([`GpuHierarchy::dropped`]), never silent.
+//!
+//! Lights that never move (the scene's first [`HierarchyPlan::static_lights`]) are splatted
+//! into level 1 once, when the build is made, and that table kept: each build copies it and
+//! splats only the lights after them; their level-0 lights are written once. The sums are
+//! integers, so it is the same hierarchy as a build of every light. The coarser levels are
+//! made afresh each build, from level 1 (a node's light is its sums' centroid, not a sum).
 
 use manylights_scene::{Light, LightKind};
 use wgpu::util::DeviceExt;
@@ -259,6 +265,26 @@ pub struct GpuHierarchy {
     /// `cells_room`, `fill` and `cell_splat`.
     cell_pipelines: [wgpu::ComputePipeline; 3],
     sums: Sums,
+    /// Level 1's table with the lights that never move splatted into it, where the build
+    /// keeps it.
+    kept: Option<Kept>,
+}
+
+/// Level 1's table as the lights that never move leave it: `lights` of them, `bytes` bytes.
+struct Kept {
+    lights: u32,
+    slots: wgpu::Buffer,
+    bytes: u64,
+}
+
+/// How many of `sources` lights (the first) the build of `plan` keeps the level-1 sums of: the
+/// plan's lights that never move, where there is a level 1 and level 0's bands are not drawn
+/// afresh each frame (the kept lights' level-0 lights are written once); else 0.
+fn kept_lights(plan: &HierarchyPlan, sources: u32) -> u32 {
+    if plan.levels < 2 || plan.params.sample_from == Some(0) {
+        return 0;
+    }
+    plan.static_lights.min(sources)
 }
 
 impl GpuHierarchy {
@@ -338,9 +364,13 @@ impl GpuHierarchy {
             let n = items.div_ceil(WORKGROUP).max(1);
             (n.min(max), n.div_ceil(max))
         };
-        let steps_of = plan.steps(sources, |items| grid(items).0 * WORKGROUP, cell_items);
+        let kept = kept_lights(&plan, sources);
+        let row = |items| grid(items).0 * WORKGROUP;
+        let steps_of = plan.steps(sources, kept..sources, row, cell_items);
+        let kept_step = (kept > 0).then(|| plan.steps(sources, 0..kept, row, cell_items)[0]);
         let cell_bytes = steps_of
             .iter()
+            .chain(&kept_step)
             .filter_map(|s| CellPasses::of(s).map(|c| c.bytes))
             .max()
             .unwrap_or(0)
@@ -367,40 +397,40 @@ impl GpuHierarchy {
         let finalize = pipeline::compute(d, &module, &pl, "finalize");
         let cell_pipelines = ["cells_room", "fill", "cell_splat"]
             .map(|entry| pipeline::compute(d, &module, &pl, entry));
-        let mut steps = Vec::new();
-        let passes = steps_of
-            .into_iter()
-            .map(|s| {
-                let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("lights.hierarchy.step"),
-                    contents: bytemuck::bytes_of(&s),
-                    usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-                });
-                let group = pipeline::buffers_group(
-                    d,
-                    "lights.hierarchy",
-                    &layout,
-                    &[
-                        &params,
-                        &source,
-                        &target,
-                        &shaded.lights,
-                        &slots,
-                        &dropped,
-                        &cells,
-                        &cones,
-                    ],
-                );
-                steps.push(params);
+        let pass_of = |s: Step| {
+            let params = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("lights.hierarchy.step"),
+                contents: bytemuck::bytes_of(&s),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            });
+            let group = pipeline::buffers_group(
+                d,
+                "lights.hierarchy",
+                &layout,
+                &[
+                    &params,
+                    &source,
+                    &target,
+                    &shaded.lights,
+                    &slots,
+                    &dropped,
+                    &cells,
+                    &cones,
+                ],
+            );
+            (
                 Pass {
                     finalize: s.a[0] == 1,
                     group,
                     groups: grid(s.a[1]),
                     cells: CellPasses::of(&s),
-                }
-            })
-            .collect();
-        Ok(Self {
+                },
+                params,
+            )
+        };
+        let (passes, steps) = steps_of.into_iter().map(pass_of).unzip();
+        let kept_pass = kept_step.map(|s| pass_of(s).0);
+        let mut built = Self {
             plan,
             source,
             slots,
@@ -412,7 +442,46 @@ impl GpuHierarchy {
             finalize,
             cell_pipelines,
             sums,
-        })
+            kept: None,
+        };
+        if let Some(pass) = kept_pass {
+            built.keep(ctx, kept, &pass)?;
+        }
+        Ok(built)
+    }
+
+    /// Splats the `lights` lights that never move into level 1 (`pass`, the points pass over
+    /// them; their level-0 lights written to the shaded lights) and keeps level 1's table as
+    /// it is then: each build starts from it.
+    fn keep(&mut self, ctx: &GpuContext, lights: u32, pass: &Pass) -> Result<(), GpuError> {
+        let bytes = u64::from(self.plan.slots[0]) * SLOT_WORDS * 4;
+        let slots = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lights.hierarchy.kept"),
+            size: bytes,
+            usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("lights.hierarchy.kept"),
+            });
+        encoder.clear_buffer(&self.slots, 0, None);
+        self.record(&mut encoder, &mut GpuTimer::untimed(), 0, pass);
+        encoder.copy_buffer_to_buffer(&self.slots, 0, &slots, 0, bytes);
+        ctx.submit_and_wait(encoder, "lights.hierarchy.kept")?;
+        self.kept = Some(Kept {
+            lights,
+            slots,
+            bytes,
+        });
+        Ok(())
+    }
+
+    /// The lights whose level-1 sums the build keeps (`HierarchyPlan::static_lights`; 0: it
+    /// splats every light each frame).
+    pub fn kept_lights(&self) -> u32 {
+        self.kept.as_ref().map_or(0, |k| k.lights)
     }
 
     /// How its sums are held.
@@ -442,30 +511,43 @@ impl GpuHierarchy {
     /// (`lights.hierarchy.cells<l>`, `.fill<l>`, `.cell_splat<l>`, `l` the level binned).
     pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
         let outer = timer.set_category(Category::LightUpdate);
-        encoder.clear_buffer(&self.slots, 0, None);
-        for (l, p) in self.passes.iter().enumerate() {
-            let (label, pipeline) = if p.finalize {
-                (format!("lights.hierarchy.level{l}"), &self.finalize)
-            } else {
-                ("lights.hierarchy.points".to_string(), &self.points)
-            };
-            if let Some(c) = p.cells {
-                encoder.clear_buffer(&self.cells, 0, Some(c.bytes));
-            }
-            pipeline::dispatch(encoder, timer, &label, pipeline, &[&p.group], p.groups);
-            if let Some(c) = p.cells {
-                let [room, fill, splat] = &self.cell_pipelines;
-                for (name, pipeline, groups) in [
-                    ("cells", room, c.table),
-                    ("fill", fill, c.items),
-                    ("cell_splat", splat, c.corners),
-                ] {
-                    let label = format!("lights.hierarchy.{name}{l}");
-                    pipeline::dispatch(encoder, timer, &label, pipeline, &[&p.group], groups);
+        match &self.kept {
+            Some(k) => {
+                encoder.copy_buffer_to_buffer(&k.slots, 0, &self.slots, 0, k.bytes);
+                if self.slots.size() > k.bytes {
+                    encoder.clear_buffer(&self.slots, k.bytes, None);
                 }
             }
+            None => encoder.clear_buffer(&self.slots, 0, None),
+        }
+        for (l, p) in self.passes.iter().enumerate() {
+            self.record(encoder, timer, l, p);
         }
         timer.set_category(outer);
+    }
+
+    /// Records pass `p` of level `l` and, where it bins, the cells' passes after it.
+    fn record(&self, encoder: &mut wgpu::CommandEncoder, timer: &mut GpuTimer, l: usize, p: &Pass) {
+        let (label, pipeline) = if p.finalize {
+            (format!("lights.hierarchy.level{l}"), &self.finalize)
+        } else {
+            ("lights.hierarchy.points".to_string(), &self.points)
+        };
+        if let Some(c) = p.cells {
+            encoder.clear_buffer(&self.cells, 0, Some(c.bytes));
+        }
+        pipeline::dispatch(encoder, timer, &label, pipeline, &[&p.group], p.groups);
+        if let Some(c) = p.cells {
+            let [room, fill, splat] = &self.cell_pipelines;
+            for (name, pipeline, groups) in [
+                ("cells", room, c.table),
+                ("fill", fill, c.items),
+                ("cell_splat", splat, c.corners),
+            ] {
+                let label = format!("lights.hierarchy.{name}{l}");
+                pipeline::dispatch(encoder, timer, &label, pipeline, &[&p.group], groups);
+            }
+        }
     }
 
     /// Passes a build records: a pass a level (the points pass first) and the cells' three

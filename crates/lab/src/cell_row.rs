@@ -184,6 +184,10 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         covered_pixels: Some(first.covered),
         gpu_ms_hierarchy: med(hierarchy_ms),
         gpu_ms_hierarchy_steady: hierarchy_steady.as_ref().map(|s| s.total_ms),
+        gpu_ms_frame_build_steady: match (first.steady_geometry, first.steady_frame_built) {
+            (Some(g), Some(f)) => Some(g + f),
+            _ => None,
+        },
         scene_lights: (c.lights.radius.kind() == "hierarchy").then_some(scene.lights.len() as u64),
         bytes_written_per_pixel: Some(bytes_written),
         bytes_read_per_pixel: Some(bytes_read),

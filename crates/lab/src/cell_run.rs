@@ -332,6 +332,7 @@ impl<'a> CellFrames<'a> {
             cam,
             settings,
             name,
+            hierarchy: None,
         }
     }
 }
@@ -373,7 +374,8 @@ fn check_poses(
         };
         lights.before_check(ctx, k, frame)?;
         let settings = (run.settings)(cam);
-        let at = run.pose(cam, &pose, &settings);
+        let mut at = run.pose(cam, &pose, &settings);
+        at.hierarchy = lights.hierarchy();
         // Steady state at the first pose, over as many runs as measured frames.
         let steady_runs = (k == 0 && checks.timed).then_some(run.c.frames);
         let mut eval = evaluate(

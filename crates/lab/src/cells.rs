@@ -188,6 +188,9 @@ pub fn params_label(c: &Config) -> String {
             c.lights.motion.label(),
             c.light_update.name()
         ));
+        if c.lights.moving < 1.0 {
+            p.push_str(&format!(";moving={}", c.lights.moving));
+        }
     }
     p
 }

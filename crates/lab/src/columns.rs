@@ -102,5 +102,6 @@ pub const COLUMNS: &[&str] = &[
     "reference_shadowed_cached",
     "occluded_pairs",
     "hierarchy_spot_bins",
+    "gpu_ms_frame_build_steady",
     "error",
 ];

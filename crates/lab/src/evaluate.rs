@@ -21,7 +21,8 @@ use crate::experiment::Config;
 use crate::references::References;
 use crate::runner::stage;
 use crate::steady::{
-    PassMedian, Repeated, SteadyCull, steady_build, steady_cull, steady_cull_shade, steady_geometry,
+    PassMedian, Repeated, SteadyCull, ThenBuild, steady_build, steady_cull, steady_cull_shade,
+    steady_geometry,
 };
 
 /// What one camera pose measured.
@@ -61,6 +62,8 @@ pub(crate) struct PoseEval {
     /// With shadows, the same runs' median with the shading pass of the renderer without
     /// them, ms.
     pub(crate) steady_frame_unshadowed: Option<f64>,
+    /// With a hierarchy, the same runs' median with its build after each shading pass, ms.
+    pub(crate) steady_frame_built: Option<f64>,
     /// The frame's geometry back to back (run median), ms.
     pub(crate) steady_geometry: Option<f64>,
     /// Each pass of the geometry's and of culling and shading's back-to-back runs: its
@@ -82,6 +85,8 @@ pub(crate) struct Pose<'a> {
     pub(crate) settings: &'a CullSettings,
     /// The pose's name in the log.
     pub(crate) name: &'a str,
+    /// The lighting grid hierarchy built before the frame, where the cell has one.
+    pub(crate) hierarchy: Option<&'a GpuHierarchy>,
 }
 
 /// Renders the pose once and measures it on the GPU: list metrics from the exact oracle and
@@ -122,6 +127,7 @@ pub(crate) fn evaluate(
     let mut steady = None;
     let mut steady_frame = None;
     let mut steady_frame_unshadowed = None;
+    let mut steady_frame_built = None;
     let mut steady_passes = Vec::new();
     let per_pixel: Vec<u32> = match &o.lists {
         Some(lists) => {
@@ -153,6 +159,7 @@ pub(crate) fn evaluate(
                 let timed = steady_lists(p, &o, t, runs)?;
                 (steady, steady_frame) = (timed.cull, timed.frame);
                 steady_frame_unshadowed = timed.frame_unshadowed;
+                steady_frame_built = timed.frame_built;
                 steady_passes.extend(timed.passes);
             }
             if let Some(dir) = export {
@@ -220,6 +227,7 @@ pub(crate) fn evaluate(
         steady,
         steady_frame,
         steady_frame_unshadowed,
+        steady_frame_built,
         steady_geometry,
         steady_passes,
     })
@@ -357,6 +365,8 @@ struct SteadyLists {
     passes: Vec<PassMedian>,
     /// With shadows, culling and the shading pass without them (run median), ms.
     frame_unshadowed: Option<f64>,
+    /// With a hierarchy, culling, shading and the build (run median), ms.
+    frame_built: Option<f64>,
 }
 
 /// The lists of `o` (a frame whose single run timed `t`) culled again `runs` times back to
@@ -397,6 +407,7 @@ fn steady_lists(
         frame: None,
         passes: Vec::new(),
         frame_unshadowed: None,
+        frame_built: None,
     };
     if let Some(mut pass) = renderer.shade_pass(ctx, gpu_scene, o) {
         let timed = stage(pose, "culling and shading timed back to back", || {
@@ -414,6 +425,15 @@ fn steady_lists(
             || steady_cull_shade(&repeated, passes + pass.passes(), runs, &mut pass),
         )?;
         out.frame_unshadowed = timed.map(|s| s.total_ms);
+    }
+    if let (Some(hierarchy), Some(pass)) = (p.hierarchy, renderer.shade_pass(ctx, gpu_scene, o)) {
+        let mut built = ThenBuild { pass, hierarchy };
+        let timed = stage(
+            pose,
+            "culling, shading and the hierarchy's build timed back to back",
+            || steady_cull_shade(&repeated, passes + built.passes(), runs, &mut built),
+        )?;
+        out.frame_built = timed.map(|s| s.total_ms);
     }
     Ok(out)
 }

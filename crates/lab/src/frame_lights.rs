@@ -20,8 +20,9 @@ use crate::noise::Draws;
 /// With `radius: Hierarchy`, the plan of the cell's lighting grid hierarchy and the scene it
 /// shades: the scene's geometry with the plan's layout of lights in place of its own (points,
 /// every level's table slots, spots), which the GPU build fills each frame; none otherwise.
-/// Moving lights (the scene's from `first` on) are planned for where they are at every frame
-/// the cell renders.
+/// Moving lights (the scene's generated ones from `first` on, `moving_from`) are planned for
+/// where they are at every frame the cell renders; the lights before them never move, and the
+/// build keeps their level-1 sums (`HierarchyPlan::static_lights`).
 pub(crate) fn hierarchy_plan(
     c: &Config,
     scene: &Scene,
@@ -33,7 +34,7 @@ pub(crate) fn hierarchy_plan(
     let anchors = anchors(c, scene)?;
     let moving = Moving {
         motion: &c.lights.motion,
-        first,
+        first: moving_from(c, scene, first),
         frames: c.warmup + c.frames,
         anchors: &anchors,
     };
@@ -42,11 +43,26 @@ pub(crate) fn hierarchy_plan(
         .map_err(LabError::from)
 }
 
-/// The anchor normals of the cell's generated lights where its motion reads them
-/// (`Motion::Glide`: `LightSpec::anchors` over the scene's geometry), else none.
+/// The first of the scene's lights that moves, where its generated lights start at `first`:
+/// the last `LightSpec::moving_count` of them move (all of them by default).
+fn moving_from(c: &Config, scene: &Scene, first: usize) -> usize {
+    first_moving(&c.lights, scene.lights.len(), first)
+}
+
+/// The first of `lights` lights that `spec` moves, its generated ones from `first` on.
+fn first_moving(spec: &manylights_scene::LightSpec, lights: usize, first: usize) -> usize {
+    let generated = lights.saturating_sub(first);
+    lights - (spec.moving_count() as usize).min(generated)
+}
+
+/// The anchor normals of the cell's moving lights where its motion reads them
+/// (`Motion::Glide`: `LightSpec::anchors` over the scene's geometry, the last
+/// `LightSpec::moving_count`), else none.
 fn anchors(c: &Config, scene: &Scene) -> Result<Vec<glam::Vec3>, LabError> {
     if c.lights.motion.uses_anchors() {
-        Ok(c.lights.anchors(scene)?)
+        let all = c.lights.anchors(scene)?;
+        let moving = (c.lights.moving_count() as usize).min(all.len());
+        Ok(all[all.len() - moving..].to_vec())
     } else {
         Ok(Vec::new())
     }
@@ -88,7 +104,7 @@ impl FrameLights {
         of: &LightsOf<'_>,
         hierarchy: Option<GpuHierarchy>,
     ) -> Result<Self, LabError> {
-        let (scene, first) = (of.scene, of.first);
+        let (scene, first) = (of.scene, moving_from(c, of.scene, of.first));
         let motion = if c.lights.motion.is_static() || first >= scene.lights.len() {
             None
         } else {
@@ -125,7 +141,7 @@ impl FrameLights {
         Ok(Self {
             motion,
             hierarchy,
-            draws: Draws::new(ctx, c, of.gpu_scene, scene, first)?,
+            draws: Draws::new(ctx, c, of.gpu_scene, scene, of.first)?,
             sampled_bands: matches!(
                 c.lights.radius,
                 RadiusRule::Hierarchy {
@@ -232,5 +248,32 @@ impl FrameLights {
             return Err(LabError::HierarchyDropped { outside, full });
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use manylights_scene::{LightSpec, Motion};
+
+    #[test]
+    fn the_last_generated_lights_move() {
+        let spec = LightSpec {
+            count: 400,
+            motion: Motion::Orbit(1.0),
+            moving: 0.25,
+            ..LightSpec::default()
+        };
+        // 10 lights of the scene's own, then 400 generated: the last 100 move.
+        assert_eq!(super::first_moving(&spec, 410, 10), 310);
+        let all = LightSpec {
+            moving: 1.0,
+            ..spec
+        };
+        assert_eq!(super::first_moving(&all, 410, 10), 10);
+        let none = LightSpec {
+            motion: Motion::Static,
+            ..spec
+        };
+        assert_eq!(super::first_moving(&none, 410, 10), 410);
     }
 }

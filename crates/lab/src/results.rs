@@ -264,6 +264,12 @@ pub struct Row {
     /// written before it.
     #[serde(default)]
     pub gpu_ms_hierarchy_steady: Option<f64>,
+    /// `radius: Hierarchy`: the frame in steady state with the hierarchy's build timed in it:
+    /// `gpu_ms_geometry_steady` plus culling, shading and the build back to back in one
+    /// submission (each run's build writing the lights the next run culls, as an
+    /// application's frames run), ms. Empty otherwise, and in rows written before it.
+    #[serde(default)]
+    pub gpu_ms_frame_build_steady: Option<f64>,
     /// The scene's lights where the cell shades others in their place (`radius: Hierarchy`,
     /// whose nodes of every level `lights` counts); empty otherwise. A report's settings
     /// group cells by `Row::setting_lights`.
@@ -408,6 +414,16 @@ impl Row {
             Some(name) => Category::from_name(name),
             None => Some(crate::old_rows::category_before_plans(label)),
         }
+    }
+
+    /// The whole frame in steady state, a hierarchy's build included, ms:
+    /// `gpu_ms_frame_build_steady` where it was timed, else `gpu_ms_frame_steady` plus
+    /// [`Row::hierarchy_build_ms`].
+    pub fn frame_with_build_ms(&self) -> Option<f64> {
+        self.gpu_ms_frame_build_steady.or_else(|| {
+            self.gpu_ms_frame_steady
+                .map(|t| t + self.hierarchy_build_ms().unwrap_or(0.0))
+        })
     }
 
     /// The hierarchy's build a frame pays, ms: `gpu_ms_hierarchy_steady` where it was timed,

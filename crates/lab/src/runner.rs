@@ -8,8 +8,9 @@
 //! metrics from the exact per-pixel oracle (on the GPU, on every `exact_stride`-th pixel) and,
 //! with `accuracy`, the image error against the reference and the infinite-range
 //! reference; a small render and lights-per-pixel heatmap for the report. Moving lights
-//! (`lights.motion`) move before each frame ([`crate::dynamic`]), their update timed with it,
-//! and the list metrics and accuracy are taken at every measured frame instead of every pose.
+//! (`lights.motion`; `lights.moving` of them) move before each frame (`crate::frame_lights`),
+//! their update timed with it, and the list metrics and accuracy are taken at every measured
+//! frame instead of every pose.
 
 use std::collections::BTreeSet;
 use std::path::Path;

@@ -206,6 +206,38 @@ pub fn steady_build(
     timed_runs(ctx, passes, n, &mut repeat)
 }
 
+/// A frame's shading pass followed by the lighting grid hierarchy's build, for
+/// [`steady_cull_shade`]: the build timed with the frame, back to back with its culling and
+/// shading as an application's frames run them (each run's build writes the lights the next
+/// run culls; every build of the same lights is the same hierarchy, so the lists keep their
+/// size), for `gpu_ms_frame_build_steady`.
+pub struct ThenBuild<'a, P: ListPass> {
+    /// The shading pass.
+    pub pass: P,
+    /// The build after it.
+    pub hierarchy: &'a GpuHierarchy,
+}
+
+impl<P: ListPass> ListPass for ThenBuild<'_, P> {
+    fn bind(
+        &mut self,
+        ctx: &GpuContext,
+        lists: [wgpu::BindingResource<'_>; 3],
+        form: manylights_cull::ListForm,
+    ) {
+        self.pass.bind(ctx, lists, form);
+    }
+
+    fn record(&self, enc: &mut wgpu::CommandEncoder, timer: &mut GpuTimer) {
+        self.pass.record(enc, timer);
+        self.hierarchy.encode(enc, timer);
+    }
+
+    fn passes(&self) -> u32 {
+        self.pass.passes() + self.hierarchy.pass_count()
+    }
+}
+
 /// `repeat` (`n` runs of `passes` passes each, back to back into the timer it is given)
 /// repeated untimed for [`warm_up`], then timed per pass and as spans.
 fn timed_runs(

@@ -54,9 +54,7 @@ impl Rank {
     /// A row's time by this rank, ms.
     pub fn time(self, r: &Row) -> Option<f64> {
         match self {
-            Self::Frame => r
-                .gpu_ms_frame_steady
-                .map(|t| t + r.hierarchy_build_ms().unwrap_or(0.0)),
+            Self::Frame => r.frame_with_build_ms(),
             Self::CullShade => cost(r),
         }
     }

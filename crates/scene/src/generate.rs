@@ -80,10 +80,20 @@ pub struct LightSpec {
     /// the serialised form so that earlier experiments keep their cell identifiers).
     #[serde(skip_serializing_if = "is_static")]
     pub motion: Motion,
+    /// Fraction of the generated lights that `motion` moves, in [0, 1] (default 1, every
+    /// one; left out of the serialised form then): the last [`LightSpec::moving_count`] of
+    /// them, the others staying home, as an application's few moving lights among many fixed
+    /// ones.
+    #[serde(skip_serializing_if = "is_all")]
+    pub moving: f32,
 }
 
 fn is_static(m: &Motion) -> bool {
     *m == Motion::Static
+}
+
+fn is_all(f: &f32) -> bool {
+    *f == 1.0
 }
 
 impl Default for LightSpec {
@@ -98,14 +108,31 @@ impl Default for LightSpec {
             spot_fraction: 0.0,
             spot_outer_deg: 35.0,
             motion: Motion::Static,
+            moving: 1.0,
         }
     }
 }
 
 impl LightSpec {
+    /// How many of the generated lights move: `moving` of `count`, rounded to the nearest;
+    /// none where `motion` is static.
+    pub fn moving_count(&self) -> u32 {
+        if self.motion.is_static() {
+            return 0;
+        }
+        (f64::from(self.moving) * f64::from(self.count)).round() as u32
+    }
+
     /// Checks every field; the error names the field, the value and what is accepted.
     pub fn validate(&self) -> Result<(), SceneError> {
         self.motion.validate()?;
+        if !(0.0..=1.0).contains(&self.moving) {
+            return Err(SceneError::invalid(
+                "lights.moving",
+                self.moving,
+                "a fraction in [0, 1] of the generated lights that move",
+            ));
+        }
         if !(self.intensity.is_finite() && self.intensity >= 0.0) {
             return Err(SceneError::invalid(
                 "lights.intensity",
@@ -548,5 +575,47 @@ mod tests {
         .validate()
         .unwrap_err();
         assert!(e.to_string().contains("lights.intensity = NaN"), "{e}");
+        let e = LightSpec {
+            moving: 1.5,
+            ..LightSpec::default()
+        }
+        .validate()
+        .unwrap_err();
+        assert!(e.to_string().contains("lights.moving = 1.5"), "{e}");
+    }
+
+    #[test]
+    fn a_fraction_of_the_lights_moves() {
+        let spec = LightSpec {
+            count: 1000,
+            motion: Motion::Noise(1.0),
+            moving: 0.1,
+            ..LightSpec::default()
+        };
+        assert_eq!(spec.moving_count(), 100);
+        assert_eq!(
+            LightSpec {
+                moving: 1.0,
+                ..spec
+            }
+            .moving_count(),
+            1000
+        );
+        assert_eq!(
+            LightSpec {
+                motion: Motion::Static,
+                ..spec
+            }
+            .moving_count(),
+            0
+        );
+        // Every light moving is left out of the written form (cell identifiers keep).
+        let all = ron::to_string(&LightSpec {
+            moving: 1.0,
+            ..spec
+        })
+        .unwrap();
+        assert!(!all.contains("moving"), "{all}");
+        assert!(ron::to_string(&spec).unwrap().contains("moving:0.1"));
     }
 }

@@ -32,6 +32,9 @@ pub struct Step {
     /// The frame's seed, 1 where this level's bands are sampled, the level, the bands' ramp
     /// (bits).
     pub s: [u32; 4],
+    /// The points pass: its first source light (its items are the lights from there on) and
+    /// the source lights in all (where their direction bins start in the target indices).
+    pub o: [u32; 4],
 }
 
 /// How the lights a hierarchy is planned for move ([`HierarchyPlan::for_scene`]): the scene's
@@ -119,6 +122,11 @@ pub struct HierarchyPlan {
     /// The sums' scale: 2^52 over the total power level 1 gathers (the channels' sum: the
     /// point lights' and the spots' scaled to their bins' cones).
     pub scale: f32,
+    /// The lights that never move, the scene's first ones (`Moving::first`; all of them where
+    /// none moves): the build splats them into level 1 once and keeps those sums, and each
+    /// frame's build starts from them and splats only the lights after them
+    /// (`crate::hierarchy::GpuHierarchy`). 0 from [`HierarchyPlan::new`]: every light may move.
+    pub static_lights: u32,
 }
 
 impl HierarchyPlan {
@@ -191,6 +199,7 @@ impl HierarchyPlan {
             } else {
                 1.0
             },
+            static_lights: 0,
         };
         Ok((plan, hier))
     }
@@ -267,6 +276,8 @@ impl HierarchyPlan {
                 *slots = (*slots).max(table_slots(nodes, 1.25));
             }
         }
+        let n = scene.lights.len();
+        plan.static_lights = moving.map_or(n, |m| m.first.min(n)) as u32;
         let shaded = Scene {
             lights: plan.placeholder(&scene.lights),
             ..scene.clone()
@@ -297,12 +308,14 @@ impl HierarchyPlan {
         out
     }
 
-    /// Each dispatch's parameters, in order (the points pass, then a finalize pass a level); a
-    /// pass that spreads at least `cell_items` items into the next level bins them into cells
-    /// first (spread 2), a smaller one spreads each at once (1), the last level none (0).
+    /// Each dispatch's parameters, in order (the points pass over source lights `points` of
+    /// `sources`, then a finalize pass a level); a pass that spreads at least `cell_items`
+    /// items into the next level bins them into cells first (spread 2), a smaller one spreads
+    /// each at once (1), the last level none (0).
     pub(super) fn steps(
         &self,
         sources: u32,
+        points: std::ops::Range<u32>,
         row: impl Fn(u32) -> u32,
         cell_items: u32,
     ) -> Vec<Step> {
@@ -325,7 +338,11 @@ impl HierarchyPlan {
         let far = [self.far.x, self.far.y, self.far.z, f32::INFINITY];
         (0..self.levels)
             .map(|l| {
-                let items = if l == 0 { sources } else { self.slots[l - 1] };
+                let items = if l == 0 {
+                    points.len() as u32
+                } else {
+                    self.slots[l - 1]
+                };
                 let spread = match (l + 1 < self.levels, items >= cell_items) {
                     (false, _) => 0,
                     (true, false) => 1,
@@ -359,6 +376,7 @@ impl HierarchyPlan {
                         l as u32,
                         (self.params.ramp as f32).to_bits(),
                     ],
+                    o: [if l == 0 { points.start } else { 0 }, sources, 0, 0],
                 }
             })
             .collect()
