@@ -619,6 +619,31 @@ fn build_frames(
     build.dropped(ctx).unwrap()
 }
 
+/// `lights` at each of frames `0..frames`, those from `first` on where `motion` puts them.
+fn moved_frames(
+    lights: &[manylights_scene::Light],
+    motion: &manylights_scene::Motion,
+    first: usize,
+    frames: u32,
+) -> Vec<Vec<manylights_scene::Light>> {
+    (0..frames)
+        .map(|f| {
+            lights
+                .iter()
+                .enumerate()
+                .map(|(i, l)| manylights_scene::Light {
+                    position: if i < first {
+                        l.position
+                    } else {
+                        motion.position(i as u32, l.position, l.radius, f)
+                    },
+                    ..*l
+                })
+                .collect()
+        })
+        .collect()
+}
+
 fn params_at(spacing: f64) -> HierarchyParams {
     HierarchyParams {
         alpha: 1.0,
@@ -700,19 +725,7 @@ fn moving_lights_get_tables_for_every_frame() {
     .generate(&scene)
     .unwrap();
     let frames = 6;
-    let moved: Vec<Vec<manylights_scene::Light>> = (0..frames)
-        .map(|f| {
-            scene
-                .lights
-                .iter()
-                .enumerate()
-                .map(|(i, l)| manylights_scene::Light {
-                    position: motion.position(i as u32, l.position, l.radius, f),
-                    ..*l
-                })
-                .collect()
-        })
-        .collect();
+    let moved = moved_frames(&scene.lights, &motion, 0, frames);
     let params = params_at(0.25);
     let moving = Moving {
         motion: &motion,
@@ -763,23 +776,7 @@ fn lights_that_stay_are_splatted_once() {
     let motion = manylights_scene::Motion::Noise(3.0);
     let first = 1000;
     let frames = 4;
-    let moved: Vec<Vec<manylights_scene::Light>> = (0..frames)
-        .map(|f| {
-            scene
-                .lights
-                .iter()
-                .enumerate()
-                .map(|(i, l)| manylights_scene::Light {
-                    position: if i < first {
-                        l.position
-                    } else {
-                        motion.position(i as u32, l.position, l.radius, f)
-                    },
-                    ..*l
-                })
-                .collect()
-        })
-        .collect();
+    let moved = moved_frames(&scene.lights, &motion, first, frames);
     assert_ne!(moved[2][first].position, scene.lights[first].position);
     let params = params_at(0.5);
     let moving = Moving {
