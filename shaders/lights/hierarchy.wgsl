@@ -105,16 +105,22 @@ const NO_CELL: u32 = 0xffffffffu;
 // The most slots cell_of probes before a light is spread at once instead (nothing is lost).
 const MAX_PROBES: u32 = 256u;
 
+// Probes of slot_of that step 1, 2, 3, ... slots on (triangular probing) before it steps one
+// slot at a time: a grid's keys come in runs, and one slot at a time from the first let some
+// boxes' tables grow runs of tens of slots (crates/gpu/examples/hash_probes.rs).
+const TRIANGULAR_PROBES: u32 = 64u;
+
 // The slot of `key` in the next level's table (inserting it), or none where every slot holds
-// another key: it probes the whole table, so a table with room always takes a node (the plan
-// sizes each with a quarter more slots than its level's nodes).
+// another key: after its triangular probes it probes the whole table one slot at a time, so a
+// table with room always takes a node (the plan sizes each with a quarter more slots than its
+// level's nodes).
 fn slot_of(key: u32) -> i32 {
     let count = step.b.w;
     var probe = (key * 2654435769u) ^ (key >> 15u);
     probe = probe % count;
     var tries = 0u;
     loop {
-        if tries >= count {
+        if tries >= count + TRIANGULAR_PROBES {
             return -1;
         }
         let at = step.b.z + probe;
@@ -122,8 +128,8 @@ fn slot_of(key: u32) -> i32 {
         if old == 0u || old == key {
             return i32(at);
         }
-        probe = (probe + 1u) % count;
         tries += 1u;
+        probe = (probe + select(1u, tries, tries < TRIANGULAR_PROBES)) % count;
     }
     return -1;
 }
