@@ -426,7 +426,9 @@ fn steady_lists(
         )?;
         out.frame_unshadowed = timed.map(|s| s.total_ms);
     }
-    if let (Some(hierarchy), Some(pass)) = (p.hierarchy, renderer.shade_pass(ctx, gpu_scene, o)) {
+    if let Some(hierarchy) = p.hierarchy
+        && let Some(pass) = renderer.shade_pass(ctx, gpu_scene, o)
+    {
         let mut built = ThenBuild { pass, hierarchy };
         let timed = stage(
             pose,
