@@ -298,8 +298,11 @@ fn band_points_match_their_reference_on_every_path() {
         // lights each sample (tests/shade/msaa.rs), and deferred's G-buffer holds a fragment's
         // normal where the reference interpolates it at each edge sample (0.0026 here on
         // lavapipe): their lists are checked by the false negatives.
+        // Forward alone shades the band points' packed lights where the reference shades the
+        // general path's: the same sums rounded apart by an ulp, which turn a few 8-bit pixels
+        // one step on some CPUs' lavapipe (3.3e-5 seen in CI, 0 here).
         let tolerance = match (r.backend.as_str(), r.msaa) {
-            ("forward", 1) => 1e-6,
+            ("forward", 1) => 1e-4,
             ("forward", _) => 0.05,
             (_, 1) => 1e-3,
             _ => 0.01,
