@@ -112,6 +112,17 @@ const STATIC_ONLY: &[(&str, &[&str], &str)] = &[
         "emit counts only when it does not fill (fill = true here)",
     ),
     ("clustered_fill_wide", &["bin_counts"], "as clustered_fill"),
+    ("clustered_scatter", &["bin_counts"], "as clustered_fill"),
+    (
+        "clustered_count",
+        &["cull_stats"],
+        "the held pairs' offsets, taken only with CLUSTER_PAIRS (that pipeline's pass declares them)",
+    ),
+    (
+        "clustered_count_wide",
+        &["cull_stats"],
+        "as clustered_count",
+    ),
     (
         "clustered_count",
         &["cluster_aux"],

@@ -11,6 +11,7 @@ mod lists;
 mod msaa;
 mod occlusion;
 mod order;
+mod pairs;
 mod paths;
 mod transparent;
 

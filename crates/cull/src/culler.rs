@@ -79,6 +79,12 @@ pub struct Culler {
     /// (clusters 32 px x 32) took 1.60 ms against 1.86 looping over the light's slices, and at
     /// 50,000 lights in the hall 0.378 against 0.447 (H100). The same lists either way.
     pub cluster_slice_masks: bool,
+    /// With the clusters' boxes, whether a run whose lists are sized up front (back-to-back
+    /// runs) has its count passes hold each (cluster, light) pair they count, so that
+    /// `cull.clustered.scatter` puts them in their lists in place of the fill passes, which
+    /// would test them all again (`CLUSTER_PAIRS`; 8 bytes a list entry). True by default. The
+    /// same lists either way.
+    pub cluster_pairs: bool,
     /// The tiles a lane of the clusters' wide-light passes should take
     /// ([`crate::CLUSTER_LANE_TILES`] by default): a light whose rectangle holds more than
     /// [`crate::layout::CLUSTER_LANES`] times as many tiles is split into bands of its rows, each
@@ -197,6 +203,7 @@ impl Culler {
             cluster_tile_rect_pairs: crate::CLUSTER_TILE_RECT_PAIRS,
             cluster_boxes: true,
             cluster_slice_masks: true,
+            cluster_pairs: true,
             cluster_lane_tiles: crate::CLUSTER_LANE_TILES,
             cluster_band_pool: None,
             cluster_sphere_bounds: true,

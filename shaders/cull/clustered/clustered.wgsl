@@ -185,7 +185,89 @@ fn cluster_boxes(@builtin(global_invocation_id) id: vec3<u32>) {
     cluster_aux[o + 7u] = far;
 }
 
-fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, fill: bool) {
+// Held pairs (CLUSTER_PAIRS: the count passes of a run whose lists were sized up front, as
+// back-to-back runs are): the count passes' tests are the fill passes' again, so there each
+// thread keeps the (cluster, light) pairs it counts, PAIR_SLOTS of them in registers, and writes
+// them to the pair region of cluster_aux (after the clusters' boxes, two words a pair) at an
+// offset its workgroup takes with one atomic on cull_stats[PAIRS_WORD]; a thread that counted
+// more walks its lights' clusters again, writing each pair (EMIT_PAIRS). The region holds the
+// lists' total, so every pair fits; cull.clustered.scatter then puts each into its list in
+// place of the fill passes.
+override CLUSTER_PAIRS: bool = false;
+const PAIR_SLOTS: u32 = 8u;
+const PAIRS_WORD: u32 = 11u;
+// What emit_cluster does with a pair: count it (holding it with CLUSTER_PAIRS), put it in its
+// list, or write it to the pair region at pair_next.
+const EMIT_COUNT: u32 = 0u;
+const EMIT_FILL: u32 = 1u;
+const EMIT_PAIRS: u32 = 2u;
+var<private> held_bins: array<u32, PAIR_SLOTS>;
+var<private> held_count: u32;
+var<private> held_light: u32;
+var<private> pair_next: u32;
+var<workgroup> wg_pairs: atomic<u32>;
+var<workgroup> wg_pairs_base: u32;
+
+// The first word of the pair region in cluster_aux, and the pairs it holds.
+fn pairs_at() -> u32 {
+    return CLUSTER_BOX_WORDS * cull.bins;
+}
+
+fn pair_capacity() -> u32 {
+    return (arrayLength(&cluster_aux) - pairs_at()) / 2u;
+}
+
+fn write_pair(k: u32, bin: u32, light: u32) {
+    if k < pair_capacity() {
+        cluster_aux[pairs_at() + 2u * k] = bin;
+        cluster_aux[pairs_at() + 2u * k + 1u] = light;
+    }
+}
+
+fn emit_cluster(bin: u32, light: u32, mode: u32) {
+    if mode == EMIT_PAIRS {
+        write_pair(pair_next, bin, light);
+        pair_next += 1u;
+        return;
+    }
+    emit(bin, light, mode == EMIT_FILL);
+    if CLUSTER_PAIRS && mode == EMIT_COUNT {
+        if held_count < PAIR_SLOTS {
+            held_bins[held_count] = bin;
+        }
+        held_count += 1u;
+        held_light = light;
+    }
+}
+
+// After a count pass's thread has emitted its pairs (uniform control flow): takes their place in
+// the pair region and writes those held; true where it counted more than it held, and must walk
+// its clusters again with EMIT_PAIRS (from pair_next).
+fn hold_pairs(li: u32) -> bool {
+    var at = 0u;
+    if held_count != 0u {
+        at = atomicAdd(&wg_pairs, held_count);
+    }
+    workgroupBarrier();
+    if li == 0u {
+        let n = atomicLoad(&wg_pairs);
+        var base = 0u;
+        if n != 0u {
+            base = atomicAdd(&cull_stats[PAIRS_WORD], n);
+        }
+        wg_pairs_base = base;
+    }
+    pair_next = workgroupUniformLoad(&wg_pairs_base) + at;
+    if held_count > PAIR_SLOTS {
+        return true;
+    }
+    for (var k = 0u; k < held_count; k++) {
+        write_pair(pair_next + k, held_bins[k], held_light);
+    }
+    return false;
+}
+
+fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, mode: u32) {
     let tiles = cull.tiles_x * cull.tiles_y;
     if (cull.flags & CULL_FLAG_SLICE_MASKS) != 0u {
         // Only the slices of s0..=s1 that hold pixels, from the tile's mask (s1 < 64).
@@ -200,7 +282,7 @@ fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, fill: bo
                 bits &= bits - 1u;
                 let bin = s * tiles + t;
                 if cluster_box_keeps(l, tile, bin) {
-                    emit(bin, i, fill);
+                    emit_cluster(bin, i, mode);
                 }
             }
         }
@@ -210,10 +292,10 @@ fn emit_slices(i: u32, l: CullLight, tile: vec2<u32>, s0: u32, s1: u32, fill: bo
         let bin = s * tiles + tile.y * cull.tiles_x + tile.x;
         if tile_boxes() {
             if cluster_box_keeps(l, tile, bin) {
-                emit(bin, i, fill);
+                emit_cluster(bin, i, mode);
             }
         } else if (cull.flags & CULL_FLAG_SKIP_EMPTY) == 0u || atomicLoad(&occupancy[bin]) != 0u {
-            emit(bin, i, fill);
+            emit_cluster(bin, i, mode);
         }
     }
 }
@@ -226,12 +308,12 @@ var<workgroup> wg_medium: atomic<u32>;
 var<workgroup> wg_medium_base: u32;
 
 // One thread a narrow light: its tiles, each with every slice of the light's range.
-fn assign_narrow(i: u32, r: LightRect, fill: bool) {
+fn assign_narrow(i: u32, r: LightRect, mode: u32) {
     let width = u32(r.rect.z - r.rect.x + 1);
     for (var k = 0u; k < r.count; k++) {
         let tile = vec2<u32>(u32(r.rect.x) + k % width, u32(r.rect.y) + k / width);
         if tile_holds(tile, r.l) {
-            emit_slices(i, r.l, tile, r.s0, r.s1, fill);
+            emit_slices(i, r.l, tile, r.s0, r.s1, mode);
         }
     }
 }
@@ -272,7 +354,7 @@ fn queue_entries() -> u32 {
 
 // CLUSTER_LANES threads a queued entry (a wide light or a band of its rows), then
 // CLUSTER_MEDIUM_LANES a medium light, over its (tile, slice) pairs.
-fn assign_wide(id: vec3<u32>, fill: bool) {
+fn assign_wide(id: vec3<u32>, mode: u32) {
     let t = id.y * GROUPS_X * 64u + id.x;
     let wide = queue_entries();
     var q = t / CLUSTER_LANES;
@@ -313,7 +395,7 @@ fn assign_wide(id: vec3<u32>, fill: bool) {
         for (var k = lane; k < tiles; k += lanes) {
             let tile = vec2<u32>(x0 + k % width, y0 + k / width);
             if tile_holds(tile, l) {
-                emit_slices(i, l, tile, s0, s0 + slices - 1u, fill);
+                emit_slices(i, l, tile, s0, s0 + slices - 1u, mode);
             }
         }
         return;
@@ -326,7 +408,7 @@ fn assign_wide(id: vec3<u32>, fill: bool) {
         let tile = vec2<u32>(x0 + tk % width, y0 + tk / width);
         if tile_holds(tile, l) {
             let s = s0 + k % slices;
-            emit_slices(i, l, tile, s, s, fill);
+            emit_slices(i, l, tile, s, s, mode);
         }
     }
 }
@@ -349,7 +431,7 @@ fn clustered_count(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_
         medium = r.count > CLUSTER_NARROW && r.count <= CLUSTER_MEDIUM;
         wide = r.count > CLUSTER_MEDIUM;
         if r.count <= CLUSTER_NARROW {
-            assign_narrow(i, r, false);
+            assign_narrow(i, r, EMIT_COUNT);
         }
     }
     var at = 0u;
@@ -408,6 +490,9 @@ fn clustered_count(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_
             store_band(cull.light_count + start + b - 1u, i, r, b, bands);
         }
     }
+    if CLUSTER_PAIRS && hold_pairs(li) {
+        assign_narrow(i, r, EMIT_PAIRS);
+    }
 }
 
 // The narrow lights again; the wide ones are the queue's.
@@ -417,19 +502,34 @@ fn clustered_fill(@builtin(global_invocation_id) id: vec3<u32>) {
     if i < cull.light_count {
         let r = light_rect(i);
         if r.count <= CLUSTER_NARROW {
-            assign_narrow(i, r, true);
+            assign_narrow(i, r, EMIT_FILL);
         }
     }
 }
 
 @compute @workgroup_size(64)
-fn clustered_count_wide(@builtin(global_invocation_id) id: vec3<u32>) {
-    assign_wide(id, false);
+fn clustered_count_wide(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    assign_wide(id, EMIT_COUNT);
+    if CLUSTER_PAIRS && hold_pairs(li) {
+        assign_wide(id, EMIT_PAIRS);
+    }
 }
 
 @compute @workgroup_size(64)
 fn clustered_fill_wide(@builtin(global_invocation_id) id: vec3<u32>) {
-    assign_wide(id, true);
+    assign_wide(id, EMIT_FILL);
+}
+
+// cull.clustered.scatter (a run whose lists were sized up front, in place of the fill passes):
+// a thread a pair that the count passes held (CLUSTER_PAIRS), into its cluster's list as the
+// fill passes would put it.
+@compute @workgroup_size(64)
+fn clustered_scatter(@builtin(global_invocation_id) id: vec3<u32>) {
+    let k = id.y * GROUPS_X * 64u + id.x;
+    if k < min(atomicLoad(&cull_stats[PAIRS_WORD]), pair_capacity()) {
+        let at = pairs_at() + 2u * k;
+        emit(cluster_aux[at], cluster_aux[at + 1u], true);
+    }
 }
 
 // The indirect dispatch of the wide passes: CLUSTER_LANES threads for each queued entry, in

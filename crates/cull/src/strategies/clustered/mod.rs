@@ -17,7 +17,13 @@
 //!    rows ([`crate::Culler::cluster_lane_tiles`]; one thread emitting a whole-screen light's
 //!    12,000 entries would idle the GPU).
 //! 3. The capacity cap and the scan ([`crate::blocks::lists`]).
-//! 4. `cull.clustered.fill` and `cull.clustered.fill_wide`, in the same split.
+//! 4. `cull.clustered.fill` and `cull.clustered.fill_wide`, in the same split. Where the
+//!    lists were sized before the count (back-to-back runs, as the steady frame's) and the
+//!    boxes are stored ([`crate::Culler::cluster_pairs`]), the count passes instead hold the
+//!    pairs they count (8 a thread in registers, written at an offset a workgroup takes with
+//!    one atomic; a thread that counted more walks its clusters again, writing each) in a
+//!    region after the boxes, 8 bytes a list entry, and `cull.clustered.scatter` (a thread a
+//!    pair) puts each in its list: the fill passes' tests are not made twice.
 //! 5. With `ordered` (the default), `cull.clustered.order_lists` lists the clusters whose lists
 //!    need sorting, `cull.clustered.order_args` turns their counts into indirect dispatches, and
 //!    `cull.clustered.order_short` and `cull.clustered.order_bits` (or, past
@@ -53,7 +59,7 @@ use crate::layout::{
 use crate::record::{Buf, Dispatch, Step};
 use crate::scan::groups_2d;
 use crate::strategies::Plan;
-use crate::{CullError, CullOutput, Strategy};
+use crate::{CullError, CullOutput, Kernel, Strategy};
 
 mod pipelines;
 
@@ -153,8 +159,15 @@ struct ClusterPlan<'a> {
     /// Their indirect dispatch arguments (binding 11 of the pass that writes them; an indirect
     /// buffer cannot also be bound for storage in the dispatch that reads it).
     wide_args: wgpu::Buffer,
-    /// The clusters' boxes (binding 11 of the per-light passes, `CULL_FLAG_CLUSTER_BOXES`).
+    /// The clusters' boxes (binding 11 of the per-light passes, `CULL_FLAG_CLUSTER_BOXES`);
+    /// with `pairs`, the pair region after them.
     boxes: Option<wgpu::Buffer>,
+    /// The count passes hold their pairs and `cull.clustered.scatter` fills the lists
+    /// ([`crate::Culler::cluster_pairs`]): a run sized before its count, with the boxes.
+    pairs: bool,
+    /// Whether the count phase was recorded (before [`Plan::size`]: the lists were not sized
+    /// up front, and the fill passes fill them).
+    counted: std::cell::Cell<bool>,
     group_a: wgpu::BindGroup,
     group_args: wgpu::BindGroup,
     sized: Option<(wgpu::Buffer, wgpu::BindGroup)>,
@@ -213,6 +226,8 @@ impl<'a> ClusterPlan<'a> {
             wide,
             wide_args,
             boxes,
+            pairs: false,
+            counted: std::cell::Cell::new(false),
             sized: None,
         }
     }
@@ -240,10 +255,70 @@ impl<'a> ClusterPlan<'a> {
     fn cells(&self) -> usize {
         usize::from(self.f.params.flags & CULL_FLAG_DEPTH_MASK != 0)
     }
+
+    /// The fill passes (the lists not sized up front, or no pairs held).
+    fn fill_passes<'s>(&'s self, group: &'s wgpu::BindGroup) -> Vec<Step<'s>> {
+        let g = self.r.pipelines.clustered();
+        vec![
+            Step::pass(
+                "cull.clustered.fill",
+                &g.per_light[self.cells()].fill,
+                group,
+                self.light_groups(),
+                self.reads(
+                    &[Buf::Lights, Buf::Occupancy, Buf::Offsets],
+                    &[Buf::Lights, Buf::Occupancy, Buf::Offsets, Buf::ClusterBoxes],
+                ),
+                &[Buf::Indices, Buf::Cursors],
+            ),
+            Step::pass(
+                "cull.clustered.fill_wide",
+                &g.per_light[self.cells()].fill_wide,
+                group,
+                Dispatch::Indirect(Buf::WideArgs, &self.wide_args, 0),
+                self.reads(
+                    &[
+                        Buf::WideLights,
+                        Buf::WideArgs,
+                        Buf::Lights,
+                        Buf::Occupancy,
+                        Buf::Offsets,
+                    ],
+                    &[
+                        Buf::WideLights,
+                        Buf::WideArgs,
+                        Buf::Lights,
+                        Buf::Occupancy,
+                        Buf::Offsets,
+                        Buf::ClusterBoxes,
+                    ],
+                ),
+                &[Buf::Indices, Buf::Cursors],
+            ),
+        ]
+    }
+
+    /// The pairs the count passes held: the lists' total.
+    fn total_pairs(&self) -> u32 {
+        let b = self.boxes.as_ref().expect("pairs with the boxes");
+        ((b.size() - box_bytes(&self.f.params)) / 8) as u32
+    }
+
+    /// The count pass (`wide`: its wide passes'), holding its pairs with `pairs`.
+    fn count_kernel(&self, wide: bool) -> &Kernel {
+        let k = &self.r.pipelines.clustered().per_light[self.cells()];
+        match (wide, self.pairs) {
+            (false, false) => &k.count,
+            (false, true) => &k.count_pairs,
+            (true, false) => &k.count_wide,
+            (true, true) => &k.count_wide_pairs,
+        }
+    }
 }
 
 impl Plan for ClusterPlan<'_> {
     fn count(&self, _sized: bool) -> Vec<Step<'_>> {
+        self.counted.set(true);
         let (f, q) = (self.f, self.r.pipelines);
         let g = q.clustered();
         if self.by_tiles {
@@ -331,14 +406,18 @@ impl Plan for ClusterPlan<'_> {
         steps.extend([
             Step::pass(
                 "cull.clustered.count",
-                &g.per_light[self.cells()].count,
+                self.count_kernel(false),
                 &self.group_a,
                 self.light_groups(),
                 self.reads(
                     &[Buf::Lights, Buf::Occupancy],
                     &[Buf::Lights, Buf::Occupancy, Buf::ClusterBoxes],
                 ),
-                &[Buf::Counts, Buf::WideLights],
+                if self.pairs {
+                    &[Buf::Counts, Buf::WideLights, Buf::ClusterBoxes, Buf::Stats]
+                } else {
+                    &[Buf::Counts, Buf::WideLights]
+                },
             ),
             Step::pass(
                 "cull.clustered.wide_args",
@@ -350,7 +429,7 @@ impl Plan for ClusterPlan<'_> {
             ),
             Step::pass(
                 "cull.clustered.count_wide",
-                &g.per_light[self.cells()].count_wide,
+                self.count_kernel(true),
                 &self.group_a,
                 Dispatch::Indirect(Buf::WideArgs, &self.wide_args, 0),
                 self.reads(
@@ -363,7 +442,11 @@ impl Plan for ClusterPlan<'_> {
                         Buf::ClusterBoxes,
                     ],
                 ),
-                &[Buf::Counts],
+                if self.pairs {
+                    &[Buf::Counts, Buf::ClusterBoxes, Buf::Stats]
+                } else {
+                    &[Buf::Counts]
+                },
             ),
         ]);
         steps.extend(q.lists.count_tail(f, &self.group_a, f.params.bins));
@@ -381,6 +464,22 @@ impl Plan for ClusterPlan<'_> {
     }
 
     fn size(&mut self, total: u32) {
+        if !self.counted.get() && self.boxes.is_some() && self.r.culler.cluster_pairs && total > 0 {
+            // Sized up front: the boxes' buffer gains the pair region, the lists' total.
+            let p = &self.f.params;
+            let bytes = box_bytes(p) + u64::from(total) * 8;
+            let limits = &self.r.ctx.limits;
+            if bytes
+                <= limits
+                    .max_storage_buffer_binding_size
+                    .min(limits.max_buffer_size)
+            {
+                let boxes = self.f.buf(Buf::ClusterBoxes.name(), bytes);
+                self.group_a = self.f.group(&self.r.culler.placeholder, &self.wide, &boxes);
+                self.boxes = Some(boxes);
+                self.pairs = true;
+            }
+        }
         let args = self.boxes.as_ref().unwrap_or(&self.r.culler.placeholder);
         self.sized = Some(self.f.lists(total, &self.wide, args));
     }
@@ -417,43 +516,18 @@ impl Plan for ClusterPlan<'_> {
                 writes,
             )];
         }
-        let mut steps = vec![
-            Step::pass(
-                "cull.clustered.fill",
-                &g.per_light[self.cells()].fill,
+        let mut steps = if self.pairs {
+            vec![Step::pass(
+                "cull.clustered.scatter",
+                &g.scatter,
                 group,
-                self.light_groups(),
-                self.reads(
-                    &[Buf::Lights, Buf::Occupancy, Buf::Offsets],
-                    &[Buf::Lights, Buf::Occupancy, Buf::Offsets, Buf::ClusterBoxes],
-                ),
+                groups_2d(self.total_pairs().div_ceil(64), GROUPS_X),
+                &[Buf::ClusterBoxes, Buf::Stats, Buf::Offsets],
                 &[Buf::Indices, Buf::Cursors],
-            ),
-            Step::pass(
-                "cull.clustered.fill_wide",
-                &g.per_light[self.cells()].fill_wide,
-                group,
-                Dispatch::Indirect(Buf::WideArgs, &self.wide_args, 0),
-                self.reads(
-                    &[
-                        Buf::WideLights,
-                        Buf::WideArgs,
-                        Buf::Lights,
-                        Buf::Occupancy,
-                        Buf::Offsets,
-                    ],
-                    &[
-                        Buf::WideLights,
-                        Buf::WideArgs,
-                        Buf::Lights,
-                        Buf::Occupancy,
-                        Buf::Offsets,
-                        Buf::ClusterBoxes,
-                    ],
-                ),
-                &[Buf::Indices, Buf::Cursors],
-            ),
-        ];
+            )]
+        } else {
+            self.fill_passes(group)
+        };
         if self.ordered {
             steps.push(Step::pass(
                 "cull.clustered.order_lists",

@@ -10,6 +10,8 @@ pub(crate) struct Pipelines {
     /// (testing the flag at every (light, cluster) took 1.2% longer a frame at 1M lights).
     pub(super) per_light: [PerLight; 2],
     pub(super) wide_args: Kernel,
+    /// `cull.clustered.scatter`: the held pairs into their lists.
+    pub(super) scatter: Kernel,
     pub(super) order: Kernel,
     /// `cull.clustered.order`'s lists by the bitmap's rank sort, run in its place with
     /// `CULL_FLAG_ORDER_BITS`.
@@ -36,6 +38,9 @@ pub(crate) struct PerLight {
     pub(super) fill: Kernel,
     pub(super) count_wide: Kernel,
     pub(super) fill_wide: Kernel,
+    /// The count passes holding their pairs for `cull.clustered.scatter` (`CLUSTER_PAIRS`).
+    pub(super) count_pairs: Kernel,
+    pub(super) count_wide_pairs: Kernel,
 }
 
 impl PerLight {
@@ -48,11 +53,16 @@ impl PerLight {
             "clustered_fill_wide",
         ]
         .map(|e| program.pipeline_with(d, e, &constants));
+        let held = [constants[0], ("CLUSTER_PAIRS", 1.0)];
+        let [count_pairs, count_wide_pairs] =
+            ["clustered_count", "clustered_count_wide"].map(|e| program.pipeline_with(d, e, &held));
         Self {
             count,
             fill,
             count_wide,
             fill_wide,
+            count_pairs,
+            count_wide_pairs,
         }
     }
 }
@@ -71,6 +81,7 @@ impl Pipelines {
             cells,
             tiles_count,
             masks_fill,
+            scatter,
         ] = program.pipelines(
             d,
             [
@@ -84,11 +95,13 @@ impl Pipelines {
                 "cluster_cells",
                 "cluster_tiles_count",
                 "cluster_masks_fill",
+                "clustered_scatter",
             ],
         );
         Self {
             per_light: [false, true].map(|cells| PerLight::new(d, program, cells)),
             wide_args,
+            scatter,
             order_short,
             order_lists,
             order_args,
