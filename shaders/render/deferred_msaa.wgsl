@@ -13,12 +13,18 @@
 // sample's colour is composited under it before the average, as the reference blends the glass
 // over each sample.
 // With VISIBILITY (surface.wgsl), the same from the triangle ids (shade_triangles_msaa). The
-// MSAA reference (shade.reference_samples) lights every pixel this way.
+// MSAA reference (shade.reference_samples) lights every pixel this way. With GBUFFER_IDS (a
+// device with primitive_index: gbuffer_ids.wgsl), the G-buffer holds each sample's triangle id
+// in the material's place, and a pixel is lit as the reference lights it, once where one fragment
+// covers every sample (its surface the G-buffer's, the material its triangle's) and elsewhere
+// each sample on its triangle (shade_gbuffer_ids_msaa): an edge sample's normal is the one the
+// reference interpolates there, not its fragment's at the centroid.
 @group(2) @binding(0) var gb_normal_depth: texture_multisampled_2d<f32>;
 @group(2) @binding(1) var gb_material: texture_multisampled_2d<u32>;
 @group(2) @binding(3) var glass: texture_multisampled_2d<f32>;
 
 override GLASS: bool = false;
+override GBUFFER_IDS: bool = false;
 
 // Sample k's colour c (alpha: 1 where covered, 0 for background) under the glass layer.
 fn under_glass(pixel: vec2<u32>, k: u32, c: vec4<f32>) -> vec4<f32> {
@@ -62,15 +68,32 @@ fn shade_point(pixel: vec2<u32>, z: f32, s: Surface, zbin: bool) -> vec3<f32> {
     return shade_list(light_list(pixel, z), s.p, s.n, s.v, s.m);
 }
 
-// A G-buffer sample's surface: at p, with the sample's normal and material.
+// A G-buffer sample's surface: at p, with the sample's normal and material (with GBUFFER_IDS,
+// its triangle's: the first vertex's, as visibility_surface takes it).
 fn gbuffer_surface(p: vec3<f32>, pixel: vec2<u32>, k: u32) -> Surface {
     let v = view_dir(p);
-    return Surface(p, textureLoad(gb_normal_depth, pixel, k).xyz, v, materials[textureLoad(gb_material, pixel, k).x]);
+    var m = textureLoad(gb_material, pixel, k).x;
+    if GBUFFER_IDS {
+        m = vis_vertices[VERTEX_WORDS * vis_indices[3u * (m - 1u)] + 6u];
+    }
+    return Surface(p, textureLoad(gb_normal_depth, pixel, k).xyz, v, materials[m]);
 }
 
 // The NDC depth of world point p.
 fn world_ndc_depth(p: vec3<f32>) -> f32 {
     return ndc_depth((frame.view_from_world * vec4<f32>(p, 1.0)).z);
+}
+
+// A pixel one fragment covers, lit once at its centre from G-buffer sample 0 at view depth
+// `view_z` (under the glass with GLASS).
+fn gbuffer_centre(pixel: vec2<u32>, view_z: f32, zbin: bool) -> vec4<f32> {
+    let q = view_point(screen_ndc(vec2<f32>(pixel) + 0.5), view_z);
+    let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
+    let c = vec4<f32>(shade_point(pixel, ndc_depth(view_z), gbuffer_surface(p, pixel, 0u), zbin), 1.0);
+    if GLASS {
+        return all_under_glass(pixel, c);
+    }
+    return c;
 }
 
 fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
@@ -79,6 +102,10 @@ fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
     }
     if VISIBILITY {
         shade_triangles_msaa(pixel, zbin);
+        return;
+    }
+    if GBUFFER_IDS {
+        shade_gbuffer_ids_msaa(pixel, zbin);
         return;
     }
     let g0 = textureLoad(gb_normal_depth, pixel, 0);
@@ -98,13 +125,7 @@ fn shade_pixel_msaa(pixel: vec2<u32>, zbin: bool) {
         return;
     }
     if !edge && covered == DEPTH_SAMPLES {
-        let q = view_point(screen_ndc(vec2<f32>(pixel) + 0.5), g0.w);
-        let p = (frame.world_from_view * vec4<f32>(q, 1.0)).xyz;
-        var c = vec4<f32>(shade_point(pixel, ndc_depth(g0.w), gbuffer_surface(p, pixel, 0u), zbin), 1.0);
-        if GLASS {
-            c = all_under_glass(pixel, c);
-        }
-        textureStore(out_color, pixel, c);
+        textureStore(out_color, pixel, gbuffer_centre(pixel, g0.w, zbin));
         return;
     }
     var c = vec4<f32>(0.0);
@@ -148,6 +169,12 @@ fn shade_triangles_msaa(pixel: vec2<u32>, zbin: bool) {
         textureStore(out_color, pixel, c);
         return;
     }
+    textureStore(out_color, pixel, triangle_samples(pixel, zbin));
+}
+
+// The mean of a pixel's samples each lit at its own position on its triangle (the ids in
+// gb_material), looked up at its depth (each under the glass with GLASS).
+fn triangle_samples(pixel: vec2<u32>, zbin: bool) -> vec4<f32> {
     var c = vec4<f32>(0.0);
     for (var k = 0u; k < DEPTH_SAMPLES; k++) {
         let id = textureLoad(gb_material, pixel, k).x;
@@ -161,5 +188,25 @@ fn shade_triangles_msaa(pixel: vec2<u32>, zbin: bool) {
         }
         c += ck;
     }
-    textureStore(out_color, pixel, c / f32(DEPTH_SAMPLES));
+    return c / f32(DEPTH_SAMPLES);
+}
+
+// A G-buffer's pixel with GBUFFER_IDS: where one fragment covers every sample (one triangle,
+// and the same G-buffer values: a rasteriser may split a pixel of one triangle into fragments,
+// as llvmpipe does at some edges, each interpolated elsewhere), once at the centre from
+// G-buffer sample 0 (the centroid of a fragment that covers every sample is the centre), as
+// the pixel is lit without the ids; elsewhere each covered sample on its triangle
+// (triangle_samples), as the reference lights it.
+fn shade_gbuffer_ids_msaa(pixel: vec2<u32>, zbin: bool) {
+    let id0 = textureLoad(gb_material, pixel, 0).x;
+    let g0 = textureLoad(gb_normal_depth, pixel, 0);
+    var one = id0 != 0u;
+    for (var k = 1u; k < DEPTH_SAMPLES; k++) {
+        one = one && textureLoad(gb_material, pixel, k).x == id0 && all(textureLoad(gb_normal_depth, pixel, k) == g0);
+    }
+    if one {
+        textureStore(out_color, pixel, gbuffer_centre(pixel, g0.w, zbin));
+        return;
+    }
+    textureStore(out_color, pixel, triangle_samples(pixel, zbin));
 }

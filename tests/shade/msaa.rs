@@ -90,8 +90,9 @@ fn forward_msaa_matches_the_reference_at_its_sample_count() {
 /// sample. The same for the visibility buffer (`shade_triangles_msaa`). Against the reference
 /// at the same count (which lights the same points) both stay within mean FLIP 0.02 here, in
 /// the atrium at 70 x 45, where lights next to curved walls make steep gradients within a
-/// pixel: measured on lavapipe 0.008 (deferred, whose G-buffer holds a fragment's normal at its
-/// centroid where the reference interpolates it at each sample) and 0.006 (visibility).
+/// pixel: measured on lavapipe under 1e-4 (deferred, whose interior pixels are the reference's
+/// fragments and whose edge samples it lights on their triangles, as the reference does) and
+/// 0.006 (visibility, whose interior pixels it finds on their triangles at the centre).
 #[test]
 fn deferred_msaa_lights_every_sample_its_lists_need() {
     let ctx = common::gpu();
@@ -269,7 +270,9 @@ fn sample_counts_the_device_lacks_are_errors() {
 /// Issue 68's match: in the pillars, whose thin columns make edges everywhere, deferred lighting
 /// and the visibility buffer with MSAA 4 are within mean FLIP 0.001 of the reference at the
 /// same count at 192 x 108 and 640 x 360 (lavapipe has no MSAA 8; the H200's figures at 8 and
-/// at 1280 x 720 are in docs/BENCHMARKS.md, "MSAA"); forward, which lights an edge's
+/// at 1280 x 720 are in docs/BENCHMARKS.md, "MSAA"); deferred, whose G-buffer holds each
+/// sample's triangle id (`GBUFFER_IDS`), within 1e-4 at 192 x 108 (1.2e-5 on lavapipe; 6.0e-4
+/// with each edge fragment's normal at its centroid); forward, which lights an edge's
 /// fragments once each at their centroids, is measured beside them and held within 0.05.
 #[test]
 fn msaa_deferred_and_visibility_match_the_reference() {
@@ -297,10 +300,10 @@ fn msaa_deferred_and_visibility_match_the_reference() {
                 .unwrap();
             let e = compare(&out.color, &reference, 1.0);
             println!("pillars {w} x {h} {} MSAA 4: {e:?}", backend.name());
-            let bound = if backend == Backend::Forward {
-                0.05
-            } else {
-                1e-3
+            let bound = match backend {
+                Backend::Forward => 0.05,
+                Backend::Deferred if w == 192 => 1e-4,
+                _ => 1e-3,
             };
             assert!(e.flip_mean <= bound, "{w} x {h} {}: {e:?}", backend.name());
         }

@@ -37,6 +37,7 @@ pub const SHADERS: &[manylights_gpu::shaders::ShaderDef] = &[
     infinite::SHADER,
     shaders::FORWARD,
     shaders::GBUFFER,
+    shaders::GBUFFER_IDS,
     shaders::DEFERRED,
     shaders::DEFERRED_MSAA,
     shaders::VISIBILITY,

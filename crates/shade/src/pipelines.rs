@@ -12,7 +12,9 @@ use crate::backends::{
     Backend, GB_MATERIAL, GB_NORMAL_DEPTH, GB_POSITION, HdrFormat, Renderer, VISIBILITY_ID,
 };
 use crate::kinds::{Shadows, VisibilityPass};
-use crate::shaders::{DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, VISIBILITY, deferred_swaps};
+use crate::shaders::{
+    DEFERRED, DEFERRED_MSAA, FORWARD, GBUFFER, GBUFFER_IDS, VISIBILITY, deferred_swaps,
+};
 pub use crate::shaders::{LIST_SHADING, SURFACE};
 
 fn lists_entries(visibility: wgpu::ShaderStages) -> Vec<wgpu::BindGroupLayoutEntry> {
@@ -104,6 +106,7 @@ impl Renderer {
             lights: light_path.constants(),
             shadows: Shadows::Off,
             glass_layer: samples > 1 && transparent,
+            gbuffer_ids: samples > 1 && ctx.features.primitive_index,
             forward_lists,
             deferred_lists,
             deferred_float_lists,
@@ -224,6 +227,9 @@ pub(crate) struct Pipelines {
     scene_layout: wgpu::BindGroupLayout,
     samples: u32,
     hdr: HdrFormat,
+    /// With MSAA, the G-buffer holds each sample's triangle id in the material's place
+    /// (`GBUFFER_IDS`): where the device has `PRIMITIVE_INDEX`.
+    gbuffer_ids: bool,
     /// The material model of each of the scene's opaque draws (`GpuScene::opaque_models`).
     opaque_models: Vec<u32>,
     opaque_model_mask: u32,
@@ -437,10 +443,18 @@ impl Pipelines {
             Surfaces::Rebuilt => pipeline::raster_msaa(
                 d,
                 "shade.gbuffer",
-                &GBUFFER.create(d),
+                &if self.gbuffer_ids {
+                    GBUFFER_IDS.create(d)
+                } else {
+                    GBUFFER.create(d)
+                },
                 &[g0],
                 Some((
-                    "fs_gbuffer",
+                    if self.gbuffer_ids {
+                        "fs_gbuffer_ids"
+                    } else {
+                        "fs_gbuffer"
+                    },
                     &[
                         pipeline::target(GB_NORMAL_DEPTH),
                         pipeline::target(GB_MATERIAL),
@@ -500,6 +514,10 @@ impl Pipelines {
         ));
         if self.samples > 1 {
             constants.push(("GLASS", f64::from(u8::from(self.glass_layer))));
+            constants.push((
+                "GBUFFER_IDS",
+                f64::from(u8::from(self.gbuffer_ids && surfaces == Surfaces::Rebuilt)),
+            ));
         }
         if !float {
             constants.extend(sample_constants(self.samples));

@@ -52,6 +52,23 @@ pub const GBUFFER: ShaderDef = ShaderDef {
         shader_file!("render/gbuffer.wgsl"),
     ],
 };
+/// `shade.gbuffer` with MSAA over the triangles' ids (`fs_gbuffer_ids`; needs
+/// `PRIMITIVE_INDEX`).
+pub const GBUFFER_IDS: ShaderDef = ShaderDef {
+    name: "shade.gbuffer_ids",
+    consts: &[],
+    files: &[
+        FRAME,
+        LIGHT,
+        SCENE,
+        BVH,
+        BRDF,
+        SHADING,
+        VERTEX,
+        shader_file!("render/gbuffer.wgsl"),
+        shader_file!("render/gbuffer_ids.wgsl"),
+    ],
+};
 /// `shade.visibility`: the visibility buffer's raster pass (the shared vertex stage and a
 /// fragment writing the triangle id).
 pub const VISIBILITY: ShaderDef = ShaderDef {
