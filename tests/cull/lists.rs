@@ -412,6 +412,69 @@ fn gpu_exact_oracle_matches_cpu() {
     }
 }
 
+/// At the most lights the device holds (`manylights_cull::max_lights`: on lavapipe its loop
+/// limit, which a loop entered by no lane also counts) the GPU exact oracle still counts every
+/// light: lights needed equal the CPU's (up to borderline decisions) and no false negatives, in
+/// the atrium's uniform lights of radius 0.5 m. (Before its shadowed test moved out of its
+/// loops, llvmpipe ended them at 21,845 lights here.)
+#[test]
+fn gpu_exact_oracle_counts_every_light_the_device_holds() {
+    let ctx = common::gpu();
+    let mut case = random_case(5000);
+    case.scene = ProceduralScene::Atrium(AtriumParams::default())
+        .build()
+        .unwrap();
+    case.camera = case.scene.camera;
+    case.label = "atrium".into();
+    let count = manylights_cull::max_lights(&ctx).min(40_000);
+    case.scene.lights = LightSpec {
+        generator: LightGenerator::Uniform,
+        count,
+        seed: 1,
+        radius: RadiusRule::Fixed(0.5),
+        intensity: 0.5,
+        ..LightSpec::default()
+    }
+    .generate(&case.scene)
+    .unwrap();
+    let r = render(&ctx, &case, 40, 24);
+    let culler = Culler::new(&ctx, &r.gpu_scene);
+    let s = Strategy::Clustered {
+        tile_size: 8,
+        slices: 16,
+        slicing: Slicing::Exponential,
+        skip_empty: false,
+        ordered: true,
+        cells: false,
+    };
+    let out = run_gpu(&ctx, &culler, &r, &case, &s);
+    let counts = culler
+        .exact_counts(
+            &ctx,
+            &r.gpu_scene,
+            &r.depth_tex,
+            &out,
+            r.frame.clip_from_world.inverse(),
+            1,
+        )
+        .unwrap();
+    let g = manylights_cull::metrics::from_gpu_counts(&counts, &out.bin_lengths(&ctx).unwrap());
+    let c = metrics(&r, &out.params, &out.read(&ctx).unwrap());
+    println!(
+        "{count} lights: needed {} (GPU), {} (CPU)",
+        g.needed, c.needed
+    );
+    assert!(c.needed > 0, "no pixel needs a light");
+    assert_eq!(c.false_negatives, 0, "CPU oracle");
+    assert_eq!(g.false_negatives, 0, "GPU oracle at {count} lights");
+    assert!(
+        g.needed.abs_diff(c.needed) * 1000 <= c.needed,
+        "needed {} (GPU) vs {} (CPU)",
+        g.needed,
+        c.needed
+    );
+}
+
 /// A deliberate capacity drops exactly the lights beyond it, counts every one of them, and the
 /// loss shows as false negatives: the capped lists are the uncapped ones truncated.
 #[test]

@@ -138,7 +138,10 @@ fn describe(i: usize, info: &wgpu::AdapterInfo) -> String {
 
 /// Mesa's llvmpipe (lavapipe) ends every loop of a shader invocation, silently, once the
 /// invocation has run 65,535 loop iterations in all (`LP_MAX_TGSI_LOOP_ITERATIONS`, shared by
-/// every loop of the shader). A per-pixel loop over more lights than that stops short.
+/// every loop of the shader). A per-pixel loop over more lights than that stops short; and a
+/// loop behind a runtime condition that no invocation meets is entered all the same (its lanes
+/// masked off) and counts an iteration each time, so a light's test in such a loop must hold
+/// none (`crates/gpu/tests/loop_limit.rs` measures both).
 pub const LLVMPIPE_LOOP_LIMIT: u64 = 65_535;
 
 impl GpuContext {

@@ -34,30 +34,37 @@ fn reaches(l: Light, p: vec3<f32>) -> bool {
     return true;
 }
 
-// Whether light `l`, reaching p, is seen from it: always without shadows; with them
-// (exact.shadows), where the segment to the light from p lifted towards it by a shadow ray's lift
-// (SHADOW_OFFSET times p's largest coordinate's magnitude, at least 1: the normal is not at
-// hand; culling by visibility spares that lift in every direction) is clear through the BVH.
+// Whether light `l`, reaching p, is seen from it: where the segment to the light from p lifted
+// towards it by a shadow ray's lift (SHADOW_OFFSET times p's largest coordinate's magnitude, at
+// least 1: the normal is not at hand; culling by visibility spares that lift in every direction)
+// is clear through the BVH.
 fn seen(l: Light, p: vec3<f32>) -> bool {
-    if exact.shadows == 0u {
-        return true;
-    }
     let a = abs(p);
     let origin = p + normalize(l.position - p) * (SHADOW_OFFSET * max(max(a.x, a.y), max(a.z, 1.0)));
     return !bvh_blocked(origin, l.position);
 }
 
-// Whether light `l` is in the exact set of p: it reaches p and, with shadows, is seen.
-fn needs(l: Light, p: vec3<f32>) -> bool {
-    return reaches(l, p) && seen(l, p);
+// Whether light `l` is in the exact set of p: it reaches p and, with `shadowed`, is seen.
+fn needs(l: Light, p: vec3<f32>, shadowed: bool) -> bool {
+    return reaches(l, p) && (!shadowed || seen(l, p));
 }
 
 // A surface point p of a pixel, whose list is looked up at NDC depth z: (evaluated, needed,
-// found).
+// found), the exact set shadowed with exact.shadows. The test is made outside the loops, each
+// call with a constant: llvmpipe enters a loop that no lane runs, such as the BVH's in a light's
+// test without shadows, and counts that against its loop limit (GpuContext::loop_limit), which
+// three loops a light ran out of at 21,846 lights.
 fn point_counts(pixel: vec2<u32>, z: f32, p: vec3<f32>) -> vec3<u32> {
+    if exact.shadows != 0u {
+        return counts_at(pixel, z, p, true);
+    }
+    return counts_at(pixel, z, p, false);
+}
+
+fn counts_at(pixel: vec2<u32>, z: f32, p: vec3<f32>, shadowed: bool) -> vec3<u32> {
     var needed = 0u;
     for (var k = 0u; k < frame.light_count; k++) {
-        if needs(lights[k], p) {
+        if needs(lights[k], p, shadowed) {
             needed += 1u;
         }
     }
@@ -72,7 +79,7 @@ fn point_counts(pixel: vec2<u32>, z: f32, p: vec3<f32>) -> vec3<u32> {
                     let k = w * 32u + firstTrailingBit(bits);
                     bits &= bits - 1u;
                     evaluated += 1u;
-                    if needs(lights[light_indices[k]], p) {
+                    if needs(lights[light_indices[k]], p, shadowed) {
                         found += 1u;
                     }
                 }
@@ -82,7 +89,7 @@ fn point_counts(pixel: vec2<u32>, z: f32, p: vec3<f32>) -> vec3<u32> {
         let list = light_list(pixel, z);
         evaluated = list.y;
         for (var k = 0u; k < list.y; k++) {
-            if needs(lights[light_indices[list.x + k]], p) {
+            if needs(lights[light_indices[list.x + k]], p, shadowed) {
                 found += 1u;
             }
         }
