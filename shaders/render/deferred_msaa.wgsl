@@ -74,7 +74,7 @@ fn gbuffer_surface(p: vec3<f32>, pixel: vec2<u32>, k: u32) -> Surface {
     let v = view_dir(p);
     var m = textureLoad(gb_material, pixel, k).x;
     if GBUFFER_IDS {
-        m = vis_vertices[VERTEX_WORDS * vis_indices[3u * (m - 1u)] + 6u];
+        m = vis_material(vis_indices[3u * (m - 1u)]);
     }
     return Surface(p, textureLoad(gb_normal_depth, pixel, k).xyz, v, materials[m]);
 }

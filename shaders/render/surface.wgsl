@@ -31,6 +31,10 @@ fn vis_normal(i: u32) -> vec3<f32> {
     return bitcast<vec3<f32>>(vec3<u32>(vis_vertices[VERTEX_WORDS * i + 3u], vis_vertices[VERTEX_WORDS * i + 4u], vis_vertices[VERTEX_WORDS * i + 5u]));
 }
 
+fn vis_material(i: u32) -> u32 {
+    return vis_vertices[VERTEX_WORDS * i + 6u];
+}
+
 // The surface of triangle `tri` seen through the point `ndc` of the image: the point where the
 // pixel's ray meets the triangle's plane (Moller and Trumbore 1997), the normal interpolated
 // there with the same barycentrics (what the rasteriser's perspective-correct interpolation
@@ -58,5 +62,5 @@ fn visibility_surface(ndc: vec2<f32>, tri: u32) -> Surface {
     let p = p0 + b1 * e1 + b2 * e2;
     let v = view_dir(p);
     let n = normalize((1.0 - b1 - b2) * vis_normal(i0) + b1 * vis_normal(i1) + b2 * vis_normal(i2));
-    return Surface(p, facing_normal(n, v), v, materials[vis_vertices[VERTEX_WORDS * i0 + 6u]]);
+    return Surface(p, facing_normal(n, v), v, materials[vis_material(i0)]);
 }
