@@ -12,6 +12,11 @@
 // kernel reads its bodies: every thread of a workgroup reads every light of the chunk.
 // With SHADOWS (InfiniteReference::with_shadows) each light's contribution is shadowed, a ray
 // a (pixel, light): the shadowed infinite-range reference.
+// With SHADOWS and ESTIMATE_RAYS = R > 0 (InfiniteReference::with_estimate) it is estimated
+// without bias, R rays a pixel in expectation: each light's unshadowed radiance c casts its ray
+// with probability q = min(1, R luminance(c) / L), L the pixel's unshadowed luminance (the
+// compensation texel's w, which the host seeds from the unshadowed reference), and adds its
+// shadowed radiance over q where it does, nothing where it does not: E = the shadowed c.
 
 struct InfiniteParams {
     // The chunk: lights [first, first + count).
@@ -21,6 +26,8 @@ struct InfiniteParams {
     pixels: u32,
     // Threads in a row of the dispatch grid (workgroups in x times WG).
     row: u32,
+    // The estimate's draws (ESTIMATE_RAYS): a seed of their own for each independent estimate.
+    seed: u32,
 }
 
 @group(1) @binding(0) var<uniform> params: InfiniteParams;
@@ -31,6 +38,8 @@ struct InfiniteParams {
 @group(1) @binding(2) var<storage, read_write> sums: array<vec4<f32>>;
 
 const WG: u32 = 64u;
+
+override ESTIMATE_RAYS: f32 = 0.0;
 
 var<workgroup> batch: array<Light, WG>;
 
@@ -45,11 +54,13 @@ fn reference_infinite(
     var n = vec4<f32>(0.0);
     var sum = vec3<f32>(0.0);
     var comp = vec3<f32>(0.0);
+    var lum = 0.0;
     if live {
         p = surface[2u * i];
         n = surface[2u * i + 1u];
         sum = sums[2u * i].xyz;
         comp = sums[2u * i + 1u].xyz;
+        lum = sums[2u * i + 1u].w;
     }
     let covered = live && p.w > 0.0;
     let m = materials[u32(n.w)];
@@ -69,7 +80,22 @@ fn reference_infinite(
         if covered {
             let k = min(WG, params.count - base);
             for (var j = 0u; j < k; j++) {
-                let y = shadowed(light_infinite(batch[j], p.xyz, n.xyz, v, m), batch[j], p.xyz, n.xyz) - comp;
+                var c = light_infinite(batch[j], p.xyz, n.xyz, v, m);
+                if ESTIMATE_RAYS > 0.0 {
+                    let w = shading_luminance(c);
+                    if w > 0.0 {
+                        let q = select(1.0, min(1.0, ESTIMATE_RAYS * w / lum), lum > 0.0);
+                        let u = f32(pcg(i ^ pcg((params.first + base + j) ^ pcg(params.seed))) >> 8u) * (1.0 / 16777216.0);
+                        if u < q {
+                            c = shadowed(c, batch[j], p.xyz, n.xyz) / q;
+                        } else {
+                            c = vec3<f32>(0.0);
+                        }
+                    }
+                } else {
+                    c = shadowed(c, batch[j], p.xyz, n.xyz);
+                }
+                let y = c - comp;
                 let t = sum + y;
                 comp = (t - sum) - y;
                 sum = t;
@@ -79,6 +105,6 @@ fn reference_infinite(
     }
     if live {
         sums[2u * i] = vec4<f32>(sum, p.w);
-        sums[2u * i + 1u] = vec4<f32>(comp, 0.0);
+        sums[2u * i + 1u] = vec4<f32>(comp, lum);
     }
 }

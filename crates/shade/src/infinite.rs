@@ -52,6 +52,7 @@ struct Params {
     count: u32,
     pixels: u32,
     row: u32,
+    seed: u32,
 }
 
 /// The compute reference's pipeline for one uploaded scene layout.
@@ -63,6 +64,9 @@ pub struct InfiniteReference {
     chunk: Option<u32>,
     /// Whether each light's contribution is shadowed ([`InfiniteReference::with_shadows`]).
     shadows: Shadows,
+    /// The shadowed sum's unbiased estimate's rays a pixel in expectation, where it is one
+    /// ([`InfiniteReference::with_estimate`]); 0: every ray.
+    estimate: u32,
 }
 
 /// What a shadowed evaluation costs against an unshadowed one, in the chunks' sizing: a
@@ -80,7 +84,7 @@ pub fn chunk_lights(pixels: u64) -> u32 {
 impl InfiniteReference {
     /// Builds the pipeline.
     pub fn new(ctx: &GpuContext, scene: &GpuScene) -> Self {
-        Self::build(ctx, scene, Shadows::Off)
+        Self::build(ctx, scene, Shadows::Off, 0)
     }
 
     /// The pass again with `shadows`: `Shadows::Exact`, a shadow ray for every light at every
@@ -89,16 +93,35 @@ impl InfiniteReference {
     /// reference, the light as it arrives. `Stochastic` shades as `Exact` ([`Shadows::truth`]).
     pub fn with_shadows(self, ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
         let shadows = shadows.truth();
-        if shadows == self.shadows {
+        if shadows == self.shadows && self.estimate == 0 {
             return self;
         }
         Self {
             chunk: self.chunk,
-            ..Self::build(ctx, scene, shadows)
+            ..Self::build(ctx, scene, shadows, 0)
         }
     }
 
-    fn build(ctx: &GpuContext, scene: &GpuScene, shadows: Shadows) -> Self {
+    /// The pass again as an unbiased estimate of the shadowed infinite-range reference with
+    /// `rays` shadow rays a pixel in expectation (at least 1), for views where a ray for every
+    /// (pixel, light) pair takes too long: each light's unshadowed radiance c at a pixel casts
+    /// its ray with probability q = min(1, rays luminance(c) / L), L the pixel's unshadowed
+    /// luminance, and adds its shadowed radiance over q where it does (`ESTIMATE_RAYS`,
+    /// shaders/render/reference_infinite.wgsl). Rendered by [`InfiniteReference::estimate`].
+    pub fn with_estimate(self, ctx: &GpuContext, scene: &GpuScene, rays: u32) -> Self {
+        assert!(rays >= 1, "an estimate casts at least one ray a pixel");
+        Self {
+            chunk: self.chunk,
+            ..Self::build(ctx, scene, Shadows::Exact, rays)
+        }
+    }
+
+    /// The estimate's rays a pixel in expectation (0: the pass is exact).
+    pub fn estimate_rays(&self) -> u32 {
+        self.estimate
+    }
+
+    fn build(ctx: &GpuContext, scene: &GpuScene, shadows: Shadows, estimate: u32) -> Self {
         let d = &ctx.device;
         let c = wgpu::ShaderStages::COMPUTE;
         let layout = d.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -118,7 +141,8 @@ impl InfiniteReference {
             ],
         });
         let module = SHADER.create(d);
-        let constants = shadows.constants();
+        let mut constants = shadows.constants().to_vec();
+        constants.push(("ESTIMATE_RAYS", f64::from(estimate)));
         let pipeline = pipeline::compute_with(
             d,
             &module,
@@ -134,6 +158,7 @@ impl InfiniteReference {
             layout,
             chunk: None,
             shadows,
+            estimate,
         }
     }
 
@@ -157,12 +182,60 @@ impl InfiniteReference {
         scene: &GpuScene,
         surfaces: &ReferenceFrame,
     ) -> Result<HdrImage, GpuError> {
+        if self.estimate > 0 {
+            return Err(GpuError::Unsupported(
+                "the infinite-range reference's estimate renders with InfiniteReference::estimate \
+                 (it needs the unshadowed image)"
+                    .into(),
+            ));
+        }
+        self.run(ctx, scene, surfaces, None)
+    }
+
+    /// One unbiased estimate of the shadowed infinite-range image (a pass built by
+    /// [`InfiniteReference::with_estimate`]) at the surface points of `surfaces`, from
+    /// `unshadowed`, the unshadowed infinite-range image of the same view
+    /// ([`InfiniteReference::render`]), its draws seeded by `seed`: independent estimates take
+    /// seeds of their own.
+    pub fn estimate(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        surfaces: &ReferenceFrame,
+        unshadowed: &HdrImage,
+        seed: u32,
+    ) -> Result<HdrImage, GpuError> {
+        if self.estimate == 0 {
+            return Err(GpuError::Unsupported(
+                "InfiniteReference::estimate on an exact pass: build it with_estimate".into(),
+            ));
+        }
+        let (w, h) = (surfaces.position.width, surfaces.position.height);
+        if (unshadowed.width, unshadowed.height) != (w, h) {
+            return Err(GpuError::Unsupported(format!(
+                "the estimate's unshadowed image is {} x {}, its surfaces {w} x {h}",
+                unshadowed.width, unshadowed.height
+            )));
+        }
+        self.run(ctx, scene, surfaces, Some((unshadowed, seed)))
+    }
+
+    fn run(
+        &self,
+        ctx: &GpuContext,
+        scene: &GpuScene,
+        surfaces: &ReferenceFrame,
+        seeded: Option<(&HdrImage, u32)>,
+    ) -> Result<HdrImage, GpuError> {
         let (w, h) = (surfaces.position.width, surfaces.position.height);
         let pixels = u64::from(w) * u64::from(h);
         self.shadows
             .check_scene(scene, "the infinite-range reference")?;
-        // A shadowed evaluation weighs as SHADOW_RAY_COST unshadowed ones in the chunks.
-        let cost = if self.shadows.casts() {
+        // A shadowed evaluation weighs as SHADOW_RAY_COST unshadowed ones in the chunks; an
+        // estimate's, whose rays are few, as two.
+        let cost = if self.estimate > 0 {
+            2
+        } else if self.shadows.casts() {
             SHADOW_RAY_COST
         } else {
             1
@@ -182,11 +255,22 @@ impl InfiniteReference {
             contents: bytemuck::cast_slice(&surface),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let sums = d.create_buffer(&wgpu::BufferDescriptor {
+        // The estimate's pixels' unshadowed luminance in their compensation texels' w.
+        let seeds: Vec<[f32; 4]> = match seeded {
+            Some((u, _)) => u
+                .data
+                .iter()
+                .flat_map(|c| {
+                    let l = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+                    [[0.0; 4], [0.0, 0.0, 0.0, l]]
+                })
+                .collect(),
+            None => vec![[0.0; 4]; 2 * pixels as usize],
+        };
+        let sums = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("reference_infinite.sums"),
-            size: bytes,
+            contents: bytemuck::cast_slice(&seeds),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
         });
         let lights = scene.light_count;
         let chunk = self.chunk.unwrap_or_else(|| chunk_lights(pixels * cost));
@@ -210,6 +294,7 @@ impl InfiniteReference {
                 count: chunk.min(lights - k * chunk),
                 pixels: pixels as u32,
                 row: groups.0 * WORKGROUP,
+                seed: seeded.map_or(0, |(_, s)| s),
             };
             let at = (k * stride) as usize;
             params[at..at + size_of::<Params>()].copy_from_slice(bytemuck::bytes_of(&p));
