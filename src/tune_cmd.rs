@@ -130,6 +130,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
         visibility_pass: Default::default(),
         shadows: args.shadows.shadows(),
         shadowed_reference: false,
+        shadowed_reference_rays: None,
         occlusion: false,
         materials: a.models()?,
         slack: DEFAULT_SLACK,

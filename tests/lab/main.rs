@@ -508,7 +508,7 @@ fn mask_budget_sweeps_tile_masks_on_and_off_with_the_same_lists() {
                  hierarchy_ramp,hierarchy_sample_from,stochastic_bound,stochastic_draw,interleave,\
                  stochastic_exposure,shadows,flip_mean_shadowed,energy_error_shadowed,\
                  rays_per_pixel,gpu_ms_shadow,grays_per_s,reference_shadowed_cached,occluded_pairs,\
-                 hierarchy_spot_bins,gpu_ms_frame_build_steady,error"
+                 hierarchy_spot_bins,gpu_ms_frame_build_steady,shadowed_reference_se,error"
     ));
 }
 

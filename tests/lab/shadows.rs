@@ -376,3 +376,84 @@ fn occlusion_cells_drop_hidden_pairs_and_keep_the_image() {
         .to_string();
     assert!(err.contains("occlusion") && err.contains("ZBin"), "{err}");
 }
+
+/// The shadowed infinite-range reference estimated (`shadowed_reference_rays`): the same
+/// unshadowed cell scored against the exact reference and against the estimate with 64 rays a
+/// pixel agrees within its standard error (`shadowed_reference_se`, reported only for the
+/// estimate, positive and small); the estimate's halves are cached in the run folder, so the
+/// second cell of the view uses them; bad values are errors naming the field.
+#[test]
+fn the_shadowed_reference_estimate_scores_as_the_exact_one() {
+    let ctx = common::gpu();
+    let src = |rays: &str| {
+        format!(
+            r#"Experiment(
+        name: "estimate",
+        config: Config(
+            scene: Atrium(),
+            lights: (count: 96, radius: Fixed(3.0), intensity: 2.0),
+            resolution: (48, 27),
+            frames: 1,
+            warmup: 0,
+            shadowed_reference: true,
+            {rays}
+            backend: Deferred,
+            strategy: ZBin(tile_size: 16),
+        ),
+        sweep: (strategy: [ZBin(tile_size: 16), TiledGather(tile_size: 16)]),
+    )"#
+        )
+    };
+    let run = |rays: &str, dir: &Path| {
+        let text = src(rays);
+        let e = Experiment::parse(&text, Path::new("estimate.ron")).unwrap();
+        let s = run_parsed(&ctx, &e, &text, Path::new("."), dir, &opts()).unwrap();
+        assert_eq!(s.rows.len(), 2);
+        s.rows
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let exact = run("", &tmp.path().join("exact"));
+    let estimates = run(
+        "shadowed_reference_rays: Some(64),",
+        &tmp.path().join("estimate"),
+    );
+    let (exact, estimated) = (&exact[0], &estimates[0]);
+    assert_eq!(exact.shadow.shadowed_reference_se, None);
+    let se = estimated
+        .shadow
+        .shadowed_reference_se
+        .expect("shadowed_reference_se");
+    let (a, b) = (
+        exact.shadow.flip_mean_shadowed.unwrap(),
+        estimated.shadow.flip_mean_shadowed.unwrap(),
+    );
+    println!("exact {a}, estimated {b}, se {se}");
+    assert!(se > 0.0 && se < 0.05, "standard error {se}");
+    assert!(
+        (a - b).abs() <= 4.0 * se + 1e-3,
+        "exact {a}, estimated {b}, se {se}"
+    );
+    assert_eq!(exact.flip_mean_infinite, estimated.flip_mean_infinite);
+    // The second cell, of the same view, takes the estimate's halves from the cache.
+    assert_eq!(estimated.shadow.reference_shadowed_cached, Some(false));
+    assert_eq!(estimates[1].shadow.reference_shadowed_cached, Some(true));
+    assert_eq!(estimates[1].shadow.shadowed_reference_se, Some(se));
+    for (value, want) in [
+        (
+            "shadowed_reference_rays: Some(0),",
+            "shadowed_reference_rays = Some(0)",
+        ),
+        (
+            "shadowed_reference_rays: Some(8), msaa: 4,",
+            "shadowed_reference_rays = Some(8) with msaa = 4",
+        ),
+    ] {
+        let err = Experiment::parse(&src(value), Path::new("bad.ron"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bad.ron") && err.contains(want),
+            "{value}: {err}"
+        );
+    }
+}

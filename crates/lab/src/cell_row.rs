@@ -231,6 +231,7 @@ fn shadow_columns(c: &Config, first: &PoseEval, worst: &Worst) -> ShadowColumns 
             _ => None,
         },
         reference_shadowed_cached: first.shadowed_cached,
+        shadowed_reference_se: worst.shadowed_se,
         occluded_pairs: c.occlusion.then_some(first.occluded),
     }
 }
@@ -446,6 +447,7 @@ struct Worst {
     exposure_inf: Option<f64>,
     flip_shadowed: Option<f64>,
     energy_shadowed: Option<f64>,
+    shadowed_se: Option<f64>,
 }
 
 impl Worst {
@@ -520,6 +522,7 @@ impl Worst {
             exposure_inf,
             flip_shadowed,
             energy_shadowed,
+            shadowed_se: max_f64(&|e| e.shadowed_se),
         }
     }
 }

@@ -103,5 +103,6 @@ pub const COLUMNS: &[&str] = &[
     "occluded_pairs",
     "hierarchy_spot_bins",
     "gpu_ms_frame_build_steady",
+    "shadowed_reference_se",
     "error",
 ];

@@ -42,6 +42,8 @@ pub(crate) struct PoseEval {
     pub(crate) shadowed: Option<HdrImage>,
     /// Whether it came from the run folder's cache.
     pub(crate) shadowed_cached: Option<bool>,
+    /// Where it is an estimate, its standard error in mean FLIP (`shadowed_reference_se`).
+    pub(crate) shadowed_se: Option<f64>,
     pub(crate) acc: Option<ImageError>,
     pub(crate) acc_inf: Option<ImageError>,
     pub(crate) acc_shadowed: Option<ImageError>,
@@ -214,6 +216,7 @@ pub(crate) fn evaluate(
         infinite_cached: None,
         shadowed: None,
         shadowed_cached: None,
+        shadowed_se: None,
         acc: None,
         acc_inf: None,
         acc_shadowed: None,
@@ -291,6 +294,7 @@ impl PoseEval {
         self.infinite_cached = a.infinite_cached;
         self.shadowed = a.shadowed;
         self.shadowed_cached = a.shadowed_cached;
+        self.shadowed_se = a.shadowed_se;
         self.acc = a.acc;
         self.acc_inf = a.acc_inf;
         self.acc_shadowed = a.acc_shadowed;
@@ -309,6 +313,7 @@ struct Accuracy {
     infinite_cached: Option<bool>,
     shadowed: Option<HdrImage>,
     shadowed_cached: Option<bool>,
+    shadowed_se: Option<f64>,
 }
 
 /// `color`, the pose's image, against the windowed reference (where the cell renders it) and the
@@ -337,16 +342,17 @@ fn against_references(
         None
     };
     let view = (cam, c.resolution);
-    let (ri, cached) = stage(pose, "infinite-range reference", || {
+    let (ri, cached, _) = stage(pose, "infinite-range reference", || {
         refs.infinite(ctx, gpu_scene, view, windowed.as_ref(), Shadows::Off)
     })?;
     out.acc_inf = Some(compare_adapted(color, &ri));
     out.infinite = Some(ri);
     out.infinite_cached = Some(cached);
     if refs.set.has_shadowed() {
-        let (rs, cached) = stage(pose, "shadowed infinite-range reference", || {
+        let (rs, cached, se) = stage(pose, "shadowed infinite-range reference", || {
             refs.infinite(ctx, gpu_scene, view, windowed.as_ref(), Shadows::Exact)
         })?;
+        out.shadowed_se = se;
         out.acc_shadowed = Some(compare_adapted(color, &rs));
         out.shadowed = Some(rs);
         out.shadowed_cached = Some(cached);

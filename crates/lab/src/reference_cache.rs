@@ -129,6 +129,18 @@ impl ReferenceKey {
         Self(json.to_string())
     }
 
+    /// The key of half `half` (0 or 1) of the shadowed reference's estimate with `rays` rays a
+    /// pixel (`Config::shadowed_reference_rays`): the mean of its estimates of that half.
+    pub fn with_estimate(self, rays: u32, half: u32) -> Self {
+        let mut json: serde_json::Value = serde_json::from_str(&self.0).expect("a key is JSON");
+        json["estimate"] = serde_json::json!({
+            "rays": rays,
+            "half": half,
+            "of": crate::references::ESTIMATES,
+        });
+        Self(json.to_string())
+    }
+
     /// The file name: a hash of the key.
     pub fn file_name(&self) -> String {
         let mut h = Fnv::default();

@@ -42,7 +42,16 @@ impl ReferenceSet {
                             scene,
                             Shadows::Exact,
                         ),
-                        InfiniteReference::new(ctx, scene).with_shadows(ctx, scene, Shadows::Exact),
+                        match c.shadowed_reference_rays {
+                            Some(rays) => {
+                                InfiniteReference::new(ctx, scene).with_estimate(ctx, scene, rays)
+                            }
+                            None => InfiniteReference::new(ctx, scene).with_shadows(
+                                ctx,
+                                scene,
+                                Shadows::Exact,
+                            ),
+                        },
                     ))
                 })
                 .transpose()?,
@@ -97,20 +106,63 @@ impl References<'_> {
     }
 
     /// The infinite-range image of the view shaded with `shadows`, from the cache where it
-    /// holds it under the same key, and whether it did; `windowed`, the view's windowed
-    /// reference frame where rendered, gives the surfaces.
+    /// holds it under the same key, whether it did, and where the shadowed one is an estimate
+    /// (`Config::shadowed_reference_rays`) its standard error in mean FLIP; `windowed`, the
+    /// view's windowed reference frame where rendered, gives the surfaces.
     pub(crate) fn infinite(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        view: (&Camera, (u32, u32)),
+        windowed: Option<&ReferenceFrame>,
+        shadows: Shadows,
+    ) -> Result<(HdrImage, bool, Option<f64>), LabError> {
+        let (_, inf) = self.set.pair(shadows);
+        if shadows.casts() && inf.estimate_rays() > 0 {
+            return self.estimated(ctx, gpu_scene, view, windowed);
+        }
+        let (img, cached) = self.infinite_part(ctx, gpu_scene, view, windowed, shadows, None)?;
+        Ok((img, cached, None))
+    }
+
+    /// The shadowed infinite-range reference as the mean of [`ESTIMATES`] unbiased estimates
+    /// (`InfiniteReference::estimate`, each seeded apart), cached as the means of its two
+    /// halves, and its standard error: half the mean FLIP between the halves (their difference
+    /// has twice the standard deviation of the mean of all).
+    fn estimated(
+        &self,
+        ctx: &GpuContext,
+        gpu_scene: &GpuScene,
+        view: (&Camera, (u32, u32)),
+        windowed: Option<&ReferenceFrame>,
+    ) -> Result<(HdrImage, bool, Option<f64>), LabError> {
+        let (a, cached_a) =
+            self.infinite_part(ctx, gpu_scene, view, windowed, Shadows::Exact, Some(0))?;
+        let (b, cached_b) =
+            self.infinite_part(ctx, gpu_scene, view, windowed, Shadows::Exact, Some(1))?;
+        let se = manylights_shade::accuracy::compare_adapted(&a, &b).flip_mean / 2.0;
+        Ok((mean_of(&[&a, &b]), cached_a && cached_b, Some(se)))
+    }
+
+    /// The infinite-range image with `shadows`, or with `half` = Some(h) the mean of the
+    /// shadowed estimate's h-th half, from the cache where it holds it.
+    fn infinite_part(
         &self,
         ctx: &GpuContext,
         gpu_scene: &GpuScene,
         (cam, size): (&Camera, (u32, u32)),
         windowed: Option<&ReferenceFrame>,
         shadows: Shadows,
+        half: Option<u32>,
     ) -> Result<(HdrImage, bool), LabError> {
         use crate::reference_cache as cache;
         let (rr, inf) = self.set.pair(shadows);
         let key = self.cache.map(|(dir, scene)| {
             let key = cache::ReferenceKey::with_shadows(scene, cam, size, rr.samples(), shadows);
+            let key = match half {
+                Some(h) => key.with_estimate(inf.estimate_rays(), h),
+                None => key,
+            };
             (dir, key)
         });
         if let Some((dir, key)) = &key {
@@ -118,16 +170,53 @@ impl References<'_> {
                 return Ok((img, true));
             }
         }
-        let img = match self.lights_as_they_are {
-            Some(scene) => {
+        let img = match half {
+            Some(h) => {
+                let (unshadowed, _) =
+                    self.infinite_part(ctx, gpu_scene, (cam, size), windowed, Shadows::Off, None)?;
+                let scene = self.lights_as_they_are.unwrap_or(gpu_scene);
                 scene.set_view(ctx, cam, size.0, size.1, 0);
-                infinite_image(ctx, (rr, inf), scene, cam, size, windowed)
+                let rendered;
+                let surfaces = match windowed {
+                    Some(w) => w,
+                    None => {
+                        rendered = rr.surfaces(ctx, scene, size.0, size.1)?;
+                        &rendered
+                    }
+                };
+                let runs = (0..ESTIMATES / 2)
+                    .map(|k| inf.estimate(ctx, scene, surfaces, &unshadowed, h * ESTIMATES / 2 + k))
+                    .collect::<Result<Vec<_>, _>>()?;
+                mean_of(&runs.iter().collect::<Vec<_>>())
             }
-            None => infinite_image(ctx, (rr, inf), gpu_scene, cam, size, windowed),
-        }?;
+            None => match self.lights_as_they_are {
+                Some(scene) => {
+                    scene.set_view(ctx, cam, size.0, size.1, 0);
+                    infinite_image(ctx, (rr, inf), scene, cam, size, windowed)
+                }
+                None => infinite_image(ctx, (rr, inf), gpu_scene, cam, size, windowed),
+            }?,
+        };
         if let Some((dir, key)) = &key {
             cache::save(dir, key, &img)?;
         }
         Ok((img, false))
     }
+}
+
+/// Independent estimates the shadowed infinite-range reference averages where it is estimated
+/// (`Config::shadowed_reference_rays`): two halves of two, whose difference gives its standard
+/// error.
+pub(crate) const ESTIMATES: u32 = 4;
+
+/// The texel-wise mean of images of one size (alpha: the first's).
+fn mean_of(images: &[&HdrImage]) -> HdrImage {
+    let n = images.len() as f32;
+    let mut out = images[0].clone();
+    for (k, t) in out.data.iter_mut().enumerate() {
+        for c in 0..3 {
+            t[c] = images.iter().map(|i| i.data[k][c]).sum::<f32>() / n;
+        }
+    }
+    out
 }

@@ -400,6 +400,12 @@ pub struct ShadowColumns {
     /// Whether the shadowed infinite-range reference came from the run folder's cache.
     #[serde(default)]
     pub reference_shadowed_cached: Option<bool>,
+    /// Where the shadowed infinite-range reference is an estimate (`shadowed_reference_rays`):
+    /// its standard error in mean FLIP, half the mean FLIP between the means of its two pairs
+    /// of estimates (for small errors the FLIP of the mean of four against the truth); the
+    /// worst pose's. Empty where it is exact or not rendered.
+    #[serde(default)]
+    pub shadowed_reference_se: Option<f64>,
     /// (Bin, light) pairs culling by visibility dropped from the lists
     /// (`manylights_cull::CullOutput::occluded`), the first pose. Empty without `occlusion`.
     #[serde(default)]
