@@ -371,6 +371,24 @@ fn msaa_casts_one_ray_set_a_shaded_sample_group() {
     );
 }
 
+/// The atrium at 40 x 24 with its BVH, and the reference's surface points.
+fn atrium_surfaces(
+    ctx: &manylights_gpu::GpuContext,
+) -> (
+    manylights_scene::Scene,
+    GpuScene,
+    manylights_shade::ReferenceFrame,
+) {
+    let (w, h) = (40, 24);
+    let s = scene("atrium");
+    let mut gpu_scene = GpuScene::upload(ctx, &s, &s.camera, w, h).unwrap();
+    gpu_scene.build_bvh(ctx, &s).unwrap();
+    let surfaces = ReferenceRenderer::new(ctx, &gpu_scene)
+        .surfaces(ctx, &gpu_scene, w, h)
+        .unwrap();
+    (s, gpu_scene, surfaces)
+}
+
 /// The shadowed infinite-range reference (`InfiniteReference::with_shadows`, small chunks so
 /// that it spans many dispatches) at every fourth pixel of the atrium: the f64 model with the
 /// infinite-range falloff summed over the lights whose ray is not blocked in f64, within 1e-3 of
@@ -380,13 +398,7 @@ fn msaa_casts_one_ray_set_a_shaded_sample_group() {
 fn the_shadowed_infinite_reference_matches_the_rays_in_f64() {
     use manylights_shade::InfiniteReference;
     let ctx = common::gpu();
-    let (w, h) = (40, 24);
-    let s = scene("atrium");
-    let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    gpu_scene.build_bvh(&ctx, &s).unwrap();
-    let surfaces = ReferenceRenderer::new(&ctx, &gpu_scene)
-        .surfaces(&ctx, &gpu_scene, w, h)
-        .unwrap();
+    let (s, gpu_scene, surfaces) = atrium_surfaces(&ctx);
     let plain = InfiniteReference::new(&ctx, &gpu_scene).with_chunk(64);
     let unshadowed = plain.render(&ctx, &gpu_scene, &surfaces).unwrap();
     let shadowed = plain
@@ -451,13 +463,7 @@ fn the_shadowed_infinite_reference_matches_the_rays_in_f64() {
 fn the_shadowed_reference_estimate_is_unbiased() {
     use manylights_shade::InfiniteReference;
     let ctx = common::gpu();
-    let (w, h) = (40, 24);
-    let s = scene("atrium");
-    let mut gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
-    gpu_scene.build_bvh(&ctx, &s).unwrap();
-    let surfaces = ReferenceRenderer::new(&ctx, &gpu_scene)
-        .surfaces(&ctx, &gpu_scene, w, h)
-        .unwrap();
+    let (s, gpu_scene, surfaces) = atrium_surfaces(&ctx);
     let plain = InfiniteReference::new(&ctx, &gpu_scene).with_chunk(64);
     let unshadowed = plain.render(&ctx, &gpu_scene, &surfaces).unwrap();
     let exact = InfiniteReference::new(&ctx, &gpu_scene)
