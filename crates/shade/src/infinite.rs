@@ -261,7 +261,9 @@ impl InfiniteReference {
                 .data
                 .iter()
                 .flat_map(|c| {
-                    let l = 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+                    let l = manylights_scene::shadow_estimate::shading_luminance(glam::Vec3::new(
+                        c[0], c[1], c[2],
+                    ));
                     [[0.0; 4], [0.0, 0.0, 0.0, l]]
                 })
                 .collect(),
