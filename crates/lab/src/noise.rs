@@ -60,12 +60,9 @@ impl Draws {
         first: usize,
     ) -> Result<Option<Self>, LabError> {
         let shadow_frames = c.shadows.rays().map(|_| gpu_scene.shadow_frames());
-        let (
-            Some(params),
-            RadiusRule::Stochastic {
-                accumulate, seeds, ..
-            },
-        ) = (c.lights.stochastic(scene), c.lights.radius)
+        let (Some(params), RadiusRule::Stochastic {
+            accumulate, seeds, ..
+        }) = (c.lights.stochastic(scene), c.lights.radius)
         else {
             return Ok(match c.shadows {
                 manylights_shade::Shadows::Stochastic {

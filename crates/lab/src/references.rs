@@ -174,8 +174,13 @@ impl References<'_> {
             Some(h) => {
                 let (unshadowed, _) =
                     self.infinite_part(ctx, gpu_scene, (cam, size), windowed, Shadows::Off, None)?;
-                let scene = self.lights_as_they_are.unwrap_or(gpu_scene);
-                scene.set_view(ctx, cam, size.0, size.1, 0);
+                let scene = match self.lights_as_they_are {
+                    Some(scene) => {
+                        scene.set_view(ctx, cam, size.0, size.1, 0);
+                        scene
+                    }
+                    None => gpu_scene,
+                };
                 let rendered;
                 let surfaces = match windowed {
                     Some(w) => w,
