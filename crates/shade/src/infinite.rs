@@ -255,25 +255,34 @@ impl InfiniteReference {
             contents: bytemuck::cast_slice(&surface),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        // The estimate's pixels' unshadowed luminance in their compensation texels' w.
-        let seeds: Vec<[f32; 4]> = match seeded {
-            Some((u, _)) => u
-                .data
-                .iter()
-                .flat_map(|c| {
-                    let l = manylights_scene::shadow_estimate::shading_luminance(glam::Vec3::new(
-                        c[0], c[1], c[2],
-                    ));
-                    [[0.0; 4], [0.0, 0.0, 0.0, l]]
+        // The estimate's pixels' unshadowed luminance in their compensation texels' w; a
+        // buffer the device zeroes otherwise.
+        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        let sums = match seeded {
+            Some((u, _)) => {
+                let seeds: Vec<[f32; 4]> = u
+                    .data
+                    .iter()
+                    .flat_map(|c| {
+                        let l = manylights_scene::shadow_estimate::shading_luminance(
+                            glam::Vec3::new(c[0], c[1], c[2]),
+                        );
+                        [[0.0; 4], [0.0, 0.0, 0.0, l]]
+                    })
+                    .collect();
+                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some("reference_infinite.sums"),
+                    contents: bytemuck::cast_slice(&seeds),
+                    usage,
                 })
-                .collect(),
-            None => vec![[0.0; 4]; 2 * pixels as usize],
+            }
+            None => d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("reference_infinite.sums"),
+                size: bytes,
+                usage,
+                mapped_at_creation: false,
+            }),
         };
-        let sums = d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("reference_infinite.sums"),
-            contents: bytemuck::cast_slice(&seeds),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        });
         let lights = scene.light_count;
         let chunk = self.chunk.unwrap_or_else(|| chunk_lights(pixels * cost));
         let chunks = lights.div_ceil(chunk).max(1);
