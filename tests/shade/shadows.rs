@@ -463,7 +463,7 @@ fn the_shadowed_infinite_reference_matches_the_rays_in_f64() {
 fn the_shadowed_reference_estimate_is_unbiased() {
     use manylights_shade::InfiniteReference;
     let ctx = common::gpu();
-    let (s, gpu_scene, surfaces) = atrium_surfaces(&ctx);
+    let (_, gpu_scene, surfaces) = atrium_surfaces(&ctx);
     let plain = InfiniteReference::new(&ctx, &gpu_scene).with_chunk(64);
     let unshadowed = plain.render(&ctx, &gpu_scene, &surfaces).unwrap();
     let exact = InfiniteReference::new(&ctx, &gpu_scene)
