@@ -15,6 +15,8 @@ fn shade_all(p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32>
     for (var i = 0u; i < frame.light_count; i++) {
         c += shade_light(lights[i], p, n, v, m);
     }
+    lights_walked += frame.light_count;
+    count_lights_walked(c);
     return shadow_estimate(c);
 }
 
@@ -94,6 +96,21 @@ fn count_ray(p: vec3<f32>) {
     if (frame.flags & FRAME_FLAG_COUNT_RAYS) != 0u {
         let h = (bitcast<u32>(p.x) * 0x9e3779b1u) ^ (bitcast<u32>(p.y) * 0x85ebca6bu) ^ bitcast<u32>(p.z);
         atomicAdd(&ray_counts[(h ^ (h >> 15u)) % RAY_COUNT_SLOTS], 1u);
+    }
+}
+
+// The lights this invocation's pixel (fragment, sample group) has walked: each light whose
+// distance it computes against the light's range, in every loop over a list, a z-bin cell or
+// every light (one add a batch or a light; lists and masks narrowed before the pixel's loop,
+// such as shade_parts_list's box test, count only what passes). lights_checked adds it to
+// group 0's counters in a frame with FRAME_FLAG_COUNT_LIGHTS
+// (manylights_gpu::GpuScene::count_lights_walked).
+var<private> lights_walked: u32 = 0u;
+
+fn count_lights_walked(c: vec3<f32>) {
+    if (frame.flags & FRAME_FLAG_COUNT_LIGHTS) != 0u && lights_walked != 0u {
+        let h = (bitcast<u32>(c.x) * 0x9e3779b1u) ^ (bitcast<u32>(c.y) * 0x85ebca6bu) ^ (lights_walked * 0xc2b2ae35u);
+        atomicAdd(&ray_counts[(h ^ (h >> 15u)) % RAY_COUNT_SLOTS], lights_walked);
     }
 }
 
@@ -253,6 +270,7 @@ fn shade_listed(light: Light, p: vec3<f32>, to_light: vec3<f32>, d: f32, n: vec3
 // non-finite pixels in the results, never a plausible image. (Renderer::render refuses that combination first.) The NaN's bits are or-ed with a
 // runtime zero, so that it is not a constant expression for the shader compiler to refuse.
 fn lights_checked(c: vec3<f32>) -> vec3<f32> {
+    count_lights_walked(c);
     if POINT_LIGHTS && !point_lights_only() {
         return vec3<f32>(bitcast<f32>(0x7fc00000u | (frame.flags & 0u)));
     }

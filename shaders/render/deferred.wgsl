@@ -256,6 +256,7 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
         }
         workgroupBarrier();
         if takes {
+            lights_walked += n;
             var k = 0u;
             if POINT_LIGHTS {
                 // Four lights at a time: their positions and radii loaded and their rejects
@@ -392,6 +393,9 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             atomicStore(&wg_part_keep[2u * GROUP_PARTS * (1u - p) + li], 0u);
         }
         *parity = 1u - p;
+        if takes {
+            lights_walked += countOneBits(keeps.x) + countOneBits(keeps.y);
+        }
         // The loop's body is shade_group_list's, written again: as a function adding to `c`
         // through a pointer, the Forward+ configuration took 2.3% longer and the hall at 5,000
         // lights 2.6% (H100, docs/bench/HISTORY.md).

@@ -62,6 +62,7 @@ fn shade_zbin_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool) {
                 if k < cell.first || k >= cell.end {
                     continue;
                 }
+                lights_walked += 1u;
                 let to_light = lights[i].position - s.p;
                 let d = length(to_light);
                 if !infinite && d >= lights[i].radius {
@@ -191,6 +192,7 @@ fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: S
             if k < cell.first || k >= cell.end {
                 continue;
             }
+            lights_walked += 1u;
             let q = wg_points[j];
             let light = point_light(q[0], q[1], slot_band(j));
             let to_light = light.position - s.p;

@@ -15,6 +15,7 @@
 fn shade_list(list: vec2<u32>, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Material) -> vec3<f32> {
     let infinite = (frame.flags & FRAME_FLAG_INFINITE_RANGE) != 0u;
     var c = emitted(m);
+    lights_walked += list.y;
     for (var k = 0u; k < list.y; k++) {
         let i = light_indices[list.x + k];
         let to_light = lights[i].position - p;
@@ -37,6 +38,7 @@ fn shade_zbin(cell: ZBinCell, p: vec3<f32>, n: vec3<f32>, v: vec3<f32>, m: Mater
     }
     for (var w = cell.first / 32u; w <= (cell.end - 1u) / 32u; w++) {
         var bits = zbin_bits(cell, w);
+        lights_walked += countOneBits(bits);
         while bits != 0u {
             let k = w * 32u + firstTrailingBit(bits);
             bits &= bits - 1u;

@@ -27,6 +27,7 @@ mod shadows_stochastic;
 mod steady;
 mod transparent;
 mod visibility;
+mod walked;
 
 use manylights_cull::{CullSettings, Slicing, Strategy};
 use manylights_gpu::timing::{Category, GpuTimer, PassKind, PassTiming};

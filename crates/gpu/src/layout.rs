@@ -57,6 +57,10 @@ pub const FRAME_FLAG_BAND_POINTS: u32 = 8;
 /// counters ([`crate::GpuScene::count_rays`] sets it for one frame).
 pub const FRAME_FLAG_COUNT_RAYS: u32 = 16;
 
+/// `Frame.flags`: shading adds the lights each pixel walks (the loops' `lights_walked`) to
+/// group 0's counters ([`crate::GpuScene::count_lights_walked`] sets it for one frame).
+pub const FRAME_FLAG_COUNT_LIGHTS: u32 = 32;
+
 /// WGSL constants generated from their Rust definitions; prepended to every composed shader.
 pub fn wgsl_prelude() -> String {
     format!(
@@ -78,6 +82,7 @@ pub fn wgsl_prelude() -> String {
          const FRAME_FLAG_STOCHASTIC_POINTS: u32 = {FRAME_FLAG_STOCHASTIC_POINTS}u;\n\
          const FRAME_FLAG_BAND_POINTS: u32 = {FRAME_FLAG_BAND_POINTS}u;\n\
          const FRAME_FLAG_COUNT_RAYS: u32 = {FRAME_FLAG_COUNT_RAYS}u;\n\
+         const FRAME_FLAG_COUNT_LIGHTS: u32 = {FRAME_FLAG_COUNT_LIGHTS}u;\n\
          const RAY_COUNT_SLOTS: u32 = {ray_count_slots}u;\n\
          const XI_BITS: u32 = {xi_bits}u;\n\
          const PHI_BITS: u32 = {phi_bits}u;\n\

@@ -2,7 +2,8 @@
 //! index travels per vertex), the lights and materials as storage buffers, and the frame uniform.
 //! Group 0 of every pass binds: 0 = frame, 1 = lights, 2 = materials, 3 and 4 = the BVH of the
 //! opaque triangles that shadow rays walk ([`GpuScene::build_bvh`]; until it is built, a BVH of
-//! no triangle), 5 = the counters of the shadow rays shading casts ([`GpuScene::count_rays`]).
+//! no triangle), 5 = the counters of the shadow rays shading casts ([`GpuScene::count_rays`])
+//! or of the lights it walks ([`GpuScene::count_lights_walked`]), whichever a frame counts.
 
 use bytemuck::cast_slice;
 use glam::Vec3;
@@ -14,6 +15,8 @@ use crate::bvh::{GpuBvh, SceneBvh};
 use crate::layout::{GpuFrame, GpuLight, GpuMaterial, GpuVertex, LIGHT_KIND_POINT};
 use crate::light_model::{LightModel, LightPath, Ranges};
 use crate::{GpuContext, GpuError};
+
+mod counts;
 
 /// A scene uploaded for rendering.
 pub struct GpuScene {
@@ -55,12 +58,13 @@ pub struct GpuScene {
     has_bvh: bool,
     /// The frame number stochastic shadow rays draw by ([`GpuScene::set_shadow_frame`]).
     shadow_frame: std::sync::Arc<std::sync::atomic::AtomicU32>,
-    /// [`RAY_COUNT_SLOTS`] counters of shadow rays, group 0's binding 5.
+    /// [`RAY_COUNT_SLOTS`] counters of shadow rays or walked lights, group 0's binding 5.
     ray_counts: wgpu::Buffer,
 }
 
 /// Counters the shadow rays of a counted frame are spread over (a ray adds one to the slot its
-/// surface point hashes to, so that a frame's millions of rays do not contend for one word).
+/// surface point hashes to, so that a frame's millions of rays do not contend for one word), and
+/// its pixels' walked lights (a pixel adds its count to the slot its colour hashes to).
 pub const RAY_COUNT_SLOTS: u32 = 16_384;
 
 /// The layout of group 0, which every pass binds: the frame uniform, the lights and the
@@ -276,37 +280,6 @@ impl GpuScene {
             (&self.bvh, &self.ray_counts),
         );
         Ok(built)
-    }
-
-    /// The shadow rays `render` casts: the counters cleared, the frame uniform set for
-    /// `camera` at `width` x `height` with [`crate::layout::FRAME_FLAG_COUNT_RAYS`] (shading
-    /// with `SHADOWS` then adds one for each ray it casts), `render` run, the counters read back
-    /// and summed, the frame set again without the flag. A frame that is timed must not count:
-    /// each ray then writes to memory.
-    pub fn count_rays<E: From<GpuError>>(
-        &self,
-        ctx: &GpuContext,
-        (camera, width, height): (&Camera, u32, u32),
-        render: impl FnOnce() -> Result<(), E>,
-    ) -> Result<u64, E> {
-        let bytes = u64::from(RAY_COUNT_SLOTS) * 4;
-        ctx.queue
-            .write_buffer(&self.ray_counts, 0, &vec![0u8; bytes as usize]);
-        self.set_view(
-            ctx,
-            camera,
-            width,
-            height,
-            crate::layout::FRAME_FLAG_COUNT_RAYS,
-        );
-        let rendered = render();
-        self.set_view(ctx, camera, width, height, 0);
-        rendered?;
-        let counts = crate::readback::read_buffer(ctx, &self.ray_counts, 0, bytes)?;
-        Ok(bytemuck::cast_slice::<u8, u32>(&counts)
-            .iter()
-            .map(|&n| u64::from(n))
-            .sum())
     }
 
     /// Sets the frame number stochastic shadow rays draw their lights by (0 after the upload):

@@ -200,6 +200,9 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
             } * first.covered as f64,
         ),
         lights_needed_per_pixel_mean: worst.needed_per_pixel_mean,
+        lights_walked_per_pixel_mean: first
+            .walked
+            .map(|n| n as f64 / first.covered.max(1) as f64),
         gpu_ms_light_update: med(light_update),
         cpu_ms_upload: percentiles(uploads).map(|x| x.0),
         sweep: sweep_columns(cell, &c.lights.radius),

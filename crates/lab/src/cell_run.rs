@@ -380,6 +380,7 @@ fn check_poses(
         let steady_runs = (k == 0 && checks.timed).then_some(run.c.frames);
         let mut eval = evaluate(
             &at,
+            k == 0,
             steady_runs,
             checks.export.as_deref().filter(|_| k == 0),
         )?;

@@ -104,5 +104,6 @@ pub const COLUMNS: &[&str] = &[
     "hierarchy_spot_bins",
     "gpu_ms_frame_build_steady",
     "shadowed_reference_se",
+    "lights_walked_per_pixel_mean",
     "error",
 ];

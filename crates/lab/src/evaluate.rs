@@ -49,6 +49,9 @@ pub(crate) struct PoseEval {
     pub(crate) acc_shadowed: Option<ImageError>,
     /// The shadow rays the frame casts (with shadows; counted in a frame of its own).
     pub(crate) rays: Option<u64>,
+    /// The lights the frame's shading walks, summed over its pixels (the first pose; counted
+    /// in a frame of its own).
+    pub(crate) walked: Option<u64>,
     pub(crate) list_bytes: u64,
     pub(crate) gbuffer_bytes: u64,
     pub(crate) msaa_target_bytes: u64,
@@ -92,11 +95,12 @@ pub(crate) struct Pose<'a> {
 }
 
 /// Renders the pose once and measures it on the GPU: list metrics from the exact oracle and
-/// lights per pixel; with `steady_runs`, culling, shading and the geometry back to back over
-/// that many runs; with `export`, the pose's data exported there. Its accuracy is
-/// [`PoseEval::score`]'s.
+/// lights per pixel; with `count_walked`, the lights its shading walks, in a frame of their own;
+/// with `steady_runs`, culling, shading and the geometry back to back over that many runs; with
+/// `export`, the pose's data exported there. Its accuracy is [`PoseEval::score`]'s.
 pub(crate) fn evaluate(
     p: &Pose<'_>,
+    count_walked: bool,
     steady_runs: Option<u32>,
     export: Option<&std::path::Path>,
 ) -> Result<PoseEval, LabError> {
@@ -114,6 +118,12 @@ pub(crate) fn evaluate(
     let (w, h) = c.resolution;
     gpu_scene.set_view(ctx, cam, w, h, 0);
     let render = || renderer.render(ctx, gpu_scene, c.backend, &c.strategy, settings, (w, h));
+    let walked = match count_walked {
+        true => Some(stage(pose, "lights walked counted", || {
+            gpu_scene.count_lights_walked(ctx, (cam, w, h), || render().map(|_| ()))
+        })?),
+        false => None,
+    };
     let rays = match c.shadows.casts() {
         true => Some(stage(pose, "shadow rays counted", || {
             gpu_scene.count_rays(ctx, (cam, w, h), || render().map(|_| ()))
@@ -221,6 +231,7 @@ pub(crate) fn evaluate(
         acc_inf: None,
         acc_shadowed: None,
         rays,
+        walked,
         list_bytes,
         gbuffer_bytes: o.gbuffer_bytes,
         msaa_target_bytes: o.msaa_target_bytes,

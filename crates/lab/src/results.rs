@@ -157,6 +157,14 @@ pub struct Row {
     /// evaluated per light needed is `lights_per_pixel_mean / lights_needed_per_pixel_mean`.
     #[serde(default)]
     pub lights_needed_per_pixel_mean: Option<f64>,
+    /// Mean number of lights a covered pixel's shading walks (tests against its range), counted
+    /// on the GPU in a frame of its own (`manylights_gpu::GpuScene::count_lights_walked`), the
+    /// first pose: `lights_per_pixel_mean` less what a backend's loop skips before a pixel tests
+    /// a light (deferred's and the visibility buffer's box of an 8 x 8 block's surface points
+    /// over the clusters' lists), summed over every fragment or sample group a pixel shades.
+    /// Lights walked per light needed is this over `lights_needed_per_pixel_mean`.
+    #[serde(default)]
+    pub lights_walked_per_pixel_mean: Option<f64>,
     /// Moving lights: the median GPU time of a frame's light update, ms: the animation pass
     /// (`lights.animate`, `light_update: Gpu`) or the copy of the uploaded lights
     /// (`lights.upload`, `light_update: Upload`; empty where the device cannot time it). It is

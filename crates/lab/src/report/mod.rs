@@ -184,6 +184,23 @@ fn summary(rows: &[Row]) -> Vec<String> {
             r.0, r.1.cell
         ));
     }
+    if let Some((walked, r)) = rows
+        .iter()
+        .filter_map(|r| {
+            Some((
+                r.lights_walked_per_pixel_mean? / r.lights_needed_per_pixel_mean?,
+                r,
+            ))
+        })
+        .filter(|(x, _)| x.is_finite())
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+    {
+        out.push(format!(
+            "The fewest lights walked by the shading per light needed ({walked:.2}; its lists hold {:.2}) came from `{}`.",
+            r.lights_per_pixel_mean.unwrap_or(f64::NAN) / r.lights_needed_per_pixel_mean.unwrap_or(f64::NAN),
+            r.cell
+        ));
+    }
     if rows
         .iter()
         .any(|r| r.adapter.contains("H100") || r.adapter.contains("H200"))
