@@ -424,6 +424,27 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
     return c;
 }
 
+// Where a workgroup's covered pixels lie in more than one slice, each slice's list is tested
+// against the box of that slice's pixels alone (slice_box), not the whole workgroup's: a pixel
+// walks only its own slice's list, and the whole box of a block across a depth edge or along
+// a slanted floor reaches lights that none of the slice's pixels can.
+const SLICE_BOXES: bool = true;
+
+// The part box (one part: GROUP_PARTS) made again of the pixels that `take` the next slice's
+// list. Every thread has passed the barrier that ends the last batch of the slice before (or,
+// where that list was empty, the barrier after the box it did not read), so that no test of
+// the old box is left when it is cleared.
+fn slice_box(li: u32, takes: bool, p: vec3<f32>) {
+    if li < 6u * GROUP_PARTS {
+        atomicStore(&wg_part_box[li], 0u);
+    }
+    workgroupBarrier();
+    if takes {
+        widen_part_box(li, p);
+    }
+    workgroupBarrier();
+}
+
 // The slices a workgroup's covered pixels lie in, a bit a slice (shade_cluster_group).
 var<workgroup> wg_slice_bits: array<atomic<u32>, CLUSTER_GROUP_SLICES / 32u>;
 var<workgroup> wg_slice_bits_plain: array<u32, CLUSTER_GROUP_SLICES / 32u>;
@@ -469,11 +490,18 @@ fn shade_cluster_group(pixel: vec2<u32>, group: vec2<u32>, li: u32, stored: bool
     var parity = 0u;
     let tile = group * 8u / cull.tile_size;
     let bin = tile.y * cull.tiles_x + tile.x;
+    var in_slices = 0u;
+    for (var w = 0u; w < CLUSTER_GROUP_SLICES / 32u; w++) {
+        in_slices += countOneBits(slices[w]);
+    }
     for (var w = 0u; w < CLUSTER_GROUP_SLICES / 32u; w++) {
         var bits = slices[w];
         while bits != 0u {
             let k = w * 32u + firstTrailingBit(bits);
             bits &= bits - 1u;
+            if SLICE_BOXES && in_slices > 1u {
+                slice_box(li, covered && slice == k, s.p);
+            }
             let list = bin_ranges[k * cull.tiles_x * cull.tiles_y + bin];
             c = shade_parts_list(list, li, covered && slice == k, s, c, &parity);
         }

@@ -197,18 +197,22 @@ fn parts_model(
                 .flat_map(|y| (bx..(bx + 8).min(w)).map(move |x| (x, y)))
                 .filter(|&(x, y)| points[(y * w + x) as usize].is_some())
                 .collect();
-            let Some(first) = pixels.first() else {
-                continue;
-            };
-            let p0 = points[(first.1 * w + first.0) as usize].unwrap();
-            let (mut min, mut max) = (p0, p0);
+            // A box of each slice's pixels (`SLICE_BOXES`: where the block has one slice, the
+            // whole block's).
+            let mut boxes: Vec<(usize, DVec3, DVec3)> = Vec::new();
             for &(x, y) in &pixels {
+                let z = depth[(y * w + x) as usize];
+                let bin = bin_of(frame, params, [x, y], z) as usize;
                 let p = points[(y * w + x) as usize].unwrap();
-                (min, max) = (min.min(p), max.max(p));
+                match boxes.iter_mut().find(|b| b.0 == bin) {
+                    Some(b) => (b.1, b.2) = (b.1.min(p), b.2.max(p)),
+                    None => boxes.push((bin, p, p)),
+                }
             }
             for &(x, y) in &pixels {
                 let z = depth[(y * w + x) as usize];
                 let bin = bin_of(frame, params, [x, y], z) as usize;
+                let &(_, min, max) = boxes.iter().find(|b| b.0 == bin).unwrap();
                 for &i in lists.list(bin) {
                     let l = &lights[i as usize];
                     let c = l.position.as_dvec3();
