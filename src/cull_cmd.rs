@@ -175,14 +175,18 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     print_points(m.covered_pixels, bounds.is_some(), samples);
     print_earlier(&earlier, frames);
     print_lists(&m, &out, args.occlusion);
-    if args.shadows.shadows().casts() {
-        let rays = shadow_rays(
-            &ctx,
-            &gpu_scene,
-            &scene.camera,
-            (&strategy, &settings),
-            args,
-        )?;
+    let (walked, rays) = deferred_counts(
+        &ctx,
+        (&gpu_scene, &scene),
+        (&strategy, &settings),
+        args,
+    )?;
+    println!(
+        "  lights walked           {walked} ({:.2} a covered point, {:.3} per light needed; deferred shading of the lists)",
+        walked as f64 / m.covered_pixels.max(1) as f64,
+        walked as f64 / m.needed.max(1) as f64
+    );
+    if let Some(rays) = rays {
         println!(
             "  shadow rays             {rays} ({:.2} a covered point; deferred shading of the lists)",
             rays as f64 / m.covered_pixels.max(1) as f64
@@ -256,20 +260,27 @@ fn write_heatmaps(
     ))
 }
 
-/// The shadow rays one deferred frame shading `strategy`'s lists with `Shadows::Exact` casts
-/// (counted on the GPU, `GpuScene::count_rays`), over the stochastic ranges the lights hold.
-fn shadow_rays(
+/// What one deferred frame shading `strategy`'s lists walks and casts, counted on the GPU over
+/// the stochastic ranges the lights hold: the lights its pixels walk
+/// (`GpuScene::count_lights_walked`), and with shadows the shadow rays
+/// (`GpuScene::count_rays`); with --occlusion, over the lists culling by visibility leaves.
+fn deferred_counts(
     ctx: &GpuContext,
-    gpu_scene: &GpuScene,
-    camera: &manylights_scene::Camera,
+    (gpu_scene, scene): (&GpuScene, &manylights_scene::Scene),
     (strategy, settings): (&manylights_cull::Strategy, &CullSettings),
     args: &CullArgs,
-) -> Result<u64> {
+) -> Result<(u64, Option<u64>)> {
     use manylights_shade::{Backend, Renderer};
     let (w, h) = (args.scene.width, args.scene.height);
-    let renderer =
+    let camera = &scene.camera;
+    let mut renderer =
         Renderer::with_samples(ctx, gpu_scene, args.msaa)?.with_shadows(args.shadows.shadows());
-    Ok(gpu_scene.count_rays(ctx, (camera, w, h), || {
+    if args.occlusion {
+        renderer
+            .culler
+            .set_occluders(ctx, &manylights_scene::occluders::of_scene(scene))?;
+    }
+    let render = || {
         renderer
             .render(
                 ctx,
@@ -280,7 +291,13 @@ fn shadow_rays(
                 (w, h),
             )
             .map(|_| ())
-    })?)
+    };
+    let walked = gpu_scene.count_lights_walked(ctx, (camera, w, h), render)?;
+    let rays = match args.shadows.shadows().casts() {
+        true => Some(gpu_scene.count_rays(ctx, (camera, w, h), render)?),
+        false => None,
+    };
+    Ok((walked, rays))
 }
 
 /// Draws the stochastic ranges of frames `0..frames` in turn (none without `draws`) and

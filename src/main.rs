@@ -81,7 +81,8 @@ enum Command {
     Render(RenderArgs),
     /// Cull the lights of a scene with one strategy and measure the lists against the exact
     /// per-pixel oracle: false negatives, false-positive ratio, lights per pixel, the longest
-    /// list, list memory, per-pass GPU times; and write heatmaps of lights per tile and per pixel.
+    /// list, list memory, per-pass GPU times, the lights deferred shading of the lists walks; and
+    /// write heatmaps of lights per tile and per pixel.
     Cull(CullArgs),
     /// Run an experiment (a RON file): every cell of its sweep, with a progress bar, each cell
     /// persisted as soon as it finishes (a rerun skips finished cells), then DIR/results.csv,

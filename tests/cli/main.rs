@@ -305,6 +305,22 @@ fn cull_reports_metrics_and_writes_heatmaps() {
             stdout.contains("false-positive ratio") && stdout.contains("list entries / bytes"),
             "{stdout}"
         );
+        // Deferred shading walks each pixel's whole list at 64 lights: the lights walked a
+        // covered point are the lights a pixel's list holds.
+        let field = |label: &str| -> f64 {
+            let line = stdout
+                .lines()
+                .find(|l| l.trim_start().starts_with(label))
+                .unwrap_or_else(|| panic!("{strategy}: no `{label}` in {stdout}"));
+            let rest = line.trim_start()[label.len()..].trim_start();
+            let rest = rest.split_once('(').map_or(rest, |(_, r)| r);
+            rest.split_whitespace().next().unwrap().parse().unwrap()
+        };
+        assert_eq!(
+            format!("{:.2}", field("lights walked")),
+            format!("{:.2}", field("lights per pixel")),
+            "{strategy}: {stdout}"
+        );
         let name = strategy.replace('-', "_");
         for kind in ["tiles", "pixels"] {
             let img = image::open(out.join(format!("heatmap_{kind}_{name}.png")))

@@ -46,7 +46,8 @@ pub(crate) fn atrium_lights(count: u32, radius: f32) -> Scene {
     s
 }
 
-fn clusters(tile_size: u32, slices: u32) -> Strategy {
+/// Clusters of `tile_size` pixels and `slices` exponential slices, ordered, skipping empty ones.
+pub(crate) fn clusters(tile_size: u32, slices: u32) -> Strategy {
     Strategy::Clustered {
         tile_size,
         slices,

@@ -14,19 +14,8 @@ use manylights_cull::{BinLists, CullOutput, ListForm};
 use manylights_gpu::layout::GpuFrame;
 use manylights_scene::Light;
 
-use super::cluster_group::atrium_lights;
+use super::cluster_group::{atrium_lights, clusters};
 use super::*;
-
-fn clusters(tile_size: u32, slices: u32) -> Strategy {
-    Strategy::Clustered {
-        tile_size,
-        slices,
-        slicing: Slicing::Exponential,
-        skip_empty: true,
-        ordered: true,
-        cells: false,
-    }
-}
 
 /// The frame's walked lights counted on the GPU, its image, and the lists' lengths summed over
 /// its covered pixels.
