@@ -104,7 +104,8 @@ fn count_ray(p: vec3<f32>) {
 // every light (one add a batch or a light; lists and masks narrowed before the pixel's loop,
 // such as shade_parts_list's box test, count only what passes). lights_checked adds it to
 // group 0's counters in a frame with FRAME_FLAG_COUNT_LIGHTS
-// (manylights_gpu::GpuScene::count_lights_walked).
+// (manylights_gpu::GpuScene::count_lights_walked) and starts it again from zero, for an
+// invocation that shades several sample groups.
 var<private> lights_walked: u32 = 0u;
 
 fn count_lights_walked(c: vec3<f32>) {
@@ -112,6 +113,7 @@ fn count_lights_walked(c: vec3<f32>) {
         let h = (bitcast<u32>(c.x) * 0x9e3779b1u) ^ (bitcast<u32>(c.y) * 0x85ebca6bu) ^ (lights_walked * 0xc2b2ae35u);
         atomicAdd(&ray_counts[(h ^ (h >> 15u)) % RAY_COUNT_SLOTS], lights_walked);
     }
+    lights_walked = 0u;
 }
 
 // `c`, the radiance one light adds at `p`, or zero where SHADOWS and its shadow ray is blocked.

@@ -294,3 +294,41 @@ fn the_clusters_block_box_narrows_what_pixels_walk() {
         "z-binning's rounds: lights needed {needed}, walked {walked}, listed {listed}"
     );
 }
+
+/// With MSAA 4 and every light in every list, each shading point (a pixel's centre, a sample,
+/// a fragment) walks every light once: the count is the light count times the points, between
+/// one and four a covered pixel, in deferred and the visibility buffer (which light several
+/// points in one invocation) and forward.
+#[test]
+fn msaa_shading_points_walk_every_light_once() {
+    let ctx = common::gpu();
+    let (w, h) = (96, 54);
+    let s = scene("pillars");
+    let gpu_scene = GpuScene::upload(&ctx, &s, &s.camera, w, h).unwrap();
+    let renderer = Renderer::with_samples(&ctx, &gpu_scene, 4).unwrap();
+    let every = CullSettings {
+        slack: 1e4,
+        ..CullSettings::for_camera(&s.camera)
+    };
+    let strategy = Strategy::tiled_gather(16);
+    let lights = s.lights.len() as u64;
+    for backend in [Backend::Deferred, Backend::Visibility, Backend::Forward] {
+        let render = || renderer.render(&ctx, &gpu_scene, backend, &strategy, &every, (w, h));
+        let walked = gpu_scene
+            .count_lights_walked(&ctx, (&s.camera, w, h), || render().map(|_| ()))
+            .unwrap();
+        let out = render().unwrap();
+        let covered = out.color.data.iter().filter(|p| p[3] > 0.0).count() as u64;
+        let points = walked / lights;
+        println!(
+            "{} MSAA 4: {points} shading points for {covered} covered pixels",
+            backend.name()
+        );
+        assert_eq!(walked % lights, 0, "{}: {walked} walked", backend.name());
+        assert!(
+            covered <= points && points <= 4 * covered && points > covered,
+            "{}: {points} points, {covered} pixels",
+            backend.name()
+        );
+    }
+}
