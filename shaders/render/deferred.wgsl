@@ -315,10 +315,14 @@ fn shade_group_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
 // widened from zero (workgroup memory starts at zero; a part without covered pixels keeps
 // zeros). One part, the whole workgroup: culling and lighting at 1M lights in clusters of
 // 24 px x 32 took 1.97-1.98 ms on an H100 with one, 2.02 with two (rows 0-3 and 4-7), 2.14 with
-// four, and 2.11 without the boxes (docs/bench/HISTORY.md).
+// four, and 2.11 without the boxes (docs/bench/HISTORY.md). With more than one part, box
+// WHOLE_BOX (after the parts') holds every covered pixel, and a light that misses it is not
+// tested against the parts (those timings are from before it).
 const GROUP_PARTS: u32 = 1u;
 const GROUP_PART: u32 = 64u / GROUP_PARTS;
-var<workgroup> wg_part_box: array<atomic<u32>, 6u * GROUP_PARTS>;
+const WHOLE_BOX: u32 = select(0u, GROUP_PARTS, GROUP_PARTS > 1u);
+const PART_BOXES: u32 = WHOLE_BOX + 1u;
+var<workgroup> wg_part_box: array<atomic<u32>, 6u * PART_BOXES>;
 // The lights of a batch of shade_parts_list that may reach a pixel of each part: bit k % 32 of
 // word 2 (GROUP_PARTS p + h) + k / 32 for part h, p the batch's parity (two sets, so that one is
 // cleared while the other is read, with no barrier of its own). Two words a part: a
@@ -327,7 +331,14 @@ var<workgroup> wg_part_box: array<atomic<u32>, 6u * GROUP_PARTS>;
 var<workgroup> wg_part_keep: array<atomic<u32>, 4u * GROUP_PARTS>;
 
 fn widen_part_box(li: u32, p: vec3<f32>) {
-    let at = 6u * (li / GROUP_PART);
+    widen_box(li / GROUP_PART, p);
+    if GROUP_PARTS > 1u {
+        widen_box(WHOLE_BOX, p);
+    }
+}
+
+fn widen_box(h: u32, p: vec3<f32>) {
+    let at = 6u * h;
     atomicMax(&wg_part_box[at], ~ordered_bits(p.x));
     atomicMax(&wg_part_box[at + 1u], ~ordered_bits(p.y));
     atomicMax(&wg_part_box[at + 2u], ~ordered_bits(p.z));
@@ -380,7 +391,8 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
             } else {
                 wg_lights[li] = lights[i];
             }
-            for (var part = 0u; part < GROUP_PARTS; part++) {
+            let whole = GROUP_PARTS == 1u || infinite || part_box_holds(WHOLE_BOX, lights[i].position, lights[i].radius);
+            for (var part = 0u; whole && part < GROUP_PARTS; part++) {
                 if infinite || part_box_holds(part, lights[i].position, lights[i].radius) {
                     atomicOr(&wg_part_keep[2u * (GROUP_PARTS * p + part) + li / 32u], 1u << (li % 32u));
                 }
@@ -435,7 +447,7 @@ const SLICE_BOXES: bool = true;
 // where that list was empty, the barrier after the box it did not read), so that no test of
 // the old box is left when it is cleared.
 fn slice_box(li: u32, takes: bool, p: vec3<f32>) {
-    if li < 6u * GROUP_PARTS {
+    if li < 6u * PART_BOXES {
         atomicStore(&wg_part_box[li], 0u);
     }
     workgroupBarrier();

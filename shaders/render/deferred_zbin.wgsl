@@ -167,7 +167,7 @@ fn shade_zbin_rounds(group: ZBinCell, li: u32, takes: bool, cell: ZBinCell, s: S
             bits &= bits - 1u;
             let i = light_indices[k];
             let q = vec4<f32>(lights[i].position, lights[i].radius);
-            if infinite || part_box_holds(0u, q.xyz, q.w) {
+            if infinite || part_box_holds(WHOLE_BOX, q.xyz, q.w) {
                 wg_points[li] = array<vec4<f32>, 2>(q, point_energy(lights[i].color, lights[i].intensity, lights[i].alpha));
                 if BAND_POINTS {
                     wg_bands[li] = band_slot(lights[i]);
