@@ -175,23 +175,8 @@ pub(crate) fn cull(args: &CullArgs) -> Result<()> {
     print_points(m.covered_pixels, bounds.is_some(), samples);
     print_earlier(&earlier, frames);
     print_lists(&m, &out, args.occlusion);
-    let (walked, rays) = deferred_counts(
-        &ctx,
-        (&gpu_scene, &scene),
-        (&strategy, &settings),
-        args,
-    )?;
-    println!(
-        "  lights walked           {walked} ({:.2} a covered point, {:.3} per light needed; deferred shading of the lists)",
-        walked as f64 / m.covered_pixels.max(1) as f64,
-        walked as f64 / m.needed.max(1) as f64
-    );
-    if let Some(rays) = rays {
-        println!(
-            "  shadow rays             {rays} ({:.2} a covered point; deferred shading of the lists)",
-            rays as f64 / m.covered_pixels.max(1) as f64
-        );
-    }
+    let counts = deferred_counts(&ctx, (&gpu_scene, &scene), (&strategy, &settings), args)?;
+    print_counts(counts, &m);
     print_timings(timings.as_deref());
     print!("{repeated}");
     println!("{heat}");
@@ -258,6 +243,23 @@ fn write_heatmaps(
         tile_png.display(),
         pixel_png.display()
     ))
+}
+
+/// The lights deferred shading walks and the shadow rays it casts ([`deferred_counts`]), each
+/// over the covered points and the lights walked over the lights needed too.
+fn print_counts((walked, rays): (u64, Option<u64>), m: &ListMetrics) {
+    let points = m.covered_pixels.max(1) as f64;
+    println!(
+        "  lights walked           {walked} ({:.2} a covered point, {:.3} per light needed; deferred shading of the lists)",
+        walked as f64 / points,
+        walked as f64 / m.needed.max(1) as f64
+    );
+    if let Some(rays) = rays {
+        println!(
+            "  shadow rays             {rays} ({:.2} a covered point; deferred shading of the lists)",
+            rays as f64 / points
+        );
+    }
 }
 
 /// What one deferred frame shading `strategy`'s lists walks and casts, counted on the GPU over

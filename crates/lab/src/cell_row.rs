@@ -191,14 +191,7 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         scene_lights: (c.lights.radius.kind() == "hierarchy").then_some(scene.lights.len() as u64),
         bytes_written_per_pixel: Some(bytes_written),
         bytes_read_per_pixel: Some(bytes_read),
-        ns_per_light_eval: ns_per_light_eval(
-            &first.steady_passes,
-            if c.backend == Backend::NaiveForward {
-                light_count as f64
-            } else {
-                first.lights_per_pixel_mean
-            } * first.covered as f64,
-        ),
+        ns_per_light_eval: light_eval_ns(c, first, light_count),
         lights_needed_per_pixel_mean: worst.needed_per_pixel_mean,
         lights_walked_per_pixel_mean: first
             .walked
@@ -213,6 +206,17 @@ pub(crate) fn cell_row(parts: RowParts<'_>) -> Row {
         finished_unix: now(),
         error: None,
     }
+}
+
+/// `ns_per_light_eval`: the first pose's shading passes over the lights it evaluates (naive
+/// forward: every light at every covered pixel).
+fn light_eval_ns(c: &Config, first: &PoseEval, light_count: u64) -> Option<f64> {
+    let per_pixel = if c.backend == Backend::NaiveForward {
+        light_count as f64
+    } else {
+        first.lights_per_pixel_mean
+    };
+    ns_per_light_eval(&first.steady_passes, per_pixel * first.covered as f64)
 }
 
 /// The shadow columns: the first pose's rays and their cost, the worst pose's error against the

@@ -255,34 +255,7 @@ impl InfiniteReference {
             contents: bytemuck::cast_slice(&surface),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        // The estimate's pixels' unshadowed luminance in their compensation texels' w; a
-        // buffer the device zeroes otherwise.
-        let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
-        let sums = match seeded {
-            Some((u, _)) => {
-                let seeds: Vec<[f32; 4]> = u
-                    .data
-                    .iter()
-                    .flat_map(|c| {
-                        let l = manylights_scene::shadow_estimate::shading_luminance(
-                            glam::Vec3::new(c[0], c[1], c[2]),
-                        );
-                        [[0.0; 4], [0.0, 0.0, 0.0, l]]
-                    })
-                    .collect();
-                d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                    label: Some("reference_infinite.sums"),
-                    contents: bytemuck::cast_slice(&seeds),
-                    usage,
-                })
-            }
-            None => d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("reference_infinite.sums"),
-                size: bytes,
-                usage,
-                mapped_at_creation: false,
-            }),
-        };
+        let sums = sums_buffer(d, seeded.map(|(u, _)| u), bytes);
         let lights = scene.light_count;
         let chunk = self.chunk.unwrap_or_else(|| chunk_lights(pixels * cost));
         let chunks = lights.div_ceil(chunk).max(1);
@@ -375,6 +348,38 @@ impl InfiniteReference {
             height: h,
             data,
         })
+    }
+}
+
+/// The pass's running sums and their compensation, two texels a pixel (`bytes`): with the
+/// estimate's `unshadowed` image, each pixel's unshadowed luminance seeded in its compensation
+/// texel's w; a buffer the device zeroes otherwise.
+fn sums_buffer(d: &wgpu::Device, unshadowed: Option<&HdrImage>, bytes: u64) -> wgpu::Buffer {
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    match unshadowed {
+        Some(u) => {
+            let seeds: Vec<[f32; 4]> = u
+                .data
+                .iter()
+                .flat_map(|c| {
+                    let l = manylights_scene::shadow_estimate::shading_luminance(
+                        glam::Vec3::new(c[0], c[1], c[2]),
+                    );
+                    [[0.0; 4], [0.0, 0.0, 0.0, l]]
+                })
+                .collect();
+            d.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("reference_infinite.sums"),
+                contents: bytemuck::cast_slice(&seeds),
+                usage,
+            })
+        }
+        None => d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("reference_infinite.sums"),
+            size: bytes,
+            usage,
+            mapped_at_creation: false,
+        }),
     }
 }
 
