@@ -176,13 +176,14 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     )?;
     let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3}"));
     println!(
-        "{:>4}  {:<64} {:>11} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9}",
+        "{:>4}  {:<64} {:>11} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9}",
         "rank",
         "strategy",
         "frame",
         "cull+shade",
         "cull",
         "lights/px",
+        "walked",
         "needed",
         "per need",
         if args.shadows.shadows().casts() {
@@ -193,13 +194,15 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     );
     for (i, r) in report.ranked.iter().enumerate() {
         println!(
-            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9}",
+            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9} {:>9}",
             i + 1,
             format!("{} ({}){}", r.strategy, r.params, range_of(r)),
             ms(Rank::Frame.time(r)),
             ms(manylights_lab::tune::cost(r)),
             ms(r.gpu_ms_cull_steady),
             r.lights_per_pixel_mean
+                .map_or("-".into(), |v| format!("{v:.1}")),
+            r.lights_walked_per_pixel_mean
                 .map_or("-".into(), |v| format!("{v:.1}")),
             r.lights_needed_per_pixel_mean
                 .map_or("-".into(), |v| format!("{v:.1}")),
