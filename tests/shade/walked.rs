@@ -1,10 +1,10 @@
 //! The lights shading walks (`GpuScene::count_lights_walked`, the lab's
 //! `lights_walked_per_pixel_mean`): a pixel's loop over its list walks every light of it, so the
 //! count is the lists' own lengths summed over the pixels; over the clusters' lists a workgroup
-//! at a time (`shade_parts_list`) a pixel walks only the lights whose sphere meets the box of its
-//! 8 x 8 block's surface points, which a model on the host (the same test in f64 over the
-//! surface points rebuilt from the depth buffer) brackets; and never fewer than the lights the
-//! pixel needs.
+//! at a time (`shade_parts_list`) a pixel walks only the lights whose sphere meets the box of the
+//! surface points of its 8 x 8 block's pixels in its slice, which a model on the host (the same
+//! test in f64 over the surface points rebuilt from the depth buffer) brackets; and never fewer
+//! than the lights the pixel needs.
 
 use glam::DVec3;
 use manylights_cull::geometry::bin_of;
@@ -163,8 +163,9 @@ fn needed(
     (depth, points, needed)
 }
 
-/// The host's model of `shade_parts_list`: for each 8 x 8 block, the box of its covered pixels'
-/// surface points; each pixel walks the lights of its cluster's list whose sphere meets the box.
+/// The host's model of `shade_parts_list`: for each 8 x 8 block, the box of the surface points of
+/// its covered pixels in each slice; each pixel walks the lights of its cluster's list whose
+/// sphere meets its slice's box.
 /// Each light is counted where it meets the box with its radius scaled by `1 - margin` (`lo`)
 /// and by `1 + margin` (`hi`), so that the GPU's f32 box and its relative margin of 1e-4 lie
 /// between the two.
