@@ -102,6 +102,53 @@ pub(crate) enum TuneRank {
     CullShade,
 }
 
+/// A time in ms to three places, `-` where there is none.
+fn ms(v: Option<f64>) -> String {
+    v.map_or("-".into(), |v| format!("{v:.3}"))
+}
+
+/// The ranked candidates as a table: the frame, culling and shading, culling, the lists' lights
+/// a pixel, the lights shading walks and needs, the lists' lights per light needed, and the
+/// error the budget limits (against the shadowed light where `shadowed`).
+fn print_ranking(ranked: &[manylights_lab::Row], shadowed: bool) {
+    println!(
+        "{:>4}  {:<64} {:>11} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9}",
+        "rank",
+        "strategy",
+        "frame",
+        "cull+shade",
+        "cull",
+        "lights/px",
+        "walked",
+        "needed",
+        "per need",
+        if shadowed {
+            "FLIP shad"
+        } else {
+            "FLIP inf"
+        }
+    );
+    for (i, r) in ranked.iter().enumerate() {
+        println!(
+            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9} {:>9}",
+            i + 1,
+            format!("{} ({}){}", r.strategy, r.params, range_of(r)),
+            ms(Rank::Frame.time(r)),
+            ms(manylights_lab::tune::cost(r)),
+            ms(r.gpu_ms_cull_steady),
+            r.lights_per_pixel_mean
+                .map_or("-".into(), |v| format!("{v:.1}")),
+            r.lights_walked_per_pixel_mean
+                .map_or("-".into(), |v| format!("{v:.1}")),
+            r.lights_needed_per_pixel_mean
+                .map_or("-".into(), |v| format!("{v:.1}")),
+            r.false_positive_ratio
+                .map_or("-".into(), |v| format!("{v:.2}")),
+            manylights_lab::tune::budget_error(r).map_or("-".into(), |v| format!("{v:.4}")),
+        );
+    }
+}
+
 pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
     let a = &args.scene;
     args.shadows.check()?;
@@ -174,43 +221,7 @@ pub(crate) fn run_tune(args: &TuneArgs) -> Result<()> {
             rank,
         },
     )?;
-    let ms = |v: Option<f64>| v.map_or("-".into(), |v| format!("{v:.3}"));
-    println!(
-        "{:>4}  {:<64} {:>11} {:>11} {:>11} {:>9} {:>9} {:>9} {:>9} {:>9}",
-        "rank",
-        "strategy",
-        "frame",
-        "cull+shade",
-        "cull",
-        "lights/px",
-        "walked",
-        "needed",
-        "per need",
-        if args.shadows.shadows().casts() {
-            "FLIP shad"
-        } else {
-            "FLIP inf"
-        }
-    );
-    for (i, r) in report.ranked.iter().enumerate() {
-        println!(
-            "{:>4}  {:<64} {:>8} ms {:>8} ms {:>8} ms {:>9} {:>9} {:>9} {:>9} {:>9}",
-            i + 1,
-            format!("{} ({}){}", r.strategy, r.params, range_of(r)),
-            ms(Rank::Frame.time(r)),
-            ms(manylights_lab::tune::cost(r)),
-            ms(r.gpu_ms_cull_steady),
-            r.lights_per_pixel_mean
-                .map_or("-".into(), |v| format!("{v:.1}")),
-            r.lights_walked_per_pixel_mean
-                .map_or("-".into(), |v| format!("{v:.1}")),
-            r.lights_needed_per_pixel_mean
-                .map_or("-".into(), |v| format!("{v:.1}")),
-            r.false_positive_ratio
-                .map_or("-".into(), |v| format!("{v:.2}")),
-            manylights_lab::tune::budget_error(r).map_or("-".into(), |v| format!("{v:.4}")),
-        );
-    }
+    print_ranking(&report.ranked, args.shadows.shadows().casts());
     for (r, why) in &report.rejected {
         println!(
             "rejected: {} ({}){}: {why}",
