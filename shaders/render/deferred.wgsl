@@ -442,8 +442,8 @@ fn shade_parts_list(list: vec2<u32>, li: u32, takes: bool, s: Surface, c_in: vec
 // a slanted floor reaches lights that none of the slice's pixels can.
 const SLICE_BOXES: bool = true;
 
-// The part box (one part: GROUP_PARTS) made again of the pixels that `take` the next slice's
-// list. Every thread has passed the barrier that ends the last batch of the slice before (or,
+// The part boxes (and, with several parts, the whole box) made again of the pixels that
+// `take` the next slice's list. Every thread has passed the barrier that ends the last batch of the slice before (or,
 // where that list was empty, the barrier after the box it did not read), so that no test of
 // the old box is left when it is cleared.
 fn slice_box(li: u32, takes: bool, p: vec3<f32>) {
